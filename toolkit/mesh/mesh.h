@@ -1,0 +1,57 @@
+// A triangle mesh whose connectivity is fixed for a whole animation while its vertex positions
+// change per frame. The triangle index array is shared (immutable, reference counted) between
+// all copies of a mesh and all frames; a frame only owns its positions.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "toolkit/core/types.h"
+
+namespace ptc {
+
+class Mesh {
+ public:
+  Mesh() = default;
+  /// Takes ownership of the triangles and positions. Every index must be < positions.size()
+  /// (loaders check this and report the element; here a violation is a programmer error and
+  /// throws std::invalid_argument).
+  Mesh(std::vector<Tri> triangles, std::vector<Vec3> positions);
+
+  [[nodiscard]] std::size_t triangle_count() const { return tris_ ? tris_->size() : 0; }
+  [[nodiscard]] std::size_t vertex_count() const { return pos_.size(); }
+  [[nodiscard]] bool empty() const { return triangle_count() == 0; }
+
+  [[nodiscard]] std::span<const Tri> triangles() const {
+    return tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
+  }
+  [[nodiscard]] const Tri& triangle(std::size_t t) const { return (*tris_)[t]; }
+  [[nodiscard]] std::span<const Vec3> positions() const { return pos_; }
+  [[nodiscard]] std::span<Vec3> positions() { return pos_; }
+  [[nodiscard]] const Vec3& position(std::size_t v) const { return pos_[v]; }
+
+  /// The three corner positions of triangle t.
+  [[nodiscard]] std::array<Vec3, 3> corners(std::size_t t) const {
+    const Tri& f = (*tris_)[t];
+    return {pos_[f[0]], pos_[f[1]], pos_[f[2]]};
+  }
+
+  /// Replace the positions of the current frame (same vertex count; otherwise invalid_argument).
+  void set_positions(std::vector<Vec3> positions);
+
+  /// The shared, immutable triangle array (the topology every frame refers to).
+  [[nodiscard]] const std::shared_ptr<const std::vector<Tri>>& shared_triangles() const { return tris_; }
+
+  /// Same topology, new positions (no copy of the triangle array).
+  [[nodiscard]] Mesh with_positions(std::vector<Vec3> positions) const;
+
+  /// Axis-aligned bounding box of the referenced and unreferenced vertices alike.
+  [[nodiscard]] Box3 bounds() const;
+
+ private:
+  std::shared_ptr<const std::vector<Tri>> tris_;
+  std::vector<Vec3> pos_;
+};
+
+}  // namespace ptc

@@ -1,0 +1,79 @@
+// Connectivity of a fixed triangle array, computed once per topology: the edge -> triangles
+// map, boundary and non-manifold edges, connected components and the dual graph.
+//
+// Policy for degenerate input (documented in docs/mesh_policy.md):
+// - a triangle side whose two indices are equal (a "collapsed" side of a triangle with a
+//   repeated index) is not an edge; it appears in no edge list and has kNoEdge as its edge id;
+// - a triangle that uses the same undirected edge twice (indices a, b, a) lists it once;
+// - an edge used by one triangle is a boundary edge, by two a manifold edge, by three or more a
+//   non-manifold edge; in the dual graph every pair of triangles on an edge is adjacent.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <boost/graph/adjacency_list.hpp>
+
+#include "toolkit/core/types.h"
+
+namespace ptc {
+
+/// An undirected mesh edge, v0 < v1.
+struct Edge {
+  std::uint32_t v0, v1;
+  friend bool operator==(const Edge&, const Edge&) = default;
+};
+
+inline constexpr std::uint32_t kNoEdge = 0xffffffffu;
+
+class EdgeMap {
+ public:
+  /// Builds the map in O(T + V) time (bucketed by the smaller vertex index).
+  static EdgeMap build(std::span<const Tri> triangles, std::size_t vertex_count);
+
+  [[nodiscard]] std::size_t edge_count() const { return edges_.size(); }
+  [[nodiscard]] const Edge& edge(std::size_t e) const { return edges_[e]; }
+  [[nodiscard]] std::span<const Edge> edges() const { return edges_; }
+  /// Triangles incident to edge e, ascending, each once.
+  [[nodiscard]] std::span<const std::uint32_t> triangles_of(std::size_t e) const {
+    return {edge_tris_.data() + offsets_[e], edge_tris_.data() + offsets_[e + 1]};
+  }
+  [[nodiscard]] std::size_t valence(std::size_t e) const { return offsets_[e + 1] - offsets_[e]; }
+  /// Edge id of side k of triangle t (side k joins corner k and corner (k+1)%3), or kNoEdge.
+  [[nodiscard]] std::uint32_t side_edge(std::size_t t, int k) const { return side_edges_[3 * t + k]; }
+  /// Edge id of {a, b}, or kNoEdge when no triangle uses it. O(log degree).
+  [[nodiscard]] std::uint32_t find(std::uint32_t a, std::uint32_t b) const;
+
+  [[nodiscard]] std::size_t boundary_edge_count() const;
+  [[nodiscard]] std::size_t non_manifold_edge_count() const;
+
+ private:
+  std::vector<Edge> edges_;               // sorted by (v0, v1)
+  std::vector<std::uint32_t> vertex_first_;  // edges of smaller vertex v: [vertex_first_[v], vertex_first_[v+1])
+  std::vector<std::uint32_t> offsets_;    // edge_count + 1
+  std::vector<std::uint32_t> edge_tris_;
+  std::vector<std::uint32_t> side_edges_;  // 3 per triangle
+};
+
+/// Per-triangle component label (0..count-1, numbered in order of first triangle), where two
+/// triangles are connected when they share a vertex.
+struct Components {
+  std::vector<std::uint32_t> label;
+  std::uint32_t count = 0;
+};
+[[nodiscard]] Components vertex_connected_components(std::span<const Tri> triangles, std::size_t vertex_count);
+/// Same, but triangles are connected only through shared edges (the dual graph's components).
+[[nodiscard]] Components edge_connected_components(const EdgeMap& edges, std::size_t triangle_count);
+
+/// Dual graph: a vertex per triangle (vertex index = triangle index), an edge per pair of
+/// triangles sharing a mesh edge; the edge property is the shared mesh edge's id. A pair of
+/// triangles sharing two edges (possible on degenerate input) gets one dual edge per shared edge.
+struct DualEdgeProperty {
+  std::uint32_t mesh_edge = kNoEdge;
+};
+using DualGraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS, boost::no_property,
+                                        DualEdgeProperty>;
+[[nodiscard]] DualGraph build_dual_graph(const EdgeMap& edges, std::size_t triangle_count);
+
+}  // namespace ptc
