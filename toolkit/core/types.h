@@ -6,6 +6,7 @@
 #include <limits>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
 
 namespace ptc {
 

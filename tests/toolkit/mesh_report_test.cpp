@@ -1,0 +1,125 @@
+// analyze_mesh against hand-counted answers on small meshes built for each defect.
+#include "toolkit/mesh/mesh_report.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include <CGAL/Gmpq.h>
+
+namespace ptc {
+namespace {
+
+Mesh unit_cube() {
+  std::vector<Vec3> p;
+  for (int i = 0; i < 8; ++i) p.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  std::vector<Tri> t{{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                     {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  return Mesh(t, p);
+}
+
+TEST(MeshReport, SummaryOfEmptyAndOddEven) {
+  EXPECT_EQ(summarize({}).count, 0u);
+  std::vector<double> odd{3, 1, 2};
+  auto s = summarize(odd);
+  EXPECT_EQ(s.min, 1);
+  EXPECT_EQ(s.max, 3);
+  EXPECT_EQ(s.p50, 2);
+  EXPECT_EQ(s.mean, 2);
+  std::vector<double> even{4, 1, 3, 2};
+  EXPECT_EQ(summarize(even).p50, 2.5);
+}
+
+TEST(MeshReport, ClosedCube) {
+  const auto r = analyze_mesh(unit_cube());
+  EXPECT_EQ(r.vertices, 8u);
+  EXPECT_EQ(r.triangles, 12u);
+  EXPECT_EQ(r.edges, 18u);
+  EXPECT_EQ(r.boundary_edges, 0u);
+  EXPECT_EQ(r.non_manifold_edges, 0u);
+  EXPECT_EQ(r.non_manifold_vertices, 0u);
+  EXPECT_TRUE(r.closed_manifold());
+  EXPECT_EQ(r.euler_characteristic(), 2);
+  EXPECT_DOUBLE_EQ(r.total_area, 6.0);
+  EXPECT_DOUBLE_EQ(r.triangle_area.min, 0.5);
+  EXPECT_DOUBLE_EQ(r.triangle_area.max, 0.5);
+  EXPECT_DOUBLE_EQ(r.edge_length.min, 1.0);
+  EXPECT_DOUBLE_EQ(r.edge_length.max, std::sqrt(2.0));
+  EXPECT_EQ(r.components, 1u);
+  EXPECT_EQ(r.edge_components, 1u);
+  EXPECT_EQ(r.bounds.lo, Vec3(0, 0, 0));
+  EXPECT_EQ(r.bounds.hi, Vec3(1, 1, 1));
+}
+
+TEST(MeshReport, EveryDefectCountedOnce) {
+  std::vector<Vec3> p{{0, 0, 0}, {1, 0, 0}, {0, 1, 0},   // 0-2 a triangle
+                      {2, 0, 0},                          // 3 collinear with 0,1
+                      {0, 0, 0},                          // 4 duplicate of vertex 0 (coordinates)
+                      {-0.0, 1, 0},                       // 5 duplicate of vertex 2 (-0 == 0)
+                      {9, 9, 9},                          // 6 unreferenced
+                      {0, 0, 1}, {0, 0, 2}};              // 7,8 fan through edge (0,1)
+  std::vector<Tri> t{{0, 1, 2},    // ok
+                     {0, 1, 3},    // zero area (collinear)
+                     {0, 0, 2},    // repeated index
+                     {2, 1, 0},    // duplicate of triangle 0 (same vertex set)
+                     {4, 5, 1},    // uses duplicate vertices: a separate vertex-component? shares vertex 1
+                     {0, 1, 7}, {1, 0, 8}};  // edge (0,1) now has triangles 0,1,3,5,6 -> non-manifold
+  const auto r = analyze_mesh(Mesh(t, p));
+  EXPECT_EQ(r.triangles, 7u);
+  EXPECT_EQ(r.unreferenced_vertices, 1u);
+  EXPECT_EQ(r.zero_area_triangles, 1u);
+  EXPECT_EQ(r.repeated_index_triangles, 1u);
+  EXPECT_EQ(r.duplicate_triangles, 1u);
+  EXPECT_EQ(r.duplicate_vertices, 2u);
+  // (0,1) carries triangles 0,1,3,5,6 and (0,2) carries 0,2,3: both non-manifold.
+  EXPECT_EQ(r.non_manifold_edges, 2u);
+  EXPECT_FALSE(r.closed_manifold());
+  EXPECT_EQ(r.bounds.hi, Vec3(2, 1, 2));  // the unreferenced vertex (9,9,9) is not in the box
+}
+
+TEST(MeshReport, BowTieIsANonManifoldVertex) {
+  std::vector<Vec3> p{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
+  std::vector<Tri> t{{0, 1, 2}, {0, 3, 4}};
+  const auto r = analyze_mesh(Mesh(t, p));
+  EXPECT_EQ(r.non_manifold_vertices, 1u);
+  EXPECT_EQ(r.non_manifold_edges, 0u);
+  EXPECT_EQ(r.components, 1u);
+  EXPECT_EQ(r.edge_components, 2u);
+  EXPECT_EQ(r.boundary_edges, 6u);
+}
+
+TEST(MeshReport, ExactCollinearityAtHugeOffsetAndTinyScale) {
+  // Collinear in exact arithmetic although the double cross product is not exactly zero...
+  const Vec3 a(1e7, 1e7, 1e7), d(1e-3, 3e-3, 7e-3);
+  const Vec3 b = a + d, c = a + 2 * d;
+  EXPECT_TRUE(collinear_exact(a, a, b));
+  // ... and b, c may be rounded off the line: the predicate decides on the stored doubles.
+  // Oracle: the cross product in exact rational arithmetic (GMP).
+  auto exact_collinear = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    using Q = CGAL::Gmpq;
+    const Q ux = Q(q.x()) - Q(p.x()), uy = Q(q.y()) - Q(p.y()), uz = Q(q.z()) - Q(p.z());
+    const Q vx = Q(r.x()) - Q(p.x()), vy = Q(r.y()) - Q(p.y()), vz = Q(r.z()) - Q(p.z());
+    return uy * vz - uz * vy == 0 && uz * vx - ux * vz == 0 && ux * vy - uy * vx == 0;
+  };
+  EXPECT_EQ(collinear_exact(a, b, c), exact_collinear(a, b, c));
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (int i = 0; i < 2000; ++i) {
+    // Points on a line through a huge offset, rounded to double: sometimes collinear, sometimes not.
+    const Vec3 o(1e7 * U(rng), 1e7 * U(rng), 1e7 * U(rng)), dir(U(rng), U(rng), U(rng));
+    const Vec3 p = o + 1e-3 * dir, q = o + 2e-3 * (i % 3 ? dir : Vec3(U(rng), U(rng), U(rng)));
+    ASSERT_EQ(collinear_exact(o, p, q), exact_collinear(o, p, q)) << i;
+  }
+  // A sliver that is not collinear is never reported as zero area.
+  EXPECT_FALSE(collinear_exact(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0.5, 1e-300, 0)));
+  // Tiny scale: exact multiples (power-of-two scaling keeps them exact) are collinear; 1e-30
+  // times 3 is not 3e-30 in double, so those stored points are not.
+  const double s = std::ldexp(1.0, -100);
+  EXPECT_TRUE(collinear_exact(Vec3(1, 2, 3) * s, Vec3(2, 4, 6) * s, Vec3(3, 6, 9) * s));
+  EXPECT_EQ(collinear_exact(Vec3(1e-30, 2e-30, 3e-30), Vec3(2e-30, 4e-30, 6e-30), Vec3(3e-30, 6e-30, 9e-30)),
+            exact_collinear(Vec3(1e-30, 2e-30, 3e-30), Vec3(2e-30, 4e-30, 6e-30), Vec3(3e-30, 6e-30, 9e-30)));
+}
+
+}  // namespace
+}  // namespace ptc

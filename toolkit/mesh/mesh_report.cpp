@@ -1,0 +1,163 @@
+#include "toolkit/mesh/mesh_report.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace ptc {
+
+Summary summarize(std::span<const double> values) {
+  Summary s;
+  s.count = values.size();
+  if (values.empty()) return s;
+  std::vector<double> v(values.begin(), values.end());
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  s.min = *lo;
+  s.max = *hi;
+  // Pairwise-stable enough for reporting: accumulate in long double.
+  long double sum = 0;
+  for (double x : v) sum += x;
+  s.mean = static_cast<double>(sum / static_cast<long double>(v.size()));
+  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  s.p50 = *mid;
+  if (v.size() % 2 == 0) s.p50 = 0.5 * (s.p50 + *std::max_element(v.begin(), mid));
+  return s;
+}
+
+namespace {
+
+// Coordinates compared with -0.0 == +0.0 (the only two distinct doubles that compare equal).
+Vec3 canonical(const Vec3& p) { return Vec3(p.x() + 0.0, p.y() + 0.0, p.z() + 0.0); }
+
+std::size_t count_duplicate_vertices(std::span<const Vec3> pos) {
+  std::vector<std::uint32_t> order(pos.size());
+  std::iota(order.begin(), order.end(), 0u);
+  auto less = [&](std::uint32_t a, std::uint32_t b) {
+    const Vec3 p = canonical(pos[a]), q = canonical(pos[b]);
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    return p.z() < q.z();
+  };
+  std::sort(order.begin(), order.end(), less);
+  std::size_t dup = 0;
+  for (std::size_t i = 1; i < order.size(); ++i) dup += !less(order[i - 1], order[i]);
+  return dup;
+}
+
+std::size_t count_duplicate_triangles(std::span<const Tri> tris) {
+  std::vector<Tri> sorted(tris.begin(), tris.end());
+  for (Tri& f : sorted) std::sort(f.begin(), f.end());
+  std::sort(sorted.begin(), sorted.end());
+  std::size_t dup = 0;
+  for (std::size_t i = 1; i < sorted.size(); ++i) dup += sorted[i] == sorted[i - 1];
+  return dup;
+}
+
+// A vertex is non-manifold when its incident triangles split into two or more groups that are
+// not connected through edges incident to that vertex (two fans touching at a point, or the
+// fans around a non-manifold edge's endpoints).
+std::size_t count_non_manifold_vertices(const Mesh& mesh, const EdgeMap& edges) {
+  const auto tris = mesh.triangles();
+  const std::size_t V = mesh.vertex_count();
+  // vertex -> incident triangles (CSR)
+  std::vector<std::uint32_t> first(V + 1, 0);
+  for (const Tri& f : tris)
+    for (int k = 0; k < 3; ++k)
+      if (k == 0 || (f[k] != f[0] && (k == 1 || f[k] != f[1]))) ++first[f[k] + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  std::vector<std::uint32_t> inc(first.back());
+  {
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const Tri& f = tris[t];
+      for (int k = 0; k < 3; ++k)
+        if (k == 0 || (f[k] != f[0] && (k == 1 || f[k] != f[1]))) inc[fill[f[k]]++] = static_cast<std::uint32_t>(t);
+    }
+  }
+  std::size_t count = 0;
+  std::vector<std::uint32_t> parent;
+  for (std::size_t v = 0; v < V; ++v) {
+    const std::size_t n = first[v + 1] - first[v];
+    if (n < 2) continue;
+    const std::uint32_t* ts = inc.data() + first[v];
+    parent.resize(n);
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](std::uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    // Two incident triangles are linked when they share an edge that contains v.
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t e = edges.side_edge(ts[i], k);
+        if (e == kNoEdge) continue;
+        const Edge& ed = edges.edge(e);
+        if (ed.v0 != v && ed.v1 != v) continue;
+        for (std::uint32_t other : edges.triangles_of(e)) {
+          const auto* it = std::lower_bound(ts, ts + n, other);
+          if (it != ts + n && *it == other) {
+            const std::uint32_t a = find(static_cast<std::uint32_t>(i)), b = find(static_cast<std::uint32_t>(it - ts));
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);
+          }
+        }
+      }
+    std::size_t groups = 0;
+    for (std::size_t i = 0; i < n; ++i) groups += find(static_cast<std::uint32_t>(i)) == i;
+    count += groups > 1;
+  }
+  return count;
+}
+
+}  // namespace
+
+MeshReport analyze_mesh(const Mesh& mesh, const EdgeMap& edges) {
+  MeshReport r;
+  const auto tris = mesh.triangles();
+  const auto pos = mesh.positions();
+  r.vertices = mesh.vertex_count();
+  r.triangles = tris.size();
+
+  std::vector<char> used(r.vertices, 0);
+  std::vector<double> areas(tris.size());
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    const Tri& f = tris[t];
+    for (auto v : f) used[v] = 1;
+    const Vec3 &a = pos[f[0]], &b = pos[f[1]], &c = pos[f[2]];
+    areas[t] = 0.5 * (b - a).cross(c - a).norm();
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2])
+      ++r.repeated_index_triangles;
+    else if (collinear_exact(a, b, c))
+      ++r.zero_area_triangles;
+  }
+  for (std::size_t v = 0; v < r.vertices; ++v) {
+    if (used[v])
+      r.bounds.extend(pos[v]);
+    else
+      ++r.unreferenced_vertices;
+  }
+  long double total = 0;
+  for (double a : areas) total += a;
+  r.total_area = static_cast<double>(total);
+  r.triangle_area = summarize(areas);
+
+  std::vector<double> lengths(edges.edge_count());
+  for (std::size_t e = 0; e < edges.edge_count(); ++e)
+    lengths[e] = (pos[edges.edge(e).v1] - pos[edges.edge(e).v0]).norm();
+  r.edge_length = summarize(lengths);
+
+  r.duplicate_vertices = count_duplicate_vertices(pos);
+  r.duplicate_triangles = count_duplicate_triangles(tris);
+  r.edges = edges.edge_count();
+  r.boundary_edges = edges.boundary_edge_count();
+  r.non_manifold_edges = edges.non_manifold_edge_count();
+  r.non_manifold_vertices = count_non_manifold_vertices(mesh, edges);
+  r.components = vertex_connected_components(tris, r.vertices).count;
+  r.edge_components = edge_connected_components(edges, tris.size()).count;
+  return r;
+}
+
+MeshReport analyze_mesh(const Mesh& mesh) {
+  return analyze_mesh(mesh, EdgeMap::build(mesh.triangles(), mesh.vertex_count()));
+}
+
+}  // namespace ptc

@@ -1,0 +1,61 @@
+// What `ptc info` reports about a mesh: counts, extent, area and edge statistics, and every
+// kind of defect the degenerate-input policy (docs/mesh_policy.md) counts instead of rejecting.
+#pragma once
+
+#include <cstddef>
+#include <span>
+
+#include "toolkit/core/types.h"
+#include "toolkit/mesh/mesh.h"
+#include "toolkit/mesh/topology.h"
+
+namespace ptc {
+
+/// Distribution summary of a sample. For an empty sample count = 0 and all values are 0.
+struct Summary {
+  std::size_t count = 0;
+  double min = 0, mean = 0, p50 = 0, max = 0;
+};
+/// Summary of the values (copies them for the median; O(n)).
+[[nodiscard]] Summary summarize(std::span<const double> values);
+
+struct MeshReport {
+  std::size_t vertices = 0;              ///< positions in the mesh
+  std::size_t triangles = 0;
+  std::size_t unreferenced_vertices = 0; ///< vertices used by no triangle
+  Box3 bounds;                           ///< over referenced vertices only
+  double total_area = 0;                 ///< sum of triangle areas (one side)
+  Summary triangle_area;                 ///< per triangle
+  Summary edge_length;                   ///< per unique edge (collapsed sides excluded)
+
+  // Defects, counted (never repaired) — see docs/mesh_policy.md.
+  std::size_t repeated_index_triangles = 0;  ///< a corner index appears twice or three times
+  std::size_t zero_area_triangles = 0;       ///< distinct indices but collinear corners (exact predicate)
+  std::size_t duplicate_vertices = 0;        ///< vertices whose coordinates equal an earlier vertex's (-0 == 0)
+  std::size_t duplicate_triangles = 0;       ///< triangles with the same vertex set as an earlier one
+  std::size_t edges = 0;                     ///< unique undirected edges
+  std::size_t boundary_edges = 0;            ///< edges with one incident triangle
+  std::size_t non_manifold_edges = 0;        ///< edges with three or more incident triangles
+  std::size_t non_manifold_vertices = 0;     ///< vertices whose incident triangles form two or more edge-connected fans
+  std::size_t components = 0;                ///< connected through shared vertices
+  std::size_t edge_components = 0;           ///< connected through shared edges (dual-graph components)
+
+  /// Closed 2-manifold: no boundary, non-manifold edge or vertex.
+  [[nodiscard]] bool closed_manifold() const {
+    return boundary_edges == 0 && non_manifold_edges == 0 && non_manifold_vertices == 0 && triangles > 0;
+  }
+  /// V - E + F over referenced vertices.
+  [[nodiscard]] long long euler_characteristic() const {
+    return static_cast<long long>(vertices - unreferenced_vertices) - static_cast<long long>(edges) +
+           static_cast<long long>(triangles);
+  }
+};
+
+[[nodiscard]] MeshReport analyze_mesh(const Mesh& mesh, const EdgeMap& edges);
+[[nodiscard]] MeshReport analyze_mesh(const Mesh& mesh);
+
+/// Exact orientation predicate: true when a, b, c are collinear (including coincident points).
+/// Uses CGAL's filtered exact predicates, so the answer is exact for all finite doubles.
+[[nodiscard]] bool collinear_exact(const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace ptc
