@@ -63,15 +63,53 @@ inline constexpr SphereMethod kAllSphereMethods[] = {SphereMethod::Exact,  Spher
 /// radius as a + b*sqrt(t) with rational a, b, t; they are rounded to double here (radius to
 /// nearest, via MPFR), so `radius` is within 1 ulp of the true minimal radius.
 /// Containment is NOT re-inflated: this is the reference value.
+/// Guarantee (stronger than the line above): every center coordinate and the radius are the
+/// correctly rounded (to nearest, ties to even) doubles of the exact values. Cancellation in
+/// a + b*sqrt(t) is avoided by evaluating (a^2 - b^2 t) / (a - b sqrt(t)) when the terms have
+/// opposite signs, with a Ziv loop (mpfr_can_round) that raises the precision from 256 bits
+/// until the rounding is decided; a rational value (b = 0 or t a perfect square) is rounded
+/// directly. Because the center is rounded, |p - center| computed in double may exceed `radius`
+/// by up to ~2 ulp of the largest coordinate magnitude (see exact_containment_tol).
 [[nodiscard]] Sphere min_sphere_exact(std::span<const Vec3> points);
 
+/// The relative tolerance under which contains_all holds for min_sphere_exact's result: the
+/// rounding of the center to double displaces it by up to sqrt(3)/2 ulp of the largest
+/// coordinate magnitude M, so tol = kSphereContainmentTol + 4 eps M / radius (infinite for a
+/// radius of 0, where contains_all uses its own absolute rule).
+[[nodiscard]] double exact_containment_tol(const Sphere& exact, std::span<const Vec3> points);
+
+/// Ritter 1990: pass 1 finds the points of extreme x, y, z and spans the initial sphere over the
+/// farthest of the three pairs; pass 2 grows the sphere over every outside point (center moved
+/// toward it, new radius (r + d) / 2). Like every approximation below, a last pass sets the
+/// radius to the largest center-point distance: that is what makes containment hold under
+/// rounding, and it removes the growth passes' overshoot (never larger than Ritter's radius).
 [[nodiscard]] Sphere ritter_sphere(std::span<const Vec3> points);
+/// EPOS-2s (Larsson 2008): the points of extreme projection onto s fixed directions (axes, cube
+/// diagonals, cube edge directions), their minimal sphere (Welzl's move-to-front in double on
+/// normalised coordinates; duplicates removed first), then Ritter's growth pass over all points
+/// and the containment pass. Sets of at most 2s points are solved directly (Larsson's rule).
 /// directions: 3, 7 or 13 (EPOS-6, -14, -26); other values throw std::invalid_argument.
+/// Cost is O(s n): on cluster-sized sets (~65 points) EPOS-14/-26 are slower than min_sphere.
 [[nodiscard]] Sphere epos_sphere(std::span<const Vec3> points, int directions);
 
 /// Minimal sphere of a triangle in closed form: the circumsphere when the triangle is acute
 /// (center in the plane), otherwise the sphere over the longest edge; degenerate triangles
 /// (collinear or repeated corners) give the sphere over the two farthest corners.
+/// The acute case is computed relative to the corner with the largest angle (the cross
+/// product is then well conditioned), the others from the longest edge's midpoint; the radius
+/// is finally raised to the largest center-corner distance (containment, as above).
 [[nodiscard]] Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c);
+
+/// AvgSA of method.md: the mean surface area 4 pi R^2 of the minimal spheres of the single
+/// triangles (triangle_min_sphere); 0 for no triangles. Indices must be < positions.size()
+/// (asserted).
+[[nodiscard]] double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<const Tri> triangles);
+
+namespace detail {
+/// The rounding behind min_sphere_exact, exposed for tests: the correctly rounded (to nearest,
+/// ties to even) double of a + b*sqrt(t) for rationals written "p/q" or "p" (base 10, t >= 0).
+/// Throws std::invalid_argument on malformed text.
+[[nodiscard]] double round_sqrt_form(std::string_view a, std::string_view b, std::string_view t);
+}  // namespace detail
 
 }  // namespace ptc

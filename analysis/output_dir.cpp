@@ -1,0 +1,76 @@
+#include "analysis/output_dir.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <system_error>
+
+#include "toolkit/core/error.h"
+
+namespace ptc {
+namespace fs = std::filesystem;
+
+namespace {
+std::string unique_suffix() {
+  static std::atomic<unsigned> counter{0};
+  return std::to_string(::getpid()) + "-" + std::to_string(counter++);
+}
+}  // namespace
+
+OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
+  if (target_.empty()) throw InputError("", "", "--out", "output directory name is empty");
+  std::error_code ec;
+  if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
+    throw InputError(target_.string(), "", "", "exists and is not a directory");
+  fs::path parent = target_.parent_path();
+  if (!parent.empty()) {
+    fs::create_directories(parent, ec);
+    if (ec) throw InputError(parent.string(), "", "", "cannot create directory: " + ec.message());
+  }
+  const std::string leaf = target_.filename().string();
+  tmp_ = (parent.empty() ? fs::path(".") : parent) / ("." + leaf + ".tmp-" + unique_suffix());
+  fs::create_directory(tmp_, ec);
+  if (ec) throw InputError(tmp_.string(), "", "", "cannot create directory: " + ec.message());
+}
+
+OutputDir::~OutputDir() {
+  if (!committed_) {
+    std::error_code ec;
+    fs::remove_all(tmp_, ec);
+  }
+}
+
+fs::path OutputDir::path(std::string_view name) const { return tmp_ / fs::path(name); }
+
+void OutputDir::write(std::string_view name, std::string_view bytes) const {
+  const fs::path p = path(name);
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  if (out) out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) throw InputError((target_ / fs::path(name)).string(), "", "", std::string("cannot write: ") + std::strerror(errno));
+}
+
+void OutputDir::commit() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::path old;
+  if (fs::exists(target_, ec)) {
+    old = tmp_;
+    old += ".old";
+    fs::rename(target_, old, ec);
+    if (ec) throw InputError(target_.string(), "", "", "cannot move the previous output aside: " + ec.message());
+  }
+  fs::rename(tmp_, target_, ec);
+  if (ec) {
+    std::error_code ignore;
+    if (!old.empty()) fs::rename(old, target_, ignore);  // put the user's directory back
+    throw InputError(target_.string(), "", "", "cannot move the output into place: " + ec.message());
+  }
+  committed_ = true;
+  if (!old.empty()) fs::remove_all(old, ec);
+}
+
+}  // namespace ptc

@@ -1,0 +1,37 @@
+// Outputs are written whole or not at all: an output directory is assembled under a temporary
+// sibling name and renamed into place by commit(). An existing directory of the same name is
+// replaced only at that moment (moved aside, then deleted), so an interrupted or failed run
+// leaves whatever the user had intact.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace ptc {
+
+class OutputDir {
+ public:
+  /// Creates the temporary sibling directory of `target` (its parent is created if missing).
+  /// Errors (parent not writable, target is a file) throw InputError naming the path.
+  explicit OutputDir(std::filesystem::path target);
+  OutputDir(const OutputDir&) = delete;
+  OutputDir& operator=(const OutputDir&) = delete;
+  /// Removes the temporary directory unless committed.
+  ~OutputDir();
+
+  /// Path inside the temporary directory for a file that will end up as target/name.
+  [[nodiscard]] std::filesystem::path path(std::string_view name) const;
+  /// Writes `bytes` to target/name (inside the temporary directory).
+  void write(std::string_view name, std::string_view bytes) const;
+  /// Moves the finished directory into place.
+  void commit();
+
+  [[nodiscard]] const std::filesystem::path& target() const { return target_; }
+
+ private:
+  std::filesystem::path target_, tmp_;
+  bool committed_ = false;
+};
+
+}  // namespace ptc

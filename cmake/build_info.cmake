@@ -1,0 +1,20 @@
+# Writes ptc_build_info.h with the git commit of the source tree; rewritten only when it changes,
+# so a manifest always names the commit the binary was built from.
+execute_process(COMMAND git -C ${SRC} rev-parse HEAD OUTPUT_VARIABLE commit OUTPUT_STRIP_TRAILING_WHITESPACE
+                ERROR_QUIET RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0 OR commit STREQUAL "")
+  set(commit "unknown")
+endif()
+execute_process(COMMAND git -C ${SRC} status --porcelain --untracked-files=no OUTPUT_VARIABLE status ERROR_QUIET)
+if(status STREQUAL "")
+  set(dirty 0)
+else()
+  set(dirty 1)
+endif()
+set(text "#pragma once\n#define PTC_GIT_COMMIT \"${commit}\"\n#define PTC_GIT_DIRTY ${dirty}\n")
+if(EXISTS ${OUT})
+  file(READ ${OUT} old)
+endif()
+if(NOT old STREQUAL text)
+  file(WRITE ${OUT} "${text}")
+endif()

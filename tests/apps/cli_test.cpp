@@ -1,0 +1,213 @@
+// The `ptc` command as a user runs it: exit codes, one-line errors naming file and element,
+// atomic outputs, and every sample mesh of libcgal-demo giving a result or a clear error.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RunResult {
+  int code = -1;        // exit code, or -signal when killed by a signal
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) {
+    if (c == '\'')
+      q.append("'\\''");
+    else
+      q.push_back(c);
+  }
+  return q + "'";
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("ptc_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  RunResult ptc(const std::vector<std::string>& args) const {
+    std::string cmd = quote(PTC_BIN);
+    for (const auto& a : args) cmd.append(" ").append(quote(a));
+    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
+    cmd.append(" >").append(quote(o.string())).append(" 2>").append(quote(e.string()));
+    const int status = std::system(cmd.c_str());
+    RunResult r;
+    if (WIFEXITED(status)) r.code = WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) r.code = -WTERMSIG(status);
+    r.out = slurp(o);
+    r.err = slurp(e);
+    return r;
+  }
+  fs::path write(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+  fs::path dir_;
+};
+
+std::size_t lines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
+
+const char* kCube =
+    "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+    "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
+
+TEST_F(Cli, UsageErrorsExitTwo) {
+  EXPECT_EQ(ptc({}).code, 2);
+  EXPECT_EQ(ptc({"info"}).code, 2);
+  EXPECT_EQ(ptc({"info", "x.off", "--bogus"}).code, 2);
+  EXPECT_EQ(ptc({"frobnicate"}).code, 2);
+  const auto cube = write("cube.off", kCube).string();
+  EXPECT_EQ(ptc({"subdivide", cube, "--levels", "-1", "--out", (dir_ / "o.off").string()}).code, 2);
+  EXPECT_EQ(ptc({"subdivide", cube, "--scheme", "butterfly", "--out", (dir_ / "o.off").string()}).code, 2);
+  EXPECT_EQ(ptc({"spheres", cube, "--methods", "exact,bogus"}).code, 2);
+  EXPECT_EQ(ptc({"spheres", cube, "--min-run", "10", "--max-run", "5"}).code, 2);
+  EXPECT_EQ(ptc({"info", "--help"}).code, 0);
+}
+
+TEST_F(Cli, BadInputExitsOneWithOneLineNamingFileAndElement) {
+  const auto missing = (dir_ / "missing.off").string();
+  auto r = ptc({"info", missing});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("missing.off"), std::string::npos) << r.err;
+
+  const auto nan = write("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n").string();
+  r = ptc({"info", nan});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("nan.off"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("vertex 1"), std::string::npos) << r.err;
+
+  const auto idx = write("idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").string();
+  r = ptc({"info", idx});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("idx.obj"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("line 4"), std::string::npos) << r.err;
+
+  const auto lie = write("lie.off", "OFF\n1000000000000 1 0\n0 0 0\n").string();
+  r = ptc({"info", lie});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+
+  const auto unknown = write("mesh.xyz", "1 2 3\n").string();
+  r = ptc({"info", unknown});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("mesh.xyz"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, InfoJsonMatchesTheMesh) {
+  const auto cube = write("cube.off", kCube).string();
+  auto r = ptc({"info", cube, "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["schema"], "ptc-info/1");
+  EXPECT_EQ(j["triangles"], 12);
+  EXPECT_EQ(j["vertices"], 8);
+  EXPECT_EQ(j["edges"], 18);
+  EXPECT_EQ(j["boundary_edges"], 0);
+  EXPECT_EQ(j["closed_manifold"], true);
+  EXPECT_EQ(j["euler_characteristic"], 2);
+  EXPECT_DOUBLE_EQ(j["total_area"].get<double>(), 6.0);
+  r = ptc({"info", cube});
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("triangles"), std::string::npos);
+}
+
+TEST_F(Cli, SubdivideCountsAndAtomicOutput) {
+  const auto cube = write("cube.off", kCube).string();
+  const auto out = (dir_ / "fine.ply").string();
+  auto r = ptc({"subdivide", cube, "--levels", "2", "--out", out, "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["triangles_out"], 12 * 16);
+  r = ptc({"info", out, "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto k = nlohmann::json::parse(r.out);
+  EXPECT_EQ(k["triangles"], 192);
+  EXPECT_EQ(k["closed_manifold"], true);
+  EXPECT_DOUBLE_EQ(k["total_area"].get<double>(), 6.0);  // midpoint split keeps the surface
+  // A failing run must not touch the existing output.
+  const std::string before = slurp(out);
+  const auto bad = write("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n").string();
+  r = ptc({"subdivide", bad, "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(slurp(out), before);
+  // Loop refuses a non-manifold mesh with a clear error.
+  const auto fan = write("fan.off", "OFF\n5 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n0 -1 0\n3 0 1 2\n3 1 0 3\n3 0 1 4\n").string();
+  r = ptc({"subdivide", fan, "--scheme", "loop", "--out", (dir_ / "fan2.off").string()});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "fan2.off"));
+}
+
+TEST_F(Cli, SpheresWritesCsvAndManifestAtomically) {
+  const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  const auto out = dir_ / "spheres";
+  auto r = ptc({"spheres", mesh, "--repeats", "1", "--out", out.string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(out / "spheres.csv"));
+  ASSERT_TRUE(fs::exists(out / "sphere_sets.csv"));
+  ASSERT_TRUE(fs::exists(out / "manifest.json"));
+  const std::string csv = slurp(out / "spheres.csv");
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "method,point_sets,ns_per_sphere,ns_per_sphere_min,ns_per_sphere_max,rel_err_mean,rel_err_max,not_containing");
+  EXPECT_EQ(lines(csv), 7u);  // header + 6 methods
+  const auto m = nlohmann::json::parse(slurp(out / "manifest.json"));
+  EXPECT_EQ(m["command"], "spheres");
+  EXPECT_EQ(m["inputs"][0]["fnv1a64"].get<std::string>().size(), 16u);
+  EXPECT_TRUE(m["build"]["libraries"].contains("cgal"));
+  EXPECT_TRUE(m["machine"].contains("logical_cores"));
+  // A failed run leaves the previous directory whole; no temporary directories remain.
+  const auto bad = write("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n").string();
+  r = ptc({"spheres", bad, "--out", out.string()});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(slurp(out / "spheres.csv"), csv);
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".spheres.tmp"), std::string::npos) << e.path();
+}
+
+TEST_F(Cli, EverySampleMeshGivesAResultOrAClearError) {
+  std::size_t ok = 0, rejected = 0;
+  for (const auto& e : fs::directory_iterator(std::string(PTC_TEST_DATA) + "/meshes")) {
+    const auto r = ptc({"info", e.path().string(), "--json"});
+    ASSERT_TRUE(r.code == 0 || r.code == 1) << e.path() << " exit " << r.code << "\n" << r.err;
+    if (r.code == 0) {
+      EXPECT_TRUE(nlohmann::json::accept(r.out)) << e.path();
+      ++ok;
+    } else {
+      EXPECT_EQ(lines(r.err), 1u) << e.path() << ": " << r.err;
+      EXPECT_NE(r.err.find(e.path().filename().string()), std::string::npos) << r.err;
+      ++rejected;
+    }
+  }
+  EXPECT_GT(ok, 100u);
+  std::cout << "[ sample meshes ] " << ok << " loaded, " << rejected << " rejected with a clear error\n";
+}
+
+}  // namespace

@@ -1,0 +1,148 @@
+// OBJ reader against hand-written files: corner forms, relative indices, ignored keywords.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "toolkit/core/error.h"
+#include "toolkit/io/mesh_io.h"
+
+namespace ptc {
+namespace {
+
+LoadedMesh obj(std::string_view text) { return read_mesh_from_memory(text, MeshFormat::Obj, "t.obj"); }
+
+InputError obj_error(std::string_view text) {
+  try {
+    (void)obj(text);
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "t.obj");
+    EXPECT_NE(std::string(e.what()).find("t.obj"), std::string::npos) << e.what();
+    return e;
+  }
+  ADD_FAILURE() << "no InputError for:\n" << text;
+  return InputError("", "", "", "");
+}
+
+TEST(IoObj, CornerFormsAndIgnoredKeywords) {
+  const auto lm = obj(
+      "# comment\nmtllib scene.mtl\no thing\ng group\ns 1\nusemtl red\n"
+      "v 0 0 0\nv 1 0 0 1.0\nv 0 1 0\nv 0 0 1 0.5 0.5 0.5\n"
+      "vt 0 0\nvt 1 0\nvn 0 0 1\nvp 0.5\n"
+      "f 1 2 3\n"
+      "f 1/1 2/2 4/1\n"
+      "f 1/1/1 3/2/1 4/1/1 # trailing comment\n"
+      "f 2//1 3//1 4//1\n"
+      "l 1 2\np 3\ncurv 0 1 1 2\nfoo bar\n");
+  const Mesh& m = lm.mesh;
+  ASSERT_EQ(m.vertex_count(), 4u);
+  EXPECT_EQ(m.position(0), Vec3(0, 0, 0));
+  EXPECT_EQ(m.position(1), Vec3(1, 0, 0));
+  EXPECT_EQ(m.position(2), Vec3(0, 1, 0));
+  EXPECT_EQ(m.position(3), Vec3(0, 0, 1));
+  ASSERT_EQ(m.triangle_count(), 4u);
+  EXPECT_EQ(m.triangle(0), (Tri{0, 1, 2}));
+  EXPECT_EQ(m.triangle(1), (Tri{0, 1, 3}));
+  EXPECT_EQ(m.triangle(2), (Tri{0, 2, 3}));
+  EXPECT_EQ(m.triangle(3), (Tri{1, 2, 3}));
+  EXPECT_EQ(lm.report.format, MeshFormat::Obj);
+  EXPECT_EQ(lm.report.faces, 4u);
+  EXPECT_EQ(lm.report.source_face, (std::vector<std::uint32_t>{0, 1, 2, 3}));
+}
+
+TEST(IoObj, NegativeIndicesAreRelativeToTheVerticesDefinedSoFar) {
+  const auto lm = obj(
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+      "f -3 -2 -1\n"         // 0 1 2
+      "v 1 1 0\n"
+      "f -3/-1 -1/-1 -2\n"   // 1 3 2
+      "v 2 2 2\nv 3 3 3\n"
+      "f -1//-1 -2//-1 1\n"  // 5 4 0
+      "f 6 -5 -2\n");        // 5 1 4 (absolute and relative mixed)
+  const Mesh& m = lm.mesh;
+  ASSERT_EQ(m.triangle_count(), 4u);
+  EXPECT_EQ(m.triangle(0), (Tri{0, 1, 2}));
+  EXPECT_EQ(m.triangle(1), (Tri{1, 3, 2}));
+  EXPECT_EQ(m.triangle(2), (Tri{5, 4, 0}));
+  EXPECT_EQ(m.triangle(3), (Tri{5, 1, 4}));
+}
+
+TEST(IoObj, ForwardReferencesPolygonsAndCrLf) {
+  const auto lm = obj("f 1 2 3 4 5\r\nv 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\nv -1 0.5 0\r\n");
+  const Mesh& m = lm.mesh;
+  ASSERT_EQ(m.triangle_count(), 3u);
+  EXPECT_EQ(m.triangle(0), (Tri{0, 1, 2}));
+  EXPECT_EQ(m.triangle(1), (Tri{0, 2, 3}));
+  EXPECT_EQ(m.triangle(2), (Tri{0, 3, 4}));
+  EXPECT_EQ(lm.report.polygons, 1u);
+  EXPECT_EQ(lm.report.triangles_from_polygons, 3u);
+  EXPECT_EQ(m.position(4), Vec3(-1, 0.5, 0));
+}
+
+TEST(IoObj, BadIndices) {
+  auto e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 0 3\n");
+  EXPECT_EQ(e.location(), "line 5");
+  EXPECT_EQ(e.element(), "face 1");
+  EXPECT_EQ(e.reason(), "index 0 is invalid (OBJ indices start at 1)");
+  e = obj_error("v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n");
+  EXPECT_EQ(e.location(), "line 3");
+  EXPECT_EQ(e.element(), "face 0");
+  EXPECT_EQ(e.reason(), "relative index -3 refers before the first vertex (2 vertices defined so far)");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 57\nf 1 2 4\n");
+  EXPECT_EQ(e.location(), "line 5");
+  EXPECT_EQ(e.element(), "face 1");
+  EXPECT_EQ(e.reason(), "index 57 out of range [1, 3] (the file defines 3 vertices)");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n");
+  EXPECT_NE(e.reason().find("refers before the first vertex"), std::string::npos) << e.what();
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n");
+  EXPECT_NE(e.reason().find("out of range"), std::string::npos) << e.what();
+}
+
+TEST(IoObj, GarbledAndShortLines) {
+  auto e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/x/3 2 3\n");
+  EXPECT_EQ(e.location(), "line 4");
+  EXPECT_EQ(e.reason(), "corner '1/x/3' is not of the form i, i/t, i/t/n or i//n");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3a\n");
+  EXPECT_EQ(e.reason(), "corner '3a' is not an integer index");
+  e = obj_error("v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_EQ(e.location(), "line 2");
+  EXPECT_EQ(e.element(), "vertex 1");
+  EXPECT_EQ(e.reason(), "expected 3 coordinates, found 2");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0..5\nf 1 2 3\n");
+  EXPECT_EQ(e.element(), "vertex 2");
+  EXPECT_EQ(e.reason(), "coordinate 2 '0..5' is not a number");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n");
+  EXPECT_EQ(e.location(), "line 5");
+  EXPECT_EQ(e.element(), "face 1");
+  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
+}
+
+TEST(IoObj, NanInfEmptyAndNoFaces) {
+  auto e = obj_error("v 0 0 0\nv 1 NaN 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_EQ(e.location(), "line 2");
+  EXPECT_EQ(e.element(), "vertex 1");
+  EXPECT_EQ(e.reason(), "coordinate 1 is NaN");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv inf 1 0\nf 1 2 3\n");
+  EXPECT_EQ(e.reason(), "coordinate 0 is infinite");
+  e = obj_error("");
+  EXPECT_EQ(e.reason(), "mesh has no triangles");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\n");
+  EXPECT_EQ(e.reason(), "mesh has no triangles");
+}
+
+TEST(IoObj, TruncatedFiles) {
+  const std::string full = "v 0.5 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\n";
+  // Mid-number in the last vertex: the face refers to a vertex that no longer exists.
+  auto e = obj_error(full.substr(0, full.find("v 0 0 1") + 4) + "\n");
+  EXPECT_EQ(e.location(), "line 4");
+  EXPECT_EQ(e.reason(), "expected 3 coordinates, found 1");
+  // Cut in the last face's index list.
+  e = obj_error(full.substr(0, full.size() - 3));  // "f 1 3"
+  EXPECT_EQ(e.location(), "line 6");
+  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
+  // Cut before any face.
+  e = obj_error(full.substr(0, full.find('f')));
+  EXPECT_EQ(e.reason(), "mesh has no triangles");
+}
+
+}  // namespace
+}  // namespace ptc

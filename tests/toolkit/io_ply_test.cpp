@@ -1,0 +1,354 @@
+// PLY reader against files built byte by byte: all three encodings, skipped properties and
+// elements (lists included), every scalar type name, and each kind of bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "toolkit/core/error.h"
+#include "toolkit/io/mesh_io.h"
+
+namespace ptc {
+namespace {
+
+LoadedMesh ply(std::string_view bytes) { return read_mesh_from_memory(bytes, MeshFormat::Ply, "t.ply"); }
+
+InputError ply_error(std::string_view bytes) {
+  try {
+    (void)ply(bytes);
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "t.ply");
+    EXPECT_NE(std::string(e.what()).find("t.ply"), std::string::npos) << e.what();
+    return e;
+  }
+  ADD_FAILURE() << "no InputError";
+  return InputError("", "", "", "");
+}
+
+// Binary data in either byte order.
+struct Bytes {
+  bool big = false;
+  std::string s;
+  template <class T>
+  Bytes& put(T v) {
+    char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));
+    if (big)
+      for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
+    s.append(b, sizeof(T));
+    return *this;
+  }
+};
+
+// Four vertices with mixed coordinate types, a vertex list property, an edge element with a list
+// before the faces, a triangle and a quad with extra face properties, and a material element last.
+const char* kHeaderBody =
+    "comment made by hand\n"
+    "obj_info nothing to see\n"
+    "element vertex 4\n"
+    "property float x\n"
+    "property uchar red\n"
+    "property double y\n"
+    "property int16 z\n"
+    "property list uchar float texcoord\n"
+    "element edge 2\n"
+    "property int vertex1\n"
+    "property list ushort int path\n"
+    "property char flag\n"
+    "element face 2\n"
+    "property uchar flags\n"
+    "property list uint8 uint32 vertex_indices\n"
+    "property float quality\n"
+    "element material 1\n"
+    "property uchar r\n"
+    "property float64 shininess\n"
+    "end_header\n";
+
+std::string binary_file(bool big) {
+  std::string s = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") + " 1.0\n" +
+                  kHeaderBody;
+  Bytes b{big, {}};
+  // vertices: x (float), red, y (double), z (int16), texcoord list
+  b.put(0.5f).put<std::uint8_t>(200).put(-1.25).put<std::int16_t>(3).put<std::uint8_t>(2).put(0.25f).put(0.75f);
+  b.put(0.1f).put<std::uint8_t>(0).put(1e-300).put<std::int16_t>(-2).put<std::uint8_t>(0);
+  b.put(-7.0f).put<std::uint8_t>(1).put(2.0).put<std::int16_t>(32767).put<std::uint8_t>(1).put(9.f);
+  b.put(1e30f).put<std::uint8_t>(2).put(-0.0).put<std::int16_t>(-32768).put<std::uint8_t>(0);
+  // edges: vertex1, path (ushort count, ints), flag
+  b.put<std::int32_t>(0).put<std::uint16_t>(3).put<std::int32_t>(0).put<std::int32_t>(1).put<std::int32_t>(2).put<std::int8_t>(-1);
+  b.put<std::int32_t>(1).put<std::uint16_t>(0).put<std::int8_t>(5);
+  // faces: flags, vertex_indices, quality
+  b.put<std::uint8_t>(1).put<std::uint8_t>(3).put<std::uint32_t>(0).put<std::uint32_t>(1).put<std::uint32_t>(2).put(0.5f);
+  b.put<std::uint8_t>(2).put<std::uint8_t>(4).put<std::uint32_t>(3).put<std::uint32_t>(2).put<std::uint32_t>(1).put<std::uint32_t>(0).put(1.5f);
+  // material
+  b.put<std::uint8_t>(9).put(0.125);
+  return s + b.s;
+}
+
+const char* kAsciiFile =
+    "ply\nformat ascii 1.0\n"
+    "comment made by hand\n"
+    "element vertex 4\n"
+    "property float x\nproperty uchar red\nproperty double y\nproperty int16 z\n"
+    "property list uchar float texcoord\n"
+    "element edge 2\nproperty int vertex1\nproperty list ushort int path\nproperty char flag\n"
+    "element face 2\nproperty uchar flags\nproperty list uint8 uint32 vertex_indices\nproperty float quality\n"
+    "element material 1\nproperty uchar r\nproperty float64 shininess\n"
+    "end_header\n"
+    "0.5 200 -1.25 3 2 0.25 0.75\n"
+    "0.1 0 1e-300 -2 0\n"
+    "-7 1 2 32767 1 9\n"
+    "1e30 2 -0 -32768 0\n"
+    "0 3 0 1 2 -1\n"
+    "1 0 5\n"
+    "1 3 0 1 2 0.5\n"
+    "2 4 3 2 1 0 1.5\n"
+    "9 0.125\n";
+
+void expect_reference_mesh(const LoadedMesh& lm, bool float_x) {
+  const Mesh& m = lm.mesh;
+  ASSERT_EQ(m.vertex_count(), 4u);
+  // Binary x is a float (0.1f widened); ascii x is the decimal text read as double.
+  EXPECT_EQ(m.position(0), Vec3(0.5, -1.25, 3));
+  EXPECT_EQ(m.position(1), Vec3(float_x ? static_cast<double>(0.1f) : 0.1, 1e-300, -2));
+  EXPECT_EQ(m.position(2), Vec3(-7, 2, 32767));
+  EXPECT_EQ(m.position(3), Vec3(float_x ? static_cast<double>(1e30f) : 1e30, 0, -32768));
+  EXPECT_TRUE(std::signbit(m.position(3).y()));
+  ASSERT_EQ(m.triangle_count(), 3u);
+  EXPECT_EQ(m.triangle(0), (Tri{0, 1, 2}));
+  EXPECT_EQ(m.triangle(1), (Tri{3, 2, 1}));
+  EXPECT_EQ(m.triangle(2), (Tri{3, 1, 0}));
+  EXPECT_EQ(lm.report.format, MeshFormat::Ply);
+  EXPECT_EQ(lm.report.faces, 2u);
+  EXPECT_EQ(lm.report.polygons, 1u);
+  EXPECT_EQ(lm.report.triangles_from_polygons, 2u);
+  EXPECT_EQ(lm.report.source_face, (std::vector<std::uint32_t>{0, 1, 1}));
+}
+
+TEST(IoPly, BinaryLittleEndian) {
+  const auto lm = ply(binary_file(false));
+  expect_reference_mesh(lm, true);
+  EXPECT_TRUE(lm.report.binary);
+}
+
+TEST(IoPly, BinaryBigEndian) {
+  const auto lm = ply(binary_file(true));
+  expect_reference_mesh(lm, true);
+  EXPECT_TRUE(lm.report.binary);
+}
+
+TEST(IoPly, Ascii) {
+  const auto lm = ply(kAsciiFile);
+  expect_reference_mesh(lm, false);
+  EXPECT_FALSE(lm.report.binary);
+}
+
+TEST(IoPly, CrLfHeaderFaceBeforeVertexAndVertexIndexName) {
+  std::string s =
+      "ply\r\nformat binary_little_endian 1.0\r\n"
+      "element face 1\r\nproperty list int short vertex_index\r\n"
+      "element vertex 3\r\nproperty int x\r\nproperty uint y\r\nproperty char z\r\nend_header\r\n";
+  Bytes b;
+  b.put<std::int32_t>(3).put<std::int16_t>(2).put<std::int16_t>(0).put<std::int16_t>(1);
+  b.put<std::int32_t>(-5).put<std::uint32_t>(4000000000u).put<std::int8_t>(-128);
+  b.put<std::int32_t>(1).put<std::uint32_t>(0).put<std::int8_t>(127);
+  b.put<std::int32_t>(2).put<std::uint32_t>(1).put<std::int8_t>(0);
+  const auto lm = ply(s + b.s);
+  ASSERT_EQ(lm.mesh.vertex_count(), 3u);
+  EXPECT_EQ(lm.mesh.position(0), Vec3(-5, 4000000000.0, -128));
+  EXPECT_EQ(lm.mesh.position(1), Vec3(1, 0, 127));
+  EXPECT_EQ(lm.mesh.position(2), Vec3(2, 1, 0));
+  ASSERT_EQ(lm.mesh.triangle_count(), 1u);
+  EXPECT_EQ(lm.mesh.triangle(0), (Tri{2, 0, 1}));
+}
+
+// ---- errors --------------------------------------------------------------------------------------
+
+std::string ascii_tri(std::string_view vertex_lines, std::string_view face_lines, int nv = 3, int nf = 1) {
+  return "ply\nformat ascii 1.0\nelement vertex " + std::to_string(nv) +
+         "\nproperty float x\nproperty float y\nproperty float z\nelement face " + std::to_string(nf) +
+         "\nproperty list uchar int vertex_indices\nend_header\n" + std::string(vertex_lines) +
+         std::string(face_lines);
+}
+
+TEST(IoPly, BadHeaderLinesNameTheLine) {
+  struct Case {
+    std::string text, location, reason_part;
+  };
+  const Case cases[] = {
+      {"", "line 1", "file is empty"},
+      {"plx\nformat ascii 1.0\nend_header\n", "line 1", "missing 'ply'"},
+      {"ply\nformat binary_middle_endian 1.0\nend_header\n", "line 2", "unknown format 'binary_middle_endian'"},
+      {"ply\nformat ascii 2.0\nend_header\n", "line 2", "unsupported format version '2.0'"},
+      {"ply\nformat ascii 1.0\nelement vertex 3\nproperty floaty x\nend_header\n", "line 4",
+       "unknown property type 'floaty'"},
+      {"ply\nformat ascii 1.0\nelemnt vertex 3\nend_header\n", "line 3", "unknown header keyword 'elemnt'"},
+      {"ply\nformat ascii 1.0\nproperty float x\nend_header\n", "line 3", "property before any element"},
+      {"ply\nformat ascii 1.0\nelement vertex -3\nend_header\n", "line 3", "not a non-negative integer"},
+      {"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n", "line 4", "no end_header"},
+      {"ply\nelement vertex 0\nend_header\n", "line 3", "no format line"},
+      {"ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n", "line 5",
+       "no vertex element"},
+      {"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nend_header\n", "line 3",
+       "vertex element has no z property"},
+      {"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 0\nproperty list uchar float vertex_indices\nend_header\n",
+       "line 8", "must have an integer type"},
+      {"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 0\nproperty int vertex_indices\nend_header\n",
+       "line 8", "must be a list"},
+      {"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 0\nproperty uchar red\nend_header\n",
+       "line 7", "face element has no vertex_indices list"},
+      {"ply\nformat ascii 1.0\nelement vertex 0\nproperty list float float x\nend_header\n", "line 4",
+       "list count type must be an integer type"},
+  };
+  for (const Case& c : cases) {
+    const InputError e = ply_error(c.text);
+    EXPECT_EQ(e.location(), c.location) << e.what();
+    EXPECT_EQ(e.element(), "header") << e.what();
+    EXPECT_NE(e.reason().find(c.reason_part), std::string::npos) << e.what();
+  }
+}
+
+TEST(IoPly, HeaderClaiming2To40VerticesThrowsBeforeAllocating) {
+  for (const char* fmt : {"ascii", "binary_little_endian"}) {
+    const std::string s = std::string("ply\nformat ") + fmt +
+                          " 1.0\nelement vertex 1099511627776\nproperty float x\nproperty float y\nproperty float z\n"
+                          "end_header\n0 0 0\n";
+    const InputError e = ply_error(s);
+    EXPECT_EQ(e.location(), "line 3") << e.what();
+    EXPECT_EQ(e.element(), "header");
+    EXPECT_NE(e.reason().find("exceeds the 32-bit limit"), std::string::npos) << e.what();
+  }
+  // Within 32 bits, but more than the bytes after the header can hold (12 bytes per vertex).
+  const std::string s =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n0123456789ab";
+  const InputError e = ply_error(s);
+  EXPECT_EQ(e.location(), "line 3");
+  EXPECT_NE(e.reason().find("header claims 1000000000 vertices"), std::string::npos) << e.what();
+  EXPECT_NE(e.reason().find("only 12 bytes"), std::string::npos) << e.what();
+  // A skipped element claiming too much is caught the same way.
+  const InputError f = ply_error(binary_file(false).replace(binary_file(false).find("edge 2"), 6, "edge 4000000000"));
+  EXPECT_EQ(f.location(), "line 11");
+  EXPECT_NE(f.reason().find("'edge' elements"), std::string::npos) << f.what();
+}
+
+TEST(IoPly, TruncatedBinaryAtEveryByte) {
+  for (bool big : {false, true}) {
+    const std::string full = binary_file(big);
+    const std::size_t data = full.find("end_header\n") + 11;
+    for (std::size_t cut = 0; cut < full.size(); ++cut) {
+      try {
+        (void)ply(full.substr(0, cut));
+        ADD_FAILURE() << "loaded a file cut at byte " << cut;
+      } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), "t.ply");
+        if (cut >= data) {
+          // Either the up-front check (the header claims more than the bytes left can hold) or the
+          // element being read when the data ran out, at its byte offset.
+          const bool claim = e.element() == "header" && e.reason().find("header claims") != std::string::npos;
+          const bool at_byte = e.location().rfind("byte ", 0) == 0 && !e.element().empty() &&
+                               e.reason().find("file ends after") != std::string::npos;
+          EXPECT_TRUE(claim || at_byte) << "cut " << cut << ": " << e.what();
+        } else {
+          EXPECT_EQ(e.location().rfind("line ", 0), 0u) << "cut " << cut << ": " << e.what();
+        }
+      }
+    }
+  }
+  // Fixed-size data cut short: the header claims more than is left.
+  const std::string full = binary_file(false);
+  const std::size_t data = full.find("end_header\n") + 11;
+  InputError e = ply_error(full.substr(0, data + 20));
+  EXPECT_EQ(e.location(), "line 5");
+  EXPECT_EQ(e.element(), "header");
+  EXPECT_EQ(e.reason(), "header claims 4 vertices (at least 16 bytes each) but the file has only 20 bytes after the header");
+  // Cut inside face 1's index list (2 of its 4 indices present): the minimum sizes still fit, the
+  // reader runs out at the third index.
+  const std::size_t face1 = full.size() - 9 - 22;
+  e = ply_error(full.substr(0, face1 + 10));
+  EXPECT_EQ(e.element(), "face 1");
+  EXPECT_EQ(e.reason(), "file ends after 1 of 2 faces");
+  EXPECT_EQ(e.location(), "byte " + std::to_string(face1 + 2));
+}
+
+TEST(IoPly, TruncatedAscii) {
+  const std::string full = kAsciiFile;
+  // Cut early: fewer bytes are left than the claimed elements need (2 per value at least).
+  auto e = ply_error(full.substr(0, full.find("-7 1 2")));
+  EXPECT_EQ(e.element(), "header");
+  EXPECT_EQ(e.location(), "line 10");
+  EXPECT_EQ(e.reason(), "header claims 2 'edge' elements (at least 6 bytes each) but the file has only 46 bytes after the header");
+  // Cut late: the reader runs out of tokens.
+  e = ply_error(full.substr(0, full.find(" 1 0 1.5")));  // mid face 1's index list
+  EXPECT_EQ(e.element(), "face 1");
+  EXPECT_EQ(e.reason(), "file ends after 1 of 2 faces");
+  e = ply_error(full.substr(0, full.size() - 6));  // inside the material
+  EXPECT_EQ(e.element(), "material 0");
+  EXPECT_EQ(e.reason(), "file ends after 0 of 1 'material' elements");
+}
+
+TEST(IoPly, NanInfGarbledAndBadIndicesAscii) {
+  auto e = ply_error(ascii_tri("0 0 0\n1 nan 0\n0 1 0\n", "3 0 1 2\n"));
+  EXPECT_EQ(e.location(), "line 11");
+  EXPECT_EQ(e.element(), "vertex 1");
+  EXPECT_EQ(e.reason(), "y is NaN");
+  e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 inf\n", "3 0 1 2\n"));
+  EXPECT_EQ(e.reason(), "z is infinite");
+  e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0x\n", "3 0 1 2\n"));
+  EXPECT_EQ(e.location(), "line 12");
+  EXPECT_EQ(e.element(), "vertex 2");
+  EXPECT_EQ(e.reason(), "value of 'z' '0x' is not a number");
+  e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 2.5\n"));
+  EXPECT_EQ(e.element(), "face 0");
+  EXPECT_EQ(e.reason(), "index of 'vertex_indices' '2.5' is not an integer");
+  e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "3 0 -1 2\n"));
+  EXPECT_EQ(e.location(), "line 13");
+  EXPECT_EQ(e.reason(), "index -1 is negative");
+  e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 57\n"));
+  EXPECT_EQ(e.reason(), "index 57 out of range [0, 3)");
+  e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 2\n2 0 1\n", 3, 2));
+  EXPECT_EQ(e.location(), "line 14");
+  EXPECT_EQ(e.element(), "face 1");
+  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
+  e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "", 3, 0));
+  EXPECT_EQ(e.reason(), "mesh has no triangles");
+  e = ply_error("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                "end_header\n0 0 0\n");
+  EXPECT_EQ(e.reason(), "mesh has no triangles");
+}
+
+TEST(IoPly, NanAndBadIndicesBinary) {
+  const std::string head =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const auto file = [&](float y1, std::uint8_t n, std::int32_t last) {
+    Bytes b{true, {}};
+    b.put(0.f).put(0.f).put(0.f).put(1.f).put(y1).put(0.f).put(0.f).put(1.f).put(0.f);
+    b.put(n);
+    for (std::int32_t i = 0; i + 1 < n; ++i) b.put(i);
+    if (n > 0) b.put(last);
+    return head + b.s;
+  };
+  EXPECT_EQ(ply(file(0.f, 3, 2)).mesh.triangle_count(), 1u);
+  auto e = ply_error(file(std::nanf(""), 3, 2));
+  EXPECT_EQ(e.element(), "vertex 1");
+  EXPECT_EQ(e.location(), "byte " + std::to_string(head.size() + 12));
+  EXPECT_EQ(e.reason(), "y is NaN");
+  e = ply_error(file(-INFINITY, 3, 2));
+  EXPECT_EQ(e.reason(), "y is infinite");
+  e = ply_error(file(0.f, 3, -1));
+  EXPECT_EQ(e.element(), "face 0");
+  EXPECT_EQ(e.location(), "byte " + std::to_string(head.size() + 36 + 1 + 8));
+  EXPECT_EQ(e.reason(), "index -1 is negative");
+  e = ply_error(file(0.f, 3, 3));
+  EXPECT_EQ(e.reason(), "index 3 out of range [0, 3)");
+  e = ply_error(file(0.f, 2, 1));
+  EXPECT_EQ(e.location(), "byte " + std::to_string(head.size() + 36));
+  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
+}
+
+}  // namespace
+}  // namespace ptc

@@ -1,0 +1,85 @@
+// Per-triangle geometry: area, unit normal, edge lengths, perimeter, centroid. Inline, pure.
+//
+// Degeneracy rule (one rule for area and normal, so that they never disagree):
+//   the cross product is formed at the corner between the two SHORTEST sides e1, e2 (the largest
+//   angle), which minimises its rounding error; the triangle is DEGENERATE when
+//       |e1 x e2| <= kDegenerateSine * |e1| * |e2|
+//   i.e. when the sine of its largest angle is below kDegenerateSine (this includes repeated
+//   corners, where |e1| = 0, and exactly collinear corners). A degenerate triangle has area 0 and
+//   the zero normal, and so contributes nothing to area sums or area-weighted normal sums.
+// Why 1e-12: every component of the computed cross product carries an absolute rounding error of
+// about 3 eps |e1| |e2| (eps = 2.2e-16), so its direction is only known to ~6 eps / sine radians.
+// Above 1e-12 a normal is right to ~1.3e-3 rad even for the worst accepted sliver (to ~1e-15 rad
+// for well-shaped triangles); below it the direction is noise, while the area dropped is at most
+// 5e-13 |e1| |e2| (far below anything a metric can see).
+//
+// Range: lengths use std::hypot (no overflow/underflow in the squares); the cross product's
+// components are products of two coordinate differences, so side lengths must lie in about
+// [1e-150, 1e150] (scales 1e-30 and 1e+30, offsets of 1e7 with features of 1e-3 are fine: the
+// differences of nearby doubles are exact, so a far offset costs nothing beyond the rounding of
+// the input coordinates themselves).
+#pragma once
+
+#include <cmath>
+
+#include "toolkit/core/types.h"
+
+namespace ptc {
+
+/// Threshold on the sine of a triangle's largest angle below which it is degenerate (see above).
+inline constexpr double kDegenerateSine = 1e-12;
+
+/// Euclidean length without overflow or underflow of the squares.
+[[nodiscard]] inline double safe_norm(const Vec3& v) { return std::hypot(v.x(), v.y(), v.z()); }
+
+/// Area (one side, unit length^2) and unit normal (right-handed in corner order a, b, c) of a
+/// triangle; degenerate triangles (see the file comment) give area 0 and normal (0, 0, 0).
+struct TriangleGeometry {
+  double area = 0;
+  Vec3 normal = Vec3::Zero();
+};
+
+[[nodiscard]] inline TriangleGeometry triangle_geometry(const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Sides opposite each corner; the corner between the two shortest sides is the one opposite
+  // the longest side. (b-a) x (c-a) = (c-b) x (a-b) = (a-c) x (b-c): same orientation.
+  const Vec3 ab = b - a, bc = c - b, ca = a - c;
+  const double lab = safe_norm(ab), lbc = safe_norm(bc), lca = safe_norm(ca);
+  Vec3 cr;
+  double l1, l2;
+  if (lbc >= lab && lbc >= lca) {  // longest side bc: corner a, sides ab and ac
+    cr = ab.cross(-ca);
+    l1 = lab, l2 = lca;
+  } else if (lca >= lab) {  // longest side ca: corner b, sides bc and ba
+    cr = bc.cross(-ab);
+    l1 = lbc, l2 = lab;
+  } else {  // longest side ab: corner c, sides ca and cb
+    cr = ca.cross(-bc);
+    l1 = lca, l2 = lbc;
+  }
+  const double n = safe_norm(cr);
+  TriangleGeometry g;
+  if (!(n > kDegenerateSine * l1 * l2)) return g;  // also catches n == 0 and NaN
+  g.area = 0.5 * n;
+  g.normal = cr / n;
+  return g;
+}
+
+/// Area of one side (unit length^2); 0 for degenerate triangles.
+[[nodiscard]] inline double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return triangle_geometry(a, b, c).area;
+}
+
+/// Unit normal, right-handed in corner order; the zero vector for degenerate triangles.
+[[nodiscard]] inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return triangle_geometry(a, b, c).normal;
+}
+
+/// Sum of the three side lengths (unit length). Collapsed sides have length 0.
+[[nodiscard]] inline double triangle_perimeter(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return safe_norm(b - a) + safe_norm(c - b) + safe_norm(a - c);
+}
+
+/// Arithmetic mean of the corners, computed as (a + b + c) / 3.
+[[nodiscard]] inline Vec3 triangle_centroid(const Vec3& a, const Vec3& b, const Vec3& c) { return (a + b + c) / 3.0; }
+
+}  // namespace ptc

@@ -1,0 +1,49 @@
+// Replace a file atomically: write to a temporary file in the same directory, then rename it over
+// the target. A reader never sees a half-written file, and a write that fails or is interrupted
+// (exception, crash, full disk) leaves the previous file untouched.
+//
+//   AtomicFile f(path);   // creates ".<name>.tmp-<pid>-<counter>" next to path
+//   f.write(bytes);       // any number of times
+//   f.commit();           // flush, fsync, close, rename over path
+//   // destroyed without commit(): the temporary is removed, path is unchanged
+//
+// Durability: commit() fsyncs the file before the rename, so the new content is on disk before it
+// becomes visible; the directory itself is not fsynced (after a power loss the rename may be
+// lost, in which case the old file is still there, whole).
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+namespace ptc {
+
+class AtomicFile {
+ public:
+  /// Creates the temporary file (mode 0666 & ~umask, or the target's mode when it exists).
+  /// Throws InputError naming `target` and strerror when it cannot.
+  explicit AtomicFile(std::filesystem::path target);
+  /// Removes the temporary file unless commit() succeeded. Never throws.
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  /// Appends bytes (unbuffered: pass large chunks). Throws InputError on failure.
+  void write(std::string_view bytes);
+  /// fsync + close + rename over the target. Throws InputError (naming the target and strerror) on
+  /// failure, after which the temporary is removed and the target is unchanged. Call once.
+  void commit();
+
+  [[nodiscard]] const std::filesystem::path& target() const { return target_; }
+  [[nodiscard]] const std::filesystem::path& temp_path() const { return temp_; }
+  [[nodiscard]] bool committed() const { return committed_; }
+
+ private:
+  [[noreturn]] void fail(const char* what, int err);
+  void discard() noexcept;
+
+  std::filesystem::path target_, temp_;
+  int fd_ = -1;
+  bool committed_ = false;
+};
+
+}  // namespace ptc

@@ -1,0 +1,79 @@
+#include "toolkit/io/mesh_io.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "toolkit/core/error.h"
+#include "toolkit/io/readers.h"
+
+namespace ptc {
+namespace {
+
+// The whole file in memory (one read; the parsers index into it).
+std::string read_file(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(name, "", "", std::string("cannot open: ") + std::strerror(errno));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) throw InputError(name, "", "", std::string("cannot stat: ") + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) throw InputError(name, "", "", "is a directory");
+  std::string data;
+  if (S_ISREG(st.st_mode)) data.reserve(static_cast<std::size_t>(st.st_size));
+  char buf[1 << 16];
+  for (;;) {
+    // Regular files: read straight into the string; pipes and the like: through a buffer.
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw InputError(name, byte_loc(data.size()), "", std::string("cannot read: ") + std::strerror(errno));
+    }
+    if (n == 0) break;
+    data.append(buf, static_cast<std::size_t>(n));
+  }
+  return data;
+}
+
+}  // namespace
+
+std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext)
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  if (ext == ".off") return MeshFormat::Off;
+  if (ext == ".obj") return MeshFormat::Obj;
+  if (ext == ".ply") return MeshFormat::Ply;
+  if (ext == ".stl") return MeshFormat::Stl;
+  return std::nullopt;
+}
+
+LoadedMesh read_mesh_from_memory(std::string_view bytes, MeshFormat f, const std::string& name) {
+  switch (f) {
+    case MeshFormat::Off: return io::read_off(bytes, name);
+    case MeshFormat::Obj: return io::read_obj(bytes, name);
+    case MeshFormat::Ply: return io::read_ply(bytes, name);
+    case MeshFormat::Stl: return io::read_stl(bytes, name);
+  }
+  throw std::logic_error("read_mesh_from_memory: bad MeshFormat value");
+}
+
+LoadedMesh read_mesh(const std::filesystem::path& path) {
+  const std::optional<MeshFormat> f = format_from_extension(path);
+  if (!f)
+    throw InputError(
+        path.string(), "", "",
+        "unknown mesh format " +
+            (path.extension().empty() ? std::string("(no extension)") : "'" + path.extension().string() + "'") +
+            " (use .off, .obj, .ply or .stl)");
+  const std::string data = read_file(path);
+  return read_mesh_from_memory(data, *f, path.string());
+}
+
+}  // namespace ptc
