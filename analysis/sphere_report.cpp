@@ -9,19 +9,16 @@
 
 namespace ptc {
 
-SphereReport run_sphere_report(const Mesh& mesh, const SphereReportConfig& cfg) {
+std::vector<std::vector<Vec3>> morton_point_sets(const Mesh& mesh, const SphereReportConfig& cfg,
+                                                 std::vector<std::uint32_t>* run_first) {
   if (cfg.min_run < 1 || cfg.max_run < cfg.min_run)
     throw std::invalid_argument("sphere report: need 1 <= min_run <= max_run");
-  if (cfg.repeats < 1) throw std::invalid_argument("sphere report: repeats must be >= 1");
-  SphereReport r;
-  r.config = cfg;
   const auto order = morton_order(mesh.positions(), mesh.triangles());
-
-  // Cut the Morton order into runs of seeded length; gather each run's unique vertices.
   std::mt19937_64 rng(cfg.seed);
   std::uniform_int_distribution<std::size_t> len(cfg.min_run, cfg.max_run);
   std::vector<std::vector<Vec3>> sets;
   std::vector<std::uint32_t> stamp(mesh.vertex_count(), 0xffffffffu);
+  if (run_first) run_first->clear();
   for (std::size_t first = 0; first < order.size();) {
     const std::size_t last = std::min(order.size(), first + len(rng));
     const auto id = static_cast<std::uint32_t>(sets.size());
@@ -32,12 +29,20 @@ SphereReport run_sphere_report(const Mesh& mesh, const SphereReportConfig& cfg) 
           stamp[v] = id;
           pts.push_back(mesh.position(v));
         }
-    r.run_first.push_back(static_cast<std::uint32_t>(first));
-    r.run_points.push_back(static_cast<std::uint32_t>(pts.size()));
+    if (run_first) run_first->push_back(static_cast<std::uint32_t>(first));
     sets.push_back(std::move(pts));
     first = last;
   }
-  r.run_first.push_back(static_cast<std::uint32_t>(order.size()));
+  if (run_first) run_first->push_back(static_cast<std::uint32_t>(order.size()));
+  return sets;
+}
+
+SphereReport run_sphere_report(const Mesh& mesh, const SphereReportConfig& cfg) {
+  if (cfg.repeats < 1) throw std::invalid_argument("sphere report: repeats must be >= 1");
+  SphereReport r;
+  r.config = cfg;
+  const auto sets = morton_point_sets(mesh, cfg, &r.run_first);
+  for (const auto& s : sets) r.run_points.push_back(static_cast<std::uint32_t>(s.size()));
 
   r.exact_radius.resize(sets.size());
   for (std::size_t s = 0; s < sets.size(); ++s) r.exact_radius[s] = min_sphere_exact(sets[s]).radius;

@@ -38,6 +38,12 @@ struct SphereReport {
   std::vector<std::vector<double>> radius; ///< [method][point set]
 };
 
+/// The point sets the report measures: the mesh's triangles in Morton order cut into runs of
+/// seeded length in [min_run, max_run]; each set holds its run's unique vertices.
+/// `run_first` receives each run's first index into the Morton order (plus the end).
+[[nodiscard]] std::vector<std::vector<Vec3>> morton_point_sets(const Mesh& mesh, const SphereReportConfig& config,
+                                                               std::vector<std::uint32_t>* run_first = nullptr);
+
 /// Throws std::invalid_argument on a bad configuration; an empty mesh gives an empty report.
 [[nodiscard]] SphereReport run_sphere_report(const Mesh& mesh, const SphereReportConfig& config);
 

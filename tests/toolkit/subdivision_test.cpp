@@ -19,6 +19,7 @@
 #include <set>
 
 #include "toolkit/core/error.h"
+#include "toolkit/io/mesh_io.h"
 
 namespace ptc {
 namespace {
@@ -819,6 +820,22 @@ TEST(SubdivMidpoint, FuzzRandomTriangleSoups) {
     } catch (const InputError&) {
     }
   }
+}
+
+}  // namespace
+}  // namespace ptc
+
+namespace ptc {
+namespace {
+
+// A real scanned mesh (CGAL's elephant, 5.6k triangles, read by the project's reader) against
+// OpenMesh's LoopT, vertex by vertex.
+TEST(SubdivLoop, RealMeshMatchesOpenMesh) {
+  const LoadedMesh lm = read_mesh(std::string(PTC_TEST_DATA) + "/meshes/elephant.off");
+  Soup m{std::vector<Tri>(lm.mesh.triangles().begin(), lm.mesh.triangles().end()),
+         std::vector<Vec3>(lm.mesh.positions().begin(), lm.mesh.positions().end())};
+  const Subdivider s = Subdivider::build(m.tris, m.pos.size(), SubdivisionScheme::Loop, 1);
+  expect_matches_openmesh(s, m, openmesh_loop(m, 1));
 }
 
 }  // namespace

@@ -57,6 +57,11 @@ inline constexpr SphereMethod kAllSphereMethods[] = {SphereMethod::Exact,  Spher
 /// Working path: CGAL Min_sphere_of_spheres_d<double> on coordinates translated to the box
 /// center and scaled by a power of two to unit extent (exact operations), mapped back; the
 /// radius is then raised to the largest center-point distance so that containment holds.
+/// Precision: the radius is minimal to ~1e-15 of the set's extent PLUS ~1 ulp of the largest
+/// coordinate magnitude, because the center is rounded in absolute coordinates before the
+/// radius is raised (offset 1e7, features 1e-3: ~2e-9 absolute, ~1e-6 relative). Callers that
+/// need the radius of a small set far from the origin pass coordinates relative to a local
+/// origin (cluster_metrics does).
 [[nodiscard]] Sphere min_sphere(std::span<const Vec3> points);
 
 /// The exact minimal sphere computed with an exact number type. CGAL returns the center and
