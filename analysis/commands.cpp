@@ -31,8 +31,8 @@ void cmd_info(const InfoOptions& opt, std::ostream& out) {
 void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
   if (opt.levels < 0 || opt.levels > 8)
     throw InputError("", "", "--levels", fmt::format("{} is outside 0..8", opt.levels));
-  if (!format_from_extension(opt.output))
-    throw InputError(opt.output.string(), "", "", "unknown output format (use .off, .obj or .ply)");
+  if (const auto f = format_from_extension(opt.output); !f || *f == MeshFormat::Stl)
+    throw InputError(opt.output.string(), "", "", "cannot write this format (use .off, .obj or .ply)");
   auto t0 = std::chrono::steady_clock::now();
   const LoadedMesh lm = read_mesh(opt.input);
   const double read_ms = ms_since(t0);

@@ -33,7 +33,7 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
   const std::string leaf = target_.filename().string();
   tmp_ = (parent.empty() ? fs::path(".") : parent) / ("." + leaf + ".tmp-" + unique_suffix());
   fs::create_directory(tmp_, ec);
-  if (ec) throw InputError(tmp_.string(), "", "", "cannot create directory: " + ec.message());
+  if (ec) throw InputError(target_.string(), "", "", "cannot create the output directory: " + ec.message());
 }
 
 OutputDir::~OutputDir() {
