@@ -23,21 +23,27 @@ void cmd_info(const InfoOptions& opt, std::ostream& out) {
   const LoadedMesh lm = read_mesh(opt.input);
   const MeshReport rep = analyze_mesh(lm.mesh);
   if (opt.json)
-    out << mesh_info_json(opt.input, lm.report, rep).dump(2) << '\n';
+    out << dump_json(mesh_info_json(opt.input, lm.report, rep));
   else
     out << mesh_info_text(opt.input, lm.report, rep);
 }
 
 void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
-  if (opt.levels < 0 || opt.levels > 8)
-    throw InputError("", "", "--levels", fmt::format("{} is outside 0..8", opt.levels));
   if (const auto f = format_from_extension(opt.output); !f || *f == MeshFormat::Stl)
     throw InputError(opt.output.string(), "", "", "cannot write this format (use .off, .obj or .ply)");
   auto t0 = std::chrono::steady_clock::now();
   const LoadedMesh lm = read_mesh(opt.input);
   const double read_ms = ms_since(t0);
   t0 = std::chrono::steady_clock::now();
-  const Subdivider sub = Subdivider::build(lm.mesh.triangles(), lm.mesh.vertex_count(), opt.scheme, opt.levels);
+  // The subdivider's errors name the element (edge, triangle, levels) but not the file.
+  const Subdivider sub = [&] {
+    try {
+      return Subdivider::build(lm.mesh.triangles(), lm.mesh.vertex_count(), opt.scheme, opt.levels);
+    } catch (const InputError& e) {
+      if (!e.file().empty()) throw;
+      throw InputError(opt.input.string(), e.location(), e.element(), e.reason());
+    }
+  }();
   const Mesh refined = sub.apply(lm.mesh);
   const double sub_ms = ms_since(t0);
   t0 = std::chrono::steady_clock::now();
@@ -50,7 +56,7 @@ void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
                      {"triangles_out", refined.triangle_count()}, {"vertices_out", refined.vertex_count()},
                      {"read_ms", read_ms},                {"subdivide_ms", sub_ms},
                      {"write_ms", write_ms}};
-    out << j.dump(2) << '\n';
+    out << dump_json(j);
   } else {
     out << fmt::format("{}: {} triangles, {} vertices -> {} x{} -> {}: {} triangles, {} vertices ({:.0f} ms)\n",
                        opt.input.string(), lm.mesh.triangle_count(), lm.mesh.vertex_count(), to_string(opt.scheme),
@@ -86,7 +92,7 @@ void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
     manifest.add_output("sphere_sets.csv");
     manifest.add_output("manifest.json");
     manifest.set_result("point_sets", rep.exact_radius.size());
-    dir.write("manifest.json", manifest.to_json().dump(2) + "\n");
+    dir.write("manifest.json", dump_json(manifest.to_json()));
     dir.commit();
   }
   if (opt.json) {
@@ -97,7 +103,7 @@ void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
                    {"rel_err_mean", m.rel_err_mean},
                    {"rel_err_max", m.rel_err_max},
                    {"not_containing", m.not_containing}});
-    out << j.dump(2) << '\n';
+    out << dump_json(j);
     return;
   }
   out << fmt::format("bounding spheres of {} point sets ({}-{} Morton-ordered triangles each) of {}\n",

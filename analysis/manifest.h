@@ -12,6 +12,10 @@
 
 namespace ptc {
 
+/// JSON text for files and stdout: indented, and invalid UTF-8 (file names are bytes on Linux)
+/// replaced by U+FFFD instead of throwing.
+[[nodiscard]] std::string dump_json(const nlohmann::json& j);
+
 /// FNV-1a 64-bit hash of a file's bytes, as 16 hex digits (a cheap identity check, not a
 /// cryptographic one). Throws InputError when the file cannot be read.
 [[nodiscard]] std::string file_fnv1a64(const std::filesystem::path& path);

@@ -14,10 +14,11 @@ std::string_view to_string(MeshFormat f) {
   return "?";
 }
 
-namespace {
 nlohmann::json summary_json(const Summary& s) {
-  return {{"count", s.count}, {"min", s.min}, {"mean", s.mean}, {"p50", s.p50}, {"max", s.max}};
+  return {{"count", s.count}, {"min", s.min}, {"mean", s.mean}, {"p5", s.p5},
+          {"p50", s.p50},     {"p95", s.p95}, {"max", s.max}};
 }
+namespace {
 nlohmann::json vec_json(const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
 }  // namespace
 
@@ -48,6 +49,7 @@ nlohmann::json mesh_info_json(const std::filesystem::path& file, const ReadRepor
   j["non_manifold_vertices"] = r.non_manifold_vertices;
   j["repeated_index_triangles"] = r.repeated_index_triangles;
   j["zero_area_triangles"] = r.zero_area_triangles;
+  j["near_degenerate_triangles"] = r.near_degenerate_triangles;
   j["duplicate_vertices"] = r.duplicate_vertices;
   j["duplicate_triangles"] = r.duplicate_triangles;
   j["components"] = r.components;
@@ -78,7 +80,8 @@ std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& 
   line("edges", fmt::format("{} ({} boundary, {} non-manifold)", r.edges, r.boundary_edges, r.non_manifold_edges));
   line("non-manifold vertices", std::to_string(r.non_manifold_vertices));
   line("degenerate triangles",
-       fmt::format("{} repeated index, {} zero area", r.repeated_index_triangles, r.zero_area_triangles));
+       fmt::format("{} repeated index, {} zero area, {} near-degenerate (sine < 1e-12)", r.repeated_index_triangles,
+                   r.zero_area_triangles, r.near_degenerate_triangles));
   line("duplicates", fmt::format("{} vertices, {} triangles", r.duplicate_vertices, r.duplicate_triangles));
   line("components", fmt::format("{} (by vertex), {} (by edge)", r.components, r.edge_components));
   line("closed manifold", r.closed_manifold() ? "yes" : "no");

@@ -16,5 +16,7 @@ namespace ptc {
 [[nodiscard]] std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& read,
                                          const MeshReport& report);
 [[nodiscard]] std::string_view to_string(MeshFormat f);
+/// {"count", "min", "mean", "p5", "p50", "p95", "max"}.
+[[nodiscard]] nlohmann::json summary_json(const Summary& s);
 
 }  // namespace ptc

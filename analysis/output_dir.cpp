@@ -3,12 +3,10 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <cerrno>
-#include <cstring>
-#include <fstream>
 #include <system_error>
 
 #include "toolkit/core/error.h"
+#include "toolkit/io/atomic_file.h"
 
 namespace ptc {
 namespace fs = std::filesystem;
@@ -22,18 +20,32 @@ std::string unique_suffix() {
 
 OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
   if (target_.empty()) throw InputError("", "", "--out", "output directory name is empty");
+  target_ = target_.lexically_normal();
+  if (!target_.has_filename()) target_ = target_.parent_path();  // "dir/" -> "dir"
+  const std::string leaf = target_.filename().string();
+  if (leaf.empty() || leaf == "." || leaf == "..")
+    throw InputError(target_.string(), "", "", "not usable as an output directory name");
   std::error_code ec;
-  if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
-    throw InputError(target_.string(), "", "", "exists and is not a directory");
+  if (fs::exists(target_, ec)) {
+    if (!fs::is_directory(target_, ec)) throw InputError(target_.string(), "", "", "exists and is not a directory");
+    if (!fs::is_empty(target_, ec) && !fs::exists(target_ / kMarker, ec))
+      throw InputError(target_.string(), "", "",
+                       "exists and is not a ptc output directory (no .ptc-output marker); refusing to replace it");
+  }
   fs::path parent = target_.parent_path();
   if (!parent.empty()) {
     fs::create_directories(parent, ec);
     if (ec) throw InputError(parent.string(), "", "", "cannot create directory: " + ec.message());
   }
-  const std::string leaf = target_.filename().string();
   tmp_ = (parent.empty() ? fs::path(".") : parent) / ("." + leaf + ".tmp-" + unique_suffix());
   fs::create_directory(tmp_, ec);
   if (ec) throw InputError(target_.string(), "", "", "cannot create the output directory: " + ec.message());
+  try {
+    write(kMarker, "written by ptc; a later run with the same --out replaces this directory\n");
+  } catch (...) {
+    fs::remove_all(tmp_, ec);
+    throw;
+  }
 }
 
 OutputDir::~OutputDir() {
@@ -46,11 +58,9 @@ OutputDir::~OutputDir() {
 fs::path OutputDir::path(std::string_view name) const { return tmp_ / fs::path(name); }
 
 void OutputDir::write(std::string_view name, std::string_view bytes) const {
-  const fs::path p = path(name);
-  std::ofstream out(p, std::ios::binary | std::ios::trunc);
-  if (out) out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) throw InputError((target_ / fs::path(name)).string(), "", "", std::string("cannot write: ") + std::strerror(errno));
+  AtomicFile f(path(name));
+  f.write(bytes);
+  f.commit();
 }
 
 void OutputDir::commit() {

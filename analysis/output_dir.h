@@ -2,6 +2,10 @@
 // sibling name and renamed into place by commit(). An existing directory of the same name is
 // replaced only at that moment (moved aside, then deleted), so an interrupted or failed run
 // leaves whatever the user had intact.
+//
+// Only ptc's own output is ever replaced: every directory this class creates holds a marker file
+// `.ptc-output`; an existing target that is neither empty nor marked (a user's home, a source
+// tree, a thesis) is refused with an InputError before any work is done.
 #pragma once
 
 #include <filesystem>
@@ -12,8 +16,9 @@ namespace ptc {
 
 class OutputDir {
  public:
-  /// Creates the temporary sibling directory of `target` (its parent is created if missing).
-  /// Errors (parent not writable, target is a file) throw InputError naming the path.
+  /// Creates the temporary sibling directory of `target` (its parent is created if missing;
+  /// a trailing separator is ignored). Errors (parent not writable, target is a file, target is
+  /// a non-empty directory without the marker) throw InputError naming the path.
   explicit OutputDir(std::filesystem::path target);
   OutputDir(const OutputDir&) = delete;
   OutputDir& operator=(const OutputDir&) = delete;
@@ -28,6 +33,9 @@ class OutputDir {
   void commit();
 
   [[nodiscard]] const std::filesystem::path& target() const { return target_; }
+
+  /// Name of the marker file written into every output directory.
+  static constexpr const char* kMarker = ".ptc-output";
 
  private:
   std::filesystem::path target_, tmp_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <random>
+#include <limits>
 #include <stdexcept>
 
 #include "toolkit/geometry/morton.h"
@@ -64,6 +65,7 @@ SphereReport run_sphere_report(const Mesh& mesh, const SphereReportConfig& cfg) 
     sum.ns_per_sphere_max = ns.back();
     sum.ns_per_sphere_median = ns.size() % 2 ? ns[ns.size() / 2] : 0.5 * (ns[ns.size() / 2 - 1] + ns[ns.size() / 2]);
     double err_sum = 0;
+    sum.rel_err_max = sets.empty() ? 0.0 : -std::numeric_limits<double>::infinity();  // a too-small radius shows
     for (std::size_t s = 0; s < sets.size(); ++s) {
       const double ex = r.exact_radius[s];
       const double err = ex > 0 ? (radii[s] - ex) / ex : radii[s] - ex;

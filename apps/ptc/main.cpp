@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
   auto* c_info = app.add_subcommand("info", "counts, extent, area/edge statistics and defects of a mesh");
   c_info->add_option("MESH", info.input, "mesh file (.off .obj .ply .stl)")->required();
   c_info->add_flag("--json", info.json, "print JSON (schema ptc-info/1)");
+  add_threads_option(c_info, threads);
 
   // subdivide
   SubdivideOptions sub;
@@ -81,6 +82,7 @@ int main(int argc, char** argv) {
       ->check(enum_validator("sphere method", parse_sphere_method));
   c_sph->add_option("--out", sph.out_dir, "output directory (spheres.csv, sphere_sets.csv, manifest.json)");
   c_sph->add_flag("--json", sph.json, "print JSON");
+  add_threads_option(c_sph, threads);  // accepted for uniformity; the timings are one-thread by design
 
   try {
     app.parse(argc, argv);

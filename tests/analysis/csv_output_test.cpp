@@ -84,6 +84,42 @@ TEST(OutputDir, CommitReplacesAndFailureKeepsTheOld) {
   fs::remove_all(base);
 }
 
+TEST(OutputDir, NeverReplacesADirectoryItDidNotWrite) {
+  const fs::path base = fs::temp_directory_path() / ("ptc_outdir2_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  fs::create_directories(base / "precious");
+  std::ofstream(base / "precious" / "thesis.txt") << "years of work";
+  try {
+    OutputDir d(base / "precious");
+    FAIL() << "a foreign directory was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("precious"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(slurp(base / "precious" / "thesis.txt"), "years of work");
+  // An empty directory is fine, and so is a trailing separator.
+  fs::create_directories(base / "empty");
+  {
+    OutputDir d(base / "empty/");
+    d.write("x.csv", "1\n");
+    d.commit();
+    EXPECT_EQ(d.target(), base / "empty");
+  }
+  EXPECT_EQ(slurp(base / "empty" / "x.csv"), "1\n");
+  EXPECT_TRUE(fs::exists(base / "empty" / OutputDir::kMarker));
+  // ... and the marked directory can be replaced by the next run.
+  {
+    OutputDir d(base / "empty");
+    d.write("y.csv", "2\n");
+    d.commit();
+  }
+  EXPECT_FALSE(fs::exists(base / "empty" / "x.csv"));
+  EXPECT_THROW(OutputDir(base / ".."), InputError);
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(base)) ++entries;
+  EXPECT_EQ(entries, 2u);  // precious and empty, no temporaries
+  fs::remove_all(base);
+}
+
 TEST(Manifest, HashIsFnv1aAndRecordsEverything) {
   const fs::path p = fs::temp_directory_path() / ("ptc_hash_" + std::to_string(::getpid()));
   std::ofstream(p, std::ios::binary) << "a";

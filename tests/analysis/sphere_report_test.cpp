@@ -64,6 +64,16 @@ TEST(SphereReport, SetsAndErrorsAgainstIndependentRecomputation) {
   }
   for (std::size_t mi = 0; mi < r.methods.size(); ++mi) {
     const auto& s = r.methods[mi];
+    // Errors recomputed independently from the per-set radii, set by set.
+    double mean = 0, mx = -1e300;
+    for (std::size_t k = 0; k < r.exact_radius.size(); ++k) {
+      const double err = (r.radius[mi][k] - r.exact_radius[k]) / r.exact_radius[k];
+      EXPECT_GE(err, -1e-12) << to_string(s.method) << " set " << k;  // never below the minimal radius
+      mean += err;
+      mx = std::max(mx, err);
+    }
+    EXPECT_DOUBLE_EQ(s.rel_err_mean, mean / double(r.exact_radius.size())) << to_string(s.method);
+    EXPECT_EQ(s.rel_err_max, mx) << to_string(s.method);
     EXPECT_EQ(s.not_containing, 0u) << to_string(s.method);
     EXPECT_GE(s.rel_err_mean, -1e-12) << to_string(s.method);  // nothing beats the minimal sphere
     if (s.method == SphereMethod::Exact) {

@@ -163,6 +163,8 @@ TEST_F(Cli, SubdivideCountsAndAtomicOutput) {
   r = ptc({"subdivide", fan, "--scheme", "loop", "--out", (dir_ / "fan2.off").string()});
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("fan.off"), std::string::npos) << r.err;  // names the file ...
+  EXPECT_NE(r.err.find("edge (0, 1)"), std::string::npos) << r.err;  // ... and the element
   EXPECT_FALSE(fs::exists(dir_ / "fan2.off"));
 }
 
@@ -190,6 +192,25 @@ TEST_F(Cli, SpheresWritesCsvAndManifestAtomically) {
   EXPECT_EQ(slurp(out / "spheres.csv"), csv);
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string().find(".spheres.tmp"), std::string::npos) << e.path();
+  // A trailing slash names the same directory.
+  r = ptc({"spheres", mesh, "--repeats", "1", "--methods", "ritter", "--out", out.string() + "/"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lines(slurp(out / "spheres.csv")), 2u);
+  // A directory ptc did not write is never replaced.
+  fs::create_directories(dir_ / "precious");
+  std::ofstream(dir_ / "precious" / "thesis.txt") << "years of work";
+  r = ptc({"spheres", mesh, "--repeats", "1", "--methods", "ritter", "--out", (dir_ / "precious").string()});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("precious"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(dir_ / "precious" / "thesis.txt"), "years of work");
+}
+
+TEST_F(Cli, NonUtf8FileNamesWork) {
+  const auto p = write("bad\xff.off", kCube).string();
+  const auto r = ptc({"info", p, "--json"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::accept(r.out));
 }
 
 TEST_F(Cli, EverySampleMeshGivesAResultOrAClearError) {

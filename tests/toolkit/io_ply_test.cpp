@@ -352,3 +352,44 @@ TEST(IoPly, NanAndBadIndicesBinary) {
 
 }  // namespace
 }  // namespace ptc
+
+namespace ptc {
+namespace {
+
+// Found by review: an element without properties claims no bytes, so its count escaped the
+// size check and the ascii reader looped over it (a 200-byte file hung `ptc info`).
+TEST(IoPly, ElementWithoutPropertiesIsSkippedWhateverItsCount) {
+  for (const char* enc : {"ascii", "binary_little_endian"}) {
+    std::string h = std::string("ply\nformat ") + enc +
+                    " 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                    "element junk 4000000000\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    if (std::string(enc) == "ascii") {
+      h += "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    } else {
+      for (double v : {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0}) h.append(reinterpret_cast<const char*>(&v), 8);
+      h.push_back(3);
+      for (std::int32_t i : {0, 1, 2}) h.append(reinterpret_cast<const char*>(&i), 4);
+    }
+    const LoadedMesh m = ply(h);
+    EXPECT_EQ(m.mesh.triangle_count(), 1u) << enc;
+    EXPECT_EQ(m.mesh.position(1), Vec3(1, 0, 0)) << enc;
+  }
+  // Counts beyond 32 bits are rejected in the header, naming the line.
+  const InputError e = ply_error("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement junk 9000000000000000000\nend_header\n");
+  EXPECT_EQ(e.location(), "line 7");
+}
+
+// Found by review: duplicate checks were linear per header line (quadratic headers).
+TEST(IoPly, HugeHeaderIsLinear) {
+  std::string h = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element face 1\nproperty list uchar int vertex_indices\n";
+  for (int i = 0; i < 100000; ++i) h += "element e" + std::to_string(i) + " 0\n";
+  h += "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  EXPECT_EQ(ply(h).mesh.triangle_count(), 1u);  // ctest's timeout catches a quadratic regression
+  h.insert(h.find("end_header"), "element e7 0\n");
+  EXPECT_NE(std::string(ply_error(h).what()).find("declared twice"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ptc

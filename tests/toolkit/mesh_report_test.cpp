@@ -29,6 +29,17 @@ TEST(MeshReport, SummaryOfEmptyAndOddEven) {
   EXPECT_EQ(s.mean, 2);
   std::vector<double> even{4, 1, 3, 2};
   EXPECT_EQ(summarize(even).p50, 2.5);
+  // 0..100: percentile p is exactly p (linear interpolation between order statistics).
+  std::vector<double> hundred;
+  for (int i = 100; i >= 0; --i) hundred.push_back(i);
+  const auto h = summarize(hundred);
+  EXPECT_EQ(h.p5, 5);
+  EXPECT_EQ(h.p50, 50);
+  EXPECT_EQ(h.p95, 95);
+  EXPECT_EQ(h.mean, 50);
+  std::vector<double> one{7};
+  EXPECT_EQ(summarize(one).p5, 7);
+  EXPECT_EQ(summarize(one).p95, 7);
 }
 
 TEST(MeshReport, ClosedCube) {
@@ -76,6 +87,38 @@ TEST(MeshReport, EveryDefectCountedOnce) {
   EXPECT_EQ(r.non_manifold_edges, 2u);
   EXPECT_FALSE(r.closed_manifold());
   EXPECT_EQ(r.bounds.hi, Vec3(2, 1, 2));  // the unreferenced vertex (9,9,9) is not in the box
+  // Hand count of the edges: (0,1) (0,2) (1,2) (0,3) (1,3) (4,5) (1,5) (1,4) (0,7) (1,7) (0,8) (1,8).
+  EXPECT_EQ(r.edges, 12u);
+  // Valence 1: (1,2)? no: (1,2) carries 0 and 3. Boundary: (0,3) (1,3) (4,5) (1,5) (1,4) (0,7) (1,7) (0,8) (1,8).
+  EXPECT_EQ(r.boundary_edges, 9u);
+  // Vertex 1: triangle 4 {4,5,1} touches the rest only at vertex 1 -> a second fan.
+  EXPECT_EQ(r.non_manifold_vertices, 1u);
+  EXPECT_EQ(r.components, 1u);       // all share vertex 1 (or 0)
+  EXPECT_EQ(r.edge_components, 2u);  // triangle 4 is edge-connected to nothing
+  EXPECT_EQ(r.near_degenerate_triangles, 0u);
+}
+
+TEST(MeshReport, SliverIsNearDegenerateAndHugeCoordinatesStayFinite) {
+  std::vector<Vec3> p{{0, 0, 0}, {1, 0, 0}, {0.5, 1e-14, 0}, {1e300, 0, 0}, {0, 1e300, 0}};
+  const auto r = analyze_mesh(Mesh({{0, 1, 2}, {0, 3, 4}}, p));
+  EXPECT_EQ(r.near_degenerate_triangles, 1u);  // sine of the largest angle ~4e-14 < 1e-12
+  EXPECT_EQ(r.zero_area_triangles, 0u);
+  EXPECT_EQ(r.edge_length.max, std::hypot(1e300, 1e300));  // no overflow in the length
+  EXPECT_TRUE(std::isinf(r.total_area));                    // 5e599 is beyond double: inf, not 0
+}
+
+TEST(MeshReport, BookOfManyPagesIsFast) {
+  // 20000 triangles on one edge: counting non-manifold vertices must not be quadratic.
+  std::vector<Vec3> p{{0, 0, 0}, {1, 0, 0}};
+  std::vector<Tri> t;
+  for (std::uint32_t i = 0; i < 20000; ++i) {
+    p.emplace_back(0.5, std::cos(i * 1e-4), std::sin(i * 1e-4));
+    t.push_back({0, 1, i + 2});
+  }
+  const auto r = analyze_mesh(Mesh(t, p));
+  EXPECT_EQ(r.non_manifold_edges, 1u);
+  EXPECT_EQ(r.non_manifold_vertices, 0u);  // every page is linked through the shared edge
+  EXPECT_EQ(r.boundary_edges, 40000u);
 }
 
 TEST(MeshReport, BowTieIsANonManifoldVertex) {

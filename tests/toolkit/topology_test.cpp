@@ -95,6 +95,21 @@ TEST(Topology, NonManifoldFanOfThreeAndDegenerates) {
   EXPECT_EQ(g[boost::edge(1, 2, g).first].mesh_edge, e01);
 }
 
+TEST(Topology, HugeBookIsLinearInTheDualGraph) {
+  // 5000 pages on edge (0, 1): a clique would have 12.5M dual edges; the path has 4999 and the
+  // same single component.
+  const std::uint32_t pages = 5000;
+  std::vector<Tri> t;
+  for (std::uint32_t i = 0; i < pages; ++i) t.push_back({0, 1, 2 + i});
+  const EdgeMap em = EdgeMap::build(t, pages + 2);
+  EXPECT_EQ(em.valence(em.find(0, 1)), pages);
+  const DualGraph g = build_dual_graph(em, t.size());
+  EXPECT_EQ(boost::num_edges(g), pages - 1u);
+  EXPECT_EQ(edge_connected_components(em, t.size()).count, 1u);
+  std::vector<int> comp(t.size());
+  EXPECT_EQ(boost::connected_components(g, comp.data()), 1);
+}
+
 TEST(Topology, ComponentsByVertexAndByEdge) {
   // Two triangles touching only at vertex 2 (a bow tie) and a separate triangle.
   std::vector<Tri> t{{0, 1, 2}, {2, 3, 4}, {5, 6, 7}};

@@ -82,7 +82,9 @@ inline constexpr double kFallbackAreaTieTol = 1e-12;
 
 /// N_avg(k) = sum n_i / |sum n_i| over the unit normals n_i of the cluster's triangles
 /// (method.md). Zero normals (degenerate triangles) contribute nothing.
-/// Fallback (sum numerically zero, see kNormalSumZeroTol; e.g. any closed surface): N_avg is
+/// Fallback (sum numerically zero, see kNormalSumZeroTol; e.g. a regular tetrahedron or a cube —
+/// note that only the AREA-weighted normal sum vanishes on every closed surface, the plain sum
+/// of unit normals vanishes only on symmetric ones): N_avg is
 /// undefined, and this returns, deterministically, the unit normal of the largest-area triangle
 /// (the lowest index among those within kFallbackAreaTieTol of the largest area) — a choice that
 /// rotates with the cluster; if every normal is zero (or the input is empty), (0, 0, 1).

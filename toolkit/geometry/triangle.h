@@ -22,6 +22,9 @@
 
 #include <cmath>
 
+#include <algorithm>
+#include <cmath>
+
 #include "toolkit/core/types.h"
 
 namespace ptc {
@@ -42,7 +45,15 @@ struct TriangleGeometry {
 [[nodiscard]] inline TriangleGeometry triangle_geometry(const Vec3& a, const Vec3& b, const Vec3& c) {
   // Sides opposite each corner; the corner between the two shortest sides is the one opposite
   // the longest side. (b-a) x (c-a) = (c-b) x (a-b) = (a-c) x (b-c): same orientation.
-  const Vec3 ab = b - a, bc = c - b, ca = a - c;
+  // Scale the sides by a power of two (exact) so that the cross product neither overflows
+  // (coordinates ~1e300) nor underflows (~1e-300); the area is scaled back at the end.
+  Vec3 ab = b - a, bc = c - b, ca = a - c;
+  const double big = std::max({ab.cwiseAbs().maxCoeff(), bc.cwiseAbs().maxCoeff(), ca.cwiseAbs().maxCoeff()});
+  int e = 0;
+  if (big > 0 && std::isfinite(big)) {
+    e = std::ilogb(big);
+    ab = ab * std::ldexp(1.0, -e), bc = bc * std::ldexp(1.0, -e), ca = ca * std::ldexp(1.0, -e);
+  }
   const double lab = safe_norm(ab), lbc = safe_norm(bc), lca = safe_norm(ca);
   Vec3 cr;
   double l1, l2;
@@ -59,7 +70,7 @@ struct TriangleGeometry {
   const double n = safe_norm(cr);
   TriangleGeometry g;
   if (!(n > kDegenerateSine * l1 * l2)) return g;  // also catches n == 0 and NaN
-  g.area = 0.5 * n;
+  g.area = std::ldexp(0.5 * n, 2 * e);  // inf only when the true area exceeds the double range
   g.normal = cr / n;
   return g;
 }

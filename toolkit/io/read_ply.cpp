@@ -7,6 +7,7 @@
 #include <cstring>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "toolkit/io/readers.h"
@@ -57,7 +58,8 @@ struct Element {
   std::string name;
   std::uint64_t count = 0;
   std::vector<Property> props;
-  std::uint64_t line = 0;  // header line declaring it
+  std::unordered_set<std::string> prop_names;  // duplicate check in O(1) (headers can be huge)
+  std::uint64_t line = 0;                      // header line declaring it
 };
 
 enum class Encoding { Ascii, BinaryLittle, BinaryBig };
@@ -92,7 +94,7 @@ class PlyParser {
     } else {
       read_ascii();
     }
-    return finish(std::move(tris_), std::move(pos_), std::move(report_), name_);
+    return finish(std::move(sink_.take()), std::move(pos_), std::move(report_), name_);
   }
 
  private:
@@ -141,8 +143,10 @@ class PlyParser {
         if (parse_int(c, n) != NumStatus::Ok || n < 0)
           header_error(ln, "element " + quote(e.name) + " count " + quote(c) + " is not a non-negative integer");
         e.count = static_cast<std::uint64_t>(n);
-        for (const Element& o : elements_)
-          if (o.name == e.name) header_error(ln, "element " + quote(e.name) + " declared twice");
+        if (e.count > kMaxElements)
+          header_error(ln, "element " + quote(e.name) + " count " + std::to_string(e.count) +
+                               " exceeds the 32-bit limit");
+        if (!element_names_.insert(e.name).second) header_error(ln, "element " + quote(e.name) + " declared twice");
         elements_.push_back(std::move(e));
       } else if (kw == "property") {
         if (elements_.empty()) header_error(ln, "property before any element");
@@ -158,8 +162,7 @@ class PlyParser {
         p.name = std::string(f.next());
         if (p.name.empty()) header_error(ln, "property name missing");
         Element& e = elements_.back();
-        for (const Property& o : e.props)
-          if (o.name == p.name) header_error(ln, "property " + quote(p.name) + " declared twice");
+        if (!e.prop_names.insert(p.name).second) header_error(ln, "property " + quote(p.name) + " declared twice");
         if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z")) {
           if (p.list) header_error(ln, "vertex property " + quote(p.name) + " must not be a list");
           p.role = p.name == "x" ? Role::X : p.name == "y" ? Role::Y : Role::Z;
@@ -233,8 +236,7 @@ class PlyParser {
       for (const Property& p : fe.props)
         if (p.role == Role::Indices && !ascii) min_face = size_of(p.count_type) + 3 * size_of(p.type);
       const std::uint64_t n = std::min<std::uint64_t>(fe.count, after_header / min_face);
-      tris_.reserve(n);
-      report_.source_face.reserve(n);
+      sink_.reserve(n);
     }
   }
 
@@ -258,17 +260,8 @@ class PlyParser {
     if (corners_.size() < 3)
       element_error(loc, e, item, "face has " + std::to_string(corners_.size()) + " corners (at least 3 needed)");
     // Counts were checked against the 32-bit limit, but polygons can give more triangles.
-    if (tris_.size() + corners_.size() - 2 > kMaxElements)
-      element_error(loc, e, item, "more triangles than 32-bit ids can number");
-    const auto face = static_cast<std::uint32_t>(report_.faces++);
-    for (std::size_t k = 1; k + 1 < corners_.size(); ++k) {
-      tris_.push_back({corners_[0], corners_[k], corners_[k + 1]});
-      report_.source_face.push_back(face);
-    }
-    if (corners_.size() > 3) {
-      ++report_.polygons;
-      report_.triangles_from_polygons += corners_.size() - 2;
-    }
+    if (sink_.full(corners_.size())) element_error(loc, e, item, "more triangles than 32-bit ids can number");
+    sink_.add_face(corners_);
   }
   void add_vertex(const Vec3& p, const std::string& loc, const Element& e, std::uint64_t item) {
     for (int k = 0; k < 3; ++k)
@@ -377,6 +370,7 @@ class PlyParser {
   void read_ascii() {
     TokenReader tr(bytes_.substr(data_offset_), data_line_);
     for (const Element& e : elements_) {
+      if (e.props.empty()) continue;  // an element without properties has no data, whatever its count
       const bool is_vertex = &e == &elements_[vertex_el_];
       const bool is_face = face_el_ != kNone && &e == &elements_[face_el_];
       for (std::uint64_t i = 0; i < e.count; ++i) {
@@ -455,8 +449,9 @@ class PlyParser {
 
   ReadReport report_;
   std::vector<Vec3> pos_;
-  std::vector<Tri> tris_;
+  TriangleSink sink_{report_};
   std::vector<std::uint32_t> corners_;
+  std::unordered_set<std::string> element_names_;
 };
 
 }  // namespace

@@ -117,8 +117,6 @@ class LineReader {
   [[nodiscard]] std::uint64_t line() const { return line_; }
   /// Bytes after the line last returned.
   [[nodiscard]] std::size_t remaining() const { return static_cast<std::size_t>(e_ - p_); }
-  /// Pointer to the first byte after the line last returned.
-  [[nodiscard]] const char* position() const { return p_; }
 
  private:
   const char* p_;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <numeric>
 
+#include "toolkit/geometry/triangle.h"
+
 namespace ptc {
 
 Summary summarize(std::span<const double> values) {
@@ -10,17 +12,21 @@ Summary summarize(std::span<const double> values) {
   s.count = values.size();
   if (values.empty()) return s;
   std::vector<double> v(values.begin(), values.end());
-  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-  s.min = *lo;
-  s.max = *hi;
-  // Pairwise-stable enough for reporting: accumulate in long double.
-  long double sum = 0;
+  std::sort(v.begin(), v.end());
+  s.min = v.front();
+  s.max = v.back();
+  long double sum = 0;  // long double: the mean of 1M areas stays exact to ~1e-16
   for (double x : v) sum += x;
   s.mean = static_cast<double>(sum / static_cast<long double>(v.size()));
-  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  s.p50 = *mid;
-  if (v.size() % 2 == 0) s.p50 = 0.5 * (s.p50 + *std::max_element(v.begin(), mid));
+  auto pct = [&](double p) {
+    const double pos = p * static_cast<double>(v.size() - 1);
+    const auto i = static_cast<std::size_t>(pos);
+    const double f = pos - static_cast<double>(i);
+    return i + 1 < v.size() ? v[i] + f * (v[i + 1] - v[i]) : v[i];
+  };
+  s.p5 = pct(0.05);
+  s.p50 = pct(0.5);
+  s.p95 = pct(0.95);
   return s;
 }
 
@@ -54,25 +60,28 @@ std::size_t count_duplicate_triangles(std::span<const Tri> tris) {
 }
 
 // A vertex is non-manifold when its incident triangles split into two or more groups that are
-// not connected through edges incident to that vertex (two fans touching at a point, or the
-// fans around a non-manifold edge's endpoints).
+// not connected through edges incident to that vertex (two fans touching at a point). The
+// endpoints of a non-manifold edge are not counted for that reason alone (all the edge's
+// triangles are linked through it); they are counted when their fans split as well.
+// Cost: O(sum over vertices of incident triangles * log), each edge through v visited once.
 std::size_t count_non_manifold_vertices(const Mesh& mesh, const EdgeMap& edges) {
   const auto tris = mesh.triangles();
   const std::size_t V = mesh.vertex_count();
-  // vertex -> incident triangles (CSR)
+  auto distinct_corner = [](const Tri& f, int k) {
+    return k == 0 || (f[k] != f[0] && (k == 1 || f[k] != f[1]));
+  };
+  // vertex -> incident triangles (CSR, ascending)
   std::vector<std::uint32_t> first(V + 1, 0);
   for (const Tri& f : tris)
     for (int k = 0; k < 3; ++k)
-      if (k == 0 || (f[k] != f[0] && (k == 1 || f[k] != f[1]))) ++first[f[k] + 1];
+      if (distinct_corner(f, k)) ++first[f[k] + 1];
   std::partial_sum(first.begin(), first.end(), first.begin());
   std::vector<std::uint32_t> inc(first.back());
   {
     std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-      const Tri& f = tris[t];
+    for (std::size_t t = 0; t < tris.size(); ++t)
       for (int k = 0; k < 3; ++k)
-        if (k == 0 || (f[k] != f[0] && (k == 1 || f[k] != f[1]))) inc[fill[f[k]]++] = static_cast<std::uint32_t>(t);
-    }
+        if (distinct_corner(tris[t], k)) inc[fill[tris[t][k]]++] = static_cast<std::uint32_t>(t);
   }
   std::size_t count = 0;
   std::vector<std::uint32_t> parent;
@@ -80,29 +89,31 @@ std::size_t count_non_manifold_vertices(const Mesh& mesh, const EdgeMap& edges) 
     const std::size_t n = first[v + 1] - first[v];
     if (n < 2) continue;
     const std::uint32_t* ts = inc.data() + first[v];
+    auto local = [&](std::uint32_t t) { return static_cast<std::uint32_t>(std::lower_bound(ts, ts + n, t) - ts); };
     parent.resize(n);
     std::iota(parent.begin(), parent.end(), 0u);
     auto find = [&](std::uint32_t x) {
       while (parent[x] != x) x = parent[x] = parent[parent[x]];
       return x;
     };
-    // Two incident triangles are linked when they share an edge that contains v.
+    std::size_t groups = n;
     for (std::size_t i = 0; i < n; ++i)
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t e = edges.side_edge(ts[i], k);
         if (e == kNoEdge) continue;
         const Edge& ed = edges.edge(e);
-        if (ed.v0 != v && ed.v1 != v) continue;
-        for (std::uint32_t other : edges.triangles_of(e)) {
-          const auto* it = std::lower_bound(ts, ts + n, other);
-          if (it != ts + n && *it == other) {
-            const std::uint32_t a = find(static_cast<std::uint32_t>(i)), b = find(static_cast<std::uint32_t>(it - ts));
-            if (a != b) parent[std::max(a, b)] = std::min(a, b);
+        const auto et = edges.triangles_of(e);
+        // Visit each edge through v once: from its first triangle.
+        if ((ed.v0 != v && ed.v1 != v) || et.front() != ts[i]) continue;
+        const std::uint32_t a = find(static_cast<std::uint32_t>(i));
+        for (std::size_t j = 1; j < et.size(); ++j) {
+          const std::uint32_t b = find(local(et[j]));
+          if (a != b) {
+            parent[b] = a;
+            --groups;
           }
         }
       }
-    std::size_t groups = 0;
-    for (std::size_t i = 0; i < n; ++i) groups += find(static_cast<std::uint32_t>(i)) == i;
     count += groups > 1;
   }
   return count;
@@ -123,11 +134,13 @@ MeshReport analyze_mesh(const Mesh& mesh, const EdgeMap& edges) {
     const Tri& f = tris[t];
     for (auto v : f) used[v] = 1;
     const Vec3 &a = pos[f[0]], &b = pos[f[1]], &c = pos[f[2]];
-    areas[t] = 0.5 * (b - a).cross(c - a).norm();
+    areas[t] = triangle_area(a, b, c);
     if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2])
       ++r.repeated_index_triangles;
     else if (collinear_exact(a, b, c))
       ++r.zero_area_triangles;
+    else if (areas[t] == 0)
+      ++r.near_degenerate_triangles;
   }
   for (std::size_t v = 0; v < r.vertices; ++v) {
     if (used[v])
@@ -142,7 +155,7 @@ MeshReport analyze_mesh(const Mesh& mesh, const EdgeMap& edges) {
 
   std::vector<double> lengths(edges.edge_count());
   for (std::size_t e = 0; e < edges.edge_count(); ++e)
-    lengths[e] = (pos[edges.edge(e).v1] - pos[edges.edge(e).v0]).norm();
+    lengths[e] = safe_norm(pos[edges.edge(e).v1] - pos[edges.edge(e).v0]);
   r.edge_length = summarize(lengths);
 
   r.duplicate_vertices = count_duplicate_vertices(pos);

@@ -12,11 +12,13 @@
 namespace ptc {
 
 /// Distribution summary of a sample. For an empty sample count = 0 and all values are 0.
+/// Percentiles interpolate linearly between order statistics (p50 of an even count is the mean
+/// of the two middle values). NaN values are not allowed (they have no order).
 struct Summary {
   std::size_t count = 0;
-  double min = 0, mean = 0, p50 = 0, max = 0;
+  double min = 0, mean = 0, p5 = 0, p50 = 0, p95 = 0, max = 0;
 };
-/// Summary of the values (copies them for the median; O(n)).
+/// Summary of the values (copies and sorts them; O(n log n)).
 [[nodiscard]] Summary summarize(std::span<const double> values);
 
 struct MeshReport {
@@ -24,13 +26,17 @@ struct MeshReport {
   std::size_t triangles = 0;
   std::size_t unreferenced_vertices = 0; ///< vertices used by no triangle
   Box3 bounds;                           ///< over referenced vertices only
-  double total_area = 0;                 ///< sum of triangle areas (one side)
+  double total_area = 0;                 ///< sum of triangle areas (one side; geometry/triangle.h, so
+                                         ///< degenerate ones count 0); inf if beyond the double range
   Summary triangle_area;                 ///< per triangle
   Summary edge_length;                   ///< per unique edge (collapsed sides excluded)
 
   // Defects, counted (never repaired) — see docs/mesh_policy.md.
   std::size_t repeated_index_triangles = 0;  ///< a corner index appears twice or three times
   std::size_t zero_area_triangles = 0;       ///< distinct indices but collinear corners (exact predicate)
+  /// Not zero-area, but the sine of the largest angle is below kDegenerateSine (1e-12): every
+  /// cluster metric treats these as degenerate too (area 0, no normal; geometry/triangle.h).
+  std::size_t near_degenerate_triangles = 0;
   std::size_t duplicate_vertices = 0;        ///< vertices whose coordinates equal an earlier vertex's (-0 == 0)
   std::size_t duplicate_triangles = 0;       ///< triangles with the same vertex set as an earlier one
   std::size_t edges = 0;                     ///< unique undirected edges

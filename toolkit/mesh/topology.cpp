@@ -131,9 +131,13 @@ DualGraph build_dual_graph(const EdgeMap& edges, std::size_t triangle_count) {
   DualGraph g(triangle_count);
   for (std::size_t e = 0; e < edges.edge_count(); ++e) {
     auto ts = edges.triangles_of(e);
-    for (std::size_t i = 0; i < ts.size(); ++i)
-      for (std::size_t j = i + 1; j < ts.size(); ++j)
-        boost::add_edge(ts[i], ts[j], DualEdgeProperty{static_cast<std::uint32_t>(e)}, g);
+    const DualEdgeProperty prop{static_cast<std::uint32_t>(e)};
+    if (ts.size() <= kMaxCliqueValence) {
+      for (std::size_t i = 0; i < ts.size(); ++i)
+        for (std::size_t j = i + 1; j < ts.size(); ++j) boost::add_edge(ts[i], ts[j], prop, g);
+    } else {
+      for (std::size_t i = 1; i < ts.size(); ++i) boost::add_edge(ts[i - 1], ts[i], prop, g);
+    }
   }
   return g;
 }

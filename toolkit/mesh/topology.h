@@ -6,7 +6,10 @@
 //   repeated index) is not an edge; it appears in no edge list and has kNoEdge as its edge id;
 // - a triangle that uses the same undirected edge twice (indices a, b, a) lists it once;
 // - an edge used by one triangle is a boundary edge, by two a manifold edge, by three or more a
-//   non-manifold edge; in the dual graph every pair of triangles on an edge is adjacent.
+//   non-manifold edge; in the dual graph every pair of triangles on an edge is adjacent when the
+//   edge has at most kMaxCliqueValence triangles; beyond that (a "book" of thousands of pages,
+//   which would give a quadratic number of dual edges) its triangles are linked as a path in
+//   ascending id order, which keeps the same connected components in linear size.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +29,9 @@ struct Edge {
 };
 
 inline constexpr std::uint32_t kNoEdge = 0xffffffffu;
+
+/// Non-manifold edges with up to this many triangles make a clique in the dual graph; more, a path.
+inline constexpr std::size_t kMaxCliqueValence = 16;
 
 class EdgeMap {
  public:
@@ -67,8 +73,9 @@ struct Components {
 [[nodiscard]] Components edge_connected_components(const EdgeMap& edges, std::size_t triangle_count);
 
 /// Dual graph: a vertex per triangle (vertex index = triangle index), an edge per pair of
-/// triangles sharing a mesh edge; the edge property is the shared mesh edge's id. A pair of
-/// triangles sharing two edges (possible on degenerate input) gets one dual edge per shared edge.
+/// triangles sharing a mesh edge (but see kMaxCliqueValence); the edge property is the shared
+/// mesh edge's id. A pair of triangles sharing two edges (possible on degenerate input) gets one
+/// dual edge per shared edge.
 struct DualEdgeProperty {
   std::uint32_t mesh_edge = kNoEdge;
 };

@@ -1,0 +1,111 @@
+#include "analysis/cluster_report.h"
+
+#include <cmath>
+#include <limits>
+
+#include <oneapi/tbb/parallel_for.h>
+
+#include "analysis/mesh_info.h"
+#include "toolkit/mesh/mesh_report.h"
+
+namespace ptc {
+
+std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg) {
+  std::vector<ClusterRow> rows(c.cluster_count());
+  const bool has_objective = cfg.max_count > 0 && cfg.max_size > 0;
+  ClusterParams params;
+  if (has_objective) {
+    params.max_count = cfg.max_count;
+    params.max_size = cfg.max_size;
+    params.size_bound_mode = cfg.size_bound_mode;
+    params.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+  }
+  const bool usable = has_objective && params.avg_sa > 0;
+  oneapi::tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
+    ClusterRow& r = rows[k];
+    r.m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Cgal);
+    if (usable) {
+      r.reg_bound = reg_bound(r.m.vertices, params.max_count);
+      r.size_bound = size_bound(r.m.sphere.surface_area(), params.max_size, params.avg_sa, params.size_bound_mode);
+      r.acc = acc(r.m.reg, r.reg_bound, r.size_bound);
+    } else {
+      r.acc = r.reg_bound = r.size_bound = std::numeric_limits<double>::quiet_NaN();
+    }
+  });
+  return rows;
+}
+
+CsvTable triangles_csv(const Clustering& c) {
+  CsvTable t({"triangle_id", "cluster_id"});
+  const auto label = c.cluster_of_triangle();
+  for (std::size_t i = 0; i < label.size(); ++i)
+    t.add_row({static_cast<std::uint64_t>(i), static_cast<std::uint64_t>(label[i])});
+  return t;
+}
+
+namespace {
+// Column name -> value, the one place that defines clusters.csv and the distributions.
+template <class F>
+void for_each_metric(const ClusterRow& r, F&& f) {
+  f("triangles", static_cast<double>(r.m.triangles));
+  f("vertices", static_cast<double>(r.m.vertices));
+  f("connectivity", r.m.connectivity);
+  f("reg", r.m.reg);
+  f("acc", r.acc);
+  f("sphere_radius", r.m.sphere.radius);
+  f("sphere_area", r.m.sphere.surface_area());
+  f("bbox_area", r.m.box.surface_area());
+  f("p_hit", r.m.p_hit);
+  f("area", r.m.area);
+  f("area_p", r.m.area_p);
+  f("reg_bound", r.reg_bound);
+  f("size_bound", r.size_bound);
+}
+}  // namespace
+
+CsvTable clusters_csv(const std::vector<ClusterRow>& rows) {
+  std::vector<std::string> cols{"cluster_id"};
+  if (!rows.empty()) for_each_metric(rows.front(), [&](const char* name, double) { cols.emplace_back(name); });
+  else for_each_metric(ClusterRow{}, [&](const char* name, double) { cols.emplace_back(name); });
+  cols.emplace_back("n_avg_fallback");
+  CsvTable t(cols);
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    std::vector<CsvValue> row{static_cast<std::uint64_t>(k)};
+    for_each_metric(rows[k], [&](const char* name, double v) {
+      if (std::string_view(name) == "triangles" || std::string_view(name) == "vertices")
+        row.emplace_back(static_cast<std::uint64_t>(v));
+      else
+        row.emplace_back(v);
+    });
+    row.emplace_back(static_cast<std::uint64_t>(rows[k].m.n_avg_fallback));
+    t.add_row(std::move(row));
+  }
+  return t;
+}
+
+nlohmann::json cluster_distributions(const std::vector<ClusterRow>& rows) {
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> values;
+  for_each_metric(ClusterRow{}, [&](const char* name, double) {
+    names.emplace_back(name);
+    values.emplace_back();
+  });
+  for (const auto& r : rows) {
+    std::size_t i = 0;
+    for_each_metric(r, [&](const char*, double v) { values[i++].push_back(v); });
+  }
+  nlohmann::json j = nlohmann::json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    std::vector<double> finite;
+    for (double v : values[i])
+      if (!std::isnan(v)) finite.push_back(v);
+    if (finite.empty() && !values[i].empty()) {
+      j[names[i]] = nullptr;  // undefined for this run (e.g. acc without an objective)
+      continue;
+    }
+    j[names[i]] = summary_json(summarize(finite));
+  }
+  return j;
+}
+
+}  // namespace ptc

@@ -1,0 +1,66 @@
+// The front door of clustering: one configuration struct, one call. Strings from the command
+// line become these enums at the edge (apps/ptc); algorithms never look anything up by name.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string_view>
+
+#include "toolkit/clustering/clustering.h"
+#include "toolkit/geometry/cluster_metrics.h"
+#include "toolkit/geometry/gwh01.h"
+#include "toolkit/mesh/mesh.h"
+
+namespace ptc {
+
+enum class ClusterMethod {
+  Growth,       ///< iterative growth from start triangles (method.md)
+  Contraction,  ///< dual-graph edge contraction, best merge first (method.md, after GWH01)
+  SahSplit,     ///< top-down SAH split into clusters of bounded triangle/vertex count (modern baseline)
+  Meshopt,      ///< meshoptimizer 0.18 meshopt_buildMeshlets (modern baseline)
+};
+enum class ObjectiveKind {
+  Acc,    ///< Garanzha: Acc = reg - regBound * sizeBound (larger is better; merge while > 0)
+  Naive,  ///< "SAH clusters": Naive = sum 2 Area_i / SA(box), bounded by MaxCount vertices
+  Gwh01,  ///< Garland-Willmott-Heckbert 2001: cost E_fit + a1 E_dir + a2 E_shape (lower is better)
+};
+enum class StartRule {
+  IndexOrder,     ///< next untaken triangle in index order
+  SpatialOrder,   ///< next untaken triangle in Morton order of centroids
+  FewestFree,     ///< untaken triangle with the fewest untaken edge neighbours (ties: Morton order)
+};
+
+[[nodiscard]] std::string_view to_string(ClusterMethod m);
+[[nodiscard]] std::string_view to_string(ObjectiveKind o);
+[[nodiscard]] std::string_view to_string(StartRule s);
+[[nodiscard]] std::optional<ClusterMethod> parse_cluster_method(std::string_view s);   ///< growth|contraction|sah-split|meshopt
+[[nodiscard]] std::optional<ObjectiveKind> parse_objective(std::string_view s);        ///< acc|naive|gwh01
+[[nodiscard]] std::optional<StartRule> parse_start_rule(std::string_view s);          ///< index|spatial|fewest-free
+
+struct ClusterConfig {
+  ClusterMethod method = ClusterMethod::Contraction;
+  ObjectiveKind objective = ObjectiveKind::Acc;
+  /// MaxCount (paper; vertices): Acc's regBound = N_V / MaxCount; Naive's and GWH01's hard
+  /// vertex limit; the SAH split's and meshopt's vertex limit. 0 together with max_size = 0
+  /// means "no clustering": one triangle per cluster (the paper's Standard baseline).
+  std::uint32_t max_count = 50;
+  /// MaxSize (paper; in units of AvgSA): Acc's sizeBound. Only Acc uses it.
+  double max_size = 50;
+  SizeBoundMode size_bound_mode = SizeBoundMode::Max;
+  SphereMethod sphere = SphereMethod::Cgal;       ///< sphere inside the objective loop
+  StartRule start = StartRule::SpatialOrder;      ///< growth only
+  GwhParams gwh{};                                ///< GWH01 weights (a1 = 0.2, a2 = 2, area weights)
+  std::uint32_t target_clusters = 0;              ///< GWH01 contraction: stop at this many clusters (0 = only MaxCount stops)
+  std::uint32_t max_triangles = 0;                ///< SAH split / meshopt: triangle limit per cluster (0 = 2 * max_count)
+};
+
+/// Progress callback: fraction done in [0, 1]; called at most a few hundred times.
+using ProgressFn = std::function<void(double)>;
+
+/// Clusters the mesh's triangles. Deterministic (same input, same output, bit for bit) and
+/// invariant under rigid motion of the input (up to rounding ties). Throws std::invalid_argument
+/// on an inconsistent configuration (e.g. max_count = 0 with max_size > 0).
+[[nodiscard]] Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress = {});
+
+}  // namespace ptc
