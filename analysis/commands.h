@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "analysis/sphere_report.h"
+#include "toolkit/clustering/cluster.h"
 #include "toolkit/mesh/subdivision.h"
 
 namespace ptc {
@@ -36,5 +37,14 @@ struct SpheresOptions {
   std::vector<std::string> argv;   ///< recorded in the manifest
 };
 void cmd_spheres(const SpheresOptions& opt, std::ostream& out);
+
+struct ClusterOptions {
+  std::filesystem::path input;
+  std::filesystem::path out_dir;   ///< triangles.csv, clusters.csv, summary.json, clusters.ply (required)
+  ClusterConfig config;
+  bool json = false;
+  std::vector<std::string> argv;
+};
+void cmd_cluster(const ClusterOptions& opt, std::ostream& out);
 
 }  // namespace ptc

@@ -84,6 +84,47 @@ int main(int argc, char** argv) {
   c_sph->add_flag("--json", sph.json, "print JSON");
   add_threads_option(c_sph, threads);  // accepted for uniformity; the timings are one-thread by design
 
+  // cluster
+  ClusterOptions clu;
+  std::string method = "contraction", objective = "acc", size_bound = "max", sphere = "cgal", start = "spatial",
+              gwh_weight = "area";
+  auto* c_clu = app.add_subcommand("cluster", "group triangles into compact connected clusters (once per topology)");
+  c_clu->add_option("MESH", clu.input, "mesh file")->required();
+  c_clu->add_option("--method", method, "growth, contraction, sah-split or meshopt")
+      ->check(enum_validator("method", parse_cluster_method))
+      ->capture_default_str();
+  c_clu->add_option("--objective", objective, "acc (Garanzha 2009), naive (SAH clusters) or gwh01 (Garland et al. 2001)")
+      ->check(enum_validator("objective", parse_objective))
+      ->capture_default_str();
+  c_clu->add_option("--max-count", clu.config.max_count, "MaxCount (vertices); 0 with --max-size 0 = one triangle per cluster")
+      ->check(CLI::Range(0u, 1u << 20))
+      ->capture_default_str();
+  c_clu->add_option("--max-size", clu.config.max_size, "MaxSize (sphere area in units of the mean triangle sphere area)")
+      ->check(CLI::Range(0.0, 1e12))
+      ->capture_default_str();
+  c_clu->add_option("--size-bound", size_bound, "max (as printed in the paper) or min")
+      ->check(CLI::IsMember({"max", "min"}))
+      ->capture_default_str();
+  c_clu->add_option("--sphere", sphere, "bounding sphere inside the objective: exact cgal ritter epos6 epos14 epos26")
+      ->check(enum_validator("sphere method", parse_sphere_method))
+      ->capture_default_str();
+  c_clu->add_option("--start", start, "growth start rule: index, spatial or fewest-free")
+      ->check(enum_validator("start rule", parse_start_rule))
+      ->capture_default_str();
+  c_clu->add_option("--gwh-a1", clu.config.gwh.a1, "GWH01 weight of E_dir")->check(CLI::Range(0.0, 1e6))->capture_default_str();
+  c_clu->add_option("--gwh-a2", clu.config.gwh.a2, "GWH01 weight of E_shape")->check(CLI::Range(0.0, 1e6))->capture_default_str();
+  c_clu->add_option("--gwh-weight", gwh_weight, "GWH01 E_dir weights: area or sqrt-area")
+      ->check(CLI::IsMember({"area", "sqrt-area"}))
+      ->capture_default_str();
+  c_clu->add_option("--target-clusters", clu.config.target_clusters, "GWH01 contraction: stop at this many clusters (0 = off)")
+      ->capture_default_str();
+  c_clu->add_option("--max-triangles", clu.config.max_triangles, "sah-split/meshopt triangle limit (0 = 2 x max-count)")
+      ->capture_default_str();
+  c_clu->add_option("--out", clu.out_dir, "output directory (triangles.csv, clusters.csv, summary.json, clusters.ply)")
+      ->required();
+  c_clu->add_flag("--json", clu.json, "print the summary's results as JSON");
+  add_threads_option(c_clu, threads);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -110,6 +151,15 @@ int main(int argc, char** argv) {
     } else if (*c_sub) {
       sub.scheme = *parse_subdivision_scheme(scheme);
       cmd_subdivide(sub, std::cout);
+    } else if (*c_clu) {
+      clu.config.method = *parse_cluster_method(method);
+      clu.config.objective = *parse_objective(objective);
+      clu.config.size_bound_mode = size_bound == "max" ? SizeBoundMode::Max : SizeBoundMode::Min;
+      clu.config.sphere = *parse_sphere_method(sphere);
+      clu.config.start = *parse_start_rule(start);
+      clu.config.gwh.weight = gwh_weight == "area" ? GwhWeight::Area : GwhWeight::SqrtArea;
+      clu.argv = args;
+      cmd_cluster(clu, std::cout);
     } else if (*c_sph) {
       if (!methods.empty()) {
         sph.config.methods.clear();

@@ -232,3 +232,57 @@ TEST_F(Cli, EverySampleMeshGivesAResultOrAClearError) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST_F(Cli, ClusterWritesTheFourFilesConsistently) {
+  const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  const auto out = dir_ / "clu";
+  for (const char* method : {"growth", "contraction", "sah-split", "meshopt"}) {
+    SCOPED_TRACE(method);
+    auto r = ptc({"cluster", mesh, "--method", method, "--max-count", "40", "--out", out.string(), "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto res = nlohmann::json::parse(r.out);
+    const std::size_t clusters = res["clusters"];
+    const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+    EXPECT_EQ(summary["schema"], "ptc-cluster-summary/1");
+    EXPECT_EQ(summary["parameters"]["method"], method);
+    EXPECT_EQ(summary["parameters"]["max_count"], 40);
+    EXPECT_EQ(summary["results"]["validation"], "ok");
+    EXPECT_EQ(lines(slurp(out / "clusters.csv")), clusters + 1);
+    // triangles.csv covers every triangle of the input once, with ids < clusters.
+    std::istringstream tri(slurp(out / "triangles.csv"));
+    std::string line;
+    std::getline(tri, line);
+    EXPECT_EQ(line, "triangle_id,cluster_id");
+    std::size_t n = 0;
+    while (std::getline(tri, line)) {
+      const auto comma = line.find(',');
+      EXPECT_EQ(std::stoull(line.substr(0, comma)), n);
+      EXPECT_LT(std::stoull(line.substr(comma + 1)), clusters);
+      ++n;
+    }
+    r = ptc({"info", (out / "clusters.ply").string(), "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["triangles"], n);
+  }
+}
+
+TEST_F(Cli, ClusterRejectsBadArguments) {
+  const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  EXPECT_EQ(ptc({"cluster", mesh}).code, 2);  // --out is required
+  EXPECT_EQ(ptc({"cluster", mesh, "--method", "kmeans", "--out", (dir_ / "x").string()}).code, 2);
+  EXPECT_EQ(ptc({"cluster", mesh, "--objective", "best", "--out", (dir_ / "x").string()}).code, 2);
+  EXPECT_EQ(ptc({"cluster", mesh, "--max-count", "-3", "--out", (dir_ / "x").string()}).code, 2);
+  // Inconsistent parameters are a failed run with one line.
+  auto r = ptc({"cluster", mesh, "--max-count", "0", "--max-size", "5", "--out", (dir_ / "x").string()});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "x"));
+  // meshoptimizer's limits are explained, not an abort.
+  r = ptc({"cluster", mesh, "--method", "meshopt", "--max-count", "1000", "--out", (dir_ / "x").string()});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+}
+
+}  // namespace

@@ -1,0 +1,141 @@
+// Float boxes for the BVH layer, made conservatively from the double positions of the mesh.
+//
+// The tracer works in single precision in a *trace frame*: positions minus a frame origin (a
+// double), so that a mesh far from the world origin (offsets of 1e7) keeps its float precision.
+// A box is rounded OUTWARD from the double coordinates p - origin, and the tracer's float vertex
+// is p - origin rounded to NEAREST; since rounding is monotone, the float triangle always lies
+// inside its float box (round_down(min) <= round_nearest(any) <= round_up(max)).
+#pragma once
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "toolkit/core/types.h"
+
+namespace ptc::bvh {
+
+using Vec3f = std::array<float, 3>;
+
+inline constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// Axis-aligned float box; the empty box has lo = +inf, hi = -inf (so extend() needs no test).
+struct Box3f {
+  Vec3f lo{kInf, kInf, kInf};
+  Vec3f hi{-kInf, -kInf, -kInf};
+
+  void extend(const Box3f& b) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = b.lo[a] < lo[a] ? b.lo[a] : lo[a];
+      hi[a] = b.hi[a] > hi[a] ? b.hi[a] : hi[a];
+    }
+  }
+  void extend(const Vec3f& p) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = p[a] < lo[a] ? p[a] : lo[a];
+      hi[a] = p[a] > hi[a] ? p[a] : hi[a];
+    }
+  }
+  [[nodiscard]] bool empty() const { return !(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2]); }
+  /// b lies inside this box (closed); an empty b is inside every box.
+  [[nodiscard]] bool contains(const Box3f& b) const {
+    if (b.empty()) return true;
+    for (int a = 0; a < 3; ++a)
+      if (!(lo[a] <= b.lo[a] && b.hi[a] <= hi[a])) return false;
+    return true;
+  }
+  /// Surface area 2(xy + yz + zx) in double (0 for an empty box). Double so that sums over
+  /// millions of nodes (the SAH cost) do not lose digits.
+  [[nodiscard]] double surface_area() const {
+    if (empty()) return 0.0;
+    const double x = double(hi[0]) - lo[0], y = double(hi[1]) - lo[1], z = double(hi[2]) - lo[2];
+    return 2.0 * (x * y + y * z + z * x);
+  }
+  [[nodiscard]] Vec3f center() const {
+    return {0.5f * (lo[0] + hi[0]), 0.5f * (lo[1] + hi[1]), 0.5f * (lo[2] + hi[2])};
+  }
+  friend bool operator==(const Box3f&, const Box3f&) = default;
+};
+
+/// Largest float <= x (x finite or infinite). Branch-free (boxes are made per frame, and the
+/// rounding direction is a coin flip the branch predictor cannot learn): when the nearest float
+/// f overshoots, step one unit in the last place towards -inf on the bit pattern (f > 0: bits - 1;
+/// f < 0: bits + 1; f = +0 cannot overshoot since a negative x rounds to -0).
+[[nodiscard]] inline float round_down(double x) {
+  const float f = static_cast<float>(x);
+  const auto b = std::bit_cast<std::int32_t>(f);
+  const std::int32_t step = ((b >> 31) * 2) + 1;  // +1 for f >= +0, -1 for f <= -0
+  const std::int32_t adj = -static_cast<std::int32_t>(static_cast<double>(f) > x);
+  return std::bit_cast<float>(b - (step & adj));
+}
+/// Smallest float >= x (mirror of round_down; -0 cannot undershoot since a positive x rounds to +0).
+[[nodiscard]] inline float round_up(double x) {
+  const float f = static_cast<float>(x);
+  const auto b = std::bit_cast<std::int32_t>(f);
+  const std::int32_t step = ((b >> 31) * 2) + 1;
+  const std::int32_t adj = -static_cast<std::int32_t>(static_cast<double>(f) < x);
+  return std::bit_cast<float>(b + (step & adj));
+}
+
+/// p - origin rounded to the nearest float: the tracer's vertex in the trace frame.
+[[nodiscard]] inline Vec3f to_frame(const Vec3& p, const Vec3& origin) {
+  return {static_cast<float>(p.x() - origin.x()), static_cast<float>(p.y() - origin.y()),
+          static_cast<float>(p.z() - origin.z())};
+}
+
+/// One box per triangle in the frame at `origin`, rounded outward (contains the float triangle
+/// to_frame(corners)). Precondition: indices < positions.size() (asserted by the Mesh class).
+[[nodiscard]] std::vector<Box3f> triangle_boxes(std::span<const Vec3> positions, std::span<const Tri> triangles,
+                                                const Vec3& origin = Vec3::Zero());
+
+/// One box per point group g = indices[offsets[g] .. offsets[g+1]) (e.g. a clustering's
+/// vertex lists: the per-frame "cluster box update" of the method), rounded outward in the frame
+/// at `origin`. An empty group gets the empty box. offsets.size() = groups + 1 (empty offsets:
+/// no groups).
+[[nodiscard]] std::vector<Box3f> point_group_boxes(std::span<const Vec3> positions,
+                                                   std::span<const std::uint32_t> offsets,
+                                                   std::span<const std::uint32_t> indices,
+                                                   const Vec3& origin = Vec3::Zero());
+
+/// The centre of every box (the builders' centroids when none better is known).
+[[nodiscard]] std::vector<Vec3f> box_centers(std::span<const Box3f> boxes);
+
+/// Next float towards -inf / +inf of a finite f (one unit in the last place).
+[[nodiscard]] inline float next_below(float f) {
+  const auto b = std::bit_cast<std::int32_t>(f);
+  if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
+  return std::bit_cast<float>(b >= 0 ? b - 1 : b + 1);
+}
+[[nodiscard]] inline float next_above(float f) {
+  const auto b = std::bit_cast<std::int32_t>(f);
+  if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
+  return std::bit_cast<float>(b >= 0 ? b + 1 : b - 1);
+}
+
+/// The positions in the trace frame, rounded to nearest (the tracer's vertices): out[v] =
+/// to_frame(positions[v], origin). One pass, done once per frame; everything else gathers from it.
+void frame_positions(std::span<const Vec3> positions, const Vec3& origin, std::vector<Vec3f>& out);
+
+/// Boxes from frame positions (floats rounded to nearest), widened by one unit in the last
+/// place on every side. Since a double p lies within half a unit of its float, the box contains
+/// the double triangle (or point group) as well as the float one: rounded outward like the
+/// double versions above, at most one unit looser, and about twice as fast (half the memory).
+[[nodiscard]] std::vector<Box3f> triangle_boxes(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);
+void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::uint32_t> offsets,
+                       std::span<const std::uint32_t> indices, std::vector<Box3f>& out);
+
+/// Centroids of float triangles (v0 + v1 + v2) / 3, inside the boxes above.
+[[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);
+
+/// Centroids (v0 + v1 + v2) / 3 of the triangles in the frame at `origin`.
+[[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span<const Tri> triangles,
+                                                    const Vec3& origin = Vec3::Zero());
+
+/// Union of boxes.
+[[nodiscard]] Box3f union_of(std::span<const Box3f> boxes);
+
+}  // namespace ptc::bvh

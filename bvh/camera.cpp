@@ -1,0 +1,47 @@
+#include "bvh/camera.h"
+
+#include <cmath>
+
+namespace ptc::bvh {
+
+PinholeCamera frame_box(const Box3& bounds, const Vec3& view_dir, const Vec3& up_hint, double fov_y_deg) {
+  PinholeCamera c;
+  c.fov_y_deg = fov_y_deg;
+  c.forward = view_dir.normalized();
+  c.right = c.forward.cross(up_hint).normalized();
+  c.up = c.right.cross(c.forward);
+  if (bounds.empty()) {
+    c.eye = -c.forward;
+    return c;
+  }
+  // Distance at which every corner of the box projects inside the square image (with a 5%
+  // margin): for corner q relative to the centre, |q.right| and |q.up| <= tan(fov/2) * (d + q.fwd).
+  const double t = std::tan(0.5 * fov_y_deg * M_PI / 180.0) / 1.05;
+  double dist = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 q = Vec3(k & 1 ? bounds.hi.x() : bounds.lo.x(), k & 2 ? bounds.hi.y() : bounds.lo.y(),
+                        k & 4 ? bounds.hi.z() : bounds.lo.z()) - bounds.center();
+    const double lateral = std::max(std::abs(q.dot(c.right)), std::abs(q.dot(c.up)));
+    dist = std::max(dist, lateral / t - q.dot(c.forward));
+  }
+  c.eye = bounds.center() - dist * c.forward;
+  return c;
+}
+
+RayBatch primary_rays(const PinholeCamera& cam, int width, int height) {
+  RayBatch rays;
+  rays.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  const double th = std::tan(0.5 * cam.fov_y_deg * M_PI / 180.0);
+  const double tw = th * width / height;
+  std::size_t i = 0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x, ++i) {
+      const double sx = (2.0 * (x + 0.5) / width - 1.0) * tw;
+      const double sy = (1.0 - 2.0 * (y + 0.5) / height) * th;
+      const Vec3 d = (cam.forward + sx * cam.right + sy * cam.up).normalized();
+      rays.set(i, cam.eye, {static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z())});
+    }
+  return rays;
+}
+
+}  // namespace ptc::bvh

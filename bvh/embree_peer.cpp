@@ -1,0 +1,144 @@
+#include "bvh/embree_peer.h"
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace ptc::bvh {
+
+const char* to_string(EmbreeMode m) {
+  switch (m) {
+    case EmbreeMode::StaticMedium: return "embree_static_medium";
+    case EmbreeMode::DynamicLow: return "embree_dynamic_low";
+    case EmbreeMode::DynamicRefit: return "embree_dynamic_refit";
+  }
+  return "?";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+void check(RTCDevice dev, const char* what) {
+  const RTCError e = rtcGetDeviceError(dev);
+  if (e != RTC_ERROR_NONE) throw std::runtime_error(std::string("Embree error ") + std::to_string(int(e)) + " in " + what);
+}
+
+}  // namespace
+
+struct EmbreeScene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  RTCGeometry geom = nullptr;
+  float* vertices = nullptr;  // owned by the geometry (rtcSetNewGeometryBuffer)
+  std::size_t vertex_count = 0;
+  Vec3 origin;
+};
+
+EmbreeScene::EmbreeScene(const Mesh& mesh, const Vec3& origin, const EmbreeConfig& cfg) : impl_(std::make_unique<Impl>()) {
+  Impl& im = *impl_;
+  im.origin = origin;
+  const std::string conf = cfg.threads ? "threads=" + std::to_string(cfg.threads) : std::string();
+  im.device = rtcNewDevice(conf.empty() ? nullptr : conf.c_str());
+  if (!im.device) throw std::runtime_error("Embree: rtcNewDevice failed");
+  im.scene = rtcNewScene(im.device);
+  const bool dynamic = cfg.mode != EmbreeMode::StaticMedium;
+  rtcSetSceneFlags(im.scene, dynamic ? RTC_SCENE_FLAG_DYNAMIC : RTC_SCENE_FLAG_NONE);
+  rtcSetSceneBuildQuality(im.scene, dynamic ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_MEDIUM);
+  im.geom = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  if (cfg.mode == EmbreeMode::DynamicRefit) rtcSetGeometryBuildQuality(im.geom, RTC_BUILD_QUALITY_REFIT);
+  else if (cfg.mode == EmbreeMode::DynamicLow) rtcSetGeometryBuildQuality(im.geom, RTC_BUILD_QUALITY_LOW);
+  im.vertex_count = mesh.vertex_count();
+  // 3 floats per vertex; Embree reads 16 bytes per vertex, so the buffer ends with padding.
+  im.vertices = static_cast<float*>(rtcSetNewGeometryBuffer(im.geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                            3 * sizeof(float), im.vertex_count + 1));
+  auto* idx = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(im.geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangle_count()));
+  check(im.device, "buffers");
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k) idx[3 * t + k] = mesh.triangle(t)[k];
+  rtcAttachGeometry(im.scene, im.geom);
+  update(mesh.positions());
+}
+
+EmbreeScene::~EmbreeScene() {
+  if (!impl_) return;
+  if (impl_->geom) rtcReleaseGeometry(impl_->geom);
+  if (impl_->scene) rtcReleaseScene(impl_->scene);
+  if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+void EmbreeScene::update(std::span<const Vec3> positions) {
+  Impl& im = *impl_;
+  auto t0 = Clock::now();
+  const std::size_t n = std::min(positions.size(), im.vertex_count);
+  for (std::size_t v = 0; v < n; ++v) {
+    const Vec3f p = to_frame(positions[v], im.origin);
+    im.vertices[3 * v] = p[0], im.vertices[3 * v + 1] = p[1], im.vertices[3 * v + 2] = p[2];
+  }
+  rtcUpdateGeometryBuffer(im.geom, RTC_BUFFER_TYPE_VERTEX, 0);
+  rtcCommitGeometry(im.geom);
+  vertex_ms_ = ms_since(t0);
+  t0 = Clock::now();
+  rtcCommitScene(im.scene);
+  commit_ms_ = ms_since(t0);
+  check(im.device, "commit");
+}
+
+TraceTotals EmbreeScene::trace(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads) const {
+  const Impl& im = *impl_;
+  const std::size_t n = rays.size();
+  hits.resize(n);
+  tbb::enumerable_thread_specific<TraceTotals> totals;
+  auto body = [&](const tbb::blocked_range<std::size_t>& range) {
+    TraceTotals& tot = totals.local();
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      RTCRayHit rh;
+      const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), im.origin);
+      rh.ray.org_x = o[0], rh.ray.org_y = o[1], rh.ray.org_z = o[2];
+      rh.ray.dir_x = rays.dx[i], rh.ray.dir_y = rays.dy[i], rh.ray.dir_z = rays.dz[i];
+      rh.ray.tnear = rays.tmin[i];
+      rh.ray.tfar = rays.tmax[i];
+      rh.ray.time = 0.0f;
+      rh.ray.mask = 0xffffffffu;
+      rh.ray.id = 0;
+      rh.ray.flags = 0;
+      std::uint32_t tri = kNoTriangle;
+      float t = 0, u = 0, v = 0;
+      if (mode == HitMode::Closest) {
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(im.scene, &ctx, &rh);
+        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) tri = rh.hit.primID, t = rh.ray.tfar, u = rh.hit.u, v = rh.hit.v;
+      } else {
+        rtcOccluded1(im.scene, &ctx, &rh.ray);
+        if (rh.ray.tfar < 0.0f) tri = kUnknownTriangle, t = rays.tmax[i];  // occluded (rtcOccluded1 sets tfar = -inf)
+      }
+      hits.t[i] = t, hits.u[i] = u, hits.v[i] = v, hits.triangle[i] = tri;
+      hits.nodes_visited[i] = 0, hits.triangles_tested[i] = 0;
+      tot.rays += 1;
+      tot.hits += tri != kNoTriangle;
+    }
+  };
+  if (threads == 1) {
+    body(tbb::blocked_range<std::size_t>(0, n));
+  } else {
+    tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : static_cast<int>(threads));
+    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), body); });
+  }
+  TraceTotals sum;
+  for (const TraceTotals& t : totals) sum.rays += t.rays, sum.hits += t.hits;
+  return sum;
+}
+
+}  // namespace ptc::bvh

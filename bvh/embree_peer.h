@@ -1,0 +1,56 @@
+// Embree 3 as the performance peer: the same mesh, the same trace frame (positions minus the
+// same origin, in float) and the same rays, traced with rtcIntersect1 / rtcOccluded1.
+//
+// Modes (Embree's own names):
+//   - StaticMedium: RTC_BUILD_QUALITY_MEDIUM, static scene (Embree's default SAH build);
+//   - DynamicLow: RTC_SCENE_FLAG_DYNAMIC + RTC_BUILD_QUALITY_LOW (Morton build), rebuilt per frame;
+//   - DynamicRefit: RTC_SCENE_FLAG_DYNAMIC, scene quality LOW, geometry quality REFIT: the first
+//     commit builds, every later commit refits the tree to the new vertices.
+// Threads: the device is created with "threads=N" (N = 0: Embree's default, all cores);
+// set_affinity is never used.
+#pragma once
+
+#include <memory>
+
+#include "bvh/tracer.h"
+
+namespace ptc::bvh {
+
+/// Triangle id reported for an occluded ray (rtcOccluded1 does not say which triangle).
+inline constexpr std::uint32_t kUnknownTriangle = 0xfffffffeu;
+
+enum class EmbreeMode { StaticMedium, DynamicLow, DynamicRefit };
+[[nodiscard]] const char* to_string(EmbreeMode m);
+
+struct EmbreeConfig {
+  EmbreeMode mode = EmbreeMode::StaticMedium;
+  unsigned threads = 0;  ///< Embree worker threads for commits (0: all cores)
+};
+
+class EmbreeScene {
+ public:
+  /// Creates the device and scene and commits the first frame. Throws std::runtime_error when
+  /// Embree reports an error.
+  EmbreeScene(const Mesh& mesh, const Vec3& origin, const EmbreeConfig& cfg = {});
+  ~EmbreeScene();
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  /// One frame: new positions (same count) converted into the shared vertex buffer, then
+  /// rtcCommitScene (build or refit by mode). Times in milliseconds of the last update.
+  void update(std::span<const Vec3> positions);
+  [[nodiscard]] double last_vertex_ms() const { return vertex_ms_; }
+  [[nodiscard]] double last_commit_ms() const { return commit_ms_; }
+
+  /// Traces the batch with rtcIntersect1 (Closest) or rtcOccluded1 (Any); hits as in the
+  /// tracer (triangle = primID; for Any, triangle = kUnknownTriangle, t = the ray's tmax and
+  /// u = v = 0: Embree reports no hit data for occlusion). threads = 1: the calling thread only; else oneTBB.
+  TraceTotals trace(const RayBatch& rays, HitBatch& hits, HitMode mode = HitMode::Closest, unsigned threads = 1) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  double vertex_ms_ = 0, commit_ms_ = 0;
+};
+
+}  // namespace ptc::bvh

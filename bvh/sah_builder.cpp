@@ -1,0 +1,446 @@
+#include "bvh/sah_builder.h"
+
+#include <emmintrin.h>  // SSE2: the x86-64 baseline
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numeric>
+
+namespace ptc::bvh {
+
+namespace {
+
+// ------------------------------------------------------------------------------------------
+// Shared skeleton: an explicit stack of pending subtrees, nodes emitted in depth-first
+// pre-order (the first child is allocated right after its parent; the second child's index is
+// patched into the parent when the second subtree is started).
+
+struct CostAccumulator {  // sum of the tree's SAH terms (see sah_cost.h); divided by A(root) at the end
+  double area_terms = 0.0;   // sum traversal * A(inner) + intersection * W * A(leaf)
+  double count_terms = 0.0;  // the same sum with every A = 1 (used when A(root) = 0)
+  void inner(const SahCostModel& m, double area) {
+    area_terms += m.traversal * area;
+    count_terms += m.traversal;
+  }
+  void leaf(const SahCostModel& m, double area, double weight) {
+    area_terms += m.intersection * weight * area;
+    count_terms += m.intersection * weight;
+  }
+  [[nodiscard]] double total(double root_area) const { return root_area > 0.0 ? area_terms / root_area : count_terms; }
+};
+
+double weight_of(const BuildInput& in, std::uint32_t prim) { return in.weights.empty() ? 1.0 : in.weights[prim]; }
+
+void check_input(const BuildInput& in, const BuildConfig& cfg) {
+  assert(in.centroids.size() == in.boxes.size());
+  assert(in.weights.empty() || in.weights.size() == in.boxes.size());
+  assert(cfg.max_leaf_size >= 1);
+  assert(cfg.bins >= 2 && cfg.bins <= 256);
+  assert(cfg.cost.traversal > 0.0 && cfg.cost.intersection > 0.0);
+  (void)in, (void)cfg;
+}
+
+// ------------------------------------------------------------------------------------------
+// Full-sweep SAH.
+
+struct SweepTask {
+  std::uint32_t begin, end;
+  std::uint32_t patch_parent;  // node whose `index` receives this subtree's root, or kNone
+};
+constexpr std::uint32_t kNone = 0xffffffffu;
+
+}  // namespace
+
+Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg) {
+  check_input(in, cfg);
+  Bvh bvh;
+  const auto n = static_cast<std::uint32_t>(in.boxes.size());
+  if (n == 0) return bvh;
+  bvh.prim_order.resize(n);
+  std::iota(bvh.prim_order.begin(), bvh.prim_order.end(), 0u);
+  bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
+  const SahCostModel& m = cfg.cost;
+  CostAccumulator acc;
+  std::vector<std::uint32_t> order(n);
+  std::vector<double> suffix_area(n + 1), suffix_weight(n + 1);
+  std::vector<SweepTask> stack{{0, n, kNone}};
+  while (!stack.empty()) {
+    const SweepTask task = stack.back();
+    stack.pop_back();
+    const auto idx = static_cast<std::uint32_t>(bvh.nodes.size());
+    bvh.nodes.emplace_back();
+    if (task.patch_parent != kNone) bvh.nodes[task.patch_parent].index = idx;
+    std::uint32_t* prims = bvh.prim_order.data() + task.begin;
+    const std::uint32_t count = task.end - task.begin;
+    Box3f box;
+    double weight = 0.0;
+    for (std::uint32_t i = 0; i < count; ++i) box.extend(in.boxes[prims[i]]), weight += weight_of(in, prims[i]);
+    bvh.nodes[idx].bounds = box;
+    const double area = box.surface_area();
+    const double leaf_cost = m.intersection * weight;
+
+    // Best split over all axes and positions; split "after position k" of the sorted order.
+    double best_cost = std::numeric_limits<double>::infinity();
+    int best_axis = -1;
+    std::uint32_t best_k = 0;
+    if (count > 1 && area > 0.0) {
+      for (int axis = 0; axis < 3; ++axis) {
+        std::copy(prims, prims + count, order.begin());
+        std::sort(order.begin(), order.begin() + count, [&](std::uint32_t a, std::uint32_t b) {
+          const float ca = in.centroids[a][axis], cb = in.centroids[b][axis];
+          return ca != cb ? ca < cb : a < b;
+        });
+        Box3f right;
+        double wr = 0.0;
+        for (std::uint32_t i = count; i-- > 0;) {
+          right.extend(in.boxes[order[i]]);
+          wr += weight_of(in, order[i]);
+          suffix_area[i] = right.surface_area();
+          suffix_weight[i] = wr;
+        }
+        Box3f left;
+        double wl = 0.0;
+        for (std::uint32_t k = 1; k < count; ++k) {  // left = order[0, k), right = order[k, count)
+          left.extend(in.boxes[order[k - 1]]);
+          wl += weight_of(in, order[k - 1]);
+          const double c = m.traversal + m.intersection * (left.surface_area() * wl + suffix_area[k] * suffix_weight[k]) / area;
+          if (c < best_cost) best_cost = c, best_axis = axis, best_k = k;
+        }
+      }
+    }
+    const bool must_split = count > cfg.max_leaf_size;
+    if (count == 1 || (!must_split && leaf_cost <= best_cost)) {
+      bvh.nodes[idx].index = task.begin;
+      bvh.nodes[idx].count = count;
+      acc.leaf(m, area, weight);
+      continue;
+    }
+    std::uint32_t k = count / 2;  // no usable plane (zero-area node): object median in current order
+    if (best_axis >= 0) {
+      std::sort(prims, prims + count, [&](std::uint32_t a, std::uint32_t b) {
+        const float ca = in.centroids[a][best_axis], cb = in.centroids[b][best_axis];
+        return ca != cb ? ca < cb : a < b;
+      });
+      k = best_k;
+    }
+    acc.inner(m, area);
+    stack.push_back({task.begin + k, task.end, idx});  // second child, patched into idx
+    stack.push_back({task.begin, task.begin + k, kNone});  // first child = idx + 1
+  }
+  bvh.cost = acc.total(bvh.nodes[0].bounds.surface_area());
+  return bvh;
+}
+
+// ------------------------------------------------------------------------------------------
+// Binned SAH. Primitive references are copied into 48-byte records (box, id, weight, centroid)
+// that are partitioned in place, so the hot loops stream through memory instead of gathering
+// from the input spans.
+
+namespace {
+
+struct alignas(16) Ref {
+  float lo[3];
+  std::uint32_t id;
+  float hi[3];
+  std::uint32_t weight;
+  float c[3];
+  float pad;
+};
+static_assert(sizeof(Ref) == 48);
+
+struct BinnedTask {
+  std::uint32_t begin, end, patch_parent;
+  Box3f box;        // union of the primitive boxes
+  Box3f centroids;  // bounds of the centroids
+};
+
+constexpr std::uint32_t kMaxBins = 256;
+constexpr std::uint32_t kSweepBelow = 16;  // nodes of at most this many primitives are swept exactly
+
+struct Bins {
+  __m128 lo[3][kMaxBins], hi[3][kMaxBins];
+  std::uint32_t weight[3][kMaxBins];  // weights >= 1, so 0 means an empty bin
+
+  void clear(std::uint32_t nbins) {
+    const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
+    for (int a = 0; a < 3; ++a)
+      for (std::uint32_t b = 0; b < nbins; ++b) lo[a][b] = inf, hi[a][b] = ninf, weight[a][b] = 0;
+  }
+  void add(const std::int32_t* bin, __m128 l, __m128 h, std::uint32_t w) {
+    for (int a = 0; a < 3; ++a) {
+      const std::int32_t b = bin[a];
+      lo[a][b] = _mm_min_ps(lo[a][b], l);
+      hi[a][b] = _mm_max_ps(hi[a][b], h);
+      weight[a][b] += w;
+    }
+  }
+  void merge(const Bins& o, std::uint32_t nbins) {
+    for (int a = 0; a < 3; ++a)
+      for (std::uint32_t b = 0; b < nbins; ++b) {
+        lo[a][b] = _mm_min_ps(lo[a][b], o.lo[a][b]);
+        hi[a][b] = _mm_max_ps(hi[a][b], o.hi[a][b]);
+        weight[a][b] += o.weight[a][b];
+      }
+  }
+};
+
+inline __m128 load_lo(const Ref& r) { return _mm_load_ps(r.lo); }  // lane 3 holds id bits: masked by users
+inline __m128 load_hi(const Ref& r) { return _mm_load_ps(r.hi); }
+
+inline Box3f to_box(__m128 lo, __m128 hi) {
+  alignas(16) float l[4], h[4];
+  _mm_store_ps(l, lo), _mm_store_ps(h, hi);
+  return {{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
+}
+
+// Half the surface area, xy + yz + zx, of a non-empty box (lanes 0-2), in float: only compared.
+inline float half_area(__m128 lo, __m128 hi) {
+  const __m128 e = _mm_sub_ps(hi, lo);                                 // x y z .
+  const __m128 r = _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1));       // y z x .
+  const __m128 p = _mm_mul_ps(e, r);                                   // xy yz zx .
+  const __m128 s = _mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 1)));
+  return _mm_cvtss_f32(_mm_add_ss(s, _mm_movehl_ps(p, p)));
+}
+
+}  // namespace
+
+Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
+  check_input(in, cfg);
+  Bvh bvh;
+  const auto n = static_cast<std::uint32_t>(in.boxes.size());
+  if (n == 0) return bvh;
+  const SahCostModel& m = cfg.cost;
+  const std::uint32_t nbins = cfg.bins;
+
+  std::vector<Ref> refs(n);
+  Box3f root_box, root_cent;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    Ref& r = refs[i];
+    const Box3f& b = in.boxes[i];
+    const Vec3f& c = in.centroids[i];
+    r = Ref{{b.lo[0], b.lo[1], b.lo[2]}, i, {b.hi[0], b.hi[1], b.hi[2]}, in.weights.empty() ? 1u : in.weights[i],
+            {c[0], c[1], c[2]}, 0.0f};
+    root_box.extend(b);
+    root_cent.extend(c);
+  }
+  bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
+  CostAccumulator acc;
+  auto bins = std::make_unique<Bins[]>(2);
+  std::vector<BinnedTask> stack;
+  stack.push_back({0, n, kNone, root_box, root_cent});
+  const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
+
+  while (!stack.empty()) {
+    const BinnedTask task = stack.back();
+    stack.pop_back();
+    const auto idx = static_cast<std::uint32_t>(bvh.nodes.size());
+    bvh.nodes.emplace_back();
+    if (task.patch_parent != kNone) bvh.nodes[task.patch_parent].index = idx;
+    bvh.nodes[idx].bounds = task.box;
+    Ref* r = refs.data() + task.begin;
+    const std::uint32_t count = task.end - task.begin;
+    const double area = task.box.surface_area();
+    auto make_leaf = [&] {
+      std::uint64_t w = 0;
+      for (std::uint32_t i = 0; i < count; ++i) w += r[i].weight;
+      bvh.nodes[idx].index = task.begin;
+      bvh.nodes[idx].count = count;
+      acc.leaf(m, area, static_cast<double>(w));
+    };
+    if (count == 1) {
+      make_leaf();
+      continue;
+    }
+
+    // Small nodes: exact sweep over the primitives sorted by centroid on each axis (cheaper than
+    // clearing and sweeping bins, and exact). Larger nodes: bins.
+    const bool small = count <= kSweepBelow;
+    std::uint8_t order[3][kSweepBelow];
+    int sweep_axis = -1;
+    std::uint32_t sweep_k = 0;
+    // Bin along every axis whose centroid extent is positive.
+    float scale[3];
+    bool usable[3];
+    for (int a = 0; a < 3; ++a) {
+      const float ext = task.centroids.hi[a] - task.centroids.lo[a];
+      // bins * (1 - 2^-20) / ext keeps the largest centroid inside the last bin; the clamp below
+      // catches what rounding still pushes out.
+      usable[a] = ext > 0.0f && area > 0.0 && !small;
+      scale[a] = usable[a] ? static_cast<float>(nbins) * (1.0f - 1.0f / 1048576.0f) / ext : 0.0f;
+      if (usable[a] && !std::isfinite(scale[a])) usable[a] = false;  // extent below ~1e-38: too small to bin
+    }
+    int best_axis = -1;
+    std::uint32_t best_split = 0;  // left = bins [0, best_split)
+    double best_cost = std::numeric_limits<double>::infinity();
+    std::uint64_t total_weight = 0;
+    if (usable[0] || usable[1] || usable[2]) {
+      // Two bin sets, for even and odd primitives: consecutive updates of the same bin would
+      // otherwise wait for each other through memory.
+      Bins& b0 = bins[0];
+      Bins& b1 = bins[1];
+      b0.clear(nbins);
+      if (count > 1) b1.clear(nbins);
+      const __m128 clo = _mm_setr_ps(task.centroids.lo[0], task.centroids.lo[1], task.centroids.lo[2], 0.0f);
+      const __m128 sc = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
+      const __m128 maxbin = _mm_set1_ps(static_cast<float>(nbins - 1));
+      auto bin_of = [&](const Ref& x, std::int32_t* out) {
+        const __m128 c = _mm_load_ps(x.c);
+        const __m128 f = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, clo), sc), _mm_setzero_ps()), maxbin);
+        _mm_store_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(f));
+      };
+      std::uint32_t i = 0;
+      for (; i + 1 < count; i += 2) {
+        alignas(16) std::int32_t bi0[4], bi1[4];
+        bin_of(r[i], bi0);
+        bin_of(r[i + 1], bi1);
+        b0.add(bi0, load_lo(r[i]), load_hi(r[i]), r[i].weight);
+        b1.add(bi1, load_lo(r[i + 1]), load_hi(r[i + 1]), r[i + 1].weight);
+        total_weight += r[i].weight + r[i + 1].weight;
+      }
+      if (i < count) {
+        alignas(16) std::int32_t bi0[4];
+        bin_of(r[i], bi0);
+        b0.add(bi0, load_lo(r[i]), load_hi(r[i]), r[i].weight);
+        total_weight += r[i].weight;
+      }
+      if (count > 1) b0.merge(b1, nbins);
+      // Only non-empty bins matter: a boundary next to an empty bin gives the same partition as
+      // the boundary before it (small nodes, the majority, have few non-empty bins).
+      float right_area[kMaxBins], right_weight[kMaxBins];
+      std::uint32_t used[kMaxBins];
+      float best_sum = std::numeric_limits<float>::infinity();
+      for (int a = 0; a < 3; ++a) {
+        if (!usable[a]) continue;
+        std::uint32_t k = 0;
+        for (std::uint32_t b = 0; b < nbins; ++b)
+          if (b0.weight[a][b]) used[k++] = b;
+        __m128 lo = inf, hi = ninf;
+        std::uint64_t w = 0;
+        for (std::uint32_t j = k; j-- > 1;) {  // right side = used[j .. k)
+          const std::uint32_t b = used[j];
+          lo = _mm_min_ps(lo, b0.lo[a][b]), hi = _mm_max_ps(hi, b0.hi[a][b]);
+          w += b0.weight[a][b];
+          right_area[j] = half_area(lo, hi);
+          right_weight[j] = static_cast<float>(w);
+        }
+        lo = inf, hi = ninf;
+        std::uint64_t wl = 0;
+        for (std::uint32_t j = 1; j < k; ++j) {  // left = used[0 .. j), split before bin used[j]
+          const std::uint32_t b = used[j - 1];
+          lo = _mm_min_ps(lo, b0.lo[a][b]), hi = _mm_max_ps(hi, b0.hi[a][b]);
+          wl += b0.weight[a][b];
+          const float sum = half_area(lo, hi) * static_cast<float>(wl) + right_area[j] * right_weight[j];
+          if (sum < best_sum) best_sum = sum, best_axis = a, best_split = used[j];
+        }
+      }
+      if (best_axis >= 0) best_cost = m.traversal + m.intersection * 2.0 * static_cast<double>(best_sum) / area;
+    } else {
+      for (std::uint32_t i = 0; i < count; ++i) total_weight += r[i].weight;
+      if (small && area > 0.0) {
+        float right_area[kSweepBelow], right_weight[kSweepBelow];
+        float best_sum = std::numeric_limits<float>::infinity();
+        for (int a = 0; a < 3; ++a) {
+          std::uint8_t* o = order[a];
+          for (std::uint32_t i = 0; i < count; ++i) {  // insertion sort by (centroid, position)
+            std::uint32_t j = i;
+            while (j > 0 && r[o[j - 1]].c[a] > r[i].c[a]) o[j] = o[j - 1], --j;
+            o[j] = static_cast<std::uint8_t>(i);
+          }
+          __m128 lo = inf, hi = ninf;
+          std::uint64_t w = 0;
+          for (std::uint32_t j = count; j-- > 1;) {
+            lo = _mm_min_ps(lo, load_lo(r[o[j]])), hi = _mm_max_ps(hi, load_hi(r[o[j]]));
+            w += r[o[j]].weight;
+            right_area[j] = half_area(lo, hi);
+            right_weight[j] = static_cast<float>(w);
+          }
+          lo = inf, hi = ninf;
+          w = 0;
+          for (std::uint32_t j = 1; j < count; ++j) {
+            lo = _mm_min_ps(lo, load_lo(r[o[j - 1]])), hi = _mm_max_ps(hi, load_hi(r[o[j - 1]]));
+            w += r[o[j - 1]].weight;
+            const float sum = half_area(lo, hi) * static_cast<float>(w) + right_area[j] * right_weight[j];
+            if (sum < best_sum) best_sum = sum, sweep_axis = a, sweep_k = j;
+          }
+        }
+        if (sweep_axis >= 0) best_cost = m.traversal + m.intersection * 2.0 * static_cast<double>(best_sum) / area;
+      }
+    }
+    const bool must_split = count > cfg.max_leaf_size;
+    if (!must_split && m.intersection * static_cast<double>(total_weight) <= best_cost) {
+      make_leaf();
+      continue;
+    }
+
+    // Partition (Hoare style) and gather the children's boxes and centroid bounds on the way.
+    std::uint32_t k;
+    __m128 llo = inf, lhi = ninf, rlo = inf, rhi = ninf, lclo = inf, lchi = ninf, rclo = inf, rchi = ninf;
+    if (best_axis >= 0) {
+      const int a = best_axis;
+      const float lo_a = task.centroids.lo[a], sc_a = scale[a], maxb = static_cast<float>(nbins - 1);
+      auto goes_left = [&](const Ref& x) {
+        const float f = std::min(std::max((x.c[a] - lo_a) * sc_a, 0.0f), maxb);
+        return static_cast<std::uint32_t>(static_cast<std::int32_t>(f)) < best_split;
+      };
+      std::uint32_t i = 0, j = count;
+      while (true) {
+        while (i < j && goes_left(r[i])) {
+          llo = _mm_min_ps(llo, load_lo(r[i])), lhi = _mm_max_ps(lhi, load_hi(r[i]));
+          const __m128 c = _mm_load_ps(r[i].c);
+          lclo = _mm_min_ps(lclo, c), lchi = _mm_max_ps(lchi, c);
+          ++i;
+        }
+        while (i < j && !goes_left(r[j - 1])) {
+          --j;
+          rlo = _mm_min_ps(rlo, load_lo(r[j])), rhi = _mm_max_ps(rhi, load_hi(r[j]));
+          const __m128 c = _mm_load_ps(r[j].c);
+          rclo = _mm_min_ps(rclo, c), rchi = _mm_max_ps(rchi, c);
+        }
+        if (i >= j) break;
+        std::swap(r[i], r[j - 1]);  // now r[i] goes left and r[j-1] goes right; the loops above take them
+      }
+      k = i;
+    } else if (sweep_axis >= 0) {
+      Ref tmp[kSweepBelow];
+      for (std::uint32_t i = 0; i < count; ++i) tmp[i] = r[order[sweep_axis][i]];
+      k = sweep_k;
+      for (std::uint32_t i = 0; i < count; ++i) {
+        r[i] = tmp[i];
+        const __m128 c = _mm_load_ps(r[i].c);
+        if (i < k) {
+          llo = _mm_min_ps(llo, load_lo(r[i])), lhi = _mm_max_ps(lhi, load_hi(r[i]));
+          lclo = _mm_min_ps(lclo, c), lchi = _mm_max_ps(lchi, c);
+        } else {
+          rlo = _mm_min_ps(rlo, load_lo(r[i])), rhi = _mm_max_ps(rhi, load_hi(r[i]));
+          rclo = _mm_min_ps(rclo, c), rchi = _mm_max_ps(rchi, c);
+        }
+      }
+    } else {
+      // No plane separates the centroids (all equal, or a zero-area node): object median.
+      k = count / 2;
+      for (std::uint32_t i = 0; i < count; ++i) {
+        const __m128 c = _mm_load_ps(r[i].c);
+        if (i < k) {
+          llo = _mm_min_ps(llo, load_lo(r[i])), lhi = _mm_max_ps(lhi, load_hi(r[i]));
+          lclo = _mm_min_ps(lclo, c), lchi = _mm_max_ps(lchi, c);
+        } else {
+          rlo = _mm_min_ps(rlo, load_lo(r[i])), rhi = _mm_max_ps(rhi, load_hi(r[i]));
+          rclo = _mm_min_ps(rclo, c), rchi = _mm_max_ps(rchi, c);
+        }
+      }
+    }
+    assert(k > 0 && k < count);
+    acc.inner(m, area);
+    stack.push_back({task.begin + k, task.end, idx, to_box(rlo, rhi), to_box(rclo, rchi)});
+    stack.push_back({task.begin, task.begin + k, kNone, to_box(llo, lhi), to_box(lclo, lchi)});
+  }
+  bvh.prim_order.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) bvh.prim_order[i] = refs[i].id;
+  bvh.cost = acc.total(bvh.nodes[0].bounds.surface_area());
+  return bvh;
+}
+
+}  // namespace ptc::bvh

@@ -1,0 +1,45 @@
+// SAH BVH builders: pure functions from primitive boxes, centroids and weights to a Bvh.
+// The same builder serves triangles (weight 1) and clusters (weight = triangles in the cluster;
+// a leaf then holds whole clusters).
+//
+//   Bvh b = build_binned_sah({boxes, centroids, weights}, BuildConfig{});
+//
+// Both builders split top-down. At a node with primitives P, box B and weight W(P):
+//   leaf cost  = intersection * W(P)
+//   split cost = traversal + intersection * (A(L) W(L) + A(R) W(R)) / A(B)
+// and the node becomes a leaf when |P| <= max_leaf_size and leaf cost <= best split cost, or
+// when |P| = 1. Above max_leaf_size a split is forced: the SAH-best one, or, when every centroid
+// is equal (no plane separates them), the object median in the current order.
+// The reported Bvh::cost is the tree's SAH cost (sah_cost() recomputes it independently).
+// Deterministic: the same input gives the same tree on every run and thread count.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "bvh/bvh.h"
+
+namespace ptc::bvh {
+
+/// Input spans (not owned; all of the same length n, except weights).
+struct BuildInput {
+  std::span<const Box3f> boxes;
+  std::span<const Vec3f> centroids;        ///< a point inside (or at the centre of) each box
+  std::span<const std::uint32_t> weights;  ///< empty: every primitive weighs 1; else n entries >= 1
+};
+
+struct BuildConfig {
+  SahCostModel cost{};              ///< SAH constants (see SahCostModel)
+  std::uint32_t max_leaf_size = 8;  ///< most primitives in a leaf, >= 1 (triangles: 4-16; clusters: 1-4)
+  std::uint32_t bins = 16;          ///< binned builder: bins per axis, in [2, 256] (Wald 2007 uses 16)
+};
+
+/// Exact SAH: at every node every axis is sorted by centroid (ties by primitive id) and all
+/// |P| - 1 split positions are evaluated. O(n log^2 n); the quality reference.
+[[nodiscard]] Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg = {});
+
+/// Binned SAH (Wald 2007): centroids are binned into cfg.bins equal bins per axis of the node's
+/// centroid bounds and the bins' boundaries are the candidate planes. O(n log n).
+[[nodiscard]] Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg = {});
+
+}  // namespace ptc::bvh

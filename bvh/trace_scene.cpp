@@ -1,0 +1,473 @@
+#include "bvh/trace_scene.h"
+
+#include <emmintrin.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace ptc::bvh {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+std::uint32_t blocks_for(std::uint32_t triangles) { return (triangles + 3) / 4; }
+
+Vec3 default_origin(const Mesh& mesh, const SceneConfig& cfg) {
+  if (cfg.origin) return *cfg.origin;
+  const Box3 b = mesh.bounds();
+  return b.empty() ? Vec3::Zero() : b.center();
+}
+
+// Corners of triangles ids[0..n) into the blocks starting at `first` (lanes past n: NaN).
+void fill_vertices(std::span<const std::uint32_t> ids, std::span<const Vec3f> fp, std::span<const Tri> tris,
+                   TriBlock* first) {
+  const auto n = static_cast<std::uint32_t>(ids.size());
+  for (std::uint32_t b = 0; b < blocks_for(n); ++b) {
+    TriBlock& blk = first[b];
+    for (std::uint32_t lane = 0; lane < 4; ++lane) {
+      const std::uint32_t i = 4 * b + lane;
+      if (i < n) {
+        const Tri& t = tris[ids[i]];
+        for (int c = 0; c < 3; ++c) {
+          const Vec3f& p = fp[t[c]];
+          blk.v[c][0][lane] = p[0], blk.v[c][1][lane] = p[1], blk.v[c][2][lane] = p[2];
+        }
+      } else {
+        for (int c = 0; c < 3; ++c)
+          for (int a = 0; a < 3; ++a) blk.v[c][a][lane] = std::numeric_limits<float>::quiet_NaN();
+      }
+    }
+  }
+}
+
+// Corners of every lane's triangle (ids: 4 per block, kNoTriangle = padding, NaN corners).
+void fill_lanes(std::span<const std::uint32_t> ids, std::span<const Vec3f> fp, std::span<const Tri> tris,
+                TriBlock* blocks) {
+  constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t b = 0; b < ids.size() / 4; ++b) {
+    TriBlock& blk = blocks[b];
+    for (std::uint32_t lane = 0; lane < 4; ++lane) {
+      const std::uint32_t id = ids[4 * b + lane];
+      if (id != kNoTriangle) {
+        const Tri& t = tris[id];
+        for (int c = 0; c < 3; ++c) {
+          const Vec3f& p = fp[t[c]];
+          blk.v[c][0][lane] = p[0], blk.v[c][1][lane] = p[1], blk.v[c][2][lane] = p[2];
+        }
+      } else {
+        for (int c = 0; c < 3; ++c) blk.v[c][0][lane] = blk.v[c][1][lane] = blk.v[c][2][lane] = nan;
+      }
+    }
+  }
+}
+
+void fill_ids(std::span<const std::uint32_t> ids, std::uint32_t* first_id) {
+  const auto n = static_cast<std::uint32_t>(ids.size());
+  for (std::uint32_t i = 0; i < 4 * blocks_for(n); ++i) first_id[i] = i < n ? ids[i] : kNoTriangle;
+}
+
+// Exact box of a block's float triangles (NaN padding lanes ignored: _mm_min_ps(x, acc)
+// returns acc when x is NaN).
+Box3f block_box(const TriBlock& b) {
+  Box3f box;
+  for (int a = 0; a < 3; ++a) {
+    __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf);
+    for (int c = 0; c < 3; ++c) {
+      const __m128 x = _mm_load_ps(b.v[c][a]);
+      lo = _mm_min_ps(x, lo), hi = _mm_max_ps(x, hi);
+    }
+    lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(1, 0, 3, 2)));
+    lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(2, 3, 0, 1)));
+    hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(1, 0, 3, 2)));
+    hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(2, 3, 0, 1)));
+    box.lo[a] = _mm_cvtss_f32(lo), box.hi[a] = _mm_cvtss_f32(hi);
+  }
+  return box;
+}
+
+}  // namespace
+
+const char* to_string(ClusterLeaf l) { return l == ClusterLeaf::Linear ? "linear" : "block_tree"; }
+
+SceneConfig triangle_scene_defaults() {
+  SceneConfig c;
+  c.build.cost = {1.0, 0.3};
+  c.build.max_leaf_size = 8;
+  return c;
+}
+
+SceneConfig cluster_scene_defaults() {
+  SceneConfig c;
+  c.build.cost = {1.0, 0.3};
+  c.build.max_leaf_size = 1;
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TriangleScene::TriangleScene(const Mesh& mesh, const SceneConfig& cfg) : tris_(mesh.shared_triangles()), cfg_(cfg) {
+  data_.origin = default_origin(mesh, cfg);
+  update(mesh.positions());
+}
+
+void TriangleScene::update(std::span<const Vec3> positions) {
+  const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
+  auto t0 = Clock::now();
+  frame_positions(positions, data_.origin, fpos_);
+  times_.vertices_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  boxes_ = triangle_boxes(fpos_, tris);
+  centroids_ = triangle_centroids(fpos_, tris);
+  times_.boxes_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  bvh_ = build_binned_sah({boxes_, centroids_, {}}, cfg_.build);
+  times_.build_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  data_.wide = collapse_to_wide(bvh_);
+  times_.collapse_ms = ms_since(t0);
+
+  // Leaf data: blocks in the order the leaves appear in the wide nodes; leaves become direct.
+  t0 = Clock::now();
+  std::uint32_t nblocks = 0;
+  for (const WideNode& n : data_.wide.nodes)
+    for (int k = 0; k < 4; ++k)
+      if (n.is_leaf(k)) nblocks += blocks_for(n.count[k]);
+  data_.blocks.resize(nblocks);
+  data_.triangle_ids.resize(4 * static_cast<std::size_t>(nblocks));
+  data_.ranges.clear();
+  std::uint32_t next = 0;
+  for (WideNode& n : data_.wide.nodes)
+    for (int k = 0; k < 4; ++k) {
+      if (!n.is_leaf(k)) continue;
+      const std::span<const std::uint32_t> ids(bvh_.prim_order.data() + n.child[k], n.count[k]);
+      fill_vertices(ids, fpos_, tris, data_.blocks.data() + next);
+      fill_ids(ids, data_.triangle_ids.data() + 4 * std::size_t(next));
+      n.child[k] = next;  // direct leaf: count stays the triangle count
+      next += blocks_for(n.count[k]);
+    }
+  times_.leaf_data_ms = ms_since(t0);
+  times_.refit_ms = 0.0;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg)
+    : tris_(mesh.shared_triangles()),
+      cfg_(cfg),
+      order_(cv.triangle_order.begin(), cv.triangle_order.end()),
+      offsets_(cv.triangle_offsets.begin(), cv.triangle_offsets.end()),
+      vertices_(cv.vertices.begin(), cv.vertices.end()),
+      vertex_offsets_(cv.vertex_offsets.begin(), cv.vertex_offsets.end()) {
+  const std::size_t T = mesh.triangle_count();
+  if (offsets_.empty() || offsets_.front() != 0 || offsets_.back() != order_.size() || order_.size() != T)
+    throw std::invalid_argument("ClusterScene: the clustering's offsets/order do not cover the " + std::to_string(T) +
+                                " triangles");
+  std::vector<std::uint8_t> seen(T, 0);
+  for (std::uint32_t t : order_)
+    if (t >= T || seen[t]++) throw std::invalid_argument("ClusterScene: triangle_order is not a permutation");
+  const std::size_t C = offsets_.size() - 1;
+  if (!vertex_offsets_.empty() && (vertex_offsets_.size() != C + 1 || vertex_offsets_.back() != vertices_.size()))
+    throw std::invalid_argument("ClusterScene: vertex_offsets do not match the clusters");
+  for (std::size_t c = 0; c < C; ++c)
+    if (offsets_[c + 1] <= offsets_[c])
+      throw std::invalid_argument("ClusterScene: empty or decreasing cluster " + std::to_string(c));
+  const std::span<const Tri> tris = mesh.triangles();
+  if (vertex_offsets_.empty()) {  // no vertex lists: the corners of the cluster's triangles
+    vertices_.resize(3 * T);
+    vertex_offsets_.resize(C + 1);
+    for (std::size_t i = 0; i < T; ++i)
+      for (int k = 0; k < 3; ++k) vertices_[3 * i + k] = tris[order_[i]][k];
+    for (std::size_t c = 0; c <= C; ++c) vertex_offsets_[c] = 3 * offsets_[c];
+  }
+
+  // Within each cluster: Morton order of the rest-pose centroids in the cluster's own box (10
+  // bits per axis), ties by triangle id, so that consecutive groups of four are compact blocks.
+  const auto pos = mesh.positions();
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed;
+  for (std::size_t c = 0; c < C; ++c) {
+    Box3 box;
+    std::vector<Vec3> cen;
+    for (std::uint32_t i = offsets_[c]; i < offsets_[c + 1]; ++i) {
+      const Tri& t = tris[order_[i]];
+      cen.push_back((pos[t[0]] + pos[t[1]] + pos[t[2]]) / 3.0);
+      box.extend(cen.back());
+    }
+    const Vec3 ext = box.extent();
+    const double scale = ext.maxCoeff() > 0 ? 1023.0 / ext.maxCoeff() : 0.0;
+    keyed.clear();
+    for (std::uint32_t i = offsets_[c]; i < offsets_[c + 1]; ++i) {
+      std::uint32_t code = 0;
+      const Vec3 q = (cen[i - offsets_[c]] - box.lo) * scale;
+      const auto x = static_cast<std::uint32_t>(q.x()), y = static_cast<std::uint32_t>(q.y()),
+                 z = static_cast<std::uint32_t>(q.z());
+      for (int bit = 9; bit >= 0; --bit)
+        code = (code << 3) | (((x >> bit) & 1u) << 2) | (((y >> bit) & 1u) << 1) | ((z >> bit) & 1u);
+      keyed.push_back({code, order_[i]});
+    }
+    std::sort(keyed.begin(), keyed.end());
+    for (std::uint32_t i = offsets_[c]; i < offsets_[c + 1]; ++i) order_[i] = keyed[i - offsets_[c]].second;
+  }
+
+  weights_.resize(C);
+  for (std::size_t c = 0; c < C; ++c) weights_[c] = offsets_[c + 1] - offsets_[c];
+  data_.origin = default_origin(mesh, cfg);
+  cluster_ranges_.resize(C);
+  sub_root_.assign(C, kNoTriangle);
+  std::vector<std::uint32_t> lane_ids;  // triangle id per block lane (kNoTriangle: padding)
+  if (cfg_.cluster_leaf == ClusterLeaf::Linear) {
+    for (std::size_t c = 0; c < C; ++c) {
+      const auto first = static_cast<std::uint32_t>(lane_ids.size() / 4);
+      for (std::uint32_t i = 0; i < 4 * blocks_for(weights_[c]); ++i)
+        lane_ids.push_back(i < weights_[c] ? order_[offsets_[c] + i] : kNoTriangle);
+      cluster_ranges_[c] = {first, blocks_for(weights_[c]), weights_[c]};
+    }
+  } else {
+    // BlockTree: per cluster a binned SAH tree over its rest-pose triangles, leaves of at most 4
+    // triangles = one block each, collapsed to 4-wide; blocks in leaf order; topology kept.
+    frame_positions(pos, data_.origin, fpos_);
+    BuildConfig sub;
+    sub.max_leaf_size = 4;
+    sub.cost = cfg_.build.cost;
+    std::vector<Box3f> tb;
+    std::vector<Vec3f> tc;
+    for (std::size_t c = 0; c < C; ++c) {
+      const std::span<const std::uint32_t> ids(order_.data() + offsets_[c], weights_[c]);
+      const auto first = static_cast<std::uint32_t>(lane_ids.size() / 4);
+      if (ids.size() <= 4) {  // one block: the cluster is a direct leaf
+        for (std::uint32_t i = 0; i < 4; ++i) lane_ids.push_back(i < ids.size() ? ids[i] : kNoTriangle);
+        cluster_ranges_[c] = {first, 1, weights_[c]};
+        continue;
+      }
+      tb.clear(), tc.clear();
+      for (std::uint32_t t : ids) {
+        Box3f b;
+        Vec3f m{0, 0, 0};
+        for (int k = 0; k < 3; ++k) {
+          const Vec3f& p = fpos_[tris[t][k]];
+          b.extend(p);
+          for (int a = 0; a < 3; ++a) m[a] += p[a] / 3.0f;
+        }
+        tb.push_back(b), tc.push_back(m);
+      }
+      const Bvh b = build_binned_sah({tb, tc, {}}, sub);
+      const WideBvh w = collapse_to_wide(b);
+      const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
+      sub_root_[c] = base + w.root;
+      sub_depth_ = std::max(sub_depth_, w.depth);
+      for (WideNode n : w.nodes) {
+        for (int k = 0; k < 4; ++k) {
+          if (n.is_leaf(k)) {
+            const auto blk = static_cast<std::uint32_t>(lane_ids.size() / 4);
+            for (std::uint32_t i = 0; i < 4; ++i)
+              lane_ids.push_back(i < n.count[k] ? ids[b.prim_order[n.child[k] + i]] : kNoTriangle);
+            n.child[k] = blk;  // direct leaf of count <= 4 triangles
+          } else if (!n.is_empty(k)) {
+            n.child[k] += base;
+          }
+        }
+        sub_nodes_.push_back(n);
+      }
+      const auto end = static_cast<std::uint32_t>(lane_ids.size() / 4);
+      cluster_ranges_[c] = {first, end - first, weights_[c]};
+    }
+  }
+  data_.blocks.resize(lane_ids.size() / 4);
+  data_.triangle_ids.assign(lane_ids.begin(), lane_ids.end());
+  update(pos);
+}
+
+void ClusterScene::refit_subtrees() {
+  WideNode* nodes = data_.wide.nodes.data();
+  for (std::size_t i = sub_nodes_.size(); i-- > 0;) {
+    WideNode& n = nodes[i];
+    for (int k = 0; k < 4; ++k) {
+      if (n.is_leaf(k)) {
+        n.set_child_box(k, block_box(data_.blocks[n.child[k]]));
+      } else if (!n.is_empty(k)) {
+        Box3f u;
+        for (int j = 0; j < 4; ++j) u.extend(nodes[n.child[k]].child_box(j));
+        n.set_child_box(k, u);
+      }
+    }
+  }
+}
+
+void ClusterScene::update(std::span<const Vec3> positions) {
+  const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
+  const std::size_t C = weights_.size();
+  auto t0 = Clock::now();
+  frame_positions(positions, data_.origin, fpos_);
+  times_.vertices_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  point_group_boxes(fpos_, vertex_offsets_, vertices_, boxes_);
+  centroids_ = box_centers(boxes_);
+  times_.boxes_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  bvh_ = build_binned_sah({boxes_, centroids_, weights_}, cfg_.build);
+  times_.build_ms = ms_since(t0);
+
+  // Collapse, then link: nodes [0, S) are the per-cluster trees (kept from frame to frame),
+  // the top tree follows; a leaf of one cluster becomes a link to its tree (BlockTree) or a
+  // direct leaf, a leaf of several clusters an indirect one.
+  t0 = Clock::now();
+  WideBvh top = collapse_to_wide(bvh_);
+  const auto S = static_cast<std::uint32_t>(sub_nodes_.size());
+  if (data_.wide.nodes.size() < S) data_.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());
+  data_.wide.nodes.resize(S + top.nodes.size());
+  data_.ranges.resize(C);
+  for (std::size_t i = 0; i < bvh_.prim_order.size(); ++i) data_.ranges[i] = cluster_ranges_[bvh_.prim_order[i]];
+  for (std::size_t i = 0; i < top.nodes.size(); ++i) {
+    WideNode n = top.nodes[i];
+    for (int k = 0; k < 4; ++k) {
+      if (n.is_leaf(k)) {
+        if (n.count[k] == 1) {
+          const std::uint32_t c = bvh_.prim_order[n.child[k]];
+          if (sub_root_[c] != kNoTriangle) {
+            n.child[k] = sub_root_[c], n.count[k] = 0;
+          } else {
+            n.child[k] = cluster_ranges_[c].first_block, n.count[k] = cluster_ranges_[c].triangle_count;  // packed
+          }
+        } else {
+          n.count[k] |= kIndirectLeaf;
+        }
+      } else if (!n.is_empty(k)) {
+        n.child[k] += S;
+      }
+    }
+    data_.wide.nodes[S + i] = n;
+  }
+  data_.wide.root = S;
+  data_.wide.bounds = top.bounds;
+  data_.wide.depth = top.depth + sub_depth_;
+  data_.wide.leaves = top.leaves;
+  if (top.nodes.empty()) data_.wide.nodes.clear();
+  times_.collapse_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  fill_lanes(data_.triangle_ids, fpos_, tris, data_.blocks.data());
+  times_.leaf_data_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  if (S) refit_subtrees();
+  times_.refit_ms = ms_since(t0);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count, bool exact_unions) {
+  std::vector<std::string> issues;
+  auto fail = [&](std::string s) {
+    if (issues.size() < 20) issues.push_back(std::move(s));
+  };
+  const auto& nodes = d.wide.nodes;
+  if (d.triangle_ids.size() != 4 * d.blocks.size()) fail("triangle_ids size is not 4 per block");
+  if (nodes.empty()) {
+    if (triangle_count != 0) fail("no nodes for " + std::to_string(triangle_count) + " triangles");
+    return issues;
+  }
+  if (d.wide.root >= nodes.size()) {
+    fail("root out of range");
+    return issues;
+  }
+  std::vector<std::uint8_t> reached(nodes.size(), 0), tri_seen(triangle_count, 0), lane_used(d.triangle_ids.size(), 0);
+  std::vector<std::uint32_t> stack{d.wide.root};
+  reached[d.wide.root] = 1;
+  while (!stack.empty()) {
+    const std::uint32_t i = stack.back();
+    stack.pop_back();
+    const WideNode& n = nodes[i];
+    for (int k = 0; k < 4; ++k) {
+      const Box3f box = n.child_box(k);
+      const std::string where = "node " + std::to_string(i) + " child " + std::to_string(k);
+      if (n.is_empty(k)) {
+        if (!box.empty()) fail(where + ": empty slot with a box");
+        continue;
+      }
+      if (!n.is_leaf(k)) {
+        const std::uint32_t c = n.child[k];
+        if (c >= nodes.size()) {
+          fail(where + ": child index " + std::to_string(c) + " out of range");
+          continue;
+        }
+        if (reached[c]++) {
+          fail("node " + std::to_string(c) + " is reached twice");
+          continue;
+        }
+        stack.push_back(c);
+        Box3f u;
+        for (int j = 0; j < 4; ++j) u.extend(nodes[c].child_box(j));
+        if (exact_unions ? !(u == box) : !box.contains(u))
+          fail(where + ": box is not the union of (does not contain) its children's boxes");
+        continue;
+      }
+      std::vector<LeafRange> leaf_ranges;
+      if (n.count[k] & kIndirectLeaf) {
+        const std::uint32_t nr = n.count[k] & ~kIndirectLeaf;
+        if (static_cast<std::uint64_t>(n.child[k]) + nr > d.ranges.size()) {
+          fail(where + ": ranges out of bounds");
+          continue;
+        }
+        leaf_ranges.assign(d.ranges.begin() + n.child[k], d.ranges.begin() + n.child[k] + nr);
+      } else {
+        leaf_ranges.push_back({n.child[k], (n.count[k] + 3) / 4, n.count[k]});
+      }
+      for (std::size_t r = 0; r < leaf_ranges.size(); ++r) {
+        const LeafRange lr = leaf_ranges[r];
+        const std::uint64_t nb = lr.block_count;
+        if (lr.triangle_count == 0 || lr.triangle_count > 4 * nb || lr.first_block + nb > d.blocks.size()) {
+          fail(where + ": range " + std::to_string(r) + " empty or past the blocks");
+          continue;
+        }
+        std::uint32_t real = 0;
+        for (std::uint32_t j = 0; j < 4 * nb; ++j) {
+          const std::size_t lane = 4 * std::size_t(lr.first_block) + j;
+          const TriBlock& blk = d.blocks[lane / 4];
+          const std::uint32_t id = d.triangle_ids[lane];
+          if (lane_used[lane]++) fail(where + ": lane " + std::to_string(lane) + " referenced twice");
+          if (id == kNoTriangle) {
+            if (!std::isnan(blk.v[0][0][lane % 4])) fail(where + ": padding lane not padded");
+            continue;
+          }
+          ++real;
+          if (id >= triangle_count) {
+            fail(where + ": triangle id " + std::to_string(id) + " out of range");
+            continue;
+          }
+          if (tri_seen[id]++) fail("triangle " + std::to_string(id) + " appears twice");
+          for (int c = 0; c < 3; ++c) {
+            Box3f pb;
+            pb.extend(Vec3f{blk.v[c][0][lane % 4], blk.v[c][1][lane % 4], blk.v[c][2][lane % 4]});
+            if (!box.contains(pb)) fail(where + ": triangle " + std::to_string(id) + " corner outside the leaf box");
+          }
+        }
+        if (real != lr.triangle_count) fail(where + ": range " + std::to_string(r) + " holds " + std::to_string(real) +
+                                            " triangles, not " + std::to_string(lr.triangle_count));
+      }
+    }
+  }
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    if (!reached[i]) {
+      fail("node " + std::to_string(i) + " is unreachable");
+      break;
+    }
+  for (std::size_t t = 0; t < triangle_count; ++t)
+    if (!tri_seen[t]) {
+      fail("triangle " + std::to_string(t) + " is in no leaf");
+      break;
+    }
+  return issues;
+}
+
+}  // namespace ptc::bvh

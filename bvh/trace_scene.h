@@ -1,0 +1,183 @@
+// What the tracer reads: a 4-wide BVH whose leaves refer to SIMD blocks of triangles, in one of
+// two flavours that share every line of traversal code:
+//   - TriangleScene: a BVH over triangle boxes (the standard per-frame rebuild);
+//   - ClusterScene: a BVH over cluster boxes (Garanzha 2009): a leaf holds whole clusters, whose
+//     triangles are either tested linearly four at a time (ClusterLeaf::Linear, the paper's
+//     method) or through a small fixed-topology tree per cluster over its blocks of four
+//     triangles, built once per clustering and refitted every frame (ClusterLeaf::BlockTree:
+//     a two-level variant; the per-frame build still only sees cluster boxes).
+// Per frame (method.md, "The per-frame loop"): update(positions) converts the positions into
+// the trace frame, recomputes the boxes, builds the SAH BVH, refreshes the leaf data (and, for
+// BlockTree, refits the per-cluster trees); the time of every stage is kept.
+//
+// Precision: everything is in single precision in a *trace frame* centred at `origin` (double),
+// see box.h. Rays come in world coordinates (double origins) and are moved into the frame.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "bvh/aligned.h"
+#include "bvh/box.h"
+#include "bvh/sah_builder.h"
+#include "bvh/wide_bvh.h"
+#include "toolkit/mesh/mesh.h"
+
+namespace ptc::bvh {
+
+/// Four triangles in structure-of-arrays form: v[corner][axis][lane], 144 bytes. Unused lanes
+/// hold NaN corners, which every comparison of the kernel rejects.
+struct alignas(16) TriBlock {
+  float v[3][3][4];
+};
+
+/// Triangles in consecutive blocks [first_block, first_block + block_count) holding
+/// triangle_count triangles (padding lanes may be in any block).
+struct LeafRange {
+  std::uint32_t first_block = 0;
+  std::uint32_t block_count = 0;
+  std::uint32_t triangle_count = 0;
+};
+
+/// Marker of "no triangle" (padding lanes, misses).
+inline constexpr std::uint32_t kNoTriangle = 0xffffffffu;
+
+/// Flag in WideNode::count of a leaf child that refers to several ranges (see TraceData).
+inline constexpr std::uint32_t kIndirectLeaf = 0x80000000u;
+
+/// The flat data of a scene, as traversal sees it. Traversal starts at wide.root. A leaf child
+/// of a wide node is either
+///   direct   (count < kIndirectLeaf): `count` triangles packed in the ceil(count / 4) blocks
+///            starting at block `child` (padding only in the last block);
+///   indirect (count & kIndirectLeaf): the ranges ranges[child .. child + (count & ~kIndirectLeaf)).
+/// Triangle scenes have direct leaves only; cluster scenes direct leaves for single clusters (or
+/// single blocks) and indirect ones for leaves of several clusters.
+struct TraceData {
+  WideBvh wide;
+  std::vector<LeafRange> ranges;
+  AlignedVector<TriBlock> blocks;
+  AlignedVector<std::uint32_t> triangle_ids;  ///< 4 per block: mesh triangle id or kNoTriangle
+  Vec3 origin = Vec3::Zero();                 ///< the trace frame
+};
+
+/// Checks of the flat data (tests call it on every scene): every node reachable from the root
+/// exactly once (a tree), every leaf child's ranges inside `ranges` and blocks inside `blocks`,
+/// every mesh triangle id 0 .. triangle_count-1 in exactly one used lane (padding lanes:
+/// kNoTriangle and NaN corners), every inner child box containing its node's child boxes
+/// (equal to their union when `exact_unions`), every leaf child box containing its triangles'
+/// float corners. One line per violation (empty = valid).
+[[nodiscard]] std::vector<std::string> validate(const TraceData& data, std::size_t triangle_count,
+                                                bool exact_unions = true);
+
+/// Wall-clock times of the last update's stages, milliseconds.
+struct StageTimes {
+  double vertices_ms = 0;   ///< positions into the trace frame (float)
+  double boxes_ms = 0;      ///< primitive boxes and centroids
+  double build_ms = 0;      ///< binned SAH build
+  double collapse_ms = 0;   ///< binary -> 4-wide, and (clusters) linking
+  double leaf_data_ms = 0;  ///< SoA triangle blocks
+  double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees
+  [[nodiscard]] double total_ms() const {
+    return vertices_ms + boxes_ms + build_ms + collapse_ms + leaf_data_ms + refit_ms;
+  }
+};
+
+/// How a cluster leaf's triangles are tested (see the file comment).
+enum class ClusterLeaf { Linear, BlockTree };
+[[nodiscard]] const char* to_string(ClusterLeaf l);
+
+struct SceneConfig {
+  BuildConfig build{};  ///< builder settings (max_leaf_size counts primitives: triangles or clusters)
+  std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
+  ClusterLeaf cluster_leaf = ClusterLeaf::BlockTree;  ///< ClusterScene only
+};
+
+/// Default build settings of a triangle scene: SAH traversal 1, intersection 0.3 (a 4-wide node
+/// test costs about three triangle tests of a 4-wide block; measured best on armadillo x2, see
+/// bench/bvh_bench.cpp), leaves of up to 8 triangles.
+[[nodiscard]] SceneConfig triangle_scene_defaults();
+/// Default build settings of a cluster scene: the same SAH constants, one cluster per leaf
+/// (leaves of several clusters cost the sum of their triangles and are rarely chosen).
+[[nodiscard]] SceneConfig cluster_scene_defaults();
+
+/// Triangle BVH: one box per triangle; a leaf is a range of triangles whose blocks are laid out
+/// in leaf order (each leaf starts a new block).
+class TriangleScene {
+ public:
+  /// Keeps the topology (shared, not copied) and builds the first frame.
+  explicit TriangleScene(const Mesh& mesh, const SceneConfig& cfg = triangle_scene_defaults());
+  /// One frame: new positions (same vertex count).
+  void update(std::span<const Vec3> positions);
+
+  [[nodiscard]] const TraceData& data() const { return data_; }
+  [[nodiscard]] const Bvh& bvh() const { return bvh_; }
+  [[nodiscard]] const std::vector<Box3f>& boxes() const { return boxes_; }
+  [[nodiscard]] const StageTimes& times() const { return times_; }
+
+ private:
+  std::shared_ptr<const std::vector<Tri>> tris_;
+  SceneConfig cfg_;
+  std::vector<Vec3f> fpos_;
+  std::vector<Box3f> boxes_;
+  std::vector<Vec3f> centroids_;
+  Bvh bvh_;
+  TraceData data_;
+  StageTimes times_;
+};
+
+/// A clustering as the BVH layer sees it: cluster c is the triangles
+/// triangle_order[triangle_offsets[c] .. triangle_offsets[c+1]) and, for the per-frame box, the
+/// vertices vertices[vertex_offsets[c] .. vertex_offsets[c+1]) (when vertex_offsets is empty
+/// the boxes are made from the triangles' corners instead). Spans are copied by ClusterScene.
+struct ClusterView {
+  std::span<const std::uint32_t> triangle_order, triangle_offsets, vertices, vertex_offsets;
+};
+/// The view of any clustering type with these four members (e.g. ptc::Clustering).
+template <class C>
+[[nodiscard]] ClusterView view_of(const C& c) {
+  return {c.triangle_order, c.triangle_offsets, c.vertices, c.vertex_offsets};
+}
+
+/// Cluster BVH: one box per cluster (from its vertex list), weights = cluster sizes. Blocks are
+/// laid out once per clustering, cluster by cluster, and only refilled per frame. Within a
+/// cluster: Linear packs the triangles in Morton order of their rest-pose centroids; BlockTree
+/// builds a binned SAH tree (leaves of at most 4 triangles, one block each) over the
+/// cluster's rest-pose triangles and lays the blocks out in its leaf order.
+class ClusterScene {
+ public:
+  /// Throws std::invalid_argument when the clustering does not cover the mesh's triangles once
+  /// each (sizes and offsets are checked, not connectivity).
+  ClusterScene(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg = cluster_scene_defaults());
+  void update(std::span<const Vec3> positions);
+
+  [[nodiscard]] const TraceData& data() const { return data_; }
+  [[nodiscard]] const Bvh& bvh() const { return bvh_; }
+  [[nodiscard]] const std::vector<Box3f>& boxes() const { return boxes_; }
+  [[nodiscard]] const std::vector<std::uint32_t>& weights() const { return weights_; }
+  [[nodiscard]] const StageTimes& times() const { return times_; }
+  [[nodiscard]] std::size_t subtree_nodes() const { return sub_nodes_.size(); }
+
+ private:
+  void refit_subtrees();
+  std::shared_ptr<const std::vector<Tri>> tris_;
+  SceneConfig cfg_;
+  std::vector<std::uint32_t> order_, offsets_, vertices_, vertex_offsets_;
+  std::vector<std::uint32_t> weights_;
+  std::vector<LeafRange> cluster_ranges_;  // blocks of cluster c (fixed layout)
+  // BlockTree: the per-cluster trees (child indices relative to the start of sub_nodes_, which
+  // become absolute because the subtrees occupy nodes [0, sub_nodes_.size()) of every frame).
+  AlignedVector<WideNode> sub_nodes_;
+  std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
+  std::uint32_t sub_depth_ = 0;
+  std::vector<Vec3f> fpos_;
+  std::vector<Box3f> boxes_;
+  std::vector<Vec3f> centroids_;
+  Bvh bvh_;
+  TraceData data_;
+  StageTimes times_;
+};
+
+}  // namespace ptc::bvh

@@ -1,0 +1,83 @@
+// The reference CPU tracer: rays in structure-of-arrays batches, closest hit or any hit, over a
+// TriangleScene or a ClusterScene (both give a TraceData), multithreaded with oneTBB.
+//
+// One traversal code serves both queries (a compile-time flag): a 4-wide BVH walked with one
+// SSE box test per node, children visited nearest first (closest hit) and the stack culled by
+// the best hit so far; leaves test their triangles four at a time with the watertight test of
+// watertight.h (bit-identical to the scalar intersect_triangle).
+// Robust traversal: the slab test uses (bound - origin) * (1/dir) with the near and far
+// reciprocals scaled by (1 -/+ 2^-21), which covers the rounding of the subtraction, the
+// reciprocal and the product (2 gamma_3 of Ize 2013 / pbrt), so a box the exact ray touches is
+// never culled. A zero direction component gives 1/dir = +-inf; the 0 * inf = NaN of an origin
+// exactly on a slab plane is ignored by the max/min order (a NaN candidate never replaces the
+// running bound), so axis-aligned rays lose no rows of pixels.
+// The closest hit is the smallest (t, triangle id) pair, so it does not depend on the tree:
+// ties between triangles (rays through shared edges and vertices) resolve to the lower id.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+#include "bvh/aligned.h"
+#include "bvh/trace_scene.h"
+
+namespace ptc::bvh {
+
+/// Rays: origins in world coordinates (double, so that far-away scenes keep their precision),
+/// directions (not necessarily unit; t is in units of the direction's length) and the
+/// parametric interval (tmin, tmax] (tmin >= 0; tmax = inf means unbounded; hits have finite t).
+/// A ray whose direction is zero or not finite never hits.
+struct RayBatch {
+  AlignedVector<double> ox, oy, oz;
+  AlignedVector<float> dx, dy, dz, tmin, tmax;
+
+  [[nodiscard]] std::size_t size() const { return ox.size(); }
+  void resize(std::size_t n);
+  void set(std::size_t i, const Vec3& org, const Vec3f& dir, float t0 = 0.0f,
+           float t1 = std::numeric_limits<float>::infinity()) {
+    ox[i] = org.x(), oy[i] = org.y(), oz[i] = org.z();
+    dx[i] = dir[0], dy[i] = dir[1], dz[i] = dir[2];
+    tmin[i] = t0, tmax[i] = t1;
+  }
+};
+
+/// Results, one entry per ray. triangle = kNoTriangle for a miss (t, u, v are then 0).
+/// u, v: barycentric weights of the triangle's corners 1 and 2. Counters (when requested):
+/// wide nodes whose four boxes were tested, and triangles tested (padding lanes not counted).
+/// Threads write disjoint tiles of 64 rays: no cache line is shared between threads.
+struct HitBatch {
+  AlignedVector<float> t, u, v;
+  AlignedVector<std::uint32_t> triangle;
+  AlignedVector<std::uint32_t> nodes_visited, triangles_tested;
+
+  [[nodiscard]] std::size_t size() const { return t.size(); }
+  void resize(std::size_t n);
+};
+
+enum class HitMode { Closest, Any };
+
+struct TraceOptions {
+  HitMode mode = HitMode::Closest;
+  unsigned threads = 0;   ///< worker threads; 0 = all cores (oneTBB's default)
+  bool counters = true;   ///< fill nodes_visited / triangles_tested
+};
+
+/// Sums over a batch.
+struct TraceTotals {
+  std::uint64_t rays = 0, hits = 0, nodes_visited = 0, triangles_tested = 0;
+};
+
+/// Traces every ray of the batch (hits is resized). Deterministic for any thread count.
+TraceTotals trace(const TraceData& scene, const RayBatch& rays, HitBatch& hits, const TraceOptions& opt = {});
+
+/// One ray, for tests and tools.
+struct Hit {
+  float t = 0, u = 0, v = 0;
+  std::uint32_t triangle = kNoTriangle;
+  std::uint32_t nodes_visited = 0, triangles_tested = 0;
+  [[nodiscard]] bool hit() const { return triangle != kNoTriangle; }
+};
+[[nodiscard]] Hit trace_ray(const TraceData& scene, const Vec3& org, const Vec3f& dir, HitMode mode = HitMode::Closest,
+                            float tmin = 0.0f, float tmax = std::numeric_limits<float>::infinity());
+
+}  // namespace ptc::bvh

@@ -1,0 +1,62 @@
+// The 4-wide BVH the tracer walks: a binary Bvh collapsed so that one node holds up to four
+// children's boxes in SIMD order (one SSE test for four boxes, as Embree's BVH4).
+//
+// Collapse (the usual greedy rule): a wide node starts with its binary node's two children and
+// repeatedly replaces the inner child of largest surface area by that child's two children
+// until it has four children or only leaves. Leaves stay the binary tree's leaves.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bvh/aligned.h"
+#include "bvh/bvh.h"
+
+namespace ptc::bvh {
+
+/// 128 bytes, two cache lines. Child i's box is (bounds[0][i], bounds[2][i], bounds[4][i]) ..
+/// (bounds[1][i], bounds[3][i], bounds[5][i]): row 2a is lo on axis a, row 2a+1 hi on axis a,
+/// so a ray picks its near/far rows by the sign of its direction once.
+struct alignas(64) WideNode {
+  float bounds[6][4];
+  /// Inner child: node index, count = 0. Leaf child: `child` is the first item and `count`
+  /// (> 0) the number of items of the leaf (collapse: a range of Bvh::prim_order; the tracer
+  /// rebinds it to its own leaf table). Empty slot: empty box (+inf..-inf), count = 0,
+  /// child = kEmptySlot.
+  std::uint32_t child[4];
+  std::uint32_t count[4];
+
+  [[nodiscard]] Box3f child_box(int i) const {
+    return {{bounds[0][i], bounds[2][i], bounds[4][i]}, {bounds[1][i], bounds[3][i], bounds[5][i]}};
+  }
+  void set_child_box(int i, const Box3f& b) {
+    for (int a = 0; a < 3; ++a) bounds[2 * a][i] = b.lo[a], bounds[2 * a + 1][i] = b.hi[a];
+  }
+  [[nodiscard]] bool is_leaf(int i) const { return count[i] != 0; }
+  static constexpr std::uint32_t kEmptySlot = 0xffffffffu;
+  [[nodiscard]] bool is_empty(int i) const { return count[i] == 0 && child[i] == kEmptySlot; }
+};
+static_assert(sizeof(WideNode) == 128);
+
+/// Nodes (an empty tree has none) and the root's index; collapse_to_wide puts the root first and
+/// children after parents (a ClusterScene appends per-cluster subtrees, see trace_scene.h).
+/// `depth`: the number of wide levels (the traversal stack needs at most 3 * depth + 1 entries).
+struct WideBvh {
+  AlignedVector<WideNode> nodes;
+  std::uint32_t root = 0;
+  Box3f bounds;
+  std::uint32_t depth = 0;
+  std::uint32_t leaves = 0;
+};
+
+/// Collapses a binary tree (validate()d) into a 4-wide one with the same leaves. A binary tree
+/// that is a single leaf becomes one wide node with one leaf child. O(nodes).
+[[nodiscard]] WideBvh collapse_to_wide(const Bvh& bvh);
+
+/// Checks of a collapsed tree against its binary source before rebinding: every binary leaf
+/// appears exactly once as a wide leaf child with the same range and box; every inner child's
+/// box equals the union of its node's child boxes; children after parents; empty slots empty.
+[[nodiscard]] std::vector<std::string> validate_wide(const WideBvh& wide, const Bvh& bvh);
+
+}  // namespace ptc::bvh

@@ -1,0 +1,411 @@
+// The tracer against the brute-force loop over all triangles (same scalar watertight test, same
+// trace frame), ray by ray and field by field, for triangle and cluster BVHs; adversarial rays
+// on closed meshes (zero leaks); any-hit against closest-hit.
+#include "bvh/tracer.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+#include <variant>
+
+#include "bvh/morton_runs.h"
+#include "bvh/trace_scene.h"
+#include "test_util.h"
+
+namespace ptc::bvh {
+namespace {
+
+enum class Kind { Triangles, TrianglesLeaf1, TrianglesLeaf16, Clusters80, Clusters80Linear, Clusters80Leaf4, Clusters7 };
+const char* name(Kind k) {
+  switch (k) {
+    case Kind::Triangles: return "triangles";
+    case Kind::TrianglesLeaf1: return "triangles_leaf1";
+    case Kind::TrianglesLeaf16: return "triangles_leaf16";
+    case Kind::Clusters80: return "clusters80";
+    case Kind::Clusters80Linear: return "clusters80_linear";
+    case Kind::Clusters80Leaf4: return "clusters80_leaf4";
+    case Kind::Clusters7: return "clusters7";
+  }
+  return "?";
+}
+const Kind kAllKinds[] = {Kind::Triangles,  Kind::TrianglesLeaf1,   Kind::TrianglesLeaf16, Kind::Clusters80,
+                          Kind::Clusters80Linear, Kind::Clusters80Leaf4, Kind::Clusters7};
+
+// Owns a scene of either flavour (and the clustering it was made from).
+struct AnyScene {
+  std::unique_ptr<MortonRuns> runs;
+  std::variant<std::monostate, TriangleScene, ClusterScene> scene;
+  const TraceData& data() const {
+    return scene.index() == 1 ? std::get<1>(scene).data() : std::get<2>(scene).data();
+  }
+};
+
+AnyScene make_scene(const Mesh& m, Kind k, std::optional<Vec3> origin = std::nullopt) {
+  AnyScene s;
+  SceneConfig cfg;
+  cfg.origin = origin;
+  switch (k) {
+    case Kind::Triangles: s.scene.emplace<1>(m, cfg); break;
+    case Kind::TrianglesLeaf1: cfg.build.max_leaf_size = 1; s.scene.emplace<1>(m, cfg); break;
+    case Kind::TrianglesLeaf16: cfg.build.max_leaf_size = 16; s.scene.emplace<1>(m, cfg); break;
+    case Kind::Clusters80:
+    case Kind::Clusters80Linear:
+    case Kind::Clusters80Leaf4:
+    case Kind::Clusters7:
+      s.runs = std::make_unique<MortonRuns>(morton_runs(m, k == Kind::Clusters7 ? 7 : 80));
+      cfg.build.max_leaf_size = k == Kind::Clusters80 || k == Kind::Clusters80Linear ? 1 : 4;
+      if (k == Kind::Clusters80Linear || k == Kind::Clusters7) cfg.cluster_leaf = ClusterLeaf::Linear;
+      if (k == Kind::Clusters7) cfg.build.cost.traversal = 50.0;  // leaves of several clusters (indirect)
+      s.scene.emplace<2>(m, s.runs->view(), cfg);
+      break;
+  }
+  if (k == Kind::Clusters7) {
+    std::size_t indirect = 0;
+    for (const WideNode& n : s.data().wide.nodes)
+      for (int i = 0; i < 4; ++i) indirect += n.is_leaf(i) && (n.count[i] & kIndirectLeaf);
+    EXPECT_GT(indirect, 0u);
+  }
+  // (a cluster's box comes from its vertex list and contains, not equals, its tree's boxes)
+  const auto issues = validate(s.data(), m.triangle_count(), s.scene.index() == 1);
+  EXPECT_TRUE(issues.empty()) << name(k) << ": " << test::joined(issues);
+  return s;
+}
+
+// Same answer, bit for bit (the closest hit is the smallest (t, id), independent of the tree).
+void expect_same(const Hit& got, const Hit& want, const std::string& what) {
+  ASSERT_EQ(got.triangle, want.triangle) << what << " t=" << got.t << " vs " << want.t;
+  if (!want.hit()) return;
+  ASSERT_EQ(got.t, want.t) << what;
+  ASSERT_EQ(got.u, want.u) << what;
+  ASSERT_EQ(got.v, want.v) << what;
+}
+
+Vec3f unit(std::mt19937& g) {
+  std::normal_distribution<float> n;
+  while (true) {
+    const Vec3f d{n(g), n(g), n(g)};
+    if (d[0] != 0 || d[1] != 0 || d[2] != 0) return d;
+  }
+}
+
+// Random rays: half from random points of the enlarged bounds in random directions, half aimed
+// at random points of random triangles.
+struct RaySet {
+  std::vector<Vec3> org;
+  std::vector<Vec3f> dir;
+};
+RaySet random_rays(const Mesh& m, std::size_t n, std::uint32_t seed) {
+  std::mt19937 g(seed);
+  const Box3 b = m.bounds();
+  const Vec3 c = b.center(), e = b.hi - b.lo;
+  std::uniform_real_distribution<double> U(-1.0, 1.0), W(0.0, 1.0);
+  std::uniform_int_distribution<std::uint32_t> T(0, static_cast<std::uint32_t>(m.triangle_count() - 1));
+  RaySet r;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 o = c + Vec3(U(g) * e.x(), U(g) * e.y(), U(g) * e.z());
+    r.org.push_back(o);
+    if (i % 2) {
+      r.dir.push_back(unit(g));
+    } else {
+      const auto k = m.corners(T(g));
+      double w1 = W(g), w2 = W(g);
+      if (w1 + w2 > 1) w1 = 1 - w1, w2 = 1 - w2;
+      const Vec3 p = k[0] + w1 * (k[1] - k[0]) + w2 * (k[2] - k[0]);
+      const Vec3 d = p - o;
+      r.dir.push_back({float(d.x()), float(d.y()), float(d.z())});
+    }
+  }
+  return r;
+}
+
+class TracerKinds : public ::testing::TestWithParam<Kind> {};
+
+TEST_P(TracerKinds, RandomRaysMatchBruteForceRayByRay) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  const AnyScene s = make_scene(m, GetParam());
+  const RaySet rays = random_rays(m, 1200, 5);
+  int hits = 0;
+  for (std::size_t i = 0; i < rays.org.size(); ++i) {
+    const Hit want = test::brute_force(m, s.data().origin, rays.org[i], rays.dir[i]);
+    const Hit got = trace_ray(s.data(), rays.org[i], rays.dir[i]);
+    expect_same(got, want, std::string(name(GetParam())) + " ray " + std::to_string(i));
+    EXPECT_GT(got.nodes_visited, 0u);
+    hits += want.hit();
+    // Any hit: occluded iff the closest hit exists; the reported triangle really is hit.
+    const Hit any = trace_ray(s.data(), rays.org[i], rays.dir[i], HitMode::Any);
+    ASSERT_EQ(any.hit(), want.hit()) << i;
+    if (any.hit()) {
+      const auto c = m.corners(any.triangle);
+      const Vec3& f = s.data().origin;
+      const auto h = intersect_triangle(make_watertight_ray(to_frame(rays.org[i], f), rays.dir[i]), to_frame(c[0], f),
+                                        to_frame(c[1], f), to_frame(c[2], f), 0.0f, kInf);
+      ASSERT_TRUE(h && h->t == any.t) << i;
+      // Shadow-ray semantics: with tmax just short of the closest hit nothing occludes, with
+      // tmax = the closest hit something does.
+      EXPECT_TRUE(trace_ray(s.data(), rays.org[i], rays.dir[i], HitMode::Any, 0.0f, want.t).hit());
+      const float before = std::nextafter(want.t, 0.0f);
+      EXPECT_EQ(trace_ray(s.data(), rays.org[i], rays.dir[i], HitMode::Any, 0.0f, before).hit(),
+                test::brute_force(m, s.data().origin, rays.org[i], rays.dir[i], 0.0f, before).hit());
+    }
+  }
+  EXPECT_GT(hits, 500);
+}
+
+TEST_P(TracerKinds, BatchEqualsSingleRaysForAnyThreadCount) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const AnyScene s = make_scene(m, GetParam());
+  const RaySet rs = random_rays(m, 3000, 9);
+  RayBatch rays;
+  rays.resize(rs.org.size());
+  for (std::size_t i = 0; i < rs.org.size(); ++i) rays.set(i, rs.org[i], rs.dir[i]);
+  for (HitMode mode : {HitMode::Closest, HitMode::Any}) {
+    HitBatch h1, h2;
+    TraceOptions opt;
+    opt.mode = mode;
+    opt.threads = 1;
+    const TraceTotals t1 = trace(s.data(), rays, h1, opt);
+    opt.threads = 2;
+    const TraceTotals t2 = trace(s.data(), rays, h2, opt);
+    EXPECT_EQ(t1.rays, rays.size());
+    EXPECT_EQ(t1.hits, t2.hits);
+    EXPECT_EQ(t1.nodes_visited, t2.nodes_visited);
+    std::uint64_t nodes = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const Hit one = trace_ray(s.data(), rs.org[i], rs.dir[i], mode);
+      ASSERT_EQ(h1.triangle[i], one.triangle);
+      ASSERT_EQ(h2.triangle[i], one.triangle);
+      ASSERT_EQ(h1.t[i], one.t);
+      ASSERT_EQ(h2.u[i], one.u);
+      ASSERT_EQ(h1.nodes_visited[i], one.nodes_visited);
+      ASSERT_EQ(h2.triangles_tested[i], one.triangles_tested);
+      nodes += h1.nodes_visited[i];
+    }
+    EXPECT_EQ(nodes, t1.nodes_visited);
+  }
+}
+
+// Rays from points inside a closed mesh towards every vertex (exactly through it) and through
+// the midpoints of edges: all must hit (zero leaks), and the hits equal brute force on a sample.
+TEST_P(TracerKinds, ClosedMeshZeroLeaksThroughVerticesAndEdges) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  const AnyScene s = make_scene(m, GetParam());
+  // Interior points: a little inside from triangle centroids, confirmed by the winding number.
+  std::vector<Vec3> inside;
+  for (std::uint32_t t = 0; inside.size() < 3 && t < m.triangle_count(); t += 4999) {
+    const auto c = m.corners(t);
+    const Vec3 n = (c[1] - c[0]).cross(c[2] - c[0]).normalized();
+    const Vec3 cen = (c[0] + c[1] + c[2]) / 3.0;
+    for (double sgn : {-1.0, 1.0}) {
+      const Vec3 p = cen + sgn * 0.05 * n;
+      if (std::abs(test::winding_number(m, p)) > 0.99) {
+        inside.push_back(p);
+        break;
+      }
+    }
+  }
+  ASSERT_EQ(inside.size(), 3u);
+  std::size_t rays = 0, leaks = 0;
+  for (const Vec3& o : inside) {
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+      const Vec3 d = m.position(v) - o;
+      const Vec3f dir{float(d.x()), float(d.y()), float(d.z())};
+      const Hit h = trace_ray(s.data(), o, dir);
+      ++rays;
+      leaks += !h.hit();
+      if (v % 997 == 0) expect_same(h, test::brute_force(m, s.data().origin, o, dir), "vertex ray");
+    }
+    for (std::size_t t = 0; t < m.triangle_count(); t += 3) {
+      const auto c = m.corners(t);
+      for (int e = 0; e < 3; ++e) {
+        const Vec3 d = 0.5 * (c[e] + c[(e + 1) % 3]) - o;
+        const Hit h = trace_ray(s.data(), o, {float(d.x()), float(d.y()), float(d.z())}, HitMode::Any);
+        ++rays;
+        leaks += !h.hit();
+      }
+    }
+  }
+  EXPECT_EQ(leaks, 0u) << "of " << rays << " rays";
+}
+
+// Origins on the surface (vertices and random points of triangles), random directions.
+TEST_P(TracerKinds, OriginsOnTheSurface) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  const AnyScene s = make_scene(m, GetParam());
+  std::mt19937 g(17);
+  std::uniform_real_distribution<double> W(0.0, 1.0);
+  std::size_t inward_misses = 0;
+  for (std::uint32_t t = 0; t < m.triangle_count(); t += 131) {
+    const auto c = m.corners(t);
+    double w1 = W(g), w2 = W(g);
+    if (w1 + w2 > 1) w1 = 1 - w1, w2 = 1 - w2;
+    const Vec3 origins[2] = {c[0], c[0] + w1 * (c[1] - c[0]) + w2 * (c[2] - c[0])};
+    const Vec3 n = (c[1] - c[0]).cross(c[2] - c[0]).normalized();
+    for (const Vec3& o : origins) {
+      const Vec3f d = unit(g);
+      expect_same(trace_ray(s.data(), o, d), test::brute_force(m, s.data().origin, o, d), "surface origin");
+      // Inward (armadillo is oriented outward): the ray stays inside the closed surface and
+      // must hit something (its own triangle when the float origin lies just outside).
+      const Vec3 in = -n + 0.5 * Vec3(d[0], d[1], d[2]).normalized();
+      const Vec3f di{float(in.x()), float(in.y()), float(in.z())};
+      const Hit h = trace_ray(s.data(), o, di);
+      inward_misses += !h.hit();
+      if (t % 5 == 0) expect_same(h, test::brute_force(m, s.data().origin, o, di), "inward");
+    }
+  }
+  EXPECT_EQ(inward_misses, 0u);
+}
+
+// Axis-aligned rays (exact zero components of both signs) from origins on grid lines inside a
+// closed cube whose faces are grids of coplanar triangles: the origins lie exactly on the slab
+// planes of many boxes (0 * inf = NaN in a naive slab test) and the rays run exactly along
+// edges and through vertices. Every ray must hit the face it points at, at the exact distance;
+// scaled tiny (1e-3), huge (offset 1e7), in the default frame and in the world frame.
+void axis_aligned_cube(Kind kind, double scale, const Vec3& offset, std::optional<Vec3> frame) {
+  const int n = 8;
+  const Mesh m = test::grid_cube(n, scale, offset);
+  const AnyScene s = make_scene(m, kind, frame);
+  const Vec3f axes[6] = {{1, 0, 0}, {-1, -0.0f, 0}, {0, 1, -0.0f}, {0, -1, 0}, {-0.0f, 0, 1}, {0, 0, -1}};
+  std::size_t rays = 0, leaks = 0, wrong_t = 0;
+  for (int i = 1; i < n; ++i)
+    for (int j = 1; j < n; ++j)
+      for (int k = 1; k < n; ++k)
+        for (const Vec3f& d : axes) {
+          // grid points (on the triangles' edge lines) and points between them
+          for (double h : {0.0, 0.5}) {
+            const Vec3 p = offset + scale * Vec3(2.0 * (i + h) / n - 1.0, 2.0 * (j + h) / n - 1.0, 2.0 * (k + h) / n - 1.0);
+            if (h != 0.0 && (i + h >= n || j + h >= n || k + h >= n)) continue;
+            const Hit hit = trace_ray(s.data(), p, d);
+            ++rays;
+            if (!hit.hit()) {
+              ++leaks;
+              continue;
+            }
+            // distance to the face, in the trace frame's floats
+            int a = d[0] != 0 ? 0 : d[1] != 0 ? 1 : 2;
+            const double face = offset[a] + (d[a] > 0 ? scale : -scale);
+            const double exact = std::abs(face - p[a]);
+            if (std::abs(hit.t - exact) > 1e-5 * scale + 4e-7 * std::abs(p[a] - s.data().origin[a])) ++wrong_t;
+            if ((i + j + k) % 5 == 0) expect_same(hit, test::brute_force(m, s.data().origin, p, d), "axis ray");
+          }
+        }
+  EXPECT_EQ(leaks, 0u) << "of " << rays;
+  EXPECT_EQ(wrong_t, 0u) << "of " << rays;
+}
+
+TEST_P(TracerKinds, AxisAlignedRaysUnitCube) { axis_aligned_cube(GetParam(), 1.0, Vec3::Zero(), std::nullopt); }
+TEST_P(TracerKinds, AxisAlignedRaysTinyCube) { axis_aligned_cube(GetParam(), 1e-3, Vec3::Zero(), std::nullopt); }
+TEST_P(TracerKinds, AxisAlignedRaysHugeOffsetRebased) {
+  axis_aligned_cube(GetParam(), 1000.0, Vec3(1e7, -1e7, 1e7), std::nullopt);
+}
+TEST_P(TracerKinds, AxisAlignedRaysHugeOffsetWorldFrame) {
+  axis_aligned_cube(GetParam(), 1000.0, Vec3(1e7, -1e7, 1e7), Vec3::Zero());
+}
+
+// Random rays from inside a tiny and a huge-offset closed mesh: zero leaks, brute force equal.
+void random_inside(Kind kind, double scale, const Vec3& offset, std::optional<Vec3> frame) {
+  Mesh base = test::load_mesh("armadillo.off");
+  const Box3 b = base.bounds();
+  const double s0 = (b.hi - b.lo).maxCoeff();
+  std::vector<Vec3> p(base.positions().begin(), base.positions().end());
+  for (Vec3& q : p) q = offset + (q - b.center()) * (scale / s0);
+  const Mesh m = base.with_positions(std::move(p));
+  const AnyScene s = make_scene(m, kind, frame);
+  // Interior points as in the closed-mesh test.
+  std::vector<Vec3> inside;
+  for (std::uint32_t t = 0; inside.size() < 2 && t < m.triangle_count(); t += 7001) {
+    const auto c = m.corners(t);
+    const Vec3 n = (c[1] - c[0]).cross(c[2] - c[0]).normalized();
+    const Vec3 q = (c[0] + c[1] + c[2]) / 3.0 - 4e-4 * scale * n;
+    if (std::abs(test::winding_number(m, q)) > 0.99) inside.push_back(q);
+  }
+  ASSERT_EQ(inside.size(), 2u);
+  std::mt19937 g(23);
+  std::size_t leaks = 0;
+  for (const Vec3& o : inside)
+    for (int i = 0; i < 3000; ++i) {
+      const Vec3f d = unit(g);
+      const Hit h = trace_ray(s.data(), o, d);
+      leaks += !h.hit();
+      if (i % 50 == 0) expect_same(h, test::brute_force(m, s.data().origin, o, d), "inside ray");
+    }
+  EXPECT_EQ(leaks, 0u);
+}
+
+TEST_P(TracerKinds, TinySceneFromInside) { random_inside(GetParam(), 1e-3, Vec3::Zero(), std::nullopt); }
+TEST_P(TracerKinds, HugeOffsetSceneFromInside) { random_inside(GetParam(), 1e3, Vec3(-1e7, 1e7, 1e7), std::nullopt); }
+
+INSTANTIATE_TEST_SUITE_P(AllScenes, TracerKinds, ::testing::ValuesIn(kAllKinds),
+                         [](const auto& param_info) { return std::string(name(param_info.param)); });
+
+TEST(Tracer, EmptyMeshAndDegenerateRays) {
+  const Mesh empty({}, {});
+  const TriangleScene s(empty);
+  EXPECT_TRUE(validate(s.data(), 0).empty());
+  EXPECT_FALSE(trace_ray(s.data(), Vec3::Zero(), {1, 0, 0}).hit());
+  const Mesh one({{0, 1, 2}}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)});
+  const TriangleScene s1(one);
+  EXPECT_TRUE(trace_ray(s1.data(), Vec3(0.2, 0.2, 1), {0, 0, -1}).hit());
+  EXPECT_FALSE(trace_ray(s1.data(), Vec3(0.2, 0.2, 1), {0, 0, 0}).hit());  // zero direction
+  EXPECT_FALSE(trace_ray(s1.data(), Vec3(0.2, 0.2, 1), {0, 0, std::nanf("")}).hit());
+  EXPECT_FALSE(trace_ray(s1.data(), Vec3(0.2, 0.2, 1), {0, 0, -1}, HitMode::Closest, 2.0f, 3.0f).hit());
+  RayBatch rays;
+  HitBatch hits;
+  EXPECT_EQ(trace(s1.data(), rays, hits).rays, 0u);
+}
+
+TEST(Tracer, ClusterSceneRejectsBadClusterings) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  MortonRuns r = morton_runs(m, 50);
+  r.triangle_order[0] = r.triangle_order[1];
+  EXPECT_THROW(ClusterScene(m, r.view()), std::invalid_argument);
+  r = morton_runs(m, 50);
+  r.triangle_offsets.back() -= 1;
+  EXPECT_THROW(ClusterScene(m, r.view()), std::invalid_argument);
+}
+
+TEST(Tracer, UpdateFollowsTheAnimation) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const Mesh moved = test::deformed(m, 0.05);
+  const MortonRuns runs = morton_runs(m, 64);
+  TriangleScene ts(m);
+  ClusterScene cs(m, runs.view());
+  ts.update(moved.positions());
+  cs.update(moved.positions());
+  EXPECT_TRUE(validate(ts.data(), m.triangle_count()).empty());
+  EXPECT_TRUE(validate(cs.data(), m.triangle_count(), false).empty());
+  const RaySet rs = random_rays(moved, 300, 3);
+  for (std::size_t i = 0; i < rs.org.size(); ++i) {
+    const Hit want = test::brute_force(moved, ts.data().origin, rs.org[i], rs.dir[i]);
+    expect_same(trace_ray(ts.data(), rs.org[i], rs.dir[i]), want, "triangles, frame 2");
+    expect_same(trace_ray(cs.data(), rs.org[i], rs.dir[i]), want, "clusters, frame 2");
+  }
+}
+
+}  // namespace
+}  // namespace ptc::bvh
+
+namespace ptc::bvh {
+namespace {
+
+// A ray whose float edge function rounds to exactly 0 while the exact value is -2^-46: the
+// double recomputation must decide (the ray is inside triangle 1 = (A, B, C) and outside
+// triangle 0 = (C, B, D), which share edge BC). Without it the SIMD kernel would report
+// triangle 0, which lies on the wrong side.
+TEST(Tracer, DoubleFallbackDecidesAnEdgeFunctionThatRoundsToZero) {
+  const double e = std::ldexp(1.0, -23);
+  const std::vector<Vec3> p{{-1, 1, 2}, {-1, -1 - e, 2}, {1 + e, 1 + 2 * e, 2}, {1, -1, 1.5}};  // A B C D
+  const Mesh m({{2, 1, 3}, {0, 1, 2}}, p);
+  const SceneConfig at_zero{{}, Vec3::Zero()};
+  const TriangleScene s(m, at_zero);
+  const WatertightRay r = make_watertight_ray({0, 0, 0}, {0, 0, 1});
+  auto f = [&](int v) { return to_frame(p[v], Vec3::Zero()); };
+  EXPECT_TRUE(intersect_triangle(r, f(0), f(1), f(2), 0.0f, kInf));
+  EXPECT_FALSE(intersect_triangle(r, f(2), f(1), f(3), 0.0f, kInf));
+  const Hit h = trace_ray(s.data(), Vec3::Zero(), {0, 0, 1});
+  EXPECT_EQ(h.triangle, 1u);
+  expect_same(h, test::brute_force(m, Vec3::Zero(), Vec3::Zero(), {0, 0, 1}), "fallback");
+}
+
+}  // namespace
+}  // namespace ptc::bvh

@@ -1,0 +1,494 @@
+// The clustering objectives (toolkit/clustering/objectives/*.h) against independent answers:
+// every incremental score of a merge A + B is compared with the from-scratch quantities of
+// geometry/cluster_metrics.h and geometry/gwh01.h on the merged triangle set, on random adjacent
+// cluster pairs of real and hand-made meshes (degenerate and non-manifold ones first).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <random>
+#include <set>
+#include <vector>
+
+#include <boost/graph/adjacency_list.hpp>
+
+#include "toolkit/clustering/objectives.h"
+#include "toolkit/clustering/objectives/acc.h"
+#include "toolkit/clustering/objectives/gwh01.h"
+#include "toolkit/clustering/objectives/naive.h"
+#include "toolkit/geometry/cluster_metrics.h"
+#include "toolkit/geometry/gwh01.h"
+#include "toolkit/geometry/triangle.h"
+#include "toolkit/io/mesh_io.h"
+#include "toolkit/mesh/topology.h"
+
+namespace ptc {
+namespace {
+
+using Ids = std::vector<std::uint32_t>;
+
+// ---- Meshes -------------------------------------------------------------------------------
+
+/// Deterministic jitter in [-1, 1] (splitmix64; independent of the standard library).
+double jitter(std::uint64_t i) {
+  std::uint64_t z = i + 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-52 - 1.0;
+}
+
+/// nx x ny quads, each split into two triangles, in z = 0 plus `amp` x jitter on all axes.
+Mesh grid(int nx, int ny, double amp, std::uint64_t seed = 1) {
+  std::vector<Vec3> p;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      const std::uint64_t k = 3 * (seed * 1000 + p.size());
+      p.emplace_back(i + amp * jitter(k), j + amp * jitter(k + 1), amp * jitter(k + 2));
+    }
+  std::vector<Tri> t;
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (nx + 1) + i); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      t.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      t.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return Mesh(std::move(t), std::move(p));
+}
+
+/// Four triangles on one edge (valence 4: non-manifold) plus a triangle on each free side of two of
+/// them, slightly jittered.
+Mesh book() {
+  std::vector<Vec3> p{{0, 0, 0}, {0, 0, 1}, {1, 0, 0.5}, {0, 1, 0.4}, {-1, 0.1, 0.5}, {0, -1, 0.6},
+                      {1.2, 0.8, 0.1}, {0.8, 1.1, 1.2}};
+  for (std::size_t i = 0; i < p.size(); ++i) p[i] += 0.01 * Vec3(jitter(3 * i), jitter(3 * i + 1), jitter(3 * i + 2));
+  std::vector<Tri> t{{0, 1, 2}, {1, 0, 3}, {0, 1, 4}, {1, 0, 5}, {0, 2, 6}, {3, 1, 7}};
+  return Mesh(std::move(t), std::move(p));
+}
+
+/// A jittered grid with degenerate triangles mixed in: a repeated index (a, a, b), a triangle
+/// (a, b, a) on a grid edge, a collinear (zero-area) one, and a triangle made of one vertex.
+Mesh degenerate_mix() {
+  Mesh g = grid(4, 3, 0.05, 7);
+  std::vector<Tri> t(g.triangles().begin(), g.triangles().end());
+  std::vector<Vec3> p(g.positions().begin(), g.positions().end());
+  t.push_back({0, 0, 1});
+  t.push_back({6, 7, 6});
+  p.push_back(0.5 * (p[1] + p[2]));
+  t.push_back({1, static_cast<std::uint32_t>(p.size() - 1), 2});  // collinear with edge (1, 2)
+  t.push_back({3, 3, 3});
+  return Mesh(std::move(t), std::move(p));
+}
+
+/// Regular tetrahedron (outward normals): its unit normals sum to zero.
+Mesh regular_tetrahedron() {
+  std::vector<Vec3> p{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+  std::vector<Tri> t{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+  return Mesh(std::move(t), std::move(p));
+}
+
+Mesh load(const char* name) { return read_mesh(std::string(PTC_TEST_DATA) + "/meshes/" + name).mesh; }
+
+// ---- Independent construction of a candidate merge ------------------------------------------
+
+Ids sorted_vertices(const Mesh& m, const Ids& tris) {
+  Ids v;
+  for (std::uint32_t t : tris) v.insert(v.end(), m.triangle(t).begin(), m.triangle(t).end());
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
+}
+
+/// Owns the lists a MergeContext points to.
+struct Candidate {
+  Ids a, b, va, added, shared;
+  MergeContext ctx;
+};
+
+/// MergeContext of A + B from its definition: vertex set algebra, and the removed boundary by
+/// counting, per mesh edge, the triangles of A and of B on it.
+void make_candidate(const Mesh& m, const EdgeMap& em, const Ids& a, const Ids& b, Candidate& c) {
+  c.a = a;
+  c.b = b;
+  c.va = sorted_vertices(m, a);
+  const Ids vb = sorted_vertices(m, b);
+  c.added.clear();
+  c.shared.clear();
+  std::set_difference(vb.begin(), vb.end(), c.va.begin(), c.va.end(), std::back_inserter(c.added));
+  std::set_intersection(vb.begin(), vb.end(), c.va.begin(), c.va.end(), std::back_inserter(c.shared));
+  const std::set<std::uint32_t> sa(a.begin(), a.end()), sb(b.begin(), b.end());
+  double removed = 0;
+  for (std::size_t e = 0; e < em.edge_count(); ++e) {
+    int na = 0, nb = 0;
+    for (std::uint32_t t : em.triangles_of(e)) {
+      na += sa.count(t) ? 1 : 0;
+      nb += sb.count(t) ? 1 : 0;
+    }
+    if (na > 0 && nb > 0) {
+      const Edge& ed = em.edge(e);
+      removed += safe_norm(m.position(ed.v1) - m.position(ed.v0)) * ((na == 1) + (nb == 1));
+    }
+  }
+  c.ctx.a_triangles = c.a;
+  c.ctx.b_triangles = c.b;
+  c.ctx.a_vertices = c.va;
+  c.ctx.added = c.added;
+  c.ctx.shared = c.shared;
+  c.ctx.vertex_count = static_cast<std::uint32_t>(c.va.size() + c.added.size());
+  c.ctx.boundary_removed = removed;
+}
+
+/// The objective's summary of a triangle set, built as growth builds it: one triangle at a time.
+template <class O>
+typename O::Summary summary_of(O& o, const Mesh& m, const EdgeMap& em, const Ids& tris) {
+  typename O::Summary s = o.single(tris[0]);
+  Ids sofar{tris[0]};
+  for (std::size_t i = 1; i < tris.size(); ++i) {
+    Candidate c;
+    make_candidate(m, em, sofar, {tris[i]}, c);
+    const auto ev = o.evaluate(s, o.single(tris[i]), c.ctx, Precision::Exact);
+    s = o.merge(s, o.single(tris[i]), c.ctx, ev);
+    sofar.push_back(tris[i]);
+  }
+  return s;
+}
+
+/// Two disjoint, edge-adjacent, edge-connected triangle sets of about na and nb triangles (BFS).
+std::pair<Ids, Ids> random_pair(const ClusterTables& tb, std::mt19937_64& rng, std::size_t na, std::size_t nb) {
+  const std::uint32_t T = tb.triangle_count();
+  std::vector<char> used(T, 0);
+  auto bfs = [&](std::uint32_t seed, std::size_t n) {
+    Ids out{seed}, queue{seed};
+    used[seed] = 1;
+    for (std::size_t q = 0; q < queue.size() && out.size() < n; ++q)
+      for (std::uint32_t u : tb.neighbours_of(queue[q]))
+        if (!used[u] && out.size() < n) {
+          used[u] = 1;
+          out.push_back(u);
+          queue.push_back(u);
+        }
+    return out;
+  };
+  for (;;) {
+    std::fill(used.begin(), used.end(), 0);
+    const Ids a = bfs(static_cast<std::uint32_t>(rng() % T), na);
+    Ids border;
+    for (std::uint32_t t : a)
+      for (std::uint32_t u : tb.neighbours_of(t))
+        if (!used[u]) border.push_back(u);
+    if (border.empty()) continue;
+    const Ids b = bfs(border[rng() % border.size()], nb);
+    return {a, b};
+  }
+}
+
+Ids merged(const Ids& a, const Ids& b) {
+  Ids u = a;
+  u.insert(u.end(), b.begin(), b.end());
+  std::sort(u.begin(), u.end());
+  return u;
+}
+
+ClusterParams acc_params(const Mesh& m, double max_count, double max_size, SphereMethod s = SphereMethod::Cgal) {
+  ClusterParams p;
+  p.max_count = max_count;
+  p.max_size = max_size;
+  p.avg_sa = average_triangle_sphere_area(m.positions(), m.triangles());
+  p.sphere = s;
+  return p;
+}
+
+/// |acc - reference| relative to the size of Acc's two terms (Acc itself may be near 0).
+double acc_error(double acc_value, const ClusterMetrics& cm, const ClusterParams& p) {
+  const double reference = cluster_acc(cm, p);
+  const double terms = std::abs(cm.reg) + reg_bound(cm.vertices, p.max_count) *
+                                              size_bound(cm.sphere.surface_area(), p.max_size, p.avg_sa,
+                                                         p.size_bound_mode);
+  return std::abs(acc_value - reference) / terms;
+}
+
+// ---- ClusterTables -----------------------------------------------------------------------
+
+TEST(ClusterTables, NeighboursAreTheBoostDualGraphsAdjacency) {
+  for (const Mesh& m : {grid(5, 4, 0.1), book(), degenerate_mix(), load("elephant.off")}) {
+    const ClusterTables tb = ClusterTables::build(m);
+    const DualGraph g = build_dual_graph(tb.edges, m.triangle_count());
+    for (std::uint32_t t = 0; t < m.triangle_count(); ++t) {
+      std::set<std::uint32_t> expected;
+      for (auto [it, end] = boost::adjacent_vertices(t, g); it != end; ++it) expected.insert(static_cast<std::uint32_t>(*it));
+      const auto nb = tb.neighbours_of(t);
+      EXPECT_EQ(Ids(nb.begin(), nb.end()), Ids(expected.begin(), expected.end())) << "triangle " << t;
+    }
+  }
+}
+
+TEST(ClusterTables, DegenerateTriangles) {
+  const Mesh m = degenerate_mix();
+  const ClusterTables tb = ClusterTables::build(m);
+  const std::uint32_t T = tb.triangle_count();
+  std::uint32_t v[3], e[3];
+  EXPECT_EQ(tb.distinct_vertices(T - 4, v), 2);  // (0, 0, 1)
+  EXPECT_EQ(tb.distinct_edges(T - 4, e), 1);
+  EXPECT_EQ(tb.distinct_vertices(T - 3, v), 2);  // (6, 7, 6)
+  EXPECT_EQ(tb.distinct_edges(T - 3, e), 1);
+  EXPECT_DOUBLE_EQ(tb.triangle_perimeter(T - 3), safe_norm(m.position(7) - m.position(6)));
+  EXPECT_EQ(tb.distinct_vertices(T - 1, v), 1);  // (3, 3, 3): no edge, no neighbour
+  EXPECT_EQ(tb.distinct_edges(T - 1, e), 0);
+  EXPECT_TRUE(tb.neighbours_of(T - 1).empty());
+  EXPECT_EQ(tb.area[T - 2], 0.0);  // collinear
+  EXPECT_TRUE(tb.normal[T - 2].isZero(0.0));
+  for (std::uint32_t t = 0; t < T; ++t) {  // per-triangle data as triangle.h computes it
+    const auto c = m.corners(t);
+    const TriangleGeometry g = triangle_geometry(c[0], c[1], c[2]);
+    EXPECT_EQ(tb.area[t], g.area);
+    EXPECT_EQ(tb.normal[t], g.normal);
+  }
+}
+
+// ---- Acc -----------------------------------------------------------------------------------
+
+TEST(AccObjective, RejectsBadParameters) {
+  const Mesh m = grid(2, 2, 0.1);
+  const ClusterTables tb = ClusterTables::build(m);
+  EXPECT_THROW(AccObjective(tb, acc_params(m, 0, 10)), std::invalid_argument);
+  EXPECT_THROW(AccObjective(tb, acc_params(m, 10, 0)), std::invalid_argument);
+  ClusterParams p = acc_params(m, 10, 10);
+  p.avg_sa = 0;
+  EXPECT_THROW(AccObjective(tb, p), std::invalid_argument);
+}
+
+// Closed surfaces: the normal sum vanishes, N_avg comes from average_normal's fallback rule.
+TEST(AccObjective, FallbackNormalOnClosedSurfaces) {
+  for (const char* name : {"regular tetrahedron", "cube.off"}) {
+    const Mesh m = std::string(name) == "cube.off" ? load(name) : regular_tetrahedron();
+    const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+    const ClusterTables tb = ClusterTables::build(m);
+    const ClusterParams p = acc_params(m, 10, 10);
+    AccObjective o(tb, p);
+    Ids all(m.triangle_count());
+    std::iota(all.begin(), all.end(), 0u);
+    const Ids a(all.begin(), all.end() - 1), b{all.back()};
+    const auto sa = summary_of(o, m, em, a);
+    Candidate c;
+    make_candidate(m, em, a, b, c);
+    const auto ev = o.evaluate(sa, o.single(b[0]), c.ctx, Precision::Exact);
+    const ClusterMetrics cm = cluster_metrics(m, all);
+    ASSERT_TRUE(cm.n_avg_fallback) << name;
+    EXPECT_TRUE(ev.fallback) << name;
+    EXPECT_EQ(ev.n_avg, cm.n_avg) << name;
+    EXPECT_NEAR(ev.area_p, cm.area_p, 1e-13 * cm.area) << name;
+    EXPECT_LE(acc_error(ev.score, cm, p), 1e-12) << name;
+  }
+}
+
+// A nearly closed surface: |sum n_i| ~ 1e-8 per normal, far above the fallback threshold but where
+// an incremental sum (in merge order) would tilt N_avg by ~1e-8 rad; the objective recomputes the
+// sum in ascending order there (kRecomputeNormalSum), so N_avg is the same bits as cluster_metrics'.
+TEST(AccObjective, NearCancellationOfTheNormalSum) {
+  for (double eps : {3e-7, 1e-6, 1e-5}) {
+    Mesh m = regular_tetrahedron();
+    std::vector<Vec3> p(m.positions().begin(), m.positions().end());
+    p[0] += eps * Vec3(0.3, -0.7, 0.2);
+    m = m.with_positions(std::move(p));
+    const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+    const ClusterTables tb = ClusterTables::build(m);
+    const ClusterParams params = acc_params(m, 10, 10);
+    AccObjective o(tb, params);
+    for (const Ids& a : {Ids{2, 1, 0}, Ids{1, 2, 3}, Ids{3, 0, 2}}) {
+      Ids b;
+      for (std::uint32_t t = 0; t < 4; ++t)
+        if (std::find(a.begin(), a.end(), t) == a.end()) b.push_back(t);
+      Candidate c;
+      make_candidate(m, em, a, b, c);
+      const auto ev = o.evaluate(summary_of(o, m, em, a), o.single(b[0]), c.ctx, Precision::Exact);
+      const ClusterMetrics cm = cluster_metrics(m, Ids{0, 1, 2, 3});
+      ASSERT_FALSE(cm.n_avg_fallback) << eps;
+      EXPECT_EQ(ev.n_avg, cm.n_avg) << eps;
+      EXPECT_LE(acc_error(ev.score, cm, params), 1e-12) << eps;
+    }
+  }
+}
+
+// The exact score equals cluster_acc of the merged set, for each sphere method, and the bound is
+// a bound. Random pairs of clusters of 1 to 60 triangles on a real mesh (curved: the AreaP
+// identity and the summed path both occur).
+TEST(AccObjective, ExactScoreEqualsClusterAccFromScratch) {
+  const Mesh m = load("elephant.off");
+  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+  const ClusterTables tb = ClusterTables::build(m);
+  for (SphereMethod sm : {SphereMethod::Cgal, SphereMethod::Ritter, SphereMethod::Epos26, SphereMethod::Exact})
+  for (const AccTuning& tuning : {AccTuning::for_contraction(), AccTuning::for_growth()}) {
+    const ClusterParams p = acc_params(m, 40, 20, sm);
+    AccObjective o(tb, p, tuning);
+    std::mt19937_64 rng(42);
+    const int trials = sm == SphereMethod::Exact ? 8 : 40;
+    double worst = 0, worst_area_p = 0;
+    int bounded = 0;
+    for (int i = 0; i < trials; ++i) {
+      const auto [a, b] = random_pair(tb, rng, 1 + rng() % 60, 1 + rng() % 40);
+      const auto sa = summary_of(o, m, em, a), sb = summary_of(o, m, em, b);
+      Candidate c;
+      make_candidate(m, em, a, b, c);
+      const auto ev = o.evaluate(sa, sb, c.ctx, Precision::Exact);
+      ASSERT_TRUE(ev.exact);
+      const ClusterMetrics cm = cluster_metrics(m, merged(a, b), sm);
+      worst = std::max(worst, acc_error(ev.score, cm, p));
+      worst_area_p = std::max(worst_area_p, std::abs(ev.area_p - cm.area_p) / cm.area_p);
+      for (Precision pr : {Precision::UpperBoundAllowed, Precision::RefinedBound}) {
+        const auto bound = o.evaluate(sa, sb, c.ctx, pr);
+        EXPECT_GE(bound.score, ev.score) << "trial " << i;
+        bounded += bound.exact ? 0 : 1;
+      }
+    }
+    EXPECT_LE(worst, 1e-12) << to_string(sm);
+    EXPECT_LE(worst_area_p, 1e-13) << to_string(sm);
+    if (o.minimal_sphere()) {
+      EXPECT_GT(bounded, 0) << "the bound path was not exercised";
+    }
+  }
+}
+
+// Growth's case: B is one triangle adding at most one vertex; with the vertex memo on, every
+// score still equals the from-scratch value (the memo is exact), also after many additions.
+TEST(AccObjective, VertexMemoIsExact) {
+  const Mesh m = load("elephant.off");
+  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+  const ClusterTables tb = ClusterTables::build(m);
+  const ClusterParams p = acc_params(m, 60, 30);
+  AccObjective o(tb, p, AccTuning::for_growth());
+  std::mt19937_64 rng(7);
+  double worst = 0;
+  for (int cluster = 0; cluster < 5; ++cluster) {
+    Ids members{static_cast<std::uint32_t>(rng() % m.triangle_count())};
+    auto s = o.single(members[0]);
+    for (int step = 0; step < 60; ++step) {
+      Ids frontier;
+      for (std::uint32_t t : members)
+        for (std::uint32_t u : tb.neighbours_of(t))
+          if (std::find(members.begin(), members.end(), u) == members.end()) frontier.push_back(u);
+      if (frontier.empty()) break;
+      std::sort(frontier.begin(), frontier.end());
+      frontier.erase(std::unique(frontier.begin(), frontier.end()), frontier.end());
+      for (std::uint32_t d : frontier) {  // evaluate all (fills and uses the memo), as growth does
+        Candidate c;
+        make_candidate(m, em, members, {d}, c);
+        const auto ev = o.evaluate(s, o.single(d), c.ctx, Precision::Exact);
+        worst = std::max(worst, acc_error(ev.score, cluster_metrics(m, merged(members, {d})), p));
+      }
+      const std::uint32_t d = frontier[rng() % frontier.size()];
+      Candidate c;
+      make_candidate(m, em, members, {d}, c);
+      const auto ev = o.evaluate(s, o.single(d), c.ctx, Precision::Exact);
+      s = o.merge(s, o.single(d), c.ctx, ev);
+      members.push_back(d);
+    }
+  }
+  EXPECT_LE(worst, 1e-12);
+}
+
+// ---- Naive ---------------------------------------------------------------------------------
+
+TEST(NaiveObjective, ScoreEqualsClusterMetricsAndLimitIsMaxCount) {
+  const Mesh m = load("elephant.off");
+  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+  const ClusterTables tb = ClusterTables::build(m);
+  EXPECT_THROW(NaiveObjective(tb, 2), std::invalid_argument);
+  NaiveObjective o(tb, 30);
+  std::mt19937_64 rng(3);
+  for (int i = 0; i < 50; ++i) {
+    const auto [a, b] = random_pair(tb, rng, 1 + rng() % 30, 1 + rng() % 30);
+    Candidate c;
+    make_candidate(m, em, a, b, c);
+    const auto ev = o.evaluate(summary_of(o, m, em, a), summary_of(o, m, em, b), c.ctx, Precision::Exact);
+    const ClusterMetrics cm = cluster_metrics(m, merged(a, b));
+    EXPECT_NEAR(ev.score, cm.naive, 1e-14 * cm.naive);
+    EXPECT_EQ(o.legal(c.ctx), cm.vertices <= 30);
+  }
+}
+
+// ---- GWH01 ---------------------------------------------------------------------------------
+
+double mean_edge_length(const Mesh& m) {
+  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+  double s = 0;
+  for (const Edge& e : em.edges()) s += (m.position(e.v1) - m.position(e.v0)).norm();
+  return s / static_cast<double>(em.edge_count());
+}
+
+void check_gwh(const Mesh& m, GwhWeight weight, int trials, std::size_t max_size) {
+  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+  const ClusterTables tb = ClusterTables::build(m);
+  GwhParams params;
+  params.weight = weight;
+  Gwh01Objective o(tb, 1000, params);
+  const double l = mean_edge_length(m);
+  EXPECT_NEAR(o.fit_scale(), 1.0 / (l * l), 1e-12 / (l * l));
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < trials; ++i) {
+    const auto [a, b] = random_pair(tb, rng, 1 + rng() % max_size, 1 + rng() % max_size);
+    Candidate c;
+    make_candidate(m, em, a, b, c);
+    const auto ev = o.evaluate(summary_of(o, m, em, a), summary_of(o, m, em, b), c.ctx, Precision::Exact);
+    const GwhTerms tm = gwh_terms(m, merged(a, b), weight), ta = gwh_terms(m, a, weight), tb2 = gwh_terms(m, b, weight);
+    // E_fit: the quadric merged with shared vertices subtracted, against the direct sum; the
+    // error bound of gwh01.h is ~10 eps D^2 (D: cluster size), here taken relative to l^2.
+    EXPECT_NEAR(ev.e_fit * o.fit_scale(), tm.fit.e_fit * o.fit_scale(), 1e-11) << "trial " << i;
+    EXPECT_NEAR(ev.e_dir, tm.e_dir, 1e-12) << "trial " << i;  // the moment identity, measured
+    EXPECT_NEAR(ev.perimeter, tm.perimeter, 1e-12 * std::max(1.0, tm.perimeter)) << "trial " << i;
+    const double expected = -(tm.fit.e_fit * o.fit_scale() + params.a1 * tm.e_dir +
+                               params.a2 * shape_cost(tm.gamma, ta.gamma, tb2.gamma));
+    EXPECT_NEAR(ev.score, expected, 1e-10) << "trial " << i;
+  }
+}
+
+TEST(Gwh01Objective, TermsEqualGwhTermsOfTheMergedSet) {
+  check_gwh(load("elephant.off"), GwhWeight::Area, 60, 50);
+  check_gwh(load("elephant.off"), GwhWeight::SqrtArea, 20, 50);
+}
+
+TEST(Gwh01Objective, NonManifoldAndDegenerateTriangles) {
+  check_gwh(book(), GwhWeight::Area, 40, 3);
+  check_gwh(degenerate_mix(), GwhWeight::Area, 60, 8);
+}
+
+TEST(Gwh01Objective, RejectsBadParameters) {
+  const Mesh m = grid(2, 2, 0.1);
+  const ClusterTables tb = ClusterTables::build(m);
+  EXPECT_THROW(Gwh01Objective(tb, 2, GwhParams{}), std::invalid_argument);
+  GwhParams p;
+  p.a1 = -1;
+  EXPECT_THROW(Gwh01Objective(tb, 10, p), std::invalid_argument);
+}
+
+// Scaling a mesh by a power of two scales every length exactly, so every scale-free score must be
+// bit-identical: Acc, Naive, and GWH01 thanks to the normalisation of E_fit (without it, the cost
+// would change).
+TEST(Objectives, ScoresAreScaleFree) {
+  const Mesh m = load("elephant.off");
+  std::vector<Vec3> scaled(m.positions().begin(), m.positions().end());
+  for (Vec3& p : scaled) p *= 1024.0;
+  const Mesh m2 = m.with_positions(std::move(scaled));
+  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+  const ClusterTables t1 = ClusterTables::build(m), t2 = ClusterTables::build(m2);
+  AccObjective a1(t1, acc_params(m, 40, 20)), a2(t2, acc_params(m2, 40, 20));
+  Gwh01Objective g1(t1, 1000, GwhParams{}), g2(t2, 1000, GwhParams{});
+  NaiveObjective n1(t1, 1000), n2(t2, 1000);
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 20; ++i) {
+    const auto [a, b] = random_pair(t1, rng, 1 + rng() % 40, 1 + rng() % 40);
+    Candidate c1, c2;
+    make_candidate(m, em, a, b, c1);
+    make_candidate(m2, em, a, b, c2);
+    EXPECT_EQ(a1.evaluate(summary_of(a1, m, em, a), summary_of(a1, m, em, b), c1.ctx, Precision::Exact).score,
+              a2.evaluate(summary_of(a2, m2, em, a), summary_of(a2, m2, em, b), c2.ctx, Precision::Exact).score);
+    EXPECT_EQ(g1.evaluate(summary_of(g1, m, em, a), summary_of(g1, m, em, b), c1.ctx, Precision::Exact).score,
+              g2.evaluate(summary_of(g2, m2, em, a), summary_of(g2, m2, em, b), c2.ctx, Precision::Exact).score);
+    EXPECT_EQ(n1.evaluate(summary_of(n1, m, em, a), summary_of(n1, m, em, b), c1.ctx, Precision::Exact).score,
+              n2.evaluate(summary_of(n2, m2, em, a), summary_of(n2, m2, em, b), c2.ctx, Precision::Exact).score);
+  }
+}
+
+}  // namespace
+}  // namespace ptc

@@ -1,0 +1,166 @@
+// The front door of clustering (cluster.h): configuration checks, the one enum -> objective type
+// dispatch, and the enum <-> string mapping used at the command-line edge.
+//
+// Configuration rules (std::invalid_argument otherwise):
+// - max_size must be finite and >= 0;
+// - max_count = max_size = 0: the Standard baseline, one triangle per cluster, for every method
+//   and objective (no objective is evaluated);
+// - Acc (growth, contraction): max_count > 0 and max_size > 0 (exactly one of them 0 is an error:
+//   regBound or sizeBound would divide by 0);
+// - Naive, GWH01: max_count >= 3 (their only limit; max_size is not used by them and may be any
+//   value >= 0, but max_count = 0 with max_size > 0 is rejected: without a vertex limit they
+//   would merge every edge-connected component into one cluster);
+// - SahSplit, Meshopt: the checks of sah_split.h / meshopt.h.
+// Acc on a mesh whose AvgSA is 0 (every triangle collapsed to a point) gives one triangle per
+// cluster: every sphere has radius 0, so reg = 0 and Acc = -regBound < 0 for every merge.
+#include "toolkit/clustering/cluster.h"
+
+#include <cctype>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "toolkit/clustering/contraction.h"
+#include "toolkit/clustering/growth.h"
+#include "toolkit/clustering/meshopt.h"
+#include "toolkit/clustering/objectives.h"
+#include "toolkit/clustering/sah_split.h"
+#include "toolkit/geometry/sphere.h"
+
+namespace ptc {
+
+namespace {
+
+bool iequals(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
+  return true;
+}
+
+Clustering one_per_triangle(const Mesh& mesh) {
+  std::vector<std::uint32_t> labels(mesh.triangle_count());
+  std::iota(labels.begin(), labels.end(), 0u);
+  return clustering_from_labels(labels, mesh.triangles());
+}
+
+template <ClusterObjective O>
+Clustering run_greedy(const Mesh& mesh, const ClusterTables& tables, O& objective, const ClusterConfig& config,
+                      const ProgressFn& progress) {
+  ClusterRun run;
+  if (config.method == ClusterMethod::Growth) {
+    GrowthOptions o;
+    o.start = config.start;
+    run = grow_clusters(tables, objective, o, progress);
+  } else {
+    ContractionOptions o;
+    o.target_clusters = config.target_clusters;
+    run = contract_clusters(tables, objective, o, progress);
+  }
+  return clustering_from_labels(run.labels, mesh.triangles());
+}
+
+}  // namespace
+
+std::string_view to_string(ClusterMethod m) {
+  switch (m) {
+    case ClusterMethod::Growth: return "growth";
+    case ClusterMethod::Contraction: return "contraction";
+    case ClusterMethod::SahSplit: return "sah-split";
+    case ClusterMethod::Meshopt: return "meshopt";
+  }
+  return "?";
+}
+
+std::string_view to_string(ObjectiveKind o) {
+  switch (o) {
+    case ObjectiveKind::Acc: return "acc";
+    case ObjectiveKind::Naive: return "naive";
+    case ObjectiveKind::Gwh01: return "gwh01";
+  }
+  return "?";
+}
+
+std::string_view to_string(StartRule s) {
+  switch (s) {
+    case StartRule::IndexOrder: return "index";
+    case StartRule::SpatialOrder: return "spatial";
+    case StartRule::FewestFree: return "fewest-free";
+  }
+  return "?";
+}
+
+std::optional<ClusterMethod> parse_cluster_method(std::string_view s) {
+  for (ClusterMethod m : {ClusterMethod::Growth, ClusterMethod::Contraction, ClusterMethod::SahSplit,
+                          ClusterMethod::Meshopt})
+    if (iequals(s, to_string(m))) return m;
+  return std::nullopt;
+}
+
+std::optional<ObjectiveKind> parse_objective(std::string_view s) {
+  for (ObjectiveKind o : {ObjectiveKind::Acc, ObjectiveKind::Naive, ObjectiveKind::Gwh01})
+    if (iequals(s, to_string(o))) return o;
+  return std::nullopt;
+}
+
+std::optional<StartRule> parse_start_rule(std::string_view s) {
+  for (StartRule r : {StartRule::IndexOrder, StartRule::SpatialOrder, StartRule::FewestFree})
+    if (iequals(s, to_string(r))) return r;
+  return std::nullopt;
+}
+
+Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress) {
+  if (!(config.max_size >= 0.0) || !std::isfinite(config.max_size))
+    throw std::invalid_argument("cluster_mesh: max_size must be finite and >= 0, got " +
+                                std::to_string(config.max_size));
+  if (config.max_count == 0 && config.max_size == 0.0) {  // the Standard baseline
+    if (progress) progress(1.0);
+    return one_per_triangle(mesh);
+  }
+  switch (config.method) {
+    case ClusterMethod::SahSplit: return sah_split_clusters(mesh, config);
+    case ClusterMethod::Meshopt: return meshopt_clusters(mesh, config);
+    case ClusterMethod::Growth:
+    case ClusterMethod::Contraction: break;
+  }
+
+  // Growth and contraction: the enum -> objective type dispatch, done once here.
+  switch (config.objective) {
+    case ObjectiveKind::Acc: {
+      if (config.max_count == 0 || config.max_size == 0.0)
+        throw std::invalid_argument("cluster_mesh: Acc needs max_count > 0 and max_size > 0 (both 0 = one triangle "
+                                    "per cluster); got max_count " + std::to_string(config.max_count) +
+                                    ", max_size " + std::to_string(config.max_size));
+      if (mesh.empty()) return Clustering{};
+      const ClusterTables tables = ClusterTables::build(mesh);
+      ClusterParams params;
+      params.max_count = config.max_count;
+      params.max_size = config.max_size;
+      params.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+      params.size_bound_mode = config.size_bound_mode;
+      params.sphere = config.sphere;
+      if (!(params.avg_sa > 0.0)) return one_per_triangle(mesh);  // see the file comment
+      AccObjective objective(tables, params,
+                            config.method == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction());
+      return run_greedy(mesh, tables, objective, config, progress);
+    }
+    case ObjectiveKind::Naive: {
+      if (config.max_count == 0)
+        throw std::invalid_argument("cluster_mesh: Naive needs max_count >= 3 (its only limit)");
+      const ClusterTables tables = ClusterTables::build(mesh);
+      NaiveObjective objective(tables, config.max_count);
+      return run_greedy(mesh, tables, objective, config, progress);
+    }
+    case ObjectiveKind::Gwh01: {
+      if (config.max_count == 0)
+        throw std::invalid_argument("cluster_mesh: GWH01 needs max_count >= 3 (its vertex limit)");
+      const ClusterTables tables = ClusterTables::build(mesh);
+      Gwh01Objective objective(tables, config.max_count, config.gwh);
+      return run_greedy(mesh, tables, objective, config, progress);
+    }
+  }
+  throw std::invalid_argument("cluster_mesh: unknown objective");
+}
+
+}  // namespace ptc

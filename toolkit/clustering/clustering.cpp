@@ -1,0 +1,280 @@
+#include "toolkit/clustering/clustering.h"
+
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace ptc {
+
+namespace {
+
+/// Edge-connected pieces of one set of triangles at a time. The per-triangle arrays are
+/// allocated once (size T) and reused for every cluster through a stamp, so one call costs
+/// O(n log n) for a set of n triangles, not O(T).
+class PieceFinder {
+ public:
+  PieceFinder(std::span<const Tri> triangles, const EdgeMap& edges)
+      : tris_(triangles), edges_(edges), stamp_of_(triangles.size(), 0), pos_of_(triangles.size(), 0) {}
+
+  /// piece[i] = piece of ids[i], pieces numbered 0.. in order of their first position. Every id
+  /// must be < T (callers filter). A repeated id is connected to its other occurrences (it shares
+  /// its own edges). Returns the number of pieces (0 for an empty set).
+  std::uint32_t find(std::span<const std::uint32_t> ids, std::vector<std::uint32_t>& piece) {
+    if (++stamp_ == 0) {  // wrapped after 2^32 - 1 calls: forget the old stamps
+      std::fill(stamp_of_.begin(), stamp_of_.end(), 0u);
+      stamp_ = 1;
+    }
+    const auto n = static_cast<std::uint32_t>(ids.size());
+    for (std::uint32_t i = 0; i < n; ++i) {
+      stamp_of_[ids[i]] = stamp_;
+      pos_of_[ids[i]] = i;
+    }
+    parent_.resize(n);
+    std::iota(parent_.begin(), parent_.end(), 0u);
+    const std::size_t T = tris_.size();
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const Tri& f = tris_[ids[i]];
+      for (int k = 0; k < 3; ++k) {
+        // find() rather than side_edge(): it stays in bounds even for an EdgeMap of another mesh.
+        const std::uint32_t e = edges_.find(f[k], f[(k + 1) % 3]);
+        if (e == kNoEdge) continue;
+        for (const std::uint32_t t2 : edges_.triangles_of(e))
+          if (t2 < T && stamp_of_[t2] == stamp_) unite(i, pos_of_[t2]);
+      }
+    }
+    piece.assign(n, 0);
+    std::uint32_t count = 0;
+    std::vector<std::uint32_t>& root_piece = scratch_;
+    root_piece.assign(n, kNoCluster);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint32_t r = root(i);
+      if (root_piece[r] == kNoCluster) root_piece[r] = count++;
+      piece[i] = root_piece[r];
+    }
+    return count;
+  }
+
+ private:
+  std::uint32_t root(std::uint32_t x) {
+    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = root(a);
+    b = root(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+
+  std::span<const Tri> tris_;
+  const EdgeMap& edges_;
+  std::vector<std::uint32_t> stamp_of_, pos_of_, parent_, scratch_;
+  std::uint32_t stamp_ = 0;
+};
+
+/// Sorted distinct vertices of the triangles `ids` (all < triangles.size()), appended to `out`.
+void append_distinct_vertices(std::span<const std::uint32_t> ids, std::span<const Tri> triangles,
+                              std::vector<std::uint32_t>& out) {
+  const std::size_t first = out.size();
+  for (const std::uint32_t t : ids) out.insert(out.end(), triangles[t].begin(), triangles[t].end());
+  std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
+  out.erase(std::unique(out.begin() + static_cast<std::ptrdiff_t>(first), out.end()), out.end());
+}
+
+/// Checks one offset array; returns false (after reporting) when its ranges are unusable.
+bool check_offsets(const std::vector<std::uint32_t>& off, std::size_t data_size, const char* name,
+                   const char* data_name, std::vector<std::string>& issues, std::size_t max_issues) {
+  auto report = [&](std::string s) {
+    if (issues.size() < max_issues) issues.push_back(std::move(s));
+  };
+  if (off.empty()) {
+    report(fmt::format("{} is empty (needs cluster_count + 1 entries, the first 0)", name));
+    return false;
+  }
+  bool ok = true;
+  if (off.front() != 0) {
+    report(fmt::format("{}[0] = {}, expected 0", name, off.front()));
+    ok = false;
+  }
+  for (std::size_t c = 0; c + 1 < off.size(); ++c)
+    if (off[c + 1] < off[c]) {
+      report(fmt::format("cluster {}: {} decrease ({} -> {})", c, name, off[c], off[c + 1]));
+      ok = false;
+    }
+  if (off.back() != data_size) {
+    report(fmt::format("{} ends at {} but {} has {} entries", name, off.back(), data_name, data_size));
+    ok = false;
+  }
+  return ok;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> Clustering::cluster_of_triangle() const {
+  const std::size_t T = triangle_order.size();
+  std::vector<std::uint32_t> out(T, kNoCluster);
+  for (std::size_t c = 0; c + 1 < triangle_offsets.size(); ++c) {
+    const std::size_t lo = std::min<std::size_t>(triangle_offsets[c], T);
+    const std::size_t hi = std::min<std::size_t>(triangle_offsets[c + 1], T);
+    for (std::size_t i = lo; i < hi; ++i)
+      if (triangle_order[i] < T) out[triangle_order[i]] = static_cast<std::uint32_t>(c);
+  }
+  return out;
+}
+
+Clustering clustering_from_labels(std::span<const std::uint32_t> labels, std::span<const Tri> triangles) {
+  if (labels.size() != triangles.size())
+    throw std::invalid_argument(fmt::format("clustering_from_labels: {} labels for {} triangles", labels.size(),
+                                            triangles.size()));
+  const std::size_t T = labels.size();
+  if (T > 0xffffffffu) throw std::invalid_argument("clustering_from_labels: more than 2^32 - 1 triangles");
+
+  // Sort (label, triangle) keys: each label's run starts with its smallest triangle id.
+  std::vector<std::uint64_t> key(T);
+  for (std::size_t t = 0; t < T; ++t) key[t] = (std::uint64_t{labels[t]} << 32) | t;
+  std::sort(key.begin(), key.end());
+  struct Run {
+    std::uint32_t first_triangle, begin, end;  // [begin, end) in key
+  };
+  std::vector<Run> runs;
+  for (std::size_t i = 0; i < T;) {
+    std::size_t j = i + 1;
+    while (j < T && (key[j] >> 32) == (key[i] >> 32)) ++j;
+    runs.push_back({static_cast<std::uint32_t>(key[i]), static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+    i = j;
+  }
+  std::sort(runs.begin(), runs.end(), [](const Run& a, const Run& b) { return a.first_triangle < b.first_triangle; });
+
+  Clustering c;
+  c.triangle_order.reserve(T);
+  c.triangle_offsets.reserve(runs.size() + 1);
+  c.vertex_offsets.reserve(runs.size() + 1);
+  for (const Run& r : runs) {
+    const std::size_t first = c.triangle_order.size();
+    for (std::uint32_t i = r.begin; i < r.end; ++i) c.triangle_order.push_back(static_cast<std::uint32_t>(key[i]));
+    c.triangle_offsets.push_back(static_cast<std::uint32_t>(c.triangle_order.size()));
+    append_distinct_vertices(std::span<const std::uint32_t>(c.triangle_order).subspan(first), triangles, c.vertices);
+    c.vertex_offsets.push_back(static_cast<std::uint32_t>(c.vertices.size()));
+  }
+  return c;
+}
+
+std::vector<std::string> validate(const Clustering& c, std::span<const Tri> triangles, const EdgeMap& edges,
+                                  const ClusterLimits& limits, std::size_t max_issues) {
+  std::vector<std::string> issues;
+  auto full = [&] { return issues.size() >= max_issues; };
+  auto report = [&](std::string s) {
+    if (!full()) issues.push_back(std::move(s));
+  };
+  const std::size_t T = triangles.size();
+
+  // 1. Structure of the offset arrays.
+  const bool tri_ok = check_offsets(c.triangle_offsets, c.triangle_order.size(), "triangle_offsets",
+                                    "triangle_order", issues, max_issues);
+  bool vert_ok = check_offsets(c.vertex_offsets, c.vertices.size(), "vertex_offsets", "vertices", issues, max_issues);
+  if (c.vertex_offsets.size() != c.triangle_offsets.size()) {
+    report(fmt::format("vertex_offsets has {} entries, triangle_offsets {} (both must be cluster_count + 1)",
+                       c.vertex_offsets.size(), c.triangle_offsets.size()));
+    vert_ok = false;
+  }
+
+  // 2. Every triangle exactly once. Without usable offsets, positions stand in for clusters.
+  std::vector<std::uint32_t> seen_in(T, kNoCluster);  // first cluster (or position) holding t
+  auto check_id = [&](std::uint32_t t, std::size_t where, const char* what) {
+    if (t >= T) {
+      report(fmt::format("{} {}: triangle id {} out of range (the mesh has {} triangles)", what, where, t, T));
+    } else if (seen_in[t] != kNoCluster) {
+      if (tri_ok && seen_in[t] == where)
+        report(fmt::format("triangle {} appears twice in cluster {}", t, where));
+      else
+        report(fmt::format("triangle {} appears in {}s {} and {}", t, what, seen_in[t], where));
+    } else {
+      seen_in[t] = static_cast<std::uint32_t>(where);
+    }
+  };
+  if (tri_ok) {
+    for (std::size_t k = 0; k + 1 < c.triangle_offsets.size() && !full(); ++k)
+      for (std::uint32_t i = c.triangle_offsets[k]; i < c.triangle_offsets[k + 1]; ++i)
+        check_id(c.triangle_order[i], k, "cluster");
+  } else {
+    for (std::size_t i = 0; i < c.triangle_order.size() && !full(); ++i) check_id(c.triangle_order[i], i, "position");
+  }
+  for (std::size_t t = 0; t < T && !full(); ++t)
+    if (seen_in[t] == kNoCluster) report(fmt::format("triangle {} is in no cluster", t));
+  if (!tri_ok || full()) return issues;
+
+  // 3. Per cluster: not empty, ascending, vertex list, connectivity, limits.
+  PieceFinder pieces(triangles, edges);
+  std::vector<std::uint32_t> ids, expected, piece;
+  for (std::size_t k = 0; k + 1 < c.triangle_offsets.size() && !full(); ++k) {
+    const auto tris = c.triangles_of(k);
+    if (tris.empty()) {
+      report(fmt::format("cluster {}: empty", k));
+      continue;
+    }
+    if (!std::is_sorted(tris.begin(), tris.end()))
+      report(fmt::format("cluster {}: triangles not in ascending order", k));
+    ids.clear();
+    for (const std::uint32_t t : tris)
+      if (t < T) ids.push_back(t);
+    expected.clear();
+    append_distinct_vertices(ids, triangles, expected);
+    if (vert_ok) {
+      const auto listed = c.vertices_of(k);
+      if (std::adjacent_find(listed.begin(), listed.end(), std::greater_equal<>()) != listed.end()) {
+        report(fmt::format("cluster {}: vertex list not strictly ascending", k));
+      } else if (!std::equal(listed.begin(), listed.end(), expected.begin(), expected.end())) {
+        std::vector<std::uint32_t> extra, missing;
+        std::set_difference(listed.begin(), listed.end(), expected.begin(), expected.end(), std::back_inserter(extra));
+        std::set_difference(expected.begin(), expected.end(), listed.begin(), listed.end(),
+                            std::back_inserter(missing));
+        report(fmt::format("cluster {}: vertex list has {} vertices, its triangles use {} ({} missing{}, {} extra{})",
+                           k, listed.size(), expected.size(), missing.size(),
+                           missing.empty() ? "" : fmt::format(" e.g. {}", missing.front()), extra.size(),
+                           extra.empty() ? "" : fmt::format(" e.g. {}", extra.front())));
+      }
+    }
+    if (!ids.empty()) {
+      const std::uint32_t n = pieces.find(ids, piece);
+      if (n > 1) report(fmt::format("cluster {}: not edge-connected ({} pieces)", k, n));
+    }
+    if (limits.max_triangles > 0 && tris.size() > limits.max_triangles)
+      report(fmt::format("cluster {}: {} triangles > limit {}", k, tris.size(), limits.max_triangles));
+    if (limits.max_vertices > 0 && expected.size() > limits.max_vertices)
+      report(fmt::format("cluster {}: {} vertices > limit {}", k, expected.size(), limits.max_vertices));
+  }
+  return issues;
+}
+
+Clustering split_disconnected(const Clustering& c, std::span<const Tri> triangles, const EdgeMap& edges) {
+  const std::size_t T = triangles.size();
+  const auto& off = c.triangle_offsets;
+  bool ok = !off.empty() && off.front() == 0 && off.back() == c.triangle_order.size() && c.triangle_order.size() == T &&
+            std::is_sorted(off.begin(), off.end());
+  std::vector<std::uint32_t> label(T, kNoCluster);
+  if (ok)
+    for (const std::uint32_t t : c.triangle_order) {
+      if (t >= T || label[t] != kNoCluster) {
+        ok = false;
+        break;
+      }
+      label[t] = 0;
+    }
+  if (!ok)
+    throw std::invalid_argument(
+        "split_disconnected: the clustering is not a partition of the triangles with consistent offsets");
+
+  PieceFinder pieces(triangles, edges);
+  std::vector<std::uint32_t> piece;
+  std::uint32_t next = 0;
+  for (std::size_t k = 0; k + 1 < off.size(); ++k) {
+    const auto tris = c.triangles_of(k);
+    const std::uint32_t n = pieces.find(tris, piece);
+    for (std::size_t i = 0; i < tris.size(); ++i) label[tris[i]] = next + piece[i];
+    next += n;
+  }
+  return clustering_from_labels(label, triangles);
+}
+
+}  // namespace ptc

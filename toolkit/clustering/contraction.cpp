@@ -1,0 +1,444 @@
+#include "toolkit/clustering/contraction.h"
+
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+
+namespace ptc {
+
+namespace {
+
+constexpr std::uint32_t kExactBit = 0x80000000u;
+
+/// A queue entry: the key (score, pair (lo << 32) | hi, lo < hi) and the version stamps of lo and
+/// hi when it was pushed (ver_hi carries the exact flag in its top bit).
+struct Entry {
+  double score;
+  std::uint64_t pair;
+  std::uint32_t ver_lo;
+  std::uint32_t ver_hi;
+};
+
+/// Queue order: higher score first, equal scores by the smaller pair.
+inline bool ranks_below(double s1, std::uint64_t p1, double s2, std::uint64_t p2) {
+  return s1 < s2 || (s1 == s2 && p1 > p2);
+}
+
+/// Max-heap of entries, 4-ary, with the 16-byte keys apart from the stamps: a sift reads four
+/// children from one or two cache lines and half as many levels as a binary heap (the queue
+/// holds millions of entries on large meshes; measured ~2x faster than std::push/pop_heap).
+class EntryHeap {
+ public:
+  [[nodiscard]] bool empty() const { return keys_.empty(); }
+  [[nodiscard]] std::size_t size() const { return keys_.size(); }
+  void reserve(std::size_t n) {
+    keys_.reserve(n);
+    stamps_.reserve(n);
+  }
+  /// Appends without ordering; call heapify() before the next push/pop.
+  void append(const Entry& e) {
+    keys_.push_back({e.score, e.pair});
+    stamps_.push_back({e.ver_lo, e.ver_hi});
+  }
+  void heapify() {
+    const std::size_t n = keys_.size();
+    if (n < 2) return;
+    for (std::size_t i = (n - 2) / 4 + 1; i-- > 0;) sift_down(i);
+  }
+  void push(const Entry& e) {
+    append(e);
+    sift_up(keys_.size() - 1);
+  }
+  [[nodiscard]] Entry top() const { return {keys_[0].score, keys_[0].pair, stamps_[0].ver_lo, stamps_[0].ver_hi}; }
+  void pop() {
+    keys_[0] = keys_.back();
+    stamps_[0] = stamps_.back();
+    keys_.pop_back();
+    stamps_.pop_back();
+    if (!keys_.empty()) sift_down(0);
+  }
+  /// Removes every entry for which `stale` is true, then restores the heap (O(n)).
+  template <class F>
+  void purge(F&& stale) {
+    std::size_t w = 0;
+    for (std::size_t r = 0; r < keys_.size(); ++r) {
+      const Entry e{keys_[r].score, keys_[r].pair, stamps_[r].ver_lo, stamps_[r].ver_hi};
+      if (stale(e)) continue;
+      keys_[w] = keys_[r];
+      stamps_[w++] = stamps_[r];
+    }
+    keys_.resize(w);
+    stamps_.resize(w);
+    heapify();
+  }
+
+ private:
+  struct Key {
+    double score;
+    std::uint64_t pair;
+  };
+  struct Stamps {
+    std::uint32_t ver_lo, ver_hi;
+  };
+  static bool below(const Key& x, const Key& y) { return ranks_below(x.score, x.pair, y.score, y.pair); }
+  void sift_up(std::size_t i) {
+    const Key k = keys_[i];
+    const Stamps st = stamps_[i];
+    while (i > 0) {
+      const std::size_t parent = (i - 1) / 4;
+      if (!below(keys_[parent], k)) break;
+      keys_[i] = keys_[parent];
+      stamps_[i] = stamps_[parent];
+      i = parent;
+    }
+    keys_[i] = k;
+    stamps_[i] = st;
+  }
+  void sift_down(std::size_t i) {
+    const std::size_t n = keys_.size();
+    const Key k = keys_[i];
+    const Stamps st = stamps_[i];
+    for (;;) {
+      const std::size_t first = 4 * i + 1;
+      if (first >= n) break;
+      const std::size_t last = std::min(first + 4, n);
+      std::size_t best = first;
+      for (std::size_t c = first + 1; c < last; ++c)
+        if (below(keys_[best], keys_[c])) best = c;
+      if (!below(k, keys_[best])) break;
+      keys_[i] = keys_[best];
+      stamps_[i] = stamps_[best];
+      i = best;
+    }
+    keys_[i] = k;
+    stamps_[i] = st;
+  }
+  std::vector<Key> keys_;
+  std::vector<Stamps> stamps_;
+};
+
+/// An adjacent cluster and 2 x the length of the manifold mesh edges the two share.
+struct Neighbour {
+  std::uint32_t id;
+  double shared2;
+};
+
+}  // namespace
+
+template <ClusterObjective O>
+ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const ContractionOptions& options,
+                             const ProgressFn& progress) {
+  using Summary = typename O::Summary;
+  using Evaluation = typename O::Evaluation;
+  const std::uint32_t T = tb.triangle_count();
+  ClusterRun run;
+  if (T == 0) {
+    if (progress) progress(1.0);
+    return run;
+  }
+
+  // ---- Clusters: one per triangle. A singleton's member and vertex lists are implicit (no
+  // allocation for the T initial clusters); a merged cluster owns vectors.
+  std::vector<std::uint32_t> single_verts(3 * std::size_t{T});
+  std::vector<std::uint8_t> single_nv(T);
+  std::vector<std::vector<std::uint32_t>> members_vec(T), verts_vec(T);
+  std::vector<Summary> summary;
+  summary.reserve(T);
+  std::vector<std::uint32_t> version(T, 0);
+  std::vector<char> alive(T, 1);
+  std::uint32_t alive_count = T;
+  for (std::uint32_t t = 0; t < T; ++t) {
+    single_nv[t] = static_cast<std::uint8_t>(tb.distinct_vertices(t, &single_verts[3 * std::size_t{t}]));
+    summary.push_back(objective.single(t));
+  }
+  std::vector<std::uint32_t> iota(T);
+  for (std::uint32_t t = 0; t < T; ++t) iota[t] = t;
+  auto members = [&](std::uint32_t c) -> std::span<const std::uint32_t> {
+    return members_vec[c].empty() ? std::span<const std::uint32_t>(&iota[c], 1) : std::span<const std::uint32_t>(members_vec[c]);
+  };
+  auto verts = [&](std::uint32_t c) -> std::span<const std::uint32_t> {
+    return verts_vec[c].empty() ? std::span<const std::uint32_t>(&single_verts[3 * std::size_t{c}], single_nv[c])
+                                : std::span<const std::uint32_t>(verts_vec[c]);
+  };
+
+  // ---- Adjacency: the dual graph (ClusterTables' CSR; the same pairs as build_dual_graph,
+  // tested) as one sorted list per cluster, with 2 x the length of the manifold mesh edges shared.
+  std::vector<std::vector<Neighbour>> adj(T);
+  std::size_t adj_total = 0;  // sum of the list sizes = 2 x live pairs
+  for (std::uint32_t t = 0; t < T; ++t) {
+    const auto nb = tb.neighbours_of(t);
+    auto& list = adj[t];
+    list.reserve(nb.size());
+    for (std::uint32_t u : nb) list.push_back({u, 0.0});  // ascending, distinct
+    if constexpr (O::kUsesBoundary) {
+      std::uint32_t es[3];
+      const int ne = tb.distinct_edges(t, es);
+      for (int i = 0; i < ne; ++i) {
+        if (tb.edges.valence(es[i]) != 2) continue;  // non-manifold edges: counted per merge (nm lists)
+        const auto ts = tb.edges.triangles_of(es[i]);
+        const std::uint32_t u = ts[0] == t ? ts[1] : ts[0];
+        for (Neighbour& n : list)
+          if (n.id == u) n.shared2 += 2.0 * tb.edge_length[es[i]];
+      }
+    }
+    adj_total += list.size();
+  }
+  // Non-manifold edges (valence >= 3) per cluster, and a union-find to count their triangles per
+  // cluster (only needed by objectives that measure the boundary, and only on such meshes).
+  std::vector<std::vector<std::uint32_t>> nm;
+  std::vector<std::uint32_t> parent;
+  bool any_nm = false;
+  if constexpr (O::kUsesBoundary) {
+    for (std::uint32_t e = 0; e < tb.edges.edge_count(); ++e)
+      if (tb.edges.valence(e) >= 3) {
+        if (!any_nm) nm.resize(T);
+        any_nm = true;
+        for (std::uint32_t t : tb.edges.triangles_of(e)) nm[t].push_back(e);
+      }
+    if (any_nm) {
+      parent.resize(T);
+      for (std::uint32_t t = 0; t < T; ++t) parent[t] = t;
+    }
+  }
+  auto find = [&](std::uint32_t t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];  // path halving
+    return t;
+  };
+
+  // ---- MergeContext with vertex stamps (the stamped cluster is cached across calls).
+  std::vector<std::uint32_t> vstamp(tb.positions.size(), 0);
+  std::uint32_t stamp = 0, stamped = 0xffffffffu, stamped_version = 0;
+  std::vector<std::uint32_t> added, shared;
+  auto shared2_of = [&](std::uint32_t a, std::uint32_t b) {
+    const auto& l = adj[a];
+    auto it = std::lower_bound(l.begin(), l.end(), b, [](const Neighbour& n, std::uint32_t id) { return n.id < id; });
+    return it != l.end() && it->id == b ? it->shared2 : 0.0;
+  };
+  // Canonical roles: `a` is the pair's cluster with more vertices (ties: the smaller id), so that
+  // a pair is always evaluated the same way (bit-identical scores at push and at pop).
+  auto roles = [&](std::uint32_t x, std::uint32_t y) {
+    const std::size_t nx = verts(x).size(), ny = verts(y).size();
+    return nx > ny || (nx == ny && x < y) ? std::pair{x, y} : std::pair{y, x};
+  };
+  auto make_ctx = [&](std::uint32_t a, std::uint32_t b, MergeContext& ctx) {
+    const auto va = verts(a);
+    if (stamped != a || stamped_version != version[a]) {
+      if (++stamp == 0) {  // wrapped: clear
+        std::fill(vstamp.begin(), vstamp.end(), 0u);
+        stamp = 1;
+      }
+      for (std::uint32_t v : va) vstamp[v] = stamp;
+      stamped = a;
+      stamped_version = version[a];
+    }
+    added.clear();
+    shared.clear();
+    for (std::uint32_t v : verts(b)) (vstamp[v] == stamp ? shared : added).push_back(v);
+    double removed = 0;
+    if constexpr (O::kUsesBoundary) {
+      removed = shared2_of(a, b);
+      if (any_nm && !nm[a].empty() && !nm[b].empty()) {
+        auto ia = nm[a].begin(), ib = nm[b].begin();
+        while (ia != nm[a].end() && ib != nm[b].end()) {
+          if (*ia < *ib) {
+            ++ia;
+          } else if (*ib < *ia) {
+            ++ib;
+          } else {  // an edge of valence >= 3 used by both: count its triangles in a and in b
+            int na = 0, nb = 0;
+            for (std::uint32_t t : tb.edges.triangles_of(*ia)) {
+              const std::uint32_t r = find(t);
+              na += r == a;
+              nb += r == b;
+            }
+            removed += tb.edge_length[*ia] * ((na == 1 ? 1.0 : 0.0) + (nb == 1 ? 1.0 : 0.0));
+            ++ia;
+            ++ib;
+          }
+        }
+      }
+    }
+    ctx.a_triangles = members(a);
+    ctx.b_triangles = members(b);
+    ctx.a_vertices = va;
+    ctx.added = added;
+    ctx.shared = shared;
+    ctx.vertex_count = static_cast<std::uint32_t>(va.size() + added.size());
+    ctx.boundary_removed = removed;
+  };
+
+  // ---- The queue.
+  EntryHeap heap;
+  heap.reserve(adj_total / 2 + 16);
+  auto make_entry = [&](std::uint32_t x, std::uint32_t y, double score, bool exact) {
+    const std::uint32_t lo = std::min(x, y), hi = std::max(x, y);
+    return Entry{score, (std::uint64_t{lo} << 32) | hi, version[lo], version[hi] | (exact ? kExactBit : 0u)};
+  };
+  // Evaluates the pair (x, y) cheaply; false when it deserves no entry (illegal, or never positive).
+  auto entry_of = [&](std::uint32_t x, std::uint32_t y, Entry& out) {
+    const auto [a, b] = roles(x, y);
+    MergeContext ctx;
+    make_ctx(a, b, ctx);
+    if (!objective.legal(ctx)) return false;
+    const Evaluation ev = objective.evaluate(summary[a], summary[b], ctx, Precision::UpperBoundAllowed);
+    ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
+    if (O::kMergeOnlyPositive && !(ev.score > 0.0)) return false;
+    out = make_entry(a, b, ev.score, ev.exact);
+    return true;
+  };
+  for (std::uint32_t t = 0; t < T; ++t)
+    for (const Neighbour& n : adj[t]) {
+      Entry e;
+      if (n.id > t && entry_of(t, n.id, e)) heap.append(e);
+    }
+  heap.heapify();
+  auto current = [&](const Entry& e) {
+    const auto lo = static_cast<std::uint32_t>(e.pair >> 32), hi = static_cast<std::uint32_t>(e.pair);
+    return alive[lo] && alive[hi] && version[lo] == e.ver_lo && version[hi] == (e.ver_hi & ~kExactBit);
+  };
+
+  // ---- A direct-mapped cache of the exact evaluations of re-inserted entries, so that an entry
+  // that waited does not pay for its evaluation twice when it comes back to the top.
+  struct CacheSlot {
+    std::uint64_t pair = ~std::uint64_t{0};
+    std::uint32_t ver_lo = 0, ver_hi = 0;
+    Evaluation ev{};
+  };
+  constexpr int kCacheBits = 14;
+  std::vector<CacheSlot> cache(std::size_t{1} << kCacheBits);
+
+  // ---- Contract.
+  const std::uint64_t report_every = std::max<std::uint64_t>(1, T / 256);
+  std::uint64_t merges = 0;
+  std::vector<std::uint32_t> union_verts;
+  std::vector<Neighbour> new_adj;
+  while (!heap.empty()) {
+    if (options.target_clusters > 0 && alive_count <= options.target_clusters) break;
+    const Entry top = heap.top();
+    heap.pop();
+    if (!current(top)) continue;  // stale: lazy deletion
+    const auto lo = static_cast<std::uint32_t>(top.pair >> 32), hi = static_cast<std::uint32_t>(top.pair);
+    const auto [a, b] = roles(lo, hi);
+    MergeContext ctx;
+    make_ctx(a, b, ctx);
+    if (!objective.legal(ctx)) continue;  // re-check after the pop
+    const bool exact_key = (top.ver_hi & kExactBit) != 0;
+    CacheSlot& slot = cache[(top.pair * 0x9E3779B97F4A7C15ull) >> (64 - kCacheBits)];
+    Evaluation ev;
+    if (exact_key && slot.pair == top.pair && slot.ver_lo == top.ver_lo && slot.ver_hi == top.ver_hi) {
+      ev = slot.ev;  // evaluated when it was re-inserted (the same value evaluate() gives again)
+    } else {
+      ev = objective.evaluate(summary[a], summary[b], ctx, Precision::Exact);
+      ++run.exact_evaluations;
+    }
+    if (!exact_key) {  // the key was an upper bound
+      if (O::kMergeOnlyPositive && !(ev.score > 0.0)) continue;
+      const Entry exact = make_entry(a, b, ev.score, true);
+      if (!heap.empty() && ranks_below(exact.score, exact.pair, heap.top().score, heap.top().pair)) {
+        heap.push(exact);  // another entry ranks higher: wait
+        slot = {exact.pair, exact.ver_lo, exact.ver_hi, ev};
+        continue;
+      }
+    }
+
+    // Merge hi into lo (the smaller id survives).
+    const std::uint32_t keep = lo, gone = hi;
+    summary[keep] = objective.merge(summary[a], summary[b], ctx, ev);
+    union_verts.clear();
+    const auto va = verts(a);
+    std::merge(va.begin(), va.end(), added.begin(), added.end(), std::back_inserter(union_verts));
+    for (std::uint32_t v : added) vstamp[v] = stamp;  // the stamps now mark the union
+    verts_vec[keep].swap(union_verts);
+    std::vector<std::uint32_t>().swap(verts_vec[gone]);
+    {
+      auto& mk = members_vec[keep];
+      auto& mg = members_vec[gone];
+      if (mk.empty()) mk.push_back(keep);  // was a singleton
+      if (mg.empty()) mg.push_back(gone);
+      if (mk.size() < mg.size()) mk.swap(mg);  // append the smaller list
+      mk.insert(mk.end(), mg.begin(), mg.end());
+      std::vector<std::uint32_t>().swap(mg);
+    }
+    if (any_nm) {
+      if (!nm[gone].empty()) {
+        std::vector<std::uint32_t> u;
+        std::set_union(nm[keep].begin(), nm[keep].end(), nm[gone].begin(), nm[gone].end(), std::back_inserter(u));
+        nm[keep].swap(u);
+        std::vector<std::uint32_t>().swap(nm[gone]);
+      }
+      parent[gone] = keep;
+    }
+
+    // Adjacency: keep's list = lo's and hi's lists without each other, shared lengths summed.
+    new_adj.clear();
+    {
+      const auto& l1 = adj[lo];
+      const auto& l2 = adj[hi];
+      std::size_t i = 0, j = 0;
+      while (i < l1.size() || j < l2.size()) {
+        Neighbour n;
+        if (j == l2.size() || (i < l1.size() && l1[i].id < l2[j].id)) {
+          n = l1[i++];
+        } else if (i == l1.size() || l2[j].id < l1[i].id) {
+          n = l2[j++];
+        } else {
+          n = {l1[i].id, l1[i].shared2 + l2[j].shared2};
+          ++i;
+          ++j;
+        }
+        if (n.id != lo && n.id != hi) new_adj.push_back(n);
+      }
+    }
+    adj_total -= adj[lo].size() + adj[hi].size();
+    for (const Neighbour& n : new_adj) {  // in x's list: drop hi, (re)point lo
+      auto& l = adj[n.id];
+      auto at = [&](std::uint32_t id) {
+        return std::lower_bound(l.begin(), l.end(), id, [](const Neighbour& m, std::uint32_t v) { return m.id < v; });
+      };
+      if (auto it = at(hi); it != l.end() && it->id == hi) {
+        l.erase(it);
+        --adj_total;
+      }
+      if (auto it = at(lo); it != l.end() && it->id == lo) {
+        it->shared2 = n.shared2;
+      } else {
+        l.insert(it, {lo, n.shared2});
+        ++adj_total;
+      }
+    }
+    adj[keep].swap(new_adj);
+    std::vector<Neighbour>().swap(adj[gone]);
+    adj_total += adj[keep].size();
+    alive[gone] = 0;
+    ++version[keep];
+    stamped = keep;  // the stamps mark V(keep) (see above)
+    stamped_version = version[keep];
+    --alive_count;
+    if (options.record_merges) run.merges.push_back({keep, gone, ev.score});
+    if (++merges % report_every == 0 && progress) progress(static_cast<double>(merges) / T);
+
+    for (const Neighbour& n : adj[keep]) {
+      Entry e;
+      if (entry_of(keep, n.id, e)) heap.push(e);
+    }
+    // Purge stale entries once they outnumber the live pairs (memory O(live pairs)).
+    if (heap.size() > adj_total + 1024) heap.purge([&](const Entry& e) { return !current(e); });
+  }
+
+  run.labels.assign(T, 0);
+  for (std::uint32_t c = 0; c < T; ++c)
+    if (alive[c])
+      for (std::uint32_t t : members(c)) run.labels[t] = c;
+  if (progress) progress(1.0);
+  return run;
+}
+
+template ClusterRun contract_clusters<AccObjective>(const ClusterTables&, AccObjective&, const ContractionOptions&,
+                                                    const ProgressFn&);
+template ClusterRun contract_clusters<NaiveObjective>(const ClusterTables&, NaiveObjective&,
+                                                      const ContractionOptions&, const ProgressFn&);
+template ClusterRun contract_clusters<Gwh01Objective>(const ClusterTables&, Gwh01Objective&,
+                                                      const ContractionOptions&, const ProgressFn&);
+
+}  // namespace ptc

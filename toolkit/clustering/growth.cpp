@@ -1,0 +1,251 @@
+#include "toolkit/clustering/growth.h"
+
+#include <algorithm>
+#include <functional>
+#include <utility>
+#include <vector>
+
+#include "toolkit/geometry/morton.h"
+
+namespace ptc {
+
+namespace {
+
+constexpr std::uint32_t kNone = 0xffffffffu;
+
+/// The start rules of growth.h.
+class StartPicker {
+ public:
+  StartPicker(const ClusterTables& tb, StartRule rule) : tb_(&tb), rule_(rule) {
+    const std::uint32_t T = tb.triangle_count();
+    if (rule == StartRule::IndexOrder) return;
+    order_ = morton_order(tb.positions, tb.triangles);
+    if (rule != StartRule::FewestFree) return;
+    rank_.resize(T);
+    free_.resize(T);
+    heap_.reserve(T);
+    for (std::uint32_t r = 0; r < T; ++r) rank_[order_[r]] = r;
+    for (std::uint32_t t = 0; t < T; ++t) {
+      free_[t] = static_cast<std::uint32_t>(tb.neighbours_of(t).size());
+      heap_.push_back(key(free_[t], rank_[t]));
+    }
+    std::make_heap(heap_.begin(), heap_.end(), std::greater<>());
+  }
+
+  /// The next start triangle, or kNone when every triangle is taken.
+  std::uint32_t next(const std::vector<std::uint32_t>& label) {
+    const std::uint32_t T = tb_->triangle_count();
+    switch (rule_) {
+      case StartRule::IndexOrder:
+        while (cursor_ < T && label[cursor_] != kNone) ++cursor_;
+        return cursor_ < T ? cursor_ : kNone;
+      case StartRule::SpatialOrder:
+        while (cursor_ < T && label[order_[cursor_]] != kNone) ++cursor_;
+        return cursor_ < T ? order_[cursor_] : kNone;
+      case StartRule::FewestFree:
+        while (!heap_.empty()) {
+          std::pop_heap(heap_.begin(), heap_.end(), std::greater<>());
+          const std::uint64_t k = heap_.back();
+          heap_.pop_back();
+          const std::uint32_t t = order_[static_cast<std::uint32_t>(k)];
+          if (label[t] == kNone && free_[t] == static_cast<std::uint32_t>(k >> 32)) return t;  // else stale
+        }
+        return kNone;
+    }
+    return kNone;
+  }
+
+  /// Triangle t was just taken (label[t] set): its untaken neighbours lose a free neighbour.
+  void taken(std::uint32_t t, const std::vector<std::uint32_t>& label) {
+    if (rule_ != StartRule::FewestFree) return;
+    for (std::uint32_t u : tb_->neighbours_of(t)) {
+      if (label[u] != kNone) continue;
+      --free_[u];
+      heap_.push_back(key(free_[u], rank_[u]));
+      std::push_heap(heap_.begin(), heap_.end(), std::greater<>());
+    }
+  }
+
+ private:
+  static std::uint64_t key(std::uint32_t free, std::uint32_t rank) { return (std::uint64_t{free} << 32) | rank; }
+
+  const ClusterTables* tb_;
+  StartRule rule_;
+  std::uint32_t cursor_ = 0;
+  std::vector<std::uint32_t> order_, rank_, free_;
+  std::vector<std::uint64_t> heap_;  // min-heap of (free count, Morton rank), lazy deletion
+};
+
+}  // namespace
+
+template <ClusterObjective O>
+ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOptions& options,
+                         const ProgressFn& progress) {
+  using Summary = typename O::Summary;
+  using Evaluation = typename O::Evaluation;
+  const std::uint32_t T = tb.triangle_count();
+  ClusterRun run;
+  run.labels.assign(T, kNone);
+  std::vector<std::uint32_t>& label = run.labels;
+  if (T == 0) {
+    if (progress) progress(1.0);
+    return run;
+  }
+
+  std::vector<std::uint32_t> vstamp(tb.positions.size(), kNone);  // vertex in cluster c <=> vstamp == c
+  std::vector<std::uint32_t> fstamp(T, kNone);                    // triangle in c's frontier <=> fstamp == c
+  struct Candidate {  // a frontier triangle with what does not change while it waits
+    std::uint32_t t;
+    int nv, ne;
+    std::uint32_t v[3];  // distinct vertices
+    std::uint32_t e[3];  // distinct edges
+    std::uint8_t in_k;   // bit i: v[i] is a vertex of the cluster (kept up to date: no stamp lookups)
+    Summary single;
+  };
+  std::vector<Candidate> frontier;
+  std::vector<std::uint32_t> members, verts;
+  // The refinement queue: (key, triangle, frontier slot, precision level of the key).
+  struct Keyed {
+    double score;
+    std::uint32_t t, slot;
+    std::uint8_t level;
+  };
+  constexpr Precision kLevels[] = {Precision::UpperBoundAllowed, Precision::RefinedBound, Precision::Exact};
+  constexpr std::uint8_t kExactLevel = 2;
+  auto ranks_below = [](const Keyed& x, const Keyed& y) {  // queue order: higher key, then lower id
+    return x.score < y.score || (x.score == y.score && x.t > y.t);
+  };
+  std::vector<Keyed> queue;
+  std::vector<Evaluation> evals;
+  StartPicker picker(tb, options.start);
+  const std::uint64_t report_every = std::max<std::uint64_t>(1, T / 256);
+  std::uint64_t taken = 0;
+
+  std::uint32_t cluster = 0;
+  // The MergeContext of k + {c.t}; `added` and `shared` are the caller's buffers.
+  auto make_ctx = [&](const Candidate& c, std::uint32_t* added, std::uint32_t* shared, MergeContext& ctx) {
+    int na = 0, ns = 0;
+    for (int i = 0; i < c.nv; ++i) ((c.in_k >> i) & 1 ? shared[ns++] : added[na++]) = c.v[i];
+    double removed = 0;
+    if constexpr (O::kUsesBoundary) {
+      for (int i = 0; i < c.ne; ++i) {
+        int n = 0;  // triangles of k on this edge
+        for (std::uint32_t u : tb.edges.triangles_of(c.e[i]))
+          if (u != c.t && label[u] == cluster) ++n;
+        if (n > 0) removed += tb.edge_length[c.e[i]] * ((n == 1 ? 1.0 : 0.0) + 1.0);  // [n_k == 1] + [n_d == 1]
+      }
+    }
+    ctx.a_triangles = members;
+    ctx.b_triangles = {&c.t, 1};
+    ctx.a_vertices = verts;
+    ctx.added = {added, static_cast<std::size_t>(na)};
+    ctx.shared = {shared, static_cast<std::size_t>(ns)};
+    ctx.vertex_count = static_cast<std::uint32_t>(verts.size() + static_cast<std::size_t>(na));
+    ctx.boundary_removed = removed;
+  };
+  auto take = [&](std::uint32_t t) {
+    label[t] = cluster;
+    picker.taken(t, label);
+    for (std::uint32_t u : tb.neighbours_of(t))
+      if (label[u] == kNone && fstamp[u] != cluster) {
+        fstamp[u] = cluster;
+        Candidate c{u, 0, 0, {}, {}, 0, objective.single(u)};
+        c.nv = tb.distinct_vertices(u, c.v);
+        c.ne = tb.distinct_edges(u, c.e);
+        for (int i = 0; i < c.nv; ++i)
+          if (vstamp[c.v[i]] == cluster) c.in_k = static_cast<std::uint8_t>(c.in_k | (1u << i));
+        frontier.push_back(std::move(c));
+      }
+    if (++taken % report_every == 0 && progress) progress(static_cast<double>(taken) / T);
+  };
+
+  for (std::uint32_t s; (s = picker.next(label)) != kNone; ++cluster) {
+    frontier.clear();
+    members.assign(1, s);
+    {
+      std::uint32_t v[3];
+      const int nv = tb.distinct_vertices(s, v);
+      verts.assign(v, v + nv);
+      for (int i = 0; i < nv; ++i) vstamp[v[i]] = cluster;
+    }
+    Summary cur = objective.single(s);
+    take(s);
+    evals.resize(std::max(evals.size(), frontier.size()));
+
+    for (;;) {
+      // Best-first refinement: every legal candidate enters with its cheapest bound; the top of
+      // the queue is refined one precision level at a time until the top is exact -- then no
+      // other candidate can beat it (each key bounds its exact score from above; ties by id).
+      queue.clear();
+      for (std::size_t i = 0; i < frontier.size(); ++i) {
+        std::uint32_t added[3], shared[3];
+        MergeContext ctx;
+        make_ctx(frontier[i], added, shared, ctx);
+        if (!objective.legal(ctx)) continue;
+        evals[i] = objective.evaluate(cur, frontier[i].single, ctx, kLevels[0]);
+        ++(evals[i].exact ? run.exact_evaluations : run.bound_evaluations);
+        queue.push_back({evals[i].score, frontier[i].t, static_cast<std::uint32_t>(i),
+                         evals[i].exact ? kExactLevel : std::uint8_t{0}});
+      }
+      // The queue is as long as the frontier (a few dozen at most): a linear scan for the top
+      // beats a heap here.
+      bool has = false;
+      std::size_t top_at = 0;
+      while (!queue.empty()) {
+        top_at = 0;
+        for (std::size_t q = 1; q < queue.size(); ++q)
+          if (ranks_below(queue[top_at], queue[q])) top_at = q;
+        Keyed& top = queue[top_at];
+        if (O::kMergeOnlyPositive && !(top.score > 0.0)) break;  // every key, so every score, is <= 0
+        if (top.level == kExactLevel) {
+          has = true;
+          break;
+        }
+        std::uint32_t added[3], shared[3];
+        MergeContext ctx;
+        make_ctx(frontier[top.slot], added, shared, ctx);
+        const Evaluation& ev = evals[top.slot] =
+            objective.evaluate(cur, frontier[top.slot].single, ctx, kLevels[top.level + 1]);
+        ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
+        top.score = ev.score;
+        top.level = ev.exact ? kExactLevel : static_cast<std::uint8_t>(top.level + 1);
+      }
+      if (!has) break;
+      const std::size_t best_i = queue[top_at].slot;
+      const std::uint32_t best_t = queue[top_at].t;
+      const double best_score = queue[top_at].score;
+      const Evaluation best_ev = evals[best_i];
+
+      // Add best_t to the cluster.
+      const std::uint32_t d = best_t;
+      std::uint32_t added[3], shared[3];
+      MergeContext ctx;
+      make_ctx(frontier[best_i], added, shared, ctx);
+      cur = objective.merge(cur, frontier[best_i].single, ctx, best_ev);
+      for (std::uint32_t v : ctx.added) {
+        vstamp[v] = cluster;
+        verts.insert(std::upper_bound(verts.begin(), verts.end(), v), v);
+        for (Candidate& c : frontier)
+          for (int i = 0; i < c.nv; ++i)
+            if (c.v[i] == v) c.in_k = static_cast<std::uint8_t>(c.in_k | (1u << i));
+      }
+      members.push_back(d);
+      if (options.record_merges) run.merges.push_back({cluster, d, best_score});
+      frontier[best_i] = std::move(frontier.back());
+      frontier.pop_back();
+      take(d);
+      if (evals.size() < frontier.size()) evals.resize(2 * frontier.size());
+    }
+  }
+  if (progress) progress(1.0);
+  return run;
+}
+
+template ClusterRun grow_clusters<AccObjective>(const ClusterTables&, AccObjective&, const GrowthOptions&,
+                                                const ProgressFn&);
+template ClusterRun grow_clusters<NaiveObjective>(const ClusterTables&, NaiveObjective&, const GrowthOptions&,
+                                                  const ProgressFn&);
+template ClusterRun grow_clusters<Gwh01Objective>(const ClusterTables&, Gwh01Objective&, const GrowthOptions&,
+                                                  const ProgressFn&);
+
+}  // namespace ptc

@@ -1,0 +1,139 @@
+// The interface between the greedy clustering algorithms (growth.h, contraction.h) and the
+// objectives that rank their merges (objectives/acc.h, objectives/naive.h, objectives/gwh01.h).
+//
+// A greedy step asks two separate questions about one candidate merge A + B (growth: A = the
+// growing cluster, B = one untaken triangle; contraction: two adjacent clusters), kept apart as
+// OpenMesh's decimater modules keep them (style.md point 3):
+//   legal(ctx)                may this merge happen at all?   (hard limits; MaxCount for Naive/GWH01)
+//   evaluate(a, b, ctx, p)    how good is the merged cluster? (a score: LARGER IS BETTER for all)
+// Both read one MergeContext that the algorithm computes once per candidate (the union's vertex
+// count via vertex stamps, its new and shared vertices, the boundary length that disappears).
+// An objective carries a small mergeable Summary per cluster (sums, a box, a sphere, a quadric),
+// so evaluating a candidate never walks the whole cluster except where that is the exact answer
+// (each objective documents when).
+//
+// Lazy evaluation: below Precision::Exact an objective may return, instead of the exact score, a
+// cheaper UPPER BOUND on it (Evaluation::exact = false). The algorithms only ever need the exact
+// score of the best candidate, so they refine only candidates whose bound can still win (growth:
+// best-first refinement over the candidates of one step, level by level; contraction: bound keys
+// in the priority queue, replaced by exact keys when they reach the top). A valid bound never
+// changes the result: the candidate chosen is the one with the best exact score.
+//
+// Stop rule: O::kMergeOnlyPositive = true (Acc) means "merge only while the best score is > 0";
+// false (Naive, GWH01) means "merge while any legal candidate exists" -- the score then only
+// orders the merges and the hard limit (plus, in contraction, a target cluster count) stops them.
+//
+// Ties: the algorithms break equal scores by ids (growth: lower triangle id; contraction: the
+// pair of cluster ids, lexicographically), so the result is deterministic.
+#pragma once
+
+#include <concepts>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "toolkit/core/types.h"
+#include "toolkit/mesh/mesh.h"
+#include "toolkit/mesh/topology.h"
+
+namespace ptc {
+
+/// Per-mesh data shared by every objective and algorithm, computed once per clustering run
+/// (O(T + V)). Refers to the mesh's positions and triangles: the mesh must outlive it.
+struct ClusterTables {
+  const Mesh* mesh = nullptr;
+  std::span<const Vec3> positions;
+  std::span<const Tri> triangles;
+  std::vector<double> area;    ///< Area_i (one side, L^2) per triangle; 0 for degenerate ones (triangle.h rule)
+  std::vector<Vec3> normal;    ///< unit normal per triangle; the zero vector for degenerate ones
+  EdgeMap edges;               ///< topology.h's edge map (collapsed sides are no edges)
+  std::vector<double> edge_length;  ///< |p(v1) - p(v0)| per mesh edge (L)
+  /// Distinct edge-neighbours of triangle t (triangles sharing a mesh edge with t, t excluded),
+  /// ascending: neighbours[neighbour_offsets[t] .. neighbour_offsets[t + 1]). The dual graph's
+  /// adjacency without parallel edges.
+  std::vector<std::uint32_t> neighbour_offsets;
+  std::vector<std::uint32_t> neighbours;
+  double mean_edge_length = 0;  ///< mean of edge_length over all mesh edges (L); 0 without edges
+
+  [[nodiscard]] static ClusterTables build(const Mesh& mesh);
+
+  [[nodiscard]] std::uint32_t triangle_count() const { return static_cast<std::uint32_t>(triangles.size()); }
+  [[nodiscard]] std::span<const std::uint32_t> neighbours_of(std::uint32_t t) const {
+    return {neighbours.data() + neighbour_offsets[t], neighbours.data() + neighbour_offsets[t + 1]};
+  }
+  /// The distinct vertex ids of triangle t, ascending (1 to 3 of them); returns the count.
+  int distinct_vertices(std::uint32_t t, std::uint32_t out[3]) const;
+  /// The distinct mesh edges of triangle t (0 to 3; a triangle (a, b, a) has one); returns the count.
+  int distinct_edges(std::uint32_t t, std::uint32_t out[3]) const;
+  /// Sum of the lengths of t's distinct edges: the perimeter of the one-triangle cluster {t}
+  /// (gwh01.h's boundary rule).
+  [[nodiscard]] double triangle_perimeter(std::uint32_t t) const;
+};
+
+/// Everything an objective may ask about one candidate merge A + B, computed once by the
+/// algorithm. Vertex lists are distinct vertex ids, ascending.
+struct MergeContext {
+  std::span<const std::uint32_t> a_triangles;  ///< members of A (any order, fixed per cluster)
+  std::span<const std::uint32_t> b_triangles;  ///< members of B
+  std::span<const std::uint32_t> a_vertices;   ///< V(A)
+  std::span<const std::uint32_t> added;        ///< V(B) \ V(A): what the merge adds to A
+  std::span<const std::uint32_t> shared;       ///< V(A) n V(B)
+  std::uint32_t vertex_count = 0;              ///< |V(A u B)| = |V(A)| + |added| (VertexCount of the merged cluster)
+  /// P(A) + P(B) - P(A u B) >= 0 (L): the boundary length the merge removes (computed only for
+  /// objectives with kUsesBoundary = true; 0 otherwise), with the boundary
+  /// rule of gwh01.h (an edge is boundary when exactly one triangle of the cluster uses it). Per
+  /// mesh edge used by both clusters, n_A and n_B triangles of it in A and B: length times
+  /// ([n_A == 1] + [n_B == 1]); for a manifold edge between A and B that is 2 x length.
+  double boundary_removed = 0;
+};
+
+/// How exact evaluate() must be (see the file comment).
+/// Levels, cheapest first; each may return the exact score instead of a bound when that is as
+/// cheap. An objective without a bound at some level returns what the next level returns.
+enum class Precision {
+  UpperBoundAllowed,  ///< an upper bound, O(1)
+  RefinedBound,       ///< a tighter upper bound, at most O(|V(A)|) (still far below the exact cost)
+  Exact,              ///< the exact score
+};
+
+/// What an objective's evaluate() returns at least (each objective adds what its merge() reuses,
+/// e.g. Acc's sphere of the union).
+struct ScoreBase {
+  double score = 0;   ///< exact score, or an upper bound on it when exact = false; never NaN
+  bool exact = true;
+};
+
+template <class O>
+concept ClusterObjective = requires(O& o, const typename O::Summary& s, const MergeContext& ctx,
+                                    const typename O::Evaluation& ev, std::uint32_t t) {
+  { o.single(t) } -> std::same_as<typename O::Summary>;           ///< summary of the cluster {t}
+  { o.legal(ctx) } -> std::same_as<bool>;                         ///< hard limits only
+  { o.evaluate(s, s, ctx, Precision::Exact) } -> std::same_as<typename O::Evaluation>;
+  { o.merge(s, s, ctx, ev) } -> std::same_as<typename O::Summary>;  ///< summary of A u B; ev from evaluate(.., Exact)
+  requires std::derived_from<typename O::Evaluation, ScoreBase>;
+  { O::kMergeOnlyPositive } -> std::convertible_to<bool>;
+  { O::kUsesBoundary } -> std::convertible_to<bool>;  ///< reads MergeContext::boundary_removed
+};
+
+/// One merge performed by an algorithm, for tests and reports.
+/// Growth: `into` = the cluster's index (labels), `from` = the triangle added.
+/// Contraction: `into` = the surviving cluster id (the smaller of the two; a cluster's id is its
+/// smallest triangle id), `from` = the absorbed cluster's id.
+/// `score` = the exact score of the merged cluster (for Acc: Acc(A u B)).
+struct MergeRecord {
+  std::uint32_t into = 0;
+  std::uint32_t from = 0;
+  double score = 0;
+};
+
+/// What growth and contraction return: one cluster label per triangle (growth: cluster index in
+/// creation order; contraction: the cluster's smallest triangle id) and, on request, the merges
+/// in the order they happened. clustering_from_labels turns the labels into a Clustering.
+struct ClusterRun {
+  std::vector<std::uint32_t> labels;
+  std::vector<MergeRecord> merges;
+  std::uint64_t exact_evaluations = 0;  ///< evaluate(.., Exact) calls (work counter for the benchmark)
+  std::uint64_t bound_evaluations = 0;  ///< evaluate(.., UpperBoundAllowed) calls that returned a bound
+};
+
+}  // namespace ptc

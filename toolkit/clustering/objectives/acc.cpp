@@ -1,0 +1,431 @@
+#include "toolkit/clustering/objectives/acc.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "toolkit/geometry/triangle.h"
+
+namespace ptc {
+
+namespace {
+
+constexpr double kEps = 2.220446049250313e-16;
+
+void require_positive(double v, const char* what) {
+  if (!(v > 0.0) || !std::isfinite(v))
+    throw std::invalid_argument(std::string("AccObjective: ") + what + " must be finite and > 0, got " +
+                                std::to_string(v));
+}
+
+/// cluster_metrics' local origin: per axis 0 when the box touches or straddles 0, else its minimum.
+Vec3 local_origin(const Box3& box) {
+  Vec3 o;
+  for (int k = 0; k < 3; ++k) o[k] = (box.lo[k] <= 0.0 && box.hi[k] >= 0.0) ? 0.0 : box.lo[k];
+  return o;
+}
+
+double max_abs(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
+
+/// Absolute slack for tests on sphere centers stored in absolute coordinates: the center is
+/// rounded to ulp(|c|) when translated back from the local frame (cluster_metrics does the same),
+/// so geometric predicates on it are only decided beyond a few ulps of the coordinates.
+double center_slack(const Vec3& c, const Vec3& p) { return 8.0 * kEps * std::max(max_abs(c), max_abs(p)); }
+
+/// True when the point is inside the sphere by more than the rounding of the test.
+bool surely_inside(const Sphere& s, const Vec3& p) {
+  const double r = s.radius - center_slack(s.center, p);
+  return r > 0.0 && (p - s.center).squaredNorm() * (1.0 + 8.0 * kEps) <= r * r;
+}
+
+/// True when sphere `in` lies inside sphere `out` by more than rounding.
+bool surely_contains(const Sphere& out, const Sphere& in) {
+  return (in.center - out.center).norm() * (1.0 + 4.0 * kEps) + in.radius * (1.0 + 4.0 * kEps) +
+             center_slack(out.center, in.center) <=
+         out.radius;
+}
+
+/// Lower bound of cos(alpha + beta) given cos(alpha) = c1 and cos(beta) = c2 (angles in [0, pi]);
+/// -1 when alpha + beta >= pi.
+double cos_of_sum(double c1, double c2) {
+  c1 = std::clamp(c1, -1.0, 1.0);
+  c2 = std::clamp(c2, -1.0, 1.0);
+  if (c1 + c2 <= 0.0) return -1.0;
+  const double s1 = std::sqrt(std::max(0.0, (1.0 - c1) * (1.0 + c1)));
+  const double s2 = std::sqrt(std::max(0.0, (1.0 - c2) * (1.0 + c2)));
+  return c1 * c2 - s1 * s2;
+}
+
+double sin_of(double c) { return std::sqrt(std::max(0.0, (1.0 - c) * (1.0 + c))); }
+
+/// True when every normal of the part has a non-negative dot product with n (proved by its cone):
+/// cos(angle(axis, n) + half-angle) >= kConeMargin.
+bool certified(const AccObjective::Summary& part, const Vec3& n) {
+  if (part.nonzero == 0) return true;
+  const double c1 = part.cone_axis.dot(n), c2 = part.cone_cos;
+  if (!(c1 > 0.0) || !(c2 > 0.0)) return false;
+  if (c2 >= 1.0) return c1 >= AccObjective::kConeMargin;
+  // c1 c2 - s1 s2 >= margin, s1 = sqrt(1 - c1^2), without the square root: both sides squared.
+  const double lhs = c1 * c2 - AccObjective::kConeMargin;
+  return lhs >= 0.0 && lhs * lhs >= std::max(0.0, (1.0 - c1) * (1.0 + c1)) * (part.cone_sin * part.cone_sin);
+}
+
+void set_cone(AccObjective::Summary& s, const Vec3& axis, double c) {
+  s.cone_axis = axis;
+  s.cone_cos = std::clamp(c, -1.0, 1.0);
+  s.cone_sin = sin_of(s.cone_cos);
+}
+
+}  // namespace
+
+AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& params, const AccTuning& tuning)
+    : tables_(&tables), params_(params), tuning_(tuning) {
+  require_positive(params.max_count, "max_count");
+  require_positive(params.max_size, "max_size");
+  require_positive(params.avg_sa, "avg_sa");
+  minimal_ = params.sphere == SphereMethod::Exact || params.sphere == SphereMethod::Cgal;
+  inv_max_count_ = 1.0 / params.max_count;
+  inv_size_unit_ = 1.0 / (params.max_size * params.avg_sa);
+  triangle_sphere_.assign(tables.triangle_count(), Sphere{Vec3::Zero(), std::numeric_limits<double>::quiet_NaN()});
+}
+
+AccObjective::Summary AccObjective::single(std::uint32_t t) {
+  const ClusterTables& tb = *tables_;
+  Summary s;
+  s.serial = next_serial_++;
+  const Vec3& n = tb.normal[t];
+  if (!n.isZero(0.0)) {
+    s.normal_sum = n;
+    s.area_normal_sum = tb.area[t] * n;
+    s.nonzero = 1;
+    // average_normal would give n / |n|, the same up to an ulp; N_avg of a merged cluster is
+    // always recomputed from the sums, so a singleton's n_avg only serves as its cone's axis.
+    s.n_avg = n;
+    s.fallback = false;
+    set_cone(s, n, 1.0);
+  }
+  s.dop_lo.fill(std::numeric_limits<double>::infinity());
+  s.dop_hi.fill(-std::numeric_limits<double>::infinity());
+  for (std::uint32_t v : tb.triangles[t]) {
+    const Vec3& p = tb.positions[v];
+    s.box.extend(p);
+    if (!tuning_.dop_bound) continue;
+    const double proj[10] = {p.x() + p.y() + p.z(), p.x() + p.y() - p.z(), p.x() - p.y() + p.z(),
+                             -p.x() + p.y() + p.z(), p.x() + p.y(), p.x() - p.y(), p.x() + p.z(), p.x() - p.z(),
+                             p.y() + p.z(), p.y() - p.z()};
+    for (int k = 0; k < 10; ++k) {
+      s.dop_lo[k] = std::min(s.dop_lo[k], proj[k]);
+      s.dop_hi[k] = std::max(s.dop_hi[k], proj[k]);
+    }
+  }
+  s.pending = t;  // the sphere is computed when first needed (growth rarely needs a candidate's)
+  return s;
+}
+
+const Sphere& AccObjective::sphere_of(const Summary& s) {
+  if (s.pending == 0xffffffffu) return s.sphere;
+  Sphere& out = triangle_sphere_[s.pending];
+  if (!std::isnan(out.radius)) return out;
+  const ClusterTables& tb = *tables_;
+  const Vec3 o = local_origin(s.box);
+  if (minimal_) {  // closed form, minimal to rounding (on local coordinates, as cluster_metrics)
+    const Tri& f = tb.triangles[s.pending];
+    out = triangle_min_sphere(tb.positions[f[0]] - o, tb.positions[f[1]] - o, tb.positions[f[2]] - o);
+  } else {  // the method itself: later shortcuts rely on S(k) being the method's sphere of V(k)
+    std::uint32_t v[3];
+    const int nv = tb.distinct_vertices(s.pending, v);
+    Vec3 pts[3];
+    for (int i = 0; i < nv; ++i) pts[i] = tb.positions[v[i]] - o;
+    out = bounding_sphere(params_.sphere, std::span<const Vec3>(pts, static_cast<std::size_t>(nv)));
+  }
+  out.center += o;
+  return out;
+}
+
+double AccObjective::score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg_out) const {
+  // The expressions of cluster_metrics / cluster_acc, from R^2 (bounds come as R^2: no root).
+  const double area_c = std::numbers::pi * r2;
+  const double reg = area_c > 0.0 ? area_p / area_c : 0.0;
+  const double sa = 4.0 * area_c;
+  const double rb = static_cast<double>(vertex_count) * inv_max_count_;  // within an ulp of N_V / MaxCount
+  const double ratio = sa * inv_size_unit_;
+  const double sb = params_.size_bound_mode == SizeBoundMode::Max ? std::max(1.0, ratio) : std::min(1.0, ratio);
+  if (reg_out) *reg_out = reg;
+  const double acc = reg - rb * sb;
+  return std::isnan(acc) ? -std::numeric_limits<double>::infinity() : acc;
+}
+
+Sphere AccObjective::sphere_of_union(const MergeContext& ctx, const Box3& box, const PointFilter* filter) {
+  const Vec3 o = local_origin(box);
+  const auto& pos = tables_->positions;
+  // A point p of A is dropped when |p - c_A| + d_A < keep_from, i.e. |p - c_A|^2 < (keep_from - d_A)^2.
+  const double lim_a = filter ? filter->keep_from - filter->da : -1.0;
+  const double lim_b = filter ? filter->keep_from - filter->db : -1.0;
+  const double lim_a2 = lim_a > 0.0 ? lim_a * lim_a : -1.0, lim_b2 = lim_b > 0.0 ? lim_b * lim_b : -1.0;
+  // Seeds of the warm start (Cgal): the points on (or within 1e-6 of) S(A)'s and S(B)'s spheres.
+  const bool warm = filter && params_.sphere == SphereMethod::Cgal;
+  const double near_a2 = warm ? filter->ra * filter->ra * (1.0 - 1e-6) : 0.0;
+  const double near_b2 = warm ? filter->rb * filter->rb * (1.0 - 1e-6) : 0.0;
+  scratch_points_.clear();
+  scratch_seeds_.clear();
+  auto ia = ctx.a_vertices.begin(), ea = ctx.a_vertices.end();
+  auto ib = ctx.added.begin(), eb = ctx.added.end();
+  while (ia != ea || ib != eb) {  // ascending merge of two disjoint sorted lists
+    const bool from_a = ib == eb || (ia != ea && *ia < *ib);
+    const std::uint32_t v = from_a ? *ia++ : *ib++;
+    if (filter) {
+      const double d2 = (pos[v] - (from_a ? filter->ca : filter->cb)).squaredNorm();
+      if (d2 < (from_a ? lim_a2 : lim_b2)) continue;  // surely inside S(A u B)
+      if (warm && d2 >= (from_a ? near_a2 : near_b2))
+        scratch_seeds_.push_back(static_cast<std::uint32_t>(scratch_points_.size()));
+    }
+    scratch_points_.push_back(pos[v] - o);
+  }
+  ++sphere_computations_;
+  Sphere s = warm && !scratch_seeds_.empty() && scratch_seeds_.size() < scratch_points_.size()
+                 ? warm_min_sphere()
+                 : bounding_sphere(params_.sphere, scratch_points_);
+  s.center += o;
+  return s;
+}
+
+Sphere AccObjective::warm_min_sphere() {
+  // Minimal sphere of scratch_points_ from a few of them (the seeds): min_sphere of the seeds;
+  // if a point lies outside, add the farthest one and repeat. When every point is inside, the
+  // seeds' minimal sphere is the minimal sphere of all (a subset's is never larger), so this is
+  // the same sphere as min_sphere on all points, to rounding (the acceptance test allows
+  // 1e-14 relative). Usually one or two small solves instead of one on the whole set.
+  const std::span<const Vec3> pts = scratch_points_;
+  for (int iter = 0; iter < 8; ++iter) {
+    scratch_seed_points_.clear();
+    for (std::uint32_t i : scratch_seeds_) scratch_seed_points_.push_back(pts[i]);
+    Sphere s = min_sphere(scratch_seed_points_);
+    double far2 = 0;
+    std::uint32_t far = 0;
+    for (std::uint32_t i = 0; i < pts.size(); ++i)
+      if (const double d2 = (pts[i] - s.center).squaredNorm(); d2 > far2) {
+        far2 = d2;
+        far = i;
+      }
+    const double accept = s.radius * (1.0 + 1e-14);
+    if (far2 <= accept * accept) {
+      s.radius = std::max(s.radius, std::sqrt(far2));  // containment of every point, as min_sphere
+      return s;
+    }
+    if (std::find(scratch_seeds_.begin(), scratch_seeds_.end(), far) != scratch_seeds_.end()) break;  // rounding
+    scratch_seeds_.push_back(far);
+  }
+  return min_sphere(pts);
+}
+
+double AccObjective::area_p_of(const Summary& part, std::span<const std::uint32_t> members, const Vec3& n) const {
+  if (part.nonzero == 0) return 0.0;
+  double s = 0;
+  for (std::uint32_t t : members) s += tables_->area[t] * std::abs(n.dot(tables_->normal[t]));
+  return s;
+}
+
+AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary& b, const MergeContext& ctx,
+                                                Precision precision) {
+  const ClusterTables& tb = *tables_;
+  Evaluation ev;
+  ev.box = a.box;
+  ev.box.extend(b.box);
+
+  // N_avg (average_normal's rule), with the recomputation under strong cancellation.
+  const std::uint32_t m = a.nonzero + b.nonzero;
+  Vec3 ns = a.normal_sum + b.normal_sum;
+  double len = ns.norm();  // |ns| <= m: no overflow, so the plain norm (average_normal's hypot agrees to rounding)
+  bool sorted_ready = false;
+  auto sort_members = [&] {
+    if (sorted_ready) return;
+    scratch_ids_.assign(ctx.a_triangles.begin(), ctx.a_triangles.end());
+    scratch_ids_.insert(scratch_ids_.end(), ctx.b_triangles.begin(), ctx.b_triangles.end());
+    std::sort(scratch_ids_.begin(), scratch_ids_.end());
+    sorted_ready = true;
+  };
+  bool recomputed = false;
+  if (m > 0 && len < kRecomputeNormalSum * static_cast<double>(m)) {
+    recomputed = true;
+    sort_members();
+    ns = Vec3::Zero();
+    for (std::uint32_t t : scratch_ids_)
+      if (!tb.normal[t].isZero(0.0)) ns += tb.normal[t];
+    len = safe_norm(ns);  // the same sum and norm as average_normal
+  }
+  ev.normal_sum = ns;
+  if (m > 0 && len > kNormalSumZeroTol * static_cast<double>(m)) {
+    ev.n_avg = recomputed ? Vec3(ns / len) : Vec3(ns * (1.0 / len));  // recomputed: average_normal's exact bits
+    ev.fallback = false;
+  } else {  // rare: the fallback rule needs the members in ascending order
+    sort_members();
+    scratch_normals_.clear();
+    scratch_areas_.clear();
+    for (std::uint32_t t : scratch_ids_) {
+      scratch_normals_.push_back(tb.normal[t]);
+      scratch_areas_.push_back(tb.area[t]);
+    }
+    const NormalAverage na = average_normal(scratch_normals_, scratch_areas_);
+    ev.n_avg = na.n;
+    ev.fallback = na.fallback;
+  }
+
+  // AreaP: the identity when both cones certify it, the sum otherwise.
+  if (!ev.fallback && certified(a, ev.n_avg) && certified(b, ev.n_avg))
+    ev.area_p = std::max(0.0, ev.n_avg.dot(a.area_normal_sum + b.area_normal_sum));
+  else
+    ev.area_p = area_p_of(a, ctx.a_triangles, ev.n_avg) + area_p_of(b, ctx.b_triangles, ev.n_avg);
+
+  // The sphere of the union.
+  bool have = false;
+  PointFilter filter;
+  bool use_filter = false;
+  const Sphere sa = sphere_of(a);
+  if (ctx.added.empty()) {  // same vertex set as A
+    ev.sphere = sa;
+    have = true;
+  } else if (minimal_) {
+    double rb = 0;
+    if (ctx.added.size() == 1) {  // A u B = A u {v}: the point sphere (v, 0) stands for B
+      filter.cb = tb.positions[ctx.added[0]];
+      have = surely_inside(sa, filter.cb);
+      if (!have && tuning_.vertex_memo && memo_serial_ == a.serial)
+        for (const MemoEntry& e : memo_)
+          if (e.vertex == ctx.added[0]) {
+            ev.sphere = e.sphere;
+            have = true;
+            break;
+          }
+      if (have && ev.sphere.is_empty()) ev.sphere = sa;
+    } else {
+      const Sphere& sb = sphere_of(b);
+      filter.cb = sb.center;
+      rb = sb.radius;
+      if (surely_contains(sa, sb)) {
+        ev.sphere = sa;
+        have = true;
+      } else if (surely_contains(sb, sa)) {
+        ev.sphere = sb;
+        have = true;
+      } else if (std::all_of(ctx.added.begin(), ctx.added.end(),
+                             [&](std::uint32_t v) { return surely_inside(sa, tb.positions[v]); })) {
+        ev.sphere = sa;
+        have = true;
+      }
+    }
+    if (!have) {
+      // Bounds on the radius of S(A u B) from the two minimal spheres (see the header), as R^2.
+      filter.ca = sa.center;
+      const double ra = sa.radius;
+      filter.ra = ra;
+      filter.rb = rb;
+      const double d2 = (filter.cb - filter.ca).squaredNorm();
+      double r2;
+      if (rb == 0.0) {  // a point: R >= (d^2 + r_A^2) / (2 d) when d > r_A
+        r2 = d2 > ra * ra ? (d2 + ra * ra) * (d2 + ra * ra) / (4.0 * d2) : ra * ra;
+      } else if (d2 > 0.0) {
+        const double d = std::sqrt(d2);
+        const double x = std::clamp((d2 + rb * rb - ra * ra) / (2.0 * d), 0.0, d);
+        r2 = std::max(ra * ra + x * x, rb * rb + (d - x) * (d - x));
+      } else {
+        r2 = std::max(ra * ra, rb * rb);
+      }
+      // Also R >= half the largest width of the union's box / 26-DOP (two of its points are at
+      // least that far apart; the unnormalised directions have lengths sqrt(3) and sqrt(2)).
+      double half_width = 0.5 * ev.box.extent().maxCoeff();
+      if (tuning_.dop_bound) {
+        auto width = [&](int k) { return std::max(a.dop_hi[k], b.dop_hi[k]) - std::min(a.dop_lo[k], b.dop_lo[k]); };
+        for (int k = 0; k < 4; ++k) half_width = std::max(half_width, width(k) * (0.5 / std::numbers::sqrt3));
+        for (int k = 4; k < 10; ++k) half_width = std::max(half_width, width(k) * (0.5 / std::numbers::sqrt2));
+      }
+      r2 = std::max(r2, half_width * half_width);
+      // RefinedBound, one added vertex v: R >= |v - p| / 2 for every p of A (both are in the
+      // union). For a round cluster the point opposite v makes this nearly (r_A + |v - c_A|) / 2,
+      // the upper limit of R, so the bound becomes almost tight.
+      if (precision == Precision::RefinedBound && ctx.added.size() == 1) {
+        double far2 = 0;
+        for (std::uint32_t u : ctx.a_vertices) far2 = std::max(far2, (tb.positions[u] - filter.cb).squaredNorm());
+        r2 = std::max(r2, 0.25 * far2);
+      }
+      // Shrink R by 1e-12 relative and by the absolute rounding of the centers (`slack`, at most
+      // slack / r_A relative since R >= r_A), so that rounding cannot lift the bound's R above
+      // the computed exact one.
+      const double slack = center_slack(filter.ca, filter.cb);
+      const double shrink = 1.0 - 1e-12 - (ra > 0.0 ? slack / ra : 1.0);
+      const double r2_lb = r2 * shrink * shrink;
+      if (shrink > 0.0 && r2_lb > 0.0 && precision != Precision::Exact) {
+        ev.exact = false;
+        ev.score = score_of(ev.area_p, r2_lb, ctx.vertex_count, nullptr);
+        return ev;
+      }
+      // Points that are surely inside S(A u B) cannot support it: leave them out of the exact
+      // computation (same sphere, fewer points). The center c of S(A u B) satisfies
+      // |c - c_A| <= sqrt(R_ub^2 - r_A^2) (from R^2 >= r_A^2 + |c - c_A|^2 and R <= R_ub), so a
+      // point p of A with |p - c_A| + that < R_lb is strictly inside; the same for B.
+      const double r_lb = std::sqrt(std::max(0.0, r2_lb));
+      const double r_ub = 0.5 * (std::sqrt(d2) + ra + rb) * (1.0 + 1e-12) + slack;
+      filter.da = std::sqrt(std::max(0.0, r_ub * r_ub - ra * ra));
+      filter.db = std::sqrt(std::max(0.0, r_ub * r_ub - rb * rb));
+      filter.keep_from = r_lb * (1.0 - 1e-9) - slack;
+      use_filter = shrink > 0.0 && filter.keep_from > 0.0;
+    }
+  }
+  if (!have) {
+    ev.sphere = sphere_of_union(ctx, ev.box, use_filter ? &filter : nullptr);
+    if (tuning_.vertex_memo && minimal_ && ctx.added.size() == 1) {
+      if (memo_serial_ != a.serial) {
+        memo_.clear();
+        memo_serial_ = a.serial;
+      }
+      memo_.push_back({ctx.added[0], ev.sphere});
+    }
+  }
+  ev.exact = true;
+  ev.score = score_of(ev.area_p, ev.sphere.radius * ev.sphere.radius, ctx.vertex_count, &ev.reg);
+  return ev;
+}
+
+AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, const MergeContext& ctx,
+                                          const Evaluation& ev) {
+  Summary s;
+  s.serial = next_serial_++;
+  if (memo_serial_ == a.serial && !memo_.empty()) {  // carry the memo over to A u B (see the header)
+    std::erase_if(memo_, [&](const MemoEntry& e) {
+      for (std::uint32_t v : ctx.added)
+        if (v == e.vertex || !surely_inside(e.sphere, tables_->positions[v])) return true;
+      return false;
+    });
+    memo_serial_ = s.serial;
+  }
+  s.normal_sum = ev.normal_sum;
+  s.area_normal_sum = a.area_normal_sum + b.area_normal_sum;
+  s.nonzero = a.nonzero + b.nonzero;
+  s.fallback = ev.fallback;
+  s.n_avg = ev.n_avg;
+  s.sphere = ev.sphere;
+  s.box = ev.box;
+  for (int k = 0; k < 10; ++k) {
+    s.dop_lo[k] = std::min(a.dop_lo[k], b.dop_lo[k]);
+    s.dop_hi[k] = std::max(a.dop_hi[k], b.dop_hi[k]);
+  }
+  if (a.nonzero == 0) {
+    set_cone(s, b.cone_axis, b.cone_cos);
+  } else if (b.nonzero == 0) {
+    set_cone(s, a.cone_axis, a.cone_cos);
+  } else {  // a cone around a's axis containing b's cone; widened a little against rounding
+    set_cone(s, a.cone_axis, std::min(a.cone_cos, cos_of_sum(a.cone_axis.dot(b.cone_axis), b.cone_cos) - 1e-12));
+  }
+  if (s.nonzero > 0 && !certified(s, s.n_avg)) {  // rebuild the cone around N_avg (O(k), exact dots)
+    double c = 1.0;
+    for (auto members : {ctx.a_triangles, ctx.b_triangles})
+      for (std::uint32_t t : members)
+        if (!tables_->normal[t].isZero(0.0)) c = std::min(c, s.n_avg.dot(tables_->normal[t]));
+    set_cone(s, s.n_avg, c - 1e-15);
+  }
+  return s;
+}
+
+}  // namespace ptc

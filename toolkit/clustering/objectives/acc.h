@@ -1,0 +1,176 @@
+// Garanzha's objective Acc(k) = reg(k) - regBound(k) * sizeBound(k) (docs/method.md, "Quantities
+// for a cluster k"), as a ClusterObjective (objectives.h). Score = Acc of the merged cluster;
+// no hard limit (legal() is always true); merge only while the best score is > 0.
+//
+// Definitions are those of geometry/cluster_metrics.h, to the bit where it is cheap and to
+// rounding otherwise: N_avg and its fallback rule (average_normal), AreaP, AreaC = pi R^2,
+// regBound = N_V / MaxCount, sizeBound(SA = 4 pi R^2) with SizeBoundMode, and the sphere S(k) of
+// the cluster's distinct vertices by ClusterParams::sphere on cluster-local coordinates (origin
+// per axis 0 when the vertex box straddles 0, else the box minimum; vertices in ascending id
+// order -- exactly as cluster_metrics calls bounding_sphere).
+//
+// What is incremental, and why each shortcut is exact:
+// - sum n_i, sum Area_i n_i, the count of non-zero normals: sums, merged by addition.
+// - AreaP = sum Area_i |N_avg . n_i| = N_avg . sum Area_i n_i WHEN every N_avg . n_i >= 0
+//   (linearity). Each cluster keeps a cone (axis a, cos theta) containing its normals; if the
+//   angle between N_avg and a plus theta is at most 90 degrees (tested as
+//   cos(angle + theta) >= kConeMargin, far above the rounding of the test), every dot product is
+//   >= 0 and the identity holds. Otherwise (normals spread over more than a hemisphere around
+//   N_avg) AreaP is summed over the members, as cluster_metrics does. Either way the value is
+//   the same up to rounding (~k eps relative); clustering_objectives_test measures it.
+// - N_avg: when |sum n_i| < kRecomputeNormalSum * m (m non-zero normals: strong cancellation,
+//   where the incremental sum's rounding would tilt N_avg), sum n_i is recomputed over the
+//   members in ascending triangle id, as cluster_metrics sums it, and the fallback rule of
+//   average_normal (|sum| <= kNormalSumZeroTol * m) is applied to that sum with the same code.
+// - The sphere of A u B, for the minimal-sphere methods (Exact, Cgal):
+//     * B adds no vertex: the vertex set is V(A), so S = S(A) (for every method);
+//     * S(B) inside S(A) (or the reverse), or every added vertex inside S(A): the minimal
+//       sphere of a set does not change when points inside it are added, so S = S(A) (S(B));
+//     * otherwise S is computed from scratch on the sorted union, as cluster_metrics does.
+//   So the value differs from a from-scratch cluster_metrics only by the rounding of the
+//   sphere code (Cgal: ~1e-15 of the extent). For the approximations (Ritter, EPOS) the result
+//   depends on every point, so only the first shortcut applies and the rest is recomputed.
+// - Upper bounds (minimal-sphere methods only; the approximations' radius has no lower bound, so
+//   they always evaluate exactly): Acc decreases as R grows (reg = AreaP / (pi R^2); sizeBound is
+//   non-decreasing in R), so any R_lb <= R gives one. Precision::UpperBoundAllowed: the exact
+//   AreaP (cheap, above) and R >= R_lb, where, with S(A) = (c_A, r_A), S(B) = (c_B, r_B) the MINIMAL spheres and
+//   d = |c_A - c_B|:
+//       R_lb^2 = min over x in [0, d] of max(r_A^2 + x^2, r_B^2 + (d - x)^2).
+//   Proof: c_A lies in the convex hull of A's support points (on its sphere), so for any
+//   center c there is a support point s with (s - c_A).(c - c_A) <= 0, hence
+//   |s - c|^2 >= r_A^2 + |c - c_A|^2; the same for B; the max of the two is smallest for c on
+//   the segment c_A c_B. A single added vertex v (growth) is the sphere (v, 0); then
+//   R_lb = (delta^2 + r_A^2) / (2 delta), delta = |v - c_A|. Also R >= half the union's largest
+//   width along the 13 DOP directions (AccTuning::dop_bound). Precision::RefinedBound adds, for a
+//   single added vertex v, R >= max over p in A of |v - p| / 2 (O(|V(A)|)). Every R_lb is shrunk
+//   by a factor (1 - 1e-12) so that rounding of the computed spheres (~1e-15) cannot make the
+//   bound fall below the computed exact value.
+//
+// Units: Acc is dimensionless; the objective is invariant under rigid motion and uniform scaling.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "toolkit/clustering/objectives.h"
+#include "toolkit/geometry/cluster_metrics.h"
+#include "toolkit/geometry/sphere.h"
+
+namespace ptc {
+
+/// Accelerations of AccObjective that never change a score (each is exact, see the file comment).
+/// Each pays off in one algorithm only, so cluster_mesh picks them per method.
+struct AccTuning {
+  /// Remember S(A u {v}) per added vertex v for the current cluster A and reuse it after A has
+  /// grown, as long as every vertex added to A since lies inside it (it is then still the minimal
+  /// sphere of A u {v}). Minimal-sphere methods only. Growth: B adds at most one vertex, and the
+  /// same candidate vertices come back step after step.
+  bool vertex_memo = false;
+  /// Keep a 26-DOP (extents along 13 directions) per cluster; half its largest width tightens the
+  /// radius bound of two merged clusters (contraction: ~25% fewer exact evaluations on armadillo).
+  /// In growth the diameter bound of Precision::RefinedBound does better and the DOP costs more
+  /// than it saves.
+  bool dop_bound = true;
+
+  [[nodiscard]] static AccTuning for_growth() { return {true, false}; }
+  [[nodiscard]] static AccTuning for_contraction() { return {false, true}; }
+};
+
+class AccObjective {
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+
+ public:
+  static constexpr bool kMergeOnlyPositive = true;
+  static constexpr bool kUsesBoundary = false;
+  /// Certification margin of the AreaP identity (see the file comment): cos(angle + theta) must
+  /// be at least this. The test's own rounding is below 1e-8 rad (sqrt(1 - c^2) near c = 1), so
+  /// a margin of 1e-6 cannot certify a negative dot product.
+  static constexpr double kConeMargin = 1e-6;
+  /// Relative size of |sum n_i| (per non-zero normal) below which sum n_i is recomputed in
+  /// ascending triangle order (see the file comment).
+  static constexpr double kRecomputeNormalSum = 0.05;
+
+  struct Summary {
+    Vec3 normal_sum = Vec3::Zero();       ///< sum of the unit normals n_i (zero normals add nothing)
+    Vec3 area_normal_sum = Vec3::Zero();  ///< sum Area_i n_i (L^2)
+    std::uint32_t nonzero = 0;            ///< number of non-zero normals
+    bool fallback = true;                 ///< N_avg came from average_normal's fallback rule
+    Vec3 n_avg = Vec3::UnitZ();           ///< N_avg(k)
+    Vec3 cone_axis = Vec3::UnitZ();       ///< unit axis of a cone containing every non-zero n_i
+    double cone_cos = 1;                  ///< cos of that cone's half-angle (any value when nonzero = 0)
+    double cone_sin = 0;                  ///< sin of that half-angle
+    Sphere sphere;                        ///< S(k), see the file comment; for a singleton made by single()
+                                          ///< computed on first use (see `pending`), read it via sphere_of()
+    std::uint32_t pending = 0xffffffffu;  ///< singleton whose sphere is not computed yet: its triangle id
+    Box3 box;                             ///< box of the distinct vertices (the sphere's local origin)
+    /// Extent of the vertices along the 4 cube diagonals and the 6 cube edge directions
+    /// (unnormalised, see kDopDirections): with the box a 26-DOP (EPOS-26's directions), merged
+    /// by min/max. Its widths bound the sphere's radius from below.
+    std::array<double, 10> dop_lo, dop_hi;
+    std::uint64_t serial = 0;             ///< unique per summary made by this objective (keys the memo)
+  };
+  struct Evaluation : ScoreBase {
+    Sphere sphere;                ///< S(A u B) (exact evaluations only)
+    Box3 box;                     ///< box of A u B
+    Vec3 n_avg = Vec3::UnitZ();   ///< N_avg(A u B)
+    bool fallback = true;
+    Vec3 normal_sum = Vec3::Zero();  ///< sum n_i of A u B as used (possibly recomputed)
+    double area_p = 0;            ///< AreaP(A u B)
+    double reg = 0;               ///< reg(A u B) (exact evaluations only)
+  };
+
+  /// params: max_count > 0, max_size > 0, avg_sa > 0 (finite), else std::invalid_argument.
+  /// params.sphere is the sphere inside the loop.
+  AccObjective(const ClusterTables& tables, const ClusterParams& params, const AccTuning& tuning = {});
+
+  [[nodiscard]] Summary single(std::uint32_t t);
+  [[nodiscard]] bool legal(const MergeContext&) const { return true; }
+  [[nodiscard]] Evaluation evaluate(const Summary& a, const Summary& b, const MergeContext& ctx, Precision p);
+  [[nodiscard]] Summary merge(const Summary& a, const Summary& b, const MergeContext& ctx, const Evaluation& ev);
+
+  /// S(k) of a summary (computes and caches a singleton's sphere on first use).
+  [[nodiscard]] const Sphere& sphere_of(const Summary& s);
+
+  [[nodiscard]] const ClusterParams& params() const { return params_; }
+  /// True for Exact and Cgal: the sphere is the minimal one (to rounding), so the containment
+  /// shortcuts and the upper bound apply.
+  [[nodiscard]] bool minimal_sphere() const { return minimal_; }
+  /// Spheres computed from scratch so far (work counter for the benchmark).
+  [[nodiscard]] std::uint64_t sphere_computations() const { return sphere_computations_; }
+
+ private:
+  [[nodiscard]] double score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg) const;
+  /// Which points may support S(A u B) (minimal spheres only; see evaluate()).
+  struct PointFilter {
+    Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
+    double ra = 0, rb = 0;  // radii of S(A) and of B's sphere (0 for a single added point)
+    double da = 0, db = 0, keep_from = 0;
+  };
+  [[nodiscard]] Sphere sphere_of_union(const MergeContext& ctx, const Box3& box, const PointFilter* filter);
+  [[nodiscard]] Sphere warm_min_sphere();
+  [[nodiscard]] double area_p_of(const Summary& part, std::span<const std::uint32_t> members, const Vec3& n) const;
+
+  const ClusterTables* tables_;
+  ClusterParams params_;
+  bool minimal_;
+  double inv_max_count_ = 0, inv_size_unit_ = 0;  // 1 / MaxCount, 1 / (MaxSize AvgSA)
+  AccTuning tuning_;
+  std::uint64_t sphere_computations_ = 0;
+  std::uint64_t next_serial_ = 1;
+  struct MemoEntry {
+    std::uint32_t vertex;
+    Sphere sphere;
+  };
+  std::uint64_t memo_serial_ = 0;  // the summary the memo belongs to (0: none)
+  std::vector<MemoEntry> memo_;
+  std::vector<Sphere> triangle_sphere_;  // per triangle, filled on first use (radius NaN = not yet)
+  std::vector<std::uint32_t> scratch_ids_;
+  std::vector<Vec3> scratch_points_, scratch_seed_points_;
+  std::vector<std::uint32_t> scratch_seeds_;
+  std::vector<Vec3> scratch_normals_;
+  std::vector<double> scratch_areas_;
+};
+
+}  // namespace ptc
