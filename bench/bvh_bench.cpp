@@ -2,12 +2,14 @@
 // trace frame and the same rays, in one process, by default on ONE thread.
 //
 //   build-bvh/bin/bvh_bench [MESH] [--levels 2] [--reps 7] [--size 1024] [--run 80]
-//                           [--leaf 8] [--threads 1] [--ct 1] [--ci 0.3]
+//                           [--leaf 8] [--threads 1] [--ct 1] [--ci 0.3] [--meshopt 50]
 //
 // MESH (default: armadillo) is subdivided `levels` times (midpoint; 2 -> 832k triangles for
 // armadillo). Clusters: Morton-ordered runs of `run` triangles (a stand-in until the clustering
-// code is used), one cluster per leaf, tested linearly (the paper) or through a refitted block
-// tree per cluster (see bvh/trace_scene.h). Rays: size x size primary rays of a pinhole camera
+// code is used) and, unless --meshopt 0, meshoptimizer's meshlets made connected
+// (toolkit/clustering/meshopt.h, max_count vertices): compact clusters, as the method expects.
+// One cluster per leaf, tested linearly (the paper) or through a refitted block tree per
+// cluster (see bvh/trace_scene.h). Rays: size x size primary rays of a pinhole camera
 // framing the mesh (looking along -z). Every stage is run `reps` times, configurations
 // interleaved; the table shows median [min, max] (the machine is noisy: read medians).
 // Mismatches: rays whose closest triangle differs from our triangle BVH's (hit vs miss, or
@@ -32,6 +34,7 @@
 #include "bvh/morton_runs.h"
 #include "bvh/trace_scene.h"
 #include "bvh/tracer.h"
+#include "toolkit/clustering/meshopt.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/subdivision.h"
 
@@ -93,7 +96,7 @@ struct Config {
 int main(int argc, char** argv) {
   std::string mesh_path = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
   int levels = 2, reps = 7, size = 1024;
-  unsigned run = 80, threads = 1;
+  unsigned run = 80, threads = 1, meshopt_count = 50;
   SceneConfig tcfg = triangle_scene_defaults(), ccfg = cluster_scene_defaults();
   for (int i = 1; i < argc; ++i) {
     auto value = [&](const char* what) {
@@ -109,6 +112,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--run")) run = static_cast<unsigned>(value("--run"));
     else if (!std::strcmp(argv[i], "--leaf")) tcfg.build.max_leaf_size = static_cast<unsigned>(value("--leaf"));
     else if (!std::strcmp(argv[i], "--threads")) threads = static_cast<unsigned>(value("--threads"));
+    else if (!std::strcmp(argv[i], "--meshopt")) meshopt_count = static_cast<unsigned>(value("--meshopt"));
     else if (!std::strcmp(argv[i], "--ci")) tcfg.build.cost.intersection = ccfg.build.cost.intersection = value("--ci");
     else if (!std::strcmp(argv[i], "--ct")) tcfg.build.cost.traversal = ccfg.build.cost.traversal = value("--ct");
     else if (argv[i][0] != '-') mesh_path = argv[i];
@@ -132,12 +136,20 @@ int main(int argc, char** argv) {
   }
   if (levels > 0) mesh = subdivide(mesh, SubdivisionScheme::Midpoint, levels);
   const MortonRuns runs = morton_runs(mesh, run);
+  Clustering meshlets;
+  if (meshopt_count) {
+    ClusterConfig mc;
+    mc.max_count = meshopt_count;
+    meshlets = meshopt_clusters(mesh, mc);
+  }
   const Vec3 origin = mesh.bounds().center();
   tcfg.origin = ccfg.origin = origin;
   const RayBatch rays = primary_rays(frame_box(mesh.bounds()), size, size);
-  std::printf("mesh %s, %d subdivision levels: %zu triangles, %zu vertices; %zu clusters (Morton runs of %u); "
+  std::printf("mesh %s, %d subdivision levels: %zu triangles, %zu vertices; %zu clusters (Morton runs of %u), "
+              "%zu meshopt clusters (max %u vertices); "
               "%zu rays; %u thread(s); %d reps; SAH traversal %.2f intersection %.2f, triangle leaves <= %u\n\n",
               mesh_path.c_str(), levels, mesh.triangle_count(), mesh.vertex_count(), runs.cluster_count(), run,
+              meshlets.cluster_count(), meshopt_count,
               rays.size(), threads, reps, tcfg.build.cost.traversal, tcfg.build.cost.intersection,
               tcfg.build.max_leaf_size);
   const auto pos = mesh.positions();
@@ -156,21 +168,31 @@ int main(int argc, char** argv) {
   configs.push_back(std::make_unique<Config>(Config{
       "ours_triangles", [=] { ts->update(pos); }, [=, &rays](HitBatch& h) { return trace(ts->data(), rays, h, opt); },
       [=] { return scene_stages(ts->times()); }, {}, {}, {}, {}}));
-  for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
-    SceneConfig c = ccfg;
-    c.cluster_leaf = mode;
-    auto cs = std::make_shared<ClusterScene>(mesh, runs.view(), c);
-    configs.push_back(std::make_unique<Config>(Config{
-        "ours_clusters" + std::to_string(run) + "_" + to_string(mode), [=] { cs->update(pos); },
-        [=, &rays](HitBatch& h) { return trace(cs->data(), rays, h, opt); }, [=] { return scene_stages(cs->times()); },
-        {}, {}, {}, {}}));
-  }
-  for (EmbreeMode mode : {EmbreeMode::StaticMedium, EmbreeMode::DynamicLow, EmbreeMode::DynamicRefit}) {
-    auto es = std::make_shared<EmbreeScene>(mesh, origin, EmbreeConfig{mode, threads});
+  std::vector<std::pair<std::string, ClusterView>> clusterings{{"morton" + std::to_string(run), runs.view()}};
+  if (meshopt_count) clusterings.push_back({"meshopt" + std::to_string(meshopt_count), view_of(meshlets)});
+  for (const auto& [cname, view] : clusterings)
+    for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
+      SceneConfig c = ccfg;
+      c.cluster_leaf = mode;
+      auto cs = std::make_shared<ClusterScene>(mesh, view, c);
+      configs.push_back(std::make_unique<Config>(Config{
+          "ours_" + cname + "_" + to_string(mode), [=] { cs->update(pos); },
+          [=, &rays](HitBatch& h) { return trace(cs->data(), rays, h, opt); },
+          [=] { return scene_stages(cs->times()); }, {}, {}, {}, {}}));
+    }
+  struct EmbreeRun {
+    EmbreeMode mode;
+    std::string isa;
+  };
+  for (const EmbreeRun& er : {EmbreeRun{EmbreeMode::StaticMedium, ""}, EmbreeRun{EmbreeMode::DynamicLow, ""},
+                              EmbreeRun{EmbreeMode::DynamicRefit, ""}, EmbreeRun{EmbreeMode::StaticMedium, "sse2"}}) {
+    const EmbreeMode mode = er.mode;
+    const std::string ename = std::string(to_string(mode)) + (er.isa.empty() ? "" : "_" + er.isa);
+    auto es = std::make_shared<EmbreeScene>(mesh, origin, EmbreeConfig{mode, threads, er.isa});
     if (mode == EmbreeMode::DynamicRefit)
       std::printf("%-30s %-28s %9.2f ms   (first commit, once)\n", to_string(mode), "build", es->last_commit_ms());
     configs.push_back(std::make_unique<Config>(Config{
-        to_string(mode), [=] { es->update(pos); },
+        ename, [=] { es->update(pos); },
         [=, &rays](HitBatch& h) { return es->trace(rays, h, HitMode::Closest, threads); },
         [=] {
           return std::vector<std::pair<std::string, double>>{

@@ -10,6 +10,9 @@
 // (ClusterTables, objective, algorithm, clustering_from_labels) on one thread; each run is repeated
 // --repeats times (default 3) and the fastest is printed (wall clock and this process's CPU time;
 // on a shared machine the minimum is the least disturbed measurement).
+// Work counters: exact_ev / bound_ev = objective evaluations that returned the exact score / an
+// upper bound (objectives.h, "Lazy evaluation"); spheres = Acc spheres computed on a point set
+// (CGAL or the chosen method), the rest came from the shortcuts (acc.h).
 // Sphere table: Acc at MaxCount = MaxSize = 50 with each SphereMethod inside the loop; the final
 // clusters' mean reg and mean Acc are then recomputed with the EXACT sphere (cluster_metrics with
 // SphereMethod::Exact, in parallel; not timed), so the columns show what the cheaper sphere costs
@@ -77,7 +80,7 @@ Result cluster_timed(const Mesh& mesh, ClusterMethod method, ObjectiveKind objec
                      SphereMethod sphere = SphereMethod::Cgal) {
   const auto t0 = Clock::now();
   const double c0 = cpu_seconds();
-  const ClusterTables tables = ClusterTables::build(mesh);
+  const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/objective == ObjectiveKind::Gwh01);
   switch (objective) {
     case ObjectiveKind::Acc: {
       ClusterParams p;

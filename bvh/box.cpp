@@ -1,5 +1,7 @@
 #include "bvh/box.h"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 
 namespace ptc::bvh {
@@ -62,16 +64,44 @@ void frame_positions(std::span<const Vec3> positions, const Vec3& origin, std::v
   for (std::size_t v = 0; v < positions.size(); ++v) out[v] = to_frame(positions[v], origin);
 }
 
+namespace {
+
+// (x, y, z, 0) from a float triple, reading exactly 12 bytes.
+inline __m128 load3(const Vec3f& p) {
+  const __m128 xy = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(p.data())));
+  return _mm_movelh_ps(xy, _mm_load_ss(p.data() + 2));
+}
+
+// next_below / next_above of four finite floats at once (see box.h): on the bit pattern,
+// -1 for positive, +1 for negative values, and +-0 to -+denorm_min.
+inline __m128 widen_down(__m128 x) {
+  const __m128i b = _mm_castps_si128(x);
+  const __m128i step = _mm_or_si128(_mm_slli_epi32(_mm_srai_epi32(b, 31), 1), _mm_set1_epi32(1));  // +1 / -1
+  const __m128 r = _mm_castsi128_ps(_mm_sub_epi32(b, step));
+  const __m128 zero = _mm_cmpeq_ps(x, _mm_setzero_ps());
+  return _mm_or_ps(_mm_andnot_ps(zero, r), _mm_and_ps(zero, _mm_set1_ps(-std::numeric_limits<float>::denorm_min())));
+}
+inline __m128 widen_up(__m128 x) {
+  const __m128i b = _mm_castps_si128(x);
+  const __m128i step = _mm_or_si128(_mm_slli_epi32(_mm_srai_epi32(b, 31), 1), _mm_set1_epi32(1));
+  const __m128 r = _mm_castsi128_ps(_mm_add_epi32(b, step));
+  const __m128 zero = _mm_cmpeq_ps(x, _mm_setzero_ps());
+  return _mm_or_ps(_mm_andnot_ps(zero, r), _mm_and_ps(zero, _mm_set1_ps(std::numeric_limits<float>::denorm_min())));
+}
+
+inline void store_box(Box3f& box, __m128 lo, __m128 hi) {
+  alignas(16) float l[4], h[4];
+  _mm_store_ps(l, widen_down(lo)), _mm_store_ps(h, widen_up(hi));
+  box.lo = {l[0], l[1], l[2]}, box.hi = {h[0], h[1], h[2]};
+}
+
+}  // namespace
+
 std::vector<Box3f> triangle_boxes(std::span<const Vec3f> fp, std::span<const Tri> triangles) {
   std::vector<Box3f> boxes(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
-    const Vec3f& a = fp[triangles[t][0]];
-    const Vec3f& b = fp[triangles[t][1]];
-    const Vec3f& c = fp[triangles[t][2]];
-    for (int k = 0; k < 3; ++k) {
-      boxes[t].lo[k] = next_below(std::min({a[k], b[k], c[k]}));
-      boxes[t].hi[k] = next_above(std::max({a[k], b[k], c[k]}));
-    }
+    const __m128 a = load3(fp[triangles[t][0]]), b = load3(fp[triangles[t][1]]), c = load3(fp[triangles[t][2]]);
+    store_box(boxes[t], _mm_min_ps(_mm_min_ps(a, b), c), _mm_max_ps(_mm_max_ps(a, b), c));
   }
   return boxes;
 }
@@ -82,12 +112,12 @@ void point_group_boxes(std::span<const Vec3f> fp, std::span<const std::uint32_t>
   out.assign(groups, Box3f{});
   for (std::size_t g = 0; g < groups; ++g) {
     if (offsets[g] == offsets[g + 1]) continue;
-    float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+    __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf);
     for (std::uint32_t i = offsets[g]; i < offsets[g + 1]; ++i) {
-      const Vec3f& p = fp[indices[i]];
-      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+      const __m128 p = load3(fp[indices[i]]);
+      lo = _mm_min_ps(lo, p), hi = _mm_max_ps(hi, p);
     }
-    for (int k = 0; k < 3; ++k) out[g].lo[k] = next_below(lo[k]), out[g].hi[k] = next_above(hi[k]);
+    store_box(out[g], lo, hi);
   }
 }
 

@@ -46,7 +46,8 @@ struct EmbreeScene::Impl {
 EmbreeScene::EmbreeScene(const Mesh& mesh, const Vec3& origin, const EmbreeConfig& cfg) : impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
   im.origin = origin;
-  const std::string conf = cfg.threads ? "threads=" + std::to_string(cfg.threads) : std::string();
+  std::string conf = cfg.threads ? "threads=" + std::to_string(cfg.threads) : std::string();
+  if (!cfg.isa.empty()) conf += (conf.empty() ? "isa=" : ",isa=") + cfg.isa;
   im.device = rtcNewDevice(conf.empty() ? nullptr : conf.c_str());
   if (!im.device) throw std::runtime_error("Embree: rtcNewDevice failed");
   im.scene = rtcNewScene(im.device);

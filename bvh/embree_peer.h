@@ -11,6 +11,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include "bvh/tracer.h"
 
@@ -25,6 +26,10 @@ enum class EmbreeMode { StaticMedium, DynamicLow, DynamicRefit };
 struct EmbreeConfig {
   EmbreeMode mode = EmbreeMode::StaticMedium;
   unsigned threads = 0;  ///< Embree worker threads for commits (0: all cores)
+  /// Device ISA ("sse2", "sse4.2", "avx", "avx2", "avx512"); empty: Embree picks the best the
+  /// CPU supports (BVH8 with AVX and above). "sse2" gives the like-for-like comparison with our
+  /// SSE2 BVH4.
+  std::string isa;
 };
 
 class EmbreeScene {

@@ -254,6 +254,20 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
       make_leaf();
       continue;
     }
+    // Early leaf: every split costs at least traversal + intersection * sum_p A(p) w_p / A
+    // (each primitive lies in a child whose area is at least its own), so a leaf that is no
+    // dearer than that bound wins without evaluating any split.
+    if (count <= cfg.max_leaf_size && area > 0.0) {
+      double w = 0.0, aw = 0.0;
+      for (std::uint32_t i = 0; i < count; ++i) {
+        w += r[i].weight;
+        aw += 2.0 * static_cast<double>(half_area(load_lo(r[i]), load_hi(r[i]))) * r[i].weight;
+      }
+      if (m.intersection * w <= m.traversal + m.intersection * aw / area) {
+        make_leaf();
+        continue;
+      }
+    }
 
     // Small nodes: exact sweep over the primitives sorted by centroid on each axis (cheaper than
     // clearing and sweeping bins, and exact). Larger nodes: bins.
@@ -344,10 +358,13 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
         float best_sum = std::numeric_limits<float>::infinity();
         for (int a = 0; a < 3; ++a) {
           std::uint8_t* o = order[a];
-          for (std::uint32_t i = 0; i < count; ++i) {  // insertion sort by (centroid, position)
-            std::uint32_t j = i;
-            while (j > 0 && r[o[j - 1]].c[a] > r[i].c[a]) o[j] = o[j - 1], --j;
-            o[j] = static_cast<std::uint8_t>(i);
+          float cs[kSweepBelow];
+          for (std::uint32_t i = 0; i < count; ++i) cs[i] = r[i].c[a];
+          for (std::uint32_t i = 0; i < count; ++i) {  // rank by (centroid, position), branch-free
+            std::uint32_t rank = 0;
+            for (std::uint32_t j = 0; j < count; ++j)
+              rank += static_cast<std::uint32_t>(cs[j] < cs[i]) | (static_cast<std::uint32_t>(cs[j] == cs[i]) & static_cast<std::uint32_t>(j < i));
+            o[rank] = static_cast<std::uint8_t>(i);
           }
           __m128 lo = inf, hi = ninf;
           std::uint64_t w = 0;

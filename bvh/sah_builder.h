@@ -25,7 +25,7 @@ namespace ptc::bvh {
 struct BuildInput {
   std::span<const Box3f> boxes;
   std::span<const Vec3f> centroids;        ///< a point inside (or at the centre of) each box
-  std::span<const std::uint32_t> weights;  ///< empty: every primitive weighs 1; else n entries >= 1
+  std::span<const std::uint32_t> weights;  ///< empty: every primitive weighs 1; else n entries >= 1, sum < 2^32
 };
 
 struct BuildConfig {
@@ -39,7 +39,11 @@ struct BuildConfig {
 [[nodiscard]] Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg = {});
 
 /// Binned SAH (Wald 2007): centroids are binned into cfg.bins equal bins per axis of the node's
-/// centroid bounds and the bins' boundaries are the candidate planes. O(n log n).
+/// centroid bounds and the bins' boundaries are the candidate planes. Nodes of at most 16
+/// primitives are split by the exact sweep instead (cheaper there, and exact); a node within
+/// max_leaf_size whose leaf cost is below the lower bound traversal + intersection *
+/// sum_p A(p) w(p) / A(node) of every split becomes a leaf without evaluating splits (the same
+/// decision, sooner). Sequential, O(n log n); about 0.3 s for 832k triangles on one core here.
 [[nodiscard]] Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg = {});
 
 }  // namespace ptc::bvh

@@ -25,45 +25,55 @@ Vec3 default_origin(const Mesh& mesh, const SceneConfig& cfg) {
   return b.empty() ? Vec3::Zero() : b.center();
 }
 
-// Corners of triangles ids[0..n) into the blocks starting at `first` (lanes past n: NaN).
-void fill_vertices(std::span<const std::uint32_t> ids, std::span<const Vec3f> fp, std::span<const Tri> tris,
-                   TriBlock* first) {
-  const auto n = static_cast<std::uint32_t>(ids.size());
-  for (std::uint32_t b = 0; b < blocks_for(n); ++b) {
-    TriBlock& blk = first[b];
-    for (std::uint32_t lane = 0; lane < 4; ++lane) {
-      const std::uint32_t i = 4 * b + lane;
-      if (i < n) {
-        const Tri& t = tris[ids[i]];
-        for (int c = 0; c < 3; ++c) {
-          const Vec3f& p = fp[t[c]];
-          blk.v[c][0][lane] = p[0], blk.v[c][1][lane] = p[1], blk.v[c][2][lane] = p[2];
-        }
-      } else {
-        for (int c = 0; c < 3; ++c)
-          for (int a = 0; a < 3; ++a) blk.v[c][a][lane] = std::numeric_limits<float>::quiet_NaN();
-      }
-    }
-  }
+// The frame positions with a NaN sentinel vertex at index V (for padding lanes) and one more
+// element, so that a 16-byte load at any vertex stays inside the array.
+void add_sentinel(std::vector<Vec3f>& fp) {
+  constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+  fp.push_back({nan, nan, nan});
+  fp.push_back({0.0f, 0.0f, 0.0f});
 }
 
-// Corners of every lane's triangle (ids: 4 per block, kNoTriangle = padding, NaN corners).
-void fill_lanes(std::span<const std::uint32_t> ids, std::span<const Vec3f> fp, std::span<const Tri> tris,
-                TriBlock* blocks) {
-  constexpr float nan = std::numeric_limits<float>::quiet_NaN();
-  for (std::size_t b = 0; b < ids.size() / 4; ++b) {
-    TriBlock& blk = blocks[b];
-    for (std::uint32_t lane = 0; lane < 4; ++lane) {
-      const std::uint32_t id = ids[4 * b + lane];
-      if (id != kNoTriangle) {
-        const Tri& t = tris[id];
-        for (int c = 0; c < 3; ++c) {
-          const Vec3f& p = fp[t[c]];
-          blk.v[c][0][lane] = p[0], blk.v[c][1][lane] = p[1], blk.v[c][2][lane] = p[2];
-        }
-      } else {
-        for (int c = 0; c < 3; ++c) blk.v[c][0][lane] = blk.v[c][1][lane] = blk.v[c][2][lane] = nan;
-      }
+// One block from four triangle ids (kNoTriangle: padding): corners gathered with one 16-byte
+// load per vertex and transposed to SoA. When `box` is given it receives the block's exact
+// float box (NaN lanes ignored: _mm_min_ps(x, acc) returns acc for a NaN x).
+inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, TriBlock& out, Box3f* box);
+
+inline void fill_block(const std::uint32_t* ids, std::span<const Tri> tris, const float* fp, std::uint32_t sentinel,
+                       TriBlock& out, Box3f* box) {
+  std::uint32_t v[3][4];
+  for (int l = 0; l < 4; ++l) {
+    if (ids[l] != kNoTriangle) {
+      const Tri& t = tris[ids[l]];
+      v[0][l] = t[0], v[1][l] = t[1], v[2][l] = t[2];
+    } else {
+      v[0][l] = v[1][l] = v[2][l] = sentinel;
+    }
+  }
+  fill_block_corners(v, fp, out, box);
+}
+
+// v[corner][lane]: vertex indices (the sentinel for padding lanes).
+inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, TriBlock& out, Box3f* box) {
+  __m128 lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
+  for (int c = 0; c < 3; ++c) {
+    __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][0])), r1 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][1]));
+    __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][2])), r3 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][3]));
+    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // r0 = x of the 4 lanes, r1 = y, r2 = z
+    _mm_store_ps(out.v[c][0], r0), _mm_store_ps(out.v[c][1], r1), _mm_store_ps(out.v[c][2], r2);
+    if (box) {
+      lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
+      hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
+    }
+  }
+  if (box) {
+    for (int a = 0; a < 3; ++a) {
+      __m128 l = lo[a], h = hi[a];
+      l = _mm_min_ps(l, _mm_shuffle_ps(l, l, _MM_SHUFFLE(1, 0, 3, 2)));
+      l = _mm_min_ps(l, _mm_shuffle_ps(l, l, _MM_SHUFFLE(2, 3, 0, 1)));
+      h = _mm_max_ps(h, _mm_shuffle_ps(h, h, _MM_SHUFFLE(1, 0, 3, 2)));
+      h = _mm_max_ps(h, _mm_shuffle_ps(h, h, _MM_SHUFFLE(2, 3, 0, 1)));
+      box->lo[a] = _mm_cvtss_f32(l), box->hi[a] = _mm_cvtss_f32(h);
     }
   }
 }
@@ -71,25 +81,6 @@ void fill_lanes(std::span<const std::uint32_t> ids, std::span<const Vec3f> fp, s
 void fill_ids(std::span<const std::uint32_t> ids, std::uint32_t* first_id) {
   const auto n = static_cast<std::uint32_t>(ids.size());
   for (std::uint32_t i = 0; i < 4 * blocks_for(n); ++i) first_id[i] = i < n ? ids[i] : kNoTriangle;
-}
-
-// Exact box of a block's float triangles (NaN padding lanes ignored: _mm_min_ps(x, acc)
-// returns acc when x is NaN).
-Box3f block_box(const TriBlock& b) {
-  Box3f box;
-  for (int a = 0; a < 3; ++a) {
-    __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf);
-    for (int c = 0; c < 3; ++c) {
-      const __m128 x = _mm_load_ps(b.v[c][a]);
-      lo = _mm_min_ps(x, lo), hi = _mm_max_ps(x, hi);
-    }
-    lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(1, 0, 3, 2)));
-    lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(2, 3, 0, 1)));
-    hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(1, 0, 3, 2)));
-    hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(2, 3, 0, 1)));
-    box.lo[a] = _mm_cvtss_f32(lo), box.hi[a] = _mm_cvtss_f32(hi);
-  }
-  return box;
 }
 
 }  // namespace
@@ -121,11 +112,14 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
   auto t0 = Clock::now();
   frame_positions(positions, data_.origin, fpos_);
+  const auto V = static_cast<std::uint32_t>(fpos_.size());
+  add_sentinel(fpos_);
+  const std::span<const Vec3f> fp(fpos_.data(), V);
   times_.vertices_ms = ms_since(t0);
 
   t0 = Clock::now();
-  boxes_ = triangle_boxes(fpos_, tris);
-  centroids_ = triangle_centroids(fpos_, tris);
+  boxes_ = triangle_boxes(fp, tris);
+  centroids_ = triangle_centroids(fp, tris);
   times_.boxes_ms = ms_since(t0);
 
   t0 = Clock::now();
@@ -150,8 +144,10 @@ void TriangleScene::update(std::span<const Vec3> positions) {
     for (int k = 0; k < 4; ++k) {
       if (!n.is_leaf(k)) continue;
       const std::span<const std::uint32_t> ids(bvh_.prim_order.data() + n.child[k], n.count[k]);
-      fill_vertices(ids, fpos_, tris, data_.blocks.data() + next);
-      fill_ids(ids, data_.triangle_ids.data() + 4 * std::size_t(next));
+      std::uint32_t* lane_ids = data_.triangle_ids.data() + 4 * std::size_t(next);
+      fill_ids(ids, lane_ids);
+      for (std::uint32_t j = 0; j < blocks_for(n.count[k]); ++j)
+        fill_block(lane_ids + 4 * j, tris, fpos_[0].data(), V, data_.blocks[next + j], nullptr);
       n.child[k] = next;  // direct leaf: count stays the triangle count
       next += blocks_for(n.count[k]);
     }
@@ -283,6 +279,15 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   }
   data_.blocks.resize(lane_ids.size() / 4);
   data_.triangle_ids.assign(lane_ids.begin(), lane_ids.end());
+  // Corner vertex indices per block (read sequentially every frame instead of looking up the
+  // triangles of the lanes, which are scattered over the triangle array).
+  const auto sentinel = static_cast<std::uint32_t>(mesh.vertex_count());
+  corners_.resize(lane_ids.size() * 3);
+  for (std::size_t b = 0; b < lane_ids.size() / 4; ++b)
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t id = lane_ids[4 * b + l];
+      for (int c = 0; c < 3; ++c) corners_[12 * b + 4 * c + l] = id == kNoTriangle ? sentinel : tris[id][c];
+    }
   update(pos);
 }
 
@@ -292,11 +297,20 @@ void ClusterScene::refit_subtrees() {
     WideNode& n = nodes[i];
     for (int k = 0; k < 4; ++k) {
       if (n.is_leaf(k)) {
-        n.set_child_box(k, block_box(data_.blocks[n.child[k]]));
+        n.set_child_box(k, block_boxes_[n.child[k]]);
       } else if (!n.is_empty(k)) {
-        Box3f u;
-        for (int j = 0; j < 4; ++j) u.extend(nodes[n.child[k]].child_box(j));
-        n.set_child_box(k, u);
+        const WideNode& c = nodes[n.child[k]];
+        for (int row = 0; row < 6; ++row) {  // lo rows: min over the 4 children, hi rows: max
+          __m128 x = _mm_load_ps(c.bounds[row]);
+          if (row % 2 == 0) {
+            x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
+            x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
+          } else {
+            x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
+            x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
+          }
+          n.bounds[row][k] = _mm_cvtss_f32(x);
+        }
       }
     }
   }
@@ -307,10 +321,13 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   const std::size_t C = weights_.size();
   auto t0 = Clock::now();
   frame_positions(positions, data_.origin, fpos_);
+  const auto V = static_cast<std::uint32_t>(fpos_.size());
+  add_sentinel(fpos_);
+  const std::span<const Vec3f> fp(fpos_.data(), V);
   times_.vertices_ms = ms_since(t0);
 
   t0 = Clock::now();
-  point_group_boxes(fpos_, vertex_offsets_, vertices_, boxes_);
+  point_group_boxes(fp, vertex_offsets_, vertices_, boxes_);
   centroids_ = box_centers(boxes_);
   times_.boxes_ms = ms_since(t0);
 
@@ -356,7 +373,11 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   times_.collapse_ms = ms_since(t0);
 
   t0 = Clock::now();
-  fill_lanes(data_.triangle_ids, fpos_, tris, data_.blocks.data());
+  const std::size_t nb = data_.blocks.size();
+  block_boxes_.resize(S ? nb : 0);
+  for (std::size_t b = 0; b < nb; ++b)
+    fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners_.data() + 12 * b), fpos_[0].data(),
+                       data_.blocks[b], S ? &block_boxes_[b] : nullptr);
   times_.leaf_data_ms = ms_since(t0);
 
   t0 = Clock::now();

@@ -43,11 +43,21 @@ struct RayState {
   // slab test
   __m128 ox, oy, oz, inx, iny, inz, ifx, ify, ifz;
   int nx, ny, nz, fx, fy, fz;  // float offsets of the near/far rows in WideNode::bounds
-  // watertight test
+  // watertight test: made when the ray reaches its first leaf (most primary rays never do)
+  bool watertight_ready;
   int kx4, ky4, kz4;  // 4 * permuted axes (offsets inside a corner's 3x4 block)
   __m128 okx, oky, okz, sx, sy, sz;
   float tmin, tmax;  // tmax: the best hit so far (closest) or the ray's end
+  Vec3f org, dir;
 };
+
+void prepare_watertight(RayState& r) {
+  const WatertightRay w = make_watertight_ray(r.org, r.dir);
+  r.kx4 = 4 * w.kx, r.ky4 = 4 * w.ky, r.kz4 = 4 * w.kz;
+  r.okx = _mm_set1_ps(r.org[w.kx]), r.oky = _mm_set1_ps(r.org[w.ky]), r.okz = _mm_set1_ps(r.org[w.kz]);
+  r.sx = _mm_set1_ps(w.sx), r.sy = _mm_set1_ps(w.sy), r.sz = _mm_set1_ps(w.sz);
+  r.watertight_ready = true;
+}
 
 struct Result {
   float t = 0, u = 0, v = 0;
@@ -74,10 +84,8 @@ bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax) 
   r.ifx = _mm_set1_ps(inv[0] * kFarScale), r.ify = _mm_set1_ps(inv[1] * kFarScale), r.ifz = _mm_set1_ps(inv[2] * kFarScale);
   r.nx = 4 * near[0], r.ny = 4 * near[1], r.nz = 4 * near[2];
   r.fx = 4 * (near[0] ^ 1), r.fy = 4 * (near[1] ^ 1), r.fz = 4 * (near[2] ^ 1);
-  const WatertightRay w = make_watertight_ray(o, d);
-  r.kx4 = 4 * w.kx, r.ky4 = 4 * w.ky, r.kz4 = 4 * w.kz;
-  r.okx = _mm_set1_ps(o[w.kx]), r.oky = _mm_set1_ps(o[w.ky]), r.okz = _mm_set1_ps(o[w.kz]);
-  r.sx = _mm_set1_ps(w.sx), r.sy = _mm_set1_ps(w.sy), r.sz = _mm_set1_ps(w.sz);
+  r.org = o, r.dir = d;
+  r.watertight_ready = false;
   return true;
 }
 
@@ -160,8 +168,9 @@ struct Flat {  // raw views of TraceData for the hot loop
 // Tests the triangles of one leaf child (direct: `count` triangles from block `ref`;
 // indirect: the ranges ranges[ref .. ref + n)). Returns true for an any-hit query's hit.
 template <bool AnyHit>
-inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, const RayState& r, float& tmax,
+inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, RayState& r, float& tmax,
                            Result& res, std::uint32_t& tris) {
+  if (!r.watertight_ready) [[unlikely]] prepare_watertight(r);
   LeafRange one{ref, (count + 3) / 4, count};
   const LeafRange* ranges = &one;
   std::uint32_t nr = 1;
@@ -179,7 +188,7 @@ inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count
 template <bool AnyHit>
 void traverse(const Flat& d, const RayState& ray, Result& res, StackEntry* stack) {
   if (d.empty) return;
-  const RayState r = ray;  // a local copy: no aliasing with the stack and result stores
+  RayState r = ray;  // a local copy: no aliasing with the stack and result stores
   float tmax = r.tmax;
   __m128 tmax4 = _mm_set1_ps(tmax);
   const __m128 tmin4 = _mm_set1_ps(r.tmin);
@@ -275,6 +284,7 @@ Result trace_single(const TraceData& s, const Flat& f, const Vec3& org, const Ve
 TraceTotals trace(const TraceData& scene, const RayBatch& rays, HitBatch& hits, const TraceOptions& opt) {
   const std::size_t n = rays.size();
   hits.resize(n);
+  if (!opt.counters) hits.nodes_visited.clear(), hits.triangles_tested.clear();
   const Flat f = flat_of(scene);
   const std::size_t ss = stack_size(scene);
   constexpr std::size_t kTile = 64;  // rays per task: 64 * 4 bytes = 4 cache lines per array

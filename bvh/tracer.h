@@ -59,7 +59,7 @@ enum class HitMode { Closest, Any };
 struct TraceOptions {
   HitMode mode = HitMode::Closest;
   unsigned threads = 0;   ///< worker threads; 0 = all cores (oneTBB's default)
-  bool counters = true;   ///< fill nodes_visited / triangles_tested
+  bool counters = true;   ///< fill nodes_visited / triangles_tested (false: those arrays are emptied)
 };
 
 /// Sums over a batch.

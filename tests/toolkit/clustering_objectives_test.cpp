@@ -336,7 +336,7 @@ TEST(AccObjective, ExactScoreEqualsClusterAccFromScratch) {
       const ClusterMetrics cm = cluster_metrics(m, merged(a, b), sm);
       worst = std::max(worst, acc_error(ev.score, cm, p));
       worst_area_p = std::max(worst_area_p, std::abs(ev.area_p - cm.area_p) / cm.area_p);
-      for (Precision pr : {Precision::UpperBoundAllowed, Precision::RefinedBound}) {
+      for (Precision pr : {Precision::UpperBoundAllowed, Precision::RefinedBound, Precision::TightBound}) {
         const auto bound = o.evaluate(sa, sb, c.ctx, pr);
         EXPECT_GE(bound.score, ev.score) << "trial " << i;
         bounded += bound.exact ? 0 : 1;
@@ -351,7 +351,8 @@ TEST(AccObjective, ExactScoreEqualsClusterAccFromScratch) {
 }
 
 // Growth's case: B is one triangle adding at most one vertex; with the vertex memo on, every
-// score still equals the from-scratch value (the memo is exact), also after many additions.
+// score still equals the from-scratch value (the memo is exact), also after many additions; every
+// bound level bounds it, and TightBound's three-point sphere, when it claims exactness, is exact.
 TEST(AccObjective, VertexMemoIsExact) {
   const Mesh m = load("elephant.off");
   const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
@@ -360,6 +361,7 @@ TEST(AccObjective, VertexMemoIsExact) {
   AccObjective o(tb, p, AccTuning::for_growth());
   std::mt19937_64 rng(7);
   double worst = 0;
+  int exact_early = 0;
   for (int cluster = 0; cluster < 5; ++cluster) {
     Ids members{static_cast<std::uint32_t>(rng() % m.triangle_count())};
     auto s = o.single(members[0]);
@@ -374,8 +376,18 @@ TEST(AccObjective, VertexMemoIsExact) {
       for (std::uint32_t d : frontier) {  // evaluate all (fills and uses the memo), as growth does
         Candidate c;
         make_candidate(m, em, members, {d}, c);
+        const ClusterMetrics cm = cluster_metrics(m, merged(members, {d}));
+        for (Precision pr : {Precision::UpperBoundAllowed, Precision::RefinedBound, Precision::TightBound}) {
+          const auto ev = o.evaluate(s, o.single(d), c.ctx, pr);
+          if (ev.exact) {
+            ++exact_early;
+            worst = std::max(worst, acc_error(ev.score, cm, p));
+          } else {
+            EXPECT_GE(ev.score, cluster_acc(cm, p) - 1e-12);
+          }
+        }
         const auto ev = o.evaluate(s, o.single(d), c.ctx, Precision::Exact);
-        worst = std::max(worst, acc_error(ev.score, cluster_metrics(m, merged(members, {d})), p));
+        worst = std::max(worst, acc_error(ev.score, cm, p));
       }
       const std::uint32_t d = frontier[rng() % frontier.size()];
       Candidate c;
@@ -386,6 +398,7 @@ TEST(AccObjective, VertexMemoIsExact) {
     }
   }
   EXPECT_LE(worst, 1e-12);
+  EXPECT_GT(exact_early, 100);  // the cheap exact paths (inside the sphere, memo, three points) ran
 }
 
 // ---- Naive ---------------------------------------------------------------------------------

@@ -133,7 +133,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
                                     "per cluster); got max_count " + std::to_string(config.max_count) +
                                     ", max_size " + std::to_string(config.max_size));
       if (mesh.empty()) return Clustering{};
-      const ClusterTables tables = ClusterTables::build(mesh);
+      const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/false);
       ClusterParams params;
       params.max_count = config.max_count;
       params.max_size = config.max_size;
@@ -148,7 +148,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
     case ObjectiveKind::Naive: {
       if (config.max_count == 0)
         throw std::invalid_argument("cluster_mesh: Naive needs max_count >= 3 (its only limit)");
-      const ClusterTables tables = ClusterTables::build(mesh);
+      const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/false);
       NaiveObjective objective(tables, config.max_count);
       return run_greedy(mesh, tables, objective, config, progress);
     }

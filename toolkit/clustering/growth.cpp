@@ -110,8 +110,9 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
     std::uint32_t t, slot;
     std::uint8_t level;
   };
-  constexpr Precision kLevels[] = {Precision::UpperBoundAllowed, Precision::RefinedBound, Precision::Exact};
-  constexpr std::uint8_t kExactLevel = 2;
+  constexpr Precision kLevels[] = {Precision::UpperBoundAllowed, Precision::RefinedBound, Precision::TightBound,
+                                   Precision::Exact};
+  constexpr std::uint8_t kExactLevel = 3;
   auto ranks_below = [](const Keyed& x, const Keyed& y) {  // queue order: higher key, then lower id
     return x.score < y.score || (x.score == y.score && x.t > y.t);
   };
@@ -182,10 +183,11 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
         MergeContext ctx;
         make_ctx(frontier[i], added, shared, ctx);
         if (!objective.legal(ctx)) continue;
-        evals[i] = objective.evaluate(cur, frontier[i].single, ctx, kLevels[0]);
-        ++(evals[i].exact ? run.exact_evaluations : run.bound_evaluations);
-        queue.push_back({evals[i].score, frontier[i].t, static_cast<std::uint32_t>(i),
-                         evals[i].exact ? kExactLevel : std::uint8_t{0}});
+        const Evaluation ev = objective.evaluate(cur, frontier[i].single, ctx, kLevels[0]);
+        ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
+        if (ev.exact) evals[i] = ev;  // only an exact evaluation can be the answer (merge() reuses it)
+        queue.push_back({ev.score, frontier[i].t, static_cast<std::uint32_t>(i),
+                         ev.exact ? kExactLevel : std::uint8_t{0}});
       }
       // The queue is as long as the frontier (a few dozen at most): a linear scan for the top
       // beats a heap here.
@@ -204,11 +206,11 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
         std::uint32_t added[3], shared[3];
         MergeContext ctx;
         make_ctx(frontier[top.slot], added, shared, ctx);
-        const Evaluation& ev = evals[top.slot] =
-            objective.evaluate(cur, frontier[top.slot].single, ctx, kLevels[top.level + 1]);
+        const Evaluation ev = objective.evaluate(cur, frontier[top.slot].single, ctx, kLevels[top.level + 1]);
         ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
+        if (ev.exact || top.level + 1 == kExactLevel) evals[top.slot] = ev;
         top.score = ev.score;
-        top.level = ev.exact ? kExactLevel : static_cast<std::uint8_t>(top.level + 1);
+        top.level = ev.exact || top.level + 1 == kExactLevel ? kExactLevel : static_cast<std::uint8_t>(top.level + 1);
       }
       if (!has) break;
       const std::size_t best_i = queue[top_at].slot;

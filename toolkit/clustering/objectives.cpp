@@ -6,7 +6,7 @@
 
 namespace ptc {
 
-ClusterTables ClusterTables::build(const Mesh& mesh) {
+ClusterTables ClusterTables::build(const Mesh& mesh, bool edge_lengths) {
   ClusterTables t;
   t.mesh = &mesh;
   t.positions = mesh.positions();
@@ -21,15 +21,17 @@ ClusterTables ClusterTables::build(const Mesh& mesh) {
     t.normal[i] = g.normal;
   }
   t.edges = EdgeMap::build(t.triangles, mesh.vertex_count());
-  const std::size_t E = t.edges.edge_count();
-  t.edge_length.resize(E);
-  double sum = 0;
-  for (std::size_t e = 0; e < E; ++e) {
-    const Edge& ed = t.edges.edge(e);
-    t.edge_length[e] = safe_norm(t.positions[ed.v1] - t.positions[ed.v0]);  // as gwh_terms measures it
-    sum += t.edge_length[e];
+  if (edge_lengths) {
+    const std::size_t E = t.edges.edge_count();
+    t.edge_length.resize(E);
+    double sum = 0;
+    for (std::size_t e = 0; e < E; ++e) {
+      const Edge& ed = t.edges.edge(e);
+      t.edge_length[e] = safe_norm(t.positions[ed.v1] - t.positions[ed.v0]);  // as gwh_terms measures it
+      sum += t.edge_length[e];
+    }
+    t.mean_edge_length = E > 0 ? sum / static_cast<double>(E) : 0.0;
   }
-  t.mean_edge_length = E > 0 ? sum / static_cast<double>(E) : 0.0;
 
   t.neighbour_offsets.assign(T + 1, 0);
   t.neighbours.reserve(3 * T);
@@ -41,9 +43,12 @@ ClusterTables ClusterTables::build(const Mesh& mesh) {
       for (std::uint32_t u : t.edges.triangles_of(e))
         if (u != i) t.neighbours.push_back(u);
     }
-    std::sort(t.neighbours.begin() + static_cast<std::ptrdiff_t>(first), t.neighbours.end());
-    t.neighbours.erase(std::unique(t.neighbours.begin() + static_cast<std::ptrdiff_t>(first), t.neighbours.end()),
-                       t.neighbours.end());
+    // A handful of entries (3 on a manifold mesh): insertion sort, then drop repeats.
+    auto* b = t.neighbours.data() + first;
+    const std::size_t n = t.neighbours.size() - first;
+    for (std::size_t k = 1; k < n; ++k)
+      for (std::size_t j = k; j > 0 && b[j] < b[j - 1]; --j) std::swap(b[j], b[j - 1]);
+    t.neighbours.resize(first + static_cast<std::size_t>(std::unique(b, b + n) - b));
     t.neighbour_offsets[i + 1] = static_cast<std::uint32_t>(t.neighbours.size());
   }
   return t;

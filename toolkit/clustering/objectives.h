@@ -47,15 +47,17 @@ struct ClusterTables {
   std::vector<double> area;    ///< Area_i (one side, L^2) per triangle; 0 for degenerate ones (triangle.h rule)
   std::vector<Vec3> normal;    ///< unit normal per triangle; the zero vector for degenerate ones
   EdgeMap edges;               ///< topology.h's edge map (collapsed sides are no edges)
-  std::vector<double> edge_length;  ///< |p(v1) - p(v0)| per mesh edge (L)
+  std::vector<double> edge_length;  ///< |p(v1) - p(v0)| per mesh edge (L); empty unless built with edge lengths
   /// Distinct edge-neighbours of triangle t (triangles sharing a mesh edge with t, t excluded),
   /// ascending: neighbours[neighbour_offsets[t] .. neighbour_offsets[t + 1]). The dual graph's
   /// adjacency without parallel edges.
   std::vector<std::uint32_t> neighbour_offsets;
   std::vector<std::uint32_t> neighbours;
-  double mean_edge_length = 0;  ///< mean of edge_length over all mesh edges (L); 0 without edges
+  double mean_edge_length = 0;  ///< mean of edge_length over all mesh edges (L); 0 without edges (or lengths)
 
-  [[nodiscard]] static ClusterTables build(const Mesh& mesh);
+  /// edge_lengths: fill edge_length and mean_edge_length (only objectives with kUsesBoundary or
+  /// a length scale need them: GWH01; the perimeter helpers below require them).
+  [[nodiscard]] static ClusterTables build(const Mesh& mesh, bool edge_lengths = true);
 
   [[nodiscard]] std::uint32_t triangle_count() const { return static_cast<std::uint32_t>(triangles.size()); }
   [[nodiscard]] std::span<const std::uint32_t> neighbours_of(std::uint32_t t) const {
@@ -66,7 +68,7 @@ struct ClusterTables {
   /// The distinct mesh edges of triangle t (0 to 3; a triangle (a, b, a) has one); returns the count.
   int distinct_edges(std::uint32_t t, std::uint32_t out[3]) const;
   /// Sum of the lengths of t's distinct edges: the perimeter of the one-triangle cluster {t}
-  /// (gwh01.h's boundary rule).
+  /// (gwh01.h's boundary rule). Requires edge lengths.
   [[nodiscard]] double triangle_perimeter(std::uint32_t t) const;
 };
 
@@ -92,7 +94,8 @@ struct MergeContext {
 /// cheap. An objective without a bound at some level returns what the next level returns.
 enum class Precision {
   UpperBoundAllowed,  ///< an upper bound, O(1)
-  RefinedBound,       ///< a tighter upper bound, at most O(|V(A)|) (still far below the exact cost)
+  RefinedBound,       ///< a tighter upper bound, one O(|V(A)|) pass (still far below the exact cost)
+  TightBound,         ///< a tighter one still, a few O(|V(A)|) passes
   Exact,              ///< the exact score
 };
 

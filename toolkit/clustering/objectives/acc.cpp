@@ -90,6 +90,10 @@ AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& par
   inv_max_count_ = 1.0 / params.max_count;
   inv_size_unit_ = 1.0 / (params.max_size * params.avg_sa);
   triangle_sphere_.assign(tables.triangle_count(), Sphere{Vec3::Zero(), std::numeric_limits<double>::quiet_NaN()});
+  if (tuning_.vertex_memo) {
+    lb_r2_.assign(tables.positions.size(), 0.0);
+    lb_owner_.assign(tables.positions.size(), 0);
+  }
 }
 
 AccObjective::Summary AccObjective::single(std::uint32_t t) {
@@ -131,10 +135,11 @@ const Sphere& AccObjective::sphere_of(const Summary& s) {
   if (!std::isnan(out.radius)) return out;
   const ClusterTables& tb = *tables_;
   const Vec3 o = local_origin(s.box);
-  if (minimal_) {  // closed form, minimal to rounding (on local coordinates, as cluster_metrics)
+  if (params_.sphere == SphereMethod::Cgal) {  // closed form, minimal to rounding (local coordinates)
     const Tri& f = tb.triangles[s.pending];
     out = triangle_min_sphere(tb.positions[f[0]] - o, tb.positions[f[1]] - o, tb.positions[f[2]] - o);
-  } else {  // the method itself: later shortcuts rely on S(k) being the method's sphere of V(k)
+  } else {  // the method itself (Exact: the oracle; approximations: shortcuts rely on S(k) being
+            // the method's sphere of V(k))
     std::uint32_t v[3];
     const int nv = tb.distinct_vertices(s.pending, v);
     Vec3 pts[3];
@@ -228,9 +233,78 @@ double AccObjective::area_p_of(const Summary& part, std::span<const std::uint32_
   return s;
 }
 
+void AccObjective::enter_lineage(const Summary& a) {
+  if (memo_serial_ == a.serial) return;
+  memo_.clear();  // another cluster: nothing remembered applies
+  memo_serial_ = a.serial;
+  ++lineage_;
+}
+
+double AccObjective::known_r2(std::uint32_t v) const { return lb_owner_[v] == lineage_ ? lb_r2_[v] : 0.0; }
+
+void AccObjective::learn_r2(std::uint32_t v, double r2) {
+  if (lb_owner_[v] != lineage_) {
+    lb_owner_[v] = lineage_;
+    lb_r2_[v] = r2;
+  } else {
+    lb_r2_[v] = std::max(lb_r2_[v], r2);
+  }
+}
+
+void AccObjective::remember(const MergeContext& ctx, const Sphere& s) {
+  if (!tuning_.vertex_memo || !minimal_ || ctx.added.size() != 1) return;
+  memo_.push_back({ctx.added[0], s});
+  learn_r2(ctx.added[0], s.radius * s.radius);
+}
+
+bool AccObjective::small_support_sphere(const MergeContext& ctx, const Box3& box, Sphere& out) const {
+  // On cluster-local coordinates, as every sphere here. Three scans of V(A):
+  //   p  = the point farthest from v; D = the sphere with diameter v p;
+  //   q  = the point farthest from D's center: inside D -> D is minimal (a subset's minimal
+  //        sphere that contains every point is the minimal sphere of all);
+  //   T  = triangle_min_sphere(v, p, q) (closed form, minimal to rounding); the point farthest
+  //        from T's center inside -> T is minimal; otherwise T's radius is a lower bound.
+  // "Inside" allows 1e-14 relative, and the radius is then raised to the farthest point, as
+  // min_sphere does: the result agrees with min_sphere on all points to ~1e-14.
+  const auto& pos = tables_->positions;
+  const Vec3 o = local_origin(box);
+  const Vec3 v = pos[ctx.added[0]] - o;
+  auto farthest = [&](const Vec3& c, double& d2max) {
+    std::uint32_t best = ctx.a_vertices[0];
+    d2max = -1.0;
+    for (std::uint32_t u : ctx.a_vertices)
+      if (const double d2 = (pos[u] - o - c).squaredNorm(); d2 > d2max) {
+        d2max = d2;
+        best = u;
+      }
+    return best;
+  };
+  auto accept = [&](Sphere s, double far2) {
+    const double r = s.radius * (1.0 + 1e-14);
+    if (!(far2 <= r * r)) return false;
+    s.radius = std::max(s.radius, std::sqrt(far2));
+    s.center += o;
+    out = s;
+    return true;
+  };
+  double d2;
+  const Vec3 p = pos[farthest(v, d2)] - o;
+  Sphere s{0.5 * (v + p), 0.5 * std::sqrt(d2)};
+  const Vec3 q = pos[farthest(s.center, d2)] - o;
+  if (accept(s, d2)) return true;
+  s = triangle_min_sphere(v, p, q);
+  farthest(s.center, d2);
+  if (accept(s, d2)) return true;
+  out = s;  // a lower bound only (center meaningless)
+  out.center += o;
+  return false;
+}
+
 AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary& b, const MergeContext& ctx,
                                                 Precision precision) {
   const ClusterTables& tb = *tables_;
+  const bool memo = tuning_.vertex_memo && minimal_ && ctx.added.size() == 1;
+  if (memo) enter_lineage(a);
   Evaluation ev;
   ev.box = a.box;
   ev.box.extend(b.box);
@@ -292,7 +366,7 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
     if (ctx.added.size() == 1) {  // A u B = A u {v}: the point sphere (v, 0) stands for B
       filter.cb = tb.positions[ctx.added[0]];
       have = surely_inside(sa, filter.cb);
-      if (!have && tuning_.vertex_memo && memo_serial_ == a.serial)
+      if (!have && memo)
         for (const MemoEntry& e : memo_)
           if (e.vertex == ctx.added[0]) {
             ev.sphere = e.sphere;
@@ -350,6 +424,29 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
         for (std::uint32_t u : ctx.a_vertices) far2 = std::max(far2, (tb.positions[u] - filter.cb).squaredNorm());
         r2 = std::max(r2, 0.25 * far2);
       }
+      // TightBound, one added vertex v: the minimal sphere of at most three points of the union
+      // (v, the point p of A farthest from v, then the point farthest from their sphere) is a
+      // lower bound -- and the exact sphere when it already contains every point, which is the
+      // common case (see small_support_sphere).
+      if (precision == Precision::TightBound && ctx.added.size() == 1) {
+        Sphere small;  // with SphereMethod::Exact the closed form serves as a bound only
+        if (small_support_sphere(ctx, ev.box, small) && params_.sphere == SphereMethod::Cgal) {
+          ev.sphere = small;
+          have = true;
+        } else {
+          r2 = std::max(r2, small.radius * small.radius);
+        }
+      }
+      if (have) {
+        remember(ctx, ev.sphere);
+        ev.exact = true;
+        ev.score = score_of(ev.area_p, ev.sphere.radius * ev.sphere.radius, ctx.vertex_count, &ev.reg);
+        return ev;
+      }
+      if (memo) {  // a lower bound learnt for A' u {v}, A' a subset of A, holds for A u {v}
+        r2 = std::max(r2, known_r2(ctx.added[0]));
+        learn_r2(ctx.added[0], r2);
+      }
       // Shrink R by 1e-12 relative and by the absolute rounding of the centers (`slack`, at most
       // slack / r_A relative since R >= r_A), so that rounding cannot lift the bound's R above
       // the computed exact one.
@@ -375,13 +472,7 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
   }
   if (!have) {
     ev.sphere = sphere_of_union(ctx, ev.box, use_filter ? &filter : nullptr);
-    if (tuning_.vertex_memo && minimal_ && ctx.added.size() == 1) {
-      if (memo_serial_ != a.serial) {
-        memo_.clear();
-        memo_serial_ = a.serial;
-      }
-      memo_.push_back({ctx.added[0], ev.sphere});
-    }
+    remember(ctx, ev.sphere);
   }
   ev.exact = true;
   ev.score = score_of(ev.area_p, ev.sphere.radius * ev.sphere.radius, ctx.vertex_count, &ev.reg);
@@ -392,7 +483,7 @@ AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, co
                                           const Evaluation& ev) {
   Summary s;
   s.serial = next_serial_++;
-  if (memo_serial_ == a.serial && !memo_.empty()) {  // carry the memo over to A u B (see the header)
+  if (memo_serial_ == a.serial) {  // carry the memo (and the lineage) over to A u B (see the header)
     std::erase_if(memo_, [&](const MemoEntry& e) {
       for (std::uint32_t v : ctx.added)
         if (v == e.vertex || !surely_inside(e.sphere, tables_->positions[v])) return true;

@@ -26,32 +26,49 @@
 //     * B adds no vertex: the vertex set is V(A), so S = S(A) (for every method);
 //     * S(B) inside S(A) (or the reverse), or every added vertex inside S(A): the minimal
 //       sphere of a set does not change when points inside it are added, so S = S(A) (S(B));
-//     * otherwise S is computed from scratch on the sorted union, as cluster_metrics does.
+//     * growth (AccTuning::vertex_memo): S(A' u {v}) computed for an earlier A' of the same
+//       cluster is still S(A u {v}) if every vertex added since lies inside it;
+//     * otherwise S is computed on the sorted union with the points that provably cannot
+//       support it left out (PointFilter, below) and, for Cgal, warm-started from the points on
+//       S(A)'s and S(B)'s spheres (warm_min_sphere: min_sphere of a few seeds, then add the
+//       farthest point while one lies outside; a subset's minimal sphere that contains every
+//       point IS the minimal sphere). Growth's TightBound level often finds it without CGAL as
+//       the minimal sphere of three points (small_support_sphere; Cgal only: with Exact the
+//       oracle itself computes every sphere).
 //   So the value differs from a from-scratch cluster_metrics only by the rounding of the
-//   sphere code (Cgal: ~1e-15 of the extent). For the approximations (Ritter, EPOS) the result
-//   depends on every point, so only the first shortcut applies and the rest is recomputed.
+//   sphere code (Cgal: ~1e-15 of the extent; the warm start accepts 1e-14). For the
+//   approximations (Ritter, EPOS) the result depends on every point, so only the first
+//   shortcut applies and the rest is recomputed on the sorted union, as cluster_metrics does.
 // - Upper bounds (minimal-sphere methods only; the approximations' radius has no lower bound, so
 //   they always evaluate exactly): Acc decreases as R grows (reg = AreaP / (pi R^2); sizeBound is
 //   non-decreasing in R), so any R_lb <= R gives one. Precision::UpperBoundAllowed: the exact
-//   AreaP (cheap, above) and R >= R_lb, where, with S(A) = (c_A, r_A), S(B) = (c_B, r_B) the MINIMAL spheres and
-//   d = |c_A - c_B|:
+//   AreaP (cheap, above) and R >= R_lb, where, with S(A) = (c_A, r_A), S(B) = (c_B, r_B) the
+//   MINIMAL spheres and d = |c_A - c_B|:
 //       R_lb^2 = min over x in [0, d] of max(r_A^2 + x^2, r_B^2 + (d - x)^2).
 //   Proof: c_A lies in the convex hull of A's support points (on its sphere), so for any
 //   center c there is a support point s with (s - c_A).(c - c_A) <= 0, hence
 //   |s - c|^2 >= r_A^2 + |c - c_A|^2; the same for B; the max of the two is smallest for c on
 //   the segment c_A c_B. A single added vertex v (growth) is the sphere (v, 0); then
 //   R_lb = (delta^2 + r_A^2) / (2 delta), delta = |v - c_A|. Also R >= half the union's largest
-//   width along the 13 DOP directions (AccTuning::dop_bound). Precision::RefinedBound adds, for a
-//   single added vertex v, R >= max over p in A of |v - p| / 2 (O(|V(A)|)). Every R_lb is shrunk
-//   by a factor (1 - 1e-12) so that rounding of the computed spheres (~1e-15) cannot make the
-//   bound fall below the computed exact value.
+//   width along the box axes, and along the 13 DOP directions with AccTuning::dop_bound; and,
+//   with AccTuning::vertex_memo, the best bound found for v earlier in the same cluster (a
+//   superset's minimal sphere is never smaller). For a single added vertex v (growth),
+//   Precision::RefinedBound adds R >= max over p in A of |v - p| / 2 (one pass over V(A)), and
+//   Precision::TightBound the radius of the minimal sphere of three points of A u {v} (three
+//   passes; that sphere often contains every point and is then the exact answer). Every R_lb is
+//   shrunk by 1e-12 relative and by the absolute rounding of the sphere centers, so that rounding
+//   of the computed spheres (~1e-15) cannot put the bound below the computed exact value.
+// - Point filter for the exact computation: the center c of S(A u B) satisfies
+//   |c - c_A| <= sqrt(R_ub^2 - r_A^2) (from R^2 >= r_A^2 + |c - c_A|^2 and R <= R_ub =
+//   (d + r_A + r_B) / 2), so a point p of A with |p - c_A| + that < R_lb lies strictly inside
+//   S(A u B) and cannot support it; likewise for B. Dropping such points leaves the minimal
+//   sphere unchanged (it is the minimal sphere of its support points).
 //
 // Units: Acc is dimensionless; the objective is invariant under rigid motion and uniform scaling.
 #pragma once
 
 #include <array>
 #include <cstdint>
-#include <limits>
 #include <vector>
 
 #include "toolkit/clustering/objectives.h"
@@ -67,6 +84,8 @@ struct AccTuning {
   /// grown, as long as every vertex added to A since lies inside it (it is then still the minimal
   /// sphere of A u {v}). Minimal-sphere methods only. Growth: B adds at most one vertex, and the
   /// same candidate vertices come back step after step.
+  /// Also keep, per vertex v, the best lower bound on R(A u {v}) found so far (any superset of A
+  /// has a radius at least as large), which tightens the next steps' O(1) bound for free.
   bool vertex_memo = false;
   /// Keep a 26-DOP (extents along 13 directions) per cluster; half its largest width tightens the
   /// radius bound of two merged clusters (contraction: ~25% fewer exact evaluations on armadillo).
@@ -79,8 +98,6 @@ struct AccTuning {
 };
 
 class AccObjective {
-  static constexpr double kInf = std::numeric_limits<double>::infinity();
-
  public:
   static constexpr bool kMergeOnlyPositive = true;
   static constexpr bool kUsesBoundary = false;
@@ -105,10 +122,11 @@ class AccObjective {
                                           ///< computed on first use (see `pending`), read it via sphere_of()
     std::uint32_t pending = 0xffffffffu;  ///< singleton whose sphere is not computed yet: its triangle id
     Box3 box;                             ///< box of the distinct vertices (the sphere's local origin)
-    /// Extent of the vertices along the 4 cube diagonals and the 6 cube edge directions
-    /// (unnormalised, see kDopDirections): with the box a 26-DOP (EPOS-26's directions), merged
-    /// by min/max. Its widths bound the sphere's radius from below.
-    std::array<double, 10> dop_lo, dop_hi;
+    /// Extent of the vertices along the 4 cube diagonals (x+y+z, x+y-z, x-y+z, -x+y+z) and the 6
+    /// cube edge directions (x+y, x-y, x+z, x-z, y+z, y-z), unnormalised: with the box a 26-DOP
+    /// (EPOS-26's directions), merged by min/max; its widths bound the sphere's radius from
+    /// below. Empty (+inf, -inf) without AccTuning::dop_bound.
+    std::array<double, 10> dop_lo{}, dop_hi{};
     std::uint64_t serial = 0;             ///< unique per summary made by this objective (keys the memo)
   };
   struct Evaluation : ScoreBase {
@@ -150,6 +168,14 @@ class AccObjective {
   };
   [[nodiscard]] Sphere sphere_of_union(const MergeContext& ctx, const Box3& box, const PointFilter* filter);
   [[nodiscard]] Sphere warm_min_sphere();
+  /// Growth's case (one added vertex v): the minimal sphere of A u {v} from at most three of
+  /// its points when that suffices (true, exact to rounding), else a sphere whose radius is a
+  /// lower bound (false). O(|V(A)|).
+  [[nodiscard]] bool small_support_sphere(const MergeContext& ctx, const Box3& box, Sphere& out) const;
+  void remember(const MergeContext& ctx, const Sphere& s);
+  void enter_lineage(const Summary& a);
+  [[nodiscard]] double known_r2(std::uint32_t v) const;
+  void learn_r2(std::uint32_t v, double r2);
   [[nodiscard]] double area_p_of(const Summary& part, std::span<const std::uint32_t> members, const Vec3& n) const;
 
   const ClusterTables* tables_;
@@ -165,6 +191,12 @@ class AccObjective {
   };
   std::uint64_t memo_serial_ = 0;  // the summary the memo belongs to (0: none)
   std::vector<MemoEntry> memo_;
+  // Lower bounds on R(A u {v})^2 per vertex v for the current cluster's lineage (the chain of
+  // summaries merged from one another, so each A is a superset of the earlier ones and a bound
+  // stays valid): lb_r2_[v] counts while lb_owner_[v] == lineage_.
+  std::uint32_t lineage_ = 0;
+  std::vector<double> lb_r2_;
+  std::vector<std::uint32_t> lb_owner_;
   std::vector<Sphere> triangle_sphere_;  // per triangle, filled on first use (radius NaN = not yet)
   std::vector<std::uint32_t> scratch_ids_;
   std::vector<Vec3> scratch_points_, scratch_seed_points_;

@@ -1,0 +1,97 @@
+// Boxes: outward rounding (double -> float), one-ulp widening, containment of both the double
+// and the float triangle, on hard values (zeros, negatives, powers of two, far offsets).
+#include "bvh/box.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "test_util.h"
+
+namespace ptc::bvh {
+namespace {
+
+TEST(Box, RoundingDirections) {
+  for (double x : {0.0, -0.0, 1.0, -1.0, 0.1, -0.1, 1e-45, -1e-45, 1e-50, -1e-50, 3.4e38, -3.4e38, 1e39, -1e39,
+                   16777217.0, -16777217.0, 1e7 + 0.3}) {
+    EXPECT_LE(double(round_down(x)), x) << x;
+    EXPECT_GE(double(round_up(x)), x) << x;
+    // tight: the next float inwards is on the other side (or x is exactly representable)
+    if (double(round_down(x)) != x) EXPECT_GT(double(std::nextafter(round_down(x), kInf)), x) << x;
+    if (double(round_up(x)) != x) EXPECT_LT(double(std::nextafter(round_up(x), -kInf)), x) << x;
+  }
+  EXPECT_EQ(round_down(1.0), 1.0f);
+  EXPECT_EQ(round_up(1.0), 1.0f);
+  EXPECT_EQ(next_below(0.0f), -std::numeric_limits<float>::denorm_min());
+  EXPECT_EQ(next_above(-0.0f), std::numeric_limits<float>::denorm_min());
+  EXPECT_EQ(next_below(1.0f), std::nextafter(1.0f, 0.0f));
+  EXPECT_EQ(next_above(-1.0f), std::nextafter(-1.0f, 0.0f));
+}
+
+TEST(Box, BoxesContainDoubleAndFloatTriangles) {
+  std::mt19937 g(5);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (double scale : {1e-3, 1.0, 1e3}) {
+    for (const Vec3 offset : {Vec3(0, 0, 0), Vec3(1e7, -1e7, 3e6)}) {
+      std::vector<Vec3> pos;
+      std::vector<Tri> tris;
+      for (std::uint32_t t = 0; t < 2000; ++t) {
+        for (int k = 0; k < 3; ++k) pos.push_back(offset + scale * Vec3(U(g), U(g), U(g)));
+        tris.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+      }
+      pos.push_back(Vec3(0, 0, 0));  // an exact zero corner: the widening must cross zero
+      pos.push_back(Vec3(-0.0, 1, 2));
+      pos.push_back(Vec3(1, -0.0, 0));
+      tris.push_back({6000, 6001, 6002});
+      for (const Vec3 origin : {Vec3(0, 0, 0), offset}) {
+        const auto exact = triangle_boxes(pos, tris, origin);
+        std::vector<Vec3f> fp;
+        frame_positions(pos, origin, fp);
+        const auto widened = triangle_boxes(fp, tris);
+        const auto cent = triangle_centroids(fp, tris);
+        std::vector<std::uint32_t> offsets{0}, idx;
+        for (const Tri& t : tris) idx.insert(idx.end(), t.begin(), t.end()), offsets.push_back(std::uint32_t(idx.size()));
+        std::vector<Box3f> groups;
+        point_group_boxes(fp, offsets, idx, groups);
+        for (std::size_t t = 0; t < tris.size(); ++t) {
+          ASSERT_TRUE(widened[t].contains(exact[t])) << t;
+          EXPECT_EQ(groups[t], widened[t]);
+          Box3f c;
+          c.extend(cent[t]);
+          EXPECT_TRUE(widened[t].contains(c));
+          for (std::uint32_t v : tris[t]) {
+            Box3f f;
+            f.extend(fp[v]);
+            EXPECT_TRUE(exact[t].contains(f));  // the float corner is inside the outward-rounded box
+            for (int a = 0; a < 3; ++a) {       // and the double corner too
+              EXPECT_LE(double(exact[t].lo[a]), pos[v][a] - origin[a]);
+              EXPECT_GE(double(exact[t].hi[a]), pos[v][a] - origin[a]);
+              EXPECT_LE(double(widened[t].lo[a]), pos[v][a] - origin[a]);
+              EXPECT_GE(double(widened[t].hi[a]), pos[v][a] - origin[a]);
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(Box, EmptyAndDegenerate) {
+  Box3f e;
+  EXPECT_TRUE(e.empty());
+  EXPECT_EQ(e.surface_area(), 0.0);
+  Box3f p;
+  p.extend(Vec3f{1, 2, 3});
+  EXPECT_FALSE(p.empty());
+  EXPECT_EQ(p.surface_area(), 0.0);
+  EXPECT_TRUE(p.contains(e));
+  EXPECT_TRUE(union_of({}).empty());
+  std::vector<Box3f> g;
+  const std::vector<std::uint32_t> offs{0, 0};
+  point_group_boxes(std::span<const Vec3f>(), offs, {}, g);
+  ASSERT_EQ(g.size(), 1u);
+  EXPECT_TRUE(g[0].empty());
+}
+
+}  // namespace
+}  // namespace ptc::bvh
