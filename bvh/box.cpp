@@ -3,6 +3,7 @@
 #include <emmintrin.h>
 
 #include <algorithm>
+#include <cstring>
 
 namespace ptc::bvh {
 
@@ -68,7 +69,9 @@ namespace {
 
 // (x, y, z, 0) from a float triple, reading exactly 12 bytes.
 inline __m128 load3(const Vec3f& p) {
-  const __m128 xy = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(p.data())));
+  double xy_bits;  // memcpy: a float triple is only 4-byte aligned (compiles to one movsd)
+  std::memcpy(&xy_bits, p.data(), sizeof xy_bits);
+  const __m128 xy = _mm_castpd_ps(_mm_set_sd(xy_bits));
   return _mm_movelh_ps(xy, _mm_load_ss(p.data() + 2));
 }
 
