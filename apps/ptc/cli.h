@@ -1,0 +1,62 @@
+// Shared pieces of the `ptc` command line. Each subcommand lives in its own cli_<name>.cpp and
+// registers itself through a register_<name>() function listed in main.cpp; CLI11 is only
+// included by apps/ptc (through a precompiled header: its headers are expensive).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+namespace ptc::cli {
+
+/// A usage mistake found after parsing (e.g. two options that contradict each other): the
+/// command prints it and exits with code 2, like a parse error.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// What every subcommand shares: the raw argv (recorded in manifests), the --threads value, and
+/// the list of registered subcommands with the function that runs each.
+struct Context {
+  std::vector<std::string> args;
+  int threads = 0;
+  struct Entry {
+    CLI::App* app;
+    std::function<void()> run;
+  };
+  std::vector<Entry> commands;
+
+  /// Adds a subcommand; `run` is called when it was the one given. Options are bound to
+  /// objects the caller keeps alive (typically a shared_ptr captured by `run`).
+  CLI::App* add(CLI::App& app, const std::string& name, const std::string& help, std::function<void()> run) {
+    CLI::App* sub = app.add_subcommand(name, help);
+    commands.push_back({sub, std::move(run)});
+    return sub;
+  }
+};
+
+// Strings from the command line become enums here, at the edge (style.md point 5).
+template <class Parse>
+CLI::Validator enum_validator(std::string name, Parse parse) {
+  return CLI::Validator(
+      [parse, name](std::string& s) -> std::string {
+        return parse(s) ? std::string() : "'" + s + "' is not a valid " + name;
+      },
+      name);
+}
+
+inline void add_threads_option(CLI::App* cmd, int& threads) {
+  cmd->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+}
+
+// One register function per subcommand (cli_<name>.cpp).
+void register_info(CLI::App& app, Context& ctx);
+void register_subdivide(CLI::App& app, Context& ctx);
+void register_spheres(CLI::App& app, Context& ctx);
+void register_cluster(CLI::App& app, Context& ctx);
+
+}  // namespace ptc::cli
