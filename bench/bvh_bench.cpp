@@ -1,20 +1,34 @@
 // Side-by-side: our BVH over triangles and over clusters vs Embree 3, on the same mesh, the same
 // trace frame and the same rays, in one process, by default on ONE thread.
 //
-//   build-bvh/bin/bvh_bench [MESH] [--levels 2] [--reps 7] [--size 1024] [--run 80]
-//                           [--leaf 8] [--threads 1] [--ct 1] [--ci 0.3] [--meshopt 50]
+//   build/bin/bvh_bench [MESH] [--levels 2] [--reps 5] [--size 1024] [--threads 1]
+//                       [--clusters acc,meshopt] [--max-count 50] [--max-size 50]
+//                       [--leaves linear,block_tree] [--leaf 8] [--ct 1] [--ci 0.3]
+//                       [--isa auto|sse2|avx2] [--embree all|none] [--amplitude 0.01]
+//                       [--clock wall|cpu] [--out DIR]
 //
 // MESH (default: armadillo) is subdivided `levels` times (midpoint; 2 -> 832k triangles for
-// armadillo). Clusters: Morton-ordered runs of `run` triangles (a stand-in until the clustering
-// code is used) and, unless --meshopt 0, meshoptimizer's meshlets made connected
-// (toolkit/clustering/meshopt.h, max_count vertices): compact clusters, as the method expects.
-// One cluster per leaf, tested linearly (the paper) or through a refitted block tree per
-// cluster (see bvh/trace_scene.h). Rays: size x size primary rays of a pinhole camera
-// framing the mesh (looking along -z). Every stage is run `reps` times, configurations
-// interleaved; the table shows median [min, max] (the machine is noisy: read medians).
-// Mismatches: rays whose closest triangle differs from our triangle BVH's (hit vs miss, or
-// another triangle at a t differing by more than 1e-5 relative; "ties": another triangle at the
-// same t within that tolerance, e.g. through a shared edge).
+// armadillo). Clusterings (comma list, made once from the rest pose):
+//   acc      cluster_mesh(Growth, Acc, MaxCount = --max-count, MaxSize = --max-size): the method's
+//   meshopt  meshoptimizer's meshlets made connected (max_count vertices), a modern baseline;
+//   morton   Morton-ordered runs of 80 triangles (a spatial stand-in, not connected).
+// Each clustering is traced with one cluster per leaf, tested linearly (the paper) or through a
+// refitted block tree per cluster (see bvh/trace_scene.h).
+// Frames: repetition r animates the rest pose by a smooth non-rigid deformation of amplitude
+// --amplitude * r (of the bounding box size), so Embree's refit and our rebuilds see real motion.
+// Every configuration updates to frame r, then traces the same size x size primary rays
+// (pinhole camera framing the rest pose, looking along -z); configurations are interleaved
+// within a frame. Tables: median [min, max] over frames (the machine is noisy: read medians).
+// Ratios: per-frame update times against each Embree mode's commit (build / refit), trace speed
+// against each Embree mode's rtcIntersect1, measured in the same run.
+// Mismatches (every frame, summed): rays whose closest triangle differs from our triangle BVH's
+// (hit vs miss, or another triangle at a t differing by more than 1e-5 relative; "ties": another
+// triangle at the same t within that tolerance, e.g. through a shared edge).
+// --clock cpu times every stage, commit and trace with the calling thread's CPU time instead of
+// the wall clock (bvh/stage_clock.h; one thread only): on a machine shared with other jobs the
+// wall clock charges their time slices to whichever configuration was running.
+// --out DIR writes DIR/bvh_bench.csv (one row per frame and configuration) and
+// DIR/manifest.json (analysis/manifest.h).
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -26,14 +40,19 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "analysis/csv.h"
+#include "analysis/manifest.h"
+#include "analysis/output_dir.h"
 #include "bvh/camera.h"
 #include "bvh/embree_peer.h"
 #include "bvh/morton_runs.h"
 #include "bvh/trace_scene.h"
 #include "bvh/tracer.h"
+#include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/meshopt.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/subdivision.h"
@@ -48,15 +67,12 @@ struct Stat {
   double median = 0, min = 0, max = 0;
 };
 Stat stat_of(std::vector<double> v) {
+  if (v.empty()) return {};
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return {n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]), v.front(), v.back()};
 }
-double time_ms(const std::function<void()>& f) {
-  const auto t0 = Clock::now();
-  f();
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 void row(const std::string& config, const std::string& what, const std::vector<double>& v) {
   const Stat s = stat_of(v);
   std::printf("%-30s %-28s %9.2f ms   [%.2f, %.2f]\n", config.c_str(), what.c_str(), s.median, s.min, s.max);
@@ -64,175 +80,372 @@ void row(const std::string& config, const std::string& what, const std::vector<d
 
 struct Mismatch {
   std::size_t hit_miss = 0, other_triangle = 0, ties = 0;
-};
-Mismatch compare(const HitBatch& ref, const HitBatch& got) {
-  Mismatch m;
-  for (std::size_t i = 0; i < ref.size(); ++i) {
-    const bool a = ref.triangle[i] != kNoTriangle, b = got.triangle[i] != kNoTriangle;
-    if (a != b) {
-      ++m.hit_miss;
-    } else if (a && ref.triangle[i] != got.triangle[i]) {
-      if (std::abs(ref.t[i] - got.t[i]) <= 1e-5f * std::abs(ref.t[i])) ++m.ties;
-      else ++m.other_triangle;
+  void add(const HitBatch& ref, const HitBatch& got) {
+    for (std::size_t i = 0; i < ref.size(); ++i) {
+      const bool a = ref.triangle[i] != kNoTriangle, b = got.triangle[i] != kNoTriangle;
+      if (a != b) {
+        ++hit_miss;
+      } else if (a && ref.triangle[i] != got.triangle[i]) {
+        if (std::abs(ref.t[i] - got.t[i]) <= 1e-5f * std::abs(ref.t[i])) ++ties;
+        else ++other_triangle;
+      }
     }
   }
-  return m;
-}
+};
 
 // One configuration: how to update it for a frame, how to trace, and its per-stage times.
 struct Config {
   std::string name;
-  std::function<void()> update;
+  bool embree = false;
+  EmbreeMode embree_mode{};
+  std::function<void(std::span<const Vec3>)> update;
   std::function<TraceTotals(HitBatch&)> trace;
   std::function<std::vector<std::pair<std::string, double>>()> stages;
   std::map<std::string, std::vector<double>> times;
-  std::vector<double> trace_ms;
-  TraceTotals totals;
-  Mismatch mismatch;
+  std::vector<double> trace_ms, box_build_ms, total_ms;
+  std::vector<TraceTotals> totals;
+  std::vector<Mismatch> mismatch;  // per frame
 };
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// The rest pose deformed by a smooth non-rigid field of amplitude a (relative to the box size).
+std::vector<Vec3> frame_positions_at(const Mesh& m, double a) {
+  std::vector<Vec3> p(m.positions().begin(), m.positions().end());
+  if (a == 0.0) return p;
+  const Box3 b = m.bounds();
+  const double s = (b.hi - b.lo).maxCoeff();
+  for (Vec3& q : p) {
+    const Vec3 u = (q - b.lo) / s;
+    q += a * s * Vec3(std::sin(3.0 * u.y()), std::sin(3.0 * u.z() + 1.0), std::sin(3.0 * u.x() + 2.0));
+  }
+  return p;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string mesh_path = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
-  int levels = 2, reps = 7, size = 1024;
-  unsigned run = 80, threads = 1, meshopt_count = 50;
+  int levels = 2, reps = 5, size = 1024;
+  unsigned threads = 1, max_count = 50;
+  double max_size = 50, amplitude = 0.01;
+  std::string clusters_arg = "acc,meshopt", leaves_arg = "linear,block_tree", isa_arg = "auto", embree_arg = "all",
+              clock_arg = "wall", out_dir;
   SceneConfig tcfg = triangle_scene_defaults(), ccfg = cluster_scene_defaults();
+  std::vector<std::string> args(argv, argv + argc);
   for (int i = 1; i < argc; ++i) {
-    auto value = [&](const char* what) {
+    auto text = [&](const char* what) -> std::string {
       if (i + 1 >= argc) {
         std::cerr << "bvh_bench: " << what << " needs a value\n";
         std::exit(2);
       }
-      return std::atof(argv[++i]);
+      return argv[++i];
     };
-    if (!std::strcmp(argv[i], "--levels")) levels = static_cast<int>(value("--levels"));
-    else if (!std::strcmp(argv[i], "--reps")) reps = static_cast<int>(value("--reps"));
-    else if (!std::strcmp(argv[i], "--size")) size = static_cast<int>(value("--size"));
-    else if (!std::strcmp(argv[i], "--run")) run = static_cast<unsigned>(value("--run"));
-    else if (!std::strcmp(argv[i], "--leaf")) tcfg.build.max_leaf_size = static_cast<unsigned>(value("--leaf"));
-    else if (!std::strcmp(argv[i], "--threads")) threads = static_cast<unsigned>(value("--threads"));
-    else if (!std::strcmp(argv[i], "--meshopt")) meshopt_count = static_cast<unsigned>(value("--meshopt"));
-    else if (!std::strcmp(argv[i], "--ci")) tcfg.build.cost.intersection = ccfg.build.cost.intersection = value("--ci");
-    else if (!std::strcmp(argv[i], "--ct")) tcfg.build.cost.traversal = ccfg.build.cost.traversal = value("--ct");
-    else if (argv[i][0] != '-') mesh_path = argv[i];
+    auto value = [&](const char* what) {
+      const std::string t = text(what);
+      char* end = nullptr;
+      const double v = std::strtod(t.c_str(), &end);
+      if (end == t.c_str() || *end != '\0' || !std::isfinite(v)) {
+        std::cerr << "bvh_bench: " << what << ": not a number: " << t << "\n";
+        std::exit(2);
+      }
+      return v;
+    };
+    const std::string a = argv[i];
+    if (a == "--levels") levels = static_cast<int>(value("--levels"));
+    else if (a == "--reps") reps = static_cast<int>(value("--reps"));
+    else if (a == "--size") size = static_cast<int>(value("--size"));
+    else if (a == "--leaf") tcfg.build.max_leaf_size = static_cast<unsigned>(value("--leaf"));
+    else if (a == "--threads") threads = static_cast<unsigned>(value("--threads"));
+    else if (a == "--max-count") max_count = static_cast<unsigned>(value("--max-count"));
+    else if (a == "--max-size") max_size = value("--max-size");
+    else if (a == "--amplitude") amplitude = value("--amplitude");
+    else if (a == "--clusters") clusters_arg = text("--clusters");
+    else if (a == "--leaves") leaves_arg = text("--leaves");
+    else if (a == "--isa") isa_arg = text("--isa");
+    else if (a == "--embree") embree_arg = text("--embree");
+    else if (a == "--out") out_dir = text("--out");
+    else if (a == "--clock") clock_arg = text("--clock");
+    else if (a == "--ci") tcfg.build.cost.intersection = ccfg.build.cost.intersection = value("--ci");
+    else if (a == "--ct") tcfg.build.cost.traversal = ccfg.build.cost.traversal = value("--ct");
+    else if (a[0] != '-') mesh_path = a;
     else {
-      std::cerr << "bvh_bench: unknown option " << argv[i] << "\n";
+      std::cerr << "bvh_bench: unknown option " << a << "\n";
       return 2;
     }
   }
-  if (reps < 1 || size < 1 || run < 1 || threads < 1 || tcfg.build.max_leaf_size < 1) {
-    std::cerr << "bvh_bench: counts must be >= 1\n";
+  if (reps < 1 || size < 1 || threads < 1 || tcfg.build.max_leaf_size < 1 || max_count < 1 || levels < 0) {
+    std::cerr << "bvh_bench: counts must be >= 1 (levels >= 0)\n";
     return 2;
+  }
+  TraceIsa isa = TraceIsa::Auto;
+  if (isa_arg == "sse2") isa = TraceIsa::Sse2;
+  else if (isa_arg == "avx2") isa = TraceIsa::Avx2;
+  else if (isa_arg != "auto") {
+    std::cerr << "bvh_bench: --isa must be auto, sse2 or avx2\n";
+    return 2;
+  }
+  if (embree_arg != "all" && embree_arg != "none") {
+    std::cerr << "bvh_bench: --embree must be all or none\n";
+    return 2;
+  }
+  if (clock_arg != "wall" && clock_arg != "cpu") {
+    std::cerr << "bvh_bench: --clock must be wall or cpu\n";
+    return 2;
+  }
+  const StageClock clock = clock_arg == "cpu" ? StageClock::ThreadCpu : StageClock::Wall;
+  if (clock == StageClock::ThreadCpu && threads != 1) {
+    std::cerr << "bvh_bench: --clock cpu needs --threads 1\n";
+    return 2;
+  }
+  tcfg.clock = ccfg.clock = clock;
+  std::vector<ClusterLeaf> leaf_modes;
+  for (const std::string& l : split_list(leaves_arg)) {
+    if (l == "linear") leaf_modes.push_back(ClusterLeaf::Linear);
+    else if (l == "block_tree") leaf_modes.push_back(ClusterLeaf::BlockTree);
+    else {
+      std::cerr << "bvh_bench: --leaves: unknown leaf mode " << l << " (linear, block_tree)\n";
+      return 2;
+    }
   }
   tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
 
+  RunManifest manifest("bvh_bench", args);
   Mesh mesh;
   try {
     mesh = read_mesh(mesh_path).mesh;
+    manifest.add_input(mesh_path);
   } catch (const std::exception& e) {
     std::cerr << "bvh_bench: " << e.what() << "\n";
     return 1;
   }
   if (levels > 0) mesh = subdivide(mesh, SubdivisionScheme::Midpoint, levels);
-  const MortonRuns runs = morton_runs(mesh, run);
-  Clustering meshlets;
-  if (meshopt_count) {
-    ClusterConfig mc;
-    mc.max_count = meshopt_count;
-    meshlets = meshopt_clusters(mesh, mc);
+
+  // Clusterings, made once from the rest pose.
+  std::vector<std::pair<std::string, Clustering>> clusterings;
+  std::unique_ptr<MortonRuns> runs;
+  std::vector<std::pair<std::string, ClusterView>> views;
+  for (const std::string& c : split_list(clusters_arg)) {
+    const auto t0 = Clock::now();
+    if (c == "acc") {
+      ClusterConfig cc;
+      cc.method = ClusterMethod::Growth;
+      cc.objective = ObjectiveKind::Acc;
+      cc.max_count = max_count;
+      cc.max_size = max_size;
+      clusterings.push_back({"acc" + std::to_string(max_count), cluster_mesh(mesh, cc)});
+    } else if (c == "meshopt") {
+      ClusterConfig mc;
+      mc.max_count = max_count;
+      clusterings.push_back({"meshopt" + std::to_string(max_count), meshopt_clusters(mesh, mc)});
+    } else if (c == "morton") {
+      runs = std::make_unique<MortonRuns>(morton_runs(mesh, 80));
+    } else {
+      std::cerr << "bvh_bench: --clusters: unknown clustering " << c << " (acc, meshopt, morton)\n";
+      return 2;
+    }
+    const double ms = ms_since(t0);
+    manifest.add_timing_ms("clustering_" + c, ms);
+    std::printf("clustering %-8s %9.0f ms (once, rest pose)\n", c.c_str(), ms);
   }
+  for (const auto& [name, cl] : clusterings) views.push_back({name, view_of(cl)});
+  if (runs) views.push_back({"morton80", runs->view()});
+
   const Vec3 origin = mesh.bounds().center();
   tcfg.origin = ccfg.origin = origin;
   const RayBatch rays = primary_rays(frame_box(mesh.bounds()), size, size);
-  std::printf("mesh %s, %d subdivision levels: %zu triangles, %zu vertices; %zu clusters (Morton runs of %u), "
-              "%zu meshopt clusters (max %u vertices); "
-              "%zu rays; %u thread(s); %d reps; SAH traversal %.2f intersection %.2f, triangle leaves <= %u\n\n",
-              mesh_path.c_str(), levels, mesh.triangle_count(), mesh.vertex_count(), runs.cluster_count(), run,
-              meshlets.cluster_count(), meshopt_count,
-              rays.size(), threads, reps, tcfg.build.cost.traversal, tcfg.build.cost.intersection,
-              tcfg.build.max_leaf_size);
-  const auto pos = mesh.positions();
+  std::printf("mesh %s, %d subdivision levels: %zu triangles, %zu vertices; %zu rays; %u thread(s); %d frames "
+              "(amplitude %.3g per frame); SAH traversal %.2f intersection %.2f, triangle leaves <= %u; "
+              "tracer isa %s; %s clock\n",
+              mesh_path.c_str(), levels, mesh.triangle_count(), mesh.vertex_count(), rays.size(), threads, reps,
+              amplitude, tcfg.build.cost.traversal, tcfg.build.cost.intersection, tcfg.build.max_leaf_size,
+              to_string(resolve(isa)), clock_arg.c_str());
+  for (const auto& [name, v] : views)
+    std::printf("  clustering %s: %zu clusters, mean %.1f triangles\n", name.c_str(), v.triangle_offsets.size() - 1,
+                double(mesh.triangle_count()) / double(v.triangle_offsets.size() - 1));
+  std::printf("\n");
   TraceOptions opt;
   opt.threads = threads;
+  opt.isa = isa;
 
   std::vector<std::unique_ptr<Config>> configs;
-  auto ts = std::make_shared<TriangleScene>(mesh, tcfg);
   auto scene_stages = [](const StageTimes& t) {
     return std::vector<std::pair<std::string, double>>{
         {"1 vertices to frame", t.vertices_ms}, {"2 boxes", t.boxes_ms},         {"3 SAH build", t.build_ms},
-        {"4 collapse+link", t.collapse_ms},      {"5 leaf data", t.leaf_data_ms}, {"6 block-tree refit", t.refit_ms},
-        {"= boxes+build (2+3)", t.boxes_ms + t.build_ms},
-        {"= per-frame total", t.total_ms()}};
+        {"4 collapse+link", t.collapse_ms},      {"5 leaf data", t.leaf_data_ms}, {"6 block-tree refit", t.refit_ms}};
   };
-  configs.push_back(std::make_unique<Config>(Config{
-      "ours_triangles", [=] { ts->update(pos); }, [=, &rays](HitBatch& h) { return trace(ts->data(), rays, h, opt); },
-      [=] { return scene_stages(ts->times()); }, {}, {}, {}, {}}));
-  std::vector<std::pair<std::string, ClusterView>> clusterings{{"morton" + std::to_string(run), runs.view()}};
-  if (meshopt_count) clusterings.push_back({"meshopt" + std::to_string(meshopt_count), view_of(meshlets)});
-  for (const auto& [cname, view] : clusterings)
-    for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
-      SceneConfig c = ccfg;
-      c.cluster_leaf = mode;
-      auto cs = std::make_shared<ClusterScene>(mesh, view, c);
-      configs.push_back(std::make_unique<Config>(Config{
-          "ours_" + cname + "_" + to_string(mode), [=] { cs->update(pos); },
-          [=, &rays](HitBatch& h) { return trace(cs->data(), rays, h, opt); },
-          [=] { return scene_stages(cs->times()); }, {}, {}, {}, {}}));
-    }
-  struct EmbreeRun {
-    EmbreeMode mode;
-    std::string isa;
-  };
-  for (const EmbreeRun& er : {EmbreeRun{EmbreeMode::StaticMedium, ""}, EmbreeRun{EmbreeMode::DynamicLow, ""},
-                              EmbreeRun{EmbreeMode::DynamicRefit, ""}, EmbreeRun{EmbreeMode::StaticMedium, "sse2"}}) {
-    const EmbreeMode mode = er.mode;
-    const std::string ename = std::string(to_string(mode)) + (er.isa.empty() ? "" : "_" + er.isa);
-    auto es = std::make_shared<EmbreeScene>(mesh, origin, EmbreeConfig{mode, threads, er.isa});
-    if (mode == EmbreeMode::DynamicRefit)
-      std::printf("%-30s %-28s %9.2f ms   (first commit, once)\n", to_string(mode), "build", es->last_commit_ms());
-    configs.push_back(std::make_unique<Config>(Config{
-        ename, [=] { es->update(pos); },
-        [=, &rays](HitBatch& h) { return es->trace(rays, h, HitMode::Closest, threads); },
-        [=] {
-          return std::vector<std::pair<std::string, double>>{
-              {"1 vertices to frame", es->last_vertex_ms()},
-              {mode == EmbreeMode::DynamicRefit ? "3 refit commit" : "3 build commit", es->last_commit_ms()},
-              {"= per-frame total", es->last_vertex_ms() + es->last_commit_ms()}};
-        },
-        {}, {}, {}, {}}));
+  auto ts = std::make_shared<TriangleScene>(mesh, tcfg);
+  {
+    auto c = std::make_unique<Config>();
+    c->name = "ours_triangles";
+    c->update = [=](std::span<const Vec3> p) { ts->update(p); };
+    c->trace = [=, &rays](HitBatch& h) { return trace(ts->data(), rays, h, opt); };
+    c->stages = [=] { return scene_stages(ts->times()); };
+    configs.push_back(std::move(c));
   }
-
-  // Interleaved repetitions: per-frame update, then trace.
-  HitBatch ref, hits;
-  for (int r = 0; r < reps; ++r)
-    for (auto& c : configs) {
-      c->update();
-      for (const auto& [k, v] : c->stages()) c->times[k].push_back(v);
-      HitBatch& h = c.get() == configs[0].get() ? ref : hits;
-      c->trace_ms.push_back(time_ms([&] { c->totals = c->trace(h); }));
-      if (c.get() != configs[0].get() && r == 0) c->mismatch = compare(ref, hits);
+  for (const auto& [cname, view] : views)
+    for (ClusterLeaf mode : leaf_modes) {
+      SceneConfig sc = ccfg;
+      sc.cluster_leaf = mode;
+      auto cs = std::make_shared<ClusterScene>(mesh, view, sc);
+      auto c = std::make_unique<Config>();
+      c->name = "ours_" + cname + "_" + to_string(mode);
+      c->update = [=](std::span<const Vec3> p) { cs->update(p); };
+      c->trace = [=, &rays](HitBatch& h) { return trace(cs->data(), rays, h, opt); };
+      c->stages = [=] { return scene_stages(cs->times()); };
+      configs.push_back(std::move(c));
     }
+  if (embree_arg == "all")
+    for (const EmbreeMode mode : {EmbreeMode::StaticMedium, EmbreeMode::DynamicLow, EmbreeMode::DynamicRefit}) {
+      auto es = std::make_shared<EmbreeScene>(mesh, origin, EmbreeConfig{mode, threads, "", clock});
+      if (mode == EmbreeMode::DynamicRefit)
+        std::printf("%-30s %-28s %9.2f ms   (first commit, once)\n\n", to_string(mode), "build", es->last_commit_ms());
+      auto c = std::make_unique<Config>();
+      c->name = to_string(mode);
+      c->embree = true;
+      c->embree_mode = mode;
+      c->update = [=](std::span<const Vec3> p) { es->update(p); };
+      c->trace = [=, &rays](HitBatch& h) { return es->trace(rays, h, HitMode::Closest, threads); };
+      c->stages = [=] {
+        return std::vector<std::pair<std::string, double>>{
+            {"1 vertices to frame", es->last_vertex_ms()},
+            {mode == EmbreeMode::DynamicRefit ? "3 refit commit" : "3 build commit", es->last_commit_ms()}};
+      };
+      configs.push_back(std::move(c));
+    }
+
+  // Frames: every configuration updates to frame r, then traces; mismatches against the first.
+  HitBatch ref, hits;
+  for (int r = 0; r < reps; ++r) {
+    const std::vector<Vec3> pos = frame_positions_at(mesh, amplitude * r);
+    for (auto& c : configs) {
+      c->update(pos);
+      double box_build = 0, total = 0;
+      for (const auto& [k, v] : c->stages()) {
+        c->times[k].push_back(v);
+        total += v;
+        if (k == "2 boxes" || k == "3 SAH build" || k.find("commit") != std::string::npos) box_build += v;
+      }
+      c->box_build_ms.push_back(box_build);
+      c->total_ms.push_back(total);
+      const bool first = c.get() == configs[0].get();
+      HitBatch& h = first ? ref : hits;
+      const double t0 = clock_ms(clock);
+      c->totals.push_back(c->trace(h));
+      c->trace_ms.push_back(clock_ms(clock) - t0);
+      c->mismatch.emplace_back();
+      if (!first) c->mismatch.back().add(ref, hits);
+    }
+  }
 
   for (auto& c : configs) {
     for (const auto& [k, v] : c->times) row(c->name, k, v);
+    row(c->name, c->embree ? "= commit (build or refit)" : "= boxes+build (2+3)", c->box_build_ms);
+    row(c->name, "= per-frame total", c->total_ms);
     std::printf("\n");
   }
+  // Peers for the ratios.
+  std::map<std::string, double> embree_update, embree_trace;
+  for (auto& c : configs)
+    if (c->embree) {
+      embree_update[to_string(c->embree_mode)] = stat_of(c->box_build_ms).median;
+      embree_trace[to_string(c->embree_mode)] = stat_of(c->trace_ms).median;
+    }
   const double ours = stat_of(configs[0]->trace_ms).median;
+  std::printf("%-30s %-13s %8s %8s | %-22s %-22s | %-30s\n", "configuration", "update", "box+bld", "total",
+              "x faster than REFIT", "x faster than LOW", "trace speed vs rtcIntersect1");
+  std::printf("%-30s %-13s %8s %8s | %-22s %-22s | %-30s\n", "", "", "ms", "ms", "box+bld  total", "box+bld  total",
+              "MEDIUM  LOW  REFIT");
+  for (auto& c : configs) {
+    const double bb = stat_of(c->box_build_ms).median, tot = stat_of(c->total_ms).median,
+                 tr = stat_of(c->trace_ms).median;
+    std::printf("%-30s %-13s %8.2f %8.2f |", c->name.c_str(), c->embree ? "commit" : "ours", bb, tot);
+    const char* peers[2] = {"embree_dynamic_refit", "embree_dynamic_low"};
+    for (const char* p : peers) {
+      if (embree_update.count(p)) std::printf(" %7.1fx %7.1fx      |", embree_update[p] / bb, embree_update[p] / tot);
+      else std::printf(" %-21s|", " -");
+    }
+    for (const char* p : {"embree_static_medium", "embree_dynamic_low", "embree_dynamic_refit"}) {
+      if (embree_trace.count(p)) std::printf(" %5.2fx", embree_trace[p] / tr);
+    }
+    std::printf("\n");
+  }
+  std::printf("\n");
   for (auto& c : configs) {
     std::vector<double> mr;
     for (double m : c->trace_ms) mr.push_back(static_cast<double>(rays.size()) / (m * 1e3));
     const Stat s = stat_of(mr);
+    Mismatch mm;
+    for (const Mismatch& m : c->mismatch)
+      mm.hit_miss += m.hit_miss, mm.other_triangle += m.other_triangle, mm.ties += m.ties;
+    const TraceTotals& t = c->totals.back();
     std::printf("%-30s trace closest %7.2f Mrays/s [%.2f, %.2f]  %.2fx ours_triangles", c->name.c_str(), s.median,
                 s.min, s.max, ours / stat_of(c->trace_ms).median);
-    if (c->totals.nodes_visited)
-      std::printf("  nodes/ray %.2f tris/ray %.2f", double(c->totals.nodes_visited) / double(rays.size()),
-                  double(c->totals.triangles_tested) / double(rays.size()));
-    std::printf("  hits %llu", (unsigned long long)c->totals.hits);
+    if (t.nodes_visited)
+      std::printf("  nodes/ray %.2f tris/ray %.2f", double(t.nodes_visited) / double(rays.size()),
+                  double(t.triangles_tested) / double(rays.size()));
+    std::printf("  hits %llu", (unsigned long long)t.hits);
     if (c.get() != configs[0].get())
-      std::printf("  mismatches: hit/miss %zu, other triangle %zu, ties %zu", c->mismatch.hit_miss,
-                  c->mismatch.other_triangle, c->mismatch.ties);
+      std::printf("  mismatches (all frames): hit/miss %zu, other triangle %zu, ties %zu", mm.hit_miss,
+                  mm.other_triangle, mm.ties);
     std::printf("\n");
+  }
+
+  if (!out_dir.empty()) {
+    try {
+      CsvTable csv({"config", "frame", "vertices_ms", "boxes_ms", "build_ms", "collapse_ms", "leaf_data_ms",
+                    "refit_ms", "box_build_ms", "update_ms", "trace_ms", "mrays_per_s", "rays", "hits",
+                    "nodes_visited", "triangles_tested", "mismatch_hit_miss", "mismatch_other_triangle",
+                    "mismatch_ties"});
+      for (auto& c : configs)
+        for (int r = 0; r < reps; ++r) {
+          auto at = [&](const char* k) {
+            for (const auto& [key, v] : c->times)
+              if (key.find(k) != std::string::npos) return v[r];
+            return 0.0;
+          };
+          const TraceTotals& t = c->totals[r];
+          const Mismatch& m = c->mismatch[r];
+          csv.add_row({c->name, std::int64_t(r), at("vertices"), at("boxes"),
+                       c->embree ? at("commit") : at("SAH build"), at("collapse"), at("leaf data"), at("block-tree"),
+                       c->box_build_ms[r], c->total_ms[r], c->trace_ms[r],
+                       static_cast<double>(rays.size()) / (c->trace_ms[r] * 1e3), std::uint64_t(t.rays),
+                       std::uint64_t(t.hits), std::uint64_t(t.nodes_visited), std::uint64_t(t.triangles_tested),
+                       std::uint64_t(m.hit_miss), std::uint64_t(m.other_triangle), std::uint64_t(m.ties)});
+        }
+      manifest.set_parameter("levels", levels);
+      manifest.set_parameter("frames", reps);
+      manifest.set_parameter("size", size);
+      manifest.set_parameter("threads", threads);
+      manifest.set_parameter("clusters", clusters_arg);
+      manifest.set_parameter("max_count", max_count);
+      manifest.set_parameter("max_size", max_size);
+      manifest.set_parameter("leaves", leaves_arg);
+      manifest.set_parameter("amplitude", amplitude);
+      manifest.set_parameter("isa", to_string(resolve(isa)));
+      manifest.set_parameter("clock", clock_arg);
+      manifest.set_parameter("sah_traversal", tcfg.build.cost.traversal);
+      manifest.set_parameter("sah_intersection", tcfg.build.cost.intersection);
+      manifest.set_parameter("triangle_leaf", tcfg.build.max_leaf_size);
+      manifest.set_result("triangles", mesh.triangle_count());
+      manifest.set_result("rays", rays.size());
+      OutputDir dir(out_dir);
+      dir.write("bvh_bench.csv", csv.str());
+      manifest.add_output("bvh_bench.csv");
+      manifest.add_output("manifest.json");
+      dir.write("manifest.json", dump_json(manifest.to_json()));
+      dir.commit();
+      std::printf("\nwrote %s/{bvh_bench.csv,manifest.json}\n", out_dir.c_str());
+    } catch (const std::exception& e) {
+      std::cerr << "bvh_bench: " << e.what() << "\n";
+      return 1;
+    }
   }
   return 0;
 }

@@ -1,34 +1,51 @@
-// Clustering speed (growth and contraction, per objective and MaxCount = MaxSize) and the sphere
-// inside the Acc loop: speed against error. Plain tables on stdout; not a unit test.
+// Clustering benchmark (issue 4's figures; not a unit test). Three sections, each a table on
+// stdout and, with --out DIR, a CSV in DIR (written atomically with a JSON manifest):
 //
-//   clustering_bench [--mesh FILE] [--levels N] [--skip-large] [--only growth|contraction]
-//                    [--objectives acc,naive,gwh01] [--sizes 10,50,100] [--repeats N]
-//                    [--no-spheres] [--no-speed]
+//   speed.csv        time per method (growth, contraction, sah-split, meshopt) and objective (acc,
+//                    naive, gwh01 where it applies) at MaxCount = MaxSize in --sizes, one thread;
+//   spheres.csv      the sphere inside the Acc loop (exact, cgal, epos26/14/6, ritter): time, and
+//                    the final clusters' mean reg / mean Acc recomputed with the EXACT sphere;
+//   start_rules.csv  growth's start rule (index, spatial, fewest-free): clusters, mean reg / Acc,
+//                    time;
+//   manifest.json    argv, the input mesh and its hash, parameters, versions, machine, timings.
 //
-// Meshes: armadillo (52k triangles) and armadillo subdivided twice with the midpoint scheme
-// (832k; the same surface). Every time is one run of the full pipeline cluster_mesh performs
-// (ClusterTables, objective, algorithm, clustering_from_labels) on one thread; each run is repeated
-// --repeats times (default 3) and the fastest is printed (wall clock and this process's CPU time;
-// on a shared machine the minimum is the least disturbed measurement).
-// Work counters: exact_ev / bound_ev = objective evaluations that returned the exact score / an
-// upper bound (objectives.h, "Lazy evaluation"); spheres = Acc spheres computed on a point set
-// (CGAL or the chosen method), the rest came from the shortcuts (acc.h).
-// Sphere table: Acc at MaxCount = MaxSize = 50 with each SphereMethod inside the loop; the final
-// clusters' mean reg and mean Acc are then recomputed with the EXACT sphere (cluster_metrics with
-// SphereMethod::Exact, in parallel; not timed), so the columns show what the cheaper sphere costs
-// in cluster quality. Exact inside the loop only on the 52k mesh (it is ~200x slower).
+//   clustering_bench [--mesh FILE] [--levels N] [--skip-large] [--quick] [--out DIR]
+//                    [--methods growth,contraction,sah-split,meshopt] [--objectives acc,naive,gwh01]
+//                    [--sizes 10,50,100] [--repeats N] [--sections speed,spheres,start]
+//                    [--sphere-size N] [--no-exact]
+//
+// Meshes: armadillo (52k triangles; --mesh, default ${PTC_DATA_DIR}/meshes/armadillo.off) and
+// armadillo subdivided --levels times (default 2) with the midpoint scheme (832k; the same
+// surface). --quick: the 52k mesh only, size 50, one repeat, no exact sphere in the loop (a smoke
+// run of every section, ~10 s).
+//
+// Timing: every time is one run of the full pipeline that cluster_mesh performs (ClusterTables,
+// objective, algorithm, clustering_from_labels) on one thread, repeated --repeats times (default
+// 3); the MEDIAN of the process CPU time and of the wall time are reported (the machine is shared:
+// the CPU time is the stable figure). Work counters (growth/contraction): exact_ev / bound_ev =
+// objective evaluations that returned the exact score / an upper bound (objectives.h, "Lazy
+// evaluation"); spheres = Acc spheres computed on a point set (the rest came from shortcuts).
+// Quality columns (speed and start-rule tables): mean reg and mean Acc of the final clusters with
+// the CGAL sphere, Acc with MaxCount = MaxSize = the row's size (also for naive, gwh01, sah-split
+// and meshopt, so that the methods compare on Garanzha's measure); computed in parallel, not timed.
 #include <oneapi/tbb/parallel_for.h>
 
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "analysis/csv.h"
+#include "analysis/manifest.h"
+#include "analysis/output_dir.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/clustering.h"
 #include "toolkit/clustering/contraction.h"
@@ -43,8 +60,7 @@ namespace {
 using namespace ptc;
 using Clock = std::chrono::steady_clock;
 
-/// CPU time of this process (the timed code is single-threaded; on a loaded machine this is the
-/// stable number, wall clock is printed next to it).
+/// CPU time of this process (the timed code is single-threaded).
 double cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -53,191 +69,392 @@ double cpu_seconds() {
 
 struct Result {
   Clustering clustering;
-  ClusterRun run;  // labels moved out; counters kept
+  ClusterRun run;  // counters (growth/contraction only)
   double seconds = 0;
   double cpu = 0;
   std::uint64_t spheres = 0;  // Acc: spheres computed from scratch
 };
 
+struct Job {
+  ClusterMethod method = ClusterMethod::Growth;
+  ObjectiveKind objective = ObjectiveKind::Acc;
+  std::uint32_t size = 50;
+  SphereMethod sphere = SphereMethod::Cgal;
+  StartRule start = StartRule::SpatialOrder;
+};
+
+bool uses_objective(ClusterMethod m) { return m == ClusterMethod::Growth || m == ClusterMethod::Contraction; }
+
 template <class O>
-Result run_algorithm(const Mesh& mesh, const ClusterTables& tables, O& objective, ClusterMethod method,
-                     Clock::time_point t0, double c0) {
-  Result r;
-  if (method == ClusterMethod::Growth) {
+void run_algorithm(const Mesh& mesh, const ClusterTables& tables, O& objective, const Job& job, Result& r) {
+  if (job.method == ClusterMethod::Growth) {
     GrowthOptions o;
-    o.start = StartRule::SpatialOrder;
+    o.start = job.start;
     r.run = grow_clusters(tables, objective, o);
   } else {
     r.run = contract_clusters(tables, objective, ContractionOptions{});
   }
   r.clustering = clustering_from_labels(r.run.labels, mesh.triangles());
+}
+
+/// One timed run of the pipeline cluster_mesh performs (see the file comment).
+Result cluster_once(const Mesh& mesh, const Job& job) {
+  Result r;
+  const auto t0 = Clock::now();
+  const double c0 = cpu_seconds();
+  if (!uses_objective(job.method)) {
+    ClusterConfig cfg;
+    cfg.method = job.method;
+    cfg.max_count = job.size;
+    cfg.max_size = job.size;
+    r.clustering = cluster_mesh(mesh, cfg);
+  } else {
+    const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/job.objective == ObjectiveKind::Gwh01);
+    switch (job.objective) {
+      case ObjectiveKind::Acc: {
+        ClusterParams p;
+        p.max_count = job.size;
+        p.max_size = job.size;
+        p.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+        p.sphere = job.sphere;
+        AccObjective o(tables, p,
+                       job.method == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction());
+        run_algorithm(mesh, tables, o, job, r);
+        r.spheres = o.sphere_computations();
+        break;
+      }
+      case ObjectiveKind::Naive: {
+        NaiveObjective o(tables, job.size);
+        run_algorithm(mesh, tables, o, job, r);
+        break;
+      }
+      case ObjectiveKind::Gwh01: {
+        Gwh01Objective o(tables, job.size, GwhParams{});
+        run_algorithm(mesh, tables, o, job, r);
+        break;
+      }
+    }
+  }
   r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   r.cpu = cpu_seconds() - c0;
+  r.run.labels.clear();
+  r.run.labels.shrink_to_fit();
   return r;
 }
 
-Result cluster_timed(const Mesh& mesh, ClusterMethod method, ObjectiveKind objective, std::uint32_t size,
-                     SphereMethod sphere = SphereMethod::Cgal) {
-  const auto t0 = Clock::now();
-  const double c0 = cpu_seconds();
-  const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/objective == ObjectiveKind::Gwh01);
-  switch (objective) {
-    case ObjectiveKind::Acc: {
-      ClusterParams p;
-      p.max_count = size;
-      p.max_size = size;
-      p.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
-      p.sphere = sphere;
-      AccObjective o(tables, p, method == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction());
-      Result r = run_algorithm(mesh, tables, o, method, t0, c0);
-      r.spheres = o.sphere_computations();
-      return r;
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// `repeats` runs; the last run's result with the median wall and CPU times. Every run must give
+/// the same clustering (determinism; the bench stops otherwise).
+Result cluster_timed(const Mesh& mesh, const Job& job, int repeats) {
+  std::vector<double> wall, cpu;
+  Result r;
+  for (int i = 0; i < repeats; ++i) {
+    Result again = cluster_once(mesh, job);
+    if (i > 0 && (again.clustering.triangle_order != r.clustering.triangle_order ||
+                  again.clustering.triangle_offsets != r.clustering.triangle_offsets)) {
+      std::fprintf(stderr, "NON-DETERMINISTIC clustering (%s)\n", std::string(to_string(job.method)).c_str());
+      std::exit(3);
     }
-    case ObjectiveKind::Naive: {
-      NaiveObjective o(tables, size);
-      return run_algorithm(mesh, tables, o, method, t0, c0);
-    }
-    case ObjectiveKind::Gwh01: {
-      Gwh01Objective o(tables, size, GwhParams{});
-      return run_algorithm(mesh, tables, o, method, t0, c0);
-    }
+    wall.push_back(again.seconds);
+    cpu.push_back(again.cpu);
+    r = std::move(again);
   }
-  return {};
+  r.seconds = median(wall);
+  r.cpu = median(cpu);
+  return r;
 }
 
 struct Quality {
-  double mean_reg = 0, mean_acc = 0;
+  double mean_reg = 0, mean_acc = 0, mean_triangles = 0;
 };
 
-/// Mean reg and Acc of the clusters, recomputed with the exact sphere (parallel).
-Quality exact_quality(const Mesh& mesh, const Clustering& c, std::uint32_t size) {
+/// Mean reg and Acc (MaxCount = MaxSize = size) of the clusters with sphere `sm` (parallel).
+Quality quality(const Mesh& mesh, const Clustering& c, std::uint32_t size, SphereMethod sm) {
   ClusterParams p;
   p.max_count = size;
   p.max_size = size;
   p.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
-  std::vector<double> reg(c.cluster_count()), acc(c.cluster_count());
-  oneapi::tbb::parallel_for(std::size_t{0}, c.cluster_count(), [&](std::size_t k) {
-    const ClusterMetrics m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Exact);
+  const std::size_t n = c.cluster_count();
+  if (n == 0) return {};
+  std::vector<double> reg(n), acc(n);
+  oneapi::tbb::parallel_for(std::size_t{0}, n, [&](std::size_t k) {
+    const ClusterMetrics m = cluster_metrics(mesh, c.triangles_of(k), sm);
     reg[k] = m.reg;
     acc[k] = cluster_acc(m, p);
   });
-  const double n = static_cast<double>(c.cluster_count());
-  return {std::accumulate(reg.begin(), reg.end(), 0.0) / n, std::accumulate(acc.begin(), acc.end(), 0.0) / n};
+  const double dn = static_cast<double>(n);
+  return {std::accumulate(reg.begin(), reg.end(), 0.0) / dn, std::accumulate(acc.begin(), acc.end(), 0.0) / dn,
+          static_cast<double>(mesh.triangle_count()) / dn};
 }
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
+  for (std::string item; std::getline(ss, item, ',');)
+    if (!item.empty()) out.push_back(item);
   return out;
 }
+
+[[noreturn]] void usage_error(const std::string& msg) {
+  std::fprintf(stderr, "clustering_bench: %s\n", msg.c_str());
+  std::exit(2);
+}
+
+std::string str(std::string_view s) { return std::string(s); }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string mesh_path = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
+  const char* data_env = std::getenv("PTC_DATA_DIR");
+  std::string mesh_path = std::string(data_env && *data_env ? data_env : PTC_TEST_DATA) + "/meshes/armadillo.off";
   int levels = 2;
   int repeats = 3;
-  bool skip_large = false, spheres = true, speed = true;
-  std::vector<ClusterMethod> methods{ClusterMethod::Growth, ClusterMethod::Contraction};
+  bool skip_large = false, quick = false, with_exact = true;
+  std::uint32_t sphere_size = 50;
+  std::string out_dir;
+  std::vector<std::string> sections{"speed", "spheres", "start"};
+  std::vector<ClusterMethod> methods{ClusterMethod::Growth, ClusterMethod::Contraction, ClusterMethod::SahSplit,
+                                     ClusterMethod::Meshopt};
   std::vector<ObjectiveKind> objectives{ObjectiveKind::Acc, ObjectiveKind::Naive, ObjectiveKind::Gwh01};
   std::vector<std::uint32_t> sizes{10, 50, 100};
+  bool sizes_given = false, repeats_given = false;
+  const std::vector<std::string> args(argv, argv + argc);
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "%s needs a value\n", a.c_str());
-        std::exit(2);
-      }
+      if (i + 1 >= argc) usage_error(a + " needs a value");
       return argv[++i];
+    };
+    auto number = [&](const std::string& s) -> unsigned long {
+      try {
+        std::size_t used = 0;
+        const unsigned long v = std::stoul(s, &used);
+        if (used != s.size()) throw std::invalid_argument(s);
+        return v;
+      } catch (const std::exception&) {
+        usage_error(a + ": not a number: " + s);
+      }
     };
     if (a == "--mesh") {
       mesh_path = value();
     } else if (a == "--levels") {
-      levels = std::stoi(value());
+      levels = static_cast<int>(number(value()));
     } else if (a == "--repeats") {
-      repeats = std::max(1, std::stoi(value()));
+      repeats = std::max(1, static_cast<int>(number(value())));
+      repeats_given = true;
     } else if (a == "--skip-large") {
       skip_large = true;
-    } else if (a == "--no-spheres") {
-      spheres = false;
-    } else if (a == "--no-speed") {
-      speed = false;
-    } else if (a == "--only") {
-      const auto m = parse_cluster_method(value());
-      if (!m) return 2;
-      methods = {*m};
+    } else if (a == "--quick") {
+      quick = true;
+    } else if (a == "--no-exact") {
+      with_exact = false;
+    } else if (a == "--out") {
+      out_dir = value();
+    } else if (a == "--sphere-size") {
+      sphere_size = static_cast<std::uint32_t>(number(value()));
+    } else if (a == "--sections") {
+      sections = split(value());
+      for (const auto& s : sections)
+        if (s != "speed" && s != "spheres" && s != "start") usage_error("unknown section " + s);
+    } else if (a == "--methods" || a == "--only") {
+      methods.clear();
+      for (const auto& s : split(value())) {
+        const auto m = parse_cluster_method(s);
+        if (!m) usage_error("unknown method " + s);
+        methods.push_back(*m);
+      }
     } else if (a == "--objectives") {
       objectives.clear();
       for (const auto& s : split(value())) {
         const auto o = parse_objective(s);
-        if (!o) return 2;
+        if (!o) usage_error("unknown objective " + s);
         objectives.push_back(*o);
       }
     } else if (a == "--sizes") {
       sizes.clear();
-      for (const auto& s : split(value())) sizes.push_back(static_cast<std::uint32_t>(std::stoul(s)));
+      for (const auto& s : split(value())) sizes.push_back(static_cast<std::uint32_t>(number(s)));
+      sizes_given = true;
     } else {
-      std::fprintf(stderr, "unknown argument %s\n", a.c_str());
-      return 2;
+      usage_error("unknown argument " + a);
     }
   }
+  if (quick) {
+    skip_large = true;
+    with_exact = false;
+    if (!sizes_given) sizes = {50};
+    if (!repeats_given) repeats = 1;
+  }
+  auto has_section = [&](const char* s) { return std::find(sections.begin(), sections.end(), s) != sections.end(); };
+
+  RunManifest manifest("clustering_bench", args);
+  manifest.add_input(mesh_path);
+  manifest.set_parameter("levels", skip_large ? 0 : levels);
+  manifest.set_parameter("repeats", repeats);
+  manifest.set_parameter("quick", quick);
+  manifest.set_parameter("threads", 1);
+  manifest.set_parameter("sizes", sizes);
+  manifest.set_parameter("sphere_size", sphere_size);
+  manifest.set_parameter("sections", sections);
+  manifest.set_parameter("timing", "median of repeats; cpu_s = process CPU time, wall_s = wall clock");
 
   std::vector<std::pair<std::string, Mesh>> meshes;
-  meshes.emplace_back("armadillo", read_mesh(mesh_path).mesh);
+  auto t_load = Clock::now();
+  try {
+    meshes.emplace_back("armadillo", read_mesh(mesh_path).mesh);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "clustering_bench: %s\n", e.what());
+    return 1;
+  }
   if (!skip_large)
     meshes.emplace_back("armadillo/mid" + std::to_string(levels),
                         subdivide(meshes.front().second, SubdivisionScheme::Midpoint, levels));
+  manifest.add_timing_ms("load_and_subdivide", std::chrono::duration<double, std::milli>(Clock::now() - t_load).count());
 
-  if (speed) {
-    std::printf("# clustering time, one thread (full cluster_mesh pipeline; start rule spatial for growth)\n");
-    std::printf("%-16s %9s %-12s %-6s %5s %8s %8s %9s %8s %10s %10s %10s\n", "mesh", "triangles", "method", "obj",
-                "size", "wall_s", "cpu_s", "clusters", "tri/cl", "exact_ev", "bound_ev", "spheres");
+  CsvTable speed_csv({"mesh", "triangles", "method", "objective", "size", "wall_s", "cpu_s", "clusters",
+                      "triangles_per_cluster", "mean_reg", "mean_acc", "exact_evaluations", "bound_evaluations",
+                      "sphere_computations"});
+  CsvTable sphere_csv({"mesh", "triangles", "method", "size", "sphere", "wall_s", "cpu_s", "clusters",
+                       "mean_reg_exact", "mean_acc_exact", "d_reg_vs_cgal", "d_acc_vs_cgal", "d_reg_vs_exact",
+                       "d_acc_vs_exact", "time_ratio_vs_cgal"});
+  CsvTable start_csv({"mesh", "triangles", "objective", "size", "start", "wall_s", "cpu_s", "clusters",
+                      "triangles_per_cluster", "mean_reg", "mean_acc"});
+
+  if (has_section("speed")) {
+    std::printf("# clustering time, one thread, median of %d (growth: spatial start rule; sphere: cgal)\n", repeats);
+    std::printf("%-15s %8s %-11s %-6s %5s %8s %8s %8s %7s %9s %9s %10s %10s %9s\n", "mesh", "tris", "method", "obj",
+                "size", "wall_s", "cpu_s", "clusters", "tri/cl", "mean_reg", "mean_acc", "exact_ev", "bound_ev",
+                "spheres");
     for (const auto& [name, mesh] : meshes)
-      for (ClusterMethod m : methods)
-        for (ObjectiveKind o : objectives)
+      for (ClusterMethod m : methods) {
+        std::vector<ObjectiveKind> objs = objectives;
+        if (!uses_objective(m)) objs = {ObjectiveKind::Acc};  // unused; one row
+        for (ObjectiveKind o : objs)
           for (std::uint32_t s : sizes) {
-            Result r = cluster_timed(mesh, m, o, s);
-            for (int rep = 1; rep < repeats; ++rep) {
-              Result again = cluster_timed(mesh, m, o, s);
-              if (again.cpu < r.cpu) r = std::move(again);
-            }
-            std::printf("%-16s %9zu %-12s %-6s %5u %8.3f %8.3f %9zu %8.2f %10llu %10llu %10llu\n", name.c_str(),
-                        mesh.triangle_count(), std::string(to_string(m)).c_str(), std::string(to_string(o)).c_str(),
-                        s, r.seconds, r.cpu, r.clustering.cluster_count(),
-                        double(mesh.triangle_count()) / double(r.clustering.cluster_count()),
+            Job job;
+            job.method = m;
+            job.objective = o;
+            job.size = s;
+            const Result r = cluster_timed(mesh, job, repeats);
+            const Quality q = quality(mesh, r.clustering, s, SphereMethod::Cgal);
+            const std::string obj = uses_objective(m) ? str(to_string(o)) : "-";
+            std::printf("%-15s %8zu %-11s %-6s %5u %8.3f %8.3f %8zu %7.2f %9.5f %9.5f %10llu %10llu %9llu\n",
+                        name.c_str(), mesh.triangle_count(), str(to_string(m)).c_str(), obj.c_str(), s, r.seconds,
+                        r.cpu, r.clustering.cluster_count(), q.mean_triangles, q.mean_reg, q.mean_acc,
                         static_cast<unsigned long long>(r.run.exact_evaluations),
                         static_cast<unsigned long long>(r.run.bound_evaluations),
                         static_cast<unsigned long long>(r.spheres));
             std::fflush(stdout);
+            speed_csv.add_row({name, std::uint64_t{mesh.triangle_count()}, str(to_string(m)), obj, std::uint64_t{s},
+                               r.seconds, r.cpu, std::uint64_t{r.clustering.cluster_count()}, q.mean_triangles,
+                               q.mean_reg, q.mean_acc, r.run.exact_evaluations, r.run.bound_evaluations, r.spheres});
           }
+      }
   }
 
-  if (spheres) {
-    const std::uint32_t size = 50;
-    std::printf("\n# sphere inside the Acc loop (MaxCount = MaxSize = %u): time, and the final clusters' mean reg /\n"
-                "# mean Acc recomputed with the exact sphere; d_reg, d_acc = difference to the Cgal run\n",
-                size);
-    std::printf("%-16s %-12s %-7s %8s %8s %9s %12s %12s %11s %11s\n", "mesh", "method", "sphere", "wall_s", "cpu_s",
-                "clusters",
-                "mean_reg", "mean_acc", "d_reg", "d_acc");
+  if (has_section("spheres")) {
+    const std::uint32_t size = sphere_size;
+    std::printf("\n# sphere inside the Acc loop (MaxCount = MaxSize = %u), median of %d: time, and the final\n"
+                "# clusters' mean reg / mean Acc recomputed with the EXACT sphere; d_* = difference to the cgal\n"
+                "# run and to the exact-in-loop run (exact in the loop only on meshes < 100k triangles)\n",
+                size, repeats);
+    std::printf("%-15s %-11s %-7s %8s %8s %7s %8s %11s %11s %10s %10s %10s %10s\n", "mesh", "method", "sphere",
+                "wall_s", "cpu_s", "x_cgal", "clusters", "mean_reg", "mean_acc", "d_reg_cg", "d_acc_cg", "d_reg_ex",
+                "d_acc_ex");
     for (const auto& [name, mesh] : meshes)
       for (ClusterMethod m : methods) {
+        if (!uses_objective(m)) continue;
         std::vector<SphereMethod> list{SphereMethod::Cgal, SphereMethod::Epos26, SphereMethod::Epos14,
                                        SphereMethod::Epos6, SphereMethod::Ritter};
-        if (mesh.triangle_count() < 100000) list.push_back(SphereMethod::Exact);
-        Quality ref;
+        if (with_exact && mesh.triangle_count() < 100000) list.insert(list.begin(), SphereMethod::Exact);
+        Quality ref_cgal, ref_exact;
+        double cgal_cpu = 0;
+        bool have_exact = false;
         for (SphereMethod sm : list) {
-          const Result r = cluster_timed(mesh, m, ObjectiveKind::Acc, size, sm);
-          const Quality q = exact_quality(mesh, r.clustering, size);
-          if (sm == SphereMethod::Cgal) ref = q;
-          std::printf("%-16s %-12s %-7s %8.3f %8.3f %9zu %12.6f %12.6f %11.2e %11.2e\n", name.c_str(),
-                      std::string(to_string(m)).c_str(), std::string(to_string(sm)).c_str(), r.seconds, r.cpu,
-                      r.clustering.cluster_count(), q.mean_reg, q.mean_acc, q.mean_reg - ref.mean_reg,
-                      q.mean_acc - ref.mean_acc);
+          Job job;
+          job.method = m;
+          job.objective = ObjectiveKind::Acc;
+          job.size = size;
+          job.sphere = sm;
+          const Result r = cluster_timed(mesh, job, sm == SphereMethod::Exact ? 1 : repeats);
+          const Quality q = quality(mesh, r.clustering, size, SphereMethod::Exact);
+          if (sm == SphereMethod::Exact) {
+            ref_exact = q;
+            have_exact = true;
+          }
+          if (sm == SphereMethod::Cgal) {
+            ref_cgal = q;
+            cgal_cpu = r.cpu;
+          }
+          const double nan = std::numeric_limits<double>::quiet_NaN();
+          const double dre = have_exact ? q.mean_reg - ref_exact.mean_reg : nan;
+          const double dae = have_exact ? q.mean_acc - ref_exact.mean_acc : nan;
+          // Exact runs before Cgal: its d_*_cg is filled in once Cgal has run (the CSV keeps NaN).
+          const bool cg = sm != SphereMethod::Exact;
+          const double drc = cg ? q.mean_reg - ref_cgal.mean_reg : nan, dac = cg ? q.mean_acc - ref_cgal.mean_acc : nan;
+          const double ratio = cg && cgal_cpu > 0 ? r.cpu / cgal_cpu : nan;
+          std::printf("%-15s %-11s %-7s %8.3f %8.3f %7.2f %8zu %11.6f %11.6f %10.2e %10.2e %10.2e %10.2e\n",
+                      name.c_str(), str(to_string(m)).c_str(), str(to_string(sm)).c_str(), r.seconds, r.cpu, ratio,
+                      r.clustering.cluster_count(), q.mean_reg, q.mean_acc, drc, dac, dre, dae);
           std::fflush(stdout);
+          sphere_csv.add_row({name, std::uint64_t{mesh.triangle_count()}, str(to_string(m)), std::uint64_t{size},
+                              str(to_string(sm)), r.seconds, r.cpu, std::uint64_t{r.clustering.cluster_count()},
+                              q.mean_reg, q.mean_acc, drc, dac, dre, dae, ratio});
         }
       }
+  }
+
+  if (has_section("start")) {
+    const std::uint32_t size = sphere_size;
+    std::printf("\n# growth start rule (MaxCount = MaxSize = %u), median of %d; mean reg / Acc with the cgal sphere\n",
+                size, repeats);
+    std::printf("%-15s %-6s %-12s %8s %8s %8s %7s %9s %9s\n", "mesh", "obj", "start", "wall_s", "cpu_s", "clusters",
+                "tri/cl", "mean_reg", "mean_acc");
+    for (const auto& [name, mesh] : meshes)
+      for (ObjectiveKind o : objectives)
+        for (StartRule rule : {StartRule::IndexOrder, StartRule::SpatialOrder, StartRule::FewestFree}) {
+          Job job;
+          job.method = ClusterMethod::Growth;
+          job.objective = o;
+          job.size = size;
+          job.start = rule;
+          const Result r = cluster_timed(mesh, job, repeats);
+          const Quality q = quality(mesh, r.clustering, size, SphereMethod::Cgal);
+          std::printf("%-15s %-6s %-12s %8.3f %8.3f %8zu %7.2f %9.5f %9.5f\n", name.c_str(),
+                      str(to_string(o)).c_str(), str(to_string(rule)).c_str(), r.seconds, r.cpu,
+                      r.clustering.cluster_count(), q.mean_triangles, q.mean_reg, q.mean_acc);
+          std::fflush(stdout);
+          start_csv.add_row({name, std::uint64_t{mesh.triangle_count()}, str(to_string(o)), std::uint64_t{size},
+                             str(to_string(rule)), r.seconds, r.cpu, std::uint64_t{r.clustering.cluster_count()},
+                             q.mean_triangles, q.mean_reg, q.mean_acc});
+        }
+  }
+
+  if (!out_dir.empty()) {
+    OutputDir dir{std::filesystem::path(out_dir)};
+    std::vector<std::string> written;
+    if (has_section("speed")) dir.write("speed.csv", speed_csv.str()), written.push_back("speed.csv");
+    if (has_section("spheres")) dir.write("spheres.csv", sphere_csv.str()), written.push_back("spheres.csv");
+    if (has_section("start")) dir.write("start_rules.csv", start_csv.str()), written.push_back("start_rules.csv");
+    for (const auto& f : written) manifest.add_output(f);
+    manifest.add_output("manifest.json");
+    nlohmann::json meshes_json = nlohmann::json::array();
+    for (const auto& [name, mesh] : meshes)
+      meshes_json.push_back({{"name", name}, {"triangles", mesh.triangle_count()}, {"vertices", mesh.vertex_count()}});
+    manifest.set_result("meshes", meshes_json);
+    manifest.set_result("rows", {{"speed", speed_csv.rows()}, {"spheres", sphere_csv.rows()},
+                                 {"start_rules", start_csv.rows()}});
+    dir.write("manifest.json", dump_json(manifest.to_json()));
+    dir.commit();
+    std::printf("\nwrote %s/{%s manifest.json}\n", out_dir.c_str(), [&] {
+      std::string s;
+      for (const auto& f : written) s += f + " ";
+      return s;
+    }().c_str());
   }
   return 0;
 }

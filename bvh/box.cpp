@@ -124,6 +124,43 @@ void point_group_boxes(std::span<const Vec3f> fp, std::span<const std::uint32_t>
   }
 }
 
+void point_group_boxes(std::span<const Vec3f> fp, std::span<const std::uint32_t> offsets,
+                       std::span<const std::uint32_t> indices, std::vector<Box3f>& out, std::vector<Vec3f>& centers) {
+  const std::size_t groups = offsets.empty() ? 0 : offsets.size() - 1;
+  out.resize(groups);
+  centers.resize(groups);
+  // A 16-byte load at vertex v reads x, y, z of v and x of v + 1: allowed for every vertex but
+  // the last (lane 3 is never stored).
+  const std::size_t wide_ok = fp.empty() ? 0 : fp.size() - 1;
+  auto load = [&](std::uint32_t v) { return v < wide_ok ? _mm_loadu_ps(fp[v].data()) : load3(fp[v]); };
+  for (std::size_t g = 0; g < groups; ++g) {
+    std::uint32_t i = offsets[g];
+    const std::uint32_t end = offsets[g + 1];
+    if (i == end) {
+      out[g] = Box3f{};
+      centers[g] = out[g].center();
+      continue;
+    }
+    // Two accumulators: the min/max chains of consecutive vertices run in parallel.
+    __m128 lo0 = load(indices[i]), hi0 = lo0, lo1 = lo0, hi1 = lo0;
+    for (++i; i + 1 < end; i += 2) {
+      const __m128 p = load(indices[i]), q = load(indices[i + 1]);
+      lo0 = _mm_min_ps(lo0, p), hi0 = _mm_max_ps(hi0, p);
+      lo1 = _mm_min_ps(lo1, q), hi1 = _mm_max_ps(hi1, q);
+    }
+    if (i < end) {
+      const __m128 p = load(indices[i]);
+      lo0 = _mm_min_ps(lo0, p), hi0 = _mm_max_ps(hi0, p);
+    }
+    const __m128 lo = widen_down(_mm_min_ps(lo0, lo1)), hi = widen_up(_mm_max_ps(hi0, hi1));
+    alignas(16) float l[4], h[4], c[4];
+    _mm_store_ps(l, lo), _mm_store_ps(h, hi);
+    _mm_store_ps(c, _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi)));  // = Box3f::center()
+    out[g].lo = {l[0], l[1], l[2]}, out[g].hi = {h[0], h[1], h[2]};
+    centers[g] = {c[0], c[1], c[2]};
+  }
+}
+
 std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangles) {
   std::vector<Vec3f> c(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {

@@ -127,6 +127,10 @@ void frame_positions(std::span<const Vec3> positions, const Vec3& origin, std::v
 [[nodiscard]] std::vector<Box3f> triangle_boxes(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);
 void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::uint32_t> offsets,
                        std::span<const std::uint32_t> indices, std::vector<Box3f>& out);
+/// The same boxes, and their centres (Box3f::center(), bit for bit) in one pass, reusing the
+/// storage of `out` and `centers` (the per-frame cluster box update).
+void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::uint32_t> offsets,
+                       std::span<const std::uint32_t> indices, std::vector<Box3f>& out, std::vector<Vec3f>& centers);
 
 /// Centroids of float triangles (v0 + v1 + v2) / 3, inside the boxes above.
 [[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);

@@ -24,8 +24,6 @@ const char* to_string(EmbreeMode m) {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 void check(RTCDevice dev, const char* what) {
   const RTCError e = rtcGetDeviceError(dev);
@@ -43,7 +41,8 @@ struct EmbreeScene::Impl {
   Vec3 origin;
 };
 
-EmbreeScene::EmbreeScene(const Mesh& mesh, const Vec3& origin, const EmbreeConfig& cfg) : impl_(std::make_unique<Impl>()) {
+EmbreeScene::EmbreeScene(const Mesh& mesh, const Vec3& origin, const EmbreeConfig& cfg)
+    : impl_(std::make_unique<Impl>()), clock_(cfg.clock) {
   Impl& im = *impl_;
   im.origin = origin;
   std::string conf = cfg.threads ? "threads=" + std::to_string(cfg.threads) : std::string();
@@ -79,7 +78,7 @@ EmbreeScene::~EmbreeScene() {
 
 void EmbreeScene::update(std::span<const Vec3> positions) {
   Impl& im = *impl_;
-  auto t0 = Clock::now();
+  double t0 = clock_ms(clock_);
   const std::size_t n = std::min(positions.size(), im.vertex_count);
   for (std::size_t v = 0; v < n; ++v) {
     const Vec3f p = to_frame(positions[v], im.origin);
@@ -87,10 +86,10 @@ void EmbreeScene::update(std::span<const Vec3> positions) {
   }
   rtcUpdateGeometryBuffer(im.geom, RTC_BUFFER_TYPE_VERTEX, 0);
   rtcCommitGeometry(im.geom);
-  vertex_ms_ = ms_since(t0);
-  t0 = Clock::now();
+  vertex_ms_ = clock_ms(clock_) - t0;
+  t0 = clock_ms(clock_);
   rtcCommitScene(im.scene);
-  commit_ms_ = ms_since(t0);
+  commit_ms_ = clock_ms(clock_) - t0;
   check(im.device, "commit");
 }
 

@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 
+#include "bvh/stage_clock.h"
 #include "bvh/tracer.h"
 
 namespace ptc::bvh {
@@ -30,6 +31,7 @@ struct EmbreeConfig {
   /// CPU supports (BVH8 with AVX and above). "sse2" gives the like-for-like comparison with our
   /// SSE2 BVH4.
   std::string isa;
+  StageClock clock = StageClock::Wall;  ///< clock of last_vertex_ms / last_commit_ms
 };
 
 class EmbreeScene {
@@ -56,6 +58,7 @@ class EmbreeScene {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   double vertex_ms_ = 0, commit_ms_ = 0;
+  StageClock clock_ = StageClock::Wall;
 };
 
 }  // namespace ptc::bvh

@@ -9,6 +9,8 @@
 #include <memory>
 #include <numeric>
 
+#include "bvh/aligned.h"
+
 namespace ptc::bvh {
 
 namespace {
@@ -153,8 +155,7 @@ static_assert(sizeof(Ref) == 48);
 
 struct BinnedTask {
   std::uint32_t begin, end, patch_parent;
-  Box3f box;        // union of the primitive boxes
-  Box3f centroids;  // bounds of the centroids
+  Box3f box;  // union of the primitive boxes
 };
 
 constexpr std::uint32_t kMaxBins = 256;
@@ -187,8 +188,12 @@ struct Bins {
   }
 };
 
-inline __m128 load_lo(const Ref& r) { return _mm_load_ps(r.lo); }  // lane 3 holds id bits: masked by users
-inline __m128 load_hi(const Ref& r) { return _mm_load_ps(r.hi); }
+// Lane 3 of the lo / hi rows holds the id / weight bits: small integers read as floats are
+// denormals, and arithmetic on denormals takes a microcode assist (measured: 12% of the build in
+// one multiply), so lane 3 is cleared on every load.
+inline __m128 xyz_mask() { return _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); }
+inline __m128 load_lo(const Ref& r) { return _mm_and_ps(_mm_load_ps(r.lo), xyz_mask()); }
+inline __m128 load_hi(const Ref& r) { return _mm_and_ps(_mm_load_ps(r.hi), xyz_mask()); }
 
 inline Box3f to_box(__m128 lo, __m128 hi) {
   alignas(16) float l[4], h[4];
@@ -205,32 +210,86 @@ inline float half_area(__m128 lo, __m128 hi) {
   return _mm_cvtss_f32(_mm_add_ss(s, _mm_movehl_ps(p, p)));
 }
 
+// A child's box, gathered while the primitives are put in place.
+struct SideBounds {
+  __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf);
+  void add(const Ref& x) { lo = _mm_min_ps(lo, load_lo(x)), hi = _mm_max_ps(hi, load_hi(x)); }
+};
+
+// Ranks of r[0 .. count) by (centroid on axis a, position), count <= kSweepBelow: order[rank] = i.
+// Branch-free, four comparisons per instruction (positions past count are padded with +inf and
+// never counted, since their position is larger than every i).
+constexpr std::uint8_t kBits4[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+inline void rank_by_centroid(const Ref* r, std::uint32_t count, int a, std::uint8_t* order) {
+  alignas(16) float cs[kSweepBelow];
+  for (std::uint32_t i = 0; i < kSweepBelow; ++i) cs[i] = i < count ? r[i].c[a] : kInf;
+  const std::uint32_t q = (count + 3) / 4;
+  __m128 cv[kSweepBelow / 4];
+  __m128i pos[kSweepBelow / 4];
+  for (std::uint32_t k = 0; k < q; ++k)
+    cv[k] = _mm_load_ps(cs + 4 * k), pos[k] = _mm_setr_epi32(int(4 * k), int(4 * k + 1), int(4 * k + 2), int(4 * k + 3));
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const __m128 ci = _mm_set1_ps(cs[i]);
+    const __m128i ii = _mm_set1_epi32(static_cast<int>(i));
+    int rank = 0;
+    for (std::uint32_t k = 0; k < q; ++k) {
+      const __m128 before = _mm_or_ps(_mm_cmplt_ps(cv[k], ci),
+                                      _mm_and_ps(_mm_cmpeq_ps(cv[k], ci), _mm_castsi128_ps(_mm_cmplt_epi32(pos[k], ii))));
+      rank += kBits4[_mm_movemask_ps(before)];  // (no POPCNT in the x86-64 baseline: a table)
+    }
+    order[rank] = static_cast<std::uint8_t>(i);
+  }
+}
+
 }  // namespace
 
-Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
-  check_input(in, cfg);
-  Bvh bvh;
-  const auto n = static_cast<std::uint32_t>(in.boxes.size());
-  if (n == 0) return bvh;
-  const SahCostModel& m = cfg.cost;
-  const std::uint32_t nbins = cfg.bins;
+struct BuildWorkspace::Impl {
+  std::vector<Ref, AlignedAllocator<Ref>> refs;
+  std::vector<BinnedTask> stack;
+  Bins bins[2];
+};
 
-  std::vector<Ref> refs(n);
-  Box3f root_box, root_cent;
+BuildWorkspace::BuildWorkspace() : impl_(std::make_unique<Impl>()) {}
+BuildWorkspace::~BuildWorkspace() = default;
+BuildWorkspace::BuildWorkspace(const BuildWorkspace&) : impl_(std::make_unique<Impl>()) {}
+BuildWorkspace& BuildWorkspace::operator=(const BuildWorkspace&) { return *this; }
+BuildWorkspace::BuildWorkspace(BuildWorkspace&&) noexcept = default;
+BuildWorkspace& BuildWorkspace::operator=(BuildWorkspace&&) noexcept = default;
+
+Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
+  Bvh bvh;
+  BuildWorkspace ws;
+  build_binned_sah(in, cfg, bvh, ws);
+  return bvh;
+}
+
+void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, BuildWorkspace& ws) {
+  check_input(in, cfg);
+  bvh.nodes.clear();
+  bvh.prim_order.clear();
+  bvh.cost = 0.0;
+  const auto n = static_cast<std::uint32_t>(in.boxes.size());
+  if (n == 0) return;
+  const SahCostModel& m = cfg.cost;
+  if (!ws.impl_) ws.impl_ = std::make_unique<BuildWorkspace::Impl>();  // (a moved-from workspace)
+  BuildWorkspace::Impl& w = *ws.impl_;
+
+  w.refs.resize(n);
+  Ref* const refs = w.refs.data();
+  __m128 rlo = _mm_set1_ps(kInf), rhi = _mm_set1_ps(-kInf);
   for (std::uint32_t i = 0; i < n; ++i) {
     Ref& r = refs[i];
     const Box3f& b = in.boxes[i];
     const Vec3f& c = in.centroids[i];
     r = Ref{{b.lo[0], b.lo[1], b.lo[2]}, i, {b.hi[0], b.hi[1], b.hi[2]}, in.weights.empty() ? 1u : in.weights[i],
             {c[0], c[1], c[2]}, 0.0f};
-    root_box.extend(b);
-    root_cent.extend(c);
+    rlo = _mm_min_ps(rlo, load_lo(r)), rhi = _mm_max_ps(rhi, load_hi(r));
   }
   bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
   CostAccumulator acc;
-  auto bins = std::make_unique<Bins[]>(2);
-  std::vector<BinnedTask> stack;
-  stack.push_back({0, n, kNone, root_box, root_cent});
+  std::vector<BinnedTask>& stack = w.stack;
+  stack.clear();
+  stack.push_back({0, n, kNone, to_box(rlo, rhi)});
   const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
 
   while (!stack.empty()) {
@@ -240,49 +299,65 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
     bvh.nodes.emplace_back();
     if (task.patch_parent != kNone) bvh.nodes[task.patch_parent].index = idx;
     bvh.nodes[idx].bounds = task.box;
-    Ref* r = refs.data() + task.begin;
+    Ref* r = refs + task.begin;
     const std::uint32_t count = task.end - task.begin;
     const double area = task.box.surface_area();
     auto make_leaf = [&] {
-      std::uint64_t w = 0;
-      for (std::uint32_t i = 0; i < count; ++i) w += r[i].weight;
+      std::uint64_t wt = 0;
+      for (std::uint32_t i = 0; i < count; ++i) wt += r[i].weight;
       bvh.nodes[idx].index = task.begin;
       bvh.nodes[idx].count = count;
-      acc.leaf(m, area, static_cast<double>(w));
+      acc.leaf(m, area, static_cast<double>(wt));
     };
     if (count == 1) {
       make_leaf();
       continue;
     }
+    const bool must_split = count > cfg.max_leaf_size;
     // Early leaf: every split costs at least traversal + intersection * sum_p A(p) w_p / A
     // (each primitive lies in a child whose area is at least its own), so a leaf that is no
     // dearer than that bound wins without evaluating any split.
-    if (count <= cfg.max_leaf_size && area > 0.0) {
-      double w = 0.0, aw = 0.0;
+    if (!must_split && area > 0.0) {
+      double wt = 0.0, aw = 0.0;
       for (std::uint32_t i = 0; i < count; ++i) {
-        w += r[i].weight;
+        wt += r[i].weight;
         aw += 2.0 * static_cast<double>(half_area(load_lo(r[i]), load_hi(r[i]))) * r[i].weight;
       }
-      if (m.intersection * w <= m.traversal + m.intersection * aw / area) {
+      if (m.intersection * wt <= m.traversal + m.intersection * aw / area) {
         make_leaf();
         continue;
       }
     }
 
+    // Split evaluation. Two primitives that must be split have one partition only: no search.
     // Small nodes: exact sweep over the primitives sorted by centroid on each axis (cheaper than
     // clearing and sweeping bins, and exact). Larger nodes: bins.
+    const bool trivial = count == 2 && must_split;
     const bool small = count <= kSweepBelow;
     std::uint8_t order[3][kSweepBelow];
     int sweep_axis = -1;
     std::uint32_t sweep_k = 0;
-    // Bin along every axis whose centroid extent is positive.
+    // Bins per axis: cfg.bins, but no more than count / 4 (at least 4) in nodes of few
+    // primitives, where most of 16 bins would stay empty while costing a clear and a sweep step.
+    const std::uint32_t nbins = std::min(cfg.bins, std::max(4u, count / 4));
+    // Bin along every axis whose centroid extent is positive. (The centroid bounds are only
+    // needed here, so they are gathered here rather than during the parent's partition.)
+    Box3f cb;
+    if (!small && !trivial && area > 0.0) {
+      __m128 clo4 = inf, chi4 = ninf;
+      for (std::uint32_t i = 0; i < count; ++i) {
+        const __m128 c = _mm_load_ps(r[i].c);
+        clo4 = _mm_min_ps(clo4, c), chi4 = _mm_max_ps(chi4, c);
+      }
+      cb = to_box(clo4, chi4);
+    }
     float scale[3];
     bool usable[3];
     for (int a = 0; a < 3; ++a) {
-      const float ext = task.centroids.hi[a] - task.centroids.lo[a];
+      const float ext = cb.hi[a] - cb.lo[a];
       // bins * (1 - 2^-20) / ext keeps the largest centroid inside the last bin; the clamp below
       // catches what rounding still pushes out.
-      usable[a] = ext > 0.0f && area > 0.0 && !small;
+      usable[a] = ext > 0.0f && area > 0.0 && !small && !trivial;
       scale[a] = usable[a] ? static_cast<float>(nbins) * (1.0f - 1.0f / 1048576.0f) / ext : 0.0f;
       if (usable[a] && !std::isfinite(scale[a])) usable[a] = false;  // extent below ~1e-38: too small to bin
     }
@@ -290,21 +365,21 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
     std::uint32_t best_split = 0;  // left = bins [0, best_split)
     double best_cost = std::numeric_limits<double>::infinity();
     std::uint64_t total_weight = 0;
+    const __m128 clo = _mm_setr_ps(cb.lo[0], cb.lo[1], cb.lo[2], 0.0f);
+    const __m128 sc = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
+    const __m128 maxbin = _mm_set1_ps(static_cast<float>(nbins - 1));
+    auto bin_of = [&](const Ref& x, std::int32_t* out) {  // the one bin formula (binning and partition)
+      const __m128 c = _mm_load_ps(x.c);
+      const __m128 f = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, clo), sc), _mm_setzero_ps()), maxbin);
+      _mm_store_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(f));
+    };
+    Bins& b0 = w.bins[0];
     if (usable[0] || usable[1] || usable[2]) {
       // Two bin sets, for even and odd primitives: consecutive updates of the same bin would
       // otherwise wait for each other through memory.
-      Bins& b0 = bins[0];
-      Bins& b1 = bins[1];
+      Bins& b1 = w.bins[1];
       b0.clear(nbins);
-      if (count > 1) b1.clear(nbins);
-      const __m128 clo = _mm_setr_ps(task.centroids.lo[0], task.centroids.lo[1], task.centroids.lo[2], 0.0f);
-      const __m128 sc = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
-      const __m128 maxbin = _mm_set1_ps(static_cast<float>(nbins - 1));
-      auto bin_of = [&](const Ref& x, std::int32_t* out) {
-        const __m128 c = _mm_load_ps(x.c);
-        const __m128 f = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, clo), sc), _mm_setzero_ps()), maxbin);
-        _mm_store_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(f));
-      };
+      b1.clear(nbins);
       std::uint32_t i = 0;
       for (; i + 1 < count; i += 2) {
         alignas(16) std::int32_t bi0[4], bi1[4];
@@ -320,7 +395,7 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
         b0.add(bi0, load_lo(r[i]), load_hi(r[i]), r[i].weight);
         total_weight += r[i].weight;
       }
-      if (count > 1) b0.merge(b1, nbins);
+      b0.merge(b1, nbins);
       // Only non-empty bins matter: a boundary next to an empty bin gives the same partition as
       // the boundary before it (small nodes, the majority, have few non-empty bins).
       float right_area[kMaxBins], right_weight[kMaxBins];
@@ -332,13 +407,13 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
         for (std::uint32_t b = 0; b < nbins; ++b)
           if (b0.weight[a][b]) used[k++] = b;
         __m128 lo = inf, hi = ninf;
-        std::uint64_t w = 0;
+        std::uint64_t wr = 0;
         for (std::uint32_t j = k; j-- > 1;) {  // right side = used[j .. k)
           const std::uint32_t b = used[j];
           lo = _mm_min_ps(lo, b0.lo[a][b]), hi = _mm_max_ps(hi, b0.hi[a][b]);
-          w += b0.weight[a][b];
+          wr += b0.weight[a][b];
           right_area[j] = half_area(lo, hi);
-          right_weight[j] = static_cast<float>(w);
+          right_weight[j] = static_cast<float>(wr);
         }
         lo = inf, hi = ninf;
         std::uint64_t wl = 0;
@@ -353,111 +428,100 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
       if (best_axis >= 0) best_cost = m.traversal + m.intersection * 2.0 * static_cast<double>(best_sum) / area;
     } else {
       for (std::uint32_t i = 0; i < count; ++i) total_weight += r[i].weight;
-      if (small && area > 0.0) {
+      if (small && !trivial && area > 0.0) {
         float right_area[kSweepBelow], right_weight[kSweepBelow];
         float best_sum = std::numeric_limits<float>::infinity();
+        int longest = 0;
+        for (int a = 1; a < 3; ++a)
+          if (task.box.hi[a] - task.box.lo[a] > task.box.hi[longest] - task.box.lo[longest]) longest = a;
         for (int a = 0; a < 3; ++a) {
+          if (cfg.small_nodes_longest_axis && a != longest) continue;
           std::uint8_t* o = order[a];
-          float cs[kSweepBelow];
-          for (std::uint32_t i = 0; i < count; ++i) cs[i] = r[i].c[a];
-          for (std::uint32_t i = 0; i < count; ++i) {  // rank by (centroid, position), branch-free
-            std::uint32_t rank = 0;
-            for (std::uint32_t j = 0; j < count; ++j)
-              rank += static_cast<std::uint32_t>(cs[j] < cs[i]) | (static_cast<std::uint32_t>(cs[j] == cs[i]) & static_cast<std::uint32_t>(j < i));
-            o[rank] = static_cast<std::uint8_t>(i);
-          }
+          rank_by_centroid(r, count, a, o);
           __m128 lo = inf, hi = ninf;
-          std::uint64_t w = 0;
+          std::uint64_t wr = 0;
           for (std::uint32_t j = count; j-- > 1;) {
             lo = _mm_min_ps(lo, load_lo(r[o[j]])), hi = _mm_max_ps(hi, load_hi(r[o[j]]));
-            w += r[o[j]].weight;
+            wr += r[o[j]].weight;
             right_area[j] = half_area(lo, hi);
-            right_weight[j] = static_cast<float>(w);
+            right_weight[j] = static_cast<float>(wr);
           }
           lo = inf, hi = ninf;
-          w = 0;
+          wr = 0;
           for (std::uint32_t j = 1; j < count; ++j) {
             lo = _mm_min_ps(lo, load_lo(r[o[j - 1]])), hi = _mm_max_ps(hi, load_hi(r[o[j - 1]]));
-            w += r[o[j - 1]].weight;
-            const float sum = half_area(lo, hi) * static_cast<float>(w) + right_area[j] * right_weight[j];
+            wr += r[o[j - 1]].weight;
+            const float sum = half_area(lo, hi) * static_cast<float>(wr) + right_area[j] * right_weight[j];
             if (sum < best_sum) best_sum = sum, sweep_axis = a, sweep_k = j;
           }
         }
         if (sweep_axis >= 0) best_cost = m.traversal + m.intersection * 2.0 * static_cast<double>(best_sum) / area;
       }
     }
-    const bool must_split = count > cfg.max_leaf_size;
     if (!must_split && m.intersection * static_cast<double>(total_weight) <= best_cost) {
       make_leaf();
       continue;
     }
 
-    // Partition (Hoare style) and gather the children's boxes and centroid bounds on the way.
+    // Put the primitives in place (left child first) and gather the children's bounds on the way:
+    // an in-place partition by bin, the swept order, or (no plane separates the centroids: all equal,
+    // a zero-area node, or two primitives) the object median of the current order.
     std::uint32_t k;
-    __m128 llo = inf, lhi = ninf, rlo = inf, rhi = ninf, lclo = inf, lchi = ninf, rclo = inf, rchi = ninf;
+    SideBounds left, right;
     if (best_axis >= 0) {
+      // The children's boxes are the unions of their bins (partition and binning use the same
+      // bin formula); the partition is in place and branch-free (the side is a coin flip to the
+      // branch predictor): [0, k) goes left, [k, i) right, and r[i] is swapped to position k.
       const int a = best_axis;
-      const float lo_a = task.centroids.lo[a], sc_a = scale[a], maxb = static_cast<float>(nbins - 1);
-      auto goes_left = [&](const Ref& x) {
-        const float f = std::min(std::max((x.c[a] - lo_a) * sc_a, 0.0f), maxb);
-        return static_cast<std::uint32_t>(static_cast<std::int32_t>(f)) < best_split;
-      };
-      std::uint32_t i = 0, j = count;
-      while (true) {
-        while (i < j && goes_left(r[i])) {
-          llo = _mm_min_ps(llo, load_lo(r[i])), lhi = _mm_max_ps(lhi, load_hi(r[i]));
-          const __m128 c = _mm_load_ps(r[i].c);
-          lclo = _mm_min_ps(lclo, c), lchi = _mm_max_ps(lchi, c);
-          ++i;
-        }
-        while (i < j && !goes_left(r[j - 1])) {
-          --j;
-          rlo = _mm_min_ps(rlo, load_lo(r[j])), rhi = _mm_max_ps(rhi, load_hi(r[j]));
-          const __m128 c = _mm_load_ps(r[j].c);
-          rclo = _mm_min_ps(rclo, c), rchi = _mm_max_ps(rchi, c);
-        }
-        if (i >= j) break;
-        std::swap(r[i], r[j - 1]);  // now r[i] goes left and r[j-1] goes right; the loops above take them
+      for (std::uint32_t b = 0; b < nbins; ++b) {
+        SideBounds& s = b < best_split ? left : right;
+        s.lo = _mm_min_ps(s.lo, b0.lo[a][b]), s.hi = _mm_max_ps(s.hi, b0.hi[a][b]);
       }
-      k = i;
-    } else if (sweep_axis >= 0) {
-      Ref tmp[kSweepBelow];
-      for (std::uint32_t i = 0; i < count; ++i) tmp[i] = r[order[sweep_axis][i]];
-      k = sweep_k;
+      k = 0;
       for (std::uint32_t i = 0; i < count; ++i) {
-        r[i] = tmp[i];
-        const __m128 c = _mm_load_ps(r[i].c);
-        if (i < k) {
-          llo = _mm_min_ps(llo, load_lo(r[i])), lhi = _mm_max_ps(lhi, load_hi(r[i]));
-          lclo = _mm_min_ps(lclo, c), lchi = _mm_max_ps(lchi, c);
-        } else {
-          rlo = _mm_min_ps(rlo, load_lo(r[i])), rhi = _mm_max_ps(rhi, load_hi(r[i]));
-          rclo = _mm_min_ps(rclo, c), rchi = _mm_max_ps(rchi, c);
-        }
+        alignas(16) std::int32_t bi[4];
+        bin_of(r[i], bi);
+        const Ref x = r[i];
+        r[i] = r[k];
+        r[k] = x;
+        k += static_cast<std::uint32_t>(bi[a]) < best_split;
       }
     } else {
-      // No plane separates the centroids (all equal, or a zero-area node): object median.
       k = count / 2;
-      for (std::uint32_t i = 0; i < count; ++i) {
-        const __m128 c = _mm_load_ps(r[i].c);
-        if (i < k) {
-          llo = _mm_min_ps(llo, load_lo(r[i])), lhi = _mm_max_ps(lhi, load_hi(r[i]));
-          lclo = _mm_min_ps(lclo, c), lchi = _mm_max_ps(lchi, c);
-        } else {
-          rlo = _mm_min_ps(rlo, load_lo(r[i])), rhi = _mm_max_ps(rhi, load_hi(r[i]));
-          rclo = _mm_min_ps(rclo, c), rchi = _mm_max_ps(rchi, c);
-        }
+      if (sweep_axis >= 0) {
+        Ref tmp[kSweepBelow];
+        for (std::uint32_t i = 0; i < count; ++i) tmp[i] = r[order[sweep_axis][i]];
+        for (std::uint32_t i = 0; i < count; ++i) r[i] = tmp[i];
+        k = sweep_k;
       }
+      for (std::uint32_t i = 0; i < k; ++i) left.add(r[i]);
+      for (std::uint32_t i = k; i < count; ++i) right.add(r[i]);
     }
     assert(k > 0 && k < count);
     acc.inner(m, area);
-    stack.push_back({task.begin + k, task.end, idx, to_box(rlo, rhi), to_box(rclo, rchi)});
-    stack.push_back({task.begin, task.begin + k, kNone, to_box(llo, lhi), to_box(lclo, lchi)});
+    // Children of one primitive are leaves: emitted at once (pre-order: the first child is
+    // idx + 1; the second follows it when the first is a leaf), the rest goes on the stack.
+    auto emit_leaf = [&](std::uint32_t begin, const Box3f& box) {
+      BvhNode& leaf = bvh.nodes.emplace_back();
+      leaf.bounds = box, leaf.index = begin, leaf.count = 1;
+      acc.leaf(m, box.surface_area(), static_cast<double>(refs[begin].weight));
+    };
+    if (k == 1) {
+      emit_leaf(task.begin, to_box(left.lo, left.hi));
+      if (count - k == 1) {
+        bvh.nodes[idx].index = idx + 2;
+        emit_leaf(task.begin + 1, to_box(right.lo, right.hi));
+      } else {
+        stack.push_back({task.begin + k, task.end, idx, to_box(right.lo, right.hi)});
+      }
+      continue;
+    }
+    stack.push_back({task.begin + k, task.end, idx, to_box(right.lo, right.hi)});
+    stack.push_back({task.begin, task.begin + k, kNone, to_box(left.lo, left.hi)});
   }
   bvh.prim_order.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) bvh.prim_order[i] = refs[i].id;
   bvh.cost = acc.total(bvh.nodes[0].bounds.surface_area());
-  return bvh;
 }
 
 }  // namespace ptc::bvh

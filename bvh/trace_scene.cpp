@@ -1,5 +1,7 @@
 #include "bvh/trace_scene.h"
 
+#include "bvh/stage_clock.h"
+
 #include <emmintrin.h>
 
 #include <algorithm>
@@ -14,8 +16,6 @@ namespace ptc::bvh {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 std::uint32_t blocks_for(std::uint32_t triangles) { return (triangles + 3) / 4; }
 
@@ -60,7 +60,9 @@ inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, 
     __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][0])), r1 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][1]));
     __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][2])), r3 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][3]));
     _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // r0 = x of the 4 lanes, r1 = y, r2 = z
-    _mm_store_ps(out.v[c][0], r0), _mm_store_ps(out.v[c][1], r1), _mm_store_ps(out.v[c][2], r2);
+    // Streaming stores: the blocks (tens of MB) are written once per frame and not read back by
+    // this pass, so they bypass the caches instead of evicting the vertex data being gathered.
+    _mm_stream_ps(out.v[c][0], r0), _mm_stream_ps(out.v[c][1], r1), _mm_stream_ps(out.v[c][2], r2);
     if (box) {
       lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
       hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
@@ -110,28 +112,28 @@ TriangleScene::TriangleScene(const Mesh& mesh, const SceneConfig& cfg) : tris_(m
 
 void TriangleScene::update(std::span<const Vec3> positions) {
   const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
-  auto t0 = Clock::now();
+  double t0 = clock_ms(cfg_.clock);
   frame_positions(positions, data_.origin, fpos_);
   const auto V = static_cast<std::uint32_t>(fpos_.size());
   add_sentinel(fpos_);
   const std::span<const Vec3f> fp(fpos_.data(), V);
-  times_.vertices_ms = ms_since(t0);
+  times_.vertices_ms = clock_ms(cfg_.clock) - t0;
 
-  t0 = Clock::now();
+  t0 = clock_ms(cfg_.clock);
   boxes_ = triangle_boxes(fp, tris);
   centroids_ = triangle_centroids(fp, tris);
-  times_.boxes_ms = ms_since(t0);
+  times_.boxes_ms = clock_ms(cfg_.clock) - t0;
 
-  t0 = Clock::now();
-  bvh_ = build_binned_sah({boxes_, centroids_, {}}, cfg_.build);
-  times_.build_ms = ms_since(t0);
+  t0 = clock_ms(cfg_.clock);
+  build_binned_sah({boxes_, centroids_, {}}, cfg_.build, bvh_, ws_);
+  times_.build_ms = clock_ms(cfg_.clock) - t0;
 
-  t0 = Clock::now();
+  t0 = clock_ms(cfg_.clock);
   data_.wide = collapse_to_wide(bvh_);
-  times_.collapse_ms = ms_since(t0);
+  times_.collapse_ms = clock_ms(cfg_.clock) - t0;
 
   // Leaf data: blocks in the order the leaves appear in the wide nodes; leaves become direct.
-  t0 = Clock::now();
+  t0 = clock_ms(cfg_.clock);
   std::uint32_t nblocks = 0;
   for (const WideNode& n : data_.wide.nodes)
     for (int k = 0; k < 4; ++k)
@@ -151,7 +153,8 @@ void TriangleScene::update(std::span<const Vec3> positions) {
       n.child[k] = next;  // direct leaf: count stays the triangle count
       next += blocks_for(n.count[k]);
     }
-  times_.leaf_data_ms = ms_since(t0);
+  _mm_sfence();  // the streaming stores are visible before the blocks are traced
+  times_.leaf_data_ms = clock_ms(cfg_.clock) - t0;
   times_.refit_ms = 0.0;
 }
 
@@ -319,26 +322,25 @@ void ClusterScene::refit_subtrees() {
 void ClusterScene::update(std::span<const Vec3> positions) {
   const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
   const std::size_t C = weights_.size();
-  auto t0 = Clock::now();
+  double t0 = clock_ms(cfg_.clock);
   frame_positions(positions, data_.origin, fpos_);
   const auto V = static_cast<std::uint32_t>(fpos_.size());
   add_sentinel(fpos_);
   const std::span<const Vec3f> fp(fpos_.data(), V);
-  times_.vertices_ms = ms_since(t0);
+  times_.vertices_ms = clock_ms(cfg_.clock) - t0;
 
-  t0 = Clock::now();
-  point_group_boxes(fp, vertex_offsets_, vertices_, boxes_);
-  centroids_ = box_centers(boxes_);
-  times_.boxes_ms = ms_since(t0);
+  t0 = clock_ms(cfg_.clock);
+  point_group_boxes(fp, vertex_offsets_, vertices_, boxes_, centroids_);
+  times_.boxes_ms = clock_ms(cfg_.clock) - t0;
 
-  t0 = Clock::now();
-  bvh_ = build_binned_sah({boxes_, centroids_, weights_}, cfg_.build);
-  times_.build_ms = ms_since(t0);
+  t0 = clock_ms(cfg_.clock);
+  build_binned_sah({boxes_, centroids_, weights_}, cfg_.build, bvh_, ws_);
+  times_.build_ms = clock_ms(cfg_.clock) - t0;
 
   // Collapse, then link: nodes [0, S) are the per-cluster trees (kept from frame to frame),
   // the top tree follows; a leaf of one cluster becomes a link to its tree (BlockTree) or a
   // direct leaf, a leaf of several clusters an indirect one.
-  t0 = Clock::now();
+  t0 = clock_ms(cfg_.clock);
   WideBvh top = collapse_to_wide(bvh_);
   const auto S = static_cast<std::uint32_t>(sub_nodes_.size());
   if (data_.wide.nodes.size() < S) data_.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());
@@ -370,19 +372,20 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   data_.wide.depth = top.depth + sub_depth_;
   data_.wide.leaves = top.leaves;
   if (top.nodes.empty()) data_.wide.nodes.clear();
-  times_.collapse_ms = ms_since(t0);
+  times_.collapse_ms = clock_ms(cfg_.clock) - t0;
 
-  t0 = Clock::now();
+  t0 = clock_ms(cfg_.clock);
   const std::size_t nb = data_.blocks.size();
   block_boxes_.resize(S ? nb : 0);
   for (std::size_t b = 0; b < nb; ++b)
     fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners_.data() + 12 * b), fpos_[0].data(),
                        data_.blocks[b], S ? &block_boxes_[b] : nullptr);
-  times_.leaf_data_ms = ms_since(t0);
+  _mm_sfence();  // the streaming stores are visible before the blocks are traced
+  times_.leaf_data_ms = clock_ms(cfg_.clock) - t0;
 
-  t0 = Clock::now();
+  t0 = clock_ms(cfg_.clock);
   if (S) refit_subtrees();
-  times_.refit_ms = ms_since(t0);
+  times_.refit_ms = clock_ms(cfg_.clock) - t0;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -23,6 +23,7 @@
 #include "bvh/aligned.h"
 #include "bvh/box.h"
 #include "bvh/sah_builder.h"
+#include "bvh/stage_clock.h"
 #include "bvh/wide_bvh.h"
 #include "toolkit/mesh/mesh.h"
 
@@ -72,7 +73,7 @@ struct TraceData {
 [[nodiscard]] std::vector<std::string> validate(const TraceData& data, std::size_t triangle_count,
                                                 bool exact_unions = true);
 
-/// Wall-clock times of the last update's stages, milliseconds.
+/// Times of the last update's stages, milliseconds (wall-clock unless SceneConfig::clock says otherwise).
 struct StageTimes {
   double vertices_ms = 0;   ///< positions into the trace frame (float)
   double boxes_ms = 0;      ///< primitive boxes and centroids
@@ -93,6 +94,7 @@ struct SceneConfig {
   BuildConfig build{};  ///< builder settings (max_leaf_size counts primitives: triangles or clusters)
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
   ClusterLeaf cluster_leaf = ClusterLeaf::BlockTree;  ///< ClusterScene only
+  StageClock clock = StageClock::Wall;  ///< clock of the StageTimes (see stage_clock.h)
 };
 
 /// Default build settings of a triangle scene: SAH traversal 1, intersection 0.3 (a 4-wide node
@@ -124,6 +126,7 @@ class TriangleScene {
   std::vector<Box3f> boxes_;
   std::vector<Vec3f> centroids_;
   Bvh bvh_;
+  BuildWorkspace ws_;  // the builder's scratch, kept between frames
   TraceData data_;
   StageTimes times_;
 };
@@ -178,6 +181,7 @@ class ClusterScene {
   std::vector<Box3f> boxes_;
   std::vector<Vec3f> centroids_;
   Bvh bvh_;
+  BuildWorkspace ws_;  // the builder's scratch, kept between frames
   TraceData data_;
   StageTimes times_;
 };

@@ -3,8 +3,9 @@
 //
 // One traversal code serves both queries (a compile-time flag): a 4-wide BVH walked with one
 // SSE box test per node, children visited nearest first (closest hit) and the stack culled by
-// the best hit so far; leaves test their triangles four at a time with the watertight test of
-// watertight.h (bit-identical to the scalar intersect_triangle).
+// the best hit so far; leaves test their triangles four (SSE2) or eight (AVX2, chosen at run
+// time, see TraceIsa) at a time with the watertight test of watertight.h (bit-identical to the
+// scalar intersect_triangle).
 // Robust traversal: the slab test uses (bound - origin) * (1/dir) with the near and far
 // reciprocals scaled by (1 -/+ 2^-21), which covers the rounding of the subtraction, the
 // reciprocal and the product (2 gamma_3 of Ize 2013 / pbrt), so a box the exact ray touches is
@@ -56,10 +57,19 @@ struct HitBatch {
 
 enum class HitMode { Closest, Any };
 
+/// Instruction set of the traversal code (see tracer_isa.h). Auto: AVX2 when the CPU has it
+/// (checked at run time, like Embree), else SSE2. Both give bit-identical hits and counters;
+/// AVX2 tests the triangles of a leaf 8 at a time instead of 4.
+enum class TraceIsa { Auto, Sse2, Avx2 };
+[[nodiscard]] const char* to_string(TraceIsa isa);
+/// The variant Auto resolves to on this CPU; a forced Avx2 on a CPU without it resolves to Sse2.
+[[nodiscard]] TraceIsa resolve(TraceIsa isa);
+
 struct TraceOptions {
   HitMode mode = HitMode::Closest;
   unsigned threads = 0;   ///< worker threads; 0 = all cores (oneTBB's default)
   bool counters = true;   ///< fill nodes_visited / triangles_tested (false: those arrays are emptied)
+  TraceIsa isa = TraceIsa::Auto;  ///< traversal variant (results do not depend on it)
 };
 
 /// Sums over a batch.
@@ -79,5 +89,8 @@ struct Hit {
 };
 [[nodiscard]] Hit trace_ray(const TraceData& scene, const Vec3& org, const Vec3f& dir, HitMode mode = HitMode::Closest,
                             float tmin = 0.0f, float tmax = std::numeric_limits<float>::infinity());
+/// The same with an explicit traversal variant.
+[[nodiscard]] Hit trace_ray(const TraceData& scene, const Vec3& org, const Vec3f& dir, HitMode mode, float tmin,
+                            float tmax, TraceIsa isa);
 
 }  // namespace ptc::bvh

@@ -58,5 +58,9 @@ void register_info(CLI::App& app, Context& ctx);
 void register_subdivide(CLI::App& app, Context& ctx);
 void register_spheres(CLI::App& app, Context& ctx);
 void register_cluster(CLI::App& app, Context& ctx);
+void register_animate(CLI::App& app, Context& ctx);
+void register_scenes(CLI::App& app, Context& ctx);
+void register_trace(CLI::App& app, Context& ctx);
+void register_bench(CLI::App& app, Context& ctx);
 
 }  // namespace ptc::cli

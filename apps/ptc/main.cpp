@@ -22,6 +22,10 @@ int main(int argc, char** argv) {
   cli::register_subdivide(app, ctx);
   cli::register_spheres(app, ctx);
   cli::register_cluster(app, ctx);
+  cli::register_animate(app, ctx);
+  cli::register_scenes(app, ctx);
+  cli::register_trace(app, ctx);
+  cli::register_bench(app, ctx);
 
   try {
     app.parse(argc, argv);

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -235,6 +236,86 @@ TEST_F(Cli, EverySampleMeshGivesAResultOrAClearError) {
 
 namespace {
 
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> f;
+  std::stringstream ss(line);
+  for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+  return f;
+}
+
+/// The cluster files against each other, item by item: clusters.csv's leading columns and
+/// p_hit = 2 area / bbox_area per row (two-sided); triangles.csv's per-triangle cluster ids counted against
+/// clusters.csv's `triangles`; clusters.ply's per-face cluster_id (binary little endian, parsed
+/// here by hand) equal to triangles.csv; summary.json's distributions with mean, min, p5, p50,
+/// p95, max for every metric, min <= p5 <= p50 <= p95 <= max.
+void expect_cluster_files(const fs::path& out, std::size_t triangles, std::size_t clusters) {
+  std::istringstream csv(slurp(out / "clusters.csv"));
+  std::string line;
+  std::getline(csv, line);
+  const auto cols = split_csv_line(line);
+  const std::vector<std::string> want{"cluster_id", "triangles", "vertices", "connectivity", "reg", "acc",
+                                      "sphere_radius", "sphere_area", "bbox_area", "p_hit"};
+  ASSERT_GE(cols.size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) EXPECT_EQ(cols[i], want[i]);
+  const auto col = [&](const char* name) {
+    return static_cast<std::size_t>(std::find(cols.begin(), cols.end(), name) - cols.begin());
+  };
+  ASSERT_LT(col("area"), cols.size());
+  std::vector<std::size_t> per_cluster;
+  while (std::getline(csv, line)) {
+    const auto f = split_csv_line(line);
+    ASSERT_EQ(f.size(), cols.size());
+    EXPECT_EQ(std::stoull(f[0]), per_cluster.size());
+    per_cluster.push_back(std::stoull(f[1]));
+    const double area = std::stod(f[col("area")]), box = std::stod(f[col("bbox_area")]);
+    // Both sides of a triangle count (cluster_metrics.h: p_hit = Naive = sum 2 Area_i / SA(box)).
+    if (box > 0) EXPECT_NEAR(std::stod(f[col("p_hit")]), 2 * area / box, 1e-12 * (1 + area / box)) << line;
+  }
+  ASSERT_EQ(per_cluster.size(), clusters);
+  std::vector<std::size_t> counted(clusters, 0);
+  std::vector<std::int32_t> label;
+  std::istringstream tri(slurp(out / "triangles.csv"));
+  std::getline(tri, line);
+  while (std::getline(tri, line)) {
+    label.push_back(static_cast<std::int32_t>(std::stoll(line.substr(line.find(',') + 1))));
+    ++counted.at(static_cast<std::size_t>(label.back()));
+  }
+  ASSERT_EQ(label.size(), triangles);
+  EXPECT_EQ(counted, per_cluster);
+  // clusters.ply: header, vertices (3 doubles), faces (uchar 3, 3 int, int cluster_id).
+  const std::string ply = slurp(out / "clusters.ply");
+  const auto end = ply.find("end_header\n");
+  ASSERT_NE(end, std::string::npos);
+  const std::string header = ply.substr(0, end);
+  EXPECT_NE(header.find("format binary_little_endian 1.0"), std::string::npos);
+  EXPECT_NE(header.find("property int cluster_id"), std::string::npos);
+  const auto vpos = header.find("element vertex ");
+  const std::size_t nv = std::stoull(header.substr(vpos + 15));
+  std::size_t at = end + 11 + nv * 24;
+  ASSERT_EQ(ply.size(), at + triangles * 17);
+  for (std::size_t t = 0; t < triangles; ++t, at += 17) {
+    std::int32_t id = 0;
+    std::memcpy(&id, ply.data() + at + 13, 4);  // little-endian host (x86_64)
+    ASSERT_EQ(id, label[t]) << "face " << t;
+  }
+  const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+  const auto& dist = summary["results"]["distributions"];
+  for (const char* metric : {"triangles", "vertices", "connectivity", "reg", "sphere_radius", "sphere_area",
+                             "bbox_area", "p_hit"}) {
+    SCOPED_TRACE(metric);
+    ASSERT_TRUE(dist.contains(metric));
+    for (const char* k : {"mean", "min", "p5", "p50", "p95", "max"}) ASSERT_TRUE(dist[metric].contains(k)) << k;
+    const auto& d = dist[metric];
+    EXPECT_LE(d["min"].get<double>(), d["p5"].get<double>());
+    EXPECT_LE(d["p5"].get<double>(), d["p50"].get<double>());
+    EXPECT_LE(d["p50"].get<double>(), d["p95"].get<double>());
+    EXPECT_LE(d["p95"].get<double>(), d["max"].get<double>());
+    EXPECT_LE(d["min"].get<double>(), d["mean"].get<double>());
+    EXPECT_LE(d["mean"].get<double>(), d["max"].get<double>());
+  }
+  EXPECT_EQ(dist["triangles"]["mean"].get<double>(), double(triangles) / double(clusters));
+}
+
 TEST_F(Cli, ClusterWritesTheFourFilesConsistently) {
   const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
   const auto out = dir_ / "clu";
@@ -265,6 +346,7 @@ TEST_F(Cli, ClusterWritesTheFourFilesConsistently) {
     r = ptc({"info", (out / "clusters.ply").string(), "--json"});
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(nlohmann::json::parse(r.out)["triangles"], n);
+    expect_cluster_files(out, n, clusters);
   }
 }
 

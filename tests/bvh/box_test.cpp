@@ -17,8 +17,12 @@ TEST(Box, RoundingDirections) {
     EXPECT_LE(double(round_down(x)), x) << x;
     EXPECT_GE(double(round_up(x)), x) << x;
     // tight: the next float inwards is on the other side (or x is exactly representable)
-    if (double(round_down(x)) != x) EXPECT_GT(double(std::nextafter(round_down(x), kInf)), x) << x;
-    if (double(round_up(x)) != x) EXPECT_LT(double(std::nextafter(round_up(x), -kInf)), x) << x;
+    if (double(round_down(x)) != x) {
+      EXPECT_GT(double(std::nextafter(round_down(x), kInf)), x) << x;
+    }
+    if (double(round_up(x)) != x) {
+      EXPECT_LT(double(std::nextafter(round_up(x), -kInf)), x) << x;
+    }
   }
   EXPECT_EQ(round_down(1.0), 1.0f);
   EXPECT_EQ(round_up(1.0), 1.0f);
@@ -32,7 +36,7 @@ TEST(Box, BoxesContainDoubleAndFloatTriangles) {
   std::mt19937 g(5);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
   for (double scale : {1e-3, 1.0, 1e3}) {
-    for (const Vec3 offset : {Vec3(0, 0, 0), Vec3(1e7, -1e7, 3e6)}) {
+    for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(1e7, -1e7, 3e6)}) {
       std::vector<Vec3> pos;
       std::vector<Tri> tris;
       for (std::uint32_t t = 0; t < 2000; ++t) {
@@ -43,7 +47,7 @@ TEST(Box, BoxesContainDoubleAndFloatTriangles) {
       pos.push_back(Vec3(-0.0, 1, 2));
       pos.push_back(Vec3(1, -0.0, 0));
       tris.push_back({6000, 6001, 6002});
-      for (const Vec3 origin : {Vec3(0, 0, 0), offset}) {
+      for (const Vec3& origin : {Vec3(0, 0, 0), offset}) {
         const auto exact = triangle_boxes(pos, tris, origin);
         std::vector<Vec3f> fp;
         frame_positions(pos, origin, fp);
@@ -91,6 +95,44 @@ TEST(Box, EmptyAndDegenerate) {
   point_group_boxes(std::span<const Vec3f>(), offs, {}, g);
   ASSERT_EQ(g.size(), 1u);
   EXPECT_TRUE(g[0].empty());
+}
+
+// The fused per-frame box update (boxes and centres in one pass, 16-byte loads) equals the
+// plain one and Box3f::center() bit for bit: empty groups, single vertices, groups that end
+// with the last vertex of the array (where a 16-byte load would read past the end), negative
+// and zero coordinates, and reused output vectors of another size.
+TEST(Box, FusedGroupBoxesEqualThePlainOnes) {
+  std::mt19937 g(11);
+  std::uniform_real_distribution<float> U(-5.0f, 5.0f);
+  std::vector<Vec3f> fp(101);
+  for (Vec3f& p : fp) p = {U(g), U(g), U(g)};
+  fp[7] = {0.0f, -0.0f, 0.0f};
+  const auto last = static_cast<std::uint32_t>(fp.size() - 1);
+  const std::vector<std::uint32_t> offsets{0, 0, 1, 4, 4, 9, 11, 12};
+  const std::vector<std::uint32_t> indices{last, 7, 3, last, 1, 2, 3, 4, 5, 50, last, last};
+  std::vector<Box3f> plain, fused(3);
+  std::vector<Vec3f> centers(1);
+  point_group_boxes(fp, offsets, indices, plain);
+  point_group_boxes(fp, offsets, indices, fused, centers);
+  ASSERT_EQ(fused.size(), offsets.size() - 1);
+  ASSERT_EQ(centers.size(), fused.size());
+  const auto want_centers = box_centers(plain);
+  for (std::size_t i = 0; i < fused.size(); ++i) {
+    EXPECT_EQ(fused[i], plain[i]) << i;
+    for (int a = 0; a < 3; ++a) {
+      if (plain[i].empty()) continue;  // (the centre of the empty box is NaN)
+      EXPECT_EQ(centers[i][a], want_centers[i][a]) << i;
+    }
+  }
+  EXPECT_TRUE(fused[0].empty());
+  EXPECT_TRUE(fused[3].empty());
+  // Independent check: every group's box contains its points and is at most one ulp loose.
+  for (std::size_t gi = 0; gi + 1 < offsets.size(); ++gi)
+    for (std::uint32_t i = offsets[gi]; i < offsets[gi + 1]; ++i)
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_LT(fused[gi].lo[a], fp[indices[i]][a]);
+        EXPECT_GT(fused[gi].hi[a], fp[indices[i]][a]);
+      }
 }
 
 }  // namespace

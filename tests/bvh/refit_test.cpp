@@ -50,6 +50,10 @@ TEST(Refit, EqualsBoxesRecomputedFromTheSameTopology) {
     changed += !(bvh.nodes[i].bounds == before.nodes[i].bounds);
   }
   EXPECT_GT(changed, expect.size() / 2);  // the deformation really moved the boxes
+  // The refitted root is the rebuilt root: both are the union of all the new boxes.
+  const Bvh rebuilt = build_binned_sah({new_boxes, triangle_centroids(moved.positions(), moved.triangles()), {}}, {});
+  EXPECT_EQ(bvh.nodes[0].bounds, rebuilt.nodes[0].bounds);
+  EXPECT_EQ(bvh.nodes[0].bounds, union_of(new_boxes));
   EXPECT_EQ(bvh.prim_order, before.prim_order);
   EXPECT_TRUE(validate(bvh, new_boxes).empty()) << test::joined(validate(bvh, new_boxes));
   // Refitting back to the old boxes restores the original tree exactly.

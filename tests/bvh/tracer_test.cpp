@@ -12,6 +12,7 @@
 #include "bvh/morton_runs.h"
 #include "bvh/trace_scene.h"
 #include "test_util.h"
+#include "toolkit/clustering/cluster.h"
 
 namespace ptc::bvh {
 namespace {
@@ -131,6 +132,13 @@ TEST_P(TracerKinds, RandomRaysMatchBruteForceRayByRay) {
     const Hit got = trace_ray(s.data(), rays.org[i], rays.dir[i]);
     expect_same(got, want, std::string(name(GetParam())) + " ray " + std::to_string(i));
     EXPECT_GT(got.nodes_visited, 0u);
+    // Both instruction-set variants, forced: the same hit and the same counters.
+    for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2}) {
+      const Hit h = trace_ray(s.data(), rays.org[i], rays.dir[i], HitMode::Closest, 0.0f, kInf, isa);
+      expect_same(h, want, std::string(to_string(isa)) + " ray " + std::to_string(i));
+      ASSERT_EQ(h.nodes_visited, got.nodes_visited);
+      ASSERT_EQ(h.triangles_tested, got.triangles_tested);
+    }
     hits += want.hit();
     // Any hit: occluded iff the closest hit exists; the reported triangle really is hit.
     const Hit any = trace_ray(s.data(), rays.org[i], rays.dir[i], HitMode::Any);
@@ -160,13 +168,24 @@ TEST_P(TracerKinds, BatchEqualsSingleRaysForAnyThreadCount) {
   rays.resize(rs.org.size());
   for (std::size_t i = 0; i < rs.org.size(); ++i) rays.set(i, rs.org[i], rs.dir[i]);
   for (HitMode mode : {HitMode::Closest, HitMode::Any}) {
-    HitBatch h1, h2;
+    HitBatch h1, h2, hs;
     TraceOptions opt;
     opt.mode = mode;
     opt.threads = 1;
     const TraceTotals t1 = trace(s.data(), rays, h1, opt);
     opt.threads = 2;
     const TraceTotals t2 = trace(s.data(), rays, h2, opt);
+    opt.isa = TraceIsa::Sse2;  // the baseline variant gives the same batch, field by field
+    const TraceTotals ts = trace(s.data(), rays, hs, opt);
+    EXPECT_EQ(ts.hits, t1.hits);
+    EXPECT_EQ(ts.nodes_visited, t1.nodes_visited);
+    EXPECT_EQ(ts.triangles_tested, t1.triangles_tested);
+    EXPECT_EQ(hs.triangle, h1.triangle);
+    EXPECT_EQ(hs.t, h1.t);
+    EXPECT_EQ(hs.u, h1.u);
+    EXPECT_EQ(hs.v, h1.v);
+    EXPECT_EQ(hs.nodes_visited, h1.nodes_visited);
+    EXPECT_EQ(hs.triangles_tested, h1.triangles_tested);
     EXPECT_EQ(t1.rays, rays.size());
     EXPECT_EQ(t1.hits, t2.hits);
     EXPECT_EQ(t1.nodes_visited, t2.nodes_visited);
@@ -405,6 +424,40 @@ TEST(Tracer, DoubleFallbackDecidesAnEdgeFunctionThatRoundsToZero) {
   const Hit h = trace_ray(s.data(), Vec3::Zero(), {0, 0, 1});
   EXPECT_EQ(h.triangle, 1u);
   expect_same(h, test::brute_force(m, Vec3::Zero(), Vec3::Zero(), {0, 0, 1}), "fallback");
+}
+
+// The method's clusters (toolkit/clustering: growth, Acc, MaxCount = MaxSize = 50, the bench's
+// configuration) in both leaf modes, over two animated frames: ray by ray equal to brute force,
+// any-hit agreeing with closest-hit on occlusion.
+TEST(Tracer, AccClustersMatchBruteForce) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  ClusterConfig cc;
+  cc.method = ClusterMethod::Growth;
+  cc.objective = ObjectiveKind::Acc;
+  cc.max_count = 50;
+  cc.max_size = 50;
+  const Clustering cl = cluster_mesh(m, cc);
+  ASSERT_GT(cl.cluster_count(), 10u);
+  const Mesh moved = test::deformed(m, 0.03);
+  for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
+    SceneConfig cfg = cluster_scene_defaults();
+    cfg.cluster_leaf = mode;
+    ClusterScene s(m, view_of(cl), cfg);
+    for (const Mesh* frame : {&m, &moved}) {
+      s.update(frame->positions());
+      const auto issues = validate(s.data(), m.triangle_count(), false);
+      ASSERT_TRUE(issues.empty()) << test::joined(issues);
+      const RaySet rs = random_rays(*frame, 200, 31);
+      int hits = 0;
+      for (std::size_t i = 0; i < rs.org.size(); ++i) {
+        const Hit want = test::brute_force(*frame, s.data().origin, rs.org[i], rs.dir[i]);
+        expect_same(trace_ray(s.data(), rs.org[i], rs.dir[i]), want, std::string(to_string(mode)) + " acc ray");
+        EXPECT_EQ(trace_ray(s.data(), rs.org[i], rs.dir[i], HitMode::Any).hit(), want.hit());
+        hits += want.hit();
+      }
+      EXPECT_GT(hits, 60);
+    }
+  }
 }
 
 }  // namespace

@@ -17,11 +17,13 @@
 #include <vector>
 
 #include "toolkit/io/mesh_io.h"
+#include "test_meshes.h"
 
 namespace ptc {
 namespace {
 
 using Ids = std::vector<std::uint32_t>;
+using namespace test_meshes;  // bumpy_grid, expect_partition_within_limits, joined
 
 ClusterConfig config(std::uint32_t max_count, std::uint32_t max_triangles = 0) {
   ClusterConfig c;
@@ -31,42 +33,6 @@ ClusterConfig config(std::uint32_t max_count, std::uint32_t max_triangles = 0) {
   return c;
 }
 
-Mesh grid(std::uint32_t nx, std::uint32_t ny) {
-  std::vector<Vec3> p;
-  for (std::uint32_t y = 0; y <= ny; ++y)
-    for (std::uint32_t x = 0; x <= nx; ++x) p.emplace_back(x, y, 0.25 * ((x * 7 + y * 3) % 5));
-  std::vector<Tri> t;
-  for (std::uint32_t y = 0; y < ny; ++y)
-    for (std::uint32_t x = 0; x < nx; ++x) {
-      const std::uint32_t a = y * (nx + 1) + x, b = a + 1, c = a + nx + 1, d = c + 1;
-      t.push_back({a, b, d});
-      t.push_back({a, d, c});
-    }
-  return Mesh(std::move(t), std::move(p));
-}
-
-void expect_partition_within_limits(const Clustering& c, const Mesh& m, const ClusterLimits& lim) {
-  ASSERT_EQ(c.triangle_order.size(), m.triangle_count());
-  std::vector<int> seen(m.triangle_count(), 0);
-  for (std::size_t k = 0; k < c.cluster_count(); ++k) {
-    const auto ts = c.triangles_of(k);
-    EXPECT_FALSE(ts.empty());
-    std::set<std::uint32_t> v;
-    for (auto t : ts) {
-      ++seen[t];
-      v.insert(m.triangle(t).begin(), m.triangle(t).end());
-    }
-    EXPECT_LE(ts.size(), lim.max_triangles) << "cluster " << k;
-    EXPECT_LE(v.size(), lim.max_vertices) << "cluster " << k;
-  }
-  for (std::size_t t = 0; t < seen.size(); ++t) EXPECT_EQ(seen[t], 1) << "triangle " << t;
-}
-
-std::string joined(const std::vector<std::string>& issues) {
-  std::string s;
-  for (const auto& i : issues) s += i + "\n";
-  return s;
-}
 
 void expect_contract(const Mesh& m, const ClusterConfig& cfg) {
   const ClusterLimits lim = meshopt_limits(cfg);
@@ -111,7 +77,7 @@ TEST(MeshoptLimits, MapsOntoMeshoptimizer018Range) {
     EXPECT_NE(std::string(e.what()).find("[3, 255]"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("300"), std::string::npos) << e.what();
   }
-  EXPECT_THROW((void)meshopt_clusters(grid(2, 2), config(256)), std::invalid_argument);
+  EXPECT_THROW((void)meshopt_clusters(bumpy_grid(2, 2), config(256)), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -203,7 +169,7 @@ TEST(Meshopt, OnlyDegenerateTrianglesAndAllPositionsEqual) {
   const Mesh deg({{0, 0, 1}, {2, 2, 2}, {1, 1, 1}, {0, 1, 0}}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)});
   expect_contract(deg, config(3));
   expect_contract(deg, config(50));
-  const Mesh g = grid(6, 6);
+  const Mesh g = bumpy_grid(6, 6);
   expect_contract(g.with_positions(std::vector<Vec3>(g.vertex_count(), Vec3(1, 2, 3))), config(10));
 }
 
@@ -239,7 +205,7 @@ TEST(Meshopt, NonManifoldFan) {
 }
 
 TEST(Meshopt, DegenerateAndDuplicateTriangles) {
-  const Mesh g = grid(10, 10);
+  const Mesh g = bumpy_grid(10, 10);
   std::vector<Tri> t(g.triangles().begin(), g.triangles().end());
   const auto n = static_cast<std::uint32_t>(t.size());
   for (std::uint32_t i = 0; i < n; i += 3) t.push_back({t[i][0], t[i][2], t[i][1]});
@@ -265,7 +231,7 @@ TEST(Meshopt, FarOffsetTinyAndHugeScales) {
   // Positions are normalised before the float conversion: far-away, tiny (below float's range)
   // and huge (above it) meshes still give valid clusters, and a power-of-two scale (exact in
   // every step) gives bit-identical ones.
-  const Mesh g = grid(20, 20);
+  const Mesh g = bumpy_grid(20, 20);
   const Clustering base = meshopt_clusters(g, config(20));
   for (const double s : {std::ldexp(1.0, -140), std::ldexp(1.0, 140), 1e-45, 1e45}) {
     std::vector<Vec3> p;

@@ -23,39 +23,25 @@
 #include "toolkit/geometry/triangle.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/topology.h"
+#include "test_meshes.h"
 
 namespace ptc {
 namespace {
 
 using Ids = std::vector<std::uint32_t>;
+using namespace test_meshes;  // jitter, regular_tetrahedron, load (grid, book, degenerate_mix: own jittered versions)
 
-// ---- Meshes -------------------------------------------------------------------------------
-
-/// Deterministic jitter in [-1, 1] (splitmix64; independent of the standard library).
-double jitter(std::uint64_t i) {
-  std::uint64_t z = i + 0x9E3779B97F4A7C15ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  z ^= z >> 31;
-  return static_cast<double>(z >> 11) * 0x1.0p-52 - 1.0;
-}
+// ---- Meshes (own jittered variants; the shared ones are in test_meshes.h) -----------------
 
 /// nx x ny quads, each split into two triangles, in z = 0 plus `amp` x jitter on all axes.
 Mesh grid(int nx, int ny, double amp, std::uint64_t seed = 1) {
-  std::vector<Vec3> p;
-  for (int j = 0; j <= ny; ++j)
-    for (int i = 0; i <= nx; ++i) {
-      const std::uint64_t k = 3 * (seed * 1000 + p.size());
-      p.emplace_back(i + amp * jitter(k), j + amp * jitter(k + 1), amp * jitter(k + 2));
-    }
-  std::vector<Tri> t;
-  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (nx + 1) + i); };
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      t.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      t.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return Mesh(std::move(t), std::move(p));
+  const Mesh g = test_meshes::grid(nx, ny);
+  std::vector<Vec3> p(g.positions().begin(), g.positions().end());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const std::uint64_t k = 3 * (seed * 1000 + i);
+    p[i] += amp * Vec3(jitter(k), jitter(k + 1), jitter(k + 2));
+  }
+  return g.with_positions(std::move(p));
 }
 
 /// Four triangles on one edge (valence 4: non-manifold) plus a triangle on each free side of two of
@@ -81,15 +67,6 @@ Mesh degenerate_mix() {
   t.push_back({3, 3, 3});
   return Mesh(std::move(t), std::move(p));
 }
-
-/// Regular tetrahedron (outward normals): its unit normals sum to zero.
-Mesh regular_tetrahedron() {
-  std::vector<Vec3> p{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
-  std::vector<Tri> t{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
-  return Mesh(std::move(t), std::move(p));
-}
-
-Mesh load(const char* name) { return read_mesh(std::string(PTC_TEST_DATA) + "/meshes/" + name).mesh; }
 
 // ---- Independent construction of a candidate merge ------------------------------------------
 

@@ -15,11 +15,13 @@
 #include <vector>
 
 #include "toolkit/io/mesh_io.h"
+#include "test_meshes.h"
 
 namespace ptc {
 namespace {
 
 using Ids = std::vector<std::uint32_t>;
+using namespace test_meshes;  // grid, concat, expect_partition_within_limits, joined
 
 ClusterConfig config(std::uint32_t max_count, std::uint32_t max_triangles = 0) {
   ClusterConfig c;
@@ -27,55 +29,6 @@ ClusterConfig config(std::uint32_t max_count, std::uint32_t max_triangles = 0) {
   c.max_count = max_count;
   c.max_triangles = max_triangles;
   return c;
-}
-
-// Grid of nx * ny unit quads in the plane z = z0, shifted by x0 along x.
-Mesh grid(std::uint32_t nx, std::uint32_t ny, double x0 = 0, double z0 = 0) {
-  std::vector<Vec3> p;
-  for (std::uint32_t y = 0; y <= ny; ++y)
-    for (std::uint32_t x = 0; x <= nx; ++x) p.emplace_back(x0 + x, y, z0);
-  std::vector<Tri> t;
-  for (std::uint32_t y = 0; y < ny; ++y)
-    for (std::uint32_t x = 0; x < nx; ++x) {
-      const std::uint32_t a = y * (nx + 1) + x, b = a + 1, c = a + nx + 1, d = c + 1;
-      t.push_back({a, b, d});
-      t.push_back({a, d, c});
-    }
-  return Mesh(std::move(t), std::move(p));
-}
-
-Mesh concat(const Mesh& a, const Mesh& b) {
-  std::vector<Vec3> p(a.positions().begin(), a.positions().end());
-  p.insert(p.end(), b.positions().begin(), b.positions().end());
-  std::vector<Tri> t(a.triangles().begin(), a.triangles().end());
-  const auto off = static_cast<std::uint32_t>(a.vertex_count());
-  for (Tri f : b.triangles()) t.push_back({f[0] + off, f[1] + off, f[2] + off});
-  return Mesh(std::move(t), std::move(p));
-}
-
-// Checks the result item by item against the mesh, without validate(): every triangle exactly
-// once, and every cluster's triangle and distinct-vertex counts within the limits.
-void expect_partition_within_limits(const Clustering& c, const Mesh& m, const ClusterLimits& lim) {
-  ASSERT_EQ(c.triangle_order.size(), m.triangle_count());
-  std::vector<int> seen(m.triangle_count(), 0);
-  for (std::size_t k = 0; k < c.cluster_count(); ++k) {
-    const auto ts = c.triangles_of(k);
-    EXPECT_FALSE(ts.empty());
-    std::set<std::uint32_t> v;
-    for (auto t : ts) {
-      ++seen[t];
-      v.insert(m.triangle(t).begin(), m.triangle(t).end());
-    }
-    EXPECT_LE(ts.size(), lim.max_triangles) << "cluster " << k;
-    EXPECT_LE(v.size(), lim.max_vertices) << "cluster " << k;
-  }
-  for (std::size_t t = 0; t < seen.size(); ++t) EXPECT_EQ(seen[t], 1) << "triangle " << t;
-}
-
-std::string joined(const std::vector<std::string>& issues) {
-  std::string s;
-  for (const auto& i : issues) s += i + "\n";
-  return s;
 }
 
 // The full contract: leaves partition the mesh within the limits; clusters additionally pass

@@ -58,9 +58,17 @@ struct ClusterConfig {
 /// Progress callback: fraction done in [0, 1]; called at most a few hundred times.
 using ProgressFn = std::function<void(double)>;
 
-/// Clusters the mesh's triangles. Deterministic (same input, same output, bit for bit) and
-/// invariant under rigid motion of the input (up to rounding ties). Throws std::invalid_argument
-/// on an inconsistent configuration (e.g. max_count = 0 with max_size > 0).
+/// Clusters the mesh's triangles. Deterministic (same input, same output, bit for bit, every
+/// method; tested). Invariance (tested in clustering_frontdoor_test and the method tests):
+/// - rigid motion (rotation + translation; up to rounding ties): contraction with Acc or GWH01;
+///   growth with Acc or GWH01 and StartRule::IndexOrder (the spatial and fewest-free rules order
+///   by Morton code, which is axis-aligned: translation only);
+/// - NOT rotation: the Naive objective (it scores axis-aligned boxes), sah-split (axis-aligned
+///   planes), meshopt (axis-aligned kd-tree and start); all of them are invariant under uniform
+///   scaling by a power of two (exact in floating point), and a rotated input is still clustered
+///   validly. Translation changes only rounding for them.
+/// Throws std::invalid_argument on an inconsistent configuration (e.g. max_count = 0 with
+/// max_size > 0).
 [[nodiscard]] Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress = {});
 
 }  // namespace ptc

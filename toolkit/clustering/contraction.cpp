@@ -1,9 +1,11 @@
 #include "toolkit/clustering/contraction.h"
 
 #include <algorithm>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
+#include <boost/graph/adjacency_list.hpp>
 
 namespace ptc {
 
@@ -118,11 +120,20 @@ class EntryHeap {
   std::vector<Stamps> stamps_;
 };
 
-/// An adjacent cluster and 2 x the length of the manifold mesh edges the two share.
-struct Neighbour {
-  std::uint32_t id;
-  double shared2;
+/// Edge property of the cluster graph for objectives that measure the boundary: 2 x the length
+/// of the manifold mesh edges the two clusters share (kept equal on both arcs of a pair).
+struct SharedLength {
+  double shared2 = 0;
 };
+
+/// The cluster graph (contraction.h, "Graph"): a Boost.Graph adjacency_list whose vertices are the
+/// clusters (vertex c = the cluster whose id is c; a dead cluster is an isolated vertex) and whose
+/// arcs come in pairs (c -> x and x -> c for every adjacent pair). directedS with vecS out-edge
+/// lists: no global edge list (undirectedS keeps one in a std::list, a node allocation per edge),
+/// and without an edge property (Acc, Naive) an arc is one stored vertex index.
+template <bool kBoundary>
+using ClusterGraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::directedS, boost::no_property,
+                                           std::conditional_t<kBoundary, SharedLength, boost::no_property>>;
 
 }  // namespace
 
@@ -163,14 +174,14 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   };
 
   // ---- Adjacency: the dual graph (ClusterTables' CSR; the same pairs as build_dual_graph,
-  // tested) as one sorted list per cluster, with 2 x the length of the manifold mesh edges shared.
-  std::vector<std::vector<Neighbour>> adj(T);
-  std::size_t adj_total = 0;  // sum of the list sizes = 2 x live pairs
+  // tested) as the Boost.Graph cluster graph, with 2 x the length of the manifold mesh edges
+  // shared when the objective measures the boundary.
+  using Graph = ClusterGraph<O::kUsesBoundary>;
+  Graph g(T);
+  std::size_t adj_total = 0;  // arcs in g = 2 x live pairs
   for (std::uint32_t t = 0; t < T; ++t) {
-    const auto nb = tb.neighbours_of(t);
-    auto& list = adj[t];
-    list.reserve(nb.size());
-    for (std::uint32_t u : nb) list.push_back({u, 0.0});  // ascending, distinct
+    for (std::uint32_t u : tb.neighbours_of(t)) boost::add_edge(t, u, g);  // symmetric: both arcs
+    adj_total += tb.neighbours_of(t).size();
     if constexpr (O::kUsesBoundary) {
       std::uint32_t es[3];
       const int ne = tb.distinct_edges(t, es);
@@ -178,11 +189,10 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
         if (tb.edges.valence(es[i]) != 2) continue;  // non-manifold edges: counted per merge (nm lists)
         const auto ts = tb.edges.triangles_of(es[i]);
         const std::uint32_t u = ts[0] == t ? ts[1] : ts[0];
-        for (Neighbour& n : list)
-          if (n.id == u) n.shared2 += 2.0 * tb.edge_length[es[i]];
+        const auto [e, found] = boost::edge(t, u, g);
+        if (found) g[e].shared2 += 2.0 * tb.edge_length[es[i]];
       }
     }
-    adj_total += list.size();
   }
   // Non-manifold edges (valence >= 3) per cluster, and a union-find to count their triangles per
   // cluster (only needed by objectives that measure the boundary, and only on such meshes).
@@ -211,9 +221,12 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   std::uint32_t stamp = 0, stamped = 0xffffffffu, stamped_version = 0;
   std::vector<std::uint32_t> added, shared;
   auto shared2_of = [&](std::uint32_t a, std::uint32_t b) {
-    const auto& l = adj[a];
-    auto it = std::lower_bound(l.begin(), l.end(), b, [](const Neighbour& n, std::uint32_t id) { return n.id < id; });
-    return it != l.end() && it->id == b ? it->shared2 : 0.0;
+    if constexpr (O::kUsesBoundary) {
+      const auto [e, found] = boost::edge(a, b, g);
+      return found ? g[e].shared2 : 0.0;
+    } else {
+      return 0.0;
+    }
   };
   // Canonical roles: `a` is the pair's cluster with more vertices (ties: the smaller id), so that
   // a pair is always evaluated the same way (bit-identical scores at push and at pop).
@@ -288,9 +301,10 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     return true;
   };
   for (std::uint32_t t = 0; t < T; ++t)
-    for (const Neighbour& n : adj[t]) {
+    for (const auto arc : boost::make_iterator_range(boost::out_edges(t, g))) {
+      const auto x = static_cast<std::uint32_t>(boost::target(arc, g));
       Entry e;
-      if (n.id > t && entry_of(t, n.id, e)) heap.append(e);
+      if (x > t && entry_of(t, x, e)) heap.append(e);
     }
   heap.heapify();
   auto current = [&](const Entry& e) {
@@ -312,7 +326,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   const std::uint64_t report_every = std::max<std::uint64_t>(1, T / 256);
   std::uint64_t merges = 0;
   std::vector<std::uint32_t> union_verts;
-  std::vector<Neighbour> new_adj;
+  std::vector<std::uint32_t> mark(T, 0);  // mark[x] == merges + 1: x is a neighbour of lo (this merge)
   while (!heap.empty()) {
     if (options.target_clusters > 0 && alive_count <= options.target_clusters) break;
     const Entry top = heap.top();
@@ -370,46 +384,37 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
       parent[gone] = keep;
     }
 
-    // Adjacency: keep's list = lo's and hi's lists without each other, shared lengths summed.
-    new_adj.clear();
-    {
-      const auto& l1 = adj[lo];
-      const auto& l2 = adj[hi];
-      std::size_t i = 0, j = 0;
-      while (i < l1.size() || j < l2.size()) {
-        Neighbour n;
-        if (j == l2.size() || (i < l1.size() && l1[i].id < l2[j].id)) {
-          n = l1[i++];
-        } else if (i == l1.size() || l2[j].id < l1[i].id) {
-          n = l2[j++];
-        } else {
-          n = {l1[i].id, l1[i].shared2 + l2[j].shared2};
-          ++i;
-          ++j;
+    // Adjacency, on the Boost graph: lo's arcs to hi and hi's arcs go; every other neighbour x of
+    // hi becomes a neighbour of lo (shared lengths summed when x already was one).
+    const std::uint32_t tag = static_cast<std::uint32_t>(merges + 1);
+    for (const auto arc : boost::make_iterator_range(boost::out_edges(lo, g)))
+      mark[boost::target(arc, g)] = tag;
+    boost::remove_edge(lo, hi, g);
+    --adj_total;
+    for (const auto arc : boost::make_iterator_range(boost::out_edges(hi, g))) {
+      const auto x = static_cast<std::uint32_t>(boost::target(arc, g));
+      if (x == lo) continue;
+      boost::remove_edge(x, hi, g);
+      if (mark[x] == tag) {  // already adjacent to lo
+        if constexpr (O::kUsesBoundary) {
+          const double w = g[arc].shared2;
+          g[boost::edge(lo, x, g).first].shared2 += w;
+          g[boost::edge(x, lo, g).first].shared2 += w;
         }
-        if (n.id != lo && n.id != hi) new_adj.push_back(n);
-      }
-    }
-    adj_total -= adj[lo].size() + adj[hi].size();
-    for (const Neighbour& n : new_adj) {  // in x's list: drop hi, (re)point lo
-      auto& l = adj[n.id];
-      auto at = [&](std::uint32_t id) {
-        return std::lower_bound(l.begin(), l.end(), id, [](const Neighbour& m, std::uint32_t v) { return m.id < v; });
-      };
-      if (auto it = at(hi); it != l.end() && it->id == hi) {
-        l.erase(it);
-        --adj_total;
-      }
-      if (auto it = at(lo); it != l.end() && it->id == lo) {
-        it->shared2 = n.shared2;
+        --adj_total;  // x -> hi went (hi -> x: below)
       } else {
-        l.insert(it, {lo, n.shared2});
-        ++adj_total;
+        if constexpr (O::kUsesBoundary) {
+          boost::add_edge(lo, x, SharedLength{g[arc].shared2}, g);
+          boost::add_edge(x, lo, SharedLength{g[arc].shared2}, g);
+        } else {
+          boost::add_edge(lo, x, g);
+          boost::add_edge(x, lo, g);
+        }
+        ++adj_total;  // x -> hi went, lo -> x and x -> lo came
       }
     }
-    adj[keep].swap(new_adj);
-    std::vector<Neighbour>().swap(adj[gone]);
-    adj_total += adj[keep].size();
+    adj_total -= boost::out_degree(hi, g);
+    boost::clear_out_edges(hi, g);
     alive[gone] = 0;
     ++version[keep];
     stamped = keep;  // the stamps mark V(keep) (see above)
@@ -418,9 +423,9 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     if (options.record_merges) run.merges.push_back({keep, gone, ev.score});
     if (++merges % report_every == 0 && progress) progress(static_cast<double>(merges) / T);
 
-    for (const Neighbour& n : adj[keep]) {
+    for (const auto arc : boost::make_iterator_range(boost::out_edges(keep, g))) {
       Entry e;
-      if (entry_of(keep, n.id, e)) heap.push(e);
+      if (entry_of(keep, static_cast<std::uint32_t>(boost::target(arc, g)), e)) heap.push(e);
     }
     // Purge stale entries once they outnumber the live pairs (memory O(live pairs)).
     if (heap.size() > adj_total + 1024) heap.purge([&](const Entry& e) { return !current(e); });

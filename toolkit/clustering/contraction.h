@@ -5,15 +5,23 @@
 // no edge is positive" and GWH01, which contracts the lowest COST; Acc is a gain, so the highest
 // is contracted -- method.md.)
 //
-// Graph: the dual graph (a node per triangle, an edge per pair of triangles on a mesh edge,
-// including every pair on a non-manifold edge; parallel dual edges -- triangles sharing two
-// edges -- become one cluster pair) as one sorted adjacency list per cluster: (neighbour id,
-// 2 x the length of the manifold mesh edges the two share), contracted in place. The lists are
-// initialised from ClusterTables' CSR adjacency, which clustering_objectives_test checks
-// pair-for-pair against topology.h's Boost.Graph build_dual_graph. Why not contract that Boost
-// adjacency_list itself: it stores its edges in a std::list, and building it plus copying it into
-// mutable lists cost ~0.75 s of the ~6 s contraction of the 832k-triangle armadillo (measured),
-// while the contraction only ever needs per-cluster neighbour lists.
+// Graph: the cluster graph is a Boost.Graph boost::adjacency_list (vecS, vecS, directedS) whose
+// vertex c is the cluster with id c. It starts as the dual graph (a vertex per triangle, an arc
+// pair per two triangles on a mesh edge, including every pair on a non-manifold edge; parallel
+// dual edges -- triangles sharing two edges -- become one pair), built from ClusterTables' CSR
+// adjacency, which clustering_objectives_test checks pair-for-pair against topology.h's
+// build_dual_graph. Each merge mutates it with Boost's own operations: remove_edge (lo -> hi,
+// x -> hi), add_edge (lo <-> x for hi's other neighbours), clear_out_edges(hi); the neighbours
+// whose entries are refreshed are read with out_edges(lo). Objectives that measure the boundary
+// (GWH01) carry an edge property: 2 x the length of the manifold mesh edges the two clusters
+// share, summed on merge. Why directedS with arc pairs, not undirectedS: an undirected
+// adjacency_list also keeps a global std::list of edges (a node allocation per edge, and
+// clear_vertex walks it), which the contraction never needs. Cost of Boost against the
+// previous hand-written sorted adjacency lists, measured alternately in one session on the 832k
+// mesh at MaxCount = MaxSize = 50 (same clusters, same work counters; CPU s): Acc 6.3/6.7 ->
+// 7.6/8.3, GWH01 6.8/6.5 -> 7.5/8.1, i.e. +10..25%, mostly remove_edge's linear erase and vector
+// growth; still inside the 10 s target (docs/clustering.md).
+// The order of out_edges does not matter: the queue's order is a strict order on (score, pair).
 // A cluster's id is its smallest triangle id, so a merge keeps the smaller id.
 //
 // Priority queue: a max-heap of entries (score, exact?, pair (lo, hi), version stamps of

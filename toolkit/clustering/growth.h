@@ -33,8 +33,8 @@
 // (O(1) each; Naive and GWH01 are exact there, GWH01 with a 3x3 eigen-solve) plus a few
 // refinements per step (Acc: one pass over the cluster's vertices for the diameter bound, three
 // for the three-point sphere, rarely a CGAL sphere); memory O(T + V). Measured (bench/
-// clustering_bench.cpp, Acc, armadillo subdivided to 832k triangles, one thread): 0.9 s, 1.5 s,
-// 2.0 s at MaxCount = MaxSize = 10, 50, 100.
+// clustering_bench.cpp, Acc, armadillo subdivided to 832k triangles, one thread, CPU time):
+// 0.83 s, 1.49 s, 1.96 s at MaxCount = MaxSize = 10, 50, 100 (docs/clustering.md).
 // Every cluster is edge-connected by construction; a triangle without edge-neighbours (or one
 // whose neighbours are all taken) is a cluster of its own.
 #pragma once

@@ -1,0 +1,94 @@
+// The side-by-side benchmark against Embree (issue 5): in one process, on the same mesh, the same
+// trace frame and the same primary rays, over F animated frames (analysis/trace_deform.h),
+// five configurations update their acceleration structure to the frame's positions and trace:
+//
+//   ours_triangles  our binned-SAH BVH over triangle boxes, rebuilt per frame (the reference)
+//   ours_clusters   our BVH over cluster boxes (Garanzha 2009): cluster boxes updated, BVH built
+//   embree_medium   Embree static scene, RTC_BUILD_QUALITY_MEDIUM, rebuilt per frame
+//   embree_low      Embree dynamic scene, RTC_BUILD_QUALITY_LOW, rebuilt per frame
+//   embree_refit    Embree dynamic scene, geometry quality REFIT: refitted per frame
+//
+// Per frame and configuration: update_ms (ours: positions into the trace frame + primitive
+// boxes; Embree: vertex buffer), build_ms (ours: SAH build + collapse + leaf data + block-tree
+// refit; Embree: rtcCommitScene), trace_ms (closest hit, counters off), hits, and mismatches of
+// the closest triangle against ours_triangles of the same frame: a hit against a miss, or another
+// triangle at a t differing by more than tie_rel (relative); another triangle within tie_rel is
+// a tie (rays through shared edges and vertices), counted separately.
+// Medians skip frame 0 (first-touch page faults, caches, Embree's lazy initialisation) when there
+// is more than one frame. Threads: oneTBB is limited to `threads` for the whole run (builds and
+// traces), Embree's device gets "threads=N"; set_affinity is never used.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "analysis/csv.h"
+#include "analysis/trace_camera.h"
+#include "analysis/trace_deform.h"
+#include "bvh/trace_scene.h"
+#include "toolkit/clustering/clustering.h"
+#include "toolkit/mesh/mesh.h"
+
+namespace ptc {
+
+struct PeerBenchConfig {
+  int frames = 5;                         ///< animated frames (>= 1); frame 0 is the rest pose
+  int width = 1024, height = 1024;        ///< primary rays of the default camera (1..16384 each)
+  CameraSpec camera;                      ///< optional overrides of the default camera
+  unsigned threads = 1;                   ///< oneTBB and Embree threads (>= 1; 1 = one-thread figures)
+  Deformation deformation = Deformation::Twist;
+  std::uint32_t max_count = 50;           ///< clustering when none is given: growth / Acc, MaxCount = MaxSize = this
+  bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::BlockTree;
+  double tie_rel = 1e-5;                  ///< relative t tolerance of a tie
+};
+
+/// The configurations, in the order they run within a frame.
+[[nodiscard]] const std::vector<std::string>& peer_bench_configs();
+
+struct BenchRow {
+  int frame = 0;
+  std::string config;
+  double update_ms = 0, build_ms = 0, frame_ms = 0;  ///< frame_ms: wall time of the whole update call
+  double trace_ms = 0, mrays_per_s = 0;
+  std::uint64_t rays = 0, hits = 0;
+  std::uint64_t mismatches = 0;  ///< hit_miss + other_triangle
+  std::uint64_t hit_miss = 0, other_triangle = 0, ties = 0;
+};
+
+struct BenchSummary {
+  std::string config;
+  double update_ms = 0, build_ms = 0, update_build_ms = 0, trace_ms = 0, mrays_per_s = 0;  ///< medians
+  std::uint64_t mismatches = 0, ties = 0;  ///< sums over all frames (frame 0 included)
+};
+
+struct PeerBenchResult {
+  std::vector<BenchRow> rows;          ///< frame-major, configurations in peer_bench_configs() order
+  std::vector<BenchSummary> summary;   ///< one per configuration
+  std::size_t triangles = 0, vertices = 0, clusters = 0, rays = 0;
+  int median_first_frame = 0;          ///< medians over frames [median_first_frame, frames)
+  double cluster_ms = 0;               ///< clustering (0 when clusters were given)
+  double cluster_scene_setup_ms = 0;   ///< ClusterScene construction (per-clustering layout, once)
+  std::string clustering;              ///< how the clusters were made
+};
+
+/// Runs the benchmark. `clusters`: a clustering of `mesh` (validated by the caller), or nullptr
+/// to compute growth / Acc with MaxCount = MaxSize = cfg.max_count (timed as cluster_ms).
+/// Throws std::invalid_argument for a bad configuration, std::runtime_error when Embree fails.
+[[nodiscard]] PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, const PeerBenchConfig& cfg);
+
+/// Median of values (mean of the middle two for an even count; 0 for none).
+[[nodiscard]] double median(std::vector<double> v);
+
+/// Medians over frames >= first_frame per configuration (order of first appearance) and
+/// mismatch sums over all frames: the summary of run_peer_bench, recomputable from rows.
+[[nodiscard]] std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame);
+
+/// bench.csv: one row per frame and configuration (schema ptc-bench/1, docs/tracing.md).
+[[nodiscard]] CsvTable bench_csv(const PeerBenchResult& r);
+/// summary.csv: medians per configuration and ratios against each Embree mode.
+[[nodiscard]] CsvTable bench_summary_csv(const PeerBenchResult& r);
+/// The printed tables: medians, then ratios against each Embree mode (> 1: the row is faster).
+[[nodiscard]] std::string bench_table(const PeerBenchResult& r);
+
+}  // namespace ptc

@@ -1,0 +1,24 @@
+// Reading a clustering back for tracing: `ptc cluster --out DIR` writes DIR/triangles.csv
+// (header `triangle_id,cluster_id`, one row per triangle), which `ptc trace --clusters DIR` and
+// `ptc bench --clusters DIR` read and check against the mesh they trace.
+#pragma once
+
+#include <filesystem>
+
+#include "toolkit/clustering/clustering.h"
+#include "toolkit/mesh/mesh.h"
+
+namespace ptc {
+
+/// Reads `dir`/triangles.csv (or `dir` itself when it is a file) and checks it against `mesh`:
+/// header `triangle_id,cluster_id`; every row two non-negative integers; every triangle id
+/// 0 .. T-1 exactly once (T = mesh.triangle_count(); rows in any order); cluster ids any
+/// 32-bit values; every cluster connected through shared edges of `mesh` (the BVH assumes
+/// compact clusters, and a clustering of another mesh with the same triangle count fails here).
+/// Any violation throws InputError naming the file, the line (1-based, header = line 1) and the
+/// element ("triangle 12", "cluster 3"), e.g. "clusters/triangles.csv: line 7: triangle 5:
+/// cluster 2 is not connected (triangle 5 shares no edge path with triangle 0 of the cluster)".
+/// Clusters are renumbered densely (clustering_from_labels).
+[[nodiscard]] Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh);
+
+}  // namespace ptc

@@ -1,0 +1,29 @@
+// Internal: the tracer's instruction-set variants and the runtime choice between them.
+// tracer_kernel.h holds the one traversal code; it is compiled twice, by tracer_sse2.cpp (the
+// x86-64 baseline, 4 triangles per SIMD test) and tracer_avx2.cpp (compiled with -mavx2: the
+// leaf test takes two blocks = 8 triangles per test, everything else VEX-encoded). Both give
+// bit-identical hits and counters (same float operations per triangle, same visiting order).
+// trace() picks AVX2 when the CPU has it (__builtin_cpu_supports), as Embree dispatches at
+// runtime; TraceOptions::isa forces one (tests compare the two).
+#pragma once
+
+#include <cstddef>
+
+#include "bvh/tracer.h"
+
+namespace ptc::bvh::detail {
+
+/// Traces rays [begin, end) of the batch into hits (already sized; counters arrays sized when
+/// `counters`), adding to `totals`.
+using RangeFn = void (*)(const TraceData&, const RayBatch&, HitBatch&, std::size_t begin, std::size_t end,
+                         HitMode mode, bool counters, TraceTotals& totals);
+using OneFn = Hit (*)(const TraceData&, const Vec3& org, const Vec3f& dir, HitMode mode, float tmin, float tmax);
+
+void trace_range_sse2(const TraceData&, const RayBatch&, HitBatch&, std::size_t, std::size_t, HitMode, bool,
+                      TraceTotals&);
+Hit trace_one_sse2(const TraceData&, const Vec3&, const Vec3f&, HitMode, float, float);
+void trace_range_avx2(const TraceData&, const RayBatch&, HitBatch&, std::size_t, std::size_t, HitMode, bool,
+                      TraceTotals&);
+Hit trace_one_avx2(const TraceData&, const Vec3&, const Vec3f&, HitMode, float, float);
+
+}  // namespace ptc::bvh::detail

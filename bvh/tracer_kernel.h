@@ -1,0 +1,413 @@
+// Internal: the tracer's traversal and leaf kernels, compiled once per instruction set (see
+// tracer_isa.h). Include only from tracer_sse2.cpp / tracer_avx2.cpp, after defining
+// PTC_TRACE_NS (the namespace that keeps the two compilations apart: no symbol of one can be
+// picked by the linker for the other).
+#ifndef PTC_TRACE_NS
+#error "define PTC_TRACE_NS before including bvh/tracer_kernel.h"
+#endif
+
+#include <immintrin.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "bvh/tracer.h"
+#include "bvh/tracer_isa.h"
+#include "bvh/watertight.h"
+
+namespace ptc::bvh::detail::PTC_TRACE_NS {
+namespace {
+
+constexpr float kBig = std::numeric_limits<float>::max();
+// Conservative slab test: 2^-21 > 2 gamma_3 = 6u / (1 - 3u), u = 2^-24 (see tracer.h).
+constexpr float kNearScale = 1.0f - 1.0f / 2097152.0f;
+constexpr float kFarScale = 1.0f + 1.0f / 2097152.0f;
+
+struct StackEntry {
+  std::uint32_t ref;    // inner: node index; leaf: first range
+  std::uint32_t count;  // 0: inner; > 0: number of ranges
+  float t;              // entry distance of the box (conservative)
+};
+
+// Everything a ray needs during traversal, precomputed once.
+struct RayState {
+  // slab test
+  __m128 ox, oy, oz, inx, iny, inz, ifx, ify, ifz;
+  int nx, ny, nz, fx, fy, fz;  // float offsets of the near/far rows in WideNode::bounds
+  // watertight test: made when the ray reaches its first leaf (most primary rays never do)
+  bool watertight_ready;
+  int kx4, ky4, kz4;  // 4 * permuted axes (offsets inside a corner's 3x4 block)
+  __m128 okx, oky, okz, sx, sy, sz;
+#if defined(PTC_TRACE_AVX2)
+  __m256 okx8, oky8, okz8, sx8, sy8, sz8;
+#endif
+  float tmin, tmax;  // tmax: the best hit so far (closest) or the ray's end
+  Vec3f org, dir;
+};
+
+void prepare_watertight(RayState& r) {
+  const WatertightRay w = make_watertight_ray(r.org, r.dir);
+  r.kx4 = 4 * w.kx, r.ky4 = 4 * w.ky, r.kz4 = 4 * w.kz;
+  r.okx = _mm_set1_ps(r.org[w.kx]), r.oky = _mm_set1_ps(r.org[w.ky]), r.okz = _mm_set1_ps(r.org[w.kz]);
+  r.sx = _mm_set1_ps(w.sx), r.sy = _mm_set1_ps(w.sy), r.sz = _mm_set1_ps(w.sz);
+#if defined(PTC_TRACE_AVX2)
+  r.okx8 = _mm256_set1_ps(r.org[w.kx]), r.oky8 = _mm256_set1_ps(r.org[w.ky]), r.okz8 = _mm256_set1_ps(r.org[w.kz]);
+  r.sx8 = _mm256_set1_ps(w.sx), r.sy8 = _mm256_set1_ps(w.sy), r.sz8 = _mm256_set1_ps(w.sz);
+#endif
+  r.watertight_ready = true;
+}
+
+struct Result {
+  float t = 0, u = 0, v = 0;
+  std::uint32_t tri = kNoTriangle;
+  std::uint32_t nodes = 0, tris = 0;
+};
+
+// Returns false for a ray that cannot hit (zero or non-finite direction, empty interval).
+bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax) {
+  if (!(std::isfinite(d[0]) && std::isfinite(d[1]) && std::isfinite(d[2]))) return false;
+  if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return false;
+  if (!(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]))) return false;
+  r.tmin = tmin;
+  r.tmax = tmax < kBig ? tmax : kBig;
+  if (!(r.tmin < r.tmax) || !(tmin >= 0.0f)) return false;
+  float inv[3];
+  int near[3];
+  for (int a = 0; a < 3; ++a) {
+    inv[a] = 1.0f / d[a];  // +-inf for a zero component (its sign follows the zero's sign)
+    near[a] = 2 * a + (std::signbit(inv[a]) ? 1 : 0);
+  }
+  r.ox = _mm_set1_ps(o[0]), r.oy = _mm_set1_ps(o[1]), r.oz = _mm_set1_ps(o[2]);
+  r.inx = _mm_set1_ps(inv[0] * kNearScale), r.iny = _mm_set1_ps(inv[1] * kNearScale), r.inz = _mm_set1_ps(inv[2] * kNearScale);
+  r.ifx = _mm_set1_ps(inv[0] * kFarScale), r.ify = _mm_set1_ps(inv[1] * kFarScale), r.ifz = _mm_set1_ps(inv[2] * kFarScale);
+  r.nx = 4 * near[0], r.ny = 4 * near[1], r.nz = 4 * near[2];
+  r.fx = 4 * (near[0] ^ 1), r.fy = 4 * (near[1] ^ 1), r.fz = 4 * (near[2] ^ 1);
+  r.org = o, r.dir = d;
+  r.watertight_ready = false;
+  return true;
+}
+
+inline int ctz(unsigned m) { return __builtin_ctz(m); }
+
+// The lanes of `m` (in/range hits, lowest lane first) against the best hit so far: closest
+// keeps the smallest (t, id), any-hit takes the first. t, V, W, det per lane; shared by the 4-
+// and 8-wide kernels, so both choose identically.
+template <bool AnyHit>
+inline bool take_hits(int m, const float* ft, const float* fv, const float* fw, const float* fd,
+                      const std::uint32_t* ids, float& tmax, Result& res) {
+  bool found = false;
+  for (; m; m &= m - 1) {
+    const int l = ctz(static_cast<unsigned>(m));
+    const std::uint32_t id = ids[l];
+    if constexpr (!AnyHit) {
+      if (!(ft[l] < tmax || (ft[l] == tmax && id < res.tri))) continue;
+    }
+    res.t = ft[l];
+    res.tri = id;
+    res.u = fv[l] / fd[l];
+    res.v = fw[l] / fd[l];
+    found = true;
+    if constexpr (AnyHit) return true;
+    tmax = ft[l];
+  }
+  return found;
+}
+
+// The lanes of `on_edge` with an edge function of exactly 0: all three recomputed in double.
+inline void redo_edges_in_double(int on_edge, const float* ax, const float* ay, const float* bx, const float* by,
+                                 const float* cx, const float* cy, float* u, float* v, float* w) {
+  for (; on_edge; on_edge &= on_edge - 1) {
+    const int l = ctz(static_cast<unsigned>(on_edge));
+    edge_functions_double(ax[l], ay[l], bx[l], by[l], cx[l], cy[l], u[l], v[l], w[l]);
+  }
+}
+
+// Four triangles of one block against the ray; updates `res` and `tmax` (closest: the
+// smallest (t, id); any: the first hit). Returns true when a hit was recorded. The float
+// operations and their order are those of intersect_triangle (watertight.cpp).
+template <bool AnyHit>
+inline bool intersect_block(const TriBlock& blk, const std::uint32_t* ids, const RayState& r, float& tmax,
+                            Result& res) {
+  const float* v = &blk.v[0][0][0];
+  const __m128 a_x = _mm_sub_ps(_mm_load_ps(v + r.kx4), r.okx);
+  const __m128 a_y = _mm_sub_ps(_mm_load_ps(v + r.ky4), r.oky);
+  const __m128 a_z = _mm_sub_ps(_mm_load_ps(v + r.kz4), r.okz);
+  const __m128 b_x = _mm_sub_ps(_mm_load_ps(v + 12 + r.kx4), r.okx);
+  const __m128 b_y = _mm_sub_ps(_mm_load_ps(v + 12 + r.ky4), r.oky);
+  const __m128 b_z = _mm_sub_ps(_mm_load_ps(v + 12 + r.kz4), r.okz);
+  const __m128 c_x = _mm_sub_ps(_mm_load_ps(v + 24 + r.kx4), r.okx);
+  const __m128 c_y = _mm_sub_ps(_mm_load_ps(v + 24 + r.ky4), r.oky);
+  const __m128 c_z = _mm_sub_ps(_mm_load_ps(v + 24 + r.kz4), r.okz);
+  const __m128 ax = _mm_sub_ps(a_x, _mm_mul_ps(r.sx, a_z)), ay = _mm_sub_ps(a_y, _mm_mul_ps(r.sy, a_z));
+  const __m128 bx = _mm_sub_ps(b_x, _mm_mul_ps(r.sx, b_z)), by = _mm_sub_ps(b_y, _mm_mul_ps(r.sy, b_z));
+  const __m128 cx = _mm_sub_ps(c_x, _mm_mul_ps(r.sx, c_z)), cy = _mm_sub_ps(c_y, _mm_mul_ps(r.sy, c_z));
+  __m128 U = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+  __m128 V = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+  __m128 W = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+  const __m128 zero = _mm_setzero_ps();
+  const int on_edge = _mm_movemask_ps(
+      _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero)));
+  if (on_edge) [[unlikely]] {  // exact signs in double for the lanes with a zero edge function
+    alignas(16) float fax[4], fay[4], fbx[4], fby[4], fcx[4], fcy[4], fu[4], fv[4], fw[4];
+    _mm_store_ps(fax, ax), _mm_store_ps(fay, ay), _mm_store_ps(fbx, bx), _mm_store_ps(fby, by);
+    _mm_store_ps(fcx, cx), _mm_store_ps(fcy, cy), _mm_store_ps(fu, U), _mm_store_ps(fv, V), _mm_store_ps(fw, W);
+    redo_edges_in_double(on_edge, fax, fay, fbx, fby, fcx, fcy, fu, fv, fw);
+    U = _mm_load_ps(fu), V = _mm_load_ps(fv), W = _mm_load_ps(fw);
+  }
+  const __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
+  const __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
+  const __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
+  const __m128 det_ok = _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero));  // false for NaN lanes
+  const __m128 valid = _mm_andnot_ps(_mm_and_ps(neg, pos), det_ok);
+  if (!_mm_movemask_ps(valid)) return false;
+  const __m128 az = _mm_mul_ps(r.sz, a_z), bz = _mm_mul_ps(r.sz, b_z), cz = _mm_mul_ps(r.sz, c_z);
+  const __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, az), _mm_mul_ps(V, bz)), _mm_mul_ps(W, cz));
+  const __m128 t = _mm_div_ps(T, det);
+  const __m128 in_range = _mm_and_ps(_mm_cmpgt_ps(t, _mm_set1_ps(r.tmin)), _mm_cmple_ps(t, _mm_set1_ps(tmax)));
+  int m = _mm_movemask_ps(_mm_and_ps(valid, in_range));
+  if (!m) return false;
+  alignas(16) float ft[4], fv[4], fw[4], fd[4];
+  _mm_store_ps(ft, t), _mm_store_ps(fv, V), _mm_store_ps(fw, W), _mm_store_ps(fd, det);
+  return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
+}
+
+#if defined(PTC_TRACE_AVX2)
+// Two consecutive blocks (8 triangles, ids[0..8)) in one 256-bit test: lane l < 4 is block 0's
+// lane l, lane l >= 4 block 1's lane l - 4. The same float operations per lane as
+// intersect_block, and lanes are taken in the same order (block 0 first), so hits and any-hit
+// choices are identical to two calls of intersect_block.
+template <bool AnyHit>
+inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
+                                 Result& res) {
+  const float* v0 = &blk[0].v[0][0][0];
+  const float* v1 = &blk[1].v[0][0][0];
+  auto ld = [&](int off) {
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(v0 + off)), _mm_load_ps(v1 + off), 1);
+  };
+  const __m256 a_x = _mm256_sub_ps(ld(r.kx4), r.okx8);
+  const __m256 a_y = _mm256_sub_ps(ld(r.ky4), r.oky8);
+  const __m256 a_z = _mm256_sub_ps(ld(r.kz4), r.okz8);
+  const __m256 b_x = _mm256_sub_ps(ld(12 + r.kx4), r.okx8);
+  const __m256 b_y = _mm256_sub_ps(ld(12 + r.ky4), r.oky8);
+  const __m256 b_z = _mm256_sub_ps(ld(12 + r.kz4), r.okz8);
+  const __m256 c_x = _mm256_sub_ps(ld(24 + r.kx4), r.okx8);
+  const __m256 c_y = _mm256_sub_ps(ld(24 + r.ky4), r.oky8);
+  const __m256 c_z = _mm256_sub_ps(ld(24 + r.kz4), r.okz8);
+  const __m256 ax = _mm256_sub_ps(a_x, _mm256_mul_ps(r.sx8, a_z)), ay = _mm256_sub_ps(a_y, _mm256_mul_ps(r.sy8, a_z));
+  const __m256 bx = _mm256_sub_ps(b_x, _mm256_mul_ps(r.sx8, b_z)), by = _mm256_sub_ps(b_y, _mm256_mul_ps(r.sy8, b_z));
+  const __m256 cx = _mm256_sub_ps(c_x, _mm256_mul_ps(r.sx8, c_z)), cy = _mm256_sub_ps(c_y, _mm256_mul_ps(r.sy8, c_z));
+  __m256 U = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+  __m256 V = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+  __m256 W = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+  const __m256 zero = _mm256_setzero_ps();
+  const int on_edge = _mm256_movemask_ps(_mm256_or_ps(
+      _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)), _mm256_cmp_ps(W, zero, _CMP_EQ_OQ)));
+  if (on_edge) [[unlikely]] {
+    alignas(32) float fax[8], fay[8], fbx[8], fby[8], fcx[8], fcy[8], fu[8], fv[8], fw[8];
+    _mm256_store_ps(fax, ax), _mm256_store_ps(fay, ay), _mm256_store_ps(fbx, bx), _mm256_store_ps(fby, by);
+    _mm256_store_ps(fcx, cx), _mm256_store_ps(fcy, cy), _mm256_store_ps(fu, U), _mm256_store_ps(fv, V);
+    _mm256_store_ps(fw, W);
+    redo_edges_in_double(on_edge, fax, fay, fbx, fby, fcx, fcy, fu, fv, fw);
+    U = _mm256_load_ps(fu), V = _mm256_load_ps(fv), W = _mm256_load_ps(fw);
+  }
+  const __m256 neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_LT_OQ), _mm256_cmp_ps(V, zero, _CMP_LT_OQ)),
+                                  _mm256_cmp_ps(W, zero, _CMP_LT_OQ));
+  const __m256 pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_GT_OQ), _mm256_cmp_ps(V, zero, _CMP_GT_OQ)),
+                                  _mm256_cmp_ps(W, zero, _CMP_GT_OQ));
+  const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
+  const __m256 det_ok = _mm256_or_ps(_mm256_cmp_ps(det, zero, _CMP_LT_OQ), _mm256_cmp_ps(det, zero, _CMP_GT_OQ));
+  const __m256 valid = _mm256_andnot_ps(_mm256_and_ps(neg, pos), det_ok);
+  if (!_mm256_movemask_ps(valid)) return false;
+  const __m256 az = _mm256_mul_ps(r.sz8, a_z), bz = _mm256_mul_ps(r.sz8, b_z), cz = _mm256_mul_ps(r.sz8, c_z);
+  const __m256 T = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(U, az), _mm256_mul_ps(V, bz)), _mm256_mul_ps(W, cz));
+  const __m256 t = _mm256_div_ps(T, det);
+  const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(t, _mm256_set1_ps(r.tmin), _CMP_GT_OQ),
+                                        _mm256_cmp_ps(t, _mm256_set1_ps(tmax), _CMP_LE_OQ));
+  int m = _mm256_movemask_ps(_mm256_and_ps(valid, in_range));
+  if (!m) return false;
+  alignas(32) float ft[8], fv[8], fw[8], fd[8];
+  _mm256_store_ps(ft, t), _mm256_store_ps(fv, V), _mm256_store_ps(fw, W), _mm256_store_ps(fd, det);
+  return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
+}
+#endif
+
+struct Flat {  // raw views of TraceData for the hot loop
+  const WideNode* nodes;
+  const LeafRange* ranges;
+  const TriBlock* blocks;
+  const std::uint32_t* ids;
+  std::uint32_t root;
+  bool empty;
+};
+
+// Tests the triangles of one leaf child (direct: `count` triangles from block `ref`;
+// indirect: the ranges ranges[ref .. ref + n)). Returns true for an any-hit query's hit.
+template <bool AnyHit>
+inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, RayState& r, float& tmax,
+                           Result& res, std::uint32_t& tris) {
+  if (!r.watertight_ready) [[unlikely]] prepare_watertight(r);
+  LeafRange one{ref, (count + 3) / 4, count};
+  const LeafRange* ranges = &one;
+  std::uint32_t nr = 1;
+  if (count & kIndirectLeaf) ranges = d.ranges + ref, nr = count & ~kIndirectLeaf;
+  for (std::uint32_t i = 0; i < nr; ++i) {
+    const LeafRange lr = ranges[i];
+    tris += lr.triangle_count;
+    const std::uint32_t end = lr.first_block + lr.block_count;
+    std::uint32_t bk = lr.first_block;
+#if defined(PTC_TRACE_AVX2)
+    for (; bk + 1 < end; bk += 2)
+      if (intersect_block_pair<AnyHit>(d.blocks + bk, d.ids + 4 * std::size_t(bk), r, tmax, res) && AnyHit) return true;
+#endif
+    for (; bk < end; ++bk)
+      if (intersect_block<AnyHit>(d.blocks[bk], d.ids + 4 * std::size_t(bk), r, tmax, res) && AnyHit) return true;
+  }
+  return false;
+}
+
+template <bool AnyHit>
+void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
+  if (d.empty) return;
+  // (r is the caller's local, not copied: the copy of ~0.5 KB per ray showed in profiles)
+  float tmax = r.tmax;
+  __m128 tmax4 = _mm_set1_ps(tmax);
+  const __m128 tmin4 = _mm_set1_ps(r.tmin);
+  StackEntry* sp = stack;
+  *sp++ = {d.root, 0, -kBig};
+  std::uint32_t nodes = 0, tris = 0;
+  while (sp != stack) {
+    const StackEntry e = *--sp;
+    if (!AnyHit && e.t > tmax) continue;  // a closer hit was found after this entry was pushed
+    std::uint32_t ref = e.ref, cnt = e.count;
+    bool miss = false;
+    while (cnt == 0) {
+      const WideNode& n = d.nodes[ref];
+      ++nodes;
+      const float* b = &n.bounds[0][0];
+      const __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.nx), r.ox), r.inx);
+      const __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.ny), r.oy), r.iny);
+      const __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.nz), r.oz), r.inz);
+      const __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.fx), r.ox), r.ifx);
+      const __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.fy), r.oy), r.ify);
+      const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.fz), r.oz), r.ifz);
+      // _mm_max_ps(a, b) returns b when either is NaN: candidates first, running bound second.
+      const __m128 tn = _mm_max_ps(tnz, _mm_max_ps(tny, _mm_max_ps(tnx, tmin4)));
+      const __m128 tf = _mm_min_ps(tfz, _mm_min_ps(tfy, _mm_min_ps(tfx, tmax4)));
+      unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(tn, tf)));
+      if (!mask) {
+        miss = true;
+        break;
+      }
+      alignas(16) float dist[4];
+      _mm_store_ps(dist, tn);
+      const int i0 = ctz(mask);
+      mask &= mask - 1;
+      if (!mask) {
+        ref = n.child[i0], cnt = n.count[i0];
+        continue;
+      }
+      const int i1 = ctz(mask);
+      mask &= mask - 1;
+      if (!mask) {
+        const bool first_near = dist[i0] <= dist[i1];
+        const int nearer = first_near ? i0 : i1, farther = first_near ? i1 : i0;
+        *sp++ = {n.child[farther], n.count[farther], dist[farther]};
+        ref = n.child[nearer], cnt = n.count[nearer];
+        continue;
+      }
+      // Three or four children: sort by entry distance, farthest pushed first.
+      StackEntry c[4];
+      int k = 0;
+      c[k++] = {n.child[i0], n.count[i0], dist[i0]};
+      c[k++] = {n.child[i1], n.count[i1], dist[i1]};
+      for (; mask; mask &= mask - 1) {
+        const int i = ctz(mask);
+        c[k++] = {n.child[i], n.count[i], dist[i]};
+      }
+      if constexpr (!AnyHit) {
+        for (int i = 1; i < k; ++i)  // insertion sort, descending distance
+          for (int j = i; j > 0 && c[j - 1].t < c[j].t; --j) std::swap(c[j - 1], c[j]);
+      }
+      for (int i = 0; i < k - 1; ++i) *sp++ = c[i];
+      ref = c[k - 1].ref, cnt = c[k - 1].count;
+    }
+    if (miss) continue;
+    const float before = tmax;
+    if (intersect_leaf<AnyHit>(d, ref, cnt, r, tmax, res, tris)) break;  // any hit: done
+    if (tmax != before) tmax4 = _mm_set1_ps(tmax);
+  }
+  res.nodes = nodes, res.tris = tris;
+}
+
+Flat flat_of(const TraceData& s) {
+  return {s.wide.nodes.data(), s.ranges.data(), s.blocks.data(), s.triangle_ids.data(), s.wide.root,
+          s.wide.nodes.empty()};
+}
+
+std::size_t stack_size(const TraceData& s) { return 3 * std::size_t(s.wide.depth) + 8; }
+
+Result trace_single(const TraceData& s, const Flat& f, const Vec3& org, const Vec3f& dir, float tmin, float tmax,
+                    HitMode mode, StackEntry* stack) {
+  Result res;
+  RayState r;
+  if (!setup(r, to_frame(org, s.origin), dir, tmin, tmax)) return res;
+  if (mode == HitMode::Closest)
+    traverse<false>(f, r, res, stack);
+  else
+    traverse<true>(f, r, res, stack);
+  if (res.tri == kNoTriangle) res.t = 0.0f;
+  return res;
+}
+
+
+// A stack on the C++ stack for the usual depths, on the heap for degenerate trees.
+struct Stack {
+  StackEntry local[512];
+  std::vector<StackEntry> heap;
+  StackEntry* get(std::size_t n) {
+    if (n <= 512) return local;
+    heap.resize(n);
+    return heap.data();
+  }
+};
+
+void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hits, std::size_t begin,
+                      std::size_t end, HitMode mode, bool counters, TraceTotals& tot) {
+  const Flat f = flat_of(scene);
+  Stack st;
+  StackEntry* stack = st.get(stack_size(scene));
+  for (std::size_t i = begin; i < end; ++i) {
+    const Result res = trace_single(scene, f, Vec3(rays.ox[i], rays.oy[i], rays.oz[i]),
+                                    {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tmin[i], rays.tmax[i], mode, stack);
+    hits.t[i] = res.t, hits.u[i] = res.u, hits.v[i] = res.v, hits.triangle[i] = res.tri;
+    if (counters) hits.nodes_visited[i] = res.nodes, hits.triangles_tested[i] = res.tris;
+    tot.rays += 1;
+    tot.hits += res.tri != kNoTriangle;
+    tot.nodes_visited += res.nodes;
+    tot.triangles_tested += res.tris;
+  }
+}
+
+Hit trace_one_impl(const TraceData& scene, const Vec3& org, const Vec3f& dir, HitMode mode, float tmin, float tmax) {
+  Stack st;
+  const Result r = trace_single(scene, flat_of(scene), org, dir, tmin, tmax, mode, st.get(stack_size(scene)));
+  return {r.t, r.u, r.v, r.tri, r.nodes, r.tris};
+}
+
+}  // namespace
+}  // namespace ptc::bvh::detail::PTC_TRACE_NS
+
+// The variant's entry points, named after it (detail::trace_range_sse2, ..._avx2; tracer_isa.h).
+#define PTC_TRACE_CAT2(a, b) a##b
+#define PTC_TRACE_CAT(a, b) PTC_TRACE_CAT2(a, b)
+namespace ptc::bvh::detail {
+void PTC_TRACE_CAT(trace_range_, PTC_TRACE_NS)(const TraceData& s, const RayBatch& r, HitBatch& h, std::size_t b,
+                                               std::size_t e, HitMode m, bool c, TraceTotals& t) {
+  PTC_TRACE_NS::trace_range_impl(s, r, h, b, e, m, c, t);
+}
+Hit PTC_TRACE_CAT(trace_one_, PTC_TRACE_NS)(const TraceData& s, const Vec3& o, const Vec3f& d, HitMode m, float t0,
+                                            float t1) {
+  return PTC_TRACE_NS::trace_one_impl(s, o, d, m, t0, t1);
+}
+}  // namespace ptc::bvh::detail

@@ -1,0 +1,352 @@
+// Scene files (good and bad, errors naming the file and the JSON path), `ptc animate` round
+// trips (frames written, read back with read_mesh, equal to the scene's positions bit for bit),
+// --stats against an independent recomputation, bad --frames, and `ptc scenes`.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "analysis/cmd_animate.h"
+#include "analysis/scene_file.h"
+#include "toolkit/anim/cloth.h"
+#include "toolkit/anim/deformers.h"
+#include "toolkit/core/error.h"
+#include "toolkit/io/mesh_io.h"
+
+namespace fs = std::filesystem;
+
+namespace ptc {
+namespace {
+
+const fs::path kData = PTC_TEST_DATA;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) {
+    if (c == '\'')
+      q.append("'\\''");
+    else
+      q.push_back(c);
+  }
+  return q + "'";
+}
+
+struct RunResult {
+  int code = -1;
+  std::string out, err;
+};
+
+const char* kCube =
+    "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+    "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
+
+class Animate : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("ptc_anim_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    write("cube.off", kCube);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path write(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+  RunResult ptc(const std::vector<std::string>& args) const {
+    std::string cmd = quote(PTC_BIN);
+    for (const auto& a : args) cmd.append(" ").append(quote(a));
+    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
+    cmd.append(" >").append(quote(o.string())).append(" 2>").append(quote(e.string()));
+    const int status = std::system(cmd.c_str());
+    RunResult r;
+    if (WIFEXITED(status)) r.code = WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) r.code = -WTERMSIG(status);
+    r.out = slurp(o);
+    r.err = slurp(e);
+    return r;
+  }
+  // Error message of parsing `json` as a scene file (empty when it parses).
+  std::string scene_error(const std::string& json) const {
+    const fs::path p = write("scene.json", json);
+    try {
+      (void)load_scene_file(p);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return {};
+  }
+  fs::path dir_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Scene files
+
+TEST_F(Animate, SceneFileGood) {
+  const fs::path p = write("good.json", R"({
+    "schema": "ptc-scene/1",
+    "name": "mine",
+    "frames": [2, 5],
+    "camera": {"eye": [0, 1, 5], "look_at": [0, 0, 0], "fov": 30},
+    "light": {"position": [3, 3, 3], "intensity": 2},
+    "meshes": [
+      {"name": "floor", "file": "cube.off"},
+      {"name": "spin", "file": "cube.off", "subdivide": {"scheme": "loop", "levels": 1},
+       "deform": {"kind": "rigid", "axis": "z", "period": 10}},
+      {"name": "ball", "sphere": {"center": [0, 3, 0], "radius": 0.5, "levels": 1}},
+      {"name": "sheet", "cloth": {"resolution": 5, "substeps": 2}},
+      {"name": "arm", "file": "${data}/meshes/cube.off", "deform": {"kind": "wave", "axis": "x", "direction": "y", "amplitude": 0.1}}
+    ]
+  })");
+  SceneOptions o;
+  o.data_dir = kData;
+  Scene s = load_scene_file(p, o);
+  EXPECT_EQ(s.name(), "mine");
+  ASSERT_EQ(s.part_count(), 5u);
+  EXPECT_TRUE(s.is_static(0));
+  EXPECT_FALSE(s.is_static(1));
+  EXPECT_TRUE(s.is_static(2));
+  EXPECT_FALSE(s.is_static(3));
+  EXPECT_FALSE(s.is_static(4));
+  EXPECT_EQ(s.triangle_offset(1), 12u);
+  EXPECT_EQ(s.triangle_offset(2), 12u + 48u);        // Loop, one level
+  EXPECT_EQ(s.triangle_offset(3), 60u + 80u);        // icosphere, one level
+  EXPECT_EQ(s.triangle_offset(4), 140u + 2 * 4 * 4);  // 5 x 5 cloth
+  EXPECT_EQ(s.frames().first, 2);
+  EXPECT_EQ(s.frames().last, 5);
+  EXPECT_EQ(s.camera().eye, Vec3(0, 1, 5));
+  EXPECT_EQ(s.camera().fov_deg, 30);
+  EXPECT_EQ(s.light().intensity, 2);
+  // The cloth part is the cloth asked for: same positions as a ClothSimulation made here.
+  ClothParams cp;
+  cp.resolution = 5;
+  cp.substeps = 2;
+  ClothSimulation ref(cp);
+  std::vector<Vec3> all(s.rest().vertex_count()), own(ref.rest().vertex_count());
+  s.positions(4, all);
+  ref.positions(4, own);
+  for (std::size_t i = 0; i < own.size(); ++i) ASSERT_EQ(all[s.vertex_offset(3) + i], own[i]);
+}
+
+TEST_F(Animate, SceneFileErrorsNameFileAndJsonPath) {
+  const std::string f = (dir_ / "scene.json").string();
+  auto has = [&](const std::string& msg, const std::string& part) {
+    EXPECT_NE(msg.find(part), std::string::npos) << "message: " << msg << "\nexpected to contain: " << part;
+  };
+  std::string e;
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}, {"file": "cube.off", "deform": {"kind": "twist", "amplitude": "big"}}]})");
+  has(e, f);
+  has(e, "meshes[1].deform.amplitude");
+  has(e, "expected a number");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "wobble"}}]})");
+  has(e, "meshes[0].deform.kind");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "bend", "axis": "y", "direction": "y"}}]})");
+  has(e, "meshes[0].deform");
+  has(e, "direction must differ");
+  e = scene_error(R"({"meshes": [{"file": "missing.off"}]})");
+  has(e, f);
+  has(e, "meshes[0].file");
+  has(e, "missing.off");
+  e = scene_error(R"({"meshes": [{"cloth": {"resolution": 1}}]})");
+  has(e, "meshes[0].cloth");
+  has(e, "resolution must be >= 2");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "colour": "red"}]})");
+  has(e, "meshes[0].colour");
+  has(e, "unknown key");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "cloth": {}}]})");
+  has(e, "needs exactly one of");
+  e = scene_error(R"({"meshes": []})");
+  has(e, "meshes");
+  e = scene_error(R"({"frames": [5, 2], "meshes": [{"file": "cube.off"}]})");
+  has(e, "frames[1]");
+  e = scene_error(R"({"camera": {"eye": [0, 0, 1], "look_at": [0, 0, 1]}, "meshes": [{"file": "cube.off"}]})");
+  has(e, "camera");
+  e = scene_error(R"({"camera": {"eye": [0, 0], "look_at": [0, 0, 1]}, "meshes": [{"file": "cube.off"}]})");
+  has(e, "camera.eye");
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}], "schema": "ptc-scene/9"})");
+  has(e, "schema");
+  e = scene_error("{\"meshes\": [{\"file\": \"cube.off\"}");  // truncated
+  has(e, f);
+  has(e, "byte");
+  has(e, "invalid JSON");
+  e = scene_error("[1, 2]");
+  has(e, "expected an object");
+  // Loop on a non-manifold mesh: the subdivider's reason under the entry's path.
+  write("book.off", "OFF\n5 3 0\n0 0 0\n1 0 0\n0 1 0\n0 -1 0\n0 0 1\n3 0 1 2\n3 1 0 3\n3 0 1 4\n");
+  e = scene_error(R"({"meshes": [{"file": "book.off", "subdivide": {"scheme": "loop"}}]})");
+  has(e, "meshes[0].subdivide");
+  try {
+    (void)load_scene_file(dir_ / "nope.json");
+    FAIL();
+  } catch (const InputError& err) {
+    has(err.what(), (dir_ / "nope.json").string());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// ptc animate
+
+TEST_F(Animate, RoundTripThreeFramesPlyAndObj) {
+  const fs::path scene = write("twist.json", R"({"meshes": [
+      {"name": "still", "file": "cube.off"},
+      {"name": "twisted", "file": "cube.off", "subdivide": {"levels": 2}, "deform": {"kind": "twist", "amplitude": 1.3, "period": 7}}]})");
+  for (const std::string fmt : {"ply", "obj"}) {
+    const fs::path out = dir_ / ("out_" + fmt);
+    const RunResult r = ptc({"animate", scene.string(), "--frames", "3:5", "--out", out.string(), "--format", fmt});
+    ASSERT_EQ(r.code, 0) << r.err;
+    Scene s = load_scene_file(scene);
+    std::vector<Vec3> expect(s.rest().vertex_count());
+    for (int f = 3; f <= 5; ++f) {
+      const fs::path file = out / ("frame_000" + std::to_string(f) + "." + fmt);
+      ASSERT_TRUE(fs::exists(file)) << file;
+      const Mesh m = read_mesh(file).mesh;
+      s.positions(f, expect);
+      ASSERT_EQ(m.vertex_count(), expect.size());
+      ASSERT_EQ(m.triangle_count(), s.rest().triangle_count());
+      for (std::size_t i = 0; i < expect.size(); ++i) ASSERT_EQ(m.position(i), expect[i]) << fmt << " frame " << f << " v " << i;
+      for (std::size_t t = 0; t < m.triangle_count(); ++t) ASSERT_EQ(m.triangle(t), s.rest().triangle(t));
+    }
+    EXPECT_FALSE(fs::exists(out / "frame_0002.ply"));
+    EXPECT_FALSE(fs::exists(out / "frame_0006.ply"));
+    const auto man = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_EQ(man["schema"], "ptc-animate/1");
+    EXPECT_EQ(man["results"]["files"].size(), 3u);
+    EXPECT_EQ(man["results"]["parts"][0]["static"], true);
+    EXPECT_EQ(man["results"]["parts"][1]["static"], false);
+    EXPECT_EQ(man["results"]["parts"][1]["triangle_begin"], 12);
+  }
+}
+
+TEST_F(Animate, StatsAgainstIndependentRecomputation) {
+  const fs::path scene = write("rigid.json", R"({"meshes": [
+      {"file": "cube.off", "deform": {"kind": "rigid", "axis": "y", "period": 8, "velocity": [0.1, 0, 0]}}]})");
+  const fs::path out = dir_ / "out";
+  const RunResult r = ptc({"animate", scene.string(), "--frames", "0:4", "--out", out.string(), "--stats"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("ratio_min"), std::string::npos);
+  std::istringstream csv(slurp(out / "stats.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line,
+            "frame,bbox_min_x,bbox_min_y,bbox_min_z,bbox_max_x,bbox_max_y,bbox_max_z,bbox_diagonal,total_area,"
+            "area_ratio_min,area_ratio_mean,area_ratio_max,degenerate_at_first");
+  int rows = 0;
+  Scene s = load_scene_file(scene);
+  std::vector<Vec3> x(s.rest().vertex_count());
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::stringstream ls(line);
+    for (std::string c; std::getline(ls, c, ',');) f.push_back(c);
+    ASSERT_EQ(f.size(), 13u);
+    ASSERT_EQ(std::stoi(f[0]), rows);
+    s.positions(rows, x);
+    Box3 b;
+    for (const Vec3& p : x) b.extend(p);
+    EXPECT_DOUBLE_EQ(std::stod(f[1]), b.lo.x());
+    EXPECT_DOUBLE_EQ(std::stod(f[5]), b.hi.y());
+    // A rigid motion keeps every area: total 6 (unit cube), ratios 1.
+    EXPECT_NEAR(std::stod(f[8]), 6.0, 1e-12);
+    EXPECT_NEAR(std::stod(f[9]), 1.0, 1e-12);
+    EXPECT_NEAR(std::stod(f[11]), 1.0, 1e-12);
+    EXPECT_EQ(f[12], "0");
+    ++rows;
+  }
+  EXPECT_EQ(rows, 5);
+}
+
+TEST(FrameStatsFn, AreaRatiosOfAScaledTriangleAndADegenerateOne) {
+  const std::vector<Tri> tris = {{0, 1, 2}, {3, 4, 5}};
+  const std::vector<Vec3> a = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)};
+  std::vector<Vec3> b = a;
+  b[1] = Vec3(3, 0, 0);  // first triangle: area x3
+  b[5] = Vec3(2, 5, 0);  // second: was degenerate, excluded from ratios
+  const auto first = triangle_areas(tris, a);
+  const FrameStats s = frame_stats(7, tris, b, first);
+  EXPECT_EQ(s.frame, 7);
+  EXPECT_EQ(s.degenerate_at_first, 1u);
+  EXPECT_DOUBLE_EQ(s.area_ratio_min, 3.0);
+  EXPECT_DOUBLE_EQ(s.area_ratio_max, 3.0);
+  EXPECT_DOUBLE_EQ(s.total_area, 1.5 + 2.5);
+  const FrameStats none = frame_stats(0, std::vector<Tri>{{3, 4, 5}}, a, std::vector<double>{0.0});
+  EXPECT_TRUE(std::isnan(none.area_ratio_mean));
+}
+
+TEST_F(Animate, BadFramesAndUsage) {
+  const fs::path out = dir_ / "out";
+  const std::string cube = (dir_ / "cube.off").string();
+  for (const std::string bad : {"5:2", "a:b", "1:", ":3", "-1:2", "1.5:3", "2:3:4", ""}) {
+    const RunResult r = ptc({"animate", cube, "--frames", bad, "--out", out.string()});
+    EXPECT_TRUE(r.code == 1 || r.code == 2) << "'" << bad << "' exit " << r.code;
+    EXPECT_NE(r.err.find("--frames"), std::string::npos) << "'" << bad << "': " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << bad;
+  }
+  EXPECT_EQ(ptc({"animate", cube, "--frames", "0:1"}).code, 2);  // no --out
+  const RunResult unknown = ptc({"animate", "no-such-scene", "--out", out.string()});
+  EXPECT_EQ(unknown.code, 1);
+  EXPECT_NE(unknown.err.find("no-such-scene"), std::string::npos);
+  EXPECT_EQ(ptc({"animate", cube, "--out", out.string(), "--format", "stl"}).code, 2);
+}
+
+TEST_F(Animate, FramesBeyondAFiniteSource) {
+  // A directory of three frame files is a finite source (frames 0..2).
+  const fs::path frames = dir_ / "frames";
+  fs::create_directories(frames);
+  const Mesh cube = read_mesh(dir_ / "cube.off").mesh;
+  for (int f = 0; f < 3; ++f) {
+    std::vector<Vec3> p(cube.positions().begin(), cube.positions().end());
+    for (Vec3& q : p) q.x() += f;
+    std::string name = "f";
+    name += std::to_string(f) + ".off";
+    write_mesh(frames / name, cube.with_positions(p));
+  }
+  const fs::path out = dir_ / "out";
+  const RunResult beyond = ptc({"animate", frames.string(), "--frames", "1:3", "--out", out.string()});
+  EXPECT_EQ(beyond.code, 1) << beyond.err;
+  EXPECT_NE(beyond.err.find("beyond the last frame"), std::string::npos) << beyond.err;
+  EXPECT_FALSE(fs::exists(out));
+  const RunResult ok = ptc({"animate", frames.string(), "--frames", "0:2", "--out", out.string()});
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  for (int f = 0; f < 3; ++f) {
+    const Mesh m = read_mesh(out / ("frame_000" + std::to_string(f) + ".ply")).mesh;
+    for (std::size_t i = 0; i < m.vertex_count(); ++i) ASSERT_EQ(m.position(i), cube.position(i) + Vec3(f, 0, 0));
+  }
+}
+
+TEST_F(Animate, ScenesListing) {
+  const RunResult r = ptc({"scenes", "--json", "cloth-sphere-32", "armadillo-twist", "--data-dir", kData.string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["schema"], "ptc-scenes/1");
+  ASSERT_EQ(j["scenes"].size(), 2u);
+  // cloth 2 (n-1)^2 + icosphere 20 * 4^4 + floor 2.
+  EXPECT_EQ(j["scenes"][0]["triangles"], 2 * 31 * 31 + 20 * 256 + 2);
+  EXPECT_EQ(j["scenes"][0]["static_parts"], 2);
+  EXPECT_EQ(j["scenes"][1]["triangles"], read_mesh(kData / "meshes/armadillo.off").mesh.triangle_count());
+  EXPECT_EQ(j["scenes"][1]["frames"][1], 59);
+  const RunResult missing = ptc({"scenes", "armadillo-twist", "--data-dir", "/nonexistent/d"});
+  EXPECT_EQ(missing.code, 0);
+  EXPECT_NE(missing.out.find("unavailable"), std::string::npos);
+  EXPECT_NE(missing.out.find("/nonexistent/d"), std::string::npos);
+  EXPECT_EQ(ptc({"scenes", "bogus"}).code, 1);
+}
+
+}  // namespace
+}  // namespace ptc
