@@ -47,6 +47,10 @@ case "$mode" in
   run)
     mesh="$build/data/meshes/armadillo.off"
     "$build/bin/ptc" info "$mesh"
-    "$build/bin/ptc" spheres "$mesh" --out "$build/out/spheres" ;;
+    "$build/bin/ptc" spheres "$mesh" --out "$build/out/spheres"
+    "$build/bin/ptc" cluster "$mesh" --method growth --objective acc --max-count 50 --max-size 50 \
+      --out "$build/out/cluster"
+    "$build/bin/ptc" trace "$mesh" --clusters "$build/out/cluster" --shadows --out "$build/out/trace"
+    "$build/bin/ptc" bench armadillo-twist --frames 4 --width 512 --height 512 --out "$build/out/bench" ;;
   *) echo "usage: ./run.sh [run|test|build]" >&2; exit 2 ;;
 esac

@@ -96,6 +96,7 @@ std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first
 
 PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, const PeerBenchConfig& cfg) {
   if (cfg.frames < 1) throw std::invalid_argument("frames must be >= 1");
+  if (cfg.first_frame < 0 || cfg.first_frame > (std::int64_t(1) << 40)) throw std::invalid_argument("first_frame must be >= 0");
   if (cfg.threads < 1) throw std::invalid_argument("threads must be >= 1");
   if (cfg.width < 1 || cfg.height < 1 || cfg.width > 16384 || cfg.height > 16384)
     throw std::invalid_argument("image size must be 1..16384 per side");
@@ -160,10 +161,14 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
   std::vector<Vec3> pos(rest.begin(), rest.end());
   bvh::HitBatch ref, hits;
   for (int f = 0; f < cfg.frames; ++f) {
-    deform(rest, rest_bounds, cfg.deformation, f, pos);
+    if (cfg.positions)
+      cfg.positions(cfg.first_frame + f, pos);
+    else
+      deform(rest, rest_bounds, cfg.deformation, static_cast<int>(cfg.first_frame + f), pos);
     for (std::size_t c = 0; c < configs.size(); ++c) {
       BenchRow row;
       row.frame = f;
+      row.scene_frame = cfg.first_frame + f;
       row.config = configs[c].name;
       auto t1 = Clock::now();
       configs[c].update(pos);
@@ -187,10 +192,11 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
 
 CsvTable bench_csv(const PeerBenchResult& r) {
   CsvTable t({"frame", "config", "update_ms", "build_ms", "update_build_ms", "frame_ms", "trace_ms", "mrays_per_s",
-              "rays", "hits", "mismatches", "mismatch_hit_miss", "mismatch_other_triangle", "ties"});
+              "rays", "hits", "mismatches", "mismatch_hit_miss", "mismatch_other_triangle", "ties", "scene_frame"});
   for (const auto& x : r.rows)
     t.add_row({std::int64_t(x.frame), x.config, x.update_ms, x.build_ms, x.update_ms + x.build_ms, x.frame_ms,
-               x.trace_ms, x.mrays_per_s, x.rays, x.hits, x.mismatches, x.hit_miss, x.other_triangle, x.ties});
+               x.trace_ms, x.mrays_per_s, x.rays, x.hits, x.mismatches, x.hit_miss, x.other_triangle, x.ties,
+               x.scene_frame});
   return t;
 }
 

@@ -1,6 +1,9 @@
 // The side-by-side benchmark against Embree (issue 5): in one process, on the same mesh, the same
-// trace frame and the same primary rays, over F animated frames (analysis/trace_deform.h),
-// five configurations update their acceleration structure to the frame's positions and trace:
+// trace frame and the same primary rays, over F animated frames (a scene's positions, or the
+// stand-in deformation of analysis/trace_deform.h), five configurations update their
+// acceleration structure to the frame's positions and trace. Every configuration sees the whole
+// (combined) mesh as one geometry, static parts included: the static/dynamic split is
+// `ptc trace`'s (analysis/scene_trace.h); the benchmark measures the per-frame structures.
 //
 //   ours_triangles  our binned-SAH BVH over triangle boxes, rebuilt per frame (the reference)
 //   ours_clusters   our BVH over cluster boxes (Garanzha 2009): cluster boxes updated, BVH built
@@ -20,6 +23,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,8 +37,16 @@
 
 namespace ptc {
 
+/// Per-frame positions of a scene (toolkit/anim/scene.h): fills `out` (the mesh's vertex count)
+/// with the positions at scene frame `frame`.
+using FramePositions = std::function<void(std::int64_t frame, std::span<Vec3> out)>;
+
 struct PeerBenchConfig {
-  int frames = 5;                         ///< animated frames (>= 1); frame 0 is the rest pose
+  int frames = 5;                         ///< animated frames (>= 1): first_frame .. first_frame + frames - 1
+  std::int64_t first_frame = 0;           ///< scene frame of the first benchmark frame (>= 0)
+  /// Where the frames come from: a scene's positions; empty = the stand-in `deformation` of the
+  /// mesh's positions (frame 0 of the deformation is the rest pose).
+  FramePositions positions;
   int width = 1024, height = 1024;        ///< primary rays of the default camera (1..16384 each)
   CameraSpec camera;                      ///< optional overrides of the default camera
   unsigned threads = 1;                   ///< oneTBB and Embree threads (>= 1; 1 = one-thread figures)
@@ -47,7 +60,8 @@ struct PeerBenchConfig {
 [[nodiscard]] const std::vector<std::string>& peer_bench_configs();
 
 struct BenchRow {
-  int frame = 0;
+  int frame = 0;                 ///< benchmark frame 0 .. frames - 1
+  std::int64_t scene_frame = 0;  ///< first_frame + frame
   std::string config;
   double update_ms = 0, build_ms = 0, frame_ms = 0;  ///< frame_ms: wall time of the whole update call
   double trace_ms = 0, mrays_per_s = 0;

@@ -82,7 +82,24 @@ double RayFrame::offset_eps(const Vec3& p) const {
 
 double RayFrame::diagonal() const { return bounds.empty() ? 0.0 : (bounds.hi - bounds.lo).norm(); }
 
+TraceTarget target_of(const bvh::TraceData& data) {
+  return {[&data](const bvh::RayBatch& rays, bvh::HitBatch& hits, const bvh::TraceOptions& opt) {
+            return bvh::trace(data, rays, hits, opt);
+          },
+          data.origin};
+}
+
 ShadowResult trace_shadows(const bvh::TraceData& scene, const SurfaceHits& s, const Vec3& light, const RayFrame& frame,
+                           unsigned threads) {
+  return trace_shadows(target_of(scene), s, light, frame, threads);
+}
+
+AoResult trace_ao(const bvh::TraceData& scene, const SurfaceHits& s, const AoConfig& cfg, const RayFrame& frame,
+                  unsigned threads) {
+  return trace_ao(target_of(scene), s, cfg, frame, threads);
+}
+
+ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const Vec3& light, const RayFrame& frame,
                            unsigned threads) {
   ShadowResult r;
   r.lit.assign(s.size(), 0);
@@ -109,7 +126,7 @@ ShadowResult trace_shadows(const bvh::TraceData& scene, const SurfaceHits& s, co
       }
     });
     const auto t0 = std::chrono::steady_clock::now();
-    const bvh::TraceTotals tt = bvh::trace(scene, rays, hits, opt);
+    const bvh::TraceTotals tt = scene.trace(rays, hits, opt);
     r.stats.add(tt, ms_since(t0));
     for (std::size_t j = 0; j < n; ++j) r.lit[idx[first + j]] = hits.triangle[j] == bvh::kNoTriangle;
   }
@@ -134,7 +151,7 @@ Vec3 cosine_hemisphere(const Vec3& n, double u1, double u2) {
   return (r * std::cos(phi) * t1 + r * std::sin(phi) * t2 + z * n).normalized();
 }
 
-AoResult trace_ao(const bvh::TraceData& scene, const SurfaceHits& s, const AoConfig& cfg, const RayFrame& frame,
+AoResult trace_ao(const TraceTarget& scene, const SurfaceHits& s, const AoConfig& cfg, const RayFrame& frame,
                   unsigned threads) {
   if (cfg.samples < 1) throw std::invalid_argument("trace_ao: samples must be >= 1");
   if (!(cfg.max_distance_rel > 0.0) || !std::isfinite(cfg.max_distance_rel))
@@ -167,7 +184,7 @@ AoResult trace_ao(const bvh::TraceData& scene, const SurfaceHits& s, const AoCon
       }
     });
     const auto t0 = std::chrono::steady_clock::now();
-    const bvh::TraceTotals tt = bvh::trace(scene, rays, hits, opt);
+    const bvh::TraceTotals tt = scene.trace(rays, hits, opt);
     r.stats.add(tt, ms_since(t0));
     for (std::size_t j = 0; j < np; ++j) {
       std::size_t open = 0;

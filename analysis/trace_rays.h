@@ -20,6 +20,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "bvh/tracer.h"
@@ -53,6 +54,17 @@ struct RayFrame {
   [[nodiscard]] double diagonal() const;
 };
 
+/// What a pass traces: a function tracing a batch (hits resized, triangle ids of the mesh the
+/// pass was given) and the trace frame origin of its data (for the ray offsets). One BVH:
+/// target_of(data); a scene with a static and a moving BVH: SceneTracer::target()
+/// (analysis/scene_trace.h).
+struct TraceTarget {
+  std::function<bvh::TraceTotals(const bvh::RayBatch&, bvh::HitBatch&, const bvh::TraceOptions&)> trace;
+  Vec3 origin = Vec3::Zero();
+};
+/// bvh::trace over `data` (kept by reference).
+[[nodiscard]] TraceTarget target_of(const bvh::TraceData& data);
+
 /// Totals and wall time of one trace pass.
 struct PassStats {
   std::uint64_t rays = 0, hits = 0, nodes_visited = 0, triangles_tested = 0;
@@ -69,6 +81,8 @@ struct ShadowResult {
   std::vector<std::uint8_t> lit;
   PassStats stats;
 };
+[[nodiscard]] ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const Vec3& light,
+                                         const RayFrame& frame, unsigned threads = 0);
 [[nodiscard]] ShadowResult trace_shadows(const bvh::TraceData& scene, const SurfaceHits& s, const Vec3& light,
                                          const RayFrame& frame, unsigned threads = 0);
 
@@ -84,6 +98,8 @@ struct AoResult {
   std::vector<float> ao;
   PassStats stats;
 };
+[[nodiscard]] AoResult trace_ao(const TraceTarget& scene, const SurfaceHits& s, const AoConfig& cfg,
+                                const RayFrame& frame, unsigned threads = 0);
 [[nodiscard]] AoResult trace_ao(const bvh::TraceData& scene, const SurfaceHits& s, const AoConfig& cfg,
                                 const RayFrame& frame, unsigned threads = 0);
 

@@ -26,6 +26,10 @@ Vec3 default_light(const bvh::PinholeCamera& cam, const Box3& bounds) {
 }
 
 Render render_view(const bvh::TraceData& scene, const Mesh& mesh, const bvh::PinholeCamera& cam, const RenderConfig& cfg) {
+  return render_view(target_of(scene), mesh, cam, cfg);
+}
+
+Render render_view(const TraceTarget& scene, const Mesh& mesh, const bvh::PinholeCamera& cam, const RenderConfig& cfg) {
   Render r;
   r.width = cfg.width, r.height = cfg.height;
   r.rays = camera_rays(cam, cfg.width, cfg.height);
@@ -34,7 +38,7 @@ Render render_view(const bvh::TraceData& scene, const Mesh& mesh, const bvh::Pin
   opt.threads = cfg.threads;
   opt.counters = true;
   const auto t0 = std::chrono::steady_clock::now();
-  const bvh::TraceTotals tt = bvh::trace(scene, r.rays, r.primary, opt);
+  const bvh::TraceTotals tt = scene.trace(r.rays, r.primary, opt);
   r.primary_stats.add(tt, ms_since(t0));
   r.surface = surface_hits(mesh, r.rays, r.primary);
   const RayFrame frame{mesh.bounds(), scene.origin};

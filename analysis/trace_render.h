@@ -43,7 +43,9 @@ struct Render {
 };
 
 /// Traces the view. `scene` must hold `mesh`'s current positions (TriangleScene or ClusterScene
-/// data). Ray offsets and the AO distance are relative to mesh.bounds() (see trace_rays.h).
+/// data, or a SceneTracer's target with combined triangle ids). Ray offsets and the AO distance are relative to mesh.bounds() (see trace_rays.h).
+[[nodiscard]] Render render_view(const TraceTarget& scene, const Mesh& mesh, const bvh::PinholeCamera& cam,
+                                 const RenderConfig& cfg);
 [[nodiscard]] Render render_view(const bvh::TraceData& scene, const Mesh& mesh, const bvh::PinholeCamera& cam,
                                  const RenderConfig& cfg);
 

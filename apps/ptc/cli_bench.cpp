@@ -1,4 +1,4 @@
-// `ptc bench MESH [--clusters DIR | --max-count N] [--frames F] [--width W --height H]
+// `ptc bench SCENE [--clusters DIR | --max-count N] [--frames N|A:B] [--data-dir DIR] [--width W --height H]
 // [--threads T] [--deform twist|wave|none] --out DIR` (analysis/peer_bench.h).
 #include <iostream>
 
@@ -10,7 +10,8 @@ namespace ptc::cli {
 namespace {
 struct BenchArgs {
   BenchCommandOptions opt;
-  std::string deform = "twist", cluster_leaf = "block-tree";
+  std::string deform = "twist", cluster_leaf = "block-tree", frames, data_dir;
+  CLI::App* app = nullptr;
   int threads = 1;
 };
 }  // namespace
@@ -26,24 +27,31 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.cluster_leaf =
                           a->cluster_leaf == "linear" ? bvh::ClusterLeaf::Linear : bvh::ClusterLeaf::BlockTree;
                       o.config.threads = static_cast<unsigned>(a->threads);
+                      o.deform_given = a->app->count("--deform") > 0;
+                      if (a->app->count("--frames")) o.frames = a->frames;
+                      if (!a->data_dir.empty()) o.scene_options.data_dir = a->data_dir;
                       o.argv = ctx.args;
                       cmd_bench(o, std::cout);
                     });
-  c->add_option("MESH", a->opt.input, "mesh file (.off .obj .ply .stl)")->required();
+  a->app = c;
+  c->add_option("SCENE", a->opt.input,
+                "built-in scene name ('ptc scenes'), scene file (.json), mesh or animated asset file, or directory of frames")
+      ->required();
+  c->add_option("--data-dir", a->data_dir, "meshes of built-in scenes (default: $PTC_DATA_DIR or <ptc>/../data)");
   auto* cl = c->add_option("--clusters", a->opt.clusters, "use the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--max-count", cfg.max_count, "otherwise: growth/Acc clustering with MaxCount = MaxSize = N")
       ->check(CLI::Range(1u, 1u << 20))
       ->excludes(cl)
       ->capture_default_str();
-  c->add_option("--frames", cfg.frames, "animated frames (frame 0 is left out of the medians)")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
+  c->add_option("--frames", a->frames,
+                "A:B = scene frames A..B; N = N frames from the scene's first (default: an animated scene's range, "
+                "else 5 frames of --deform); the first is left out of the medians");
   c->add_option("--width", cfg.width, "primary rays per image row")->check(CLI::Range(1, 16384))->capture_default_str();
   c->add_option("--height", cfg.height, "image rows")->check(CLI::Range(1, 16384))->capture_default_str();
   c->add_option("--threads", a->threads, "threads of our builder and tracer and of Embree's device (default 1)")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
-  c->add_option("--deform", a->deform, "per-frame deformation: twist, wave or none")
+  c->add_option("--deform", a->deform, "stand-in deformation of a static scene (mesh file): twist, wave or none")
       ->check(CLI::IsMember({"twist", "wave", "none"}))
       ->capture_default_str();
   c->add_option("--cluster-leaf", a->cluster_leaf, "cluster leaves: block-tree or linear (the paper's)")

@@ -1,4 +1,4 @@
-// `ptc trace MESH [--clusters DIR] [--width W --height H] [--eye X,Y,Z --look-at X,Y,Z --up X,Y,Z
+// `ptc trace SCENE [--frame F | --frames A:B] [--data-dir DIR] [--clusters DIR] [--width W --height H] [--eye X,Y,Z --look-at X,Y,Z --up X,Y,Z
 // --fov DEG] [--shadows] [--ao N] [--threads T] [--seed S] --out DIR` (analysis/trace_command.h).
 #include <iostream>
 
@@ -11,7 +11,7 @@ namespace ptc::cli {
 namespace {
 struct TraceArgs {
   TraceCommandOptions opt;
-  std::string eye, look_at, up, light;
+  std::string eye, look_at, up, light, frame, frames, data_dir;
   double fov = kDefaultFovDeg;
   CLI::App* app = nullptr;
 };
@@ -29,23 +29,32 @@ CLI::Validator vec3_validator() {
 void register_trace(CLI::App& app, Context& ctx) {
   auto a = std::make_shared<TraceArgs>();
   auto& rc = a->opt.render;
-  auto* c = ctx.add(app, "trace", "render a mesh with the reference tracer: images, trace.csv, manifest.json", [a, &ctx] {
+  auto* c = ctx.add(app, "trace", "render a scene with the reference tracer: images, trace.csv, manifest.json", [a, &ctx] {
     auto& o = a->opt;
     if (!a->eye.empty()) o.camera.eye = parse_vec3(a->eye);
     if (!a->look_at.empty()) o.camera.look_at = parse_vec3(a->look_at);
     if (!a->up.empty()) o.camera.up = parse_vec3(a->up);
     if (!a->light.empty()) o.render.light = parse_vec3(a->light);
     if (a->app->count("--fov")) o.camera.fov_deg = a->fov;
+    if (a->app->count("--frame")) o.frame = a->frame;
+    if (a->app->count("--frames")) o.frames = a->frames;
+    if (!a->data_dir.empty()) o.scene_options.data_dir = a->data_dir;
     o.render.threads = static_cast<unsigned>(ctx.threads);
     o.argv = ctx.args;
     cmd_trace(o, [](const std::filesystem::path& p, const RgbImage& img) { viz::write_png(p, img); }, std::cout);
   });
   a->app = c;
-  c->add_option("MESH", a->opt.input, "mesh file (.off .obj .ply .stl)")->required();
+  c->add_option("SCENE", a->opt.input,
+                "built-in scene name ('ptc scenes'), scene file (.json), mesh or animated asset file, or directory of frames")
+      ->required();
+  auto* one = c->add_option("--frame", a->frame, "trace frame F (default: the scene's first frame)");
+  c->add_option("--frames", a->frames, "trace frames A..B: images shaded_0000.png ..., one trace.csv row per frame")
+      ->excludes(one);
+  c->add_option("--data-dir", a->data_dir, "meshes of built-in scenes (default: $PTC_DATA_DIR or <ptc>/../data)");
   c->add_option("--clusters", a->opt.clusters, "trace a cluster BVH over the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--width", rc.width, "image width in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
   c->add_option("--height", rc.height, "image height in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
-  c->add_option("--eye", a->eye, "camera position (default: framing the whole mesh)")->check(vec3_validator());
+  c->add_option("--eye", a->eye, "camera position (default: the scene's camera, else framing the whole first frame)")->check(vec3_validator());
   c->add_option("--look-at", a->look_at, "point the camera looks at (default: centre of the mesh's bounds)")
       ->check(vec3_validator());
   c->add_option("--up", a->up, "camera up direction (default: 0,1,0)")->check(vec3_validator());
@@ -64,7 +73,7 @@ void register_trace(CLI::App& app, Context& ctx) {
           },
           "DEG"))
       ->capture_default_str();
-  c->add_option("--light", a->light, "point light position (default: above and right of the eye)")->check(vec3_validator());
+  c->add_option("--light", a->light, "point light position (default: the scene's light, else above and right of the eye)")->check(vec3_validator());
   c->add_flag("--shadows", rc.shadows, "trace shadow rays to the point light");
   c->add_option("--ao", rc.ao_samples, "ambient-occlusion rays per pixel (0 = none)")->check(CLI::Range(0, 4096))->capture_default_str();
   c->add_option("--ao-distance", rc.ao_distance_rel, "AO max distance as a fraction of the mesh's bounds diagonal")

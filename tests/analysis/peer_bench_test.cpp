@@ -166,3 +166,35 @@ TEST(TraceDeform, TwistWaveAndNoneFollowTheirDefinitions) {
   std::vector<Vec3> wrong(3);
   EXPECT_THROW(ptc::deform(rest, b, ptc::Deformation::Twist, 1, wrong), std::invalid_argument);
 }
+
+// Frames from a scene's positions (a FramePositions callback) instead of the stand-in
+// deformation: the callback is asked for scene frames first_frame .. first_frame + frames - 1 in
+// order, rows carry them as scene_frame, and every configuration sees those positions (the hits
+// follow a mesh that moves out of the view: fewer hits each frame, all configurations agreeing).
+TEST(PeerBench, ScenePositionsDriveTheFrames) {
+  const Mesh m = sphere(3);
+  ptc::PeerBenchConfig cfg;
+  cfg.frames = 3;
+  cfg.first_frame = 4;
+  cfg.width = cfg.height = 24;
+  cfg.max_count = 16;
+  std::vector<std::int64_t> asked;
+  const auto rest = m.positions();
+  cfg.positions = [&](std::int64_t f, std::span<Vec3> out) {
+    asked.push_back(f);
+    for (std::size_t v = 0; v < out.size(); ++v) out[v] = rest[v] + Vec3(3.0 * double(f - 4), 0, 0);
+  };
+  const auto r = ptc::run_peer_bench(m, nullptr, cfg);
+  EXPECT_EQ(asked, (std::vector<std::int64_t>{4, 5, 6}));
+  const std::size_t nc = ptc::peer_bench_configs().size();
+  ASSERT_EQ(r.rows.size(), 3 * nc);
+  for (const auto& row : r.rows) {
+    EXPECT_EQ(row.scene_frame, 4 + row.frame);
+    EXPECT_EQ(row.mismatches, 0u) << row.config << " frame " << row.frame;
+  }
+  EXPECT_GT(r.rows[0].hits, r.rows[nc].hits);
+  EXPECT_GT(r.rows[nc].hits, r.rows[2 * nc].hits);
+  const auto bench = split_lines(ptc::bench_csv(r).str());
+  EXPECT_NE(bench[0].find(",scene_frame"), std::string::npos);
+  EXPECT_EQ(bench[1].substr(bench[1].rfind(',') + 1), "4");
+}

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -34,6 +35,25 @@ std::string quote(const std::string& s) {
 }
 
 std::size_t lines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
+
+// CSV (no quoted fields) as one map column -> value per data row.
+std::vector<std::map<std::string, std::string>> csv_rows(const std::string& csv) {
+  std::vector<std::vector<std::string>> t;
+  std::istringstream in(csv);
+  for (std::string l; std::getline(in, l);) {
+    std::vector<std::string> f;
+    std::istringstream ls(l);
+    for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
+    t.push_back(f);
+  }
+  std::vector<std::map<std::string, std::string>> out;
+  for (std::size_t r = 1; r < t.size(); ++r) {
+    std::map<std::string, std::string> m;
+    for (std::size_t c = 0; c < t[0].size() && c < t[r].size(); ++c) m[t[0][c]] = t[r][c];
+    out.push_back(m);
+  }
+  return out;
+}
 
 // A closed cube, and a second closed mesh with the same number of triangles but another topology.
 const char* kCube =
@@ -101,8 +121,16 @@ TEST_F(TraceCli, TraceWritesImagesCsvAndManifest) {
   ASSERT_EQ(lines(csv), 2u) << csv;
   EXPECT_EQ(csv.rfind("mesh,bvh,triangles,clusters,width,height,threads,setup_ms,build_ms,rays,hits,trace_ms,mrays_per_s,", 0), 0u);
   EXPECT_NE(csv.find(",triangles,12,0,24,16,2,"), std::string::npos) << csv;
+  // A mesh file is one static part: built once, no per-frame update.
+  const auto rows = csv_rows(csv);
+  EXPECT_EQ(rows[0].at("frame"), "0");
+  EXPECT_EQ(rows[0].at("static_triangles"), "12");
+  EXPECT_EQ(rows[0].at("moving_triangles"), "0");
+  EXPECT_GT(std::stod(rows[0].at("static_build_ms")), 0.0);
+  EXPECT_EQ(std::stod(rows[0].at("update_ms")), 0.0);
   const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
-  EXPECT_EQ(m["schema"], "ptc-trace/1");
+  EXPECT_EQ(m["schema"], "ptc-trace/2");
+  EXPECT_EQ(m["parameters"]["camera"]["from_scene"], false);
   EXPECT_EQ(m["results"]["rays"], 24 * 16);
   EXPECT_EQ(m["results"]["images"]["cost_nodes.png"]["quantity"], "nodes_visited");
   EXPECT_GE(m["results"]["images"]["cost_nodes.png"]["max"].get<double>(), 1.0);
@@ -153,4 +181,156 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
   const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
   EXPECT_EQ(m["parameters"]["threads"], 1);
   EXPECT_EQ(m["parameters"]["embree_set_affinity"], false);
+}
+
+namespace {
+// One static mesh (the cube file) and one deformed mesh (a sphere moving rigidly down onto it),
+// with the scene's own camera.
+const char* kSceneJson = R"({
+  "schema": "ptc-scene/1",
+  "frames": [0, 9],
+  "camera": {"eye": [0.5, 1.5, 5], "look_at": [0.5, 1.0, 0.5], "fov": 50},
+  "meshes": [
+    {"name": "box", "file": "cube.off"},
+    {"name": "ball", "sphere": {"center": [0.5, 2.2, 0.5], "radius": 0.5, "levels": 2},
+     "deform": {"kind": "rigid", "amplitude": 0.1, "velocity": [0, -0.03, 0]}}
+  ]
+})";
+}  // namespace
+
+TEST_F(TraceCli, SceneFileSequenceWritesOneRowAndOneImageSetPerFrame) {
+  std::ofstream(dir_ / "scene.json") << kSceneJson;
+  const CmdResult r = ptc({"trace", (dir_ / "scene.json").string(), "--frames", "0:2", "--width", "20", "--height", "14",
+                           "--shadows", "--out", (dir_ / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* base : {"shaded", "depth", "normal", "cost_nodes", "cost_triangles"})
+    for (const char* f : {"_0000", "_0001", "_0002"})
+      EXPECT_EQ(png_size(dir_ / "out" / (std::string(base) + f + ".png")), std::make_pair(20, 14)) << base << f;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "shaded.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "shaded_0003.png"));
+  const auto rows = csv_rows(slurp(dir_ / "out" / "trace.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(rows[i].at("frame"), std::to_string(i));
+    EXPECT_EQ(rows[i].at("triangles"), "332");  // 12 + 320
+    EXPECT_EQ(rows[i].at("static_triangles"), "12");
+    EXPECT_EQ(rows[i].at("moving_triangles"), "320");
+    EXPECT_EQ(rows[i].at("rays"), "280");
+    EXPECT_GT(std::stoi(rows[i].at("hits")), 0);
+    // The static BVH is built for the first frame only; the moving one is updated every frame.
+    if (i == 0) {
+      EXPECT_GT(std::stod(rows[i].at("static_build_ms")), 0.0);
+    } else {
+      EXPECT_EQ(std::stod(rows[i].at("static_build_ms")), 0.0);
+      EXPECT_EQ(std::stod(rows[i].at("setup_ms")), 0.0);
+    }
+    EXPECT_GT(std::stod(rows[i].at("update_ms")) + std::stod(rows[i].at("build_ms")), 0.0);
+  }
+  const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
+  EXPECT_EQ(m["parameters"]["camera"]["from_scene"], true);
+  EXPECT_EQ(m["parameters"]["camera"]["eye"][2], 5.0);
+  EXPECT_EQ(m["parameters"]["camera"]["fov_y_deg"], 50.0);
+  EXPECT_EQ(m["parameters"]["frames"], nlohmann::json::array({0, 2}));
+  EXPECT_EQ(m["parameters"]["parts"][1]["static"], false);
+  // --eye overrides the scene's camera; --frame picks one frame and keeps the plain names.
+  const CmdResult r2 = ptc({"trace", (dir_ / "scene.json").string(), "--frame", "4", "--eye", "0.5,1,6", "--width", "8",
+                            "--height", "8", "--out", (dir_ / "out2").string()});
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  EXPECT_EQ(png_size(dir_ / "out2" / "shaded.png"), std::make_pair(8, 8));
+  const auto m2 = nlohmann::json::parse(slurp(dir_ / "out2" / "manifest.json"));
+  EXPECT_EQ(m2["parameters"]["camera"]["eye"][2], 6.0);
+  EXPECT_EQ(csv_rows(slurp(dir_ / "out2" / "trace.csv")).at(0).at("frame"), "4");
+}
+
+TEST_F(TraceCli, BuiltinSceneSequence) {
+  const CmdResult r = ptc({"trace", "cloth-sphere-32", "--frames", "0:2", "--width", "16", "--height", "12", "--out",
+                           (dir_ / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = csv_rows(slurp(dir_ / "out" / "trace.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(rows[i].at("frame"), std::to_string(i));
+    EXPECT_EQ(std::stoul(rows[i].at("static_triangles")) + std::stoul(rows[i].at("moving_triangles")),
+              std::stoul(rows[i].at("triangles")));
+    EXPECT_GT(std::stoul(rows[i].at("static_triangles")), 0u);
+    EXPECT_GT(std::stoul(rows[i].at("moving_triangles")), 0u);
+    EXPECT_EQ(png_size(dir_ / "out" / ("shaded_000" + std::to_string(i) + ".png")), std::make_pair(16, 12));
+  }
+  EXPECT_NE(r.out.find("static triangle BVH + moving triangle BVH"), std::string::npos) << r.out;
+}
+
+TEST_F(TraceCli, BadFramesAreOneLineErrors) {
+  std::ofstream(dir_ / "scene.json") << kSceneJson;
+  const std::string out = (dir_ / "out").string(), scene = (dir_ / "scene.json").string();
+  // A directory of two frame files: frames 0..1 only.
+  fs::create_directories(dir_ / "seq");
+  fs::copy_file(cube_, dir_ / "seq" / "f_0000.off");
+  fs::copy_file(cube_, dir_ / "seq" / "f_0001.off");
+  expect_error({"trace", (dir_ / "seq").string(), "--frame", "5", "--out", out}, 1, "--frame: frame 5 is beyond");
+  expect_error({"trace", (dir_ / "seq").string(), "--frames", "0:2", "--out", out}, 1, "--frames: frame 2 is beyond");
+  expect_error({"trace", scene, "--frame", "abc", "--out", out}, 1, "--frame");
+  expect_error({"trace", scene, "--frame", "1.5", "--out", out}, 1, "--frame");
+  expect_error({"trace", scene, "--frames", "3:1", "--out", out}, 1, "--frames");
+  expect_error({"trace", scene, "--frames", "0:x", "--out", out}, 1, "--frames");
+  expect_error({"trace", scene, "--frame", "1", "--frames", "0:2", "--out", out}, 2, "--frame");
+  expect_error({"trace", "no-such-scene", "--out", out}, 1, "no-such-scene");
+  expect_error({"bench", scene, "--frames", "2:1", "--out", out}, 1, "--frames");
+  expect_error({"bench", scene, "--frames", "0", "--out", out}, 1, "--frames");
+  expect_error({"bench", scene, "--deform", "twist", "--out", out}, 1, "--deform");
+  // The frame directory traces fine within its range.
+  EXPECT_EQ(ptc({"trace", (dir_ / "seq").string(), "--frames", "0:1", "--width", "4", "--height", "4", "--out", out}).code, 0);
+}
+
+TEST_F(TraceCli, BenchTakesPositionsFromTheScene) {
+  std::ofstream(dir_ / "scene.json") << kSceneJson;
+  const CmdResult r = ptc({"bench", (dir_ / "scene.json").string(), "--frames", "3:4", "--width", "8", "--height", "8",
+                           "--max-count", "8", "--out", (dir_ / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = csv_rows(slurp(dir_ / "out" / "bench.csv"));
+  ASSERT_EQ(rows.size(), 2u * 5u);
+  for (const auto& row : rows) {
+    EXPECT_EQ(row.at("scene_frame"), std::to_string(3 + std::stoi(row.at("frame"))));
+    EXPECT_EQ(row.at("mismatches"), "0") << row.at("config");
+  }
+  const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
+  EXPECT_EQ(m["parameters"]["motion"], "scene");
+  EXPECT_EQ(m["results"]["triangles"], 332);
+  // A mesh file keeps the stand-in deformation (frames 0..N-1).
+  const CmdResult r2 = ptc({"bench", cube_.string(), "--frames", "2", "--deform", "wave", "--width", "4", "--height", "4",
+                            "--max-count", "4", "--out", (dir_ / "out2").string()});
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  const auto m2 = nlohmann::json::parse(slurp(dir_ / "out2" / "manifest.json"));
+  EXPECT_EQ(m2["parameters"]["motion"], "stand-in deformation");
+  EXPECT_EQ(m2["parameters"]["deformation"], "wave");
+}
+
+TEST_F(TraceCli, SceneWithClustersOfTheCombinedMesh) {
+  std::ofstream(dir_ / "scene.json") << kSceneJson;
+  // Two clusters over the 332 combined triangles: the cube (0..11) and the sphere (12..331).
+  fs::create_directories(dir_ / "cl");
+  {
+    std::ofstream csv(dir_ / "cl" / "triangles.csv");
+    csv << "triangle_id,cluster_id\n";
+    for (int t = 0; t < 332; ++t) csv << t << "," << (t < 12 ? 0 : 1) << "\n";
+  }
+  const CmdResult r = ptc({"trace", (dir_ / "scene.json").string(), "--clusters", (dir_ / "cl").string(), "--frames",
+                           "1:2", "--width", "12", "--height", "10", "--out", (dir_ / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = csv_rows(slurp(dir_ / "out" / "trace.csv"));
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("bvh"), "clusters");
+  EXPECT_EQ(rows[0].at("clusters"), "2");
+  EXPECT_EQ(rows[1].at("frame"), "2");
+  EXPECT_NE(r.out.find("static triangle BVH + moving cluster BVH"), std::string::npos) << r.out;
+  // A clustering of the cube alone does not fit the combined mesh.
+  fs::remove_all(dir_ / "out");
+  fs::create_directories(dir_ / "cube_cl");
+  {
+    std::ofstream csv(dir_ / "cube_cl" / "triangles.csv");
+    csv << "triangle_id,cluster_id\n";
+    for (int t = 0; t < 12; ++t) csv << t << ",0\n";
+  }
+  expect_error({"trace", (dir_ / "scene.json").string(), "--clusters", (dir_ / "cube_cl").string(), "--out",
+                (dir_ / "out").string()},
+               1, "triangles.csv");
 }
