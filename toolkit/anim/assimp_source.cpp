@@ -18,6 +18,14 @@
 #include "toolkit/anim/weld.h"
 #include "toolkit/core/error.h"
 
+namespace {
+// Model only what a scene needs: positions, faces, bones and animation channels. Everything
+// else an asset carries is dropped by assimp's RemoveComponent step right after import.
+constexpr int kUnusedComponents = aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_COLORS |
+                                  aiComponent_TEXCOORDS | aiComponent_TEXTURES | aiComponent_LIGHTS |
+                                  aiComponent_CAMERAS | aiComponent_MATERIALS;
+}  // namespace
+
 namespace ptc {
 
 namespace fs = std::filesystem;
@@ -137,13 +145,15 @@ AnimationPtr load_md2(const fs::path& path, const Md2Options& opt) {
   const std::string bytes = slurp(path);
   const Md2Header h = check_md2(bytes, name);
   Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, kUnusedComponents);
   std::vector<std::vector<Vec3>> frames;
   frames.reserve(h.num_frames);
   std::vector<Tri> tris, tris_k;
   std::vector<Vec3> pos;
   for (std::uint32_t k = 0; k < h.num_frames; ++k) {
     importer.SetPropertyInteger(AI_CONFIG_IMPORT_GLOBAL_KEYFRAME, static_cast<int>(k));
-    const aiScene* s = importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_ValidateDataStructure, "md2");
+    const aiScene* s = importer.ReadFileFromMemory(
+        bytes.data(), bytes.size(), aiProcess_ValidateDataStructure | aiProcess_RemoveComponent, "md2");
     if (!s) throw InputError(name, "", fmt::format("frame {}", k), std::string("assimp: ") + importer.GetErrorString());
     collect_soup(*s, name, k == 0 ? tris : tris_k, pos);
     if (k > 0 && (tris_k != tris || pos.size() != frames.front().size()))
@@ -306,7 +316,9 @@ AnimationPtr load_assimp_animation(const fs::path& path, const AssimpSkinOptions
   if (!fs::exists(path, ec)) throw InputError(name, "", "", "no such file");
   if (fs::is_directory(path, ec)) throw InputError(name, "", "", "is a directory, not a file");
   Assimp::Importer importer;
-  const aiScene* s = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, kUnusedComponents);
+  const aiScene* s =
+      importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_ValidateDataStructure | aiProcess_RemoveComponent);
   if (!s) throw InputError(name, "", "", std::string("assimp: ") + importer.GetErrorString());
   if (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw InputError(name, "", "", "assimp: incomplete scene (no meshes)");
   SkinRig rig = skin_rig_from_scene(*s, opt.animation, name);
