@@ -5,7 +5,7 @@
 //                       [--clusters acc,meshopt] [--max-count 50] [--max-size 50]
 //                       [--leaves linear,block_tree] [--leaf 8] [--ct 1] [--ci 0.3]
 //                       [--isa auto|sse2|avx2] [--embree all|none] [--amplitude 0.01]
-//                       [--clock wall|cpu] [--out DIR]
+//                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--median 4]
 //
 // MESH (default: armadillo) is subdivided `levels` times (midpoint; 2 -> 832k triangles for
 // armadillo). Clusterings (comma list, made once from the rest pose):
@@ -27,6 +27,9 @@
 // --clock cpu times every stage, commit and trace with the calling thread's CPU time instead of
 // the wall clock (bvh/stage_clock.h; one thread only): on a machine shared with other jobs the
 // wall clock charges their time slices to whichever configuration was running.
+// --median N: BuildConfig::median_split_below of the cluster BVHs (default: cluster_scene_defaults()).
+// --build-loop N: only the cluster build, N times over the first clustering's rest-pose boxes
+// (median, and the tree's SAH cost), then exit; a target for perf (use with --embree none).
 // --out DIR writes DIR/bvh_bench.csv (one row per frame and configuration) and
 // DIR/manifest.json (analysis/manifest.h).
 #include <tbb/global_control.h>
@@ -101,6 +104,7 @@ struct Config {
   std::function<void(std::span<const Vec3>)> update;
   std::function<TraceTotals(HitBatch&)> trace;
   std::function<std::vector<std::pair<std::string, double>>()> stages;
+  std::function<double()> sah;  // SAH cost of the last build (ours only)
   std::map<std::string, std::vector<double>> times;
   std::vector<double> trace_ms, box_build_ms, total_ms;
   std::vector<TraceTotals> totals;
@@ -132,7 +136,7 @@ std::vector<Vec3> frame_positions_at(const Mesh& m, double a) {
 
 int main(int argc, char** argv) {
   std::string mesh_path = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
-  int levels = 2, reps = 5, size = 1024;
+  int levels = 2, reps = 5, size = 1024, build_loop = 0;
   unsigned threads = 1, max_count = 50;
   double max_size = 50, amplitude = 0.01;
   std::string clusters_arg = "acc,meshopt", leaves_arg = "linear,block_tree", isa_arg = "auto", embree_arg = "all",
@@ -160,6 +164,7 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--levels") levels = static_cast<int>(value("--levels"));
     else if (a == "--reps") reps = static_cast<int>(value("--reps"));
+    else if (a == "--build-loop") build_loop = static_cast<int>(value("--build-loop"));
     else if (a == "--size") size = static_cast<int>(value("--size"));
     else if (a == "--leaf") tcfg.build.max_leaf_size = static_cast<unsigned>(value("--leaf"));
     else if (a == "--threads") threads = static_cast<unsigned>(value("--threads"));
@@ -173,6 +178,7 @@ int main(int argc, char** argv) {
     else if (a == "--out") out_dir = text("--out");
     else if (a == "--clock") clock_arg = text("--clock");
     else if (a == "--ci") tcfg.build.cost.intersection = ccfg.build.cost.intersection = value("--ci");
+    else if (a == "--median") ccfg.build.median_split_below = static_cast<unsigned>(value("--median"));
     else if (a == "--ct") tcfg.build.cost.traversal = ccfg.build.cost.traversal = value("--ct");
     else if (a[0] != '-') mesh_path = a;
     else {
@@ -275,6 +281,7 @@ int main(int argc, char** argv) {
   opt.isa = isa;
 
   std::vector<std::unique_ptr<Config>> configs;
+  std::shared_ptr<ClusterScene> first_cluster_scene;
   auto scene_stages = [](const StageTimes& t) {
     return std::vector<std::pair<std::string, double>>{
         {"1 vertices to frame", t.vertices_ms}, {"2 boxes", t.boxes_ms},         {"3 SAH build", t.build_ms},
@@ -287,6 +294,7 @@ int main(int argc, char** argv) {
     c->update = [=](std::span<const Vec3> p) { ts->update(p); };
     c->trace = [=, &rays](HitBatch& h) { return trace(ts->data(), rays, h, opt); };
     c->stages = [=] { return scene_stages(ts->times()); };
+    c->sah = [=] { return ts->bvh().cost; };
     configs.push_back(std::move(c));
   }
   for (const auto& [cname, view] : views)
@@ -294,11 +302,13 @@ int main(int argc, char** argv) {
       SceneConfig sc = ccfg;
       sc.cluster_leaf = mode;
       auto cs = std::make_shared<ClusterScene>(mesh, view, sc);
+      if (!first_cluster_scene) first_cluster_scene = cs;
       auto c = std::make_unique<Config>();
       c->name = "ours_" + cname + "_" + to_string(mode);
       c->update = [=](std::span<const Vec3> p) { cs->update(p); };
       c->trace = [=, &rays](HitBatch& h) { return trace(cs->data(), rays, h, opt); };
       c->stages = [=] { return scene_stages(cs->times()); };
+      c->sah = [=] { return cs->bvh().cost; };
       configs.push_back(std::move(c));
     }
   if (embree_arg == "all")
@@ -319,6 +329,41 @@ int main(int argc, char** argv) {
       };
       configs.push_back(std::move(c));
     }
+
+  // --build-loop N: the binned SAH build alone, N times over the first cluster scene's rest-pose
+  // boxes (centroids = box centres, as in the scene), then exit: a profiling target.
+  if (build_loop > 0) {
+    if (!first_cluster_scene) {
+      std::cerr << "bvh_bench: --build-loop needs a clustering\n";
+      return 2;
+    }
+    const std::vector<Box3f>& boxes = first_cluster_scene->boxes();
+    const std::vector<Vec3f> centers = box_centers(boxes);
+    Bvh b;
+    BuildWorkspace ws;
+    std::vector<double> ms;
+    for (int i = 0; i < build_loop; ++i) {
+      const double t0 = clock_ms(clock);
+      build_binned_sah({boxes, centers, first_cluster_scene->weights()}, ccfg.build, b, ws);
+      ms.push_back(clock_ms(clock) - t0);
+    }
+    row("build loop " + std::to_string(boxes.size()) + " clusters", "3 SAH build", ms);
+    // The box stage alone on the same clustering (rest pose).
+    std::vector<Vec3f> fp;
+    frame_positions(mesh.positions(), origin, fp);
+    std::vector<Box3f> bx;
+    std::vector<Vec3f> cx;
+    ms.clear();
+    for (int i = 0; i < build_loop; ++i) {
+      frame_positions(mesh.positions(), origin, fp);  // as in the scene: fresh positions first
+      const double t0 = clock_ms(clock);
+      point_group_boxes(fp, views.front().second.vertex_offsets, views.front().second.vertices, bx, cx);
+      ms.push_back(clock_ms(clock) - t0);
+    }
+    row("build loop " + std::to_string(boxes.size()) + " clusters", "2 boxes", ms);
+    std::printf("SAH cost %.6f, %zu nodes\n", b.cost, b.nodes.size());
+    return 0;
+  }
 
   // Frames: every configuration updates to frame r, then traces; mismatches against the first.
   HitBatch ref, hits;
@@ -391,6 +436,7 @@ int main(int argc, char** argv) {
       std::printf("  nodes/ray %.2f tris/ray %.2f", double(t.nodes_visited) / double(rays.size()),
                   double(t.triangles_tested) / double(rays.size()));
     std::printf("  hits %llu", (unsigned long long)t.hits);
+    if (c->sah) std::printf("  SAH %.4f", c->sah());
     if (c.get() != configs[0].get())
       std::printf("  mismatches (all frames): hit/miss %zu, other triangle %zu, ties %zu", mm.hit_miss,
                   mm.other_triangle, mm.ties);

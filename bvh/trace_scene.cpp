@@ -100,6 +100,7 @@ SceneConfig cluster_scene_defaults() {
   SceneConfig c;
   c.build.cost = {1.0, 0.3};
   c.build.max_leaf_size = 1;
+  c.build.median_split_below = 4;  // see BuildConfig: 6% faster build, SAH cost +0.3%
   return c;
 }
 
