@@ -52,7 +52,7 @@ struct PeerBenchConfig {
   unsigned threads = 1;                   ///< oneTBB and Embree threads (>= 1; 1 = one-thread figures)
   Deformation deformation = Deformation::Twist;
   std::uint32_t max_count = 50;           ///< clustering when none is given: growth / Acc, MaxCount = MaxSize = this
-  bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::BlockTree;
+  bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   double tie_rel = 1e-5;                  ///< relative t tolerance of a tie
 };
 

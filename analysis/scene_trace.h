@@ -42,7 +42,7 @@ struct PartLayout {
 
 struct SceneTracerConfig {
   const Clustering* clusters = nullptr;  ///< of the combined mesh: the moving BVH is a cluster BVH
-  bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::BlockTree;
+  bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
 };
 

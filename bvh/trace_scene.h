@@ -93,7 +93,7 @@ enum class ClusterLeaf { Linear, BlockTree };
 struct SceneConfig {
   BuildConfig build{};  ///< builder settings (max_leaf_size counts primitives: triangles or clusters)
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
-  ClusterLeaf cluster_leaf = ClusterLeaf::BlockTree;  ///< ClusterScene only
+  ClusterLeaf cluster_leaf = ClusterLeaf::Linear;  ///< ClusterScene only (Linear: the paper's leaves, and the faster with Acc clusters, bench/bvh_bench.cpp)
   StageClock clock = StageClock::Wall;  ///< clock of the StageTimes (see stage_clock.h)
 };
 
