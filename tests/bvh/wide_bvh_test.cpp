@@ -94,7 +94,9 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
   d.ranges[3] = d.ranges[4];
   EXPECT_FALSE(validate(d, m.triangle_count()).empty());
   // Block trees: valid (boxes contain, not equal, their children's), and refitted per frame.
-  ClusterScene bt(m, runs.view());
+  SceneConfig block_tree = cluster_scene_defaults();
+  block_tree.cluster_leaf = ClusterLeaf::BlockTree;
+  ClusterScene bt(m, runs.view(), block_tree);
   EXPECT_GT(bt.subtree_nodes(), 0u);
   EXPECT_TRUE(validate(bt.data(), m.triangle_count(), false).empty()) << test::joined(validate(bt.data(), m.triangle_count(), false));
   bt.update(test::deformed(m, 0.05).positions());
