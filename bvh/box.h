@@ -132,6 +132,32 @@ void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::ui
 void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::uint32_t> offsets,
                        std::span<const std::uint32_t> indices, std::vector<Box3f>& out, std::vector<Vec3f>& centers);
 
+/// A vertex numbering for per-frame group boxes (once per clustering): vertices renumbered in
+/// first-touch order over the groups' index lists, so that group g owns the contiguous new
+/// indices [own_offsets[g], own_offsets[g+1]) (the vertices it touches first) and lists the
+/// vertices it shares with earlier groups in shared[shared_offsets[g] .. shared_offsets[g+1])
+/// (new indices, each once per group). Vertices no group references follow in their original
+/// order, so every vertex has a new index: to_old[new] = old, to_new[old] = new.
+struct GroupVertexOrder {
+  std::vector<std::uint32_t> to_old, to_new;
+  std::vector<std::uint32_t> own_offsets, shared_offsets, shared;
+};
+/// Throws std::invalid_argument when an index is >= vertex_count or offsets are not ascending
+/// from 0 to indices.size().
+[[nodiscard]] GroupVertexOrder first_touch_order(std::size_t vertex_count, std::span<const std::uint32_t> offsets,
+                                                 std::span<const std::uint32_t> indices);
+
+/// frame_positions in a new order: out[i] = to_frame(positions[to_old[i]], origin).
+void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const Vec3& origin,
+                     std::vector<Vec3f>& out);
+
+/// point_group_boxes(frame_pos_old, offsets, indices, out, centers), bit for bit (NaN-free
+/// positions), from the positions in the order of `order` (frame_pos[new]): min/max over each
+/// group's own contiguous range, then over its shared vertices. frame_pos may hold more entries
+/// than vertices (sentinels): they are not read.
+void point_group_boxes(std::span<const Vec3f> frame_pos, const GroupVertexOrder& order, std::vector<Box3f>& out,
+                       std::vector<Vec3f>& centers);
+
 /// Centroids of float triangles (v0 + v1 + v2) / 3, inside the boxes above.
 [[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);
 

@@ -176,7 +176,8 @@ class ClusterScene {
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
   std::uint32_t sub_depth_ = 0;
   std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill
-  AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] vertex indices (V: NaN sentinel)
+  GroupVertexOrder vorder_;  // vertices renumbered in first-touch order over the clusters (fpos_ is in it)
+  AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel)
   std::vector<Vec3f> fpos_;
   std::vector<Box3f> boxes_;
   std::vector<Vec3f> centroids_;

@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <span>
+#include <stdexcept>
 
 #include "test_util.h"
 
@@ -133,6 +136,121 @@ TEST(Box, FusedGroupBoxesEqualThePlainOnes) {
         EXPECT_LT(fused[gi].lo[a], fp[indices[i]][a]);
         EXPECT_GT(fused[gi].hi[a], fp[indices[i]][a]);
       }
+}
+
+// Independent answer for a group box: scalar min/max over the group's ORIGINAL indices, then one
+// ulp outwards (next_below / next_above; +-0 both widen to -+denorm_min).
+Box3f brute_group_box(std::span<const Vec3f> fp_old, std::span<const std::uint32_t> idx) {
+  Box3f b;
+  if (idx.empty()) return b;
+  for (int a = 0; a < 3; ++a) {
+    float lo = fp_old[idx[0]][a], hi = lo;
+    for (std::uint32_t v : idx) lo = std::min(lo, fp_old[v][a]), hi = std::max(hi, fp_old[v][a]);
+    b.lo[a] = next_below(lo), b.hi[a] = next_above(hi);
+  }
+  return b;
+}
+
+// First-touch renumbering: a permutation; group g's vertex set = its own contiguous range plus
+// its shared list (earlier groups' vertices, each once); unreferenced vertices last. Boxes and
+// centres from the renumbered positions equal the brute-force ones over the original indices
+// and the plain point_group_boxes, bit for bit: random clusterings (overlapping groups,
+// duplicates inside a group, empty groups, 1..70 vertices so both the 4-vertex steps and the
+// tails run, the last vertex of the array), zero and negative-zero coordinates, unreferenced
+// vertices, reused outputs.
+TEST(Box, FirstTouchOrderBoxesEqualBruteForce) {
+  std::mt19937 g32(23);
+  auto g = [&g32] { return static_cast<std::uint32_t>(g32()); };
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::uint32_t V = 1 + g() % 400;
+    std::uniform_real_distribution<float> U(trial % 3 == 0 ? -1e-30f : -5.0f, trial % 3 == 0 ? 1e-30f : 5.0f);
+    const auto u = [&] { return U(g32); };
+    std::vector<Vec3f> fp_old(V);
+    for (Vec3f& p : fp_old) p = {u(), u(), u()};
+    fp_old[g() % V] = {0.0f, -0.0f, 0.0f};
+    fp_old[g() % V] = {-0.0f, -0.0f, -0.0f};
+    if (trial % 4 == 1) fp_old[V - 1] = {1e30f, -1e30f, 3.0f};
+    const std::uint32_t groups = g() % 40;
+    std::vector<std::uint32_t> offsets{0}, idx;
+    const std::uint32_t used = std::max<std::uint32_t>(1, V - V / 4);  // the last V/4 vertices: unreferenced...
+    for (std::uint32_t k = 0; k < groups; ++k) {
+      const std::uint32_t n = (g() % 5 == 0) ? 0 : 1 + g() % 70;
+      const std::uint32_t start = g() % used;
+      for (std::uint32_t i = 0; i < n; ++i)  // a window (neighbouring groups overlap) with some jumps
+        idx.push_back(g() % 8 == 0 ? g() % used : (start + i) % used);
+      if (trial % 2 == 0 && n > 0) idx.push_back(V - 1);  // ...but sometimes the last one is
+      offsets.push_back(static_cast<std::uint32_t>(idx.size()));
+    }
+    const GroupVertexOrder o = first_touch_order(V, offsets, idx);
+    // A permutation, and its inverse.
+    ASSERT_EQ(o.to_old.size(), V);
+    ASSERT_EQ(o.to_new.size(), V);
+    for (std::uint32_t i = 0; i < V; ++i) {
+      ASSERT_LT(o.to_old[i], V);
+      EXPECT_EQ(o.to_new[o.to_old[i]], i);
+    }
+    ASSERT_EQ(o.own_offsets.size(), offsets.size());
+    ASSERT_EQ(o.shared_offsets.size(), offsets.size());
+    std::vector<std::uint8_t> referenced(V, 0);
+    for (std::uint32_t v : idx) referenced[v] = 1;
+    for (std::uint32_t k = 0; k < groups; ++k) {
+      std::vector<std::uint32_t> want(idx.begin() + offsets[k], idx.begin() + offsets[k + 1]), got;
+      std::sort(want.begin(), want.end());
+      want.erase(std::unique(want.begin(), want.end()), want.end());
+      for (std::uint32_t i = o.own_offsets[k]; i < o.own_offsets[k + 1]; ++i) got.push_back(o.to_old[i]);
+      for (std::uint32_t i = o.shared_offsets[k]; i < o.shared_offsets[k + 1]; ++i) {
+        EXPECT_LT(o.shared[i], o.own_offsets[k]) << "shared vertex not owned by an earlier group";
+        got.push_back(o.to_old[o.shared[i]]);
+      }
+      const std::size_t with_dups = got.size();
+      std::sort(got.begin(), got.end());
+      got.erase(std::unique(got.begin(), got.end()), got.end());
+      EXPECT_EQ(got.size(), with_dups) << "a vertex listed twice in group " << k;
+      EXPECT_EQ(got, want) << "group " << k;
+    }
+    // Unreferenced vertices come last, in their original order.
+    const std::uint32_t first_unref = groups ? o.own_offsets[groups] : 0;
+    for (std::uint32_t i = 0; i < V; ++i) {
+      EXPECT_EQ(i < first_unref, bool(referenced[o.to_old[i]])) << i;
+      if (i > first_unref) {
+        EXPECT_LT(o.to_old[i - 1], o.to_old[i]);
+      }
+    }
+    // Boxes: positions converted in the new order (as ClusterScene::update does).
+    std::vector<Vec3> pos(V);
+    for (std::uint32_t v = 0; v < V; ++v) pos[v] = Vec3(fp_old[v][0], fp_old[v][1], fp_old[v][2]);
+    std::vector<Vec3f> fp_new;
+    frame_positions(pos, o.to_old, Vec3::Zero(), fp_new);
+    for (std::uint32_t i = 0; i < V; ++i) ASSERT_EQ(fp_new[i], fp_old[o.to_old[i]]);
+    std::vector<Box3f> boxes(7), plain;
+    std::vector<Vec3f> centers, plain_centers(2);
+    point_group_boxes(fp_new, o, boxes, centers);
+    point_group_boxes(fp_old, offsets, idx, plain, plain_centers);
+    ASSERT_EQ(boxes.size(), groups);
+    ASSERT_EQ(centers.size(), groups);
+    for (std::uint32_t k = 0; k < groups; ++k) {
+      const Box3f want =
+          brute_group_box(fp_old, std::span<const std::uint32_t>(idx.data() + offsets[k], offsets[k + 1] - offsets[k]));
+      EXPECT_EQ(boxes[k], want) << "trial " << trial << " group " << k;
+      EXPECT_EQ(boxes[k], plain[k]) << "trial " << trial << " group " << k;
+      if (want.empty()) continue;  // (the centre of the empty box is NaN)
+      EXPECT_EQ(centers[k], want.center()) << k;
+      EXPECT_EQ(centers[k], plain_centers[k]) << k;
+    }
+  }
+}
+
+TEST(Box, FirstTouchOrderRejectsBadInput) {
+  const std::vector<std::uint32_t> idx{0, 1, 2, 5};
+  EXPECT_THROW((void)first_touch_order(5, std::vector<std::uint32_t>{0, 2, 4}, idx), std::invalid_argument);
+  EXPECT_THROW((void)first_touch_order(6, std::vector<std::uint32_t>{0, 3, 2, 4}, idx), std::invalid_argument);
+  EXPECT_THROW((void)first_touch_order(6, std::vector<std::uint32_t>{0, 3}, idx), std::invalid_argument);
+  EXPECT_THROW((void)first_touch_order(6, std::vector<std::uint32_t>{1, 4}, idx), std::invalid_argument);
+  const GroupVertexOrder o = first_touch_order(6, std::vector<std::uint32_t>{0, 2, 4}, idx);
+  EXPECT_EQ(o.to_old, (std::vector<std::uint32_t>{0, 1, 2, 5, 3, 4}));
+  const GroupVertexOrder none = first_touch_order(3, {}, {});
+  EXPECT_EQ(none.to_old, (std::vector<std::uint32_t>{0, 1, 2}));
+  EXPECT_TRUE(none.own_offsets.size() <= 1);
 }
 
 }  // namespace

@@ -460,5 +460,66 @@ TEST(Tracer, AccClustersMatchBruteForce) {
   }
 }
 
+// The scene's per-frame cluster boxes (computed from vertices renumbered in first-touch order)
+// equal, bit for bit, brute-force min/max over each cluster's ORIGINAL vertex list in the frame,
+// widened by one ulp: Acc clusters (shared boundary vertices) and Morton runs (no vertex lists:
+// triangle corners), on a mesh with unreferenced vertices (one before, one after the used ones),
+// over two frames; the traced hits stay those of brute force.
+TEST(Tracer, ClusterBoxesEqualBruteForceOverTheOriginalVertices) {
+  const Mesh base = test::load_mesh("bunny00.off");
+  std::vector<Vec3> p{Vec3(1e3, -1e3, 5)};  // vertex 0: unreferenced, far away
+  p.insert(p.end(), base.positions().begin(), base.positions().end());
+  p.push_back(Vec3(-1e3, 1e3, 0));  // unreferenced, last
+  std::vector<Tri> t(base.triangles().begin(), base.triangles().end());
+  for (Tri& x : t)
+    for (auto& v : x) v += 1;
+  const Mesh m(t, p);
+  ClusterConfig cc;
+  cc.method = ClusterMethod::Growth;
+  cc.objective = ObjectiveKind::Acc;
+  cc.max_count = 50;
+  cc.max_size = 50;
+  const Clustering cl = cluster_mesh(m, cc);
+  const MortonRuns runs = morton_runs(m, 37);
+  std::vector<std::uint32_t> corner_offsets{0}, corners;  // the runs' implied vertex lists
+  for (std::size_t c = 0; c + 1 < runs.triangle_offsets.size(); ++c) {
+    for (std::uint32_t i = runs.triangle_offsets[c]; i < runs.triangle_offsets[c + 1]; ++i)
+      for (std::uint32_t v : m.triangles()[runs.triangle_order[i]]) corners.push_back(v);
+    corner_offsets.push_back(static_cast<std::uint32_t>(corners.size()));
+  }
+  const Mesh moved = test::deformed(m, 0.04);
+  for (int which = 0; which < 2; ++which) {
+    const ClusterView view = which == 0 ? view_of(cl) : runs.view();
+    const std::span<const std::uint32_t> offs = which == 0 ? std::span<const std::uint32_t>(cl.vertex_offsets)
+                                                           : std::span<const std::uint32_t>(corner_offsets);
+    const std::span<const std::uint32_t> verts =
+        which == 0 ? std::span<const std::uint32_t>(cl.vertices) : std::span<const std::uint32_t>(corners);
+    ClusterScene s(m, view);
+    for (const Mesh* frame : {&m, &moved}) {
+      s.update(frame->positions());
+      ASSERT_EQ(s.boxes().size(), offs.size() - 1);
+      for (std::size_t c = 0; c + 1 < offs.size(); ++c) {
+        Box3f want;
+        for (int a = 0; a < 3; ++a) {
+          float lo = kInf, hi = -kInf;
+          for (std::uint32_t i = offs[c]; i < offs[c + 1]; ++i) {
+            const Vec3f f = to_frame(frame->positions()[verts[i]], s.data().origin);
+            lo = std::min(lo, f[a]), hi = std::max(hi, f[a]);
+          }
+          want.lo[a] = next_below(lo), want.hi[a] = next_above(hi);
+        }
+        ASSERT_EQ(s.boxes()[c], want) << "clustering " << which << " cluster " << c;
+      }
+      const auto issues = validate(s.data(), m.triangle_count(), true);
+      ASSERT_TRUE(issues.empty()) << test::joined(issues);
+      const RaySet rs = random_rays(*frame, 150, 41);
+      for (std::size_t i = 0; i < rs.org.size(); ++i)
+        expect_same(trace_ray(s.data(), rs.org[i], rs.dir[i]),
+                    test::brute_force(*frame, s.data().origin, rs.org[i], rs.dir[i]), "renumbered");
+    }
+    EXPECT_THROW(s.update(base.positions()), std::invalid_argument);  // wrong vertex count
+  }
+}
+
 }  // namespace
 }  // namespace ptc::bvh
