@@ -20,6 +20,8 @@
 #include "toolkit/core/error.h"
 #include "toolkit/io/mesh_io.h"
 
+#include "cli_harness.h"
+
 namespace fs = std::filesystem;
 
 namespace ptc {
@@ -27,62 +29,15 @@ namespace {
 
 const fs::path kData = PTC_TEST_DATA;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::kCube;
+using test::RunResult;
+using test::slurp;
 
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) {
-    if (c == '\'')
-      q.append("'\\''");
-    else
-      q.push_back(c);
-  }
-  return q + "'";
-}
-
-struct RunResult {
-  int code = -1;
-  std::string out, err;
-};
-
-const char* kCube =
-    "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
-    "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
-
-class Animate : public ::testing::Test {
+class Animate : public test::CliTest {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ptc_anim_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    CliTest::SetUp();
     write("cube.off", kCube);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  fs::path write(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-  RunResult ptc(const std::vector<std::string>& args) const {
-    std::string cmd = quote(PTC_BIN);
-    for (const auto& a : args) cmd.append(" ").append(quote(a));
-    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
-    cmd.append(" >").append(quote(o.string())).append(" 2>").append(quote(e.string()));
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    if (WIFEXITED(status)) r.code = WEXITSTATUS(status);
-    if (WIFSIGNALED(status)) r.code = -WTERMSIG(status);
-    r.out = slurp(o);
-    r.err = slurp(e);
-    return r;
   }
   // Error message of parsing `json` as a scene file (empty when it parses).
   std::string scene_error(const std::string& json) const {
@@ -94,7 +49,6 @@ class Animate : public ::testing::Test {
     }
     return {};
   }
-  fs::path dir_;
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -13,70 +13,18 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_harness.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct RunResult {
-  int code = -1;        // exit code, or -signal when killed by a signal
-  std::string out, err;
-};
+using ptc::test::kCube;
+using ptc::test::lines;
+using ptc::test::RunResult;
+using ptc::test::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) {
-    if (c == '\'')
-      q.append("'\\''");
-    else
-      q.push_back(c);
-  }
-  return q + "'";
-}
-
-class Cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ptc_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  RunResult ptc(const std::vector<std::string>& args) const {
-    std::string cmd = quote(PTC_BIN);
-    for (const auto& a : args) cmd.append(" ").append(quote(a));
-    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
-    cmd.append(" >").append(quote(o.string())).append(" 2>").append(quote(e.string()));
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    if (WIFEXITED(status)) r.code = WEXITSTATUS(status);
-    if (WIFSIGNALED(status)) r.code = -WTERMSIG(status);
-    r.out = slurp(o);
-    r.err = slurp(e);
-    return r;
-  }
-  fs::path write(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-  fs::path dir_;
-};
-
-std::size_t lines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
-
-const char* kCube =
-    "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
-    "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
+class Cli : public ptc::test::CliTest {};
 
 TEST_F(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(ptc({}).code, 2);
@@ -269,7 +217,9 @@ void expect_cluster_files(const fs::path& out, std::size_t triangles, std::size_
     per_cluster.push_back(std::stoull(f[1]));
     const double area = std::stod(f[col("area")]), box = std::stod(f[col("bbox_area")]);
     // Both sides of a triangle count (cluster_metrics.h: p_hit = Naive = sum 2 Area_i / SA(box)).
-    if (box > 0) EXPECT_NEAR(std::stod(f[col("p_hit")]), 2 * area / box, 1e-12 * (1 + area / box)) << line;
+    if (box > 0) {
+      EXPECT_NEAR(std::stod(f[col("p_hit")]), 2 * area / box, 1e-12 * (1 + area / box)) << line;
+    }
   }
   ASSERT_EQ(per_cluster.size(), clusters);
   std::vector<std::size_t> counted(clusters, 0);

@@ -12,29 +12,16 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_harness.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CmdResult {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-std::size_t lines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
+using ptc::test::kCube;
+using ptc::test::lines;
+using ptc::test::slurp;
+using CmdResult = ptc::test::RunResult;
 
 // CSV (no quoted fields) as one map column -> value per data row.
 std::vector<std::map<std::string, std::string>> csv_rows(const std::string& csv) {
@@ -55,36 +42,12 @@ std::vector<std::map<std::string, std::string>> csv_rows(const std::string& csv)
   return out;
 }
 
-// A closed cube, and a second closed mesh with the same number of triangles but another topology.
-const char* kCube =
-    "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
-    "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
 
-class TraceCli : public ::testing::Test {
+class TraceCli : public ptc::test::CliTest {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ptc_trace_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    cube_ = dir_ / "cube.off";
-    std::ofstream(cube_) << kCube;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  CmdResult ptc(const std::vector<std::string>& args) const {
-    std::string cmd = quote(PTC_BIN);
-    for (const auto& a : args) cmd.append(" ").append(quote(a));
-    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
-    cmd.append(" >").append(quote(o.string())).append(" 2>").append(quote(e.string()));
-    const int status = std::system(cmd.c_str());
-    CmdResult r;
-    if (WIFEXITED(status)) r.code = WEXITSTATUS(status);
-    if (WIFSIGNALED(status)) r.code = -WTERMSIG(status);
-    r.out = slurp(o);
-    r.err = slurp(e);
-    return r;
+    CliTest::SetUp();
+    cube_ = write("cube.off", kCube);
   }
   // An error: the given exit code, exactly one line on stderr containing `needle`, no output dir.
   void expect_error(const std::vector<std::string>& args, int code, const std::string& needle) const {
@@ -95,7 +58,7 @@ class TraceCli : public ::testing::Test {
     EXPECT_FALSE(fs::exists(dir_ / "out")) << r.err;
     fs::remove_all(dir_ / "out");
   }
-  fs::path dir_, cube_;
+  fs::path cube_;
 };
 
 // Width and height from a PNG's IHDR chunk (signature checked).
