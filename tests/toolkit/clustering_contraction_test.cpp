@@ -160,21 +160,6 @@ ClusterRun run_contraction(const Mesh& m, const Scenario& s) {
   return {};
 }
 
-void expect_same_partition(const Mesh& m, std::span<const std::uint32_t> l1, std::span<const std::uint32_t> l2,
-                           const std::string& what) {
-  const Clustering c1 = clustering_from_labels(l1, m.triangles()), c2 = clustering_from_labels(l2, m.triangles());
-  EXPECT_EQ(c1.triangle_order, c2.triangle_order) << what;
-  EXPECT_EQ(c1.triangle_offsets, c2.triangle_offsets) << what;
-}
-
-void expect_valid(const Mesh& m, const Clustering& c, std::uint32_t max_vertices, const std::string& what) {
-  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
-  ClusterLimits lim;
-  lim.max_vertices = max_vertices;
-  const auto issues = validate(c, m.triangles(), em, lim);
-  EXPECT_TRUE(issues.empty()) << what << ": " << (issues.empty() ? "" : issues.front());
-}
-
 std::vector<Scenario> setups() {
   std::vector<Scenario> out;
   for (double k : {4.0, 6.0, 10.0, 20.0, 50.0}) out.push_back({ObjectiveKind::Acc, k, k});

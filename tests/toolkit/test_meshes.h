@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <numbers>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "toolkit/geometry/gwh01.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/mesh.h"
+#include "toolkit/mesh/topology.h"
 
 namespace ptc::test_meshes {
 
@@ -274,6 +276,26 @@ inline std::string joined(const std::vector<std::string>& issues) {
   std::string s;
   for (const auto& i : issues) s += i + "\n";
   return s;
+}
+
+
+// ---- Checks shared by the greedy tests --------------------------------------------------------
+
+/// Two labelings describe the same partition (cluster by cluster, in canonical order).
+inline void expect_same_partition(const Mesh& m, std::span<const std::uint32_t> l1, std::span<const std::uint32_t> l2,
+                           const std::string& what) {
+  const Clustering c1 = clustering_from_labels(l1, m.triangles()), c2 = clustering_from_labels(l2, m.triangles());
+  EXPECT_EQ(c1.triangle_order, c2.triangle_order) << what;
+  EXPECT_EQ(c1.triangle_offsets, c2.triangle_offsets) << what;
+}
+
+/// validate() finds nothing (max_vertices = 0: no vertex bound).
+inline void expect_valid(const Mesh& m, const Clustering& c, std::uint32_t max_vertices, const std::string& what) {
+  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+  ClusterLimits lim;
+  lim.max_vertices = max_vertices;
+  const auto issues = validate(c, m.triangles(), em, lim);
+  EXPECT_TRUE(issues.empty()) << what << ": " << (issues.empty() ? "" : issues.front());
 }
 
 }  // namespace ptc::test_meshes
