@@ -40,6 +40,12 @@ void* operator new(std::size_t n) {
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
+// LeakSanitizer (PTC_SANITIZE=1 builds): assimp 5.2.5 (Debian 12) leaks the partly built scene
+// when its X parser meets a truncated file - reproduced with a bare Assimp::Importer::ReadFile on
+// a cut BCN_Epileptic.X, no ptc code involved - and a test below feeds it such a file on purpose.
+// Only leaks allocated from inside libassimp are suppressed.
+extern "C" const char* __lsan_default_suppressions() { return "leak:libassimp.so\n"; }
+
 namespace ptc {
 namespace {
 
