@@ -63,6 +63,26 @@ std::int64_t parse_one_frame(const std::string& s) {
   return v;
 }
 
+// Opens SCENE (open_scene), recording the read time and, for a file, the input in the manifest.
+Scene open_recorded(const std::filesystem::path& input, const SceneOptions& options, RunManifest& manifest) {
+  const auto t0 = Clock::now();
+  Scene scene = open_scene(input.string(), options);
+  manifest.add_timing_ms("read", ms_since(t0));
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(input, ec)) manifest.add_input(input);
+  return scene;
+}
+
+// read_clusters (trace_clusters.h), recording the read time and the file in the manifest.
+Clustering read_clusters_recorded(const std::filesystem::path& clusters, const Mesh& mesh, RunManifest& manifest) {
+  const auto t0 = Clock::now();
+  Clustering c = read_clusters(clusters, mesh);
+  manifest.add_timing_ms("read_clusters", ms_since(t0));
+  std::error_code ec;
+  manifest.add_input(std::filesystem::is_directory(clusters, ec) ? clusters / "triangles.csv" : clusters);
+  return c;
+}
+
 void check_range(const Scene& scene, const FrameRange& r, const std::string& arg, const char* option) {
   if (const std::size_t fc = scene.frame_count(); fc > 0 && r.last >= static_cast<std::int64_t>(fc))
     throw InputError("", "", option, fmt::format("frame {} is beyond the last frame of '{}' (frames 0..{})", r.last, arg, fc - 1));
@@ -108,17 +128,13 @@ void cmd_trace(const TraceCommandOptions& opt, const ImageWriter& write_image, s
 
   RunManifest manifest("trace", opt.argv);
   const std::string arg = opt.input.string();
-  auto t0 = Clock::now();
-  Scene scene = open_scene(arg, opt.scene_options);
-  manifest.add_timing_ms("read", ms_since(t0));
-  std::error_code ec;
-  if (std::filesystem::is_regular_file(opt.input, ec)) manifest.add_input(opt.input);
+  Scene scene = open_recorded(opt.input, opt.scene_options, manifest);
   const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};
   check_range(scene, range, arg, opt.frames ? "--frames" : "--frame");
 
   // The first frame's positions: the camera and the trace frame are fixed from them.
   Mesh mesh = scene.rest();
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   scene.positions(double(range.first), mesh.positions(), true);
   double positions_ms = ms_since(t0);
   const Box3 first_bounds = mesh.bounds();
@@ -142,10 +158,7 @@ void cmd_trace(const TraceCommandOptions& opt, const ImageWriter& write_image, s
   Clustering clusters;
   const bool use_clusters = !opt.clusters.empty();
   if (use_clusters) {
-    t0 = Clock::now();
-    clusters = read_clusters(opt.clusters, scene.rest());
-    manifest.add_timing_ms("read_clusters", ms_since(t0));
-    manifest.add_input(std::filesystem::is_directory(opt.clusters, ec) ? opt.clusters / "triangles.csv" : opt.clusters);
+    clusters = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
   }
   std::size_t static_tris = 0;
   for (std::size_t p = 0; p < scene.part_count(); ++p)
@@ -329,11 +342,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   }
   RunManifest manifest("bench", opt.argv);
   const std::string arg = opt.input.string();
-  auto t0 = Clock::now();
-  Scene scene = open_scene(arg, opt.scene_options);
-  manifest.add_timing_ms("read", ms_since(t0));
-  std::error_code ec;
-  if (std::filesystem::is_regular_file(opt.input, ec)) manifest.add_input(opt.input);
+  Scene scene = open_recorded(opt.input, opt.scene_options, manifest);
   const Mesh& mesh = scene.rest();
   const bool animated = !scene.all_static();
   if (animated && opt.deform_given && c.deformation != Deformation::None)
@@ -368,12 +377,9 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   OutputDir dir(opt.out_dir);
   Clustering given;
   if (!opt.clusters.empty()) {
-    t0 = Clock::now();
-    given = read_clusters(opt.clusters, mesh);
-    manifest.add_timing_ms("read_clusters", ms_since(t0));
-    manifest.add_input(std::filesystem::is_directory(opt.clusters, ec) ? opt.clusters / "triangles.csv" : opt.clusters);
+    given = read_clusters_recorded(opt.clusters, mesh, manifest);
   }
-  t0 = Clock::now();
+  const auto t0 = Clock::now();
   const PeerBenchResult r = run_peer_bench(mesh, opt.clusters.empty() ? nullptr : &given, c);
   manifest.add_timing_ms("bench", ms_since(t0));
   if (r.cluster_ms > 0) manifest.add_timing_ms("cluster", r.cluster_ms);

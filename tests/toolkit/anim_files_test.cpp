@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 
+#include "temp_dir.h"
 #include "toolkit/anim/assimp_source.h"
 #include "toolkit/anim/frame_sequence.h"
 #include "toolkit/anim/load_animation.h"
@@ -32,28 +33,10 @@ namespace fs = std::filesystem;
 
 const fs::path kFaerie = "/usr/share/assimp/models/MD2/faerie.md2";
 
-class AnimFiles : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("ptc_anim_files_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
-};
+class AnimFiles : public test::TempDirTest {};
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-void spit(const fs::path& p, std::string_view s) {
-  std::ofstream out(p, std::ios::binary);
-  out << s;
-}
+using test::slurp;
+using test::spit;
 
 // Asserts that f() throws InputError whose message contains every one of `parts`.
 template <class F>

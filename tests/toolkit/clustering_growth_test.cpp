@@ -40,35 +40,6 @@ using namespace test_meshes;  // shared fixtures (test_meshes.h)
 // ---- Objectives, from scratch ----------------------------------------------------------------
 
 
-/// The score of merging a and b (u = a u b), recomputed from scratch.
-struct Reference {
-  const Mesh& m;
-  Scenario s;
-  ClusterParams acc;
-  double inv_l2 = 1;
-
-  Reference(const Mesh& mesh, const Scenario& setup) : m(mesh), s(setup), acc(acc_params(mesh, setup)) {
-    const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
-    double sum = 0;
-    for (const Edge& e : em.edges()) sum += (m.position(e.v1) - m.position(e.v0)).norm();
-    const double l = em.edge_count() ? sum / static_cast<double>(em.edge_count()) : 0.0;
-    inv_l2 = l > 0 ? 1.0 / (l * l) : 1.0;
-  }
-  bool only_positive() const { return s.kind == ObjectiveKind::Acc; }
-  bool legal(const Ids& u) const { return s.kind == ObjectiveKind::Acc || static_cast<double>(vertex_count(m, u)) <= s.max_count; }
-  double score(const Ids& u, const Ids& a, const Ids& b) const {
-    switch (s.kind) {
-      case ObjectiveKind::Acc: return cluster_acc(m, u, acc);
-      case ObjectiveKind::Naive: return cluster_metrics(m, u).naive;
-      case ObjectiveKind::Gwh01: {
-        const GwhTerms tu = gwh_terms(m, u, s.gwh.weight), ta = gwh_terms(m, a, s.gwh.weight),
-                       tb = gwh_terms(m, b, s.gwh.weight);
-        return -(tu.fit.e_fit * inv_l2 + s.gwh.a1 * tu.e_dir + s.gwh.a2 * shape_cost(tu.gamma, ta.gamma, tb.gamma));
-      }
-    }
-    return 0;
-  }
-};
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 

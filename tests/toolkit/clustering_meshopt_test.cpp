@@ -174,31 +174,14 @@ TEST(Meshopt, OnlyDegenerateTrianglesAndAllPositionsEqual) {
 }
 
 TEST(Meshopt, ManyTinyComponents) {
-  std::vector<Vec3> p;
-  std::vector<Tri> t;
-  for (std::uint32_t i = 0; i < 600; ++i) {
-    const Vec3 o(i % 10, (i / 10) % 10, i / 100);
-    const auto b = static_cast<std::uint32_t>(p.size());
-    p.push_back(o);
-    p.push_back(o + Vec3(0.3, 0, 0));
-    p.push_back(o + Vec3(0, 0.3, 0.1));
-    t.push_back({b, b + 1, b + 2});
-  }
-  const Mesh m(std::move(t), std::move(p));
+  const Mesh m = triangle_lattice(600);
   expect_contract(m, config(50));
   EXPECT_EQ(meshopt_clusters(m, config(50)).cluster_count(), 600u);
   EXPECT_LT(meshopt_meshlets(m, config(50)).cluster_count(), 600u);  // meshlets mix components
 }
 
 TEST(Meshopt, NonManifoldFan) {
-  std::vector<Vec3> p{Vec3(0, 0, -1), Vec3(0, 0, 1)};
-  std::vector<Tri> t;
-  for (std::uint32_t i = 0; i < 300; ++i) {
-    const double a = 2 * 3.141592653589793 * i / 300;
-    p.emplace_back(std::cos(a), std::sin(a), 0.0);
-    t.push_back({0, 1, i + 2});
-  }
-  const Mesh m(std::move(t), std::move(p));
+  const Mesh m = edge_fan(300);
   expect_contract(m, config(50));
   expect_contract(m, config(255, 512));
   expect_contract(m, config(3));

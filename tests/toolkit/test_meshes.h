@@ -179,6 +179,34 @@ inline Mesh components() {
 }
 
 /// The grid with a deterministic height pattern (not planar: exercises normal cones).
+/// n separate triangles on a 3D lattice (10 x 10 x ...): n components, every edge a boundary.
+inline Mesh triangle_lattice(std::uint32_t n) {
+  std::vector<Vec3> p;
+  std::vector<Tri> t;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const Vec3 o(i % 10, (i / 10) % 10, i / 100);
+    const auto b = static_cast<std::uint32_t>(p.size());
+    p.push_back(o);
+    p.push_back(o + Vec3(0.3, 0, 0));
+    p.push_back(o + Vec3(0, 0.3, 0.1));
+    t.push_back({b, b + 1, b + 2});
+  }
+  return Mesh(std::move(t), std::move(p));
+}
+
+/// n triangles on the single edge 0-1, apexes on a circle: one non-manifold edge, all
+/// edge-connected, n + 2 vertices.
+inline Mesh edge_fan(std::uint32_t n) {
+  std::vector<Vec3> p{Vec3(0, 0, -1), Vec3(0, 0, 1)};
+  std::vector<Tri> t;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const double a = 2 * std::numbers::pi * i / n;
+    p.emplace_back(std::cos(a), std::sin(a), 0.0);
+    t.push_back({0, 1, i + 2});
+  }
+  return Mesh(std::move(t), std::move(p));
+}
+
 inline Mesh bumpy_grid(int nx, int ny) {
   Mesh g = grid(nx, ny);
   std::vector<Vec3> p(g.positions().begin(), g.positions().end());
@@ -278,6 +306,37 @@ inline std::string joined(const std::vector<std::string>& issues) {
   return s;
 }
 
+
+/// The objective of the greedy reference implementations (growth and contraction tests): the
+/// score of merging a and b (u = a u b), recomputed from scratch.
+struct Reference {
+  const Mesh& m;
+  Scenario s;
+  ClusterParams acc;
+  double inv_l2 = 1;
+
+  Reference(const Mesh& mesh, const Scenario& setup) : m(mesh), s(setup), acc(acc_params(mesh, setup)) {
+    const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+    double sum = 0;
+    for (const Edge& e : em.edges()) sum += (m.position(e.v1) - m.position(e.v0)).norm();
+    const double l = em.edge_count() ? sum / static_cast<double>(em.edge_count()) : 0.0;
+    inv_l2 = l > 0 ? 1.0 / (l * l) : 1.0;
+  }
+  [[nodiscard]] bool only_positive() const { return s.kind == ObjectiveKind::Acc; }
+  [[nodiscard]] bool legal(const Ids& u) const { return s.kind == ObjectiveKind::Acc || static_cast<double>(vertex_count(m, u)) <= s.max_count; }
+  [[nodiscard]] double score(const Ids& u, const Ids& a, const Ids& b) const {
+    switch (s.kind) {
+      case ObjectiveKind::Acc: return cluster_acc(m, u, acc);
+      case ObjectiveKind::Naive: return cluster_metrics(m, u).naive;
+      case ObjectiveKind::Gwh01: {
+        const GwhTerms tu = gwh_terms(m, u, s.gwh.weight), ta = gwh_terms(m, a, s.gwh.weight),
+                       tb = gwh_terms(m, b, s.gwh.weight);
+        return -(tu.fit.e_fit * inv_l2 + s.gwh.a1 * tu.e_dir + s.gwh.a2 * shape_cost(tu.gamma, ta.gamma, tb.gamma));
+      }
+    }
+    return 0;
+  }
+};
 
 // ---- Checks shared by the greedy tests --------------------------------------------------------
 
