@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "bvh/box.h"
 #include "bvh/embree_peer.h"
 #include "bvh/tracer.h"
 #include "toolkit/clustering/cluster.h"
@@ -123,7 +124,28 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
   }
   res.clusters = clusters->cluster_count();
 
-  const Box3 rest_bounds = mesh.bounds();
+  // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
+  // are consecutive; the frame source renumbers its own data (or gathers, which it then says).
+  Mesh renumbered;
+  Clustering renumbered_clusters;
+  const Mesh* bm = &mesh;
+  res.vertex_order = cfg.cluster_vertex_order ? "clusters" : "input";
+  if (cfg.cluster_vertex_order) {
+    if (cfg.positions && !cfg.renumber_positions)
+      throw std::invalid_argument("cluster_vertex_order with scene positions needs renumber_positions");
+    const auto t1 = Clock::now();
+    const std::vector<std::uint32_t> to_old =
+        bvh::cluster_vertex_order(mesh.vertex_count(), clusters->vertex_offsets, clusters->vertices, cfg.part_offsets);
+    renumbered = renumber_vertices(mesh, to_old);
+    renumbered_clusters = renumber_vertices(*clusters, inverse_permutation(to_old));
+    if (cfg.positions) cfg.renumber_positions(to_old);  // (may change `mesh`, a caller's scene rest)
+    res.renumber_ms = ms_since(t1);
+    bm = &renumbered;
+    clusters = &renumbered_clusters;
+  }
+  const Mesh& mesh_b = *bm;
+
+  const Box3 rest_bounds = mesh_b.bounds();
   const Vec3 origin = rest_bounds.center();
   const bvh::PinholeCamera cam = make_camera(cfg.camera, rest_bounds, cfg.width, cfg.height);
   const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
@@ -135,10 +157,11 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
   bvh::SceneConfig tcfg = bvh::triangle_scene_defaults(), ccfg = bvh::cluster_scene_defaults();
   tcfg.origin = ccfg.origin = origin;
   ccfg.cluster_leaf = cfg.cluster_leaf;
-  auto ts = std::make_shared<bvh::TriangleScene>(mesh, tcfg);
+  auto ts = std::make_shared<bvh::TriangleScene>(mesh_b, tcfg);
   const auto t0 = Clock::now();
-  auto cs = std::make_shared<bvh::ClusterScene>(mesh, bvh::view_of(*clusters), ccfg);
+  auto cs = std::make_shared<bvh::ClusterScene>(mesh_b, bvh::view_of(*clusters), ccfg);
   res.cluster_scene_setup_ms = ms_since(t0);
+  res.fused_vertex_pass = cs->fused_vertex_pass();
 
   std::vector<Config> configs;
   configs.push_back({"ours_triangles", [ts](std::span<const Vec3> p) { ts->update(p); },
@@ -150,28 +173,34 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
   const bvh::EmbreeMode modes[3] = {bvh::EmbreeMode::StaticMedium, bvh::EmbreeMode::DynamicLow,
                                     bvh::EmbreeMode::DynamicRefit};
   for (int k = 0; k < 3; ++k) {
-    auto es = std::make_shared<bvh::EmbreeScene>(mesh, origin, bvh::EmbreeConfig{modes[k], cfg.threads, ""});
+    auto es = std::make_shared<bvh::EmbreeScene>(mesh_b, origin, bvh::EmbreeConfig{modes[k], cfg.threads, ""});
     const unsigned th = cfg.threads;
     configs.push_back({kEmbree[k], [es](std::span<const Vec3> p) { es->update(p); },
                        [es] { return std::pair{es->last_vertex_ms(), es->last_commit_ms()}; },
                        [es, &rays, th](bvh::HitBatch& h) { return es->trace(rays, h, bvh::HitMode::Closest, th); }});
   }
 
-  const auto rest = mesh.positions();
-  std::vector<Vec3> pos(rest.begin(), rest.end());
+  const auto rest = mesh_b.positions();
+  std::vector<Vec3> pos(rest.begin(), rest.end()), fresh(pos.size());
   bvh::HitBatch ref, hits;
   for (int f = 0; f < cfg.frames; ++f) {
+    const auto ts0 = Clock::now();
     if (cfg.positions)
       cfg.positions(cfg.first_frame + f, pos);
     else
       deform(rest, rest_bounds, cfg.deformation, static_cast<int>(cfg.first_frame + f), pos);
+    const double source_ms = ms_since(ts0);
     for (std::size_t c = 0; c < configs.size(); ++c) {
       BenchRow row;
       row.frame = f;
       row.scene_frame = cfg.first_frame + f;
       row.config = configs[c].name;
+      row.source_ms = source_ms;
+      // Every configuration reads positions just written (as right after an animation step),
+      // not whatever the configurations before it left in the caches (untimed copy).
+      std::copy(pos.begin(), pos.end(), fresh.begin());
       auto t1 = Clock::now();
-      configs[c].update(pos);
+      configs[c].update(fresh);
       row.frame_ms = ms_since(t1);
       std::tie(row.update_ms, row.build_ms) = configs[c].stage_ms();
       bvh::HitBatch& h = c == 0 ? ref : hits;
@@ -192,11 +221,12 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
 
 CsvTable bench_csv(const PeerBenchResult& r) {
   CsvTable t({"frame", "config", "update_ms", "build_ms", "update_build_ms", "frame_ms", "trace_ms", "mrays_per_s",
-              "rays", "hits", "mismatches", "mismatch_hit_miss", "mismatch_other_triangle", "ties", "scene_frame"});
+              "rays", "hits", "mismatches", "mismatch_hit_miss", "mismatch_other_triangle", "ties", "scene_frame",
+              "source_ms"});
   for (const auto& x : r.rows)
     t.add_row({std::int64_t(x.frame), x.config, x.update_ms, x.build_ms, x.update_ms + x.build_ms, x.frame_ms,
                x.trace_ms, x.mrays_per_s, x.rays, x.hits, x.mismatches, x.hit_miss, x.other_triangle, x.ties,
-               x.scene_frame});
+               x.scene_frame, x.source_ms});
   return t;
 }
 
@@ -236,6 +266,14 @@ std::string bench_table(const PeerBenchResult& r) {
     s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>8} {:>8}\n", x.config,
                      x.update_ms, x.build_ms, x.update_build_ms, x.trace_ms, x.mrays_per_s, hits, x.mismatches, x.ties);
   }
+  std::vector<double> src;
+  for (const auto& row : r.rows)
+    if (row.frame >= r.median_first_frame && row.config == r.rows.front().config) src.push_back(row.source_ms);
+  s += fmt::format("frame source (positions of a frame, outside every configuration): median {:.2f} ms; vertex order: "
+                   "{}{}\n",
+                   median(src), r.vertex_order,
+                   r.fused_vertex_pass ? " (cluster path: conversion and boxes in one pass)"
+                                       : " (cluster path: positions gathered per frame)");
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");
   for (const char* e : kEmbree) s += fmt::format(" {:>19}", std::string("upd+build vs ") + (e + 7));

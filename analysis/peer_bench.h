@@ -54,6 +54,18 @@ struct PeerBenchConfig {
   std::uint32_t max_count = 50;           ///< clustering when none is given: growth / Acc, MaxCount = MaxSize = this
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   double tie_rel = 1e-5;                  ///< relative t tolerance of a tie
+  /// Vertex order of the benchmark mesh. true (default): renumbered once, after clustering, with
+  /// bvh::cluster_vertex_order (every cluster's own vertices consecutive), so that the cluster
+  /// path converts and boxes in one pass over the positions (ClusterScene::fused_vertex_pass);
+  /// every configuration sees the same renumbered mesh and positions, triangle ids unchanged.
+  /// false: the input order (the cluster path gathers the positions per frame).
+  bool cluster_vertex_order = true;
+  /// With `positions` and cluster_vertex_order: renumbers the caller's frame source once (e.g.
+  /// Scene::renumber_vertices), so that `positions` writes in the new order; required then.
+  std::function<void(std::span<const std::uint32_t> to_old)> renumber_positions;
+  /// Vertex ranges (parts, ascending from 0 to the vertex count) that the renumbering keeps in
+  /// place (a scene's parts: Scene::vertex_offsets()); empty = one part.
+  std::vector<std::size_t> part_offsets;
 };
 
 /// The configurations, in the order they run within a frame.
@@ -64,6 +76,7 @@ struct BenchRow {
   std::int64_t scene_frame = 0;  ///< first_frame + frame
   std::string config;
   double update_ms = 0, build_ms = 0, frame_ms = 0;  ///< frame_ms: wall time of the whole update call
+  double source_ms = 0;  ///< producing the frame's positions (scene or stand-in deformation), once per frame, untimed in the configurations
   double trace_ms = 0, mrays_per_s = 0;
   std::uint64_t rays = 0, hits = 0;
   std::uint64_t mismatches = 0;  ///< hit_miss + other_triangle
@@ -84,6 +97,9 @@ struct PeerBenchResult {
   double cluster_ms = 0;               ///< clustering (0 when clusters were given)
   double cluster_scene_setup_ms = 0;   ///< ClusterScene construction (per-clustering layout, once)
   std::string clustering;              ///< how the clusters were made
+  std::string vertex_order;            ///< "clusters" (renumbered once) or "input"
+  bool fused_vertex_pass = false;      ///< the cluster scene converts and boxes in one pass (no gather)
+  double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once
 };
 
 /// Runs the benchmark. `clusters`: a clustering of `mesh` (validated by the caller), or nullptr

@@ -6,12 +6,17 @@
 //                       [--leaves linear,block_tree] [--leaf 8] [--ct 1] [--ci 0.3]
 //                       [--isa auto|sse2|avx2] [--embree all|none] [--amplitude 0.01]
 //                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--median 4]
+//                       [--vertex-order clusters|input]
 //
 // MESH (default: armadillo) is subdivided `levels` times (midpoint; 2 -> 832k triangles for
 // armadillo). Clusterings (comma list, made once from the rest pose):
 //   acc      cluster_mesh(Growth, Acc, MaxCount = --max-count, MaxSize = --max-size): the method's
 //   meshopt  meshoptimizer's meshlets made connected (max_count vertices), a modern baseline;
 //   morton   Morton-ordered runs of 80 triangles (a spatial stand-in, not connected).
+// --vertex-order clusters (default): after the first acc/meshopt clustering the mesh's vertices
+// are renumbered once with cluster_vertex_order (every configuration then sees that mesh), so its
+// cluster scene converts positions and computes boxes in one pass (stage 2; stage 1 is 0);
+// input keeps the file's order and the cluster scenes gather (stage 1) before the boxes.
 // Each clustering is traced with one cluster per leaf, tested linearly (the paper) or through a
 // refitted block tree per cluster (see bvh/trace_scene.h).
 // Frames: repetition r animates the rest pose by a smooth non-rigid deformation of amplitude
@@ -139,6 +144,7 @@ int main(int argc, char** argv) {
   int levels = 2, reps = 5, size = 1024, build_loop = 0;
   unsigned threads = 1, max_count = 50;
   double max_size = 50, amplitude = 0.01;
+  std::string vertex_order_arg = "clusters";
   std::string clusters_arg = "acc,meshopt", leaves_arg = "linear,block_tree", isa_arg = "auto", embree_arg = "all",
               clock_arg = "wall", out_dir;
   SceneConfig tcfg = triangle_scene_defaults(), ccfg = cluster_scene_defaults();
@@ -172,6 +178,7 @@ int main(int argc, char** argv) {
     else if (a == "--max-size") max_size = value("--max-size");
     else if (a == "--amplitude") amplitude = value("--amplitude");
     else if (a == "--clusters") clusters_arg = text("--clusters");
+    else if (a == "--vertex-order") vertex_order_arg = text("--vertex-order");
     else if (a == "--leaves") leaves_arg = text("--leaves");
     else if (a == "--isa") isa_arg = text("--isa");
     else if (a == "--embree") embree_arg = text("--embree");
@@ -199,6 +206,10 @@ int main(int argc, char** argv) {
   }
   if (embree_arg != "all" && embree_arg != "none") {
     std::cerr << "bvh_bench: --embree must be all or none\n";
+    return 2;
+  }
+  if (vertex_order_arg != "clusters" && vertex_order_arg != "input") {
+    std::cerr << "bvh_bench: --vertex-order must be clusters or input\n";
     return 2;
   }
   if (clock_arg != "wall" && clock_arg != "cpu") {
@@ -237,6 +248,7 @@ int main(int argc, char** argv) {
   std::vector<std::pair<std::string, Clustering>> clusterings;
   std::unique_ptr<MortonRuns> runs;
   std::vector<std::pair<std::string, ClusterView>> views;
+  bool renumbered = false;
   for (const std::string& c : split_list(clusters_arg)) {
     const auto t0 = Clock::now();
     if (c == "acc") {
@@ -259,6 +271,20 @@ int main(int argc, char** argv) {
     const double ms = ms_since(t0);
     manifest.add_timing_ms("clustering_" + c, ms);
     std::printf("clustering %-8s %9.0f ms (once, rest pose)\n", c.c_str(), ms);
+    // --vertex-order clusters: the mesh renumbered once after the first clustering, so that its
+    // clusters own consecutive vertices (the fused conversion + box pass); later clusterings are
+    // made on the renumbered mesh (their scenes gather unless their order happens to match).
+    if (vertex_order_arg == "clusters" && clusterings.size() == 1 && !renumbered) {
+      const auto t1 = Clock::now();
+      Clustering& c0 = clusterings.front().second;
+      const std::vector<std::uint32_t> to_old =
+          cluster_vertex_order(mesh.vertex_count(), c0.vertex_offsets, c0.vertices);
+      mesh = renumber_vertices(mesh, to_old);
+      c0 = renumber_vertices(c0, inverse_permutation(to_old));
+      renumbered = true;
+      std::printf("vertices renumbered in %s's cluster order %9.0f ms (once)\n", clusterings.front().first.c_str(),
+                  ms_since(t1));
+    }
   }
   for (const auto& [name, cl] : clusterings) views.push_back({name, view_of(cl)});
   if (runs) views.push_back({"morton80", runs->view()});
@@ -376,6 +402,26 @@ int main(int argc, char** argv) {
     }
     row("build loop " + std::to_string(boxes.size()) + " clusters", "1 vertices (first-touch)", ms_conv);
     row("build loop " + std::to_string(boxes.size()) + " clusters", "2 boxes (first-touch)", ms);
+    // The fused pass on the mesh renumbered once in that order (ClusterScene::fused_vertex_pass).
+    {
+      const Mesh rm = renumber_vertices(mesh, vo.to_old);
+      const ClusterView& v0 = views.front().second;
+      std::vector<std::uint32_t> rv(v0.vertices.size());
+      for (std::size_t k = 0; k < rv.size(); ++k) rv[k] = vo.to_new[v0.vertices[k]];
+      const auto fused_runs = group_runs(first_touch_order(rm.vertex_count(), v0.vertex_offsets, rv));
+      if (!fused_runs) {
+        std::fprintf(stderr, "bvh_bench: renumbered mesh has no runs\n");
+        return 1;
+      }
+      std::vector<Vec3f> fpr(rm.vertex_count() + 2);
+      ms.clear();
+      for (int i = 0; i < build_loop; ++i) {
+        const double t0 = clock_ms(clock);
+        frame_positions_and_boxes(rm.positions(), origin, *fused_runs, fpr, bx, cx);
+        ms.push_back(clock_ms(clock) - t0);
+      }
+      row("build loop " + std::to_string(boxes.size()) + " clusters", "1+2 fused (renumbered mesh)", ms);
+    }
     std::printf("first-touch order: %zu shared of %zu listed vertices\n", vo.shared.size(),
                 views.front().second.vertices.size());
     std::printf("SAH cost %.6f, %zu nodes\n", b.cost, b.nodes.size());
@@ -386,8 +432,12 @@ int main(int argc, char** argv) {
   HitBatch ref, hits;
   for (int r = 0; r < reps; ++r) {
     const std::vector<Vec3> pos = frame_positions_at(mesh, amplitude * r);
+    std::vector<Vec3> fresh(pos.size());
     for (auto& c : configs) {
-      c->update(pos);
+      // Every configuration reads positions just written (as right after an animation step),
+      // not whatever the configurations before it left in the caches (untimed copy).
+      std::copy(pos.begin(), pos.end(), fresh.begin());
+      c->update(fresh);
       double box_build = 0, total = 0;
       for (const auto& [k, v] : c->stages()) {
         c->times[k].push_back(v);

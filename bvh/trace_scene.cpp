@@ -287,15 +287,26 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   // triangles of the lanes, which are scattered over the triangle array).
   // Vertices renumbered once per clustering so that the per-frame conversion writes, and the box
   // and leaf-data stages read, each cluster's vertices mostly contiguously (box.h).
+  // When the mesh already is in that order (renumbered once with cluster_vertex_order), every
+  // cluster's own vertices are consecutive input indices and the conversion, fused with the box
+  // stage, streams over the input: no gather, no renumbering per frame.
   vorder_ = first_touch_order(mesh.vertex_count(), vertex_offsets_, vertices_);
+  runs_ = group_runs(vorder_);
   const auto sentinel = static_cast<std::uint32_t>(mesh.vertex_count());
   corners_.resize(lane_ids.size() * 3);
   for (std::size_t b = 0; b < lane_ids.size() / 4; ++b)
     for (int l = 0; l < 4; ++l) {
       const std::uint32_t id = lane_ids[4 * b + l];
-      for (int c = 0; c < 3; ++c) corners_[12 * b + 4 * c + l] = id == kNoTriangle ? sentinel : vorder_.to_new[tris[id][c]];
+      for (int c = 0; c < 3; ++c)
+        corners_[12 * b + 4 * c + l] = id == kNoTriangle ? sentinel : runs_ ? tris[id][c] : vorder_.to_new[tris[id][c]];
     }
-  vorder_.to_new = {};  // only needed for the corners
+  if (runs_) {
+    vorder_ = {};
+    fpos_.resize(mesh.vertex_count());
+    add_sentinel(fpos_);
+  } else {
+    vorder_.to_new = {};  // only needed for the corners
+  }
   update(pos);
 }
 
@@ -327,19 +338,24 @@ void ClusterScene::refit_subtrees() {
 void ClusterScene::update(std::span<const Vec3> positions) {
   const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
   const std::size_t C = weights_.size();
-  if (positions.size() != vorder_.to_old.size())
+  const std::size_t V = runs_ ? runs_->vertex_count : vorder_.to_old.size();
+  if (positions.size() != V)
     throw std::invalid_argument("ClusterScene::update: " + std::to_string(positions.size()) + " positions for " +
-                                std::to_string(vorder_.to_old.size()) + " vertices");
+                                std::to_string(V) + " vertices");
   double t0 = clock_ms(cfg_.clock);
-  frame_positions(positions, vorder_.to_old, data_.origin, fpos_);
-  const auto V = static_cast<std::uint32_t>(fpos_.size());
-  add_sentinel(fpos_);
-  const std::span<const Vec3f> fp(fpos_.data(), V);
-  times_.vertices_ms = clock_ms(cfg_.clock) - t0;
-
-  t0 = clock_ms(cfg_.clock);
-  point_group_boxes(fp, vorder_, boxes_, centroids_);
-  times_.boxes_ms = clock_ms(cfg_.clock) - t0;
+  if (runs_) {  // one pass: conversion and boxes (fpos_ keeps its size and sentinels)
+    frame_positions_and_boxes(positions, data_.origin, *runs_, std::span<Vec3f>(fpos_.data(), V), boxes_, centroids_);
+    times_.vertices_ms = 0.0;
+    times_.boxes_ms = clock_ms(cfg_.clock) - t0;
+  } else {
+    frame_positions(positions, vorder_.to_old, data_.origin, fpos_);
+    add_sentinel(fpos_);
+    const std::span<const Vec3f> fp(fpos_.data(), V);
+    times_.vertices_ms = clock_ms(cfg_.clock) - t0;
+    t0 = clock_ms(cfg_.clock);
+    point_group_boxes(fp, vorder_, boxes_, centroids_);
+    times_.boxes_ms = clock_ms(cfg_.clock) - t0;
+  }
 
   t0 = clock_ms(cfg_.clock);
   build_binned_sah({boxes_, centroids_, weights_}, cfg_.build, bvh_, ws_);

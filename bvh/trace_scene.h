@@ -7,7 +7,8 @@
 //     triangles, built once per clustering and refitted every frame (ClusterLeaf::BlockTree:
 //     a two-level variant; the per-frame build still only sees cluster boxes).
 // Per frame (method.md, "The per-frame loop"): update(positions) converts the positions into
-// the trace frame, recomputes the boxes, builds the SAH BVH, refreshes the leaf data (and, for
+// the trace frame, recomputes the boxes (for a mesh renumbered once with cluster_vertex_order(),
+// both in one pass over the input, see ClusterScene::fused_vertex_pass()), builds the SAH BVH, refreshes the leaf data (and, for
 // BlockTree, refits the per-cluster trees); the time of every stage is kept.
 //
 // Precision: everything is in single precision in a *trace frame* centred at `origin` (double),
@@ -75,8 +76,8 @@ struct TraceData {
 
 /// Times of the last update's stages, milliseconds (wall-clock unless SceneConfig::clock says otherwise).
 struct StageTimes {
-  double vertices_ms = 0;   ///< positions into the trace frame (float)
-  double boxes_ms = 0;      ///< primitive boxes and centroids
+  double vertices_ms = 0;   ///< positions into the trace frame (float); 0 when fused into boxes_ms
+  double boxes_ms = 0;      ///< primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion)
   double build_ms = 0;      ///< binned SAH build
   double collapse_ms = 0;   ///< binary -> 4-wide, and (clusters) linking
   double leaf_data_ms = 0;  ///< SoA triangle blocks
@@ -162,6 +163,11 @@ class ClusterScene {
   [[nodiscard]] const std::vector<std::uint32_t>& weights() const { return weights_; }
   [[nodiscard]] const StageTimes& times() const { return times_; }
   [[nodiscard]] std::size_t subtree_nodes() const { return sub_nodes_.size(); }
+  /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with
+  /// cluster_vertex_order()): the conversion is then fused into the box stage (StageTimes::
+  /// vertices_ms = 0, boxes_ms = both) and reads the input once, in order; otherwise the
+  /// conversion gathers the positions in that order (vertices_ms) before the boxes.
+  [[nodiscard]] bool fused_vertex_pass() const { return runs_.has_value(); }
 
  private:
   void refit_subtrees();
@@ -176,7 +182,8 @@ class ClusterScene {
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
   std::uint32_t sub_depth_ = 0;
   std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill
-  GroupVertexOrder vorder_;  // vertices renumbered in first-touch order over the clusters (fpos_ is in it)
+  GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (fpos_ is in it)
+  std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): fpos_ in input order
   AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel)
   std::vector<Vec3f> fpos_;
   std::vector<Box3f> boxes_;

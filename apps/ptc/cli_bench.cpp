@@ -1,5 +1,5 @@
 // `ptc bench SCENE [--clusters DIR | --max-count N] [--frames N|A:B] [--data-dir DIR] [--width W --height H]
-// [--threads T] [--deform twist|wave|none] --out DIR` (analysis/peer_bench.h).
+// [--threads T] [--deform twist|wave|none] [--vertex-order clusters|input] --out DIR` (analysis/peer_bench.h).
 #include <iostream>
 
 #include "analysis/trace_command.h"
@@ -10,7 +10,7 @@ namespace ptc::cli {
 namespace {
 struct BenchArgs {
   BenchCommandOptions opt;
-  std::string deform = "twist", cluster_leaf = "linear", frames, data_dir;
+  std::string deform = "twist", cluster_leaf = "linear", frames, data_dir, vertex_order = "clusters";
   CLI::App* app = nullptr;
   int threads = 1;
 };
@@ -27,6 +27,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.cluster_leaf =
                           a->cluster_leaf == "linear" ? bvh::ClusterLeaf::Linear : bvh::ClusterLeaf::BlockTree;
                       o.config.threads = static_cast<unsigned>(a->threads);
+                      o.config.cluster_vertex_order = a->vertex_order == "clusters";
                       o.deform_given = a->app->count("--deform") > 0;
                       if (a->app->count("--frames")) o.frames = a->frames;
                       if (!a->data_dir.empty()) o.scene_options.data_dir = a->data_dir;
@@ -56,6 +57,11 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->capture_default_str();
   c->add_option("--cluster-leaf", a->cluster_leaf, "cluster leaves: linear (the paper's, default) or block-tree")
       ->check(CLI::IsMember({"block-tree", "linear"}))
+      ->capture_default_str();
+  c->add_option("--vertex-order", a->vertex_order,
+                "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "
+                "streams, no gather; every configuration sees the same mesh), or input: keep the file's order")
+      ->check(CLI::IsMember({"clusters", "input"}))
       ->capture_default_str();
   c->add_option("--out", a->opt.out_dir, "output directory: bench.csv, summary.csv, manifest.json")->required();
 }

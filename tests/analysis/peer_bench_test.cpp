@@ -179,12 +179,24 @@ TEST(PeerBench, ScenePositionsDriveTheFrames) {
   cfg.width = cfg.height = 24;
   cfg.max_count = 16;
   std::vector<std::int64_t> asked;
-  const auto rest = m.positions();
+  std::vector<Vec3> rest(m.positions().begin(), m.positions().end());
   cfg.positions = [&](std::int64_t f, std::span<Vec3> out) {
     asked.push_back(f);
     for (std::size_t v = 0; v < out.size(); ++v) out[v] = rest[v] + Vec3(3.0 * double(f - 4), 0, 0);
   };
+  // The benchmark renumbers the vertices once (cluster order): the frame source follows.
+  EXPECT_THROW((void)ptc::run_peer_bench(m, nullptr, cfg), std::invalid_argument);  // no renumber_positions
+  int renumbered = 0;
+  cfg.renumber_positions = [&](std::span<const std::uint32_t> to_old) {
+    ++renumbered;
+    std::vector<Vec3> r2(rest.size());
+    for (std::size_t i = 0; i < r2.size(); ++i) r2[i] = rest[to_old[i]];
+    rest = std::move(r2);
+  };
   const auto r = ptc::run_peer_bench(m, nullptr, cfg);
+  EXPECT_EQ(renumbered, 1);
+  EXPECT_EQ(r.vertex_order, "clusters");
+  EXPECT_TRUE(r.fused_vertex_pass);
   EXPECT_EQ(asked, (std::vector<std::int64_t>{4, 5, 6}));
   const std::size_t nc = ptc::peer_bench_configs().size();
   ASSERT_EQ(r.rows.size(), 3 * nc);
@@ -195,6 +207,19 @@ TEST(PeerBench, ScenePositionsDriveTheFrames) {
   EXPECT_GT(r.rows[0].hits, r.rows[nc].hits);
   EXPECT_GT(r.rows[nc].hits, r.rows[2 * nc].hits);
   const auto bench = split_lines(ptc::bench_csv(r).str());
-  EXPECT_NE(bench[0].find(",scene_frame"), std::string::npos);
-  EXPECT_EQ(bench[1].substr(bench[1].rfind(',') + 1), "4");
+  EXPECT_NE(bench[0].find(",scene_frame,source_ms"), std::string::npos);
+
+  // The file's vertex order: the cluster path gathers; the same hits, frame by frame.
+  rest.assign(m.positions().begin(), m.positions().end());
+  asked.clear();
+  cfg.cluster_vertex_order = false;
+  const auto ri = ptc::run_peer_bench(m, nullptr, cfg);
+  EXPECT_EQ(renumbered, 1);
+  EXPECT_EQ(ri.vertex_order, "input");
+  EXPECT_FALSE(ri.fused_vertex_pass);
+  ASSERT_EQ(ri.rows.size(), r.rows.size());
+  for (std::size_t i = 0; i < r.rows.size(); ++i) {
+    EXPECT_EQ(ri.rows[i].hits, r.rows[i].hits) << r.rows[i].config;
+    EXPECT_EQ(ri.rows[i].mismatches, 0u);
+  }
 }

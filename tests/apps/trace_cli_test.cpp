@@ -128,6 +128,7 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   expect_error({"trace", (dir_ / "missing.off").string(), "--out", out}, 1, "missing.off");
   expect_error({"bench", mesh, "--clusters", (dir_ / "quad").string(), "--max-count", "5", "--out", out}, 2, "excludes");
   expect_error({"bench", mesh, "--deform", "spin", "--out", out}, 2, "--deform");
+  expect_error({"bench", mesh, "--vertex-order", "random", "--out", out}, 2, "--vertex-order");
 }
 
 TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
@@ -258,6 +259,17 @@ TEST_F(TraceCli, BenchTakesPositionsFromTheScene) {
   const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
   EXPECT_EQ(m["parameters"]["motion"], "scene");
   EXPECT_EQ(m["results"]["triangles"], 332);
+  // Vertices renumbered in the clusters' order (the default), within each part of the scene.
+  EXPECT_EQ(m["parameters"]["vertex_order"], "clusters");
+  EXPECT_EQ(m["results"]["fused_vertex_pass"], true);
+  EXPECT_NE(r.out.find("conversion and boxes in one pass"), std::string::npos) << r.out;
+  const CmdResult ri = ptc({"bench", (dir_ / "scene.json").string(), "--frames", "3:4", "--width", "8", "--height", "8",
+                            "--max-count", "8", "--vertex-order", "input", "--out", (dir_ / "outi").string()});
+  ASSERT_EQ(ri.code, 0) << ri.err;
+  const auto rows_i = csv_rows(slurp(dir_ / "outi" / "bench.csv"));
+  ASSERT_EQ(rows_i.size(), rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(rows_i[i].at("hits"), rows[i].at("hits"));
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "outi" / "manifest.json"))["results"]["fused_vertex_pass"], false);
   // A mesh file keeps the stand-in deformation (frames 0..N-1).
   const CmdResult r2 = ptc({"bench", cube_.string(), "--frames", "2", "--deform", "wave", "--width", "4", "--height", "4",
                             "--max-count", "4", "--out", (dir_ / "out2").string()});

@@ -13,6 +13,8 @@
 #include "bvh/trace_scene.h"
 #include "test_util.h"
 #include "toolkit/clustering/cluster.h"
+#include "toolkit/clustering/clustering.h"
+#include "toolkit/mesh/topology.h"
 
 namespace ptc::bvh {
 namespace {
@@ -401,6 +403,7 @@ TEST(Tracer, UpdateFollowsTheAnimation) {
   }
 }
 
+
 }  // namespace
 }  // namespace ptc::bvh
 
@@ -519,6 +522,83 @@ TEST(Tracer, ClusterBoxesEqualBruteForceOverTheOriginalVertices) {
     }
     EXPECT_THROW(s.update(base.positions()), std::invalid_argument);  // wrong vertex count
   }
+}
+
+
+// The method's precomputation: the mesh renumbered once with cluster_vertex_order (and the
+// clustering with it). The cluster scene then takes the fused conversion + box pass; its boxes,
+// its tree and every traced hit (triangle id, t, u, v) equal those of the scene over the original
+// numbering, ray by ray, in both leaf modes, over two frames; and brute force on the renumbered
+// mesh agrees. Unreferenced vertices (first and last) included.
+TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
+  const Mesh base = test::load_mesh("bunny00.off");
+  std::vector<Vec3> p{Vec3(1e3, -1e3, 5)};
+  p.insert(p.end(), base.positions().begin(), base.positions().end());
+  p.push_back(Vec3(-1e3, 1e3, 0));
+  std::vector<Tri> t(base.triangles().begin(), base.triangles().end());
+  for (Tri& x : t)
+    for (auto& v : x) v += 1;
+  const Mesh m(t, p);
+  ClusterConfig cc;
+  cc.method = ClusterMethod::Growth;
+  cc.objective = ObjectiveKind::Acc;
+  cc.max_count = 50;
+  cc.max_size = 50;
+  const Clustering cl = cluster_mesh(m, cc);
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m.vertex_count(), cl.vertex_offsets, cl.vertices);
+  const Mesh rm = renumber_vertices(m, to_old);
+  const Clustering rcl = renumber_vertices(cl, inverse_permutation(to_old));
+  ASSERT_TRUE(validate(rcl, rm.triangles(), EdgeMap::build(rm.triangles(), rm.vertex_count())).empty());
+  const Mesh moved = test::deformed(m, 0.04);
+  std::vector<Vec3> rmoved(m.vertex_count());
+  for (std::size_t i = 0; i < to_old.size(); ++i) rmoved[i] = moved.positions()[to_old[i]];
+  const Mesh rm_moved = rm.with_positions(rmoved);
+  for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
+    SceneConfig cfg = cluster_scene_defaults();
+    cfg.cluster_leaf = mode;
+    ClusterScene a(m, view_of(cl), cfg), b(rm, view_of(rcl), cfg);
+    EXPECT_FALSE(a.fused_vertex_pass()) << "the file's order happens to be the clusters' (the test needs both paths)";
+    ASSERT_TRUE(b.fused_vertex_pass());
+    EXPECT_EQ(a.data().origin, b.data().origin);
+    for (int f = 0; f < 2; ++f) {
+      a.update((f ? moved : m).positions());
+      b.update((f ? rm_moved : rm).positions());
+      EXPECT_EQ(b.times().vertices_ms, 0.0);
+      ASSERT_EQ(a.boxes(), b.boxes()) << "frame " << f;
+      EXPECT_EQ(a.bvh().prim_order, b.bvh().prim_order);
+      ASSERT_TRUE(validate(b.data(), rm.triangle_count(), false).empty());
+      const Mesh& frame = f ? rm_moved : rm;
+      const RaySet rs = random_rays(frame, 200, 57);
+      int hits = 0;
+      for (std::size_t i = 0; i < rs.org.size(); ++i) {
+        const Hit hb = trace_ray(b.data(), rs.org[i], rs.dir[i]);
+        const Hit ha = trace_ray(a.data(), rs.org[i], rs.dir[i]);
+        EXPECT_EQ(hb.triangle, ha.triangle) << i;
+        EXPECT_EQ(hb.t, ha.t) << i;
+        EXPECT_EQ(hb.u, ha.u) << i;
+        EXPECT_EQ(hb.v, ha.v) << i;
+        expect_same(hb, test::brute_force(frame, b.data().origin, rs.org[i], rs.dir[i]), "renumbered mesh");
+        hits += hb.hit();
+      }
+      EXPECT_GT(hits, 50);
+    }
+  }
+  // A clustering given without vertex lists (the scene uses the triangles' corners) takes the
+  // fused pass when the mesh was renumbered over those corner lists.
+  const MortonRuns runs = morton_runs(m, 37);
+  std::vector<std::uint32_t> corner_offsets{0}, corners;
+  for (std::size_t c = 0; c + 1 < runs.triangle_offsets.size(); ++c) {
+    for (std::uint32_t i = runs.triangle_offsets[c]; i < runs.triangle_offsets[c + 1]; ++i)
+      for (std::uint32_t v : m.triangles()[runs.triangle_order[i]]) corners.push_back(v);
+    corner_offsets.push_back(static_cast<std::uint32_t>(corners.size()));
+  }
+  const Mesh rr = renumber_vertices(m, cluster_vertex_order(m.vertex_count(), corner_offsets, corners));
+  const ClusterView no_lists{runs.triangle_order, runs.triangle_offsets, {}, {}};
+  ClusterScene c(rr, no_lists), c_old(m, no_lists);
+  EXPECT_TRUE(c.fused_vertex_pass());
+  EXPECT_FALSE(c_old.fused_vertex_pass());
+  EXPECT_EQ(c.boxes(), c_old.boxes());
+  EXPECT_THROW(c.update(base.positions()), std::invalid_argument);  // wrong vertex count
 }
 
 }  // namespace

@@ -12,6 +12,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
+#include <random>
 #include <set>
 
 #include "toolkit/anim/cloth.h"
@@ -122,6 +124,110 @@ TEST(SceneModel, CombinedMeshIsThePartsConcatenated) {
   std::vector<Vec3> wrong(3);
   EXPECT_THROW(s.positions(0.0, wrong), std::invalid_argument);
   EXPECT_NE(s.describe().find("quad (static)"), std::string::npos);
+}
+
+
+// A random permutation of 0 .. n-1 that keeps the ranges [offsets[p], offsets[p+1]).
+std::vector<std::uint32_t> shuffled_within(const std::vector<std::size_t>& offsets, unsigned seed) {
+  std::mt19937 g(seed);
+  std::vector<std::uint32_t> to_old(offsets.back());
+  for (std::size_t i = 0; i < to_old.size(); ++i) to_old[i] = static_cast<std::uint32_t>(i);
+  for (std::size_t p = 0; p + 1 < offsets.size(); ++p)
+    std::shuffle(to_old.begin() + offsets[p], to_old.begin() + offsets[p + 1], g);
+  return to_old;
+}
+
+// Renumbering a source: every deformer kind (explode keeps each soup vertex's own flight),
+// static meshes in place; a source that cannot (a keyframed test source) through the per-frame
+// gather. Against the unrenumbered source, vertex by vertex at several times; triangles renamed.
+TEST(Renumbering, SourcesProduceTheirPositionsInTheNewOrder) {
+  const Mesh sphere = make_sphere_mesh(Vec3(1, 2, 3), 0.5, 2);
+  std::vector<AnimationPtr> a, b;
+  for (DeformKind k : {DeformKind::Twist, DeformKind::Bend, DeformKind::Wave, DeformKind::Rigid, DeformKind::Explode}) {
+    DeformParams dp;
+    dp.kind = k;
+    dp.amplitude = 0.4;
+    dp.velocity = Vec3(0.1, 0, 0);
+    a.push_back(make_deformer(sphere, dp));
+    b.push_back(make_deformer(sphere, dp));
+  }
+  a.push_back(std::make_unique<StaticSource>(sphere, "s"));
+  b.push_back(std::make_unique<StaticSource>(sphere, "s"));
+  a.push_back(std::make_unique<Shifted>(sphere, 9));
+  b.push_back(std::make_unique<Shifted>(sphere, 9));
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    const Mesh& rest = a[k]->rest();
+    const std::size_t V = rest.vertex_count();
+    const std::vector<std::uint32_t> to_old = shuffled_within({0, V}, 11 + unsigned(k));
+    const bool in_place = k + 1 < a.size();
+    Animation* before = b[k].get();
+    b[k] = renumber_vertices(std::move(b[k]), to_old);
+    EXPECT_EQ(b[k].get() == before, in_place) << a[k]->describe();
+    EXPECT_EQ(b[k]->describe().find("gather") != std::string::npos, !in_place) << b[k]->describe();
+    EXPECT_EQ(b[k]->is_static(), a[k]->is_static());
+    EXPECT_EQ(b[k]->frame_count(), a[k]->frame_count());
+    const Mesh& r2 = b[k]->rest();
+    ASSERT_EQ(r2.vertex_count(), V);
+    for (std::size_t t = 0; t < rest.triangle_count(); ++t)
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(to_old[r2.triangle(t)[c]], rest.triangle(t)[c]) << "triangle " << t;
+    std::vector<Vec3> pa(V), pb(V);
+    for (double t : {0.0, 1.0, 2.5, 7.0}) {
+      a[k]->positions(t, pa);
+      b[k]->positions(t, pb);
+      for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(pb[i], pa[to_old[i]]) << a[k]->describe() << " t " << t << " v " << i;
+    }
+    // A second renumbering composes with the first.
+    const std::vector<std::uint32_t> again = shuffled_within({0, V}, 99);
+    b[k] = renumber_vertices(std::move(b[k]), again);
+    b[k]->positions(2.0, pb);
+    a[k]->positions(2.0, pa);
+    for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(pb[i], pa[to_old[again[i]]]) << a[k]->describe();
+  }
+  // Not a permutation / wrong size: std::invalid_argument, the source unchanged.
+  auto d = make_deformer(sphere, DeformParams{});
+  std::vector<std::uint32_t> bad(sphere.vertex_count(), 0);
+  EXPECT_THROW((void)renumber_vertices(std::move(d), bad), std::invalid_argument);
+  auto e = std::make_unique<StaticSource>(sphere, "s");
+  EXPECT_THROW((void)e->renumber_vertices_in_place(std::vector<std::uint32_t>{0, 1}), std::invalid_argument);
+  EXPECT_EQ(e->rest().positions()[0], sphere.positions()[0]);
+}
+
+TEST(Renumbering, SceneRenumbersEachPartWithinItsRange) {
+  auto make = [] {
+    std::vector<ScenePart> parts;
+    DeformParams dp;
+    dp.kind = DeformKind::Twist;
+    dp.amplitude = 0.7;
+    parts.push_back({"ball", make_deformer(make_sphere_mesh(Vec3(1, 2, 3), 0.5, 1), dp)});
+    parts.push_back({"quad", std::make_unique<StaticSource>(quad_mesh(), "quad")});
+    parts.push_back({"tri", std::make_unique<Shifted>(tri_mesh(5), 4)});
+    return Scene("combo", std::move(parts));
+  };
+  Scene a = make(), b = make();
+  const std::vector<std::size_t> offs(b.vertex_offsets().begin(), b.vertex_offsets().end());
+  ASSERT_EQ(offs.size(), 4u);
+  const std::vector<std::uint32_t> to_old = shuffled_within(offs, 5);
+  b.renumber_vertices(to_old);
+  const std::size_t V = a.rest().vertex_count();
+  ASSERT_EQ(b.rest().vertex_count(), V);
+  for (std::size_t t = 0; t < a.rest().triangle_count(); ++t)
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(to_old[b.rest().triangle(t)[c]], a.rest().triangle(t)[c]);
+  for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(b.rest().position(i), a.rest().position(to_old[i]));
+  std::vector<Vec3> pa(V), pb(V);
+  for (double t : {0.0, 2.0, 3.0}) {
+    a.positions(t, pa);
+    b.positions(t, pb);
+    for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(pb[i], pa[to_old[i]]) << "t " << t << " v " << i;
+  }
+  EXPECT_NE(b.describe().find("gather"), std::string::npos);  // the test source cannot renumber itself
+  // A permutation that moves a vertex into another part's range is refused, nothing changed.
+  Scene c = make();
+  std::vector<std::uint32_t> across(V);
+  for (std::size_t i = 0; i < V; ++i) across[i] = static_cast<std::uint32_t>(V - 1 - i);
+  EXPECT_THROW(c.renumber_vertices(across), std::invalid_argument);
+  EXPECT_EQ(c.rest().position(0), a.rest().position(0));
+  EXPECT_THROW(c.renumber_vertices(std::vector<std::uint32_t>(V, 0)), std::invalid_argument);
+  EXPECT_THROW(c.renumber_vertices(std::vector<std::uint32_t>{0}), std::invalid_argument);
 }
 
 TEST(SceneModel, DefaultCameraSeesTheBounds) {

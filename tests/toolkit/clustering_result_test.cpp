@@ -3,6 +3,7 @@
 // brute-force validity check and against one hand-made violation of every kind, split_disconnected
 // against brute-force components. Degenerate inputs first; randomness is seeded.
 #include "toolkit/clustering/clustering.h"
+#include "toolkit/mesh/mesh.h"
 
 #include <gtest/gtest.h>
 
@@ -566,6 +567,46 @@ TEST(SplitDisconnected, MatchesBruteForceComponentsOnRandomLabelings) {
       }
     }
   }
+}
+
+
+// Renumbering the mesh's vertices: positions moved, corners renamed, triangle order kept; the
+// inverse permutation; a clustering's vertex lists renamed and sorted again (validate() still
+// holds); bad permutations and lists refused.
+TEST(Renumbering, MeshAndClusteringFollowThePermutation) {
+  const Mesh m({{0, 1, 2}, {2, 1, 3}, {3, 4, 2}, {5, 5, 5}},
+               {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0), Vec3(0, 2, 0), Vec3(9, 9, 9), Vec3(7, 7, 7)});
+  const Ids to_old{6, 3, 0, 5, 2, 4, 1};
+  const Ids to_new = inverse_permutation(to_old);
+  for (std::uint32_t i = 0; i < to_old.size(); ++i) EXPECT_EQ(to_new[to_old[i]], i);
+  const Mesh r = renumber_vertices(m, to_old);
+  ASSERT_EQ(r.vertex_count(), m.vertex_count());
+  ASSERT_EQ(r.triangle_count(), m.triangle_count());
+  for (std::uint32_t i = 0; i < to_old.size(); ++i) EXPECT_EQ(r.position(i), m.position(to_old[i]));
+  for (std::size_t t = 0; t < m.triangle_count(); ++t)
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(r.triangle(t)[c], to_new[m.triangle(t)[c]]) << t;
+  EXPECT_THROW((void)inverse_permutation(Ids{0, 0, 1}), std::invalid_argument);
+  EXPECT_THROW((void)inverse_permutation(Ids{0, 3, 1}), std::invalid_argument);
+  EXPECT_THROW((void)renumber_vertices(m, Ids{0, 1}), std::invalid_argument);
+  EXPECT_THROW((void)renumber_vertices(m, Ids{0, 1, 2, 3, 4, 5, 5}), std::invalid_argument);
+  EXPECT_TRUE(renumber_vertices(Mesh(), {}).empty());
+
+  const Clustering c = clustering_from_labels(Ids{0, 0, 1, 2}, m.triangles());
+  const Clustering rc = renumber_vertices(c, to_new);
+  EXPECT_EQ(rc.triangle_order, c.triangle_order);
+  EXPECT_EQ(rc.triangle_offsets, c.triangle_offsets);
+  EXPECT_EQ(rc.vertex_offsets, c.vertex_offsets);
+  for (std::size_t k = 0; k < c.cluster_count(); ++k) {
+    Ids want;
+    for (std::uint32_t v : c.vertices_of(k)) want.push_back(to_new[v]);
+    std::sort(want.begin(), want.end());
+    EXPECT_EQ(Ids(rc.vertices_of(k).begin(), rc.vertices_of(k).end()), want) << k;
+  }
+  EXPECT_TRUE(validate(rc, r.triangles(), EdgeMap::build(r.triangles(), r.vertex_count())).empty());
+  EXPECT_THROW((void)renumber_vertices(c, Ids{0, 1}), std::invalid_argument);
+  Clustering broken = c;
+  broken.vertex_offsets.back() += 5;
+  EXPECT_THROW((void)renumber_vertices(broken, to_new), std::invalid_argument);
 }
 
 }  // namespace

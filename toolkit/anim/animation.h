@@ -9,6 +9,7 @@
 // steady state (sources keep their scratch space from construction on).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
@@ -43,8 +44,22 @@ class Animation {
 
   /// Whether positions never change (static meshes of a scene keep their BVH across frames).
   [[nodiscard]] virtual bool is_static() const { return false; }
+
+  /// Renumbers the vertices once, in place, when the source can do so at no cost per frame:
+  /// afterwards rest() and positions() use new index i for old vertex to_old[i] (to_old a
+  /// permutation of 0 .. vertex_count-1, else std::invalid_argument) and the triangle order is
+  /// unchanged. Returns false, changing nothing, when the source cannot (use
+  /// renumber_vertices(AnimationPtr, ...) below, which then gathers per frame). Used to hand
+  /// the per-frame loop positions in the clusters' vertex order (bvh::cluster_vertex_order).
+  virtual bool renumber_vertices_in_place(std::span<const std::uint32_t> /*to_old*/) { return false; }
 };
 
 using AnimationPtr = std::unique_ptr<Animation>;
+
+/// `source` with its vertices renumbered (see Animation::renumber_vertices_in_place): the source
+/// itself when it renumbers in place, else a wrapper that produces the source's positions into
+/// its own buffer and gathers them per frame (describe() says which). Throws
+/// std::invalid_argument unless to_old is a permutation of the source's vertices.
+[[nodiscard]] AnimationPtr renumber_vertices(AnimationPtr source, std::span<const std::uint32_t> to_old);
 
 }  // namespace ptc

@@ -132,10 +132,27 @@ class Deformer final : public Animation {
       }
       case DeformKind::Explode: {
         const double dist = p_.amplitude * diag_ * t;
-        for_vertices(in.size(), [&](std::size_t i) { out[i] = in[i] + dist * offset_[i / 3]; });
+        if (vertex_triangle_.empty())
+          for_vertices(in.size(), [&](std::size_t i) { out[i] = in[i] + dist * offset_[i / 3]; });
+        else
+          for_vertices(in.size(), [&](std::size_t i) { out[i] = in[i] + dist * offset_[vertex_triangle_[i]]; });
         break;
       }
     }
+  }
+
+  // Every kind but explode is a function of the rest position alone: renumbering the rest mesh
+  // renumbers the output. Explode keeps each (soup) vertex's triangle.
+  bool renumber_vertices_in_place(std::span<const std::uint32_t> to_old) override {
+    Mesh renumbered = renumber_vertices(rest_, to_old);  // validates before anything changes
+    if (p_.kind == DeformKind::Explode) {
+      std::vector<std::uint32_t> vt(to_old.size());
+      for (std::size_t i = 0; i < to_old.size(); ++i)
+        vt[i] = vertex_triangle_.empty() ? to_old[i] / 3 : vertex_triangle_[to_old[i]];
+      vertex_triangle_ = std::move(vt);
+    }
+    rest_ = std::move(renumbered);
+    return true;
   }
 
  private:
@@ -171,6 +188,7 @@ class Deformer final : public Animation {
   Vec3 c_, e_;
   double diag_ = 0;
   std::vector<Vec3> offset_;
+  std::vector<std::uint32_t> vertex_triangle_;  // explode after a renumbering: the triangle of each vertex
 };
 
 }  // namespace

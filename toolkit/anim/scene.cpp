@@ -108,6 +108,29 @@ void Scene::positions(double frame, std::span<Vec3> out, bool update_static) {
   }
 }
 
+void Scene::renumber_vertices(std::span<const std::uint32_t> to_old) {
+  if (to_old.size() != rest_.vertex_count())
+    throw std::invalid_argument(fmt::format("renumber_vertices: {} entries for {} vertices", to_old.size(),
+                                            rest_.vertex_count()));
+  Mesh renumbered = ptc::renumber_vertices(rest_, to_old);  // validates the permutation
+  for (std::size_t k = 0; k < parts_.size(); ++k)
+    for (std::size_t i = vertex_offsets_[k]; i < vertex_offsets_[k + 1]; ++i)
+      if (to_old[i] < vertex_offsets_[k] || to_old[i] >= vertex_offsets_[k + 1])
+        throw std::invalid_argument(fmt::format("renumber_vertices: new vertex {} of part '{}' comes from another part",
+                                                i, parts_[k].name));
+  for (std::size_t k = 0; k < parts_.size(); ++k) {
+    const std::size_t a = vertex_offsets_[k], n = vertex_offsets_[k + 1] - a;
+    std::vector<std::uint32_t> local(n);
+    bool identity = true;
+    for (std::size_t i = 0; i < n; ++i) {
+      local[i] = static_cast<std::uint32_t>(to_old[a + i] - a);
+      identity &= local[i] == i;
+    }
+    if (!identity) parts_[k].source = ptc::renumber_vertices(std::move(parts_[k].source), local);
+  }
+  rest_ = std::move(renumbered);
+}
+
 std::string Scene::describe() const {
   std::string s;
   for (std::size_t k = 0; k < parts_.size(); ++k)

@@ -90,6 +90,15 @@ class Scene {
   /// no allocation in the steady state.
   void positions(double frame, std::span<Vec3> out, bool update_static = true);
 
+  /// Renumbers the combined vertices once (to_old[new] = old, a permutation that maps every
+  /// part's range [vertex_offset(p), vertex_offset(p + 1)) onto itself, as
+  /// bvh::cluster_vertex_order with the part offsets makes it; std::invalid_argument otherwise):
+  /// each part renumbers its source (renumber_vertices: in place, or by a gather per frame,
+  /// which describe() then says), rest() is renumbered, triangles keep their ids.
+  void renumber_vertices(std::span<const std::uint32_t> to_old);
+  /// The vertex offsets of the parts (part_count() + 1 entries).
+  [[nodiscard]] std::span<const std::size_t> vertex_offsets() const { return vertex_offsets_; }
+
   /// Several lines: one per part (name, static/animated, sizes, source description).
   [[nodiscard]] std::string describe() const;
 

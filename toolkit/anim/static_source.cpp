@@ -18,6 +18,11 @@ void StaticSource::positions(double frame, std::span<Vec3> out) {
   std::ranges::copy(mesh_.positions(), out.begin());
 }
 
+bool StaticSource::renumber_vertices_in_place(std::span<const std::uint32_t> to_old) {
+  mesh_ = renumber_vertices(mesh_, to_old);
+  return true;
+}
+
 std::string StaticSource::describe() const {
   return fmt::format("static {} ({} triangles, {} vertices)", label_, mesh_.triangle_count(), mesh_.vertex_count());
 }

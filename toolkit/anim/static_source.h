@@ -19,6 +19,7 @@ class StaticSource final : public Animation {
   void positions(double frame, std::span<Vec3> out) override;
   [[nodiscard]] std::string describe() const override;
   [[nodiscard]] bool is_static() const override { return true; }
+  bool renumber_vertices_in_place(std::span<const std::uint32_t> to_old) override;
 
  private:
   Mesh mesh_;

@@ -79,4 +79,9 @@ struct ClusterLimits {
 /// vertex lists of `c` are not read. `edges` = EdgeMap::build(triangles, ...). O(T log T).
 [[nodiscard]] Clustering split_disconnected(const Clustering& c, std::span<const Tri> triangles, const EdgeMap& edges);
 
+/// The clustering of a mesh whose vertices were renumbered (to_new[old] = new, e.g.
+/// inverse_permutation of the renumbering): vertex lists renamed and sorted ascending again;
+/// triangles and clusters unchanged. Throws std::invalid_argument for a vertex id outside to_new.
+[[nodiscard]] Clustering renumber_vertices(const Clustering& c, std::span<const std::uint32_t> to_new);
+
 }  // namespace ptc

@@ -32,6 +32,33 @@ Mesh Mesh::with_positions(std::vector<Vec3> positions) const {
   return m;
 }
 
+std::vector<std::uint32_t> inverse_permutation(std::span<const std::uint32_t> to_old) {
+  constexpr std::uint32_t none = 0xffffffffu;
+  if (to_old.size() >= none) throw std::invalid_argument("inverse_permutation: too many entries");
+  std::vector<std::uint32_t> to_new(to_old.size(), none);
+  for (std::size_t i = 0; i < to_old.size(); ++i) {
+    const std::uint32_t v = to_old[i];
+    if (v >= to_old.size() || to_new[v] != none)
+      throw std::invalid_argument("renumbering: entry " + std::to_string(i) + " (" + std::to_string(v) +
+                                  (v >= to_old.size() ? ") is out of range" : ") repeats an earlier entry"));
+    to_new[v] = static_cast<std::uint32_t>(i);
+  }
+  return to_new;
+}
+
+Mesh renumber_vertices(const Mesh& mesh, std::span<const std::uint32_t> to_old) {
+  if (to_old.size() != mesh.vertex_count())
+    throw std::invalid_argument("renumber_vertices: " + std::to_string(to_old.size()) + " entries for " +
+                                std::to_string(mesh.vertex_count()) + " vertices");
+  const std::vector<std::uint32_t> to_new = inverse_permutation(to_old);
+  std::vector<Tri> tris(mesh.triangles().begin(), mesh.triangles().end());
+  for (Tri& t : tris)
+    for (std::uint32_t& v : t) v = to_new[v];
+  std::vector<Vec3> pos(to_old.size());
+  for (std::size_t i = 0; i < to_old.size(); ++i) pos[i] = mesh.position(to_old[i]);
+  return Mesh(std::move(tris), std::move(pos));
+}
+
 Box3 Mesh::bounds() const {
   Box3 b;
   for (const Vec3& p : pos_) b.extend(p);

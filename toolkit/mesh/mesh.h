@@ -54,4 +54,13 @@ class Mesh {
   std::vector<Vec3> pos_;
 };
 
+/// The inverse of a vertex renumbering: to_new[to_old[i]] = i. Throws std::invalid_argument
+/// unless to_old is a permutation of 0 .. n-1 (n = to_old.size()), naming the first bad entry.
+[[nodiscard]] std::vector<std::uint32_t> inverse_permutation(std::span<const std::uint32_t> to_old);
+
+/// The mesh with its vertices renumbered: new vertex i is old vertex to_old[i] (positions moved,
+/// triangle corners renamed; the triangle order is kept, so triangle ids stay valid). Throws
+/// std::invalid_argument unless to_old is a permutation of 0 .. vertex_count-1.
+[[nodiscard]] Mesh renumber_vertices(const Mesh& mesh, std::span<const std::uint32_t> to_old);
+
 }  // namespace ptc
