@@ -58,6 +58,14 @@ const BenchSummary* find(const std::vector<BenchSummary>& s, const std::string& 
 
 const char* kEmbree[3] = {"embree_medium", "embree_low", "embree_refit"};
 
+bvh::SceneConfig cluster_config(const PeerBenchConfig& cfg, const Vec3& origin) {
+  bvh::SceneConfig c = bvh::cluster_scene_defaults();
+  c.origin = origin;
+  c.cluster_leaf = cfg.cluster_leaf;
+  c.cluster_group_size = cfg.cluster_group_size;
+  return c;
+}
+
 }  // namespace
 
 const std::vector<std::string>& peer_bench_configs() {
@@ -135,7 +143,7 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
       throw std::invalid_argument("cluster_vertex_order with scene positions needs renumber_positions");
     const auto t1 = Clock::now();
     const std::vector<std::uint32_t> to_old =
-        bvh::cluster_vertex_order(mesh.vertex_count(), clusters->vertex_offsets, clusters->vertices, cfg.part_offsets);
+        bvh::cluster_vertex_order(mesh, bvh::view_of(*clusters), cfg.part_offsets, cluster_config(cfg, mesh.bounds().center()));
     renumbered = renumber_vertices(mesh, to_old);
     renumbered_clusters = renumber_vertices(*clusters, inverse_permutation(to_old));
     if (cfg.positions) cfg.renumber_positions(to_old);  // (may change `mesh`, a caller's scene rest)
@@ -154,14 +162,14 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
   bvh::TraceOptions opt;
   opt.threads = cfg.threads;
   opt.counters = false;
-  bvh::SceneConfig tcfg = bvh::triangle_scene_defaults(), ccfg = bvh::cluster_scene_defaults();
-  tcfg.origin = ccfg.origin = origin;
-  ccfg.cluster_leaf = cfg.cluster_leaf;
+  bvh::SceneConfig tcfg = bvh::triangle_scene_defaults(), ccfg = cluster_config(cfg, origin);
+  tcfg.origin = origin;
   auto ts = std::make_shared<bvh::TriangleScene>(mesh_b, tcfg);
   const auto t0 = Clock::now();
   auto cs = std::make_shared<bvh::ClusterScene>(mesh_b, bvh::view_of(*clusters), ccfg);
   res.cluster_scene_setup_ms = ms_since(t0);
   res.fused_vertex_pass = cs->fused_vertex_pass();
+  res.cluster_group_size = ccfg.cluster_group_size;
 
   std::vector<Config> configs;
   configs.push_back({"ours_triangles", [ts](std::span<const Vec3> p) { ts->update(p); },
@@ -270,10 +278,12 @@ std::string bench_table(const PeerBenchResult& r) {
   for (const auto& row : r.rows)
     if (row.frame >= r.median_first_frame && row.config == r.rows.front().config) src.push_back(row.source_ms);
   s += fmt::format("frame source (positions of a frame, outside every configuration): median {:.2f} ms; vertex order: "
-                   "{}{}\n",
+                   "{}{}; cluster BVH: {}\n",
                    median(src), r.vertex_order,
                    r.fused_vertex_pass ? " (cluster path: conversion and boxes in one pass)"
-                                       : " (cluster path: positions gathered per frame)");
+                                       : " (cluster path: positions gathered per frame)",
+                   r.cluster_group_size > 1 ? fmt::format("two-level, groups of <= {} clusters", r.cluster_group_size)
+                                            : std::string("plain SAH build over all cluster boxes"));
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");
   for (const char* e : kEmbree) s += fmt::format(" {:>19}", std::string("upd+build vs ") + (e + 7));

@@ -53,6 +53,9 @@ struct PeerBenchConfig {
   Deformation deformation = Deformation::Twist;
   std::uint32_t max_count = 50;           ///< clustering when none is given: growth / Acc, MaxCount = MaxSize = this
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
+  /// Two-level build of the cluster BVH over groups of at most this many clusters
+  /// (bvh::SceneConfig::cluster_group_size); 0: the plain build over all cluster boxes.
+  std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
   double tie_rel = 1e-5;                  ///< relative t tolerance of a tie
   /// Vertex order of the benchmark mesh. true (default): renumbered once, after clustering, with
   /// bvh::cluster_vertex_order (every cluster's own vertices consecutive), so that the cluster
@@ -99,6 +102,7 @@ struct PeerBenchResult {
   std::string clustering;              ///< how the clusters were made
   std::string vertex_order;            ///< "clusters" (renumbered once) or "input"
   bool fused_vertex_pass = false;      ///< the cluster scene converts and boxes in one pass (no gather)
+  std::uint32_t cluster_group_size = 0;  ///< the cluster BVH's two-level build (0: plain)
   double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once
 };
 

@@ -43,6 +43,7 @@ struct PartLayout {
 struct SceneTracerConfig {
   const Clustering* clusters = nullptr;  ///< of the combined mesh: the moving BVH is a cluster BVH
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
+  std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;  ///< bvh::SceneConfig (0: plain build)
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
 };
 

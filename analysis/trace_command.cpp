@@ -169,6 +169,7 @@ void cmd_trace(const TraceCommandOptions& opt, const ImageWriter& write_image, s
   // stage times are the steady-state figures of the first frame).
   SceneTracerConfig tcfg;
   tcfg.clusters = use_clusters ? &clusters : nullptr;
+  tcfg.cluster_group_size = opt.cluster_group_size;
   tcfg.origin = first_bounds.center();
   SceneTracer tracer(mesh, PartLayout::of(scene), tcfg);
   manifest.add_timing_ms("static_build", tracer.static_build_ms());
@@ -286,6 +287,7 @@ void cmd_trace(const TraceCommandOptions& opt, const ImageWriter& write_image, s
     return a;
   }());
   if (use_clusters) manifest.set_parameter("clusters", opt.clusters.string());
+  if (use_clusters) manifest.set_parameter("cluster_group_size", opt.cluster_group_size);
   manifest.set_parameter("width", rc.width);
   manifest.set_parameter("height", rc.height);
   manifest.set_parameter("threads", threads);
@@ -402,6 +404,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("deformation", animated ? "none (scene positions)" : to_string(c.deformation));
   manifest.set_parameter("clustering", r.clustering);
   manifest.set_parameter("cluster_leaf", bvh::to_string(c.cluster_leaf));
+  manifest.set_parameter("cluster_group_size", c.cluster_group_size);
   manifest.set_parameter("vertex_order", r.vertex_order);
   manifest.set_parameter("tie_rel", c.tie_rel);
   manifest.set_parameter("embree_set_affinity", false);

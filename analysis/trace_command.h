@@ -26,6 +26,7 @@ struct TraceCommandOptions {
   std::optional<std::string> frame;    ///< "F": one frame (default: the scene's first)
   std::optional<std::string> frames;   ///< "A:B": a sequence (images named shaded_0000.png ..., one CSV row per frame)
   std::filesystem::path clusters;      ///< directory of `ptc cluster` (triangles.csv); empty: triangle BVH
+  std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;  ///< two-level build (0: plain)
   std::filesystem::path out_dir;       ///< images, trace.csv, manifest.json (required)
   CameraSpec camera;
   RenderConfig render;                 ///< size, shadows, AO, seed, light, threads (0 = all cores)

@@ -185,6 +185,7 @@ int main(int argc, char** argv) {
     else if (a == "--out") out_dir = text("--out");
     else if (a == "--clock") clock_arg = text("--clock");
     else if (a == "--ci") tcfg.build.cost.intersection = ccfg.build.cost.intersection = value("--ci");
+    else if (a == "--groups") ccfg.cluster_group_size = static_cast<unsigned>(value("--groups"));
     else if (a == "--median") ccfg.build.median_split_below = static_cast<unsigned>(value("--median"));
     else if (a == "--ct") tcfg.build.cost.traversal = ccfg.build.cost.traversal = value("--ct");
     else if (a[0] != '-') mesh_path = a;
@@ -277,8 +278,7 @@ int main(int argc, char** argv) {
     if (vertex_order_arg == "clusters" && clusterings.size() == 1 && !renumbered) {
       const auto t1 = Clock::now();
       Clustering& c0 = clusterings.front().second;
-      const std::vector<std::uint32_t> to_old =
-          cluster_vertex_order(mesh.vertex_count(), c0.vertex_offsets, c0.vertices);
+      const std::vector<std::uint32_t> to_old = cluster_vertex_order(mesh, view_of(c0), {}, ccfg);
       mesh = renumber_vertices(mesh, to_old);
       c0 = renumber_vertices(c0, inverse_permutation(to_old));
       renumbered = true;
@@ -365,12 +365,17 @@ int main(int argc, char** argv) {
     }
     const std::vector<Box3f>& boxes = first_cluster_scene->boxes();
     const std::vector<Vec3f> centers = box_centers(boxes);
+    std::vector<std::uint32_t> groups;
+    if (ccfg.cluster_group_size > 1) {
+      for (std::size_t c = 0; c < boxes.size(); c += ccfg.cluster_group_size) groups.push_back(std::uint32_t(c));
+      groups.push_back(std::uint32_t(boxes.size()));
+    }
     Bvh b;
     BuildWorkspace ws;
     std::vector<double> ms;
     for (int i = 0; i < build_loop; ++i) {
       const double t0 = clock_ms(clock);
-      build_binned_sah({boxes, centers, first_cluster_scene->weights()}, ccfg.build, b, ws);
+      build_binned_sah({boxes, centers, first_cluster_scene->weights(), groups}, ccfg.build, b, ws);
       ms.push_back(clock_ms(clock) - t0);
     }
     row("build loop " + std::to_string(boxes.size()) + " clusters", "3 SAH build", ms);

@@ -8,6 +8,8 @@
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
 #include "bvh/aligned.h"
 
@@ -161,10 +163,15 @@ struct BinnedTask {
   std::uint32_t begin, end, patch_parent;
   Box3f box;   // union of the primitive boxes
   Box3f cbox;  // bounds of the centroids, gathered by the parent's partition; empty: not known
+  std::uint32_t groups = 0;  // 1: a range of group records (BuildInput::groups), 0: of primitives
 };
 
 constexpr std::uint32_t kMaxBins = 256;
-constexpr std::uint32_t kSweepBelow = 16;  // nodes of at most this many primitives are swept exactly
+constexpr std::uint32_t kSweepBelow = 16;
+#ifndef PTC_TWO_SETS_FROM
+#define PTC_TWO_SETS_FROM 100000
+#endif
+constexpr std::uint32_t kTwoSetsFrom = PTC_TWO_SETS_FROM;  // nodes of at most this many primitives are swept exactly
 
 // Per axis and bin: the box as eight floats, lo x y z . and -hi x y z . (the upper bound negated,
 // so that one minimum updates both halves: one 8-wide min per axis and primitive with AVX, two
@@ -360,6 +367,7 @@ BinRangeFn pick_bin_range() {
 
 struct BuildWorkspace::Impl {
   std::vector<Ref, AlignedAllocator<Ref>> refs;
+  std::vector<Ref, AlignedAllocator<Ref>> group_refs;  // two-level build: one record per group
   std::vector<BinnedTask> stack;
   Bins bins[2];
 };
@@ -424,19 +432,51 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
   CostAccumulator acc;
   std::vector<BinnedTask>& stack = w.stack;
   stack.clear();
-  stack.push_back({0, n, kNone, to_box(rlo, rhi), to_box(rclo, rchi)});
   const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
+  // Two-level build (BuildInput::groups): one record per group (the union of its primitives'
+  // boxes, the box centre, the summed weight); the top levels split groups, and a node of one
+  // group continues with the group's primitives (contiguous in refs).
+  const std::size_t G = in.groups.empty() ? 0 : in.groups.size() - 1;
+  if (!in.groups.empty() && (G == 0 || in.groups.front() != 0 || in.groups.back() != n))
+    throw std::invalid_argument("build_binned_sah: group offsets do not span the " + std::to_string(n) + " primitives");
+  if (G > 1) {
+    w.group_refs.resize(G);
+    __m128 gclo = inf, gchi = ninf;
+    for (std::size_t g = 0; g < G; ++g) {
+      const std::uint32_t a = in.groups[g], e = in.groups[g + 1];
+      if (e <= a || e > n) throw std::invalid_argument("build_binned_sah: empty or decreasing group " + std::to_string(g));
+      __m128 lo = inf, hi = ninf;
+      std::uint64_t wt = 0;
+      for (std::uint32_t i = a; i < e; ++i) {
+        lo = _mm_min_ps(lo, load_lo(refs[i])), hi = _mm_max_ps(hi, load_hi(refs[i]));
+        wt += refs[i].weight;
+      }
+      const __m128 c = _mm_and_ps(_mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi)), mask);
+      Ref& gr = w.group_refs[g];
+      _mm_store_ps(gr.lo, _mm_or_ps(lo, _mm_castsi128_ps(_mm_setr_epi32(0, 0, 0, static_cast<int>(g)))));
+      _mm_store_ps(gr.hi, _mm_or_ps(hi, _mm_castsi128_ps(_mm_setr_epi32(0, 0, 0, static_cast<int>(wt)))));
+      _mm_store_ps(gr.c, c);
+      gclo = _mm_min_ps(gclo, c), gchi = _mm_max_ps(gchi, c);
+    }
+    stack.push_back({0, static_cast<std::uint32_t>(G), kNone, to_box(rlo, rhi), to_box(gclo, gchi), 1});
+  } else {
+    stack.push_back({0, n, kNone, to_box(rlo, rhi), to_box(rclo, rchi), 0});
+  }
   static const BinRangeFn best_bin_range = pick_bin_range();
   const BinRangeFn bin_range = cfg.allow_avx2 ? best_bin_range : &bin_range_sse2;
 
   while (!stack.empty()) {
-    const BinnedTask task = stack.back();
+    BinnedTask task = stack.back();
     stack.pop_back();
+    if (task.groups && task.end - task.begin == 1) {  // one group: continue with its primitives
+      const std::uint32_t g = w.group_refs[task.begin].id;
+      task = {in.groups[g], in.groups[g + 1], task.patch_parent, task.box, Box3f{}, 0};
+    }
     const auto idx = static_cast<std::uint32_t>(bvh.nodes.size());
     bvh.nodes.emplace_back();
     if (task.patch_parent != kNone) bvh.nodes[task.patch_parent].index = idx;
     bvh.nodes[idx].bounds = task.box;
-    Ref* r = refs + task.begin;
+    Ref* r = (task.groups ? w.group_refs.data() : refs) + task.begin;
     const std::uint32_t count = task.end - task.begin;
     const double area = task.box.surface_area();
     auto make_leaf = [&] {
@@ -450,7 +490,7 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
       make_leaf();
       continue;
     }
-    const bool must_split = count > cfg.max_leaf_size;
+    const bool must_split = count > cfg.max_leaf_size || task.groups;  // (a leaf holds primitives, not groups)
     // Early leaf: every split costs at least traversal + intersection * sum_p A(p) w_p / A
     // (each primitive lies in a child whose area is at least its own), so a leaf that is no
     // dearer than that bound wins without evaluating any split.
@@ -511,11 +551,18 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
     const BinParams bp{clo, sc, maxbin};
     Bins& b0 = w.bins[0];
     if (usable[0] || usable[1] || usable[2]) {
-      Bins& b1 = w.bins[1];
-      b0.clear(nbins);
-      b1.clear(nbins);
-      total_weight = bin_range(r, count, bp, b0, b1);
-      b0.merge(b1, nbins);
+      // Two bin sets (alternate primitives) hide the latency of consecutive updates of one bin;
+      // in nodes of few primitives clearing and merging the second set costs more than it hides.
+      if (count >= kTwoSetsFrom) {
+        Bins& b1 = w.bins[1];
+        b0.clear(nbins);
+        b1.clear(nbins);
+        total_weight = bin_range(r, count, bp, b0, b1);
+        b0.merge(b1, nbins);
+      } else {
+        b0.clear(nbins);
+        total_weight = bin_range(r, count, bp, b0, b0);
+      }
       // Only non-empty bins matter: a boundary next to an empty bin gives the same partition as
       // the boundary before it (small nodes, the majority, have few non-empty bins).
       float right_area[kMaxBins], right_weight[kMaxBins];
@@ -669,18 +716,23 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
       leaf.bounds = box, leaf.index = begin, leaf.count = 1;
       acc.leaf(m, box.surface_area(), static_cast<double>(refs[begin].weight));
     };
+    if (task.groups) {  // children of one group continue as tasks (see the top of the loop)
+      stack.push_back({task.begin + k, task.end, idx, to_box(right.lo, right.hi), right_cb, 1});
+      stack.push_back({task.begin, task.begin + k, kNone, to_box(left.lo, left.hi), left_cb, 1});
+      continue;
+    }
     if (k == 1) {
       emit_leaf(task.begin, to_box(left.lo, left.hi));
       if (count - k == 1) {
         bvh.nodes[idx].index = idx + 2;
         emit_leaf(task.begin + 1, to_box(right.lo, right.hi));
       } else {
-        stack.push_back({task.begin + k, task.end, idx, to_box(right.lo, right.hi), right_cb});
+        stack.push_back({task.begin + k, task.end, idx, to_box(right.lo, right.hi), right_cb, 0});
       }
       continue;
     }
-    stack.push_back({task.begin + k, task.end, idx, to_box(right.lo, right.hi), right_cb});
-    stack.push_back({task.begin, task.begin + k, kNone, to_box(left.lo, left.hi), left_cb});
+    stack.push_back({task.begin + k, task.end, idx, to_box(right.lo, right.hi), right_cb, 0});
+    stack.push_back({task.begin, task.begin + k, kNone, to_box(left.lo, left.hi), left_cb, 0});
   }
   bvh.prim_order.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) bvh.prim_order[i] = refs[i].id;

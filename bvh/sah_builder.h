@@ -27,6 +27,12 @@ struct BuildInput {
   std::span<const Box3f> boxes;
   std::span<const Vec3f> centroids;        ///< a point inside (or at the centre of) each box
   std::span<const std::uint32_t> weights;  ///< empty: every primitive weighs 1; else n entries >= 1, sum < 2^32
+  /// Optional two-level build (binned builder only): offsets of G groups of consecutive
+  /// primitives (G + 1 entries, ascending from 0 to n, no empty group). The top of the tree is
+  /// built over the groups (one record each: the union of its primitives' boxes, its centre, the
+  /// summed weight), and a node holding one group is built on over the group's primitives; a
+  /// leaf never holds primitives of two groups. Empty (or one group): the plain build.
+  std::span<const std::uint32_t> groups = {};
 };
 
 struct BuildConfig {

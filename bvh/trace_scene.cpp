@@ -80,6 +80,108 @@ inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, 
   }
 }
 
+// The clustering's consistency (what ClusterScene relies on): offsets from 0 to T, no empty
+// cluster, triangle_order a permutation of the mesh's triangles, vertex offsets matching.
+void check_view(const Mesh& mesh, const ClusterView& cv) {
+  const std::size_t T = mesh.triangle_count();
+  const auto& offs = cv.triangle_offsets;
+  if (offs.empty() || offs.front() != 0 || offs.back() != cv.triangle_order.size() || cv.triangle_order.size() != T)
+    throw std::invalid_argument("ClusterScene: the clustering's offsets/order do not cover the " + std::to_string(T) +
+                                " triangles");
+  std::vector<std::uint8_t> seen(T, 0);
+  for (std::uint32_t t : cv.triangle_order)
+    if (t >= T || seen[t]++) throw std::invalid_argument("ClusterScene: triangle_order is not a permutation");
+  const std::size_t C = offs.size() - 1;
+  if (!cv.vertex_offsets.empty() &&
+      (cv.vertex_offsets.size() != C + 1 || cv.vertex_offsets.front() != 0 || cv.vertex_offsets.back() != cv.vertices.size()))
+    throw std::invalid_argument("ClusterScene: vertex_offsets do not match the clusters");
+  for (std::size_t c = 0; c < C; ++c) {
+    if (offs[c + 1] <= offs[c]) throw std::invalid_argument("ClusterScene: empty or decreasing cluster " + std::to_string(c));
+    if (!cv.vertex_offsets.empty() && cv.vertex_offsets[c + 1] < cv.vertex_offsets[c])
+      throw std::invalid_argument("ClusterScene: decreasing vertex offsets at cluster " + std::to_string(c));
+  }
+}
+
+// The rest-pose BVH over the clusters (boxes over their vertex lists, or their triangles'
+// corners, in the scene's frame; the scene's build settings, plain build): its primitive order
+// is the order in which the scene keeps the clusters, and its subtrees of at most
+// cluster_group_size clusters are the groups of the two-level build. A checked view.
+Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg) {
+  const std::size_t C = cv.triangle_offsets.size() - 1;
+  std::vector<std::uint32_t> offs, idx;
+  std::span<const std::uint32_t> o = cv.vertex_offsets, v = cv.vertices;
+  if (cv.vertex_offsets.empty()) {
+    const auto tris = mesh.triangles();
+    offs.assign(1, 0);
+    for (std::size_t c = 0; c < C; ++c) {
+      for (std::uint32_t i = cv.triangle_offsets[c]; i < cv.triangle_offsets[c + 1]; ++i)
+        for (std::uint32_t x : tris[cv.triangle_order[i]]) idx.push_back(x);
+      offs.push_back(static_cast<std::uint32_t>(idx.size()));
+    }
+    o = offs, v = idx;
+  }
+  for (std::uint32_t x : v)
+    if (x >= mesh.vertex_count())
+      throw std::invalid_argument("ClusterScene: vertex " + std::to_string(x) + " of a cluster's list is not in the mesh");
+  const std::vector<Box3f> boxes = point_group_boxes(mesh.positions(), o, v, default_origin(mesh, cfg));
+  const std::vector<Vec3f> centres = box_centers(boxes);
+  std::vector<std::uint32_t> weights(C);
+  for (std::size_t c = 0; c < C; ++c) weights[c] = cv.triangle_offsets[c + 1] - cv.triangle_offsets[c];
+  BuildConfig b = cfg.build;
+  b.max_leaf_size = 1;
+  return build_binned_sah({boxes, centres, weights}, b);
+}
+
+// Group offsets (in prim_order positions) of a tree over single-primitive leaves: the maximal
+// subtrees of at most `size` primitives, left to right.
+std::vector<std::uint32_t> subtree_groups(const Bvh& t, std::uint32_t size) {
+  const std::size_t N = t.nodes.size();
+  std::vector<std::uint32_t> first(N), count(N);
+  for (std::size_t i = N; i-- > 0;) {  // children have larger indices
+    const BvhNode& n = t.nodes[i];
+    if (n.is_leaf()) {
+      first[i] = n.index, count[i] = n.count;
+    } else {
+      first[i] = std::min(first[i + 1], first[n.index]);
+      count[i] = count[i + 1] + count[n.index];
+    }
+  }
+  std::vector<std::uint32_t> groups;
+  std::vector<std::uint32_t> stack{0};
+  while (!stack.empty()) {
+    const std::uint32_t i = stack.back();
+    stack.pop_back();
+    if (count[i] <= size || t.nodes[i].is_leaf()) {
+      groups.push_back(first[i]);
+      continue;
+    }
+    stack.push_back(t.nodes[i].index), stack.push_back(i + 1);  // left first
+  }
+  std::sort(groups.begin(), groups.end());
+  groups.push_back(static_cast<std::uint32_t>(t.prim_order.size()));
+  return groups;
+}
+
+// The view's clusters in the visiting order: triangle ranges and vertex lists (the triangles'
+// corners when the view has none).
+void reorder_clusters(const Mesh& mesh, const ClusterView& cv, std::span<const std::uint32_t> visit,
+                      std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& offsets,
+                      std::vector<std::uint32_t>& vertices, std::vector<std::uint32_t>& vertex_offsets) {
+  const auto tris = mesh.triangles();
+  order.clear(), offsets.assign(1, 0), vertices.clear(), vertex_offsets.assign(1, 0);
+  for (std::uint32_t c : visit) {
+    for (std::uint32_t i = cv.triangle_offsets[c]; i < cv.triangle_offsets[c + 1]; ++i) {
+      order.push_back(cv.triangle_order[i]);
+      if (cv.vertex_offsets.empty())
+        for (std::uint32_t v : tris[cv.triangle_order[i]]) vertices.push_back(v);
+    }
+    if (!cv.vertex_offsets.empty())
+      vertices.insert(vertices.end(), cv.vertices.begin() + cv.vertex_offsets[c], cv.vertices.begin() + cv.vertex_offsets[c + 1]);
+    offsets.push_back(static_cast<std::uint32_t>(order.size()));
+    vertex_offsets.push_back(static_cast<std::uint32_t>(vertices.size()));
+  }
+}
+
 void fill_ids(std::span<const std::uint32_t> ids, std::uint32_t* first_id) {
   const auto n = static_cast<std::uint32_t>(ids.size());
   for (std::uint32_t i = 0; i < 4 * blocks_for(n); ++i) first_id[i] = i < n ? ids[i] : kNoTriangle;
@@ -101,6 +203,7 @@ SceneConfig cluster_scene_defaults() {
   c.build.cost = {1.0, 0.3};
   c.build.max_leaf_size = 1;
   c.build.median_split_below = 4;  // see BuildConfig: 6% faster build, SAH cost +0.3%
+  c.cluster_group_size = 8;        // two-level build: see SceneConfig (bench/bvh_bench.cpp --groups)
   return c;
 }
 
@@ -161,34 +264,32 @@ void TriangleScene::update(std::span<const Vec3> positions) {
 
 // ---------------------------------------------------------------------------------------------
 
+std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg) {
+  check_view(mesh, clusters);
+  return rest_tree(mesh, clusters, cfg).prim_order;
+}
+
+std::vector<std::uint32_t> cluster_vertex_order(const Mesh& mesh, const ClusterView& clusters,
+                                                std::span<const std::size_t> part_offsets, const SceneConfig& cfg) {
+  std::vector<std::uint32_t> order, offsets, vertices, vertex_offsets;
+  reorder_clusters(mesh, clusters, cluster_visit_order(mesh, clusters, cfg), order, offsets, vertices, vertex_offsets);
+  return cluster_vertex_order(mesh.vertex_count(), vertex_offsets, vertices, part_offsets);
+}
+
 ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg)
-    : tris_(mesh.shared_triangles()),
-      cfg_(cfg),
-      order_(cv.triangle_order.begin(), cv.triangle_order.end()),
-      offsets_(cv.triangle_offsets.begin(), cv.triangle_offsets.end()),
-      vertices_(cv.vertices.begin(), cv.vertices.end()),
-      vertex_offsets_(cv.vertex_offsets.begin(), cv.vertex_offsets.end()) {
-  const std::size_t T = mesh.triangle_count();
-  if (offsets_.empty() || offsets_.front() != 0 || offsets_.back() != order_.size() || order_.size() != T)
-    throw std::invalid_argument("ClusterScene: the clustering's offsets/order do not cover the " + std::to_string(T) +
-                                " triangles");
-  std::vector<std::uint8_t> seen(T, 0);
-  for (std::uint32_t t : order_)
-    if (t >= T || seen[t]++) throw std::invalid_argument("ClusterScene: triangle_order is not a permutation");
-  const std::size_t C = offsets_.size() - 1;
-  if (!vertex_offsets_.empty() && (vertex_offsets_.size() != C + 1 || vertex_offsets_.back() != vertices_.size()))
-    throw std::invalid_argument("ClusterScene: vertex_offsets do not match the clusters");
-  for (std::size_t c = 0; c < C; ++c)
-    if (offsets_[c + 1] <= offsets_[c])
-      throw std::invalid_argument("ClusterScene: empty or decreasing cluster " + std::to_string(c));
-  const std::span<const Tri> tris = mesh.triangles();
-  if (vertex_offsets_.empty()) {  // no vertex lists: the corners of the cluster's triangles
-    vertices_.resize(3 * T);
-    vertex_offsets_.resize(C + 1);
-    for (std::size_t i = 0; i < T; ++i)
-      for (int k = 0; k < 3; ++k) vertices_[3 * i + k] = tris[order_[i]][k];
-    for (std::size_t c = 0; c <= C; ++c) vertex_offsets_[c] = 3 * offsets_[c];
+    : tris_(mesh.shared_triangles()), cfg_(cfg) {
+  check_view(mesh, cv);
+  // Clusters are kept in the order of the rest-pose BVH over them (cluster_visit_order): the
+  // blocks are laid out in it, and the groups of the two-level build are its subtrees.
+  {
+    const Bvh rest = rest_tree(mesh, cv, cfg_);
+    cluster_ids_ = rest.prim_order;
+    if (cfg_.cluster_group_size > 1) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
+    if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
   }
+  reorder_clusters(mesh, cv, cluster_ids_, order_, offsets_, vertices_, vertex_offsets_);
+  const std::size_t C = offsets_.size() - 1;
+  const std::span<const Tri> tris = mesh.triangles();
 
   // Within each cluster: Morton order of the rest-pose centroids in the cluster's own box (10
   // bits per axis), ties by triangle id, so that consecutive groups of four are compact blocks.
@@ -358,7 +459,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   }
 
   t0 = clock_ms(cfg_.clock);
-  build_binned_sah({boxes_, centroids_, weights_}, cfg_.build, bvh_, ws_);
+  build_binned_sah({boxes_, centroids_, weights_, group_offsets_}, cfg_.build, bvh_, ws_);
   times_.build_ms = clock_ms(cfg_.clock) - t0;
 
   // Collapse, then link: nodes [0, S) are the per-cluster trees (kept from frame to frame),

@@ -58,6 +58,11 @@ void register_bench(CLI::App& app, Context& ctx) {
   c->add_option("--cluster-leaf", a->cluster_leaf, "cluster leaves: linear (the paper's, default) or block-tree")
       ->check(CLI::IsMember({"block-tree", "linear"}))
       ->capture_default_str();
+  c->add_option("--cluster-groups", cfg.cluster_group_size,
+                "two-level cluster BVH build over fixed groups of at most N clusters (subtrees of the rest-pose "
+                "BVH); 0 = the plain build over all cluster boxes")
+      ->check(CLI::Range(0u, 1u << 20))
+      ->capture_default_str();
   c->add_option("--vertex-order", a->vertex_order,
                 "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "
                 "streams, no gather; every configuration sees the same mesh), or input: keep the file's order")

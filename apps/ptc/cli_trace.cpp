@@ -52,6 +52,10 @@ void register_trace(CLI::App& app, Context& ctx) {
       ->excludes(one);
   c->add_option("--data-dir", a->data_dir, "meshes of built-in scenes (default: $PTC_DATA_DIR or <ptc>/../data)");
   c->add_option("--clusters", a->opt.clusters, "trace a cluster BVH over the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
+  c->add_option("--cluster-groups", a->opt.cluster_group_size,
+                "with --clusters: two-level BVH build over fixed groups of at most N clusters; 0 = plain build")
+      ->check(CLI::Range(0u, 1u << 20))
+      ->capture_default_str();
   c->add_option("--width", rc.width, "image width in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
   c->add_option("--height", rc.height, "image height in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
   c->add_option("--eye", a->eye, "camera position (default: the scene's camera, else framing the whole first frame)")->check(vec3_validator());

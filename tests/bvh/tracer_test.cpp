@@ -430,7 +430,7 @@ TEST(Tracer, DoubleFallbackDecidesAnEdgeFunctionThatRoundsToZero) {
 }
 
 // The method's clusters (toolkit/clustering: growth, Acc, MaxCount = MaxSize = 50, the bench's
-// configuration) in both leaf modes, over two animated frames: ray by ray equal to brute force,
+// configuration) in both leaf modes, plain and two-level builds, over two animated frames: ray by ray equal to brute force,
 // any-hit agreeing with closest-hit on occlusion.
 TEST(Tracer, AccClustersMatchBruteForce) {
   const Mesh m = test::load_mesh("bunny00.off");
@@ -442,9 +442,12 @@ TEST(Tracer, AccClustersMatchBruteForce) {
   const Clustering cl = cluster_mesh(m, cc);
   ASSERT_GT(cl.cluster_count(), 10u);
   const Mesh moved = test::deformed(m, 0.03);
+  for (std::uint32_t group : {0u, 3u, 8u})  // plain build, and two-level builds (SceneConfig::cluster_group_size)
   for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
+    SCOPED_TRACE("cluster_group_size " + std::to_string(group));
     SceneConfig cfg = cluster_scene_defaults();
     cfg.cluster_leaf = mode;
+    cfg.cluster_group_size = group;
     ClusterScene s(m, view_of(cl), cfg);
     for (const Mesh* frame : {&m, &moved}) {
       s.update(frame->positions());
@@ -511,7 +514,8 @@ TEST(Tracer, ClusterBoxesEqualBruteForceOverTheOriginalVertices) {
           }
           want.lo[a] = next_below(lo), want.hi[a] = next_above(hi);
         }
-        ASSERT_EQ(s.boxes()[c], want) << "clustering " << which << " cluster " << c;
+        ASSERT_EQ(s.boxes()[std::find(s.cluster_ids().begin(), s.cluster_ids().end(), c) - s.cluster_ids().begin()], want)
+            << "clustering " << which << " cluster " << c;
       }
       const auto issues = validate(s.data(), m.triangle_count(), true);
       ASSERT_TRUE(issues.empty()) << test::joined(issues);
@@ -545,7 +549,7 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
   cc.max_count = 50;
   cc.max_size = 50;
   const Clustering cl = cluster_mesh(m, cc);
-  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m.vertex_count(), cl.vertex_offsets, cl.vertices);
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(cl), {}, cluster_scene_defaults());
   const Mesh rm = renumber_vertices(m, to_old);
   const Clustering rcl = renumber_vertices(cl, inverse_permutation(to_old));
   ASSERT_TRUE(validate(rcl, rm.triangles(), EdgeMap::build(rm.triangles(), rm.vertex_count())).empty());
@@ -586,14 +590,8 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
   // A clustering given without vertex lists (the scene uses the triangles' corners) takes the
   // fused pass when the mesh was renumbered over those corner lists.
   const MortonRuns runs = morton_runs(m, 37);
-  std::vector<std::uint32_t> corner_offsets{0}, corners;
-  for (std::size_t c = 0; c + 1 < runs.triangle_offsets.size(); ++c) {
-    for (std::uint32_t i = runs.triangle_offsets[c]; i < runs.triangle_offsets[c + 1]; ++i)
-      for (std::uint32_t v : m.triangles()[runs.triangle_order[i]]) corners.push_back(v);
-    corner_offsets.push_back(static_cast<std::uint32_t>(corners.size()));
-  }
-  const Mesh rr = renumber_vertices(m, cluster_vertex_order(m.vertex_count(), corner_offsets, corners));
   const ClusterView no_lists{runs.triangle_order, runs.triangle_offsets, {}, {}};
+  const Mesh rr = renumber_vertices(m, cluster_vertex_order(m, no_lists, {}, cluster_scene_defaults()));
   ClusterScene c(rr, no_lists), c_old(m, no_lists);
   EXPECT_TRUE(c.fused_vertex_pass());
   EXPECT_FALSE(c_old.fused_vertex_pass());
