@@ -6,7 +6,7 @@
 //                       [--leaves linear,block_tree] [--leaf 8] [--ct 1] [--ci 0.3]
 //                       [--isa auto|sse2|avx2] [--embree all|none] [--amplitude 0.01]
 //                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--median 4]
-//                       [--vertex-order clusters|input]
+//                       [--vertex-order clusters|input] [--groups 8]
 //
 // MESH (default: armadillo) is subdivided `levels` times (midpoint; 2 -> 832k triangles for
 // armadillo). Clusterings (comma list, made once from the rest pose):
@@ -32,6 +32,8 @@
 // --clock cpu times every stage, commit and trace with the calling thread's CPU time instead of
 // the wall clock (bvh/stage_clock.h; one thread only): on a machine shared with other jobs the
 // wall clock charges their time slices to whichever configuration was running.
+// --groups N: SceneConfig::cluster_group_size of the cluster scenes (two-level build over fixed
+// groups of at most N clusters; 0 = the plain build; default: cluster_scene_defaults()).
 // --median N: BuildConfig::median_split_below of the cluster BVHs (default: cluster_scene_defaults()).
 // --build-loop N: only the cluster build, N times over the first clustering's rest-pose boxes
 // (median, and the tree's SAH cost), then exit; a target for perf (use with --embree none).
