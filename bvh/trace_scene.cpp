@@ -284,7 +284,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   {
     const Bvh rest = rest_tree(mesh, cv, cfg_);
     cluster_ids_ = rest.prim_order;
-    if (cfg_.cluster_group_size > 1) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
+    if (cfg_.cluster_group_size > 1 && !rest.nodes.empty()) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
     if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
   }
   reorder_clusters(mesh, cv, cluster_ids_, order_, offsets_, vertices_, vertex_offsets_);

@@ -373,6 +373,16 @@ TEST(Tracer, EmptyMeshAndDegenerateRays) {
   RayBatch rays;
   HitBatch hits;
   EXPECT_EQ(trace(s1.data(), rays, hits).rays, 0u);
+  // Cluster scenes (default settings: two-level build) on no clusters and on one.
+  const std::vector<std::uint32_t> none, zero{0}, t0{0}, o01{0, 1};
+  ClusterScene ce(empty, ClusterView{none, zero, none, {}}, cluster_scene_defaults());
+  EXPECT_TRUE(validate(ce.data(), 0).empty());
+  EXPECT_FALSE(trace_ray(ce.data(), Vec3::Zero(), {1, 0, 0}).hit());
+  ClusterScene c1(one, ClusterView{t0, o01, {}, {}}, cluster_scene_defaults());
+  EXPECT_TRUE(c1.fused_vertex_pass());
+  c1.update(one.positions());
+  EXPECT_TRUE(validate(c1.data(), 1).empty());
+  EXPECT_TRUE(trace_ray(c1.data(), Vec3(0.2, 0.2, 1), {0, 0, -1}).hit());
 }
 
 TEST(Tracer, ClusterSceneRejectsBadClusterings) {
