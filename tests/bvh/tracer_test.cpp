@@ -439,17 +439,33 @@ TEST(Tracer, DoubleFallbackDecidesAnEdgeFunctionThatRoundsToZero) {
   expect_same(h, test::brute_force(m, Vec3::Zero(), Vec3::Zero(), {0, 0, 1}), "fallback");
 }
 
-// The method's clusters (toolkit/clustering: growth, Acc, MaxCount = MaxSize = 50, the bench's
-// configuration) in both leaf modes, plain and two-level builds, over two animated frames: ray by ray equal to brute force,
-// any-hit agreeing with closest-hit on occlusion.
-TEST(Tracer, AccClustersMatchBruteForce) {
-  const Mesh m = test::load_mesh("bunny00.off");
+// The bunny with two unreferenced vertices, one far away before all others and one after them.
+Mesh with_unreferenced_ends(const Mesh& base) {
+  std::vector<Vec3> p{Vec3(1e3, -1e3, 5)};
+  p.insert(p.end(), base.positions().begin(), base.positions().end());
+  p.push_back(Vec3(-1e3, 1e3, 0));
+  std::vector<Tri> t(base.triangles().begin(), base.triangles().end());
+  for (Tri& x : t)
+    for (auto& v : x) v += 1;
+  return Mesh(t, p);
+}
+
+// The bench's clustering: growth, Acc, MaxCount = MaxSize = 50.
+Clustering acc50(const Mesh& m) {
   ClusterConfig cc;
   cc.method = ClusterMethod::Growth;
   cc.objective = ObjectiveKind::Acc;
   cc.max_count = 50;
   cc.max_size = 50;
-  const Clustering cl = cluster_mesh(m, cc);
+  return cluster_mesh(m, cc);
+}
+
+// The method's clusters (toolkit/clustering: growth, Acc, MaxCount = MaxSize = 50, the bench's
+// configuration) in both leaf modes, plain and two-level builds, over two animated frames: ray by ray equal to brute force,
+// any-hit agreeing with closest-hit on occlusion.
+TEST(Tracer, AccClustersMatchBruteForce) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const Clustering cl = acc50(m);
   ASSERT_GT(cl.cluster_count(), 10u);
   const Mesh moved = test::deformed(m, 0.03);
   for (std::uint32_t group : {0u, 3u, 8u})  // plain build, and two-level builds (SceneConfig::cluster_group_size)
@@ -483,19 +499,8 @@ TEST(Tracer, AccClustersMatchBruteForce) {
 // over two frames; the traced hits stay those of brute force.
 TEST(Tracer, ClusterBoxesEqualBruteForceOverTheOriginalVertices) {
   const Mesh base = test::load_mesh("bunny00.off");
-  std::vector<Vec3> p{Vec3(1e3, -1e3, 5)};  // vertex 0: unreferenced, far away
-  p.insert(p.end(), base.positions().begin(), base.positions().end());
-  p.push_back(Vec3(-1e3, 1e3, 0));  // unreferenced, last
-  std::vector<Tri> t(base.triangles().begin(), base.triangles().end());
-  for (Tri& x : t)
-    for (auto& v : x) v += 1;
-  const Mesh m(t, p);
-  ClusterConfig cc;
-  cc.method = ClusterMethod::Growth;
-  cc.objective = ObjectiveKind::Acc;
-  cc.max_count = 50;
-  cc.max_size = 50;
-  const Clustering cl = cluster_mesh(m, cc);
+  const Mesh m = with_unreferenced_ends(base);
+  const Clustering cl = acc50(m);
   const MortonRuns runs = morton_runs(m, 37);
   std::vector<std::uint32_t> corner_offsets{0}, corners;  // the runs' implied vertex lists
   for (std::size_t c = 0; c + 1 < runs.triangle_offsets.size(); ++c) {
@@ -546,19 +551,8 @@ TEST(Tracer, ClusterBoxesEqualBruteForceOverTheOriginalVertices) {
 // mesh agrees. Unreferenced vertices (first and last) included.
 TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
   const Mesh base = test::load_mesh("bunny00.off");
-  std::vector<Vec3> p{Vec3(1e3, -1e3, 5)};
-  p.insert(p.end(), base.positions().begin(), base.positions().end());
-  p.push_back(Vec3(-1e3, 1e3, 0));
-  std::vector<Tri> t(base.triangles().begin(), base.triangles().end());
-  for (Tri& x : t)
-    for (auto& v : x) v += 1;
-  const Mesh m(t, p);
-  ClusterConfig cc;
-  cc.method = ClusterMethod::Growth;
-  cc.objective = ObjectiveKind::Acc;
-  cc.max_count = 50;
-  cc.max_size = 50;
-  const Clustering cl = cluster_mesh(m, cc);
+  const Mesh m = with_unreferenced_ends(base);
+  const Clustering cl = acc50(m);
   const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(cl), {}, cluster_scene_defaults());
   const Mesh rm = renumber_vertices(m, to_old);
   const Clustering rcl = renumber_vertices(cl, inverse_permutation(to_old));
