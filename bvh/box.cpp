@@ -290,6 +290,25 @@ void point_group_boxes(std::span<const Vec3f> fp, const GroupVertexOrder& order,
   }
 }
 
+void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_pos, const Vec3& origin) {
+  __m128 bad = _mm_setzero_ps();
+  const std::size_t n = std::min(positions.size(), frame_pos.size());
+  for (std::size_t v = 0; v < n; ++v) bad = _mm_or_ps(bad, _mm_sub_ps(load3(frame_pos[v]), load3(frame_pos[v])));
+  if (_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7) throw_not_finite(positions, origin);
+}
+
+void throw_not_finite(std::span<const Vec3> positions, const Vec3& origin) {
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    const Vec3f f = to_frame(positions[v], origin);
+    if (!(std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2])))
+      throw std::invalid_argument("vertex " + std::to_string(v) + ": position (" + std::to_string(positions[v].x()) +
+                                  ", " + std::to_string(positions[v].y()) + ", " + std::to_string(positions[v].z()) +
+                                  ") is not finite in single precision (NaN, infinite, or beyond 3.4e38 from the "
+                                  "trace frame's origin)");
+  }
+  throw std::invalid_argument("a position is not finite in single precision");
+}
+
 std::optional<GroupRuns> group_runs(const GroupVertexOrder& order) {
   const std::size_t groups = order.own_offsets.empty() ? 0 : order.own_offsets.size() - 1;
   const std::size_t V = order.to_old.size();
@@ -364,9 +383,12 @@ inline void store3(float* q, __m128 v) {
 namespace {
 
 // A group's own vertices [b, b + n): converted, stored, and their min / max (x y z .) returned.
-using OwnRangeFn = void (*)(const double* in, float* out, std::uint32_t n, const Vec3& origin, __m128& lo, __m128& hi);
+// `bad` collects x - x of every converted value: NaN in some lane iff a value is not finite.
+using OwnRangeFn = void (*)(const double* in, float* out, std::uint32_t n, const Vec3& origin, __m128& lo, __m128& hi,
+                            __m128& bad);
 
-void own_range_sse2(const double* in, float* q, std::uint32_t n, const Vec3& origin, __m128& lo, __m128& hi) {
+void own_range_sse2(const double* in, float* q, std::uint32_t n, const Vec3& origin, __m128& lo, __m128& hi,
+                    __m128& bad) {
   const __m128d oxy = _mm_setr_pd(origin.x(), origin.y()), oz = _mm_set_sd(origin.z());
   __m128 lo1 = lo, hi1 = hi;
   std::uint32_t i = 0;
@@ -375,11 +397,13 @@ void own_range_sse2(const double* in, float* q, std::uint32_t n, const Vec3& ori
     const __m128 r = convert(in + 3 * std::size_t(i) + 3, oxy, oz);
     store3(q + 3 * std::size_t(i), p), store3(q + 3 * std::size_t(i) + 3, r);
     lo = _mm_min_ps(lo, p), hi = _mm_max_ps(hi, p), lo1 = _mm_min_ps(lo1, r), hi1 = _mm_max_ps(hi1, r);
+    bad = _mm_or_ps(bad, _mm_or_ps(_mm_sub_ps(p, p), _mm_sub_ps(r, r)));
   }
   if (i < n) {
     const __m128 p = convert(in + 3 * std::size_t(i), oxy, oz);
     store3(q + 3 * std::size_t(i), p);
     lo = _mm_min_ps(lo, p), hi = _mm_max_ps(hi, p);
+    bad = _mm_or_ps(bad, _mm_sub_ps(p, p));
   }
   lo = _mm_min_ps(lo, lo1), hi = _mm_max_ps(hi, hi1);
 }
@@ -389,7 +413,7 @@ void own_range_sse2(const double* in, float* q, std::uint32_t n, const Vec3& ori
 // ends at the range's end and may overlap the previous one (same values stored again; min and
 // max are idempotent). Ranges of fewer than four take the SSE2 path. Same roundings, same bits.
 struct Rows3 {
-  __m128 la, lb, lc, ha, hb, hc;
+  __m128 la, lb, lc, ha, hb, hc, bad;
 };
 __attribute__((target("avx2"))) inline void own_step_avx2(const double* p, float* d, __m256d o0, __m256d o1, __m256d o2,
                                                            Rows3& r) {
@@ -399,19 +423,23 @@ __attribute__((target("avx2"))) inline void own_step_avx2(const double* p, float
   _mm_storeu_ps(d, a), _mm_storeu_ps(d + 4, b), _mm_storeu_ps(d + 8, c);
   r.la = _mm_min_ps(r.la, a), r.lb = _mm_min_ps(r.lb, b), r.lc = _mm_min_ps(r.lc, c);
   r.ha = _mm_max_ps(r.ha, a), r.hb = _mm_max_ps(r.hb, b), r.hc = _mm_max_ps(r.hc, c);
+  r.bad = _mm_or_ps(r.bad, _mm_or_ps(_mm_sub_ps(a, a), _mm_or_ps(_mm_sub_ps(b, b), _mm_sub_ps(c, c))));
 }
 
 __attribute__((target("avx2"))) void own_range_avx2(const double* in, float* q, std::uint32_t n, const Vec3& origin,
-                                                     __m128& lo, __m128& hi) {
-  if (n < 4) return own_range_sse2(in, q, n, origin, lo, hi);
+                                                     __m128& lo, __m128& hi, __m128& bad) {
+  if (n < 4) return own_range_sse2(in, q, n, origin, lo, hi, bad);
   const __m256d o0 = _mm256_setr_pd(origin.x(), origin.y(), origin.z(), origin.x());
   const __m256d o1 = _mm256_setr_pd(origin.y(), origin.z(), origin.x(), origin.y());
   const __m256d o2 = _mm256_setr_pd(origin.z(), origin.x(), origin.y(), origin.z());
-  Rows3 r{_mm_set1_ps(kInf), _mm_set1_ps(kInf), _mm_set1_ps(kInf), _mm_set1_ps(-kInf), _mm_set1_ps(-kInf), _mm_set1_ps(-kInf)};
+  Rows3 r{_mm_set1_ps(kInf),  _mm_set1_ps(kInf),  _mm_set1_ps(kInf), _mm_set1_ps(-kInf),
+          _mm_set1_ps(-kInf), _mm_set1_ps(-kInf), bad};
   std::uint32_t i = 0;
   for (; i + 4 < n; i += 4) own_step_avx2(in + 3 * std::size_t(i), q + 3 * std::size_t(i), o0, o1, o2, r);
   own_step_avx2(in + 3 * std::size_t(n - 4), q + 3 * std::size_t(n - 4), o0, o1, o2, r);
   lo = _mm_min_ps(lo, fold_rows(r.la, r.lb, r.lc, min_ps)), hi = _mm_max_ps(hi, fold_rows(r.ha, r.hb, r.hc, max_ps));
+  // (every lane of the rows is data: fold lane 3 into lane 0, since the caller tests lanes 0-2)
+  bad = _mm_or_ps(r.bad, _mm_shuffle_ps(r.bad, r.bad, _MM_SHUFFLE(0, 0, 0, 3)));
 }
 
 OwnRangeFn pick_own_range() {
@@ -436,6 +464,7 @@ void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& orig
   const __m128d oxy = _mm_setr_pd(origin.x(), origin.y()), oz = _mm_set_sd(origin.z());
   const Vec3* in = positions.data();
   float* base = out_pos.empty() ? nullptr : out_pos[0].data();
+  __m128 bad = _mm_setzero_ps();
   for (std::size_t g = 0; g < groups; ++g) {
     const std::uint32_t b = runs.own_begin[g], n = runs.own_count[g];
     const std::uint32_t s0 = runs.shared_offsets[g], s1 = runs.shared_offsets[g + 1];
@@ -445,7 +474,7 @@ void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& orig
       continue;
     }
     __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf), lo1 = lo, hi1 = hi;
-    if (n) own_range(in[b].data(), base + 3 * std::size_t(b), n, origin, lo, hi);
+    if (n) own_range(in[b].data(), base + 3 * std::size_t(b), n, origin, lo, hi, bad);
     // Shared vertices (owned by earlier groups) are converted again from the input rather than
     // read back from out_pos: the same bits, and no 16-byte load across the two recent stores
     // of a vertex (a failed store-to-load forwarding stalled half of this loop).
@@ -461,7 +490,12 @@ void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& orig
     centers[g] = {c[0], c[1], c[2]};
   }
   for (const auto& [a, e] : runs.gaps)
-    for (std::uint32_t v = a; v < e; ++v) store3(base + 3 * std::size_t(v), convert(in[v].data(), oxy, oz));
+    for (std::uint32_t v = a; v < e; ++v) {
+      const __m128 p = convert(in[v].data(), oxy, oz);
+      store3(base + 3 * std::size_t(v), p);
+      bad = _mm_or_ps(bad, _mm_sub_ps(p, p));
+    }
+  if (_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7) throw_not_finite(positions, origin);
 }
 
 std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangles) {

@@ -160,6 +160,13 @@ void frame_positions(std::span<const Vec3> positions, std::span<const std::uint3
 void point_group_boxes(std::span<const Vec3f> frame_pos, const GroupVertexOrder& order, std::vector<Box3f>& out,
                        std::vector<Vec3f>& centers);
 
+/// Throws std::invalid_argument naming the first vertex whose position is not finite in the
+/// trace frame (NaN, infinite, or a float overflow of p - origin) when frame_pos (the converted
+/// positions) holds such a value; otherwise returns. One pass over frame_pos.
+void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_pos, const Vec3& origin);
+/// The message of check_finite for positions known to hold such a vertex.
+[[noreturn]] void throw_not_finite(std::span<const Vec3> positions, const Vec3& origin);
+
 /// The fused per-frame pass (no gather): possible when, in first-touch order over the groups,
 /// every group's own vertices are consecutive INPUT indices (a mesh renumbered once by
 /// cluster_vertex_order below). Group g owns input vertices [own_begin[g], own_begin[g] +
@@ -190,7 +197,9 @@ struct GroupRuns {
 /// (positions.size() == runs.vertex_count <= out_pos.size(), else std::invalid_argument; entries
 /// past it are not touched), and the boxes and
 /// centres of point_group_boxes(out_pos, offsets, indices, boxes, centers), bit for bit
-/// (NaN-free positions), computed while the group's own vertices are converted.
+/// (NaN-free positions), computed while the group's own vertices are converted. A position that
+/// is not finite in the trace frame throws std::invalid_argument (check_finite's message), after
+/// the pass.
 /// The own ranges are converted four vertices at a time with AVX2 when the CPU has it and
 /// allow_avx2 is true (the SSE2 path gives the same bits; tests compare them).
 void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& origin, const GroupRuns& runs,

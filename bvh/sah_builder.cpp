@@ -38,6 +38,16 @@ struct CostAccumulator {  // sum of the tree's SAH terms (see sah_cost.h); divid
 
 double weight_of(const BuildInput& in, std::uint32_t prim) { return in.weights.empty() ? 1.0 : in.weights[prim]; }
 
+// NaN in a box or centroid (comparisons with NaN break every ordering the builders rely on):
+// std::invalid_argument naming the first such primitive.
+[[noreturn]] void throw_nan(const BuildInput& in) {
+  for (std::size_t i = 0; i < in.boxes.size(); ++i)
+    for (int a = 0; a < 3; ++a)
+      if (std::isnan(in.boxes[i].lo[a]) || std::isnan(in.boxes[i].hi[a]) || std::isnan(in.centroids[i][a]))
+        throw std::invalid_argument("BVH build: the box or centroid of primitive " + std::to_string(i) + " holds NaN");
+  throw std::invalid_argument("BVH build: a box or centroid holds NaN");
+}
+
 void check_input(const BuildInput& in, const BuildConfig& cfg) {
   assert(in.centroids.size() == in.boxes.size());
   assert(in.weights.empty() || in.weights.size() == in.boxes.size());
@@ -60,6 +70,9 @@ constexpr std::uint32_t kNone = 0xffffffffu;
 
 Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg) {
   check_input(in, cfg);
+  for (std::size_t i = 0; i < in.boxes.size(); ++i)
+    for (int a = 0; a < 3; ++a)
+      if (std::isnan(in.boxes[i].lo[a]) || std::isnan(in.boxes[i].hi[a]) || std::isnan(in.centroids[i][a])) throw_nan(in);
   Bvh bvh;
   const auto n = static_cast<std::uint32_t>(in.boxes.size());
   if (n == 0) return bvh;
@@ -167,11 +180,8 @@ struct BinnedTask {
 };
 
 constexpr std::uint32_t kMaxBins = 256;
-constexpr std::uint32_t kSweepBelow = 16;
-#ifndef PTC_TWO_SETS_FROM
-#define PTC_TWO_SETS_FROM 100000
-#endif
-constexpr std::uint32_t kTwoSetsFrom = PTC_TWO_SETS_FROM;  // nodes of at most this many primitives are swept exactly
+constexpr std::uint32_t kSweepBelow = 16;   // nodes of at most this many primitives are swept exactly
+constexpr std::uint32_t kTwoSetsFrom = 256;  // binning into two bin sets from this many primitives up (below: one)
 
 // Per axis and bin: the box as eight floats, lo x y z . and -hi x y z . (the upper bound negated,
 // so that one minimum updates both halves: one 8-wide min per axis and primitive with AVX, two
@@ -406,7 +416,7 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
   const float* bf = in.boxes.empty() ? nullptr : in.boxes[0].lo.data();
   const float* cf = in.centroids.empty() ? nullptr : in.centroids[0].data();
   const __m128 mask = xyz_mask();
-  __m128 rclo = _mm_set1_ps(kInf), rchi = _mm_set1_ps(-kInf);
+  __m128 rclo = _mm_set1_ps(kInf), rchi = _mm_set1_ps(-kInf), nan = _mm_setzero_ps();
   for (std::uint32_t i = 0; i < n; ++i) {
     const __m128 l = _mm_and_ps(_mm_loadu_ps(bf + 6 * std::size_t(i)), mask);  // lo.xyz, (hi.x cleared)
     __m128 h = _mm_loadu_ps(bf + 6 * std::size_t(i) + 2);                      // lo.z, hi.xyz
@@ -427,7 +437,9 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
     _mm_store_ps(r.c, c);
     rlo = _mm_min_ps(rlo, l), rhi = _mm_max_ps(rhi, h);
     rclo = _mm_min_ps(rclo, c), rchi = _mm_max_ps(rchi, c);
+    nan = _mm_or_ps(nan, _mm_or_ps(_mm_cmpunord_ps(l, h), _mm_cmpunord_ps(c, c)));
   }
+  if (_mm_movemask_ps(nan)) throw_nan(in);
   bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
   CostAccumulator acc;
   std::vector<BinnedTask>& stack = w.stack;

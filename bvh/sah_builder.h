@@ -22,7 +22,8 @@
 
 namespace ptc::bvh {
 
-/// Input spans (not owned; all of the same length n, except weights).
+/// Input spans (not owned; all of the same length n, except weights). A NaN in a box or a
+/// centroid makes both builders throw std::invalid_argument naming the primitive.
 struct BuildInput {
   std::span<const Box3f> boxes;
   std::span<const Vec3f> centroids;        ///< a point inside (or at the centre of) each box

@@ -19,7 +19,15 @@ namespace {
 
 std::uint32_t blocks_for(std::uint32_t triangles) { return (triangles + 3) / 4; }
 
+// A scene's rest positions and origin must be finite (they fix the trace frame, the layout and,
+// for clusters, the rest-pose tree): std::invalid_argument naming the first bad vertex.
 Vec3 default_origin(const Mesh& mesh, const SceneConfig& cfg) {
+  const auto p = mesh.positions();
+  for (std::size_t v = 0; v < p.size(); ++v)
+    if (!p[v].allFinite())
+      throw std::invalid_argument("vertex " + std::to_string(v) + ": rest position (" + std::to_string(p[v].x()) + ", " +
+                                  std::to_string(p[v].y()) + ", " + std::to_string(p[v].z()) + ") is not finite");
+  if (cfg.origin && !cfg.origin->allFinite()) throw std::invalid_argument("scene: the trace frame's origin is not finite");
   if (cfg.origin) return *cfg.origin;
   const Box3 b = mesh.bounds();
   return b.empty() ? Vec3::Zero() : b.center();
@@ -218,6 +226,7 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
   double t0 = clock_ms(cfg_.clock);
   frame_positions(positions, data_.origin, fpos_);
+  check_finite(positions, fpos_, data_.origin);  // (a NaN box would break the build)
   const auto V = static_cast<std::uint32_t>(fpos_.size());
   add_sentinel(fpos_);
   const std::span<const Vec3f> fp(fpos_.data(), V);
@@ -279,6 +288,12 @@ std::vector<std::uint32_t> cluster_vertex_order(const Mesh& mesh, const ClusterV
 ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg)
     : tris_(mesh.shared_triangles()), cfg_(cfg) {
   check_view(mesh, cv);
+  data_.origin = default_origin(mesh, cfg);  // (checks the rest positions)
+  {
+    std::vector<Vec3f> rest;  // and that they stay finite in single precision in the trace frame
+    frame_positions(mesh.positions(), data_.origin, rest);
+    check_finite(mesh.positions(), rest, data_.origin);
+  }
   // Clusters are kept in the order of the rest-pose BVH over them (cluster_visit_order): the
   // blocks are laid out in it, and the groups of the two-level build are its subtrees.
   {
@@ -450,6 +465,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     times_.boxes_ms = clock_ms(cfg_.clock) - t0;
   } else {
     frame_positions(positions, vorder_.to_old, data_.origin, fpos_);
+    check_finite(positions, fpos_, data_.origin);  // (a NaN box would break the build)
     add_sentinel(fpos_);
     const std::span<const Vec3f> fp(fpos_.data(), V);
     times_.vertices_ms = clock_ms(cfg_.clock) - t0;

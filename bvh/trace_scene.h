@@ -186,6 +186,8 @@ class ClusterScene {
   [[nodiscard]] const std::vector<std::uint32_t>& cluster_ids() const { return cluster_ids_; }
   [[nodiscard]] const std::vector<Box3f>& boxes() const { return boxes_; }
   [[nodiscard]] const std::vector<std::uint32_t>& weights() const { return weights_; }
+  /// The two-level build's groups (BuildInput::groups, in scene cluster order); empty: plain build.
+  [[nodiscard]] const std::vector<std::uint32_t>& group_offsets() const { return group_offsets_; }
   [[nodiscard]] const StageTimes& times() const { return times_; }
   [[nodiscard]] std::size_t subtree_nodes() const { return sub_nodes_.size(); }
   /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <span>
 #include <stdexcept>
@@ -331,6 +332,15 @@ TEST(Box, FusedPassOnRenumberedVerticesEqualsBruteForce) {
     }
     std::vector<Vec3f> fp2(V + 2), c2;
     std::vector<Box3f> b2;
+    // A position that is not finite in the frame (any vertex, grouped or not): refused on both paths.
+    for (const bool avx2 : {true, false}) {
+      std::vector<Vec3> bad = pos_new;
+      bad[g() % V] = Vec3(0, std::nan(""), 0);
+      EXPECT_THROW(frame_positions_and_boxes(bad, origin, *runs, fp2, b2, c2, avx2), std::invalid_argument);
+      bad = pos_new;
+      bad[V - 1] = Vec3(-std::numeric_limits<double>::infinity(), 0, 0);
+      EXPECT_THROW(frame_positions_and_boxes(bad, origin, *runs, fp2, b2, c2, avx2), std::invalid_argument);
+    }
     EXPECT_THROW(frame_positions_and_boxes(std::span<const Vec3>(pos_new).first(V - 1), origin, *runs, fp2, b2, c2),
                  std::invalid_argument);
     EXPECT_THROW(frame_positions_and_boxes(pos_new, origin, *runs, std::span<Vec3f>(fp2).first(V - 1), b2, c2),

@@ -461,5 +461,33 @@ TEST(SahBuilder, GroupedBuild) {
     EXPECT_THROW((void)build_binned_sah({boxes, centers, weights, *bad}, cfg), std::invalid_argument);
 }
 
+
+// NaN in a box or a centroid (a NaN position upstream): both builders refuse it, naming the
+// primitive, instead of building a broken tree (ranks by a NaN centroid are not an order).
+TEST(SahBuilder, NanBoxesAndCentroidsAreRefused) {
+  const auto boxes = test::random_boxes(43, 3);
+  const auto c = box_centers(boxes);
+  BuildConfig cfg;
+  cfg.max_leaf_size = 1;
+  for (int what = 0; what < 3; ++what) {
+    auto b2 = boxes;
+    auto c2 = c;
+    const float nan = std::nanf("");
+    if (what == 0) b2[17].lo[1] = nan;
+    if (what == 1) b2[17].hi[2] = nan;
+    if (what == 2) c2[17][0] = nan;
+    for (const Named& b : kBuilders) {
+      try {
+        (void)b.fn({b2, c2, {}}, cfg);
+        ADD_FAILURE() << b.name << " accepted NaN (" << what << ")";
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("primitive 17"), std::string::npos) << e.what();
+      }
+    }
+    std::vector<std::uint32_t> groups{0, 20, 43};
+    EXPECT_THROW((void)build_binned_sah({b2, c2, {}, groups}, cfg), std::invalid_argument);
+  }
+}
+
 }  // namespace
 }  // namespace ptc::bvh

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <memory>
 #include <random>
 #include <variant>
@@ -601,6 +602,65 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
   EXPECT_FALSE(c_old.fused_vertex_pass());
   EXPECT_EQ(c.boxes(), c_old.boxes());
   EXPECT_THROW(c.update(base.positions()), std::invalid_argument);  // wrong vertex count
+}
+
+
+// Positions that are not finite in the float trace frame (NaN, infinity, or beyond float range
+// from the origin) are refused with the vertex named, at construction and per frame, by both
+// scene kinds, in the fused and the gathering cluster paths and on both instruction sets;
+// a referenced or an unreferenced vertex alike. The scene stays usable with good positions.
+TEST(Tracer, NonFinitePositionsAreRefusedNamingTheVertex) {
+  const Mesh base = test::load_mesh("bunny00.off");
+  const Mesh m = with_unreferenced_ends(base);
+  const Clustering cl = acc50(m);
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(cl), {}, cluster_scene_defaults());
+  const Mesh rm = renumber_vertices(m, to_old);
+  const Clustering rcl = renumber_vertices(cl, inverse_permutation(to_old));
+  auto expect_names = [](auto&& fn, std::size_t v, const std::string& what) {
+    try {
+      fn();
+      ADD_FAILURE() << what << ": accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex " + std::to_string(v) + ":"), std::string::npos)
+          << what << ": " << e.what();
+    }
+  };
+  const double nan = std::nan("");
+  for (const Vec3& bad : {Vec3(nan, 0, 0), Vec3(0, std::numeric_limits<double>::infinity(), 0), Vec3(0, 0, 1e39)}) {
+    for (const std::size_t v : {std::size_t(0), std::size_t(500), m.vertex_count() - 1}) {  // unreferenced, used, unreferenced
+      const std::string what = "vertex " + std::to_string(v) + " = " + std::to_string(bad.x()) + "," +
+                               std::to_string(bad.y()) + "," + std::to_string(bad.z());
+      std::vector<Vec3> p(m.positions().begin(), m.positions().end());
+      p[v] = bad;
+      if (bad.allFinite()) {
+        // finite in double: the float frame overflows. At construction the frame's origin (the
+        // bounds' centre) moves out with the vertex, so every vertex overflows and the first one is named.
+        try {
+          ClusterScene s(m.with_positions(p), view_of(cl), cluster_scene_defaults());
+          ADD_FAILURE() << what << ": accepted";
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find("not finite in single precision"), std::string::npos) << e.what();
+        }
+      } else {
+        expect_names([&] { TriangleScene s(m.with_positions(p)); }, v, what + " triangle ctor");
+        expect_names([&] { ClusterScene s(m.with_positions(p), view_of(cl), cluster_scene_defaults()); }, v,
+                     what + " cluster ctor");
+      }
+      TriangleScene ts(m);
+      expect_names([&] { ts.update(p); }, v, what + " triangle update");
+      ClusterScene gather(m, view_of(cl), cluster_scene_defaults());
+      ASSERT_FALSE(gather.fused_vertex_pass());
+      expect_names([&] { gather.update(p); }, v, what + " gathering update");
+      ClusterScene fused(rm, view_of(rcl), cluster_scene_defaults());
+      ASSERT_TRUE(fused.fused_vertex_pass());
+      std::vector<Vec3> rp(m.vertex_count());
+      for (std::size_t i = 0; i < rp.size(); ++i) rp[i] = p[to_old[i]];
+      const std::size_t rv = inverse_permutation(to_old)[v];
+      expect_names([&] { fused.update(rp); }, rv, what + " fused update");
+      fused.update(rm.positions());  // still usable
+      EXPECT_TRUE(validate(fused.data(), rm.triangle_count()).empty());
+    }
+  }
 }
 
 }  // namespace
