@@ -461,6 +461,22 @@ Clustering acc50(const Mesh& m) {
   return cluster_mesh(m, cc);
 }
 
+// The bench's clustering of a mesh, and the mesh and clustering renumbered in its vertex order
+// (cluster_vertex_order with the default cluster scene settings).
+struct Renumbered {
+  explicit Renumbered(Mesh mesh)
+      : m(std::move(mesh)),
+        cl(acc50(m)),
+        to_old(cluster_vertex_order(m, view_of(cl), {}, cluster_scene_defaults())),
+        rm(renumber_vertices(m, to_old)),
+        rcl(renumber_vertices(cl, inverse_permutation(to_old))) {}
+  Mesh m;
+  Clustering cl;
+  std::vector<std::uint32_t> to_old;
+  Mesh rm;
+  Clustering rcl;
+};
+
 // The method's clusters (toolkit/clustering: growth, Acc, MaxCount = MaxSize = 50, the bench's
 // configuration) in both leaf modes, plain and two-level builds, over two animated frames: ray by ray equal to brute force,
 // any-hit agreeing with closest-hit on occlusion.
@@ -552,11 +568,8 @@ TEST(Tracer, ClusterBoxesEqualBruteForceOverTheOriginalVertices) {
 // mesh agrees. Unreferenced vertices (first and last) included.
 TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
   const Mesh base = test::load_mesh("bunny00.off");
-  const Mesh m = with_unreferenced_ends(base);
-  const Clustering cl = acc50(m);
-  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(cl), {}, cluster_scene_defaults());
-  const Mesh rm = renumber_vertices(m, to_old);
-  const Clustering rcl = renumber_vertices(cl, inverse_permutation(to_old));
+  const Renumbered r(with_unreferenced_ends(base));
+  const auto& [m, cl, to_old, rm, rcl] = r;
   ASSERT_TRUE(validate(rcl, rm.triangles(), EdgeMap::build(rm.triangles(), rm.vertex_count())).empty());
   const Mesh moved = test::deformed(m, 0.04);
   std::vector<Vec3> rmoved(m.vertex_count());
@@ -611,11 +624,8 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
 // a referenced or an unreferenced vertex alike. The scene stays usable with good positions.
 TEST(Tracer, NonFinitePositionsAreRefusedNamingTheVertex) {
   const Mesh base = test::load_mesh("bunny00.off");
-  const Mesh m = with_unreferenced_ends(base);
-  const Clustering cl = acc50(m);
-  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(cl), {}, cluster_scene_defaults());
-  const Mesh rm = renumber_vertices(m, to_old);
-  const Clustering rcl = renumber_vertices(cl, inverse_permutation(to_old));
+  const Renumbered r(with_unreferenced_ends(base));
+  const auto& [m, cl, to_old, rm, rcl] = r;
   auto expect_names = [](auto&& fn, std::size_t v, const std::string& what) {
     try {
       fn();
