@@ -58,14 +58,6 @@ const BenchSummary* find(const std::vector<BenchSummary>& s, const std::string& 
 
 const char* kEmbree[3] = {"embree_medium", "embree_low", "embree_refit"};
 
-bvh::SceneConfig cluster_config(const PeerBenchConfig& cfg, const Vec3& origin) {
-  bvh::SceneConfig c = bvh::cluster_scene_defaults();
-  c.origin = origin;
-  c.cluster_leaf = cfg.cluster_leaf;
-  c.cluster_group_size = cfg.cluster_group_size;
-  return c;
-}
-
 }  // namespace
 
 const std::vector<std::string>& peer_bench_configs() {
@@ -132,6 +124,15 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
   }
   res.clusters = clusters->cluster_count();
 
+  // One trace frame and one cluster-scene configuration for everything below (the rest bounds do
+  // not change with the vertex numbering).
+  const Box3 rest_bounds = mesh.bounds();
+  const Vec3 origin = rest_bounds.center();
+  bvh::SceneConfig ccfg = bvh::cluster_scene_defaults();
+  ccfg.origin = origin;
+  ccfg.cluster_leaf = cfg.cluster_leaf;
+  ccfg.cluster_group_size = cfg.cluster_group_size;
+
   // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
   // are consecutive; the frame source renumbers its own data (or gathers, which it then says).
   Mesh renumbered;
@@ -143,7 +144,7 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
       throw std::invalid_argument("cluster_vertex_order with scene positions needs renumber_positions");
     const auto t1 = Clock::now();
     const std::vector<std::uint32_t> to_old =
-        bvh::cluster_vertex_order(mesh, bvh::view_of(*clusters), cfg.part_offsets, cluster_config(cfg, mesh.bounds().center()));
+        bvh::cluster_vertex_order(mesh, bvh::view_of(*clusters), cfg.part_offsets, ccfg);
     renumbered = renumber_vertices(mesh, to_old);
     renumbered_clusters = renumber_vertices(*clusters, inverse_permutation(to_old));
     if (cfg.positions) cfg.renumber_positions(to_old);  // (may change `mesh`, a caller's scene rest)
@@ -153,8 +154,6 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
   }
   const Mesh& mesh_b = *bm;
 
-  const Box3 rest_bounds = mesh_b.bounds();
-  const Vec3 origin = rest_bounds.center();
   const bvh::PinholeCamera cam = make_camera(cfg.camera, rest_bounds, cfg.width, cfg.height);
   const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
   res.rays = rays.size();
@@ -162,7 +161,7 @@ PeerBenchResult run_peer_bench(const Mesh& mesh, const Clustering* clusters, con
   bvh::TraceOptions opt;
   opt.threads = cfg.threads;
   opt.counters = false;
-  bvh::SceneConfig tcfg = bvh::triangle_scene_defaults(), ccfg = cluster_config(cfg, origin);
+  bvh::SceneConfig tcfg = bvh::triangle_scene_defaults();
   tcfg.origin = origin;
   auto ts = std::make_shared<bvh::TriangleScene>(mesh_b, tcfg);
   const auto t0 = Clock::now();

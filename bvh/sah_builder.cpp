@@ -39,13 +39,13 @@ struct CostAccumulator {  // sum of the tree's SAH terms (see sah_cost.h); divid
 double weight_of(const BuildInput& in, std::uint32_t prim) { return in.weights.empty() ? 1.0 : in.weights[prim]; }
 
 // NaN in a box or centroid (comparisons with NaN break every ordering the builders rely on):
-// std::invalid_argument naming the first such primitive.
-[[noreturn]] void throw_nan(const BuildInput& in) {
+// std::invalid_argument naming the first such primitive. (The binned builder calls it only when
+// its record pass saw a NaN.)
+void check_no_nan(const BuildInput& in) {
   for (std::size_t i = 0; i < in.boxes.size(); ++i)
     for (int a = 0; a < 3; ++a)
       if (std::isnan(in.boxes[i].lo[a]) || std::isnan(in.boxes[i].hi[a]) || std::isnan(in.centroids[i][a]))
         throw std::invalid_argument("BVH build: the box or centroid of primitive " + std::to_string(i) + " holds NaN");
-  throw std::invalid_argument("BVH build: a box or centroid holds NaN");
 }
 
 void check_input(const BuildInput& in, const BuildConfig& cfg) {
@@ -70,9 +70,7 @@ constexpr std::uint32_t kNone = 0xffffffffu;
 
 Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg) {
   check_input(in, cfg);
-  for (std::size_t i = 0; i < in.boxes.size(); ++i)
-    for (int a = 0; a < 3; ++a)
-      if (std::isnan(in.boxes[i].lo[a]) || std::isnan(in.boxes[i].hi[a]) || std::isnan(in.centroids[i][a])) throw_nan(in);
+  check_no_nan(in);
   Bvh bvh;
   const auto n = static_cast<std::uint32_t>(in.boxes.size());
   if (n == 0) return bvh;
@@ -439,7 +437,7 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
     rclo = _mm_min_ps(rclo, c), rchi = _mm_max_ps(rchi, c);
     nan = _mm_or_ps(nan, _mm_or_ps(_mm_cmpunord_ps(l, h), _mm_cmpunord_ps(c, c)));
   }
-  if (_mm_movemask_ps(nan)) throw_nan(in);
+  if (_mm_movemask_ps(nan)) check_no_nan(in);
   bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
   CostAccumulator acc;
   std::vector<BinnedTask>& stack = w.stack;

@@ -68,7 +68,7 @@ struct BuildConfig {
 /// leaf cost is below the lower bound traversal + intersection * sum_p A(p) w(p) / A(node) of
 /// every split becomes a leaf without evaluating splits (the same decision, sooner).
 /// Sequential, O(n log n); on one core here about 0.11 s for 832k triangles and 3.6 ms for
-/// 27.6k clusters, 1.9 ms with BuildInput::groups of at most 8 clusters (bench/bvh_bench.cpp,
+/// 27.6k clusters, 1.75 ms with ClusterScene's groups of at most 8 clusters (bench/bvh_bench.cpp,
 /// --build-loop for the build alone). The binning loop has
 /// an AVX2 variant chosen at runtime (BuildConfig::allow_avx2); the tree does not depend on it.
 [[nodiscard]] Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg = {});

@@ -114,7 +114,7 @@ void check_view(const Mesh& mesh, const ClusterView& cv) {
 // corners, in the scene's frame; the scene's build settings, plain build): its primitive order
 // is the order in which the scene keeps the clusters, and its subtrees of at most
 // cluster_group_size clusters are the groups of the two-level build. A checked view.
-Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg) {
+Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, const Vec3& origin) {
   const std::size_t C = cv.triangle_offsets.size() - 1;
   std::vector<std::uint32_t> offs, idx;
   std::span<const std::uint32_t> o = cv.vertex_offsets, v = cv.vertices;
@@ -131,7 +131,7 @@ Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg) {
   for (std::uint32_t x : v)
     if (x >= mesh.vertex_count())
       throw std::invalid_argument("ClusterScene: vertex " + std::to_string(x) + " of a cluster's list is not in the mesh");
-  const std::vector<Box3f> boxes = point_group_boxes(mesh.positions(), o, v, default_origin(mesh, cfg));
+  const std::vector<Box3f> boxes = point_group_boxes(mesh.positions(), o, v, origin);
   const std::vector<Vec3f> centres = box_centers(boxes);
   std::vector<std::uint32_t> weights(C);
   for (std::size_t c = 0; c < C; ++c) weights[c] = cv.triangle_offsets[c + 1] - cv.triangle_offsets[c];
@@ -275,7 +275,7 @@ void TriangleScene::update(std::span<const Vec3> positions) {
 
 std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg) {
   check_view(mesh, clusters);
-  return rest_tree(mesh, clusters, cfg).prim_order;
+  return rest_tree(mesh, clusters, cfg, default_origin(mesh, cfg)).prim_order;
 }
 
 std::vector<std::uint32_t> cluster_vertex_order(const Mesh& mesh, const ClusterView& clusters,
@@ -289,15 +289,14 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
     : tris_(mesh.shared_triangles()), cfg_(cfg) {
   check_view(mesh, cv);
   data_.origin = default_origin(mesh, cfg);  // (checks the rest positions)
-  {
-    std::vector<Vec3f> rest;  // and that they stay finite in single precision in the trace frame
-    frame_positions(mesh.positions(), data_.origin, rest);
-    check_finite(mesh.positions(), rest, data_.origin);
-  }
+  // The rest pose in the trace frame: finite in single precision (checked), and the BlockTree
+  // layout's input below.
+  frame_positions(mesh.positions(), data_.origin, fpos_);
+  check_finite(mesh.positions(), fpos_, data_.origin);
   // Clusters are kept in the order of the rest-pose BVH over them (cluster_visit_order): the
   // blocks are laid out in it, and the groups of the two-level build are its subtrees.
   {
-    const Bvh rest = rest_tree(mesh, cv, cfg_);
+    const Bvh rest = rest_tree(mesh, cv, cfg_, data_.origin);
     cluster_ids_ = rest.prim_order;
     if (cfg_.cluster_group_size > 1 && !rest.nodes.empty()) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
     if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
@@ -336,7 +335,6 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
 
   weights_.resize(C);
   for (std::size_t c = 0; c < C; ++c) weights_[c] = offsets_[c + 1] - offsets_[c];
-  data_.origin = default_origin(mesh, cfg);
   cluster_ranges_.resize(C);
   sub_root_.assign(C, kNoTriangle);
   std::vector<std::uint32_t> lane_ids;  // triangle id per block lane (kNoTriangle: padding)
@@ -350,7 +348,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   } else {
     // BlockTree: per cluster a binned SAH tree over its rest-pose triangles, leaves of at most 4
     // triangles = one block each, collapsed to 4-wide; blocks in leaf order; topology kept.
-    frame_positions(pos, data_.origin, fpos_);
+    // (fpos_ holds the rest pose in the trace frame, converted above.)
     BuildConfig sub;
     sub.max_leaf_size = 4;
     sub.cost = cfg_.build.cost;
