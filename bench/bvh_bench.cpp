@@ -18,7 +18,7 @@
 // cluster scene converts positions and computes boxes in one pass (stage 2; stage 1 is 0);
 // input keeps the file's order and the cluster scenes gather (stage 1) before the boxes.
 // Each clustering is traced with one cluster per leaf, tested linearly (the paper) or through a
-// refitted block tree per cluster (see bvh/trace_scene.h).
+// refitted block tree per cluster (see bvh/cluster_scene.h).
 // Frames: repetition r animates the rest pose by a smooth non-rigid deformation of amplitude
 // --amplitude * r (of the bounding box size), so Embree's refit and our rebuilds see real motion.
 // Every configuration updates to frame r, then traces the same size x size primary rays
@@ -38,7 +38,7 @@
 // --build-loop N: only the cluster build, N times over the first clustering's rest-pose boxes
 // (median, and the tree's SAH cost), then exit; a target for perf (use with --embree none).
 // --out DIR writes DIR/bvh_bench.csv (one row per frame and configuration) and
-// DIR/manifest.json (analysis/manifest.h).
+// DIR/manifest.json (analysis/schema/manifest.h).
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -54,14 +54,15 @@
 #include <string>
 #include <vector>
 
-#include "analysis/csv.h"
-#include "analysis/manifest.h"
-#include "analysis/output_dir.h"
+#include "analysis/schema/csv.h"
+#include "analysis/schema/manifest.h"
+#include "commands/output_dir.h"
 #include "bvh/camera.h"
 #include "bvh/embree_peer.h"
 #include "bvh/morton_runs.h"
 #include "bvh/trace_scene.h"
 #include "bvh/tracer.h"
+#include "bvh/vertex_order.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/meshopt.h"
 #include "toolkit/io/mesh_io.h"

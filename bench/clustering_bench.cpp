@@ -43,9 +43,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/csv.h"
-#include "analysis/manifest.h"
-#include "analysis/output_dir.h"
+#include "analysis/schema/csv.h"
+#include "analysis/schema/manifest.h"
+#include "commands/output_dir.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/clustering.h"
 #include "toolkit/clustering/contraction.h"

@@ -1,26 +1,29 @@
-// The issue-5 side-by-side benchmark as a stand-alone program: a thin wrapper over
-// analysis/peer_bench.h (the same code as `ptc bench`), with the issue's target setup as its
+// The side-by-side benchmark of `ptc bench` as a stand-alone program (the same code:
+// analysis/experiments/bench.h over the one frame loop), with the issue's target setup as its
 // default: armadillo subdivided twice (832k triangles), 1024 x 1024 primary rays, ONE thread,
-// growth/Acc clusters with MaxCount = MaxSize = 50, 8 twisted frames (frame 0 out of the medians).
+// growth/Acc clusters with MaxCount = MaxSize = 50, frames 0..7 of the built-in scenes' twist
+// deformer (frame 0 out of the medians).
 //
 //   build/bin/peer_bench [MESH] [--levels 2] [--frames 8] [--size 1024] [--threads 1]
-//                        [--max-count 50] [--deform twist|wave|none] [--linear] [--csv FILE]
+//                        [--max-count 50] [--deform twist|bend|wave|rigid|explode] [--csv FILE]
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iostream>
 #include <string>
 
-#include "analysis/peer_bench.h"
+#include "analysis/experiments/bench.h"
+#include "toolkit/anim/deformers.h"
+#include "toolkit/anim/static_source.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/subdivision.h"
 
 int main(int argc, char** argv) {
   using namespace ptc;
   std::string mesh_path = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off", csv;
-  int levels = 2;
+  int levels = 2, frames = 8;
+  DeformKind kind = DeformKind::Twist;
   PeerBenchConfig cfg;
-  cfg.frames = 8;
   for (int i = 1; i < argc; ++i) {
     auto value = [&](const char* what) -> std::string {
       if (i + 1 >= argc) {
@@ -32,16 +35,15 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     try {
       if (a == "--levels") levels = std::stoi(value("--levels"));
-      else if (a == "--frames") cfg.frames = std::stoi(value("--frames"));
+      else if (a == "--frames") frames = std::stoi(value("--frames"));
       else if (a == "--size") cfg.width = cfg.height = std::stoi(value("--size"));
       else if (a == "--threads") cfg.threads = static_cast<unsigned>(std::stoi(value("--threads")));
       else if (a == "--max-count") cfg.max_count = static_cast<std::uint32_t>(std::stoul(value("--max-count")));
-      else if (a == "--linear") cfg.cluster_leaf = bvh::ClusterLeaf::Linear;
       else if (a == "--csv") csv = value("--csv");
       else if (a == "--deform") {
-        const auto d = parse_deformation(value("--deform"));
-        if (!d) throw std::invalid_argument("--deform: twist, wave or none");
-        cfg.deformation = *d;
+        const auto d = parse_deform_kind(value("--deform"));
+        if (!d) throw std::invalid_argument("--deform: twist, bend, wave, rigid or explode");
+        kind = *d;
       } else if (a[0] != '-') mesh_path = a;
       else throw std::invalid_argument("unknown option " + a);
     } catch (const std::exception& e) {
@@ -49,21 +51,25 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (levels < 0 || levels > 6 || cfg.threads < 1) {
-    std::cerr << "peer_bench: --levels 0..6, --threads >= 1\n";
+  if (levels < 0 || levels > 6 || cfg.threads < 1 || frames < 1) {
+    std::cerr << "peer_bench: --levels 0..6, --threads >= 1, --frames >= 1\n";
     return 2;
   }
   try {
     Mesh mesh = read_mesh(mesh_path).mesh;
     if (levels > 0) mesh = subdivide(mesh, SubdivisionScheme::Midpoint, levels);
-    const PeerBenchResult r = run_peer_bench(mesh, nullptr, cfg);
+    std::vector<ScenePart> parts;
+    parts.push_back({"mesh", make_deformer(std::move(mesh), deform_preset(kind))});
+    Scene scene("peer_bench", std::move(parts), std::nullopt, std::nullopt, FrameRange{0, frames - 1});
+    cfg.frames = {0, frames - 1};
+    const PeerBenchResult r = run_peer_bench(scene, nullptr, cfg);
     std::printf("%s, %d midpoint subdivision levels: %zu triangles; %zu clusters (%s, clustered in %.0f ms, cluster "
-                "scene setup %.1f ms); %d frames of %s; %u thread(s); cluster leaves %s\n",
+                "scene setup %.1f ms); %d frames of the %s deformer; %u thread(s); cluster leaves %s\n",
                 mesh_path.c_str(), levels, r.triangles, r.clusters, r.clustering.c_str(), r.cluster_ms,
-                r.cluster_scene_setup_ms, cfg.frames, to_string(cfg.deformation), cfg.threads,
+                r.cluster_scene_setup_ms, frames, std::string(to_string(kind)).c_str(), cfg.threads,
                 bvh::to_string(cfg.cluster_leaf));
-    std::fputs(bench_table(r).c_str(), stdout);
-    if (!csv.empty()) std::ofstream(csv) << bench_csv(r).str();
+    std::fputs(bench_text(r).c_str(), stdout);
+    if (!csv.empty()) std::ofstream(csv) << bench_table(r).csv.str();
   } catch (const std::exception& e) {
     std::cerr << "peer_bench: " << e.what() << "\n";
     return 1;

@@ -1,6 +1,6 @@
 // Per-sphere time of every bounding-sphere method on cluster-like point sets of a real mesh:
 // armadillo's triangles in Morton order cut into runs of 64-128 (the same point sets as
-// `ptc spheres`, see analysis/sphere_report.h). Each benchmark also reports the radius error
+// `ptc spheres`, see analysis/metrics/sphere_accuracy.h). Each benchmark also reports the radius error
 // against the exact minimal sphere over all point sets (counters rel_err_mean / rel_err_max,
 // (r - r_exact) / r_exact) and how many spheres miss a point (not_containing, must be 0).
 //
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/sphere_report.h"
+#include "analysis/metrics/sphere_accuracy.h"
 #include "toolkit/io/mesh_io.h"
 
 namespace {

@@ -31,7 +31,7 @@ static_assert(sizeof(BvhNode) == 32);
 /// with A the box surface area and W the summed primitive weight (1 per triangle; the triangle
 /// count of a cluster when the primitives are clusters, so that a leaf of clusters costs the sum
 /// of their triangles, as the rays test them linearly). Unitless: only the ratio matters. The
-/// defaults (1, 1) are the textbook choice; the tracer's scenes use (1, 0.3) (trace_scene.h):
+/// defaults (1, 1) are the textbook choice; the tracer's scenes use (1, 0.3) (scene_config.h):
 /// one 4-wide node test costs about as much as testing a block of four triangles, i.e. about
 /// three triangle tests' worth per triangle (measured on armadillo x2: 10-15% faster tracing
 /// than (1, 1), and bigger leaves make the build faster).

@@ -40,7 +40,7 @@ struct alignas(64) WideNode {
 static_assert(sizeof(WideNode) == 128);
 
 /// Nodes (an empty tree has none) and the root's index; collapse_to_wide puts the root first and
-/// children after parents (a ClusterScene appends per-cluster subtrees, see trace_scene.h).
+/// children after parents (a ClusterScene appends per-cluster subtrees, see cluster_scene.h).
 /// `depth`: the number of wide levels (the traversal stack needs at most 3 * depth + 1 entries).
 struct WideBvh {
   AlignedVector<WideNode> nodes;

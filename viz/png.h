@@ -1,4 +1,4 @@
-// PNG files of RgbImage buffers (analysis/images.h) through VTK's vtkPNGWriter / vtkPNGReader.
+// PNG files of RgbImage buffers (render/images.h) through VTK's vtkPNGWriter / vtkPNGReader.
 // VTK is used only inside viz/png.cpp: no rendering window, only the image I/O module.
 //
 // Orientation: an RgbImage's row 0 is the top of the picture (the first PNG scanline); VTK
@@ -7,7 +7,7 @@
 
 #include <filesystem>
 
-#include "analysis/images.h"
+#include "render/images.h"
 
 namespace ptc::viz {
 

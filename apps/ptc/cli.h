@@ -11,13 +11,12 @@
 
 #include <CLI/CLI.hpp>
 
+#include "toolkit/core/error.h"
+
 namespace ptc::cli {
 
-/// A usage mistake found after parsing (e.g. two options that contradict each other): the
-/// command prints it and exits with code 2, like a parse error.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+/// Usage mistakes found after parsing are ptc::UsageError (toolkit/core/error.h): exit code 2.
+using ptc::UsageError;
 
 /// What every subcommand shares: the raw argv (recorded in manifests), the --threads value, and
 /// the list of registered subcommands with the function that runs each.

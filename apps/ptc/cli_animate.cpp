@@ -1,4 +1,4 @@
-#include "analysis/cmd_animate.h"
+#include "commands/animate.h"
 #include "apps/ptc/cli.h"
 
 #include <iostream>
@@ -28,6 +28,7 @@ void register_animate(CLI::App& app, Context& ctx) {
                 "built-in scene name ('ptc scenes'), scene file (.json), mesh or animated asset file, or directory of frames")
       ->required();
   a->frames_opt = c->add_option("--frames", a->frames, "inclusive frame range A:B (default: the scene's range)");
+  c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
   c->add_option("--out", a->opt.out_dir, "output directory (written whole or not at all)")->required();
   c->add_option("--format", a->format, "frame file format: ply (binary) or obj")
       ->check(CLI::IsMember({"ply", "obj"}))

@@ -1,8 +1,8 @@
 // `ptc bench SCENE [--clusters DIR | --max-count N] [--frames N|A:B] [--data-dir DIR] [--width W --height H]
-// [--threads T] [--deform twist|wave|none] [--vertex-order clusters|input] --out DIR` (analysis/peer_bench.h).
+// [--threads T] [--deform twist|wave|none] [--vertex-order clusters|input] --out DIR` (analysis/experiments/bench.h).
 #include <iostream>
 
-#include "analysis/trace_command.h"
+#include "commands/bench.h"
 #include "apps/ptc/cli.h"
 
 namespace ptc::cli {
@@ -10,7 +10,7 @@ namespace ptc::cli {
 namespace {
 struct BenchArgs {
   BenchCommandOptions opt;
-  std::string deform = "twist", cluster_leaf = "linear", frames, data_dir, vertex_order = "clusters";
+  std::string deform, cluster_leaf = "linear", frames, data_dir, vertex_order = "clusters";
   CLI::App* app = nullptr;
   int threads = 1;
 };
@@ -23,12 +23,11 @@ void register_bench(CLI::App& app, Context& ctx) {
                     "our triangle and cluster BVHs beside Embree MEDIUM/LOW/REFIT over animated frames, same rays",
                     [a, &ctx] {
                       auto& o = a->opt;
-                      o.config.deformation = *parse_deformation(a->deform);
+                      if (a->app->count("--deform")) o.deform = a->deform;
                       o.config.cluster_leaf =
                           a->cluster_leaf == "linear" ? bvh::ClusterLeaf::Linear : bvh::ClusterLeaf::BlockTree;
                       o.config.threads = static_cast<unsigned>(a->threads);
                       o.config.cluster_vertex_order = a->vertex_order == "clusters";
-                      o.deform_given = a->app->count("--deform") > 0;
                       if (a->app->count("--frames")) o.frames = a->frames;
                       if (!a->data_dir.empty()) o.scene_options.data_dir = a->data_dir;
                       o.argv = ctx.args;
@@ -45,16 +44,18 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->excludes(cl)
       ->capture_default_str();
   c->add_option("--frames", a->frames,
-                "A:B = scene frames A..B; N = N frames from the scene's first (default: an animated scene's range, "
-                "else 5 frames of --deform); the first is left out of the medians");
+                "scene frames A:B (default: an animated scene's range, else 0:4 of --deform); the first is left "
+                "out of the medians");
+  c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
   c->add_option("--width", cfg.width, "primary rays per image row")->check(CLI::Range(1, 16384))->capture_default_str();
   c->add_option("--height", cfg.height, "image rows")->check(CLI::Range(1, 16384))->capture_default_str();
   c->add_option("--threads", a->threads, "threads of our builder and tracer and of Embree's device (default 1)")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
-  c->add_option("--deform", a->deform, "stand-in deformation of a static scene (mesh file): twist, wave or none")
-      ->check(CLI::IsMember({"twist", "wave", "none"}))
-      ->capture_default_str();
+  c->add_option("--deform", a->deform,
+                "stand-in motion of a static scene (mesh file): twist (default), bend, wave, rigid, explode (the "
+                "built-in scenes' deformers) or none")
+      ->check(CLI::IsMember({"twist", "bend", "wave", "rigid", "explode", "none"}));
   c->add_option("--cluster-leaf", a->cluster_leaf, "cluster leaves: linear (the paper's, default) or block-tree")
       ->check(CLI::IsMember({"block-tree", "linear"}))
       ->capture_default_str();
@@ -69,6 +70,7 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->check(CLI::IsMember({"clusters", "input"}))
       ->capture_default_str();
   c->add_option("--out", a->opt.out_dir, "output directory: bench.csv, summary.csv, manifest.json")->required();
+  c->add_flag("--json", a->opt.json, "print the summary as JSON");
 }
 
 }  // namespace ptc::cli

@@ -1,6 +1,7 @@
-#include "analysis/commands.h"
+#include "commands/commands.h"
 #include "apps/ptc/cli.h"
 
+#include <algorithm>
 #include <iostream>
 
 namespace ptc::cli {
@@ -10,6 +11,7 @@ struct ClusterArgs {
   ClusterOptions opt;
   std::string method = "contraction", objective = "acc", size_bound = "max", sphere = "cgal", start = "spatial",
               gwh_weight = "area";
+  CLI::App* app = nullptr;
 };
 }  // namespace
 
@@ -20,13 +22,20 @@ void register_cluster(CLI::App& app, Context& ctx) {
     auto& cf = a->opt.config;
     cf.method = *parse_cluster_method(a->method);
     cf.objective = *parse_objective(a->objective);
-    cf.size_bound_mode = a->size_bound == "max" ? SizeBoundMode::Max : SizeBoundMode::Min;
+    cf.size_bound_mode = *parse_size_bound_mode(a->size_bound);
     cf.sphere = *parse_sphere_method(a->sphere);
     cf.start = *parse_start_rule(a->start);
-    cf.gwh.weight = a->gwh_weight == "area" ? GwhWeight::Area : GwhWeight::SqrtArea;
+    cf.gwh.weight = *parse_gwh_weight(a->gwh_weight);
+    for (const char* f : {"objective", "max_count", "max_size", "size_bound", "sphere", "start", "gwh_a1", "gwh_a2",
+                          "gwh_weight", "target_clusters", "max_triangles"}) {
+      std::string flag = std::string("--") + f;
+      std::replace(flag.begin(), flag.end(), '_', '-');
+      if (a->app->count(flag)) a->opt.given.emplace_back(f);
+    }
     a->opt.argv = ctx.args;
     cmd_cluster(a->opt, std::cout);
   });
+  a->app = c;
   c->add_option("MESH", a->opt.input, "mesh file")->required();
   c->add_option("--method", a->method, "growth, contraction, sah-split or meshopt")
       ->check(enum_validator("method", parse_cluster_method))
@@ -41,7 +50,7 @@ void register_cluster(CLI::App& app, Context& ctx) {
       ->check(CLI::Range(0.0, 1e12))
       ->capture_default_str();
   c->add_option("--size-bound", a->size_bound, "max (as printed in the paper) or min")
-      ->check(CLI::IsMember({"max", "min"}))
+      ->check(enum_validator("size bound", parse_size_bound_mode))
       ->capture_default_str();
   c->add_option("--sphere", a->sphere, "bounding sphere inside the objective: exact cgal ritter epos6 epos14 epos26")
       ->check(enum_validator("sphere method", parse_sphere_method))
@@ -52,7 +61,7 @@ void register_cluster(CLI::App& app, Context& ctx) {
   c->add_option("--gwh-a1", cfg.gwh.a1, "GWH01 weight of E_dir")->check(CLI::Range(0.0, 1e6))->capture_default_str();
   c->add_option("--gwh-a2", cfg.gwh.a2, "GWH01 weight of E_shape")->check(CLI::Range(0.0, 1e6))->capture_default_str();
   c->add_option("--gwh-weight", a->gwh_weight, "GWH01 E_dir weights: area or sqrt-area")
-      ->check(CLI::IsMember({"area", "sqrt-area"}))
+      ->check(enum_validator("weight", parse_gwh_weight))
       ->capture_default_str();
   c->add_option("--target-clusters", cfg.target_clusters, "GWH01 contraction: stop at this many clusters (0 = off)")
       ->capture_default_str();

@@ -1,4 +1,4 @@
-#include "analysis/cmd_animate.h"
+#include "commands/scenes.h"
 #include "apps/ptc/cli.h"
 
 #include <iostream>

@@ -1,4 +1,4 @@
-#include "analysis/commands.h"
+#include "commands/commands.h"
 #include "apps/ptc/cli.h"
 
 #include <iostream>
@@ -11,8 +11,9 @@ void register_spheres(CLI::App& app, Context& ctx) {
   auto* c = ctx.add(app, "spheres", "bounding-sphere methods: time per sphere and radius error vs exact",
                     [opt, methods, &ctx] {
                       if (opt->config.max_run < opt->config.min_run)
-                        throw UsageError("--max-run " + std::to_string(opt->config.max_run) +
-                                         " is smaller than --min-run " + std::to_string(opt->config.min_run));
+                        throw UsageError("--max-run", std::to_string(opt->config.max_run) +
+                                                        " is smaller than --min-run " +
+                                                        std::to_string(opt->config.min_run));
                       if (!methods->empty()) {
                         opt->config.methods.clear();
                         for (const auto& m : *methods) opt->config.methods.push_back(*parse_sphere_method(m));

@@ -1,4 +1,4 @@
-#include "analysis/commands.h"
+#include "commands/commands.h"
 #include "apps/ptc/cli.h"
 
 #include <iostream>

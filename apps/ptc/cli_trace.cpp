@@ -1,10 +1,10 @@
 // `ptc trace SCENE [--frame F | --frames A:B] [--data-dir DIR] [--clusters DIR] [--width W --height H] [--eye X,Y,Z --look-at X,Y,Z --up X,Y,Z
-// --fov DEG] [--shadows] [--ao N] [--threads T] [--seed S] --out DIR` (analysis/trace_command.h).
+// --fov DEG] [--shadows] [--ao N] [--threads T] [--seed S] --out DIR` (commands/trace.h).
 #include <iostream>
 
-#include "analysis/trace_command.h"
+#include "commands/trace.h"
 #include "apps/ptc/cli.h"
-#include "viz/png.h"
+#include "commands/args.h"
 
 namespace ptc::cli {
 
@@ -41,15 +41,16 @@ void register_trace(CLI::App& app, Context& ctx) {
     if (!a->data_dir.empty()) o.scene_options.data_dir = a->data_dir;
     o.render.threads = static_cast<unsigned>(ctx.threads);
     o.argv = ctx.args;
-    cmd_trace(o, [](const std::filesystem::path& p, const RgbImage& img) { viz::write_png(p, img); }, std::cout);
+    cmd_trace(o, std::cout);
   });
   a->app = c;
   c->add_option("SCENE", a->opt.input,
                 "built-in scene name ('ptc scenes'), scene file (.json), mesh or animated asset file, or directory of frames")
       ->required();
   auto* one = c->add_option("--frame", a->frame, "trace frame F (default: the scene's first frame)");
-  c->add_option("--frames", a->frames, "trace frames A..B: images shaded_0000.png ..., one trace.csv row per frame")
+  c->add_option("--frames", a->frames, "trace frames A:B: images shaded_0000.png ..., trace.csv rows per frame")
       ->excludes(one);
+  c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
   c->add_option("--data-dir", a->data_dir, "meshes of built-in scenes (default: $PTC_DATA_DIR or <ptc>/../data)");
   c->add_option("--clusters", a->opt.clusters, "trace a cluster BVH over the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--cluster-groups", a->opt.cluster_group_size,

@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   try {
     for (const auto& c : ctx.commands)
       if (*c.app) c.run();
-  } catch (const cli::UsageError& e) {
+  } catch (const UsageError& e) {
     std::cerr << "ptc: " << e.what() << " (run 'ptc --help')\n";
     return 2;
   } catch (const InputError& e) {

@@ -13,8 +13,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "analysis/cmd_animate.h"
-#include "analysis/scene_file.h"
+#include "analysis/metrics/frame_stats.h"
+#include "commands/animate.h"
+#include "toolkit/anim/scene_file.h"
 #include "toolkit/anim/cloth.h"
 #include "toolkit/anim/deformers.h"
 #include "toolkit/core/error.h"
@@ -273,8 +274,13 @@ TEST_F(Animate, FramesBeyondAFiniteSource) {
   }
   const fs::path out = dir_ / "out";
   const RunResult beyond = ptc({"animate", frames.string(), "--frames", "1:3", "--out", out.string()});
-  EXPECT_EQ(beyond.code, 1) << beyond.err;
-  EXPECT_NE(beyond.err.find("beyond the last frame"), std::string::npos) << beyond.err;
+  EXPECT_EQ(beyond.code, 2) << beyond.err;  // frames the scene does not have: bad usage
+  EXPECT_NE(beyond.err.find("--frames"), std::string::npos) << beyond.err;
+  EXPECT_NE(beyond.err.find("0:2"), std::string::npos) << beyond.err;  // names the scene's range
+  // --extend-frames cannot go past a finite source either.
+  const RunResult past = ptc({"animate", frames.string(), "--frames", "1:3", "--extend-frames", "--out", out.string()});
+  EXPECT_EQ(past.code, 2) << past.err;
+  EXPECT_NE(past.err.find("beyond the last frame"), std::string::npos) << past.err;
   EXPECT_FALSE(fs::exists(out));
   const RunResult ok = ptc({"animate", frames.string(), "--frames", "0:2", "--out", out.string()});
   ASSERT_EQ(ok.code, 0) << ok.err;

@@ -249,7 +249,7 @@ void expect_cluster_files(const fs::path& out, std::size_t triangles, std::size_
     ASSERT_EQ(id, label[t]) << "face " << t;
   }
   const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
-  const auto& dist = summary["results"]["distributions"];
+  const auto& dist = summary["distributions"];
   for (const char* metric : {"triangles", "vertices", "connectivity", "reg", "sphere_radius", "sphere_area",
                              "bbox_area", "p_hit"}) {
     SCOPED_TRACE(metric);
@@ -276,10 +276,19 @@ TEST_F(Cli, ClusterWritesTheFourFilesConsistently) {
     const auto res = nlohmann::json::parse(r.out);
     const std::size_t clusters = res["clusters"];
     const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
-    EXPECT_EQ(summary["schema"], "ptc-cluster-summary/1");
-    EXPECT_EQ(summary["parameters"]["method"], method);
-    EXPECT_EQ(summary["parameters"]["max_count"], 40);
-    EXPECT_EQ(summary["results"]["validation"], "ok");
+    EXPECT_EQ(summary["schema"], "ptc-cluster-summary/2");
+    EXPECT_EQ(summary["validation"], "ok");
+    EXPECT_EQ(summary["clusters"], clusters);
+    const auto manifest = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_EQ(manifest["parameters"]["method"], method);
+    EXPECT_EQ(manifest["parameters"]["max_count"], 40);
+    EXPECT_EQ(manifest["output_schemas"]["clusters.csv"], "ptc-clusters/1");
+    EXPECT_EQ(manifest["output_schemas"]["triangles.csv"], "ptc-cluster-triangles/1");
+    // Only what the method used is recorded.
+    const bool objective = std::string(method) == "growth" || std::string(method) == "contraction";
+    EXPECT_EQ(manifest["parameters"].contains("objective"), objective);
+    EXPECT_EQ(manifest["parameters"].contains("max_triangles"), !objective);
+    EXPECT_EQ(manifest["parameters"].contains("start"), std::string(method) == "growth");
     EXPECT_EQ(lines(slurp(out / "clusters.csv")), clusters + 1);
     // triangles.csv covers every triangle of the input once, with ids < clusters.
     std::istringstream tri(slurp(out / "triangles.csv"));
@@ -306,15 +315,35 @@ TEST_F(Cli, ClusterRejectsBadArguments) {
   EXPECT_EQ(ptc({"cluster", mesh, "--method", "kmeans", "--out", (dir_ / "x").string()}).code, 2);
   EXPECT_EQ(ptc({"cluster", mesh, "--objective", "best", "--out", (dir_ / "x").string()}).code, 2);
   EXPECT_EQ(ptc({"cluster", mesh, "--max-count", "-3", "--out", (dir_ / "x").string()}).code, 2);
-  // Inconsistent parameters are a failed run with one line.
+  // Inconsistent parameters are bad usage, in the flags' words, with one line.
   auto r = ptc({"cluster", mesh, "--max-count", "0", "--max-size", "5", "--out", (dir_ / "x").string()});
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);
   EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("--max-count"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("cluster_mesh"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "x"));
   // meshoptimizer's limits are explained, not an abort.
   r = ptc({"cluster", mesh, "--method", "meshopt", "--max-count", "1000", "--out", (dir_ / "x").string()});
-  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.code, 2);
   EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("--max-count"), std::string::npos) << r.err;
+  // A flag the method does not use is refused, naming it and what the method uses.
+  for (const std::vector<std::string>& extra :
+       {std::vector<std::string>{"--method", "sah-split", "--objective", "naive"},
+        {"--method", "meshopt", "--max-size", "10"},
+        {"--method", "growth", "--objective", "naive", "--max-size", "10"},
+        {"--method", "contraction", "--start", "index"},
+        {"--method", "growth", "--target-clusters", "5"},
+        {"--method", "growth", "--objective", "acc", "--gwh-a1", "1"}}) {
+    std::vector<std::string> args{"cluster", mesh, "--out", (dir_ / "x").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    r = ptc(args);
+    EXPECT_EQ(r.code, 2) << extra[1] << " " << extra[2] << ": " << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(extra[2]), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("not used by --method " + extra[1]), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "x"));
+  }
 }
 
 }  // namespace

@@ -81,9 +81,11 @@ TEST_F(TraceCli, TraceWritesImagesCsvAndManifest) {
     EXPECT_EQ(png_size(dir_ / "out" / f), std::make_pair(24, 16)) << f;
   EXPECT_EQ(png_size(dir_ / "out" / "cost_legend.png"), std::make_pair(256, 16));
   const std::string csv = slurp(dir_ / "out" / "trace.csv");
-  ASSERT_EQ(lines(csv), 2u) << csv;
-  EXPECT_EQ(csv.rfind("mesh,bvh,triangles,clusters,width,height,threads,setup_ms,build_ms,rays,hits,trace_ms,mrays_per_s,", 0), 0u);
-  EXPECT_NE(csv.find(",triangles,12,0,24,16,2,"), std::string::npos) << csv;
+  ASSERT_EQ(lines(csv), 4u) << csv;  // one row per pass: primary, shadow, ao
+  EXPECT_EQ(csv.rfind("mesh,bvh,triangles,clusters,width,height,threads,frame,pass,rays,hits,trace_ms,mrays_per_s,", 0), 0u);
+  EXPECT_NE(csv.find(",triangles,12,0,24,16,2,0,primary,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",triangles,12,0,24,16,2,0,shadow,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",triangles,12,0,24,16,2,0,ao,"), std::string::npos) << csv;
   // A mesh file is one static part: built once, no per-frame update.
   const auto rows = csv_rows(csv);
   EXPECT_EQ(rows[0].at("frame"), "0");
@@ -92,7 +94,8 @@ TEST_F(TraceCli, TraceWritesImagesCsvAndManifest) {
   EXPECT_GT(std::stod(rows[0].at("static_build_ms")), 0.0);
   EXPECT_EQ(std::stod(rows[0].at("update_ms")), 0.0);
   const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
-  EXPECT_EQ(m["schema"], "ptc-trace/2");
+  EXPECT_EQ(m["schema"], "ptc-trace/3");
+  EXPECT_EQ(m["output_schemas"]["trace.csv"], "ptc-trace/3");
   EXPECT_EQ(m["parameters"]["camera"]["from_scene"], false);
   EXPECT_EQ(m["results"]["rays"], 24 * 16);
   EXPECT_EQ(m["results"]["images"]["cost_nodes.png"]["quantity"], "nodes_visited");
@@ -132,7 +135,7 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
 }
 
 TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
-  const CmdResult r = ptc({"bench", cube_.string(), "--frames", "2", "--width", "8", "--height", "8", "--max-count", "4",
+  const CmdResult r = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--max-count", "4",
                      "--out", (dir_ / "out").string()});
   ASSERT_EQ(r.code, 0) << r.err;
   const std::string csv = slurp(dir_ / "out" / "bench.csv");
@@ -172,7 +175,9 @@ TEST_F(TraceCli, SceneFileSequenceWritesOneRowAndOneImageSetPerFrame) {
       EXPECT_EQ(png_size(dir_ / "out" / (std::string(base) + f + ".png")), std::make_pair(20, 14)) << base << f;
   EXPECT_FALSE(fs::exists(dir_ / "out" / "shaded.png"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "shaded_0003.png"));
-  const auto rows = csv_rows(slurp(dir_ / "out" / "trace.csv"));
+  auto rows = csv_rows(slurp(dir_ / "out" / "trace.csv"));
+  ASSERT_EQ(rows.size(), 6u);  // primary and shadow rows per frame
+  std::erase_if(rows, [](const auto& row) { return row.at("pass") != "primary"; });
   ASSERT_EQ(rows.size(), 3u);
   for (std::size_t i = 0; i < 3; ++i) {
     EXPECT_EQ(rows[i].at("frame"), std::to_string(i));
@@ -210,7 +215,9 @@ TEST_F(TraceCli, BuiltinSceneSequence) {
   const CmdResult r = ptc({"trace", "cloth-sphere-32", "--frames", "0:2", "--width", "16", "--height", "12", "--out",
                            (dir_ / "out").string()});
   ASSERT_EQ(r.code, 0) << r.err;
-  const auto rows = csv_rows(slurp(dir_ / "out" / "trace.csv"));
+  auto rows = csv_rows(slurp(dir_ / "out" / "trace.csv"));
+  ASSERT_EQ(rows.size(), 3u);  // primary rows only (no --shadows)
+  std::erase_if(rows, [](const auto& row) { return row.at("pass") != "primary"; });
   ASSERT_EQ(rows.size(), 3u);
   for (std::size_t i = 0; i < 3; ++i) {
     EXPECT_EQ(rows[i].at("frame"), std::to_string(i));
@@ -230,17 +237,22 @@ TEST_F(TraceCli, BadFramesAreOneLineErrors) {
   fs::create_directories(dir_ / "seq");
   fs::copy_file(cube_, dir_ / "seq" / "f_0000.off");
   fs::copy_file(cube_, dir_ / "seq" / "f_0001.off");
-  expect_error({"trace", (dir_ / "seq").string(), "--frame", "5", "--out", out}, 1, "--frame: frame 5 is beyond");
-  expect_error({"trace", (dir_ / "seq").string(), "--frames", "0:2", "--out", out}, 1, "--frames: frame 2 is beyond");
-  expect_error({"trace", scene, "--frame", "abc", "--out", out}, 1, "--frame");
-  expect_error({"trace", scene, "--frame", "1.5", "--out", out}, 1, "--frame");
-  expect_error({"trace", scene, "--frames", "3:1", "--out", out}, 1, "--frames");
-  expect_error({"trace", scene, "--frames", "0:x", "--out", out}, 1, "--frames");
+  // Frames and ranges have one syntax and one meaning in every command; a malformed one, or one
+  // outside the scene's range, is bad usage (exit 2).
+  expect_error({"trace", (dir_ / "seq").string(), "--frame", "5", "--out", out}, 2, "--frame: frames 5:5 are outside");
+  expect_error({"trace", (dir_ / "seq").string(), "--frames", "0:2", "--out", out}, 2, "--frames: frames 0:2 are outside");
+  expect_error({"trace", (dir_ / "seq").string(), "--frames", "0:2", "--extend-frames", "--out", out}, 2,
+               "--frames: frame 2 is beyond");
+  expect_error({"trace", scene, "--frame", "abc", "--out", out}, 2, "--frame");
+  expect_error({"trace", scene, "--frame", "1.5", "--out", out}, 2, "--frame");
+  expect_error({"trace", scene, "--frames", "3:1", "--out", out}, 2, "--frames");
+  expect_error({"trace", scene, "--frames", "0:x", "--out", out}, 2, "--frames");
   expect_error({"trace", scene, "--frame", "1", "--frames", "0:2", "--out", out}, 2, "--frame");
+  expect_error({"trace", scene, "--frame", "10", "--out", out}, 2, "outside the range 0:9");
   expect_error({"trace", "no-such-scene", "--out", out}, 1, "no-such-scene");
-  expect_error({"bench", scene, "--frames", "2:1", "--out", out}, 1, "--frames");
-  expect_error({"bench", scene, "--frames", "0", "--out", out}, 1, "--frames");
-  expect_error({"bench", scene, "--deform", "twist", "--out", out}, 1, "--deform");
+  expect_error({"bench", scene, "--frames", "2:1", "--out", out}, 2, "--frames");
+  expect_error({"bench", scene, "--frames", "5:12", "--out", out}, 2, "outside the range 0:9");
+  expect_error({"bench", scene, "--deform", "twist", "--out", out}, 2, "--deform");
   // The frame directory traces fine within its range.
   EXPECT_EQ(ptc({"trace", (dir_ / "seq").string(), "--frames", "0:1", "--width", "4", "--height", "4", "--out", out}).code, 0);
 }
@@ -270,13 +282,13 @@ TEST_F(TraceCli, BenchTakesPositionsFromTheScene) {
   ASSERT_EQ(rows_i.size(), rows.size());
   for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(rows_i[i].at("hits"), rows[i].at("hits"));
   EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "outi" / "manifest.json"))["results"]["fused_vertex_pass"], false);
-  // A mesh file keeps the stand-in deformation (frames 0..N-1).
-  const CmdResult r2 = ptc({"bench", cube_.string(), "--frames", "2", "--deform", "wave", "--width", "4", "--height", "4",
+  // A mesh file moves by the stand-in motion: the built-in scenes' deformer of that kind.
+  const CmdResult r2 = ptc({"bench", cube_.string(), "--frames", "0:1", "--deform", "wave", "--width", "4", "--height", "4",
                             "--max-count", "4", "--out", (dir_ / "out2").string()});
   ASSERT_EQ(r2.code, 0) << r2.err;
   const auto m2 = nlohmann::json::parse(slurp(dir_ / "out2" / "manifest.json"));
-  EXPECT_EQ(m2["parameters"]["motion"], "stand-in deformation");
-  EXPECT_EQ(m2["parameters"]["deformation"], "wave");
+  EXPECT_EQ(m2["parameters"]["motion"], "stand-in: the wave deformer (deform_preset)");
+  EXPECT_EQ(m2["parameters"]["frames"], nlohmann::json::array({0, 1}));
 }
 
 TEST_F(TraceCli, SceneWithClustersOfTheCombinedMesh) {

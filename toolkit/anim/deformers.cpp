@@ -193,6 +193,21 @@ class Deformer final : public Animation {
 
 }  // namespace
 
+DeformParams deform_preset(DeformKind kind) {
+  DeformParams d;
+  d.kind = kind;
+  switch (kind) {
+    case DeformKind::Twist: d.axis = 1, d.amplitude = std::numbers::pi / 2, d.period = 60; break;
+    case DeformKind::Bend: d.axis = 1, d.direction = 2, d.amplitude = std::numbers::pi / 2, d.period = 60; break;
+    case DeformKind::Wave: d.axis = 0, d.direction = 2, d.amplitude = 0.03, d.wavelength = 0.5, d.period = 30; break;
+    case DeformKind::Rigid:
+      d.axis = 1, d.amplitude = 1.0, d.period = 60, d.velocity = Vec3(0.005, 0.0, 0.0);
+      break;
+    case DeformKind::Explode: d.amplitude = 0.004; break;
+  }
+  return d;
+}
+
 std::optional<DeformKind> parse_deform_kind(std::string_view name) {
   if (name == "twist") return DeformKind::Twist;
   if (name == "bend") return DeformKind::Bend;

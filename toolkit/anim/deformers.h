@@ -69,6 +69,13 @@ struct DeformParams {
   Vec3 velocity = Vec3::Zero();
 };
 
+/// The parameters of the built-in scenes' deformers (armadillo-twist, ...), also the stand-in
+/// motion of `ptc bench --deform KIND` on a static scene: twist about y by up to pi/2 and bend
+/// of pi/2 (period 60), wave along x displacing z by 3% of the diagonal (wavelength half the
+/// width, period 30), rigid: one turn per 60 frames about y while moving 0.5% of the diagonal
+/// per frame along x; explode: 0.4% of the diagonal per frame.
+[[nodiscard]] DeformParams deform_preset(DeformKind kind);
+
 /// Checks the parameters; returns "" or the reason they are invalid ("period must be > 0").
 [[nodiscard]] std::string check(const DeformParams& p);
 

@@ -73,6 +73,8 @@ Scene::Scene(std::string name, std::vector<ScenePart> parts, std::optional<Scene
   } else {
     frames_ = {0, fc > 0 ? static_cast<std::int64_t>(fc) - 1 : 59};
   }
+  own_camera_ = camera.has_value();
+  own_light_ = light.has_value();
   camera_ = camera ? *camera : default_camera(rest_.bounds());
   if (light) {
     light_ = *light;
@@ -83,6 +85,14 @@ Scene::Scene(std::string name, std::vector<ScenePart> parts, std::optional<Scene
     light_.position = camera_.eye + Vec3(0.5, 1.0, 0.5) * d;
     light_.intensity = 1.0;
   }
+}
+
+Scene deform_scene(const Scene& scene, const DeformParams& params, std::optional<FrameRange> frames) {
+  std::vector<ScenePart> parts;
+  parts.push_back({scene.name(), make_deformer(scene.rest(), params)});
+  return Scene(scene.name(), std::move(parts), scene.has_own_camera() ? std::optional(scene.camera()) : std::nullopt,
+               scene.has_own_light() ? std::optional(scene.light()) : std::nullopt,
+               frames ? frames : std::optional(FrameRange{0, 59}));
 }
 
 bool Scene::all_static() const {
@@ -225,21 +235,6 @@ Scene deformer_scene(const std::string& name, Mesh rest, const DeformParams& dp,
   return Scene(name, std::move(parts), std::nullopt, std::nullopt, FrameRange{0, 59});
 }
 
-DeformParams preset(DeformKind kind) {
-  DeformParams d;
-  d.kind = kind;
-  switch (kind) {
-    case DeformKind::Twist: d.axis = 1, d.amplitude = std::numbers::pi / 2, d.period = 60; break;
-    case DeformKind::Bend: d.axis = 1, d.direction = 2, d.amplitude = std::numbers::pi / 2, d.period = 60; break;
-    case DeformKind::Wave: d.axis = 0, d.direction = 2, d.amplitude = 0.03, d.wavelength = 0.5, d.period = 30; break;
-    case DeformKind::Rigid:
-      d.axis = 1, d.amplitude = 1.0, d.period = 60, d.velocity = Vec3(0.005, 0.0, 0.0);
-      break;
-    case DeformKind::Explode: d.amplitude = 0.004; break;
-  }
-  return d;
-}
-
 AnimationPtr load_asset(const fs::path& p) {
 #if PTC_HAVE_LOAD_ANIMATION
   return load_animation(p.string());
@@ -272,7 +267,7 @@ const std::vector<Builtin>& registry() {
       const std::string name = fmt::format("armadillo-{}", to_string(k));
       b.push_back({{name, fmt::format("armadillo.off (52k triangles) under the {} deformer", to_string(k))},
                    [name, k](const SceneOptions& o) {
-                     return deformer_scene(name, read_data_mesh(o, "meshes/armadillo.off"), preset(k), "armadillo");
+                     return deformer_scene(name, read_data_mesh(o, "meshes/armadillo.off"), deform_preset(k), "armadillo");
                    }});
     }
     for (DeformKind k : {DeformKind::Wave, DeformKind::Twist, DeformKind::Explode}) {
@@ -281,7 +276,7 @@ const std::vector<Builtin>& registry() {
                                       to_string(k))},
                    [name, k](const SceneOptions& o) {
                      return deformer_scene(name, subdivide(read_data_mesh(o, "meshes/armadillo.off"), SubdivisionScheme::Loop, 2),
-                                           preset(k), "armadillo-832k");
+                                           deform_preset(k), "armadillo-832k");
                    }});
     }
     b.push_back({{"faerie", "faerie.md2 (assimp-testmodels): MD2 vertex keyframes, welded"},
@@ -327,7 +322,11 @@ bool is_builtin_scene(const std::string& name) {
 
 Scene make_builtin_scene(const std::string& name, const SceneOptions& opt) {
   for (const Builtin& b : registry())
-    if (b.info.name == name) return b.make(opt);
+    if (b.info.name == name) {
+      Scene s = b.make(opt);
+      s.adopt_view();
+      return s;
+    }
   throw InputError("", "", name, "no such built-in scene (run 'ptc scenes' for the list)");
 }
 

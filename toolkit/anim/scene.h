@@ -9,7 +9,7 @@
 //   - a mesh file (.off .obj .ply .stl): one static part,
 //   - an animated asset file (MD2, MD3, skinned formats assimp reads) or a directory of frame
 //     files: one animated part, through load_animation() (toolkit/anim/load_animation.h);
-// scene files (.json) are parsed by analysis/scene_file.h (the JSON library is linked there),
+// scene files (.json) are parsed by toolkit/anim/scene_file.h (the JSON library is linked there),
 // which calls back into this header for everything else.
 //
 // Built-in scenes read their meshes from a data directory: SceneOptions::data_dir, by default
@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "toolkit/anim/animation.h"
+#include "toolkit/anim/deformers.h"
 
 namespace ptc {
 
@@ -78,8 +79,17 @@ class Scene {
 
   /// The combined topology with every part's rest positions.
   [[nodiscard]] const Mesh& rest() const { return rest_; }
+  /// The camera and light: the scene's own, or the defaults of the constructor.
   [[nodiscard]] const SceneCamera& camera() const { return camera_; }
   [[nodiscard]] const SceneLight& light() const { return light_; }
+  /// Whether camera() / light() are the scene's own (given to the constructor, a scene file's
+  /// "camera" / "light", every built-in scene) rather than defaults: a command's rule is then
+  /// flag > the scene's own > the command's framing of the mesh.
+  [[nodiscard]] bool has_own_camera() const { return own_camera_; }
+  [[nodiscard]] bool has_own_light() const { return own_light_; }
+  /// Makes the current camera and light the scene's own (built-in scenes are composed with the
+  /// constructor's defaults as their view).
+  void adopt_view() { own_camera_ = own_light_ = true; }
   [[nodiscard]] const FrameRange& frames() const { return frames_; }
   /// Smallest finite frame_count() over the parts; 0 when every part is unbounded.
   [[nodiscard]] std::size_t frame_count() const;
@@ -109,8 +119,14 @@ class Scene {
   Mesh rest_;
   SceneCamera camera_;
   SceneLight light_;
+  bool own_camera_ = false, own_light_ = false;
   FrameRange frames_;
 };
+
+/// The whole scene (its combined rest mesh) as one part moved by a deformer (toolkit/anim/
+/// deformers.h): the stand-in motion of a static scene (`ptc bench --deform`). The scene's own
+/// camera and light are kept; frames default to 0..59. InputError for bad parameters.
+[[nodiscard]] Scene deform_scene(const Scene& scene, const DeformParams& params, std::optional<FrameRange> frames = {});
 
 /// Camera looking at the centre of `bounds` from the front-right-above direction (1/3, 1/3, 1)
 /// normalised, far enough back for the bounding sphere to fill ~80% of a 45 degree view; up +y.

@@ -110,6 +110,66 @@ std::optional<StartRule> parse_start_rule(std::string_view s) {
   return std::nullopt;
 }
 
+std::vector<std::string_view> used_parameters(const ClusterConfig& c) {
+  std::vector<std::string_view> u{"max_count", "max_size"};
+  if (c.max_count == 0 && c.max_size == 0.0) return u;  // one triangle per cluster
+  switch (c.method) {
+    case ClusterMethod::SahSplit:
+    case ClusterMethod::Meshopt: return {"max_count", "max_triangles"};
+    case ClusterMethod::Growth:
+    case ClusterMethod::Contraction: break;
+  }
+  u = {"objective", "max_count"};
+  if (c.objective == ObjectiveKind::Acc) u.insert(u.end(), {"max_size", "size_bound", "sphere"});
+  if (c.objective == ObjectiveKind::Gwh01) u.insert(u.end(), {"gwh_a1", "gwh_a2", "gwh_weight"});
+  if (c.method == ClusterMethod::Growth) u.push_back("start");
+  if (c.method == ClusterMethod::Contraction) u.push_back("target_clusters");
+  return u;
+}
+
+ClusterLimits limits_of(const ClusterConfig& c) {
+  ClusterLimits lim;
+  if (c.max_count == 0 && c.max_size == 0.0) {
+    lim.max_triangles = 1;
+    return lim;
+  }
+  if (c.method == ClusterMethod::SahSplit) return sah_split_limits(c);
+  if (c.method == ClusterMethod::Meshopt) return meshopt_limits(c);
+  if (c.objective != ObjectiveKind::Acc) lim.max_vertices = c.max_count;
+  return lim;
+}
+
+std::optional<ConfigProblem> check(const ClusterConfig& c) {
+  if (!(c.max_size >= 0.0) || !std::isfinite(c.max_size))
+    return ConfigProblem{"max_size", "MaxSize must be a finite number >= 0"};
+  if (c.max_count == 0 && c.max_size == 0.0) return std::nullopt;
+  if (c.method == ClusterMethod::SahSplit || c.method == ClusterMethod::Meshopt) {
+    try {  // the limits' own checks (sah_split.h, meshopt.h: meshoptimizer's bounds)
+      (void)(c.method == ClusterMethod::SahSplit ? sah_split_limits(c) : meshopt_limits(c));
+    } catch (const std::invalid_argument& e) {
+      const std::string why = e.what();
+      const auto colon = why.find(": ");
+      return ConfigProblem{why.find("max_triangles") != std::string::npos ? "max_triangles" : "max_count",
+                           colon == std::string::npos ? why : why.substr(colon + 2)};
+    }
+    return std::nullopt;
+  }
+  switch (c.objective) {
+    case ObjectiveKind::Acc:
+      if (c.max_count == 0 || c.max_size == 0.0)
+        return ConfigProblem{c.max_count == 0 ? "max_count" : "max_size",
+                             "Acc needs MaxCount > 0 and MaxSize > 0 (both 0: one triangle per cluster)"};
+      return std::nullopt;
+    case ObjectiveKind::Naive:
+    case ObjectiveKind::Gwh01:
+      if (c.max_count == 0)
+        return ConfigProblem{"max_count", std::string("MaxCount must be >= 3 for the ") +
+                                              std::string(to_string(c.objective)) + " objective (its vertex limit)"};
+      return std::nullopt;
+  }
+  return std::nullopt;
+}
+
 Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress) {
   if (!(config.max_size >= 0.0) || !std::isfinite(config.max_size))
     throw std::invalid_argument("cluster_mesh: max_size must be finite and >= 0, got " +

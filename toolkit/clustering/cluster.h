@@ -5,7 +5,9 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "toolkit/clustering/clustering.h"
 #include "toolkit/geometry/cluster_metrics.h"
@@ -54,6 +56,29 @@ struct ClusterConfig {
   std::uint32_t target_clusters = 0;              ///< GWH01 contraction: stop at this many clusters (0 = only MaxCount stops)
   std::uint32_t max_triangles = 0;                ///< SAH split / meshopt: triangle limit per cluster (0 = 2 * max_count)
 };
+
+/// What a configuration uses, asked of the clustering layer (not decided by a command): the
+/// parameters of ClusterConfig that cluster_mesh reads for this method and objective, by name:
+/// "objective", "max_count", "max_size", "size_bound", "sphere", "start", "gwh_a1", "gwh_a2",
+/// "gwh_weight", "target_clusters", "max_triangles". For example sah-split and meshopt read
+/// max_count and max_triangles only; Naive and GWH01 never read max_size; only growth reads
+/// start; only contraction reads target_clusters; MaxCount = MaxSize = 0 (one triangle per
+/// cluster) reads nothing else.
+[[nodiscard]] std::vector<std::string_view> used_parameters(const ClusterConfig& config);
+
+/// The hard limits every cluster of cluster_mesh(mesh, config) keeps (for validate()):
+/// sah-split and meshopt their vertex and triangle limits, Naive and GWH01 MaxCount vertices,
+/// Acc none (its bounds are soft), MaxCount = MaxSize = 0 one triangle.
+[[nodiscard]] ClusterLimits limits_of(const ClusterConfig& config);
+
+/// A configuration cluster_mesh would refuse: the parameter (a name of used_parameters) and the
+/// reason in the paper's words ("MaxCount must be >= 3 for the Naive objective").
+struct ConfigProblem {
+  std::string parameter;
+  std::string reason;
+};
+/// The first problem of the configuration, or nullopt when cluster_mesh accepts it.
+[[nodiscard]] std::optional<ConfigProblem> check(const ClusterConfig& config);
 
 /// Progress callback: fraction done in [0, 1]; called at most a few hundred times.
 using ProgressFn = std::function<void(double)>;

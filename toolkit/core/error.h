@@ -28,6 +28,15 @@ class InputError : public std::runtime_error {
   std::string file_, location_, element_, reason_;
 };
 
+/// Bad usage: a command-line value that is wrong whatever the input files hold (a malformed
+/// frame range, an empty --out, flags that contradict each other, a flag the chosen method does
+/// not use). An InputError with no file and the flag as the element; the command exits with 2
+/// for it (1 for other input errors).
+class UsageError : public InputError {
+ public:
+  UsageError(std::string flag, std::string reason) : InputError("", "", std::move(flag), std::move(reason)) {}
+};
+
 /// "line N" helper.
 std::string line_loc(std::uint64_t line);
 /// "byte N" helper.

@@ -11,6 +11,14 @@
 
 namespace ptc {
 
+std::string_view to_string(SizeBoundMode m) { return m == SizeBoundMode::Max ? "max" : "min"; }
+std::optional<SizeBoundMode> parse_size_bound_mode(std::string_view s) {
+  if (s == "max") return SizeBoundMode::Max;
+  if (s == "min") return SizeBoundMode::Min;
+  return std::nullopt;
+}
+
+
 namespace {
 
 void require_positive(double v, const char* what) {

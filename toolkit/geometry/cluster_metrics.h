@@ -18,6 +18,8 @@
 // otherwise.
 #pragma once
 
+#include <optional>
+#include <string_view>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -32,6 +34,9 @@ namespace ptc {
 /// printed (flat 1 until the sphere outgrows MaxSize times the average, then growing; default);
 /// `Min` = min(1, ...) as the write-up's "(0, 1]" suggests. Both kept so the difference is measured.
 enum class SizeBoundMode { Max, Min };
+/// "max", "min".
+[[nodiscard]] std::string_view to_string(SizeBoundMode m);
+[[nodiscard]] std::optional<SizeBoundMode> parse_size_bound_mode(std::string_view s);
 
 /// The free parameters of the objective Acc(k) (Garanzha 2009 as restated in method.md).
 /// The functions here require max_count > 0, max_size > 0, avg_sa > 0 and throw

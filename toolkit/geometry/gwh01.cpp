@@ -15,6 +15,14 @@
 
 namespace ptc {
 
+std::string_view to_string(GwhWeight w) { return w == GwhWeight::Area ? "area" : "sqrt-area"; }
+std::optional<GwhWeight> parse_gwh_weight(std::string_view s) {
+  if (s == "area") return GwhWeight::Area;
+  if (s == "sqrt-area") return GwhWeight::SqrtArea;
+  return std::nullopt;
+}
+
+
 void Quadric::add(const Vec3& p, double w) {
   if (!has_origin) {
     origin = p;

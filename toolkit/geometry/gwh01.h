@@ -4,6 +4,8 @@
 // The contraction algorithm that uses them lives elsewhere; these are pure functions.
 #pragma once
 
+#include <optional>
+#include <string_view>
 #include <cstdint>
 #include <span>
 
@@ -79,6 +81,9 @@ struct PlaneFit {
 /// Weights of E_dir: Area (w_i = Area_i, method.md's formula) or SqrtArea (w_i = sqrt(Area_i),
 /// what Garland's code does; the term is then no longer scale-invariant: unit 1/L).
 enum class GwhWeight { Area, SqrtArea };
+/// "area", "sqrt-area".
+[[nodiscard]] std::string_view to_string(GwhWeight w);
+[[nodiscard]] std::optional<GwhWeight> parse_gwh_weight(std::string_view s);
 
 /// E_dir = sum_i w_i (1 - n . n_i)^2 / sum_i Area_i (GWH01; method.md). `plane_normal` is the
 /// fitted unit normal n, n_i the triangles' unit normals (zero for degenerate triangles, whose

@@ -11,6 +11,17 @@
 #include "toolkit/io/readers.h"
 
 namespace ptc {
+
+std::string_view to_string(MeshFormat f) {
+  switch (f) {
+    case MeshFormat::Off: return "off";
+    case MeshFormat::Obj: return "obj";
+    case MeshFormat::Ply: return "ply";
+    case MeshFormat::Stl: return "stl";
+  }
+  return "?";
+}
+
 namespace {
 
 // The whole file in memory (one read; the parsers index into it).

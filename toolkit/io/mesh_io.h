@@ -26,6 +26,8 @@
 namespace ptc {
 
 enum class MeshFormat { Off, Obj, Ply, Stl };
+/// "off", "obj", "ply", "stl".
+[[nodiscard]] std::string_view to_string(MeshFormat f);
 
 /// What the reader found in the file besides the mesh itself.
 struct ReadReport {

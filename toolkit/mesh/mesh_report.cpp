@@ -7,29 +7,6 @@
 
 namespace ptc {
 
-Summary summarize(std::span<const double> values) {
-  Summary s;
-  s.count = values.size();
-  if (values.empty()) return s;
-  std::vector<double> v(values.begin(), values.end());
-  std::sort(v.begin(), v.end());
-  s.min = v.front();
-  s.max = v.back();
-  long double sum = 0;  // long double: the mean of 1M areas stays exact to ~1e-16
-  for (double x : v) sum += x;
-  s.mean = static_cast<double>(sum / static_cast<long double>(v.size()));
-  auto pct = [&](double p) {
-    const double pos = p * static_cast<double>(v.size() - 1);
-    const auto i = static_cast<std::size_t>(pos);
-    const double f = pos - static_cast<double>(i);
-    return i + 1 < v.size() ? v[i] + f * (v[i + 1] - v[i]) : v[i];
-  };
-  s.p5 = pct(0.05);
-  s.p50 = pct(0.5);
-  s.p95 = pct(0.95);
-  return s;
-}
-
 namespace {
 
 // Coordinates compared with -0.0 == +0.0 (the only two distinct doubles that compare equal).

@@ -7,19 +7,10 @@
 
 #include "toolkit/core/types.h"
 #include "toolkit/mesh/mesh.h"
+#include "toolkit/core/stats.h"
 #include "toolkit/mesh/topology.h"
 
 namespace ptc {
-
-/// Distribution summary of a sample. For an empty sample count = 0 and all values are 0.
-/// Percentiles interpolate linearly between order statistics (p50 of an even count is the mean
-/// of the two middle values). NaN values are not allowed (they have no order).
-struct Summary {
-  std::size_t count = 0;
-  double min = 0, mean = 0, p5 = 0, p50 = 0, p95 = 0, max = 0;
-};
-/// Summary of the values (copies and sorts them; O(n log n)).
-[[nodiscard]] Summary summarize(std::span<const double> values);
 
 struct MeshReport {
   std::size_t vertices = 0;              ///< positions in the mesh

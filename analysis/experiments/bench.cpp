@@ -1,0 +1,265 @@
+#include "analysis/experiments/bench.h"
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "analysis/loop/frame_loop.h"
+#include "toolkit/clustering/cluster.h"
+#include "toolkit/core/stats.h"
+#include "toolkit/core/stopwatch.h"
+
+namespace ptc {
+namespace {
+
+const BenchSummary* find(const std::vector<BenchSummary>& s, std::string_view name) {
+  for (const auto& x : s)
+    if (x.config == name) return &x;
+  return nullptr;
+}
+
+constexpr loop::AccelKind kEmbree[3] = {loop::AccelKind::EmbreeMedium, loop::AccelKind::EmbreeLow,
+                                        loop::AccelKind::EmbreeRefit};
+
+double nan() { return std::numeric_limits<double>::quiet_NaN(); }
+
+}  // namespace
+
+std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame) {
+  std::vector<BenchSummary> out;
+  std::map<std::string, std::vector<const BenchRow*>> by;
+  for (const auto& r : rows) {
+    if (!by.count(r.config)) out.push_back(BenchSummary{r.config});
+    by[r.config].push_back(&r);
+  }
+  for (auto& s : out) {
+    std::vector<double> u, b, ub, t, m;
+    for (const BenchRow* r : by[s.config]) {
+      s.mismatches += r->agreement.mismatches();
+      s.ties += r->agreement.ties;
+      if (r->frame < first_frame) continue;
+      u.push_back(r->times.update_ms), b.push_back(r->times.build_ms);
+      ub.push_back(r->times.update_ms + r->times.build_ms);
+      t.push_back(r->trace_ms), m.push_back(r->mrays_per_s);
+    }
+    s.update_ms = median(u), s.build_ms = median(b), s.update_build_ms = median(ub);
+    s.trace_ms = median(t), s.mrays_per_s = median(m);
+  }
+  return out;
+}
+
+PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const PeerBenchConfig& cfg) {
+  if (cfg.frames.first < 0 || cfg.frames.count() < 1) throw std::invalid_argument("frames must be a range A:B, 0 <= A <= B");
+  if (cfg.threads < 1) throw std::invalid_argument("threads must be >= 1");
+  if (cfg.width < 1 || cfg.height < 1 || cfg.width > 16384 || cfg.height > 16384)
+    throw std::invalid_argument("image size must be 1..16384 per side");
+  if (scene.rest().empty()) throw std::invalid_argument("the mesh has no triangles");
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, cfg.threads);
+
+  PeerBenchResult res;
+  res.triangles = scene.rest().triangle_count();
+  res.vertices = scene.rest().vertex_count();
+  Clustering own;
+  if (!clusters) {
+    ClusterConfig cc;
+    cc.method = ClusterMethod::Growth;
+    cc.objective = ObjectiveKind::Acc;
+    cc.max_count = cfg.max_count;
+    cc.max_size = cfg.max_count;
+    Stopwatch sw;
+    own = cluster_mesh(scene.rest(), cc);
+    res.cluster_ms = sw.ms();
+    res.clustering = fmt::format("growth/acc MaxCount={} MaxSize={}", cfg.max_count, cfg.max_count);
+    clusters = &own;
+  } else {
+    res.clustering = "given";
+  }
+  res.clusters = clusters->cluster_count();
+
+  // One trace frame and one camera for every configuration (the rest bounds do not change with
+  // the vertex numbering).
+  const Box3 rest_bounds = scene.rest().bounds();
+  loop::AccelSetup setup;
+  setup.origin = rest_bounds.center();
+  setup.cluster_leaf = cfg.cluster_leaf;
+  setup.cluster_group_size = cfg.cluster_group_size;
+  setup.threads = cfg.threads;
+
+  // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
+  // are consecutive; the scene renumbers its sources (or gathers, which it then says).
+  Clustering renumbered;
+  res.vertex_order = cfg.cluster_vertex_order ? "clusters" : "input";
+  if (cfg.cluster_vertex_order) {
+    Stopwatch sw;
+    const std::vector<std::uint32_t> to_old = bvh::cluster_vertex_order(
+        scene.rest(), bvh::view_of(*clusters), scene.vertex_offsets(), loop::cluster_scene_config(setup));
+    renumbered = renumber_vertices(*clusters, inverse_permutation(to_old));
+    scene.renumber_vertices(to_old);
+    res.renumber_ms = sw.ms();
+    clusters = &renumbered;
+  }
+  setup.clusters = clusters;
+  const Mesh& mesh = scene.rest();
+
+  const bvh::PinholeCamera cam = make_camera(cfg.camera, rest_bounds, cfg.width, cfg.height);
+  const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
+  res.rays = rays.size();
+
+  std::vector<std::unique_ptr<loop::Accel>> accels;
+  for (loop::AccelKind k : loop::kAllAccelKinds) {
+    Stopwatch sw;
+    accels.push_back(loop::make_accel(k, mesh, setup));
+    if (k == loop::AccelKind::OursClusters) {
+      res.cluster_scene_setup_ms = sw.ms();
+      res.fused_vertex_pass = loop::cluster_scene_of(*accels.back())->fused_vertex_pass();
+    }
+  }
+  res.cluster_group_size = setup.cluster_group_size;
+  std::vector<loop::Accel*> order;
+  for (auto& a : accels) order.push_back(a.get());
+
+  bvh::TraceOptions opt;
+  opt.threads = cfg.threads;
+  opt.counters = false;
+  std::vector<Vec3> pos(mesh.positions().begin(), mesh.positions().end());
+  bvh::HitBatch ref, hits;
+  loop::LoopOptions lo;
+  lo.frames = cfg.frames;
+  loop::run_frame_loop(scene, pos, order, lo, [&](const loop::FrameRecord& fr, loop::Accel& a, std::span<const Vec3>) {
+    BenchRow row;
+    row.frame = fr.index;
+    row.scene_frame = fr.frame;
+    row.config = std::string(a.name());
+    row.source_ms = fr.source_ms;
+    row.frame_ms = fr.update_wall_ms;
+    row.times = fr.times;
+    row.sah_cost = a.sah_cost().value_or(nan());
+    bvh::HitBatch& h = fr.accel == 0 ? ref : hits;
+    Stopwatch sw;
+    const bvh::TraceTotals tt = a.trace(rays, h, opt);
+    row.trace_ms = sw.ms();
+    row.rays = tt.rays;
+    row.hits = tt.hits;
+    row.mrays_per_s = row.trace_ms > 0 ? double(tt.rays) / (row.trace_ms * 1e3) : 0.0;
+    if (fr.accel > 0) row.agreement = compare_hits(ref, hits, cfg.tie);
+    res.rows.push_back(std::move(row));
+  });
+  res.median_first_frame = cfg.frames.count() > 1 ? 1 : 0;
+  res.summary = summarize(res.rows, res.median_first_frame);
+  return res;
+}
+
+Table bench_table(const PeerBenchResult& r) {
+  return tabulate(Schema{"ptc-bench", 2}, r.rows, [](const BenchRow& x, Columns& col) {
+    col("frame", x.frame);
+    col("config", x.config);
+    col("update_ms", x.times.update_ms);
+    col("build_ms", x.times.build_ms);
+    col("update_build_ms", x.times.update_ms + x.times.build_ms);
+    col("frame_ms", x.frame_ms);
+    col("trace_ms", x.trace_ms);
+    col("mrays_per_s", x.mrays_per_s);
+    col("rays", x.rays);
+    col("hits", x.hits);
+    col("mismatches", x.agreement.mismatches());
+    col("mismatch_hit_miss", x.agreement.hit_miss);
+    col("mismatch_other_triangle", x.agreement.other_triangle);
+    col("ties", x.agreement.ties);
+    col("scene_frame", x.scene_frame);
+    col("source_ms", x.source_ms);
+    col("vertices_ms", x.times.stages.vertices_ms);
+    col("boxes_ms", x.times.stages.boxes_ms);
+    col("sah_build_ms", x.times.stages.build_ms);
+    col("collapse_ms", x.times.stages.collapse_ms);
+    col("leaf_data_ms", x.times.stages.leaf_data_ms);
+    col("refit_ms", x.times.stages.refit_ms);
+    col("sah_cost", x.sah_cost);
+  });
+}
+
+namespace {
+struct SummaryRow {
+  const BenchSummary* s = nullptr;
+  const PeerBenchResult* r = nullptr;
+};
+}  // namespace
+
+Table bench_summary_table(const PeerBenchResult& r) {
+  std::vector<SummaryRow> rows;
+  for (const auto& s : r.summary) rows.push_back({&s, &r});
+  const int frames = r.rows.empty() ? 0 : r.rows.back().frame + 1;
+  return tabulate(Schema{"ptc-bench-summary", 1}, rows, [frames](const SummaryRow& x, Columns& col) {
+    static const BenchSummary none;
+    const BenchSummary& s = x.s ? *x.s : none;
+    col("config", s.config);
+    col("frames_in_median", frames - (x.r ? x.r->median_first_frame : 0));
+    col("update_ms", s.update_ms);
+    col("build_ms", s.build_ms);
+    col("update_build_ms", s.update_build_ms);
+    col("trace_ms", s.trace_ms);
+    col("mrays_per_s", s.mrays_per_s);
+    col("mismatches", s.mismatches);
+    col("ties", s.ties);
+    for (loop::AccelKind e : kEmbree) {
+      const BenchSummary* p = x.r ? find(x.r->summary, to_string(e)) : nullptr;
+      col(std::string("update_build_speedup_vs_") + std::string(to_string(e)),
+          p && s.update_build_ms > 0 ? p->update_build_ms / s.update_build_ms : nan());
+    }
+    for (loop::AccelKind e : kEmbree) {
+      const BenchSummary* p = x.r ? find(x.r->summary, to_string(e)) : nullptr;
+      col(std::string("trace_speed_vs_") + std::string(to_string(e)),
+          p && p->mrays_per_s > 0 ? s.mrays_per_s / p->mrays_per_s : nan());
+    }
+  });
+}
+
+std::string bench_text(const PeerBenchResult& r) {
+  const int frames = r.rows.empty() ? 0 : r.rows.back().frame + 1;
+  std::string s = fmt::format("medians over frames {}..{} ({} frames), {} rays\n", r.median_first_frame, frames - 1,
+                              frames - r.median_first_frame, r.rays);
+  s += fmt::format("{:<16} {:>10} {:>10} {:>13} {:>10} {:>10} {:>10} {:>8} {:>8}\n", "config", "update_ms",
+                   "build_ms", "upd+build_ms", "trace_ms", "Mrays/s", "hits", "mismatch", "ties");
+  for (const auto& x : r.summary) {
+    std::uint64_t hits = 0;
+    for (const auto& row : r.rows)
+      if (row.config == x.config) hits = row.hits;
+    s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>8} {:>8}\n", x.config,
+                     x.update_ms, x.build_ms, x.update_build_ms, x.trace_ms, x.mrays_per_s, hits, x.mismatches, x.ties);
+  }
+  std::vector<double> src;
+  for (const auto& row : r.rows)
+    if (row.frame >= r.median_first_frame && row.config == r.rows.front().config) src.push_back(row.source_ms);
+  s += fmt::format("frame source (positions of a frame, outside every configuration): median {:.2f} ms; vertex order: "
+                   "{}{}; cluster BVH: {}\n",
+                   median(src), r.vertex_order,
+                   r.fused_vertex_pass ? " (cluster path: conversion and boxes in one pass)"
+                                       : " (cluster path: positions gathered per frame)",
+                   r.cluster_group_size > 1 ? fmt::format("two-level, groups of <= {} clusters", r.cluster_group_size)
+                                            : std::string("plain SAH build over all cluster boxes"));
+  s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
+  s += fmt::format("{:<16}", "config");
+  for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>19}", "upd+build vs " + std::string(to_string(e).substr(7)));
+  for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>15}", "trace vs " + std::string(to_string(e).substr(7)));
+  s += "\n";
+  for (const auto& x : r.summary) {
+    s += fmt::format("{:<16}", x.config);
+    for (loop::AccelKind e : kEmbree) {
+      const BenchSummary* p = find(r.summary, to_string(e));
+      s += fmt::format(" {:>18.2f}x", p && x.update_build_ms > 0 ? p->update_build_ms / x.update_build_ms : 0.0);
+    }
+    for (loop::AccelKind e : kEmbree) {
+      const BenchSummary* p = find(r.summary, to_string(e));
+      s += fmt::format(" {:>14.2f}x", p && p->mrays_per_s > 0 ? x.mrays_per_s / p->mrays_per_s : 0.0);
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+}  // namespace ptc

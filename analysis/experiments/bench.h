@@ -1,0 +1,100 @@
+// The side-by-side benchmark against Embree (`ptc bench`, bench/peer_bench): in one process, on
+// the same mesh, the same trace frame and the same primary rays, over the frames of a scene,
+// every acceleration configuration of analysis/loop/accel.h (ours_triangles, ours_clusters,
+// embree_medium, embree_low, embree_refit) updates to the frame's positions and traces, through
+// the one frame loop (analysis/loop/frame_loop.h). Every configuration sees the whole
+// (combined) mesh as one geometry, static parts included: the static/dynamic split is
+// `ptc trace`'s; the benchmark measures the per-frame structures. A static scene is given its
+// stand-in motion by the caller (toolkit/anim/scene.h deform_scene).
+//
+// Per frame and configuration: update_ms, build_ms and every stage (analysis/loop UpdateTimes),
+// trace_ms (closest hit, counters off), hits, and the agreement of the closest triangle with
+// ours_triangles of the same frame (analysis/metrics/hit_agreement.h).
+// Medians skip the first frame (first-touch page faults, caches, Embree's lazy initialisation)
+// when there is more than one. Threads: oneTBB is limited to `threads` for the whole run
+// (builds and traces), Embree's device gets "threads=N"; set_affinity is never used.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "analysis/loop/accel.h"
+#include "analysis/metrics/hit_agreement.h"
+#include "analysis/schema/table.h"
+#include "render/camera.h"
+#include "toolkit/anim/scene.h"
+#include "toolkit/clustering/clustering.h"
+
+namespace ptc {
+
+struct PeerBenchConfig {
+  FrameRange frames{0, 4};                ///< scene frames (the first is left out of the medians)
+  int width = 1024, height = 1024;        ///< primary rays of the camera (1..16384 each)
+  CameraSpec camera;                      ///< the camera (unset fields: framing the rest pose)
+  unsigned threads = 1;                   ///< oneTBB and Embree threads (>= 1; 1 = one-thread figures)
+  std::uint32_t max_count = 50;           ///< clustering when none is given: growth / Acc, MaxCount = MaxSize = this
+  bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
+  /// Two-level build of the cluster BVH over groups of at most this many clusters; 0: plain.
+  std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  TieRule tie;                            ///< what counts as a tie in the hit agreement
+  /// Vertex order of the benchmark mesh. true (default): the scene is renumbered once, after
+  /// clustering, with bvh::cluster_vertex_order (every cluster's own vertices consecutive, parts
+  /// kept in place), so that the cluster path converts and boxes in one pass over the positions
+  /// (ClusterScene::fused_vertex_pass); every configuration sees the same renumbered mesh,
+  /// triangle ids unchanged. false: the input order (the cluster path gathers per frame).
+  bool cluster_vertex_order = true;
+};
+
+struct BenchRow {
+  int frame = 0;                 ///< benchmark frame 0 .. frames - 1
+  std::int64_t scene_frame = 0;  ///< the scene frame
+  std::string config;
+  loop::UpdateTimes times;       ///< update_ms, build_ms and the stages
+  double frame_ms = 0;           ///< wall time of the whole update call
+  double source_ms = 0;          ///< producing the frame's positions, once per frame, outside the configurations
+  double trace_ms = 0, mrays_per_s = 0;
+  std::uint64_t rays = 0, hits = 0;
+  HitAgreement agreement;        ///< against ours_triangles of the same frame (zero for itself)
+  double sah_cost = 0;           ///< SAH cost of our binary BVH (NaN for Embree)
+};
+
+struct BenchSummary {
+  std::string config;
+  double update_ms = 0, build_ms = 0, update_build_ms = 0, trace_ms = 0, mrays_per_s = 0;  ///< medians
+  std::uint64_t mismatches = 0, ties = 0;  ///< sums over all frames (the first included)
+};
+
+struct PeerBenchResult {
+  std::vector<BenchRow> rows;          ///< frame-major, configurations in loop::kAllAccelKinds order
+  std::vector<BenchSummary> summary;   ///< one per configuration
+  std::size_t triangles = 0, vertices = 0, clusters = 0, rays = 0;
+  int median_first_frame = 0;          ///< medians over benchmark frames [median_first_frame, frames)
+  double cluster_ms = 0;               ///< clustering (0 when clusters were given)
+  double cluster_scene_setup_ms = 0;   ///< ClusterScene construction (per-clustering layout, once)
+  std::string clustering;              ///< how the clusters were made
+  std::string vertex_order;            ///< "clusters" (renumbered once) or "input"
+  bool fused_vertex_pass = false;      ///< the cluster scene converts and boxes in one pass (no gather)
+  std::uint32_t cluster_group_size = 0;  ///< the cluster BVH's two-level build (0: plain)
+  double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once
+};
+
+/// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()
+/// (validated by the caller), or nullptr to compute growth / Acc with MaxCount = MaxSize =
+/// cfg.max_count (timed as cluster_ms). With cfg.cluster_vertex_order the scene is renumbered
+/// in place (Scene::renumber_vertices). Throws std::invalid_argument for a bad configuration,
+/// std::runtime_error when Embree fails.
+[[nodiscard]] PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const PeerBenchConfig& cfg);
+
+/// Medians over benchmark frames >= first_frame per configuration (order of first appearance)
+/// and mismatch sums over all frames: the summary of run_peer_bench, recomputable from rows.
+[[nodiscard]] std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame);
+
+/// bench.csv (schema ptc-bench/2, docs/tracing.md): one row per frame and configuration.
+[[nodiscard]] Table bench_table(const PeerBenchResult& r);
+/// summary.csv (schema ptc-bench-summary/1): medians per configuration and ratios against each Embree mode.
+[[nodiscard]] Table bench_summary_table(const PeerBenchResult& r);
+/// The printed tables: medians, then ratios against each Embree mode (> 1: the row is faster).
+[[nodiscard]] std::string bench_text(const PeerBenchResult& r);
+
+}  // namespace ptc

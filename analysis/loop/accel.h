@@ -1,0 +1,103 @@
+// The acceleration configurations that the frame loop updates and traces, behind one interface,
+// so that every experiment (bench today; sweep, compare, drift next) compares them the same way:
+//
+//   ours_triangles  our binned-SAH BVH over triangle boxes, rebuilt per frame (the reference)
+//   ours_clusters   our BVH over cluster boxes (Garanzha 2009): cluster boxes updated, BVH built
+//   embree_medium   Embree static scene, RTC_BUILD_QUALITY_MEDIUM, rebuilt per frame
+//   embree_low      Embree dynamic scene, RTC_BUILD_QUALITY_LOW, rebuilt per frame
+//   embree_refit    Embree dynamic scene, geometry quality REFIT: refitted per frame
+//   scene           `ptc trace`'s: the static parts' triangle BVH built once + the moving parts'
+//                   triangle or cluster BVH updated per frame (bvh/scene_tracer.h)
+//
+// Every configuration sees the same mesh, trace frame (origin) and rays; update() takes the
+// whole mesh's positions of a frame and leaves a traceable structure (the span that per-frame
+// comparisons count on both sides: positions in, traceable structure out).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string_view>
+
+#include "bvh/scene_tracer.h"
+#include "bvh/trace_scene.h"
+#include "bvh/tracer.h"
+#include "toolkit/clustering/clustering.h"
+#include "toolkit/mesh/mesh.h"
+
+namespace ptc::loop {
+
+enum class AccelKind { OursTriangles, OursClusters, EmbreeMedium, EmbreeLow, EmbreeRefit };
+/// "ours_triangles", "ours_clusters", "embree_medium", "embree_low", "embree_refit".
+[[nodiscard]] std::string_view to_string(AccelKind k);
+[[nodiscard]] std::optional<AccelKind> parse_accel_kind(std::string_view s);
+inline constexpr AccelKind kAllAccelKinds[] = {AccelKind::OursTriangles, AccelKind::OursClusters,
+                                               AccelKind::EmbreeMedium, AccelKind::EmbreeLow, AccelKind::EmbreeRefit};
+[[nodiscard]] bool is_embree(AccelKind k);
+
+/// The last update of a configuration, milliseconds.
+struct UpdateTimes {
+  double update_ms = 0;    ///< ours: positions into the trace frame + primitive boxes; Embree: vertex buffer
+  double build_ms = 0;     ///< ours: SAH build + collapse + leaf data (+ block-tree refit); Embree: rtcCommitScene
+  bvh::StageTimes stages;  ///< ours: each stage; Embree: zero (its commit is one call)
+};
+
+class Accel {
+ public:
+  virtual ~Accel() = default;
+  [[nodiscard]] virtual std::string_view name() const = 0;
+  /// One frame: the whole mesh's positions (the mesh's vertex count).
+  virtual void update(std::span<const Vec3> positions) = 0;
+  [[nodiscard]] virtual UpdateTimes last_update() const = 0;
+  /// Traces the batch (closest or any hit by opt.mode; Embree ignores opt.counters and opt.isa).
+  virtual bvh::TraceTotals trace(const bvh::RayBatch& rays, bvh::HitBatch& hits, const bvh::TraceOptions& opt) const = 0;
+  /// The trace frame (ray offsets are measured in it).
+  [[nodiscard]] virtual Vec3 origin() const = 0;
+  /// SAH cost of the binary BVH of the last update (bvh/sah_cost.h); nullopt where the
+  /// structure is not ours (Embree) or not one tree (the static + moving scene).
+  [[nodiscard]] virtual std::optional<double> sah_cost() const { return std::nullopt; }
+};
+
+struct AccelSetup {
+  Vec3 origin = Vec3::Zero();            ///< the trace frame shared by every configuration
+  const Clustering* clusters = nullptr;  ///< ours_clusters: a clustering of the mesh (required)
+  bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
+  /// ours_clusters: two-level build over groups of at most this many clusters (0: plain build).
+  std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  unsigned threads = 1;                  ///< Embree's device threads (ours: the caller's oneTBB limit)
+};
+
+/// The cluster scene settings of ours_clusters under `setup` (the method's precomputation, such
+/// as bvh::cluster_vertex_order, must use the same).
+[[nodiscard]] bvh::SceneConfig cluster_scene_config(const AccelSetup& setup);
+
+/// Builds the configuration over `mesh` at its current positions. std::invalid_argument for
+/// ours_clusters without clusters; std::runtime_error when Embree fails.
+[[nodiscard]] std::unique_ptr<Accel> make_accel(AccelKind kind, const Mesh& mesh, const AccelSetup& setup);
+
+/// The ClusterScene inside an ours_clusters configuration (nullptr for any other).
+[[nodiscard]] const bvh::ClusterScene* cluster_scene_of(const Accel& a);
+
+/// `ptc trace`'s configuration: bvh::SceneTracer (static parts built once, moving parts updated).
+class SceneAccel final : public Accel {
+ public:
+  SceneAccel(const Mesh& first, const bvh::PartLayout& parts, const bvh::SceneTracerConfig& cfg)
+      : tracer_(first, parts, cfg) {}
+  [[nodiscard]] std::string_view name() const override { return "scene"; }
+  void update(std::span<const Vec3> positions) override { tracer_.update(positions); }
+  [[nodiscard]] UpdateTimes last_update() const override;
+  bvh::TraceTotals trace(const bvh::RayBatch& rays, bvh::HitBatch& hits, const bvh::TraceOptions& opt) const override {
+    return tracer_.trace(rays, hits, opt);
+  }
+  [[nodiscard]] Vec3 origin() const override { return tracer_.origin(); }
+  [[nodiscard]] const bvh::SceneTracer& tracer() const { return tracer_; }
+
+ private:
+  bvh::SceneTracer tracer_;
+};
+
+/// (update_ms, build_ms) of a scene's stage times: update = conversion + boxes, build = the rest.
+[[nodiscard]] UpdateTimes update_times_of(const bvh::StageTimes& t);
+
+}  // namespace ptc::loop

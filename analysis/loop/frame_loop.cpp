@@ -1,0 +1,41 @@
+#include "analysis/loop/frame_loop.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "toolkit/core/stopwatch.h"
+
+namespace ptc::loop {
+
+void run_frame_loop(Scene& scene, std::span<Vec3> positions, std::span<Accel* const> accels, const LoopOptions& opt,
+                    const Measure& measure) {
+  if (positions.size() != scene.rest().vertex_count())
+    throw std::invalid_argument("run_frame_loop: the position buffer does not match the scene");
+  if (opt.frames.count() < 1) throw std::invalid_argument("run_frame_loop: no frames");
+  std::vector<Vec3> fresh(opt.fresh_positions ? positions.size() : 0);
+  for (std::int64_t f = opt.frames.first; f <= opt.frames.last; ++f) {
+    const int index = static_cast<int>(f - opt.frames.first);
+    Stopwatch sw;
+    scene.positions(double(f), positions, opt.update_static || index == 0);
+    const double source_ms = sw.ms();
+    for (std::size_t a = 0; a < accels.size(); ++a) {
+      std::span<const Vec3> p = positions;
+      if (opt.fresh_positions) {
+        std::copy(positions.begin(), positions.end(), fresh.begin());
+        p = fresh;
+      }
+      FrameRecord r;
+      r.index = index;
+      r.frame = f;
+      r.accel = a;
+      r.source_ms = source_ms;
+      sw.restart();
+      accels[a]->update(p);
+      r.update_wall_ms = sw.ms();
+      r.times = accels[a]->last_update();
+      measure(r, *accels[a], p);
+    }
+  }
+}
+
+}  // namespace ptc::loop

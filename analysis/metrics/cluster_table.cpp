@@ -1,0 +1,118 @@
+#include "analysis/metrics/cluster_table.h"
+
+#include <cmath>
+#include <limits>
+
+#include <oneapi/tbb/parallel_for.h>
+
+#include "analysis/schema/json.h"
+#include "toolkit/mesh/mesh_report.h"
+
+namespace ptc {
+
+std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg) {
+  std::vector<ClusterRow> rows(c.cluster_count());
+  const bool has_objective = cfg.max_count > 0 && cfg.max_size > 0;
+  ClusterParams params;
+  if (has_objective) {
+    params.max_count = cfg.max_count;
+    params.max_size = cfg.max_size;
+    params.size_bound_mode = cfg.size_bound_mode;
+    params.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+  }
+  const bool usable = has_objective && params.avg_sa > 0;
+  oneapi::tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
+    ClusterRow& r = rows[k];
+    r.m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Cgal);
+    if (usable) {
+      r.reg_bound = reg_bound(r.m.vertices, params.max_count);
+      r.size_bound = size_bound(r.m.sphere.surface_area(), params.max_size, params.avg_sa, params.size_bound_mode);
+      r.acc = acc(r.m.reg, r.reg_bound, r.size_bound);
+    } else {
+      r.acc = r.reg_bound = r.size_bound = std::numeric_limits<double>::quiet_NaN();
+    }
+  });
+  return rows;
+}
+
+Table triangles_table(const Clustering& c) {
+  struct Row {
+    std::uint64_t triangle = 0, cluster = 0;
+  };
+  std::vector<Row> rows;
+  const auto label = c.cluster_of_triangle();
+  rows.reserve(label.size());
+  for (std::size_t i = 0; i < label.size(); ++i) rows.push_back({i, label[i]});
+  return tabulate(Schema{"ptc-cluster-triangles", 1}, rows, [](const Row& r, Columns& col) {
+    col("triangle_id", r.triangle);
+    col("cluster_id", r.cluster);
+  });
+}
+
+namespace {
+// Column name -> value, the one place that defines clusters.csv and the distributions.
+template <class F>
+void for_each_metric(const ClusterRow& r, F&& f) {
+  f("triangles", static_cast<double>(r.m.triangles));
+  f("vertices", static_cast<double>(r.m.vertices));
+  f("connectivity", r.m.connectivity);
+  f("reg", r.m.reg);
+  f("acc", r.acc);
+  f("sphere_radius", r.m.sphere.radius);
+  f("sphere_area", r.m.sphere.surface_area());
+  f("bbox_area", r.m.box.surface_area());
+  f("p_hit", r.m.p_hit);
+  f("area", r.m.area);
+  f("area_p", r.m.area_p);
+  f("reg_bound", r.reg_bound);
+  f("size_bound", r.size_bound);
+}
+}  // namespace
+
+Table clusters_table(const std::vector<ClusterRow>& rows) {
+  struct Row {
+    std::uint64_t id = 0;
+    const ClusterRow* r = nullptr;
+  };
+  std::vector<Row> ids;
+  for (std::size_t k = 0; k < rows.size(); ++k) ids.push_back({k, &rows[k]});
+  return tabulate(Schema{"ptc-clusters", 1}, ids, [](const Row& x, Columns& col) {
+    static const ClusterRow none{};
+    const ClusterRow& r = x.r ? *x.r : none;
+    col("cluster_id", x.id);
+    for_each_metric(r, [&](const char* name, double v) {
+      if (std::string_view(name) == "triangles" || std::string_view(name) == "vertices")
+        col(name, static_cast<std::uint64_t>(v));
+      else
+        col(name, v);
+    });
+    col("n_avg_fallback", static_cast<std::uint64_t>(r.m.n_avg_fallback));
+  });
+}
+
+nlohmann::json cluster_distributions(const std::vector<ClusterRow>& rows) {
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> values;
+  for_each_metric(ClusterRow{}, [&](const char* name, double) {
+    names.emplace_back(name);
+    values.emplace_back();
+  });
+  for (const auto& r : rows) {
+    std::size_t i = 0;
+    for_each_metric(r, [&](const char*, double v) { values[i++].push_back(v); });
+  }
+  nlohmann::json j = nlohmann::json::object();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    std::vector<double> finite;
+    for (double v : values[i])
+      if (!std::isnan(v)) finite.push_back(v);
+    if (finite.empty() && !values[i].empty()) {
+      j[names[i]] = nullptr;  // undefined for this run (e.g. acc without an objective)
+      continue;
+    }
+    j[names[i]] = summary_json(summarize(finite));
+  }
+  return j;
+}
+
+}  // namespace ptc

@@ -1,0 +1,36 @@
+// Per-cluster metrics of a clustering at the positions of a mesh, and the tables `ptc cluster`
+// writes. Column lists are part of the interface (schema "ptc-clusters/1"): change them only
+// with a new schema version.
+#pragma once
+
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "analysis/schema/table.h"
+#include "toolkit/clustering/cluster.h"
+#include "toolkit/geometry/cluster_metrics.h"
+#include "toolkit/mesh/mesh.h"
+
+namespace ptc {
+
+/// One cluster's row. Acc, regBound and sizeBound use the run's MaxCount/MaxSize; they are NaN
+/// when MaxCount = MaxSize = 0 (no objective: one triangle per cluster).
+struct ClusterRow {
+  ClusterMetrics m;
+  double acc = 0, reg_bound = 0, size_bound = 0;
+};
+
+/// Metrics of every cluster (parallel over clusters; the sphere is the CGAL working path).
+[[nodiscard]] std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg);
+
+/// triangles.csv (schema ptc-cluster-triangles/1): triangle_id,cluster_id in input triangle order.
+[[nodiscard]] Table triangles_table(const Clustering& c);
+/// cluster_id,triangles,vertices,connectivity,reg,acc,sphere_radius,sphere_area,bbox_area,p_hit,
+/// area,area_p,reg_bound,size_bound,n_avg_fallback
+/// (clusters.csv, schema ptc-clusters/1; columns defined in docs/tables.md)
+[[nodiscard]] Table clusters_table(const std::vector<ClusterRow>& rows);
+/// {metric: {count, min, mean, p5, p50, p95, max}} for every numeric column of clusters.csv.
+[[nodiscard]] nlohmann::json cluster_distributions(const std::vector<ClusterRow>& rows);
+
+}  // namespace ptc

@@ -1,0 +1,122 @@
+#include "analysis/metrics/sphere_accuracy.h"
+
+#include <algorithm>
+#include <chrono>
+#include <random>
+#include <limits>
+#include <stdexcept>
+
+#include "toolkit/core/stopwatch.h"
+#include "toolkit/geometry/morton.h"
+
+namespace ptc {
+
+std::vector<std::vector<Vec3>> morton_point_sets(const Mesh& mesh, const SphereReportConfig& cfg,
+                                                 std::vector<std::uint32_t>* run_first) {
+  if (cfg.min_run < 1 || cfg.max_run < cfg.min_run)
+    throw std::invalid_argument("sphere report: need 1 <= min_run <= max_run");
+  const auto order = morton_order(mesh.positions(), mesh.triangles());
+  std::mt19937_64 rng(cfg.seed);
+  std::uniform_int_distribution<std::size_t> len(cfg.min_run, cfg.max_run);
+  std::vector<std::vector<Vec3>> sets;
+  std::vector<std::uint32_t> stamp(mesh.vertex_count(), 0xffffffffu);
+  if (run_first) run_first->clear();
+  for (std::size_t first = 0; first < order.size();) {
+    const std::size_t last = std::min(order.size(), first + len(rng));
+    const auto id = static_cast<std::uint32_t>(sets.size());
+    std::vector<Vec3> pts;
+    for (std::size_t i = first; i < last; ++i)
+      for (std::uint32_t v : mesh.triangle(order[i]))
+        if (stamp[v] != id) {
+          stamp[v] = id;
+          pts.push_back(mesh.position(v));
+        }
+    if (run_first) run_first->push_back(static_cast<std::uint32_t>(first));
+    sets.push_back(std::move(pts));
+    first = last;
+  }
+  if (run_first) run_first->push_back(static_cast<std::uint32_t>(order.size()));
+  return sets;
+}
+
+SphereReport run_sphere_report(const Mesh& mesh, const SphereReportConfig& cfg) {
+  if (cfg.repeats < 1) throw std::invalid_argument("sphere report: repeats must be >= 1");
+  SphereReport r;
+  r.config = cfg;
+  const auto sets = morton_point_sets(mesh, cfg, &r.run_first);
+  for (const auto& s : sets) r.run_points.push_back(static_cast<std::uint32_t>(s.size()));
+
+  r.exact_radius.resize(sets.size());
+  for (std::size_t s = 0; s < sets.size(); ++s) r.exact_radius[s] = min_sphere_exact(sets[s]).radius;
+
+  for (SphereMethod m : cfg.methods) {
+    SphereMethodSummary sum;
+    sum.method = m;
+    std::vector<double> radii(sets.size());
+    std::vector<double> ns(static_cast<std::size_t>(cfg.repeats));
+    for (int rep = 0; rep < cfg.repeats; ++rep) {
+      Stopwatch t0;
+      for (std::size_t s = 0; s < sets.size(); ++s) radii[s] = bounding_sphere(m, sets[s]).radius;
+      const double ms = t0.ms();
+      ns[static_cast<std::size_t>(rep)] = sets.empty() ? 0.0 : 1e6 * ms / static_cast<double>(sets.size());
+    }
+    std::sort(ns.begin(), ns.end());
+    sum.ns_per_sphere_min = ns.front();
+    sum.ns_per_sphere_max = ns.back();
+    sum.ns_per_sphere_median = ns.size() % 2 ? ns[ns.size() / 2] : 0.5 * (ns[ns.size() / 2 - 1] + ns[ns.size() / 2]);
+    double err_sum = 0;
+    sum.rel_err_max = sets.empty() ? 0.0 : -std::numeric_limits<double>::infinity();  // a too-small radius shows
+    for (std::size_t s = 0; s < sets.size(); ++s) {
+      const double ex = r.exact_radius[s];
+      const double err = ex > 0 ? (radii[s] - ex) / ex : radii[s] - ex;
+      err_sum += err;
+      sum.rel_err_max = std::max(sum.rel_err_max, err);
+      // Containment is checked on a recomputed sphere (the timing loop keeps only radii).
+      const Sphere sp = bounding_sphere(m, sets[s]);
+      if (!contains_all(sp, sets[s], m == SphereMethod::Exact ? exact_containment_tol(sp, sets[s]) : kSphereContainmentTol))
+        ++sum.not_containing;
+    }
+    sum.rel_err_mean = sets.empty() ? 0.0 : err_sum / static_cast<double>(sets.size());
+    r.methods.push_back(sum);
+    r.radius.push_back(std::move(radii));
+  }
+  return r;
+}
+
+Table sphere_methods_table(const SphereReport& r) {
+  const std::uint64_t sets = r.exact_radius.size();
+  return tabulate(Schema{"ptc-spheres", 1}, r.methods, [sets](const SphereMethodSummary& m, Columns& col) {
+    col("method", std::string(to_string(m.method)));
+    col("point_sets", sets);
+    col("ns_per_sphere", m.ns_per_sphere_median);
+    col("ns_per_sphere_min", m.ns_per_sphere_min);
+    col("ns_per_sphere_max", m.ns_per_sphere_max);
+    col("rel_err_mean", m.rel_err_mean);
+    col("rel_err_max", m.rel_err_max);
+    col("not_containing", m.not_containing);
+  });
+}
+
+Table sphere_sets_table(const SphereReport& r) {
+  struct Row {
+    std::uint64_t set = 0, triangles = 0, points = 0;
+    SphereMethod method = SphereMethod::Exact;
+    double radius = 0, exact = 0;
+  };
+  std::vector<Row> rows;
+  for (std::size_t mi = 0; mi < r.methods.size(); ++mi)
+    for (std::size_t s = 0; s < r.exact_radius.size(); ++s)
+      rows.push_back({s, r.run_first[s + 1] - r.run_first[s], r.run_points[s], r.methods[mi].method, r.radius[mi][s],
+                      r.exact_radius[s]});
+  return tabulate(Schema{"ptc-sphere-sets", 1}, rows, [](const Row& x, Columns& col) {
+    col("set_id", x.set);
+    col("triangles", x.triangles);
+    col("points", x.points);
+    col("method", std::string(to_string(x.method)));
+    col("radius", x.radius);
+    col("exact_radius", x.exact);
+    col("rel_err", x.exact > 0 ? (x.radius - x.exact) / x.exact : x.radius - x.exact);
+  });
+}
+
+}  // namespace ptc

@@ -1,0 +1,122 @@
+#include "analysis/schema/manifest.h"
+
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+
+#include "analysis/schema/json.h"
+#include <thread>
+
+#include <CGAL/version.h>
+#include <Eigen/Core>
+#include <OpenMesh/Core/System/config.h>
+#include <boost/version.hpp>
+#include <embree3/rtcore_config.h>
+#include <fmt/core.h>
+#include <oneapi/tbb/version.h>
+
+#include "ptc_build_info.h"  // generated at build time: PTC_GIT_COMMIT, PTC_GIT_DIRTY
+#include "toolkit/core/error.h"
+
+namespace ptc {
+namespace fs = std::filesystem;
+
+nlohmann::json build_info() {
+  nlohmann::json j;
+  j["ptc"] = PTC_VERSION;
+  j["git_commit"] = PTC_GIT_COMMIT;
+  j["git_dirty"] = PTC_GIT_DIRTY != 0;
+  j["compiler"] = std::string("g++ ") + __VERSION__;
+#ifdef NDEBUG
+  j["build_type"] = "release";
+#else
+  j["build_type"] = "debug";
+#endif
+#ifdef __SANITIZE_ADDRESS__
+  j["sanitizers"] = "address,undefined";
+#endif
+#ifdef __AVX2__
+  j["simd"] = "avx2";
+#elif defined(__SSE4_2__)
+  j["simd"] = "sse4.2";
+#else
+  j["simd"] = "sse2";
+#endif
+  nlohmann::json libs;
+  libs["cgal"] = CGAL_VERSION_STR;
+  libs["eigen"] = fmt::format("{}.{}.{}", EIGEN_WORLD_VERSION, EIGEN_MAJOR_VERSION, EIGEN_MINOR_VERSION);
+  libs["boost"] = fmt::format("{}.{}.{}", BOOST_VERSION / 100000, BOOST_VERSION / 100 % 1000, BOOST_VERSION % 100);
+  libs["openmesh"] = fmt::format("{}.{}.{}", OM_GET_VER, OM_GET_MAJ, OM_GET_MIN);
+  libs["tbb"] = TBB_VERSION_STRING;
+  libs["embree"] = RTC_VERSION_STRING;
+  libs["fmt"] = fmt::format("{}.{}.{}", FMT_VERSION / 10000, FMT_VERSION / 100 % 100, FMT_VERSION % 100);
+  libs["nlohmann_json"] = fmt::format("{}.{}.{}", NLOHMANN_JSON_VERSION_MAJOR, NLOHMANN_JSON_VERSION_MINOR,
+                                      NLOHMANN_JSON_VERSION_PATCH);
+  j["libraries"] = libs;
+  return j;
+}
+
+nlohmann::json machine_info() {
+  nlohmann::json j;
+  char host[256] = {};
+  if (::gethostname(host, sizeof host - 1) == 0) j["hostname"] = host;
+  std::ifstream cpu("/proc/cpuinfo");
+  for (std::string line; std::getline(cpu, line);)
+    if (line.rfind("model name", 0) == 0) {
+      auto p = line.find(':');
+      if (p != std::string::npos) j["cpu"] = line.substr(line.find_first_not_of(' ', p + 1));
+      break;
+    }
+  j["logical_cores"] = std::thread::hardware_concurrency();
+  std::ifstream mem("/proc/meminfo");
+  for (std::string line; std::getline(mem, line);)
+    if (line.rfind("MemTotal:", 0) == 0) {
+      j["memory_kib"] = std::stoull(line.substr(9));
+      break;
+    }
+  struct utsname u {};
+  if (::uname(&u) == 0) j["kernel"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
+  return j;
+}
+
+namespace {
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+}  // namespace
+
+RunManifest::RunManifest(std::string command, std::vector<std::string> argv)
+    : command_(std::move(command)), argv_(std::move(argv)), started_utc_(utc_now()), t0_(std::chrono::steady_clock::now()) {}
+
+void RunManifest::add_output(const std::string& file, const std::string& schema) {
+  outputs_.push_back(file);
+  if (!schema.empty()) schemas_[file] = schema;
+}
+
+nlohmann::json RunManifest::to_json() const {
+  nlohmann::json j;
+  j["schema"] = "ptc-manifest/1";
+  j["command"] = command_;
+  j["argv"] = argv_;
+  j["started_utc"] = started_utc_;
+  j["wall_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_).count();
+  j["inputs"] = inputs_;
+  j["parameters"] = parameters_;
+  j["timings_ms"] = timings_;
+  j["results"] = results_;
+  j["outputs"] = outputs_;
+  j["output_schemas"] = schemas_;
+  j["build"] = build_info();
+  j["machine"] = machine_info();
+  return j;
+}
+
+}  // namespace ptc

@@ -1,0 +1,51 @@
+// The JSON run manifest written next to every CSV, so that every number a user sees can be
+// traced to its run: command line, inputs (size, hash), parameters, versions of ptc and of
+// every library, machine, timings, the files the run wrote and the schema of every table.
+// Data only: the inputs' hashes are computed where files are opened (commands/inputs.h).
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "analysis/schema/json.h"
+
+namespace ptc {
+
+/// Versions of ptc (with the git commit it was built from) and of every library it links.
+[[nodiscard]] nlohmann::json build_info();
+/// Host name, CPU model, logical cores, memory, kernel.
+[[nodiscard]] nlohmann::json machine_info();
+
+class RunManifest {
+ public:
+  /// `command`: the subcommand ("spheres"); `argv`: the full command line as given.
+  RunManifest(std::string command, std::vector<std::string> argv);
+
+  /// An input's record (commands/inputs.h record_input: path, absolute path, bytes, FNV-1a hash).
+  void add_input(nlohmann::json entry) { inputs_.push_back(std::move(entry)); }
+  void set_parameter(const std::string& key, nlohmann::json value) { parameters_[key] = std::move(value); }
+  void add_timing_ms(const std::string& key, double ms) { timings_[key] = ms; }
+  /// A file the run wrote; `schema` ("ptc-bench/1") for a table (listed under output_schemas).
+  void add_output(const std::string& file, const std::string& schema = "");
+  void set_result(const std::string& key, nlohmann::json value) { results_[key] = std::move(value); }
+
+  [[nodiscard]] nlohmann::json to_json() const;
+
+ private:
+  std::string command_;
+  std::vector<std::string> argv_;
+  std::string started_utc_;
+  std::chrono::steady_clock::time_point t0_;
+  nlohmann::json inputs_ = nlohmann::json::array();
+  nlohmann::json parameters_ = nlohmann::json::object();
+  nlohmann::json timings_ = nlohmann::json::object();
+  nlohmann::json results_ = nlohmann::json::object();
+  std::vector<std::string> outputs_;
+  nlohmann::json schemas_ = nlohmann::json::object();
+};
+
+}  // namespace ptc

@@ -1,0 +1,498 @@
+#include "bvh/binned_sah_builder.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bvh/aligned.h"
+#include "bvh/binning.h"
+#include "bvh/top_down_builder.h"
+
+// The binned builder on the top-down skeleton (top_down_builder.h). Its steps:
+//   make_records        the input spans into 48-byte records (binning.h), root bounds, NaN check
+//   make_group_records  two-level build: one record per group, the top task over them
+// and per node (the skeleton's hooks):
+//   open                a task of one group continues with the group's primitives
+//   leaf_by_bound       the early leaf: the leaf is no dearer than a lower bound of every split
+//   find_split          large nodes: bin_split (bin_grid, one binning pass, a sweep over the
+//                       bins); small nodes: sweep_split (ranks by centroid, a right and a left
+//                       sweep, or the object median); otherwise no split (the weight only)
+//   apply               partition_by_bin (in place, children's boxes from the bins, centroid
+//                       bounds on the way), the swept order, or the object median
+namespace ptc::bvh {
+
+namespace {
+
+using namespace binned;
+
+constexpr std::uint32_t kSweepBelow = 16;    // nodes of at most this many primitives are swept exactly
+constexpr std::uint32_t kTwoSetsFrom = 256;  // binning into two bin sets from this many primitives up (below: one)
+
+struct BinnedExtra {
+  Box3f box;   // union of the primitive boxes
+  Box3f cbox;  // bounds of the centroids, gathered by the parent's partition; empty: not known
+  std::uint32_t groups = 0;  // 1: a range of group records (BuildInput::groups), 0: of primitives
+};
+using BinnedTask = TopDownTask<BinnedExtra>;
+
+// Ranks of r[0 .. count) by (centroid on axis a, position), count <= kSweepBelow: order[rank] = i.
+// Branch-free, four comparisons per instruction (positions past count are padded with +inf and
+// never counted, since their position is larger than every i).
+constexpr std::uint8_t kBits4[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+// Returns true, with order = the identity, when r is already in that order: a child often is
+// (its parent was swept along the same axis). The check runs over a fixed number of positions
+// (padding +inf keeps the order), so it costs no mispredicted loop exit.
+inline bool rank_by_centroid(const Ref* r, std::uint32_t count, int a, std::uint8_t* order) {
+  alignas(16) float cs[kSweepBelow];
+  for (std::uint32_t i = 0; i < kSweepBelow; ++i) cs[i] = i < count ? r[i].c[a] : kInf;
+  bool in_order = true;
+  for (std::uint32_t i = 1; i < kSweepBelow; ++i) in_order &= cs[i - 1] <= cs[i];
+  if (in_order) {
+    for (std::uint32_t i = 0; i < kSweepBelow; ++i) order[i] = static_cast<std::uint8_t>(i);
+    return true;
+  }
+  const std::uint32_t q = (count + 3) / 4;
+  __m128 cv[kSweepBelow / 4];
+  __m128i pos[kSweepBelow / 4];
+  // (all four rows, not only the q used ones: a loop of q loads was compiled into a memcpy call)
+  for (std::uint32_t k = 0; k < kSweepBelow / 4; ++k)
+    cv[k] = _mm_load_ps(cs + 4 * k), pos[k] = _mm_setr_epi32(int(4 * k), int(4 * k + 1), int(4 * k + 2), int(4 * k + 3));
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const __m128 ci = _mm_set1_ps(cs[i]);
+    const __m128i ii = _mm_set1_epi32(static_cast<int>(i));
+    int rank = 0;
+    for (std::uint32_t k = 0; k < q; ++k) {
+      const __m128 before = _mm_or_ps(_mm_cmplt_ps(cv[k], ci),
+                                      _mm_and_ps(_mm_cmpeq_ps(cv[k], ci), _mm_castsi128_ps(_mm_cmplt_epi32(pos[k], ii))));
+      rank += kBits4[_mm_movemask_ps(before)];  // (no POPCNT in the x86-64 baseline: a table)
+    }
+    order[rank] = static_cast<std::uint8_t>(i);
+  }
+  return false;
+}
+
+// The root's bounds from the record pass.
+struct RootBounds {
+  __m128 lo, hi;    // union of the boxes
+  __m128 clo, chi;  // bounds of the centroids
+};
+
+// The records of the input, in input order, and the root's bounds. A NaN anywhere makes
+// check_no_nan name the primitive. Records are assembled in registers (store_record).
+RootBounds make_records(const BuildInput& in, Ref* refs) {
+  const auto n = static_cast<std::uint32_t>(in.boxes.size());
+  static_assert(sizeof(Box3f) == 24 && sizeof(Vec3f) == 12);
+  const float* bf = in.boxes.empty() ? nullptr : in.boxes[0].lo.data();
+  const float* cf = in.centroids.empty() ? nullptr : in.centroids[0].data();
+  const __m128 mask = xyz_mask();
+  RootBounds rb{_mm_set1_ps(kInf), _mm_set1_ps(-kInf), _mm_set1_ps(kInf), _mm_set1_ps(-kInf)};
+  __m128 nan = _mm_setzero_ps();
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const __m128 l = _mm_and_ps(_mm_loadu_ps(bf + 6 * std::size_t(i)), mask);  // lo.xyz, (hi.x cleared)
+    __m128 h = _mm_loadu_ps(bf + 6 * std::size_t(i) + 2);                      // lo.z, hi.xyz
+    h = _mm_shuffle_ps(h, h, _MM_SHUFFLE(0, 3, 2, 1));                          // hi.xyz, lo.z
+    h = _mm_and_ps(h, mask);
+    // Centroid: a 16-byte load reads one float past the element, allowed but for the last one.
+    __m128 c;
+    if (i + 1 < n) {
+      c = _mm_and_ps(_mm_loadu_ps(cf + 3 * std::size_t(i)), mask);
+    } else {
+      const Vec3f& v = in.centroids[i];
+      c = _mm_setr_ps(v[0], v[1], v[2], 0.0f);
+    }
+    const std::uint32_t wt = in.weights.empty() ? 1u : in.weights[i];
+    store_record(refs[i], l, h, c, i, wt);
+    rb.lo = _mm_min_ps(rb.lo, l), rb.hi = _mm_max_ps(rb.hi, h);
+    rb.clo = _mm_min_ps(rb.clo, c), rb.chi = _mm_max_ps(rb.chi, c);
+    nan = _mm_or_ps(nan, _mm_or_ps(_mm_cmpunord_ps(l, h), _mm_cmpunord_ps(c, c)));
+  }
+  if (_mm_movemask_ps(nan)) check_no_nan(in);
+  return rb;
+}
+
+// Two-level build (BuildInput::groups): one record per group (the union of its primitives'
+// boxes, the box centre, the summed weight; id = the group), into group_refs; returns the
+// bounds of the group centres. Throws std::invalid_argument for an empty or decreasing group.
+Box3f make_group_records(std::span<const std::uint32_t> groups, const Ref* refs, AlignedVector<Ref>& group_refs) {
+  const std::size_t G = groups.size() - 1;
+  const auto n = groups.back();
+  const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
+  group_refs.resize(G);
+  __m128 gclo = inf, gchi = ninf;
+  for (std::size_t g = 0; g < G; ++g) {
+    const std::uint32_t a = groups[g], e = groups[g + 1];
+    if (e <= a || e > n) throw std::invalid_argument("build_binned_sah: empty or decreasing group " + std::to_string(g));
+    __m128 lo = inf, hi = ninf;
+    std::uint64_t wt = 0;
+    for (std::uint32_t i = a; i < e; ++i) {
+      lo = _mm_min_ps(lo, load_lo(refs[i])), hi = _mm_max_ps(hi, load_hi(refs[i]));
+      wt += refs[i].weight;
+    }
+    const __m128 c = _mm_and_ps(_mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi)), xyz_mask());
+    store_record(group_refs[g], lo, hi, c, static_cast<std::uint32_t>(g), static_cast<std::uint32_t>(wt));
+    gclo = _mm_min_ps(gclo, c), gchi = _mm_max_ps(gchi, c);
+  }
+  return to_box(gclo, gchi);
+}
+
+}  // namespace
+
+struct BuildWorkspace::Impl {
+  AlignedVector<Ref> refs;
+  AlignedVector<Ref> group_refs;  // two-level build: one record per group
+  std::vector<BinnedTask> stack;
+  Bins bins[2];
+};
+
+namespace {
+
+// Per large node: one binning pass (which also stores each record's bins for the partition), a
+// sweep over the bins, one partition pass (which also gathers the children's centroid bounds).
+// Per small node: ranks by centroid (skipped when already in order), one right and one left
+// sweep (which also give the records in order and the children's boxes), one copy back.
+class BinnedBuilder {
+ public:
+  using Task = BinnedTask;
+  // The best split of a node; the bins it was found in are w.bins[0] until apply().
+  struct Split {
+    double cost = std::numeric_limits<double>::infinity();  // inf: none (leaf, or the object median)
+    std::uint64_t weight = 0;                               // W(P)
+    std::uint32_t nbins = 0;
+    int bin_axis = -1;           // bin split: left = bins [0, bin_split) on bin_axis
+    std::uint32_t bin_split = 0;
+    int sweep_axis = -1;         // sweep split: left = the first sweep_k records in order[sweep_axis]
+    std::uint32_t sweep_k = 0;
+    SideBounds sweep_left, sweep_right;      // the children's boxes of the best sweep split
+    bool sorted[3] = {false, false, false};  // order[a] is the identity
+    std::uint8_t order[3][kSweepBelow];
+    RefBits swept[3][kSweepBelow];           // the records in order[a]
+  };
+
+  BinnedBuilder(const BuildInput& in, const BuildConfig& cfg, BuildWorkspace::Impl& w)
+      : in_(in), cfg_(cfg), w_(w), bin_range_(bin_range_for(cfg.allow_avx2)) {}
+
+  Box3f open(Task& t) const {
+    if (t.extra.groups && t.size() == 1) {  // one group: continue with its primitives
+      const std::uint32_t g = w_.group_refs[t.begin].id;
+      t = {{t.extra.box, Box3f{}, 0}, in_.groups[g], in_.groups[g + 1], t.patch_parent};
+    }
+    return t.extra.box;
+  }
+  bool single_primitive(const Task& t) const { return !t.extra.groups && t.size() == 1; }
+  bool must_split(const Task& t) const { return t.extra.groups != 0; }  // (a leaf holds primitives, not groups)
+  double leaf_weight(const Task& t) const {
+    const Ref* r = records(t);
+    std::uint64_t wt = 0;
+    for (std::uint32_t i = 0; i < t.size(); ++i) wt += r[i].weight;
+    return static_cast<double>(wt);
+  }
+
+  // Early leaf: every split costs at least traversal + intersection * sum_p A(p) w_p / A (each
+  // primitive lies in a child whose area is at least its own), so a leaf that is no dearer than
+  // that bound wins without evaluating any split.
+  bool leaf_by_bound(const Task& t, double area) const {
+    if (!(area > 0.0)) return false;
+    const Ref* r = records(t);
+    double wt = 0.0, aw = 0.0;
+    for (std::uint32_t i = 0; i < t.size(); ++i) {
+      wt += r[i].weight;
+      aw += 2.0 * static_cast<double>(half_area(load_lo(r[i]), load_hi(r[i]))) * r[i].weight;
+    }
+    const SahCostModel& m = cfg_.cost;
+    return m.intersection * wt <= m.traversal + m.intersection * aw / area;
+  }
+
+  // Two primitives that must be split have one partition only: no search. Small nodes: exact
+  // sweep over the primitives sorted by centroid (cheaper than clearing and sweeping bins, and
+  // exact). Larger nodes: bins along every axis whose centroid extent is positive.
+  Split find_split(const Task& t, double area, bool must_split) {
+    Split s;
+    Ref* r = records(t);
+    const std::uint32_t count = t.size();
+    const bool trivial = count == 2 && must_split;
+    const bool small = count <= kSweepBelow;
+    // Bins per axis: cfg.bins, but no more than count / 4 (at least 4) in nodes of few
+    // primitives, where most of 16 bins would stay empty while costing a clear and a sweep step.
+    s.nbins = std::min(cfg_.bins, std::max(4u, count / 4));
+    if (!trivial && area > 0.0) {
+      if (small) {
+        sweep_split(t, r, area, must_split, s);
+        return s;
+      }
+      const BinGrid grid = bin_grid(t, r, s.nbins);
+      if (grid.usable[0] || grid.usable[1] || grid.usable[2]) {
+        bin_split(r, count, grid, area, s);
+        return s;
+      }
+    }
+    for (std::uint32_t i = 0; i < count; ++i) s.weight += r[i].weight;
+    return s;
+  }
+
+  // Puts the primitives in place (left child first) and gathers the children's bounds on the
+  // way: an in-place partition by bin, the swept order, or (no plane separates the centroids:
+  // all equal, a zero-area node, or two primitives) the object median of the current order.
+  TopDownChildren<BinnedExtra> apply(const Task& t, const Split& s) {
+    Ref* r = records(t);
+    const std::uint32_t count = t.size();
+    std::uint32_t k;
+    SideBounds left, right;
+    Box3f left_cb, right_cb;  // empty: not gathered
+    if (s.bin_axis >= 0) {
+      k = partition_by_bin(r, count, s, left, right, left_cb, right_cb);
+    } else if (s.sweep_axis >= 0) {
+      if (!s.sorted[s.sweep_axis])
+        for (std::uint32_t i = 0; i < count; ++i) store_ref(r[i], s.swept[s.sweep_axis][i]);
+      k = s.sweep_k;
+      left = s.sweep_left, right = s.sweep_right;
+    } else {
+      k = count / 2;
+      for (std::uint32_t i = 0; i < k; ++i) left.add(r[i]);
+      for (std::uint32_t i = k; i < count; ++i) right.add(r[i]);
+    }
+    assert(k > 0 && k < count);
+    return {k, {to_box(left.lo, left.hi), left_cb, t.extra.groups}, {to_box(right.lo, right.hi), right_cb, t.extra.groups}};
+  }
+
+ private:
+  // Where a node's bins lie: clo + [0, nbins) / scale per axis (the bin formula of binning.h).
+  struct BinGrid {
+    BinParams params;
+    bool usable[3];
+  };
+
+  Ref* records(const Task& t) const { return (t.extra.groups ? w_.group_refs.data() : w_.refs.data()) + t.begin; }
+
+  // The grid over the node's centroid bounds (gathered here when the parent's partition did
+  // not: they are only needed here). An axis of zero extent, or of an extent below ~1e-38 (too
+  // small to bin: the scale overflows), is not usable.
+  static BinGrid bin_grid(const Task& t, const Ref* r, std::uint32_t nbins) {
+    Box3f cb = t.extra.cbox;
+    if (cb.empty()) {
+      __m128 clo4 = _mm_set1_ps(kInf), chi4 = _mm_set1_ps(-kInf);
+      for (std::uint32_t i = 0; i < t.size(); ++i) {
+        const __m128 c = _mm_and_ps(_mm_load_ps(r[i].c), xyz_mask());
+        clo4 = _mm_min_ps(clo4, c), chi4 = _mm_max_ps(chi4, c);
+      }
+      cb = to_box(clo4, chi4);
+    }
+    BinGrid g;
+    float scale[3];
+    for (int a = 0; a < 3; ++a) {
+      const float ext = cb.hi[a] - cb.lo[a];
+      // bins * (1 - 2^-20) / ext keeps the largest centroid inside the last bin; the clamp of
+      // the bin formula catches what rounding still pushes out.
+      g.usable[a] = ext > 0.0f;
+      scale[a] = g.usable[a] ? static_cast<float>(nbins) * (1.0f - 1.0f / 1048576.0f) / ext : 0.0f;
+      if (g.usable[a] && !std::isfinite(scale[a])) g.usable[a] = false;
+    }
+    g.params = {_mm_setr_ps(cb.lo[0], cb.lo[1], cb.lo[2], 0.0f), _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f),
+                _mm_set1_ps(static_cast<float>(nbins - 1))};
+    return g;
+  }
+
+  // One binning pass into w.bins[0], then per usable axis a right and a left sweep over the
+  // non-empty bins (a boundary next to an empty bin gives the same partition as the boundary
+  // before it; small nodes, the majority, have few non-empty bins).
+  void bin_split(Ref* r, std::uint32_t count, const BinGrid& grid, double area, Split& s) const {
+    const std::uint32_t nbins = s.nbins;
+    Bins& b0 = w_.bins[0];
+    // Two bin sets (alternate primitives) hide the latency of consecutive updates of one bin;
+    // in nodes of few primitives clearing and merging the second set costs more than it hides.
+    if (count >= kTwoSetsFrom) {
+      Bins& b1 = w_.bins[1];
+      b0.clear(nbins);
+      b1.clear(nbins);
+      s.weight = bin_range_(r, count, grid.params, b0, b1);
+      b0.merge(b1, nbins);
+    } else {
+      b0.clear(nbins);
+      s.weight = bin_range_(r, count, grid.params, b0, b0);
+    }
+    const __m128 inf = _mm_set1_ps(kInf);
+    float right_area[kMaxBins], right_weight[kMaxBins];
+    std::uint32_t used[kMaxBins];
+    float best_sum = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      if (!grid.usable[a]) continue;
+      std::uint32_t k = 0;
+      for (std::uint32_t b = 0; b < nbins; ++b)
+        if (b0.weight[a][b]) used[k++] = b;
+      __m128 lo = inf, nhi = inf;
+      std::uint64_t wr = 0;
+      for (std::uint32_t j = k; j-- > 1;) {  // right side = used[j .. k)
+        const std::uint32_t b = used[j];
+        lo = _mm_min_ps(lo, b0.lo(a, b)), nhi = _mm_min_ps(nhi, b0.neg_hi(a, b));
+        wr += b0.weight[a][b];
+        right_area[j] = half_area(lo, negate(nhi));
+        right_weight[j] = static_cast<float>(wr);
+      }
+      lo = inf, nhi = inf;
+      std::uint64_t wl = 0;
+      for (std::uint32_t j = 1; j < k; ++j) {  // left = used[0 .. j), split before bin used[j]
+        const std::uint32_t b = used[j - 1];
+        lo = _mm_min_ps(lo, b0.lo(a, b)), nhi = _mm_min_ps(nhi, b0.neg_hi(a, b));
+        wl += b0.weight[a][b];
+        const float sum = half_area(lo, negate(nhi)) * static_cast<float>(wl) + right_area[j] * right_weight[j];
+        if (sum < best_sum) best_sum = sum, s.bin_axis = a, s.bin_split = used[j];
+      }
+    }
+    if (s.bin_axis >= 0) s.cost = cost_of(best_sum, area);
+  }
+
+  // The exact sweep of a small node (count <= kSweepBelow) along its longest axis (all three
+  // unless cfg.small_nodes_longest_axis); a node that must be split and has at most
+  // cfg.median_split_below primitives is split at the object median of that order instead.
+  void sweep_split(const Task& t, const Ref* r, double area, bool must_split, Split& s) const {
+    const std::uint32_t count = t.size();
+    const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
+    float right_area[kSweepBelow], right_weight[kSweepBelow];
+    __m128 suffix_lo[kSweepBelow], suffix_hi[kSweepBelow];
+    const __m128 mask3 = xyz_mask();
+    float best_sum = std::numeric_limits<float>::infinity();
+    int longest = 0;
+    for (int a = 1; a < 3; ++a)
+      if (t.extra.box.hi[a] - t.extra.box.lo[a] > t.extra.box.hi[longest] - t.extra.box.lo[longest]) longest = a;
+    for (int a = 0; a < 3; ++a) {
+      if (cfg_.small_nodes_longest_axis && a != longest) continue;
+      std::uint8_t* o = s.order[a];
+      s.sorted[a] = rank_by_centroid(r, count, a, o);
+      // Right sweep down to position 0 (the total weight), keeping the suffix boxes (the
+      // right child's box) and the records in sweep order (the reordering); the left sweep
+      // keeps the best split's prefix box (the left child's box). No other pass over the
+      // node: each variable-length loop costs a mispredicted exit, and small nodes are many.
+      __m128 lo = inf, hi = ninf;
+      std::uint64_t wr = 0;
+      for (std::uint32_t j = count; j-- > 0;) {
+        const RefBits x = load_ref(r[o[j]]);
+        s.swept[a][j] = x;
+        lo = _mm_min_ps(lo, _mm_and_ps(x.a, mask3)), hi = _mm_max_ps(hi, _mm_and_ps(x.b, mask3));
+        wr += r[o[j]].weight;
+        suffix_lo[j] = lo, suffix_hi[j] = hi;
+        right_area[j] = half_area(lo, hi);
+        right_weight[j] = static_cast<float>(wr);
+      }
+      s.weight = wr;
+      lo = inf, hi = ninf;
+      wr = 0;
+      if (must_split && count <= cfg_.median_split_below) {
+        const std::uint32_t j = count / 2;
+        for (std::uint32_t i = 0; i < j; ++i) {
+          lo = _mm_min_ps(lo, _mm_and_ps(s.swept[a][i].a, mask3));
+          hi = _mm_max_ps(hi, _mm_and_ps(s.swept[a][i].b, mask3));
+          wr += r[o[i]].weight;
+        }
+        const float sum = half_area(lo, hi) * static_cast<float>(wr) + right_area[j] * right_weight[j];
+        if (sum < best_sum) {
+          best_sum = sum, s.sweep_axis = a, s.sweep_k = j;
+          s.sweep_left = {lo, hi}, s.sweep_right = {suffix_lo[j], suffix_hi[j]};
+        }
+        continue;
+      }
+      for (std::uint32_t j = 1; j < count; ++j) {
+        lo = _mm_min_ps(lo, _mm_and_ps(s.swept[a][j - 1].a, mask3));
+        hi = _mm_max_ps(hi, _mm_and_ps(s.swept[a][j - 1].b, mask3));
+        wr += r[o[j - 1]].weight;
+        const float sum = half_area(lo, hi) * static_cast<float>(wr) + right_area[j] * right_weight[j];
+        if (sum < best_sum) {
+          best_sum = sum, s.sweep_axis = a, s.sweep_k = j;
+          s.sweep_left = {lo, hi}, s.sweep_right = {suffix_lo[j], suffix_hi[j]};
+        }
+      }
+    }
+    if (s.sweep_axis >= 0) s.cost = cost_of(best_sum, area);
+  }
+
+  // The SAH split cost from the best sum of half areas times weights (both children).
+  double cost_of(float best_sum, double area) const {
+    return cfg_.cost.traversal + cfg_.cost.intersection * 2.0 * static_cast<double>(best_sum) / area;
+  }
+
+  // The children's boxes are the unions of their bins (partition and binning use the same bin
+  // formula); the partition is in place and branch-free (the side is a coin flip to the branch
+  // predictor): [0, k) goes left, [k, i) right, and r[i] is swapped to position k. The
+  // children's centroid bounds are gathered on the way (their binning needs them, and a
+  // separate pass would read the records once more): the centroid, or NaN on the other side,
+  // which _mm_min_ps / _mm_max_ps (second operand returned on NaN) ignore. Lane 3 holds
+  // Ref::bins and is never read from these bounds. Returns k.
+  std::uint32_t partition_by_bin(Ref* r, std::uint32_t count, const Split& s, SideBounds& left, SideBounds& right,
+                                 Box3f& left_cb, Box3f& right_cb) const {
+    const Bins& b0 = w_.bins[0];
+    const int a = s.bin_axis;
+    for (std::uint32_t b = 0; b < s.nbins; ++b) {
+      SideBounds& side = b < s.bin_split ? left : right;
+      side.lo = _mm_min_ps(side.lo, b0.lo(a, b)), side.hi = _mm_max_ps(side.hi, negate(b0.neg_hi(a, b)));
+    }
+    std::uint32_t k = 0;
+    const unsigned shift = 8u * static_cast<unsigned>(a);
+    const __m128 ones = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
+    __m128 lcl = inf, lch = ninf, rcl = inf, rch = ninf;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const std::uint32_t bin = (r[i].bins >> shift) & 0xffu;
+      const RefBits x = load_ref(r[i]);
+      store_ref(r[i], load_ref(r[k]));
+      store_ref(r[k], x);
+      const std::uint32_t goes_left = bin < s.bin_split;
+      const __m128 mk = _mm_castsi128_ps(_mm_set1_epi32(-static_cast<std::int32_t>(goes_left)));
+      const __m128 cl = _mm_or_ps(x.c, _mm_xor_ps(mk, ones)), cr = _mm_or_ps(x.c, mk);
+      lcl = _mm_min_ps(cl, lcl), lch = _mm_max_ps(cl, lch), rcl = _mm_min_ps(cr, rcl), rch = _mm_max_ps(cr, rch);
+      k += goes_left;
+    }
+    left_cb = to_box(lcl, lch), right_cb = to_box(rcl, rch);
+    return k;
+  }
+
+  const BuildInput& in_;
+  const BuildConfig& cfg_;
+  BuildWorkspace::Impl& w_;
+  const BinRangeFn bin_range_;
+};
+
+}  // namespace
+
+BuildWorkspace::BuildWorkspace() : impl_(std::make_unique<Impl>()) {}
+BuildWorkspace::~BuildWorkspace() = default;
+BuildWorkspace::BuildWorkspace(const BuildWorkspace&) : impl_(std::make_unique<Impl>()) {}
+BuildWorkspace& BuildWorkspace::operator=(const BuildWorkspace&) { return *this; }
+BuildWorkspace::BuildWorkspace(BuildWorkspace&&) noexcept = default;
+BuildWorkspace& BuildWorkspace::operator=(BuildWorkspace&&) noexcept = default;
+
+Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
+  Bvh bvh;
+  BuildWorkspace ws;
+  build_binned_sah(in, cfg, bvh, ws);
+  return bvh;
+}
+
+void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, BuildWorkspace& ws) {
+  check_input(in, cfg);
+  bvh.nodes.clear();
+  bvh.prim_order.clear();
+  bvh.cost = 0.0;
+  const auto n = static_cast<std::uint32_t>(in.boxes.size());
+  if (n == 0) return;
+  if (!ws.impl_) ws.impl_ = std::make_unique<BuildWorkspace::Impl>();  // (a moved-from workspace)
+  BuildWorkspace::Impl& w = *ws.impl_;
+  w.refs.resize(n);
+  const RootBounds rb = make_records(in, w.refs.data());
+  bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
+  // The root: the group records when there are two groups or more (the top levels split
+  // groups, and a node of one group continues with the group's primitives, contiguous in the
+  // records), else the primitives.
+  const std::size_t G = in.groups.empty() ? 0 : in.groups.size() - 1;
+  if (!in.groups.empty() && (G == 0 || in.groups.front() != 0 || in.groups.back() != n))
+    throw std::invalid_argument("build_binned_sah: group offsets do not span the " + std::to_string(n) + " primitives");
+  BinnedTask root{{to_box(rb.lo, rb.hi), to_box(rb.clo, rb.chi), 0}, 0, n};
+  if (G > 1) root = {{root.extra.box, make_group_records(in.groups, w.refs.data(), w.group_refs), 1}, 0, static_cast<std::uint32_t>(G)};
+  BinnedBuilder builder(in, cfg, w);
+  build_top_down(builder, cfg, root, w.stack, bvh);
+  bvh.prim_order.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) bvh.prim_order[i] = w.refs[i].id;
+}
+
+}  // namespace ptc::bvh

@@ -1,0 +1,402 @@
+#include "bvh/cluster_scene.h"
+
+#include <emmintrin.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "bvh/leaf_blocks.h"
+#include "bvh/stage_clock.h"
+#include "toolkit/geometry/morton.h"
+#include "toolkit/geometry/triangle.h"
+
+namespace ptc::bvh {
+
+namespace {
+
+// The clustering's consistency (what ClusterScene relies on): offsets from 0 to T, no empty
+// cluster, triangle_order a permutation of the mesh's triangles, vertex offsets matching.
+void check_view(const Mesh& mesh, const ClusterView& cv) {
+  const std::size_t T = mesh.triangle_count();
+  const auto& offs = cv.triangle_offsets;
+  if (offs.empty() || offs.front() != 0 || offs.back() != cv.triangle_order.size() || cv.triangle_order.size() != T)
+    throw std::invalid_argument("ClusterScene: the clustering's offsets/order do not cover the " + std::to_string(T) +
+                                " triangles");
+  std::vector<std::uint8_t> seen(T, 0);
+  for (std::uint32_t t : cv.triangle_order)
+    if (t >= T || seen[t]++) throw std::invalid_argument("ClusterScene: triangle_order is not a permutation");
+  const std::size_t C = offs.size() - 1;
+  if (!cv.vertex_offsets.empty() &&
+      (cv.vertex_offsets.size() != C + 1 || cv.vertex_offsets.front() != 0 || cv.vertex_offsets.back() != cv.vertices.size()))
+    throw std::invalid_argument("ClusterScene: vertex_offsets do not match the clusters");
+  for (std::size_t c = 0; c < C; ++c) {
+    if (offs[c + 1] <= offs[c]) throw std::invalid_argument("ClusterScene: empty or decreasing cluster " + std::to_string(c));
+    if (!cv.vertex_offsets.empty() && cv.vertex_offsets[c + 1] < cv.vertex_offsets[c])
+      throw std::invalid_argument("ClusterScene: decreasing vertex offsets at cluster " + std::to_string(c));
+  }
+}
+
+// The rest-pose BVH over the clusters (boxes over their vertex lists, or their triangles'
+// corners, in the scene's frame; the scene's build settings, plain build): its primitive order
+// is the order in which the scene keeps the clusters, and its subtrees of at most
+// cluster_group_size clusters are the groups of the two-level build. A checked view.
+Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, const Vec3& origin) {
+  const std::size_t C = cv.triangle_offsets.size() - 1;
+  std::vector<std::uint32_t> offs, idx;
+  std::span<const std::uint32_t> o = cv.vertex_offsets, v = cv.vertices;
+  if (cv.vertex_offsets.empty()) {
+    const auto tris = mesh.triangles();
+    offs.assign(1, 0);
+    for (std::size_t c = 0; c < C; ++c) {
+      for (std::uint32_t i = cv.triangle_offsets[c]; i < cv.triangle_offsets[c + 1]; ++i)
+        for (std::uint32_t x : tris[cv.triangle_order[i]]) idx.push_back(x);
+      offs.push_back(static_cast<std::uint32_t>(idx.size()));
+    }
+    o = offs, v = idx;
+  }
+  for (std::uint32_t x : v)
+    if (x >= mesh.vertex_count())
+      throw std::invalid_argument("ClusterScene: vertex " + std::to_string(x) + " of a cluster's list is not in the mesh");
+  const std::vector<Box3f> boxes = point_group_boxes(mesh.positions(), o, v, origin);
+  const std::vector<Vec3f> centres = box_centers(boxes);
+  std::vector<std::uint32_t> weights(C);
+  for (std::size_t c = 0; c < C; ++c) weights[c] = cv.triangle_offsets[c + 1] - cv.triangle_offsets[c];
+  BuildConfig b = cfg.build;
+  b.max_leaf_size = 1;
+  return build_binned_sah({boxes, centres, weights}, b);
+}
+
+// Group offsets (in prim_order positions) of a tree over single-primitive leaves: the maximal
+// subtrees of at most `size` primitives, left to right.
+std::vector<std::uint32_t> subtree_groups(const Bvh& t, std::uint32_t size) {
+  const std::size_t N = t.nodes.size();
+  std::vector<std::uint32_t> first(N), count(N);
+  for (std::size_t i = N; i-- > 0;) {  // children have larger indices
+    const BvhNode& n = t.nodes[i];
+    if (n.is_leaf()) {
+      first[i] = n.index, count[i] = n.count;
+    } else {
+      first[i] = std::min(first[i + 1], first[n.index]);
+      count[i] = count[i + 1] + count[n.index];
+    }
+  }
+  std::vector<std::uint32_t> groups;
+  std::vector<std::uint32_t> stack{0};
+  while (!stack.empty()) {
+    const std::uint32_t i = stack.back();
+    stack.pop_back();
+    if (count[i] <= size || t.nodes[i].is_leaf()) {
+      groups.push_back(first[i]);
+      continue;
+    }
+    stack.push_back(t.nodes[i].index), stack.push_back(i + 1);  // left first
+  }
+  std::sort(groups.begin(), groups.end());
+  groups.push_back(static_cast<std::uint32_t>(t.prim_order.size()));
+  return groups;
+}
+
+// The view's clusters in the visiting order: triangle ranges and vertex lists (the triangles'
+// corners when the view has none).
+void reorder_clusters(const Mesh& mesh, const ClusterView& cv, std::span<const std::uint32_t> visit,
+                      std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& offsets,
+                      std::vector<std::uint32_t>& vertices, std::vector<std::uint32_t>& vertex_offsets) {
+  const auto tris = mesh.triangles();
+  order.clear(), offsets.assign(1, 0), vertices.clear(), vertex_offsets.assign(1, 0);
+  for (std::uint32_t c : visit) {
+    for (std::uint32_t i = cv.triangle_offsets[c]; i < cv.triangle_offsets[c + 1]; ++i) {
+      order.push_back(cv.triangle_order[i]);
+      if (cv.vertex_offsets.empty())
+        for (std::uint32_t v : tris[cv.triangle_order[i]]) vertices.push_back(v);
+    }
+    if (!cv.vertex_offsets.empty())
+      vertices.insert(vertices.end(), cv.vertices.begin() + cv.vertex_offsets[c], cv.vertices.begin() + cv.vertex_offsets[c + 1]);
+    offsets.push_back(static_cast<std::uint32_t>(order.size()));
+    vertex_offsets.push_back(static_cast<std::uint32_t>(vertices.size()));
+  }
+}
+
+// Within each cluster: Morton order of the rest-pose centroids in the cluster's own box, ties by
+// triangle id, so that consecutive groups of four are compact blocks. The grid: 10 bits per axis
+// over the cube of the box's largest extent E, cell = floor((c - lo) * 1023 / E) in [0, 1023]
+// (toolkit's morton_codes() quantises to 21 bits with 2^21 / E instead, which orders some
+// clusters differently: only its bit interleave, morton_encode, is shared).
+void sort_clusters_by_morton(std::span<const Vec3> pos, std::span<const Tri> tris, std::span<const std::uint32_t> offsets,
+                             std::vector<std::uint32_t>& order) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed;  // (code, triangle id)
+  std::vector<Vec3> cen;
+  for (std::size_t c = 0; c + 1 < offsets.size(); ++c) {
+    Box3 box;
+    cen.clear();
+    for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) {
+      const Tri& t = tris[order[i]];
+      cen.push_back(triangle_centroid(pos[t[0]], pos[t[1]], pos[t[2]]));
+      box.extend(cen.back());
+    }
+    const Vec3 ext = box.extent();
+    const double scale = ext.maxCoeff() > 0 ? 1023.0 / ext.maxCoeff() : 0.0;
+    keyed.clear();
+    for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) {
+      const Vec3 q = (cen[i - offsets[c]] - box.lo) * scale;
+      const auto code = morton_encode(static_cast<std::uint32_t>(q.x()), static_cast<std::uint32_t>(q.y()),
+                                      static_cast<std::uint32_t>(q.z()));  // < 2^30: cells < 2^10
+      keyed.push_back({static_cast<std::uint32_t>(code), order[i]});
+    }
+    std::sort(keyed.begin(), keyed.end());
+    for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) order[i] = keyed[i - offsets[c]].second;
+  }
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg) {
+  check_view(mesh, clusters);
+  return rest_tree(mesh, clusters, cfg, trace_frame_origin(mesh, cfg)).prim_order;
+}
+
+std::vector<std::uint32_t> cluster_vertex_order(const Mesh& mesh, const ClusterView& clusters,
+                                                std::span<const std::size_t> part_offsets, const SceneConfig& cfg) {
+  std::vector<std::uint32_t> order, offsets, vertices, vertex_offsets;
+  reorder_clusters(mesh, clusters, cluster_visit_order(mesh, clusters, cfg), order, offsets, vertices, vertex_offsets);
+  return cluster_vertex_order(mesh.vertex_count(), vertex_offsets, vertices, part_offsets);
+}
+
+// The layout, once per clustering: clusters in the visiting order, their triangles in Morton
+// order (Linear) or in the leaf order of their block trees (BlockTree), blocks cluster by
+// cluster; then the vertex order of the per-frame pass and the first frame.
+ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg)
+    : tris_(mesh.shared_triangles()), cfg_(cfg) {
+  check_view(mesh, cv);
+  TraceData& data = f_.data;
+  data.origin = trace_frame_origin(mesh, cfg);  // (checks the rest positions)
+  // The rest pose in the trace frame: finite in single precision (checked), and the BlockTree
+  // layout's input below.
+  frame_positions(mesh.positions(), data.origin, f_.fpos);
+  check_finite(mesh.positions(), f_.fpos, data.origin);
+  // Clusters are kept in the order of the rest-pose BVH over them (cluster_visit_order): the
+  // blocks are laid out in it, and the groups of the two-level build are its subtrees.
+  {
+    const Bvh rest = rest_tree(mesh, cv, cfg_, data.origin);
+    cluster_ids_ = rest.prim_order;
+    if (cfg_.cluster_group_size > 1 && !rest.nodes.empty()) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
+    if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
+  }
+  reorder_clusters(mesh, cv, cluster_ids_, order_, offsets_, vertices_, vertex_offsets_);
+  const std::size_t C = offsets_.size() - 1;
+  sort_clusters_by_morton(mesh.positions(), mesh.triangles(), offsets_, order_);
+
+  weights_.resize(C);
+  for (std::size_t c = 0; c < C; ++c) weights_[c] = offsets_[c + 1] - offsets_[c];
+  cluster_ranges_.resize(C);
+  sub_root_.assign(C, kNoTriangle);
+  std::vector<std::uint32_t> lane_ids;  // triangle id per block lane (kNoTriangle: padding)
+  if (cfg_.cluster_leaf == ClusterLeaf::Linear) layout_linear(lane_ids);
+  else layout_block_trees(lane_ids);
+  data.blocks.resize(lane_ids.size() / 4);
+  data.triangle_ids.assign(lane_ids.begin(), lane_ids.end());
+  set_vertex_order(mesh, lane_ids);
+  update(mesh.positions());
+}
+
+// Linear: each cluster's triangles packed in blocks of four, in the (Morton) order above.
+void ClusterScene::layout_linear(std::vector<std::uint32_t>& lane_ids) {
+  for (std::size_t c = 0; c < weights_.size(); ++c) {
+    const auto first = static_cast<std::uint32_t>(lane_ids.size() / 4);
+    for (std::uint32_t i = 0; i < 4 * blocks_for(weights_[c]); ++i)
+      lane_ids.push_back(i < weights_[c] ? order_[offsets_[c] + i] : kNoTriangle);
+    cluster_ranges_[c] = {first, blocks_for(weights_[c]), weights_[c]};
+  }
+}
+
+// BlockTree: per cluster a binned SAH tree over its rest-pose triangles, leaves of at most 4
+// triangles = one block each, collapsed to 4-wide; blocks in leaf order; topology kept.
+// (f_.fpos holds the rest pose in the trace frame.)
+void ClusterScene::layout_block_trees(std::vector<std::uint32_t>& lane_ids) {
+  const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
+  BuildConfig sub;
+  sub.max_leaf_size = 4;
+  sub.cost = cfg_.build.cost;
+  std::vector<Box3f> tb;
+  std::vector<Vec3f> tc;
+  for (std::size_t c = 0; c < weights_.size(); ++c) {
+    const std::span<const std::uint32_t> ids(order_.data() + offsets_[c], weights_[c]);
+    const auto first = static_cast<std::uint32_t>(lane_ids.size() / 4);
+    if (ids.size() <= 4) {  // one block: the cluster is a direct leaf
+      for (std::uint32_t i = 0; i < 4; ++i) lane_ids.push_back(i < ids.size() ? ids[i] : kNoTriangle);
+      cluster_ranges_[c] = {first, 1, weights_[c]};
+      continue;
+    }
+    tb.clear(), tc.clear();
+    for (std::uint32_t t : ids) {
+      Box3f b;
+      Vec3f m{0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const Vec3f& p = f_.fpos[tris[t][k]];
+        b.extend(p);
+        for (int a = 0; a < 3; ++a) m[a] += p[a] / 3.0f;
+      }
+      tb.push_back(b), tc.push_back(m);
+    }
+    const Bvh b = build_binned_sah({tb, tc, {}}, sub);
+    const WideBvh w = collapse_to_wide(b);
+    const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
+    sub_root_[c] = base + w.root;
+    sub_depth_ = std::max(sub_depth_, w.depth);
+    for (WideNode n : w.nodes) {
+      for (int k = 0; k < 4; ++k) {
+        if (n.is_leaf(k)) {
+          const auto blk = static_cast<std::uint32_t>(lane_ids.size() / 4);
+          for (std::uint32_t i = 0; i < 4; ++i)
+            lane_ids.push_back(i < n.count[k] ? ids[b.prim_order[n.child[k] + i]] : kNoTriangle);
+          n.child[k] = blk;  // direct leaf of count <= 4 triangles
+        } else if (!n.is_empty(k)) {
+          n.child[k] += base;
+        }
+      }
+      sub_nodes_.push_back(n);
+    }
+    const auto end = static_cast<std::uint32_t>(lane_ids.size() / 4);
+    cluster_ranges_[c] = {first, end - first, weights_[c]};
+  }
+}
+
+// Corner vertex indices per block (read sequentially every frame instead of looking up the
+// triangles of the lanes, which are scattered over the triangle array), in the vertex order of
+// the per-frame pass: vertices renumbered once per clustering so that the per-frame conversion
+// writes, and the box and leaf-data stages read, each cluster's vertices mostly contiguously
+// (vertex_order.h). When the mesh already is in that order (renumbered once with
+// cluster_vertex_order), every cluster's own vertices are consecutive input indices and the
+// conversion, fused with the box stage, streams over the input: no gather, no renumbering per
+// frame.
+void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids) {
+  const std::span<const Tri> tris = mesh.triangles();
+  vorder_ = first_touch_order(mesh.vertex_count(), vertex_offsets_, vertices_);
+  runs_ = group_runs(vorder_);
+  const auto sentinel = static_cast<std::uint32_t>(mesh.vertex_count());
+  corners_.resize(lane_ids.size() * 3);
+  for (std::size_t b = 0; b < lane_ids.size() / 4; ++b)
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t id = lane_ids[4 * b + l];
+      for (int c = 0; c < 3; ++c)
+        corners_[12 * b + 4 * c + l] = id == kNoTriangle ? sentinel : runs_ ? tris[id][c] : vorder_.to_new[tris[id][c]];
+    }
+  if (runs_) {
+    vorder_ = {};
+    f_.fpos.resize(mesh.vertex_count());
+    add_sentinel(f_.fpos);
+  } else {
+    vorder_.to_new = {};  // only needed for the corners
+  }
+}
+
+void ClusterScene::refit_subtrees() {
+  WideNode* nodes = f_.data.wide.nodes.data();
+  for (std::size_t i = sub_nodes_.size(); i-- > 0;) {
+    WideNode& n = nodes[i];
+    for (int k = 0; k < 4; ++k) {
+      if (n.is_leaf(k)) {
+        n.set_child_box(k, block_boxes_[n.child[k]]);
+      } else if (!n.is_empty(k)) {
+        const WideNode& c = nodes[n.child[k]];
+        for (int row = 0; row < 6; ++row) {  // lo rows: min over the 4 children, hi rows: max
+          __m128 x = _mm_load_ps(c.bounds[row]);
+          if (row % 2 == 0) {
+            x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
+            x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
+          } else {
+            x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
+            x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
+          }
+          n.bounds[row][k] = _mm_cvtss_f32(x);
+        }
+      }
+    }
+  }
+}
+
+void ClusterScene::update(std::span<const Vec3> positions) {
+  TraceData& data = f_.data;
+  StageTimes& times = f_.times;
+  const std::size_t V = runs_ ? runs_->vertex_count : vorder_.to_old.size();
+  if (positions.size() != V)
+    throw std::invalid_argument("ClusterScene::update: " + std::to_string(positions.size()) + " positions for " +
+                                std::to_string(V) + " vertices");
+  double t0 = clock_ms(cfg_.clock);
+  if (runs_) {  // one pass: conversion and boxes (f_.fpos keeps its size and sentinels)
+    frame_positions_and_boxes(positions, data.origin, *runs_, std::span<Vec3f>(f_.fpos.data(), V), f_.boxes,
+                              f_.centroids);
+    times.vertices_ms = 0.0;
+    times.boxes_ms = clock_ms(cfg_.clock) - t0;
+  } else {
+    frame_positions(positions, vorder_.to_old, data.origin, f_.fpos);
+    check_finite(positions, f_.fpos, data.origin);  // (a NaN box would break the build)
+    add_sentinel(f_.fpos);
+    const std::span<const Vec3f> fp(f_.fpos.data(), V);
+    times.vertices_ms = clock_ms(cfg_.clock) - t0;
+    t0 = clock_ms(cfg_.clock);
+    point_group_boxes(fp, vorder_, f_.boxes, f_.centroids);
+    times.boxes_ms = clock_ms(cfg_.clock) - t0;
+  }
+
+  t0 = clock_ms(cfg_.clock);
+  build_binned_sah({f_.boxes, f_.centroids, weights_, group_offsets_}, cfg_.build, f_.bvh, f_.ws);
+  times.build_ms = clock_ms(cfg_.clock) - t0;
+
+  t0 = clock_ms(cfg_.clock);
+  link_top_tree();
+  times.collapse_ms = clock_ms(cfg_.clock) - t0;
+
+  t0 = clock_ms(cfg_.clock);
+  const std::size_t S = sub_nodes_.size();
+  block_boxes_.resize(S ? data.blocks.size() : 0);
+  fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, S ? block_boxes_.data() : nullptr);
+  fence_blocks();
+  times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
+
+  t0 = clock_ms(cfg_.clock);
+  if (S) refit_subtrees();
+  times.refit_ms = clock_ms(cfg_.clock) - t0;
+}
+
+// Collapse, then link: nodes [0, S) are the per-cluster trees (kept from frame to frame), the
+// top tree follows; a leaf of one cluster becomes a link to its tree (BlockTree) or a direct
+// leaf, a leaf of several clusters an indirect one.
+void ClusterScene::link_top_tree() {
+  TraceData& data = f_.data;
+  const Bvh& bvh = f_.bvh;
+  const WideBvh top = collapse_to_wide(bvh);
+  const auto S = static_cast<std::uint32_t>(sub_nodes_.size());
+  if (data.wide.nodes.size() < S) data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());
+  data.wide.nodes.resize(S + top.nodes.size());
+  data.ranges.resize(weights_.size());
+  for (std::size_t i = 0; i < bvh.prim_order.size(); ++i) data.ranges[i] = cluster_ranges_[bvh.prim_order[i]];
+  for (std::size_t i = 0; i < top.nodes.size(); ++i) {
+    WideNode n = top.nodes[i];
+    for (int k = 0; k < 4; ++k) {
+      if (n.is_leaf(k)) {
+        if (n.count[k] == 1) {
+          const std::uint32_t c = bvh.prim_order[n.child[k]];
+          if (sub_root_[c] != kNoTriangle) {
+            n.child[k] = sub_root_[c], n.count[k] = 0;
+          } else {
+            n.child[k] = cluster_ranges_[c].first_block, n.count[k] = cluster_ranges_[c].triangle_count;  // packed
+          }
+        } else {
+          n.count[k] |= kIndirectLeaf;
+        }
+      } else if (!n.is_empty(k)) {
+        n.child[k] += S;
+      }
+    }
+    data.wide.nodes[S + i] = n;
+  }
+  data.wide.root = S;
+  data.wide.bounds = top.bounds;
+  data.wide.depth = top.depth + sub_depth_;
+  data.wide.leaves = top.leaves;
+  if (top.nodes.empty()) data.wide.nodes.clear();
+}
+
+}  // namespace ptc::bvh

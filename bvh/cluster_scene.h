@@ -1,0 +1,106 @@
+// The method's per-frame rebuild (Garanzha 2009): a BVH over cluster boxes whose leaves hold
+// whole clusters, with the clusters' triangles in SIMD blocks laid out once per clustering (see
+// trace_scene.h for the per-frame loop). Also the method's precomputation: the order in which
+// the scene keeps the clusters (cluster_visit_order) and the vertex renumbering that lets the
+// per-frame conversion and box pass run fused over the input (cluster_vertex_order).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "bvh/aligned.h"
+#include "bvh/scene_config.h"
+#include "bvh/scene_frame.h"
+#include "bvh/vertex_order.h"
+#include "bvh/wide_bvh.h"
+
+namespace ptc::bvh {
+
+/// A clustering as the BVH layer sees it: cluster c is the triangles
+/// triangle_order[triangle_offsets[c] .. triangle_offsets[c+1]) and, for the per-frame box, the
+/// vertices vertices[vertex_offsets[c] .. vertex_offsets[c+1]) (when vertex_offsets is empty
+/// the boxes are made from the triangles' corners instead). Spans are copied by ClusterScene.
+struct ClusterView {
+  std::span<const std::uint32_t> triangle_order, triangle_offsets, vertices, vertex_offsets;
+};
+/// The view of any clustering type with these four members (e.g. ptc::Clustering).
+template <class C>
+[[nodiscard]] ClusterView view_of(const C& c) {
+  return {c.triangle_order, c.triangle_offsets, c.vertices, c.vertex_offsets};
+}
+
+/// The order in which a ClusterScene keeps the clusters of `clusters` on `mesh`: the primitive
+/// order of the plain binned SAH BVH over the clusters' rest-pose boxes (cfg's frame and build
+/// settings, one cluster per leaf). It depends on positions, not on the vertex numbering.
+/// Throws std::invalid_argument like ClusterScene.
+[[nodiscard]] std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters,
+                                                             const SceneConfig& cfg);
+
+/// The vertex renumbering (to_old) of the method's precomputation: cluster_vertex_order
+/// (vertex_order.h) over the clusters' vertex lists (their triangles' corners when the view has
+/// none) in cluster_visit_order. A ClusterScene with the same cfg over renumber_vertices(mesh,
+/// to_old) and the clustering renamed with it takes the fused per-frame pass (fused_vertex_pass()).
+[[nodiscard]] std::vector<std::uint32_t> cluster_vertex_order(const Mesh& mesh, const ClusterView& clusters,
+                                                              std::span<const std::size_t> part_offsets,
+                                                              const SceneConfig& cfg);
+
+/// Cluster BVH: one box per cluster (from its vertex list), weights = cluster sizes. Blocks are
+/// laid out once per clustering, cluster by cluster, and only refilled per frame. Within a
+/// cluster: Linear packs the triangles in Morton order of their rest-pose centroids (the
+/// paper's leaves, tested linearly four at a time); BlockTree builds a binned SAH tree (leaves
+/// of at most 4 triangles, one block each) over the cluster's rest-pose triangles and lays the
+/// blocks out in its leaf order, a fixed-topology tree refitted every frame (a two-level
+/// variant: the per-frame build still only sees cluster boxes).
+class ClusterScene {
+ public:
+  /// Throws std::invalid_argument when the clustering does not cover the mesh's triangles once
+  /// each (sizes and offsets are checked, not connectivity).
+  ClusterScene(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg = cluster_scene_defaults());
+  void update(std::span<const Vec3> positions);
+
+  [[nodiscard]] const TraceData& data() const { return f_.data; }
+  [[nodiscard]] const Bvh& bvh() const { return f_.bvh; }
+  /// Per-cluster data (boxes, weights, the BVH's primitive ids) is in the scene's own cluster
+  /// order: scene cluster i is the clustering's cluster cluster_ids()[i] (cluster_visit_order).
+  [[nodiscard]] const std::vector<std::uint32_t>& cluster_ids() const { return cluster_ids_; }
+  [[nodiscard]] const std::vector<Box3f>& boxes() const { return f_.boxes; }
+  [[nodiscard]] const std::vector<std::uint32_t>& weights() const { return weights_; }
+  /// The two-level build's groups (BuildInput::groups, in scene cluster order); empty: plain build.
+  [[nodiscard]] const std::vector<std::uint32_t>& group_offsets() const { return group_offsets_; }
+  [[nodiscard]] const StageTimes& times() const { return f_.times; }
+  [[nodiscard]] std::size_t subtree_nodes() const { return sub_nodes_.size(); }
+  /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with
+  /// cluster_vertex_order()): the conversion is then fused into the box stage (StageTimes::
+  /// vertices_ms = 0, boxes_ms = both) and reads the input once, in order; otherwise the
+  /// conversion gathers the positions in that order (vertices_ms) before the boxes.
+  [[nodiscard]] bool fused_vertex_pass() const { return runs_.has_value(); }
+
+ private:
+  void layout_linear(std::vector<std::uint32_t>& lane_ids);
+  void layout_block_trees(std::vector<std::uint32_t>& lane_ids);
+  void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
+  void link_top_tree();
+  void refit_subtrees();
+  std::shared_ptr<const std::vector<Tri>> tris_;
+  SceneConfig cfg_;
+  std::vector<std::uint32_t> cluster_ids_;  // scene cluster -> the clustering's cluster
+  std::vector<std::uint32_t> order_, offsets_, vertices_, vertex_offsets_;  // in the scene's cluster order
+  std::vector<std::uint32_t> weights_;
+  std::vector<std::uint32_t> group_offsets_;  // SceneConfig::cluster_group_size: runs of clusters
+  std::vector<LeafRange> cluster_ranges_;  // blocks of cluster c (fixed layout)
+  // BlockTree: the per-cluster trees (child indices relative to the start of sub_nodes_, which
+  // become absolute because the subtrees occupy nodes [0, sub_nodes_.size()) of every frame).
+  AlignedVector<WideNode> sub_nodes_;
+  std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
+  std::uint32_t sub_depth_ = 0;
+  std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill
+  GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)
+  std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): f_.fpos in input order
+  AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel)
+  SceneFrame f_;
+};
+
+}  // namespace ptc::bvh

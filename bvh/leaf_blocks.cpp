@@ -1,0 +1,80 @@
+#include "bvh/leaf_blocks.h"
+
+#include <emmintrin.h>
+
+#include <limits>
+
+namespace ptc::bvh {
+
+namespace {
+
+// One block from its corner vertex indices v[corner][lane]: corners gathered with one 16-byte
+// load per vertex and transposed to SoA. When `box` is given it receives the block's exact
+// float box (NaN lanes ignored: _mm_min_ps(x, acc) returns acc for a NaN x).
+inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, TriBlock& out, Box3f* box) {
+  __m128 lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
+  for (int c = 0; c < 3; ++c) {
+    __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][0])), r1 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][1]));
+    __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][2])), r3 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][3]));
+    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // r0 = x of the 4 lanes, r1 = y, r2 = z
+    // Streaming stores: the blocks (tens of MB) are written once per frame and not read back by
+    // this pass, so they bypass the caches instead of evicting the vertex data being gathered.
+    _mm_stream_ps(out.v[c][0], r0), _mm_stream_ps(out.v[c][1], r1), _mm_stream_ps(out.v[c][2], r2);
+    if (box) {
+      lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
+      hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
+    }
+  }
+  if (box) {
+    for (int a = 0; a < 3; ++a) {
+      __m128 l = lo[a], h = hi[a];
+      l = _mm_min_ps(l, _mm_shuffle_ps(l, l, _MM_SHUFFLE(1, 0, 3, 2)));
+      l = _mm_min_ps(l, _mm_shuffle_ps(l, l, _MM_SHUFFLE(2, 3, 0, 1)));
+      h = _mm_max_ps(h, _mm_shuffle_ps(h, h, _MM_SHUFFLE(1, 0, 3, 2)));
+      h = _mm_max_ps(h, _mm_shuffle_ps(h, h, _MM_SHUFFLE(2, 3, 0, 1)));
+      box->lo[a] = _mm_cvtss_f32(l), box->hi[a] = _mm_cvtss_f32(h);
+    }
+  }
+}
+
+// One block from four triangle ids (kNoTriangle: padding, the sentinel's corners).
+inline void fill_block(const std::uint32_t* ids, std::span<const Tri> tris, const float* fp, std::uint32_t sentinel,
+                       TriBlock& out) {
+  std::uint32_t v[3][4];
+  for (int l = 0; l < 4; ++l) {
+    if (ids[l] != kNoTriangle) {
+      const Tri& t = tris[ids[l]];
+      v[0][l] = t[0], v[1][l] = t[1], v[2][l] = t[2];
+    } else {
+      v[0][l] = v[1][l] = v[2][l] = sentinel;
+    }
+  }
+  fill_block_corners(v, fp, out, nullptr);
+}
+
+}  // namespace
+
+void add_sentinel(std::vector<Vec3f>& fp) {
+  constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+  fp.push_back({nan, nan, nan});
+  fp.push_back({0.0f, 0.0f, 0.0f});
+}
+
+void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> tris, const float* fp,
+                      std::uint32_t sentinel, std::uint32_t* lane_ids, std::span<TriBlock> blocks) {
+  const auto n = static_cast<std::uint32_t>(ids.size());
+  for (std::uint32_t i = 0; i < 4 * blocks_for(n); ++i) lane_ids[i] = i < n ? ids[i] : kNoTriangle;
+  for (std::uint32_t j = 0; j < blocks_for(n); ++j) fill_block(lane_ids + 4 * j, tris, fp, sentinel, blocks[j]);
+}
+
+void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
+                              Box3f* boxes) {
+  for (std::size_t b = 0; b < blocks.size(); ++b)
+    fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
+                       boxes ? boxes + b : nullptr);
+}
+
+void fence_blocks() { _mm_sfence(); }
+
+}  // namespace ptc::bvh

@@ -1,0 +1,37 @@
+// Filling the SIMD triangle blocks of a scene's leaves (TriBlock, trace_data.h) from the frame
+// positions, every frame. Internal to bvh/ (the two scenes). Padding lanes read a sentinel
+// vertex of NaN corners (add_sentinel), which every comparison of the kernel rejects. Blocks are
+// written with streaming stores: fence_blocks() after the fills, before the blocks are traced.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "bvh/trace_data.h"
+
+namespace ptc::bvh {
+
+/// Blocks of four lanes for `triangles` triangles.
+[[nodiscard]] constexpr std::uint32_t blocks_for(std::uint32_t triangles) { return (triangles + 3) / 4; }
+
+/// Appends the sentinel vertex (NaN, at index V = frame_pos.size() before the call, for padding
+/// lanes) and one more element, so that a 16-byte load at any vertex stays inside the array.
+void add_sentinel(std::vector<Vec3f>& frame_pos);
+
+/// The blocks of one leaf of triangles `ids` (mesh triangle ids): lane_ids[0 .. 4 *
+/// blocks_for(n)) receives the ids padded with kNoTriangle, blocks[0 .. blocks_for(n)) their
+/// corners gathered from frame_pos (x y z per vertex; `sentinel` = the sentinel's index).
+void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> triangles, const float* frame_pos,
+                      std::uint32_t sentinel, std::uint32_t* lane_ids, std::span<TriBlock> blocks);
+
+/// Every block b from its corner vertex indices corners[12 b + 4 c + l] (corner c of lane l;
+/// the sentinel's index for padding lanes), gathered from frame_pos. boxes: null, or one entry
+/// per block receiving the block's exact float box (padding lanes ignored).
+void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* frame_pos, std::span<TriBlock> blocks,
+                              Box3f* boxes);
+
+/// Makes the streaming stores of the fills visible before the blocks are traced.
+void fence_blocks();
+
+}  // namespace ptc::bvh

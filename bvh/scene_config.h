@@ -1,0 +1,59 @@
+// What both scenes (triangle_scene.h, cluster_scene.h) are configured with, their defaults, the
+// rule that fixes their trace frame, and the times of their per-frame stages.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "bvh/build_config.h"
+#include "bvh/stage_clock.h"
+#include "toolkit/mesh/mesh.h"
+
+namespace ptc::bvh {
+
+/// Times of the last update's stages, milliseconds (wall-clock unless SceneConfig::clock says otherwise).
+struct StageTimes {
+  double vertices_ms = 0;   ///< positions into the trace frame (float); 0 when fused into boxes_ms
+  double boxes_ms = 0;      ///< primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion)
+  double build_ms = 0;      ///< binned SAH build
+  double collapse_ms = 0;   ///< binary -> 4-wide, and (clusters) linking
+  double leaf_data_ms = 0;  ///< SoA triangle blocks
+  double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees
+  [[nodiscard]] double total_ms() const {
+    return vertices_ms + boxes_ms + build_ms + collapse_ms + leaf_data_ms + refit_ms;
+  }
+};
+
+/// How a cluster leaf's triangles are tested (see cluster_scene.h).
+enum class ClusterLeaf { Linear, BlockTree };
+[[nodiscard]] const char* to_string(ClusterLeaf l);
+
+struct SceneConfig {
+  BuildConfig build{};  ///< builder settings (max_leaf_size counts primitives: triangles or clusters)
+  std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
+  ClusterLeaf cluster_leaf = ClusterLeaf::Linear;  ///< ClusterScene only (Linear: the paper's leaves, and the faster with Acc clusters, bench/bvh_bench.cpp)
+  StageClock clock = StageClock::Wall;  ///< clock of the StageTimes (see stage_clock.h)
+  /// ClusterScene only: two-level build (BuildInput::groups). The groups are fixed once per
+  /// clustering: the maximal subtrees of at most this many clusters of the rest-pose BVH; per
+  /// frame the top is built over the groups' boxes and each group over its clusters' boxes.
+  /// 0 (or 1): the plain build over all cluster boxes (the paper's).
+  std::uint32_t cluster_group_size = 0;
+};
+
+/// Default build settings of a triangle scene: SAH traversal 1, intersection 0.3 (a 4-wide node
+/// test costs about three triangle tests of a 4-wide block; measured best on armadillo x2, see
+/// bench/bvh_bench.cpp), leaves of up to 8 triangles.
+[[nodiscard]] SceneConfig triangle_scene_defaults();
+/// Default build settings of a cluster scene: the same SAH constants, one cluster per leaf
+/// (leaves of several clusters cost the sum of their triangles and are rarely chosen), and the
+/// two-level build over groups of at most 8 clusters (cluster_group_size; measured on 27.6k Acc
+/// clusters of armadillo x2: build 3.6 -> 1.9 ms, SAH cost +2.6%, trace speed within 1-5%).
+[[nodiscard]] SceneConfig cluster_scene_defaults();
+
+/// The trace frame of a scene over `mesh`: cfg.origin, or the centre of the mesh's bounds (the
+/// world origin for an empty mesh). A scene's rest positions and origin must be finite (they fix
+/// the trace frame, the layout and, for clusters, the rest-pose tree): std::invalid_argument
+/// naming the first bad vertex otherwise.
+[[nodiscard]] Vec3 trace_frame_origin(const Mesh& mesh, const SceneConfig& cfg);
+
+}  // namespace ptc::bvh

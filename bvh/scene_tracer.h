@@ -1,0 +1,105 @@
+// Tracing a scene whose static parts keep their BVH (issue 6, "Scenes": static meshes keep their
+// BVH across frames, only moving meshes are updated; per-frame state is positions only).
+//
+// A SceneTracer holds up to two BVHs over sub-meshes of the scene's combined mesh
+// (toolkit/anim/scene.h: parts' triangles concatenated in part order):
+//   - the static parts' triangles in a TriangleScene built once, never updated;
+//   - the moving parts' triangles in a TriangleScene or (given a clustering of the combined
+//     mesh) a ClusterScene, updated per frame from positions only.
+// Static and moving parts may interleave in part order: each sub-mesh keeps its triangles in
+// combined order, and an id map turns a sub-mesh triangle id back into the combined id (monotone,
+// so the (t, id) order inside a sub-mesh is the combined order). A ray is traced through both and
+// the results merged (the second traversal only up to the first one's hit, and for any-hit only
+// the rays the first did not stop): closest hit = the smaller (t, combined triangle id) pair, which is what
+// one BVH over the combined mesh returns (the tracer's closest hit is the smallest (t, id) pair
+// whatever the tree); any hit = a hit in either. Both BVHs use the same trace frame (origin), so
+// their float vertices and rays are bit-identical to those of a BVH over the whole mesh.
+// When every part is static there is one BVH, built once; when none is, one BVH updated per frame.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "bvh/tracer.h"
+#include "bvh/trace_scene.h"
+#include "toolkit/anim/scene.h"
+#include "toolkit/clustering/clustering.h"
+
+namespace ptc::bvh {
+
+/// Which triangles and vertices of a combined mesh belong to which part, and which parts move.
+struct PartLayout {
+  std::vector<std::size_t> vertex_offsets{0}, triangle_offsets{0};  ///< part_count + 1 entries each
+  std::vector<bool> is_static;                                       ///< part_count entries
+  [[nodiscard]] std::size_t part_count() const { return is_static.size(); }
+  [[nodiscard]] static PartLayout of(const Scene& scene);
+  /// One static part covering the whole mesh (a mesh file).
+  [[nodiscard]] static PartLayout single(const Mesh& mesh, bool is_static);
+};
+
+struct SceneTracerConfig {
+  const Clustering* clusters = nullptr;  ///< of the combined mesh: the moving BVH is a cluster BVH
+  ClusterLeaf cluster_leaf = ClusterLeaf::Linear;
+  std::uint32_t cluster_group_size = cluster_scene_defaults().cluster_group_size;  ///< SceneConfig (0: plain build)
+  std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
+};
+
+class SceneTracer {
+ public:
+  /// `first` = the combined mesh at the first traced frame (topology + positions). Builds every
+  /// BVH over those positions. Throws std::invalid_argument when the layout does not cover the
+  /// mesh, a part's triangle uses a vertex outside the part, or a cluster mixes static and
+  /// moving triangles (InputError cannot arise: read_clusters makes clusters edge-connected and
+  /// parts share no vertex).
+  SceneTracer(const Mesh& first, const PartLayout& parts, const SceneTracerConfig& cfg = {});
+  SceneTracer(const SceneTracer&) = delete;
+  SceneTracer& operator=(const SceneTracer&) = delete;
+
+  /// A frame: the combined positions (only the moving parts' ranges are read). Updates the moving
+  /// BVH; a no-op when every part is static. std::invalid_argument for a wrong size.
+  void update(std::span<const Vec3> combined_positions);
+
+  /// Traces the rays through both BVHs and merges (see the file comment); triangle ids are
+  /// combined ids; counters (when asked) are the sums over both traversals.
+  TraceTotals trace(const RayBatch& rays, HitBatch& hits, const TraceOptions& opt) const;
+
+  [[nodiscard]] const Vec3& origin() const { return origin_; }
+  [[nodiscard]] bool split() const { return static_ != nullptr && moving_any(); }
+  [[nodiscard]] bool all_static() const { return all_static_; }
+  [[nodiscard]] std::size_t static_triangles() const { return static_ids_.size(); }
+  [[nodiscard]] std::size_t moving_triangles() const { return moving_ids_.size(); }
+  [[nodiscard]] bool moving_is_clusters() const { return bool(moving_cs_); }
+  /// Construction time of the static BVH (all parts static: of the one BVH), milliseconds.
+  [[nodiscard]] double static_build_ms() const { return static_build_ms_; }
+  /// Construction time of the moving BVH (including its first build), milliseconds.
+  [[nodiscard]] double moving_setup_ms() const { return moving_setup_ms_; }
+  /// Stage times of the last update() of the moving BVH (zero before the first / all static).
+  [[nodiscard]] const StageTimes& moving_times() const { return moving_times_; }
+  /// The BVH data (tests): static_data() requires a static part, moving_data() a moving one.
+  [[nodiscard]] const TraceData& static_data() const { return static_->data(); }
+  [[nodiscard]] const TraceData& moving_data() const;
+
+ private:
+  [[nodiscard]] bool moving_any() const { return moving_ts_ || moving_cs_; }
+  Vec3 origin_ = Vec3::Zero();
+  std::unique_ptr<TriangleScene> static_;
+  std::unique_ptr<TriangleScene> moving_ts_;
+  std::unique_ptr<ClusterScene> moving_cs_;
+  std::vector<std::uint32_t> static_ids_, moving_ids_;  // sub-mesh triangle -> combined triangle
+  struct Range {
+    std::size_t first, count;  // combined vertices [first, first + count)
+  };
+  std::vector<Range> moving_vertex_ranges_;
+  std::size_t combined_vertices_ = 0;
+  bool all_static_ = false;
+  std::vector<Vec3> moving_pos_;
+  mutable HitBatch scratch_;
+  mutable RayBatch scratch_rays_;
+  double static_build_ms_ = 0, moving_setup_ms_ = 0;
+  StageTimes moving_times_;
+};
+
+}  // namespace ptc::bvh

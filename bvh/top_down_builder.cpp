@@ -1,0 +1,26 @@
+#include "bvh/top_down_builder.h"
+
+#include <cassert>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace ptc::bvh {
+
+void check_input(const BuildInput& in, const BuildConfig& cfg) {
+  assert(in.centroids.size() == in.boxes.size());
+  assert(in.weights.empty() || in.weights.size() == in.boxes.size());
+  assert(cfg.max_leaf_size >= 1);
+  assert(cfg.bins >= 2 && cfg.bins <= 256);
+  assert(cfg.cost.traversal > 0.0 && cfg.cost.intersection > 0.0);
+  (void)in, (void)cfg;
+}
+
+void check_no_nan(const BuildInput& in) {
+  for (std::size_t i = 0; i < in.boxes.size(); ++i)
+    for (int a = 0; a < 3; ++a)
+      if (std::isnan(in.boxes[i].lo[a]) || std::isnan(in.boxes[i].hi[a]) || std::isnan(in.centroids[i][a]))
+        throw std::invalid_argument("BVH build: the box or centroid of primitive " + std::to_string(i) + " holds NaN");
+}
+
+}  // namespace ptc::bvh

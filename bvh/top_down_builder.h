@@ -1,0 +1,161 @@
+// The top-down skeleton both SAH builders share (the model: madmann91/bvh v2's
+// top_down_sah_builder.h). The skeleton owns the stack of pending subtrees, the emission of
+// nodes in depth-first pre-order (bvh.h's layout), the leaf decision and the SAH cost sum; a
+// builder supplies only how a node's split is found and applied. Internal to bvh/ (included by
+// sweep_sah_builder.cpp and binned_sah_builder.cpp, and by its test).
+//
+//   stack = {root}
+//   while the stack is not empty:
+//     task = pop;  box = builder.open(task)                 (the builder may rewrite the task)
+//     emit node `box` (pre-order: the first child follows its parent; a second child's index is
+//                      patched into its parent when the child is emitted)
+//     if |P| = 1: leaf
+//     must_split = |P| > max_leaf_size or builder.must_split(task)
+//     if not must_split and builder.leaf_by_bound(task, A): leaf   (a cheap bound says so)
+//     split = builder.find_split(task, A, must_split)           -> split.cost (inf: none), split.weight = W(P)
+//     if not must_split and intersection * W(P) <= split.cost: leaf
+//     k, first, second = builder.apply(task, split)             (primitives put in place)
+//     inner node; a child of one primitive is emitted as a leaf at once when it is next in
+//     pre-order (the first child, then the second when the first was one), else pushed.
+// A leaf costs intersection * W(P) * A, an inner node traversal * A (CostAccumulator); their sum
+// over A(root) is Bvh::cost (sah_cost.h's formula).
+#pragma once
+
+#include <concepts>
+#include <cstdint>
+#include <vector>
+
+#include "bvh/build_config.h"
+
+namespace ptc::bvh {
+
+/// Sum of a tree's SAH terms (see sah_cost.h), divided by A(root) at the end.
+struct CostAccumulator {
+  double area_terms = 0.0;   ///< sum traversal * A(inner) + intersection * W * A(leaf)
+  double count_terms = 0.0;  ///< the same sum with every A = 1 (used when A(root) = 0)
+  void inner(const SahCostModel& m, double area) {
+    area_terms += m.traversal * area;
+    count_terms += m.traversal;
+  }
+  void leaf(const SahCostModel& m, double area, double weight) {
+    area_terms += m.intersection * weight * area;
+    count_terms += m.intersection * weight;
+  }
+  [[nodiscard]] double total(double root_area) const { return root_area > 0.0 ? area_terms / root_area : count_terms; }
+};
+
+/// The weight of a primitive (BuildInput::weights, or 1).
+[[nodiscard]] inline double weight_of(const BuildInput& in, std::uint32_t prim) {
+  return in.weights.empty() ? 1.0 : in.weights[prim];
+}
+
+/// The preconditions of BuildInput and BuildConfig (assertions: programmer errors).
+void check_input(const BuildInput& in, const BuildConfig& cfg);
+
+/// NaN in a box or centroid (comparisons with NaN break every ordering the builders rely on):
+/// std::invalid_argument naming the first such primitive.
+void check_no_nan(const BuildInput& in);
+
+inline constexpr std::uint32_t kNoParent = 0xffffffffu;
+
+/// A pending subtree: what the builder carries along, the items [begin, end) (primitives, or a
+/// builder's own kind, such as the binned builder's groups), and the node whose `index`
+/// receives the subtree's root (kNoParent for a first child, which is its parent + 1). `extra`
+/// comes first: a box at its start then lies on the task's 16-byte boundaries, so that reading
+/// it from a task just copied is forwarded from the copy's stores (a box at offset 12 made the
+/// binned build 5% slower: store-to-load forwarding failed at every node).
+template <class Extra>
+struct TopDownTask {
+  Extra extra{};
+  std::uint32_t begin = 0, end = 0;
+  std::uint32_t patch_parent = kNoParent;
+  [[nodiscard]] std::uint32_t size() const { return end - begin; }
+};
+
+/// What a builder's apply() returns: the first child holds items [begin, begin + k), the
+/// second [begin + k, end), 0 < k < size.
+template <class Extra>
+struct TopDownChildren {
+  std::uint32_t k = 0;
+  Extra first{}, second{};
+};
+
+/// What a builder supplies (see the file comment; Split has at least `cost` and `weight`).
+template <class B>
+concept TopDownBuilder = requires(B& b, typename B::Task& task, const typename B::Task& ct,
+                                  const typename B::Split& split, double area, bool must_split) {
+  { b.open(task) } -> std::same_as<Box3f>;  // the node's box (union of its primitives' boxes)
+  { b.single_primitive(ct) } -> std::same_as<bool>;  // a task of one primitive (a leaf)
+  { b.must_split(ct) } -> std::same_as<bool>;        // beyond |P| > max_leaf_size
+  { b.leaf_by_bound(ct, area) } -> std::same_as<bool>;
+  { b.leaf_weight(ct) } -> std::same_as<double>;  // W(P) of a leaf made before find_split
+  { b.find_split(ct, area, must_split) } -> std::same_as<typename B::Split>;
+  { split.cost } -> std::convertible_to<double>;
+  { split.weight } -> std::convertible_to<double>;
+  { b.apply(ct, split) } -> std::same_as<TopDownChildren<decltype(ct.extra)>>;
+};
+
+/// Builds the tree of `root` into bvh.nodes (appended; the caller clears and reserves them)
+/// and sets bvh.cost. bvh.prim_order is the builder's business.
+template <TopDownBuilder B>
+void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& root,
+                    std::vector<typename B::Task>& stack, Bvh& bvh) {
+  using Task = typename B::Task;
+  const SahCostModel& m = cfg.cost;
+  CostAccumulator acc;
+  // A node for `task` (already opened, with its box), its parent patched.
+  auto emit = [&](const Task& task, const Box3f& box) {
+    const auto idx = static_cast<std::uint32_t>(bvh.nodes.size());
+    bvh.nodes.emplace_back().bounds = box;
+    if (task.patch_parent != kNoParent) bvh.nodes[task.patch_parent].index = idx;
+    return idx;
+  };
+  auto make_leaf = [&](std::uint32_t idx, const Task& task, double area, double weight) {
+    bvh.nodes[idx].index = task.begin;
+    bvh.nodes[idx].count = task.size();
+    acc.leaf(m, area, weight);
+  };
+  auto emit_leaf = [&](Task task) {
+    const Box3f box = builder.open(task);
+    make_leaf(emit(task, box), task, box.surface_area(), builder.leaf_weight(task));
+  };
+  stack.clear();
+  stack.push_back(root);
+  while (!stack.empty()) {
+    Task task = stack.back();
+    stack.pop_back();
+    const Box3f box = builder.open(task);
+    const std::uint32_t idx = emit(task, box);
+    const double area = box.surface_area();
+    if (task.size() == 1) {
+      make_leaf(idx, task, area, builder.leaf_weight(task));
+      continue;
+    }
+    const bool must_split = task.size() > cfg.max_leaf_size || builder.must_split(task);
+    if (!must_split && builder.leaf_by_bound(task, area)) {
+      make_leaf(idx, task, area, builder.leaf_weight(task));
+      continue;
+    }
+    const typename B::Split split = builder.find_split(task, area, must_split);
+    const double weight = static_cast<double>(split.weight);
+    if (!must_split && m.intersection * weight <= split.cost) {
+      make_leaf(idx, task, area, weight);
+      continue;
+    }
+    const auto children = builder.apply(task, split);
+    acc.inner(m, area);
+    const Task first{children.first, task.begin, task.begin + children.k, kNoParent};
+    const Task second{children.second, task.begin + children.k, task.end, idx};
+    if (builder.single_primitive(first)) {
+      emit_leaf(first);
+      if (builder.single_primitive(second)) emit_leaf(second);
+      else stack.push_back(second);
+      continue;
+    }
+    stack.push_back(second);
+    stack.push_back(first);
+  }
+  bvh.cost = acc.total(bvh.nodes[0].bounds.surface_area());
+}
+
+}  // namespace ptc::bvh

@@ -1,0 +1,59 @@
+// What the tracer reads (TraceData): a 4-wide BVH whose leaves refer to SIMD blocks of four
+// triangles, the same layout for triangle and cluster scenes, and its self-check validate().
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bvh/aligned.h"
+#include "bvh/box.h"
+#include "bvh/wide_bvh.h"
+
+namespace ptc::bvh {
+
+/// Four triangles in structure-of-arrays form: v[corner][axis][lane], 144 bytes. Unused lanes
+/// hold NaN corners, which every comparison of the kernel rejects.
+struct alignas(16) TriBlock {
+  float v[3][3][4];
+};
+
+/// Triangles in consecutive blocks [first_block, first_block + block_count) holding
+/// triangle_count triangles (padding lanes may be in any block).
+struct LeafRange {
+  std::uint32_t first_block = 0;
+  std::uint32_t block_count = 0;
+  std::uint32_t triangle_count = 0;
+};
+
+/// Marker of "no triangle" (padding lanes, misses).
+inline constexpr std::uint32_t kNoTriangle = 0xffffffffu;
+
+/// Flag in WideNode::count of a leaf child that refers to several ranges (see TraceData).
+inline constexpr std::uint32_t kIndirectLeaf = 0x80000000u;
+
+/// The flat data of a scene, as traversal sees it. Traversal starts at wide.root. A leaf child
+/// of a wide node is either
+///   direct   (count < kIndirectLeaf): `count` triangles packed in the ceil(count / 4) blocks
+///            starting at block `child` (padding only in the last block);
+///   indirect (count & kIndirectLeaf): the ranges ranges[child .. child + (count & ~kIndirectLeaf)).
+/// Triangle scenes have direct leaves only; cluster scenes direct leaves for single clusters (or
+/// single blocks) and indirect ones for leaves of several clusters.
+struct TraceData {
+  WideBvh wide;
+  std::vector<LeafRange> ranges;
+  AlignedVector<TriBlock> blocks;
+  AlignedVector<std::uint32_t> triangle_ids;  ///< 4 per block: mesh triangle id or kNoTriangle
+  Vec3 origin = Vec3::Zero();                 ///< the trace frame
+};
+
+/// Checks of the flat data (tests call it on every scene): every node reachable from the root
+/// exactly once (a tree), every leaf child's ranges inside `ranges` and blocks inside `blocks`,
+/// every mesh triangle id 0 .. triangle_count-1 in exactly one used lane (padding lanes:
+/// kNoTriangle and NaN corners), every inner child box containing its node's child boxes
+/// (equal to their union when `exact_unions`), every leaf child box containing its triangles'
+/// float corners. One line per violation (empty = valid).
+[[nodiscard]] std::vector<std::string> validate(const TraceData& data, std::size_t triangle_count,
+                                                bool exact_unions = true);
+
+}  // namespace ptc::bvh

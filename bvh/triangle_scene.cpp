@@ -1,0 +1,63 @@
+#include "bvh/triangle_scene.h"
+
+#include "bvh/leaf_blocks.h"
+#include "bvh/stage_clock.h"
+
+namespace ptc::bvh {
+
+TriangleScene::TriangleScene(const Mesh& mesh, const SceneConfig& cfg) : tris_(mesh.shared_triangles()), cfg_(cfg) {
+  f_.data.origin = trace_frame_origin(mesh, cfg);
+  update(mesh.positions());
+}
+
+void TriangleScene::update(std::span<const Vec3> positions) {
+  const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
+  TraceData& data = f_.data;
+  StageTimes& times = f_.times;
+  double t0 = clock_ms(cfg_.clock);
+  frame_positions(positions, data.origin, f_.fpos);
+  check_finite(positions, f_.fpos, data.origin);  // (a NaN box would break the build)
+  const auto V = static_cast<std::uint32_t>(f_.fpos.size());
+  add_sentinel(f_.fpos);
+  const std::span<const Vec3f> fp(f_.fpos.data(), V);
+  times.vertices_ms = clock_ms(cfg_.clock) - t0;
+
+  t0 = clock_ms(cfg_.clock);
+  f_.boxes = triangle_boxes(fp, tris);
+  f_.centroids = triangle_centroids(fp, tris);
+  times.boxes_ms = clock_ms(cfg_.clock) - t0;
+
+  t0 = clock_ms(cfg_.clock);
+  build_binned_sah({f_.boxes, f_.centroids, {}}, cfg_.build, f_.bvh, f_.ws);
+  times.build_ms = clock_ms(cfg_.clock) - t0;
+
+  t0 = clock_ms(cfg_.clock);
+  data.wide = collapse_to_wide(f_.bvh);
+  times.collapse_ms = clock_ms(cfg_.clock) - t0;
+
+  // Leaf data: blocks in the order the leaves appear in the wide nodes; leaves become direct.
+  t0 = clock_ms(cfg_.clock);
+  std::uint32_t nblocks = 0;
+  for (const WideNode& n : data.wide.nodes)
+    for (int k = 0; k < 4; ++k)
+      if (n.is_leaf(k)) nblocks += blocks_for(n.count[k]);
+  data.blocks.resize(nblocks);
+  data.triangle_ids.resize(4 * static_cast<std::size_t>(nblocks));
+  data.ranges.clear();
+  std::uint32_t next = 0;
+  for (WideNode& n : data.wide.nodes)
+    for (int k = 0; k < 4; ++k) {
+      if (!n.is_leaf(k)) continue;
+      const std::uint32_t nb = blocks_for(n.count[k]);
+      fill_leaf_blocks(std::span<const std::uint32_t>(f_.bvh.prim_order.data() + n.child[k], n.count[k]), tris,
+                       f_.fpos[0].data(), V, data.triangle_ids.data() + 4 * std::size_t(next),
+                       std::span<TriBlock>(data.blocks.data() + next, nb));
+      n.child[k] = next;  // direct leaf: count stays the triangle count
+      next += nb;
+    }
+  fence_blocks();
+  times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
+  times.refit_ms = 0.0;
+}
+
+}  // namespace ptc::bvh

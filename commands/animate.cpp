@@ -1,0 +1,135 @@
+// `ptc animate`.
+#include "commands/animate.h"
+
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <ostream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/metrics/frame_stats.h"
+#include "analysis/schema/json.h"
+#include "analysis/schema/manifest.h"
+#include "commands/args.h"
+#include "commands/inputs.h"
+#include "commands/output_dir.h"
+#include "commands/progress.h"
+#include "toolkit/anim/scene_file.h"
+#include "toolkit/core/error.h"
+#include "toolkit/core/stopwatch.h"
+
+namespace fs = std::filesystem;
+
+namespace ptc {
+
+void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
+  if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
+  if (opt.format != MeshFormat::Ply && opt.format != MeshFormat::Obj)
+    throw UsageError("--format", "frames are written as ply or obj");
+  // Parse --frames before the (possibly long) scene construction: a typo fails at once.
+  std::optional<FrameRange> asked;
+  if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
+
+  RunManifest manifest("animate", opt.argv);
+  Stopwatch t0;
+  Scene scene = open_scene(opt.scene, opt.scene_options);
+  manifest.add_timing_ms("load", t0.ms());
+  std::error_code ec;
+  if (fs::is_regular_file(opt.scene, ec)) record_input(manifest, opt.scene);
+
+  const FrameRange range = asked ? *asked : scene.frames();
+  check_frames(scene, range, opt.scene, "--frames", opt.extend_frames);
+
+  const Mesh& rest = scene.rest();
+  const char* ext = opt.format == MeshFormat::Ply ? "ply" : "obj";
+  manifest.set_parameter("scene", opt.scene);
+  manifest.set_parameter("frames", {range.first, range.last});
+  manifest.set_parameter("format", ext);
+  manifest.set_parameter("stats", opt.stats);
+
+  OutputDir dir(opt.out_dir);
+  std::vector<Vec3> pos(rest.vertex_count());
+  std::vector<double> first_areas;
+  std::vector<FrameStats> stats;
+  nlohmann::json files = nlohmann::json::array();
+  double animate_ms = 0, write_ms = 0;
+  {
+    ProgressBar bar("animate");
+    for (std::int64_t f = range.first; f <= range.last; ++f) {
+      t0.restart();
+      scene.positions(double(f), pos);
+      animate_ms += t0.ms();
+      for (const Vec3& p : pos)
+        if (!p.allFinite())
+          throw std::runtime_error(fmt::format("frame {} of '{}' has a non-finite vertex position", f, opt.scene));
+      if (opt.stats) {
+        if (f == range.first) first_areas = triangle_areas(rest.triangles(), pos);
+        stats.push_back(frame_stats(f, rest.triangles(), pos, first_areas));
+      }
+      t0.restart();
+      const std::string name = fmt::format("frame_{:04d}.{}", f, ext);
+      write_mesh(dir.path(name), rest.with_positions(pos));
+      write_ms += t0.ms();
+      files.push_back(name);
+      manifest.add_output(name);
+      bar.update(double(f - range.first + 1) / double(range.count()));
+    }
+  }
+  manifest.add_timing_ms("animate", animate_ms);
+  manifest.add_timing_ms("write", write_ms);
+
+  if (opt.stats) {
+    const Table t = frame_stats_table(stats);
+    dir.write("stats.csv", t.csv.str());
+    manifest.add_output("stats.csv", t.schema.id());
+  }
+
+  nlohmann::json parts = nlohmann::json::array();
+  for (std::size_t k = 0; k < scene.part_count(); ++k)
+    parts.push_back({{"name", scene.part(k).name},
+                     {"static", scene.is_static(k)},
+                     {"vertex_begin", scene.vertex_offset(k)},
+                     {"vertex_end", scene.vertex_offset(k + 1)},
+                     {"triangle_begin", scene.triangle_offset(k)},
+                     {"triangle_end", scene.triangle_offset(k + 1)},
+                     {"source", scene.part(k).source->describe()}});
+  manifest.set_result("triangles", rest.triangle_count());
+  manifest.set_result("vertices", rest.vertex_count());
+  manifest.set_result("frames_written", range.count());
+  manifest.set_result("parts", parts);
+  manifest.set_result("camera", {{"eye", vec_json(scene.camera().eye)},
+                                 {"look_at", vec_json(scene.camera().look_at)},
+                                 {"up", vec_json(scene.camera().up)},
+                                 {"fov", scene.camera().fov_deg}});
+  manifest.set_result("light", {{"position", vec_json(scene.light().position)}, {"intensity", scene.light().intensity}});
+  manifest.set_result("files", files);
+  manifest.add_output("manifest.json");
+  nlohmann::json doc = manifest.to_json();
+  doc["schema"] = "ptc-animate/1";
+  dir.write("manifest.json", dump_json(doc));
+  dir.commit();
+
+  if (opt.json) {
+    out << dump_json(doc["results"]);
+    return;
+  }
+  out << fmt::format("{}: {} triangles, {} vertices, {} part(s); frames {}..{} -> {}/frame_*.{} in {:.0f} ms (animate {:.0f} ms)\n",
+                     scene.name(), rest.triangle_count(), rest.vertex_count(), scene.part_count(), range.first, range.last,
+                     opt.out_dir.string(), ext, animate_ms + write_ms, animate_ms);
+  if (opt.stats) {
+    out << fmt::format("{:>6} {:>36} {:>12} {:>10} {:>10} {:>10}\n", "frame", "bbox min .. max (diagonal)", "total_area",
+                       "ratio_min", "ratio_mean", "ratio_max");
+    for (const FrameStats& s : stats)
+      out << fmt::format("{:>6} {:>36} {:>12.6g} {:>10.4g} {:>10.4g} {:>10.4g}\n", s.frame,
+                         fmt::format("({:.3g},{:.3g},{:.3g})..({:.3g},{:.3g},{:.3g}) ({:.4g})", s.bounds.lo.x(),
+                                     s.bounds.lo.y(), s.bounds.lo.z(), s.bounds.hi.x(), s.bounds.hi.y(), s.bounds.hi.z(),
+                                     s.bounds.extent().norm()),
+                         s.total_area, s.area_ratio_min, s.area_ratio_mean, s.area_ratio_max);
+    out << "wrote " << (opt.out_dir / "stats.csv").string() << "\n";
+  }
+}
+
+}  // namespace ptc

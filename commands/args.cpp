@@ -1,0 +1,87 @@
+#include "commands/args.h"
+
+#include <charconv>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "toolkit/core/error.h"
+
+namespace ptc {
+namespace {
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+std::string quoted(std::string_view s) {
+  std::string q(1, '\'');
+  q.append(s.substr(0, 32));
+  q.push_back('\'');
+  return q;
+}
+
+// A decimal integer >= 0, or nullopt.
+std::optional<std::int64_t> frame_number(std::string_view s) {
+  std::int64_t v = -1;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || ec != std::errc() || p != s.data() + s.size() || v < 0) return std::nullopt;
+  return v;
+}
+
+}  // namespace
+
+std::int64_t parse_frame(std::string_view s, std::string_view flag) {
+  const auto v = frame_number(s);
+  if (!v) throw UsageError(std::string(flag), fmt::format("{} is not a frame number (an integer >= 0)", quoted(s)));
+  return *v;
+}
+
+FrameRange parse_frame_range(std::string_view s, std::string_view flag) {
+  const auto colon = s.find(':');
+  const auto a = frame_number(s.substr(0, colon));
+  const auto b = colon == std::string_view::npos ? a : frame_number(s.substr(colon + 1));
+  if (!a || !b)
+    throw UsageError(std::string(flag),
+                     fmt::format("{} is not A:B with integers 0 <= A <= B (e.g. 0:59), nor one frame F", quoted(s)));
+  if (*b < *a)
+    throw UsageError(std::string(flag), fmt::format("{}: the last frame {} is before the first {}", quoted(s), *b, *a));
+  return {*a, *b};
+}
+
+std::optional<Vec3> parse_vec3(std::string_view s, std::string* why) {
+  auto fail = [&](std::string w) -> std::optional<Vec3> {
+    if (why) *why = std::move(w);
+    return std::nullopt;
+  };
+  double v[3];
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t comma = s.find(',');
+    if ((k < 2) != (comma != std::string_view::npos)) return fail("expected 3 comma-separated numbers X,Y,Z");
+    std::string_view tok = trim(k < 2 ? s.substr(0, comma) : s);
+    if (k < 2) s.remove_prefix(comma + 1);
+    if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
+    const auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v[k]);
+    if (tok.empty() || ec != std::errc() || p != tok.data() + tok.size())
+      return fail(quoted(tok).append(" is not a number"));
+    if (!std::isfinite(v[k])) return fail(quoted(tok).append(" is not a finite number"));
+  }
+  return Vec3(v[0], v[1], v[2]);
+}
+
+void check_frames(const Scene& scene, const FrameRange& r, const std::string& scene_arg, std::string_view flag,
+                  bool extend) {
+  const FrameRange& listed = scene.frames();
+  if (!extend && (r.first < listed.first || r.last > listed.last))
+    throw UsageError(std::string(flag),
+                     fmt::format("frames {}:{} are outside the range {}:{} of '{}' (--extend-frames allows frames "
+                                 "that its sources can still give)",
+                                 r.first, r.last, listed.first, listed.last, scene_arg));
+  if (const std::size_t fc = scene.frame_count(); fc > 0 && r.last >= static_cast<std::int64_t>(fc))
+    throw UsageError(std::string(flag),
+                     fmt::format("frame {} is beyond the last frame of '{}' (frames 0..{})", r.last, scene_arg, fc - 1));
+}
+
+}  // namespace ptc

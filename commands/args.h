@@ -1,0 +1,33 @@
+// The one parser of each argument shape that several commands share: frame numbers and ranges
+// ("F", "A:B"), vectors ("X,Y,Z"); and the one check of a frame range against a scene. Errors
+// are InputError with the flag as the element, in the flag's own words.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "toolkit/anim/scene.h"
+#include "toolkit/core/types.h"
+
+namespace ptc {
+
+/// "F": a frame number, a decimal integer >= 0. `flag` names the option in errors ("--frame").
+[[nodiscard]] std::int64_t parse_frame(std::string_view s, std::string_view flag);
+
+/// "A:B" (inclusive, 0 <= A <= B) or "A" (the one frame A); decimal integers.
+[[nodiscard]] FrameRange parse_frame_range(std::string_view s, std::string_view flag);
+
+/// "X,Y,Z" (three finite decimal numbers separated by commas, blanks around them allowed) or
+/// nullopt with `why` set ("expected 3 comma-separated numbers", "not a finite number 'nan'").
+[[nodiscard]] std::optional<Vec3> parse_vec3(std::string_view s, std::string* why = nullptr);
+
+/// Frames a command may use: those of the scene's listed range (Scene::frames(): a scene file's
+/// "frames", a built-in scene's range), or with `extend` (--extend-frames) any frame the sources
+/// can give (procedural sources go on forever; a finite source stops at its last frame).
+/// InputError naming `flag` and the scene's range otherwise.
+void check_frames(const Scene& scene, const FrameRange& range, const std::string& scene_arg, std::string_view flag,
+                  bool extend);
+
+}  // namespace ptc

@@ -1,0 +1,120 @@
+// `ptc bench`.
+#include "commands/bench.h"
+
+#include <ostream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/schema/json.h"
+#include "analysis/schema/manifest.h"
+#include "commands/args.h"
+#include "commands/output_dir.h"
+#include "commands/scene_args.h"
+#include "toolkit/anim/deformers.h"
+#include "toolkit/core/error.h"
+#include "toolkit/core/stopwatch.h"
+
+namespace ptc {
+
+void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
+  if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
+  PeerBenchConfig c = opt.config;
+  if (c.width < 1 || c.height < 1 || c.width > 16384 || c.height > 16384)
+    throw UsageError("--width/--height", "the image size must be 1..16384 pixels per side");
+  if (c.threads < 1) throw UsageError("--threads", "must be >= 1");
+  std::optional<FrameRange> asked;
+  if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
+  std::optional<DeformKind> deform;
+  const bool deform_none = opt.deform && *opt.deform == "none";
+  if (opt.deform && !deform_none) {
+    deform = parse_deform_kind(*opt.deform);
+    if (!deform)
+      throw UsageError("--deform",
+                       fmt::format("'{}' is not a deformer (twist, bend, wave, rigid, explode or none)", *opt.deform));
+  }
+
+  RunManifest manifest("bench", opt.argv);
+  const std::string arg = opt.input.string();
+  Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
+  const bool animated = !scene.all_static();
+  if (animated && opt.deform)
+    throw UsageError("--deform",
+                     fmt::format("'{}' is animated: the stand-in motion applies to static scenes (mesh files) only", arg));
+  // A static scene moves by its stand-in motion (the built-in scenes' deformer of that kind).
+  std::string motion = "scene";
+  if (!animated && !deform_none) {
+    const DeformKind k = deform.value_or(DeformKind::Twist);
+    scene = deform_scene(scene, deform_preset(k));
+    motion = fmt::format("stand-in: the {} deformer (deform_preset)", to_string(k));
+  } else if (!animated) {
+    motion = "none: the rest pose every frame";
+  }
+  const FrameRange range = asked ? *asked : animated ? scene.frames() : FrameRange{0, 4};
+  if (range.count() > 100000) throw UsageError("--frames", "at most 100000 frames");
+  check_frames(scene, range, arg, "--frames", opt.extend_frames || (!animated && deform_none));
+  c.frames = range;
+  c.camera = camera_for(c.camera, scene);
+  (void)make_camera(c.camera, scene.rest().bounds(), c.width, c.height);  // bad vectors fail before any work
+  // The output directory is checked before the (long) run, so a refused target costs nothing.
+  OutputDir dir(opt.out_dir);
+  Clustering given;
+  if (!opt.clusters.empty()) given = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
+  Stopwatch sw;
+  const PeerBenchResult r = run_peer_bench(scene, opt.clusters.empty() ? nullptr : &given, c);
+  manifest.add_timing_ms("bench", sw.ms());
+  if (r.cluster_ms > 0) manifest.add_timing_ms("cluster", r.cluster_ms);
+  manifest.add_timing_ms("cluster_scene_setup", r.cluster_scene_setup_ms);
+  if (c.cluster_vertex_order) manifest.add_timing_ms("renumber_vertices", r.renumber_ms);
+
+  const Table bench = bench_table(r), summary = bench_summary_table(r);
+  dir.write("bench.csv", bench.csv.str());
+  dir.write("summary.csv", summary.csv.str());
+  manifest.add_output("bench.csv", bench.schema.id());
+  manifest.add_output("summary.csv", summary.schema.id());
+  manifest.add_output("manifest.json");
+  manifest.set_parameter("scene", arg);
+  manifest.set_parameter("frames", {range.first, range.last});
+  manifest.set_parameter("motion", motion);
+  manifest.set_parameter("camera_from_scene", scene.has_own_camera());
+  manifest.set_parameter("width", c.width);
+  manifest.set_parameter("height", c.height);
+  manifest.set_parameter("threads", c.threads);
+  manifest.set_parameter("clustering", r.clustering);
+  if (opt.clusters.empty()) manifest.set_parameter("max_count", c.max_count);
+  manifest.set_parameter("cluster_leaf", bvh::to_string(c.cluster_leaf));
+  manifest.set_parameter("cluster_group_size", c.cluster_group_size);
+  manifest.set_parameter("vertex_order", r.vertex_order);
+  manifest.set_parameter("tie_rel", c.tie.rel_t);
+  manifest.set_parameter("embree_set_affinity", false);
+  manifest.set_result("triangles", r.triangles);
+  manifest.set_result("clusters", r.clusters);
+  manifest.set_result("rays", r.rays);
+  manifest.set_result("fused_vertex_pass", r.fused_vertex_pass);
+  manifest.set_result("scene_after_renumbering", scene.describe());
+  manifest.set_result("median_frames",
+                      nlohmann::json::array({r.median_first_frame, static_cast<int>(range.count()) - 1}));
+  nlohmann::json mj = manifest.to_json();
+  mj["schema"] = "ptc-bench/2";
+  dir.write("manifest.json", dump_json(mj));
+  dir.commit();
+
+  if (opt.json) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& s : r.summary)
+      j.push_back({{"config", s.config}, {"update_ms", s.update_ms}, {"build_ms", s.build_ms},
+                   {"update_build_ms", s.update_build_ms}, {"trace_ms", s.trace_ms}, {"mrays_per_s", s.mrays_per_s},
+                   {"mismatches", s.mismatches}, {"ties", s.ties}});
+    out << dump_json({{"schema", "ptc-bench-summary/1"}, {"summary", j}});
+    return;
+  }
+  out << fmt::format("{}: {} triangles, {} vertices; {} clusters ({}{}; cluster scene setup {:.1f} ms); frames {}..{} "
+                     "({}); {} thread(s)\n",
+                     arg, r.triangles, r.vertices, r.clusters, r.clustering,
+                     r.cluster_ms > 0 ? fmt::format(", clustered in {:.0f} ms", r.cluster_ms) : "",
+                     r.cluster_scene_setup_ms, range.first, range.last, motion, c.threads);
+  out << bench_text(r);
+  out << "wrote " << opt.out_dir.string() << "/{bench.csv,summary.csv,manifest.json}\n";
+}
+
+}  // namespace ptc

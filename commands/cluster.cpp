@@ -1,0 +1,147 @@
+// `ptc cluster`.
+#include "commands/commands.h"
+
+#include <algorithm>
+#include <ostream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/metrics/cluster_table.h"
+#include "analysis/schema/json.h"
+#include "analysis/schema/manifest.h"
+#include "commands/inputs.h"
+#include "commands/output_dir.h"
+#include "commands/progress.h"
+#include "toolkit/core/error.h"
+#include "toolkit/core/stopwatch.h"
+#include "toolkit/io/mesh_io.h"
+#include "toolkit/mesh/topology.h"
+
+namespace ptc {
+
+namespace {
+
+// A ClusterConfig parameter as the user spells it: "max_count" -> "--max-count".
+std::string flag_of(std::string_view parameter) {
+  std::string f = "--" + std::string(parameter);
+  for (char& ch : f)
+    if (ch == '_') ch = '-';
+  return f;
+}
+
+// The value of a used parameter, for the manifest.
+nlohmann::json value_of(const ClusterConfig& c, std::string_view p) {
+  if (p == "objective") return to_string(c.objective);
+  if (p == "max_count") return c.max_count;
+  if (p == "max_size") return c.max_size;
+  if (p == "size_bound") return to_string(c.size_bound_mode);
+  if (p == "sphere") return to_string(c.sphere);
+  if (p == "start") return to_string(c.start);
+  if (p == "gwh_a1") return c.gwh.a1;
+  if (p == "gwh_a2") return c.gwh.a2;
+  if (p == "gwh_weight") return to_string(c.gwh.weight);
+  if (p == "target_clusters") return c.target_clusters;
+  if (p == "max_triangles") return c.max_triangles;
+  return nullptr;
+}
+
+}  // namespace
+
+void check_cluster_options(const ClusterConfig& c, const std::vector<std::string>& given) {
+  const std::vector<std::string_view> used = used_parameters(c);
+  for (const std::string& g : given)
+    if (std::find(used.begin(), used.end(), g) == used.end()) {
+      std::string uses;
+      for (std::string_view u : used) uses += (uses.empty() ? "" : ", ") + flag_of(u);
+      throw UsageError(flag_of(g), fmt::format("not used by --method {}{} (it uses {})", to_string(c.method),
+                                               c.method == ClusterMethod::Growth || c.method == ClusterMethod::Contraction
+                                                   ? fmt::format(" --objective {}", to_string(c.objective))
+                                                   : std::string(),
+                                               uses));
+    }
+  if (const auto p = check(c)) throw UsageError(flag_of(p->parameter), p->reason);
+}
+
+void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
+  if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
+  check_cluster_options(opt.config, opt.given);
+  RunManifest manifest("cluster", opt.argv);
+  Stopwatch t0;
+  const LoadedMesh lm = read_mesh(opt.input);
+  manifest.add_timing_ms("read", t0.ms());
+  record_input(manifest, opt.input);
+  const ClusterConfig& c = opt.config;
+  // What the method used, and only that (toolkit/clustering used_parameters).
+  manifest.set_parameter("method", to_string(c.method));
+  for (std::string_view p : used_parameters(c)) manifest.set_parameter(std::string(p), value_of(c, p));
+
+  OutputDir dir(opt.out_dir);  // a refused target fails before the clustering
+  t0.restart();
+  Clustering clustering;
+  {
+    ProgressBar bar("clustering");
+    clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); });
+  }
+  manifest.add_timing_ms("cluster", t0.ms());
+
+  t0.restart();
+  const EdgeMap edges = EdgeMap::build(lm.mesh.triangles(), lm.mesh.vertex_count());
+  const auto issues = validate(clustering, lm.mesh.triangles(), edges, limits_of(c));
+  if (!issues.empty())  // a failed run: the algorithm broke its own invariants
+    throw std::runtime_error("clustering failed validation: " + issues.front());
+  manifest.add_timing_ms("validate", t0.ms());
+
+  t0.restart();
+  const auto rows = cluster_rows(lm.mesh, clustering, c);
+  manifest.add_timing_ms("metrics", t0.ms());
+  const nlohmann::json dist = cluster_distributions(rows);
+
+  t0.restart();
+  const Table tri_table = triangles_table(clustering), cluster_table = clusters_table(rows);
+  dir.write("triangles.csv", tri_table.csv.str());
+  dir.write("clusters.csv", cluster_table.csv.str());
+  std::vector<std::int32_t> face_cluster;
+  for (std::uint32_t k : clustering.cluster_of_triangle()) face_cluster.push_back(static_cast<std::int32_t>(k));
+  WriteOptions wo;
+  wo.face_values = face_cluster;
+  write_mesh(dir.path("clusters.ply"), lm.mesh, wo);
+  manifest.add_timing_ms("write", t0.ms());
+  manifest.add_output("triangles.csv", tri_table.schema.id());
+  manifest.add_output("clusters.csv", cluster_table.schema.id());
+  for (const char* f : {"clusters.ply", "summary.json", "manifest.json"}) manifest.add_output(f);
+  manifest.set_result("triangles", lm.mesh.triangle_count());
+  manifest.set_result("clusters", clustering.cluster_count());
+  manifest.set_result("mean_triangles_per_cluster",
+                      clustering.cluster_count() ? double(lm.mesh.triangle_count()) / double(clustering.cluster_count()) : 0.0);
+  manifest.set_result("validation", "ok");
+  manifest.set_result("distributions", dist);
+  const nlohmann::json mj = manifest.to_json();
+  // summary.json: the results alone (counts and the distribution of every clusters.csv column).
+  nlohmann::json summary = mj["results"];
+  summary["schema"] = "ptc-cluster-summary/2";
+  dir.write("summary.json", dump_json(summary));
+  dir.write("manifest.json", dump_json(mj));
+  dir.commit();
+
+  if (opt.json) {
+    out << dump_json(summary);
+    return;
+  }
+  const bool uses_objective = c.method == ClusterMethod::Growth || c.method == ClusterMethod::Contraction;
+  out << fmt::format("{}: {} triangles -> {} clusters ({}{}, MaxCount {}{}) in {:.0f} ms\n", opt.input.string(),
+                     lm.mesh.triangle_count(), clustering.cluster_count(), to_string(c.method),
+                     uses_objective ? " / " + std::string(to_string(c.objective)) : std::string(), c.max_count,
+                     uses_objective && c.objective == ObjectiveKind::Acc ? fmt::format(", MaxSize {}", c.max_size) : "",
+                     mj["timings_ms"]["cluster"].get<double>());
+  out << fmt::format("{:<14} {:>12} {:>12} {:>12} {:>12} {:>12}\n", "metric", "min", "p5", "p50", "p95", "max");
+  for (const char* k : {"triangles", "vertices", "connectivity", "reg", "acc", "p_hit"}) {
+    if (dist[k].is_null()) continue;
+    const auto& d = dist[k];
+    out << fmt::format("{:<14} {:>12.4g} {:>12.4g} {:>12.4g} {:>12.4g} {:>12.4g}\n", k, d["min"].get<double>(),
+                       d["p5"].get<double>(), d["p50"].get<double>(), d["p95"].get<double>(), d["max"].get<double>());
+  }
+  out << "wrote " << opt.out_dir.string() << "/{triangles.csv,clusters.csv,clusters.ply,summary.json,manifest.json}\n";
+}
+
+}  // namespace ptc

@@ -1,0 +1,94 @@
+// `ptc info`: the mesh report as JSON (stable keys, schema "ptc-info/1") and as text.
+#include "commands/commands.h"
+
+#include <ostream>
+
+#include "analysis/schema/json.h"
+#include "toolkit/io/mesh_io.h"
+#include "toolkit/mesh/mesh_report.h"
+
+#include <fmt/format.h>
+
+namespace ptc {
+
+namespace {
+
+nlohmann::json mesh_info_json(const std::filesystem::path& file, const ReadReport& read, const MeshReport& r) {
+  nlohmann::json j;
+  j["schema"] = "ptc-info/1";
+  j["file"] = file.string();
+  j["format"] = to_string(read.format);
+  j["binary"] = read.binary;
+  j["faces_in_file"] = read.faces;
+  j["polygons_triangulated"] = read.polygons;
+  j["triangles_from_polygons"] = read.triangles_from_polygons;
+  j["welded_vertices"] = read.welded_vertices;
+  j["vertices"] = r.vertices;
+  j["triangles"] = r.triangles;
+  j["unreferenced_vertices"] = r.unreferenced_vertices;
+  if (!r.bounds.empty()) {
+    j["bbox_min"] = vec_json(r.bounds.lo);
+    j["bbox_max"] = vec_json(r.bounds.hi);
+    j["bbox_extent"] = vec_json(r.bounds.extent());
+  }
+  j["total_area"] = r.total_area;
+  j["triangle_area"] = summary_json(r.triangle_area);
+  j["edge_length"] = summary_json(r.edge_length);
+  j["edges"] = r.edges;
+  j["boundary_edges"] = r.boundary_edges;
+  j["non_manifold_edges"] = r.non_manifold_edges;
+  j["non_manifold_vertices"] = r.non_manifold_vertices;
+  j["repeated_index_triangles"] = r.repeated_index_triangles;
+  j["zero_area_triangles"] = r.zero_area_triangles;
+  j["near_degenerate_triangles"] = r.near_degenerate_triangles;
+  j["duplicate_vertices"] = r.duplicate_vertices;
+  j["duplicate_triangles"] = r.duplicate_triangles;
+  j["components"] = r.components;
+  j["edge_components"] = r.edge_components;
+  j["closed_manifold"] = r.closed_manifold();
+  j["euler_characteristic"] = r.euler_characteristic();
+  return j;
+}
+
+std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& read, const MeshReport& r) {
+  std::string s;
+  auto line = [&](std::string_view key, const std::string& value) { s += fmt::format("{:<26}{}\n", key, value); };
+  auto summary = [](const Summary& x) {
+    return fmt::format("min {:.6g}  mean {:.6g}  median {:.6g}  max {:.6g}", x.min, x.mean, x.p50, x.max);
+  };
+  line("file", file.string());
+  line("format", fmt::format("{}{}", to_string(read.format), read.binary ? " (binary)" : ""));
+  line("vertices", fmt::format("{} ({} unreferenced)", r.vertices, r.unreferenced_vertices));
+  line("triangles", fmt::format("{} ({} from {} polygons)", r.triangles, read.triangles_from_polygons, read.polygons));
+  if (read.welded_vertices) line("welded vertices", std::to_string(read.welded_vertices));
+  if (!r.bounds.empty()) {
+    line("bbox min", fmt::format("{:.9g} {:.9g} {:.9g}", r.bounds.lo.x(), r.bounds.lo.y(), r.bounds.lo.z()));
+    line("bbox max", fmt::format("{:.9g} {:.9g} {:.9g}", r.bounds.hi.x(), r.bounds.hi.y(), r.bounds.hi.z()));
+  }
+  line("total area", fmt::format("{:.9g}", r.total_area));
+  line("triangle area", summary(r.triangle_area));
+  line("edge length", summary(r.edge_length));
+  line("edges", fmt::format("{} ({} boundary, {} non-manifold)", r.edges, r.boundary_edges, r.non_manifold_edges));
+  line("non-manifold vertices", std::to_string(r.non_manifold_vertices));
+  line("degenerate triangles",
+       fmt::format("{} repeated index, {} zero area, {} near-degenerate (sine < 1e-12)", r.repeated_index_triangles,
+                   r.zero_area_triangles, r.near_degenerate_triangles));
+  line("duplicates", fmt::format("{} vertices, {} triangles", r.duplicate_vertices, r.duplicate_triangles));
+  line("components", fmt::format("{} (by vertex), {} (by edge)", r.components, r.edge_components));
+  line("closed manifold", r.closed_manifold() ? "yes" : "no");
+  line("euler characteristic", std::to_string(r.euler_characteristic()));
+  return s;
+}
+
+}  // namespace
+
+void cmd_info(const InfoOptions& opt, std::ostream& out) {
+  const LoadedMesh lm = read_mesh(opt.input);
+  const MeshReport rep = analyze_mesh(lm.mesh);
+  if (opt.json)
+    out << dump_json(mesh_info_json(opt.input, lm.report, rep));
+  else
+    out << mesh_info_text(opt.input, lm.report, rep);
+}
+
+}  // namespace ptc

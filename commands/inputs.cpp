@@ -1,0 +1,40 @@
+#include "commands/inputs.h"
+
+#include <cstdio>
+#include <fstream>
+#include <vector>
+
+#include "toolkit/core/error.h"
+
+namespace ptc {
+namespace fs = std::filesystem;
+
+std::string file_fnv1a64(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string(), "", "", "cannot open file");
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64 offset basis
+  std::vector<char> buf(1 << 20);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    const auto n = in.gcount();
+    for (std::streamsize i = 0; i < n; ++i) {
+      h ^= static_cast<unsigned char>(buf[static_cast<std::size_t>(i)]);
+      h *= 1099511628211ull;
+    }
+  }
+  char out[17];
+  std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
+  return out;
+}
+
+void record_input(RunManifest& manifest, const fs::path& path) {
+  std::error_code ec;
+  nlohmann::json in;
+  in["path"] = path.string();
+  in["absolute_path"] = fs::absolute(path, ec).string();
+  in["bytes"] = fs::file_size(path, ec);
+  in["fnv1a64"] = file_fnv1a64(path);
+  manifest.add_input(std::move(in));
+}
+
+}  // namespace ptc

@@ -1,0 +1,18 @@
+// Recording the files a run read, for its manifest: the one place that hashes an input.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "analysis/schema/manifest.h"
+
+namespace ptc {
+
+/// FNV-1a 64-bit hash of a file's bytes, as 16 hex digits (a cheap identity check, not a
+/// cryptographic one). Throws InputError when the file cannot be read.
+[[nodiscard]] std::string file_fnv1a64(const std::filesystem::path& path);
+
+/// Adds {path, absolute_path, bytes, fnv1a64} of `path` to the manifest's inputs.
+void record_input(RunManifest& manifest, const std::filesystem::path& path);
+
+}  // namespace ptc

@@ -1,0 +1,52 @@
+// `ptc subdivide`.
+#include "commands/commands.h"
+
+#include <ostream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/schema/json.h"
+#include "toolkit/core/error.h"
+#include "toolkit/core/stopwatch.h"
+#include "toolkit/io/mesh_io.h"
+
+namespace ptc {
+
+void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
+  if (const auto f = format_from_extension(opt.output); !f || *f == MeshFormat::Stl)
+    throw InputError(opt.output.string(), "", "", "cannot write this format (use .off, .obj or .ply)");
+  Stopwatch t0;
+  const LoadedMesh lm = read_mesh(opt.input);
+  const double read_ms = t0.ms();
+  t0.restart();
+  // The subdivider's errors name the element (edge, triangle, levels) but not the file.
+  const Subdivider sub = [&] {
+    try {
+      return Subdivider::build(lm.mesh.triangles(), lm.mesh.vertex_count(), opt.scheme, opt.levels);
+    } catch (const InputError& e) {
+      if (!e.file().empty()) throw;
+      throw InputError(opt.input.string(), e.location(), e.element(), e.reason());
+    }
+  }();
+  const Mesh refined = sub.apply(lm.mesh);
+  const double sub_ms = t0.ms();
+  t0.restart();
+  write_mesh(opt.output, refined);
+  const double write_ms = t0.ms();
+  if (opt.json) {
+    nlohmann::json j{{"input", opt.input.string()},       {"output", opt.output.string()},
+                     {"scheme", to_string(opt.scheme)},   {"levels", opt.levels},
+                     {"triangles_in", lm.mesh.triangle_count()}, {"vertices_in", lm.mesh.vertex_count()},
+                     {"triangles_out", refined.triangle_count()}, {"vertices_out", refined.vertex_count()},
+                     {"read_ms", read_ms},                {"subdivide_ms", sub_ms},
+                     {"write_ms", write_ms}};
+    out << dump_json(j);
+  } else {
+    out << fmt::format("{}: {} triangles, {} vertices -> {} x{} -> {}: {} triangles, {} vertices ({:.0f} ms)\n",
+                       opt.input.string(), lm.mesh.triangle_count(), lm.mesh.vertex_count(), to_string(opt.scheme),
+                       opt.levels, opt.output.string(), refined.triangle_count(), refined.vertex_count(), sub_ms);
+  }
+}
+
+}  // namespace ptc

@@ -1,0 +1,247 @@
+// `ptc trace`: the frame loop over one configuration (the static + moving scene BVH), and per
+// frame the rendered view, its images and its rows of trace.csv.
+#include "commands/trace.h"
+
+#include <tbb/info.h>
+
+#include <ostream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/experiments/trace.h"
+#include "analysis/loop/frame_loop.h"
+#include "analysis/schema/json.h"
+#include "analysis/schema/manifest.h"
+#include "commands/args.h"
+#include "commands/output_dir.h"
+#include "commands/scene_args.h"
+#include "toolkit/core/error.h"
+#include "toolkit/core/stopwatch.h"
+#include "viz/png.h"
+
+namespace ptc {
+namespace {
+
+nlohmann::json legend_json(const ColorLegend& l) {
+  return {{"quantity", l.quantity}, {"colormap", l.colormap}, {"min", l.min}, {"max", l.max}, {"note", l.note}};
+}
+
+double per_ray(std::uint64_t total, std::uint64_t rays) { return rays ? double(total) / double(rays) : 0.0; }
+
+unsigned effective_threads(unsigned t) { return t ? t : static_cast<unsigned>(tbb::info::default_concurrency()); }
+
+void check_render_options(const RenderConfig& rc) {
+  if (rc.width < 1 || rc.height < 1 || rc.width > 16384 || rc.height > 16384)
+    throw UsageError("--width/--height", "the image size must be 1..16384 pixels per side");
+  if (rc.ao_samples < 0) throw UsageError("--ao", "the sample count must be >= 0");
+  if (rc.light && !rc.light->allFinite()) throw UsageError("--light", "not a finite vector");
+}
+
+// The images of one frame into `dir` (suffix "" for one frame, "_0007" in a sequence), each
+// recorded with its legend.
+void write_frame_images(const OutputDir& dir, const Render& r, const RenderConfig& rc, const std::string& suffix,
+                        bool first, RunManifest& manifest, nlohmann::json& images) {
+  auto put = [&](const std::string& base, const RgbImage& img, nlohmann::json legend) {
+    const std::string name = base + suffix + ".png";
+    viz::write_png(dir.path(name), img);
+    manifest.add_output(name);
+    images[name] = std::move(legend);
+  };
+  ColorLegend dl, nl, tl;  // filled by the image functions, so those run before the legends are read
+  const RgbImage depth = depth_image(r, dl), nodes = nodes_image(r, nl), tris = triangles_image(r, tl);
+  put("shaded", shaded_image(r),
+      {{"quantity", "Lambert shading"},
+       {"note", fmt::format("albedo 0.9, ambient 0.2{}, diffuse 0.8{}; background (32,32,40)",
+                            rc.ao_samples ? " x AO" : "", rc.shadows ? " x shadow" : "")}});
+  put("depth", depth, legend_json(dl));
+  put("normal", normal_image(r),
+      {{"quantity", "facing geometric normal (world)"}, {"colormap", "rgb = 255 (n + 1) / 2"}, {"min", -1}, {"max", 1},
+       {"note", "missed rays: black"}});
+  put("cost_nodes", nodes, legend_json(nl));
+  put("cost_triangles", tris, legend_json(tl));
+  if (first) {
+    viz::write_png(dir.path("cost_legend.png"), viridis_bar(256, 16));
+    manifest.add_output("cost_legend.png");
+    images["cost_legend.png"] = {{"quantity", "colour bar of the cost images"}, {"colormap", "viridis"},
+                                 {"note", "left = legend min, right = legend max"}};
+  }
+  if (rc.ao_samples > 0)
+    put("ao", ao_image(r),
+        {{"quantity", "ambient occlusion (fraction unoccluded)"}, {"colormap", "grey"}, {"min", 0}, {"max", 1},
+         {"note", "missed rays: black"}});
+}
+
+}  // namespace
+
+void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
+  if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
+  check_render_options(opt.render);
+  if (opt.frame && opt.frames) throw UsageError("--frame/--frames", "give one frame or one range, not both");
+  std::optional<FrameRange> asked;
+  if (opt.frame) {
+    const std::int64_t f = parse_frame(*opt.frame, "--frame");
+    asked = FrameRange{f, f};
+  }
+  if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
+  const bool sequence = opt.frames.has_value();
+
+  RunManifest manifest("trace", opt.argv);
+  const std::string arg = opt.input.string();
+  Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
+  const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};
+  check_frames(scene, range, arg, opt.frames ? "--frames" : "--frame", opt.extend_frames);
+
+  // The first frame's positions: the camera and the trace frame are fixed from them.
+  Mesh mesh = scene.rest();
+  Stopwatch sw;
+  scene.positions(double(range.first), mesh.positions(), true);
+  manifest.add_timing_ms("first_positions", sw.ms());
+  const Box3 first_bounds = mesh.bounds();
+
+  // Camera and light: flags > the scene's own > framing the first frame (commands/scene_args.h).
+  const CameraSpec spec = camera_for(opt.camera, scene);
+  const bvh::PinholeCamera cam = make_camera(spec, first_bounds, opt.render.width, opt.render.height);
+  RenderConfig rc = opt.render;
+  const LightChoice light = light_for(rc.light, scene, cam, first_bounds);
+  rc.light = light.position;
+
+  Clustering clusters;
+  const bool use_clusters = !opt.clusters.empty();
+  if (use_clusters) clusters = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
+  std::size_t static_tris = 0;
+  for (std::size_t p = 0; p < scene.part_count(); ++p)
+    if (scene.is_static(p)) static_tris += scene.triangle_offset(p + 1) - scene.triangle_offset(p);
+  const std::size_t moving_tris = mesh.triangle_count() - static_tris;
+
+  // The one configuration: the static BVH built once, the moving BVH updated per frame.
+  bvh::SceneTracerConfig tcfg;
+  tcfg.clusters = use_clusters ? &clusters : nullptr;
+  tcfg.cluster_group_size = opt.cluster_group_size;
+  tcfg.origin = first_bounds.center();
+  loop::SceneAccel accel(mesh, bvh::PartLayout::of(scene), tcfg);
+  const bvh::SceneTracer& tracer = accel.tracer();
+  manifest.add_timing_ms("static_build", tracer.static_build_ms());
+  manifest.add_timing_ms("setup", tracer.moving_setup_ms());
+  const char* bvh_kind = use_clusters ? "clusters" : "triangles";
+
+  OutputDir dir(opt.out_dir);
+  nlohmann::json images = nlohmann::json::object();
+  std::vector<TraceRow> rows;
+  const unsigned threads = effective_threads(rc.threads);
+  double render_ms = 0, write_ms = 0, positions_ms = 0;
+  nlohmann::json per_frame = nlohmann::json::array();
+
+  out << fmt::format("{}: {} triangles ({} static, {} moving; {} part(s)), {}; {}x{} pixels, {} thread(s); "
+                     "static BVH {:.1f} ms{}\n",
+                     arg, mesh.triangle_count(), static_tris, moving_tris, scene.part_count(),
+                     tracer.all_static() ? fmt::format("one {} BVH built once", use_clusters ? "cluster" : "triangle")
+                     : tracer.split() ? fmt::format("static triangle BVH + moving {} BVH", use_clusters ? "cluster" : "triangle")
+                                      : fmt::format("one {} BVH updated per frame", use_clusters ? "cluster" : "triangle"),
+                     rc.width, rc.height, threads, tracer.static_build_ms(),
+                     tracer.all_static() ? "" : fmt::format(", moving BVH setup {:.1f} ms", tracer.moving_setup_ms()));
+  out << fmt::format("{:>6} {:>10} {:>9} {:<8} {:>10} {:>10} {:>10} {:>9} {:>10} {:>10}\n", "frame", "update_ms",
+                     "build_ms", "pass", "rays", "hits", "trace_ms", "Mrays/s", "nodes/ray", "tris/ray");
+
+  loop::LoopOptions lo;
+  lo.frames = range;
+  lo.fresh_positions = false;  // one configuration: nothing to keep apart
+  lo.update_static = false;    // the static parts' positions stay those of the first frame
+  loop::Accel* const accels[] = {&accel};
+  loop::run_frame_loop(scene, mesh.positions(), accels, lo, [&](const loop::FrameRecord& fr, loop::Accel& a,
+                                                                  std::span<const Vec3>) {
+    const std::int64_t f = fr.frame;
+    const bool first = fr.index == 0;
+    positions_ms += fr.source_ms;
+    Stopwatch t;
+    const Render r = render_view(target_of(a), mesh, cam, rc);
+    render_ms += t.ms();
+
+    t.restart();
+    write_frame_images(dir, r, rc, sequence ? fmt::format("_{:04d}", f) : "", first, manifest, images);
+    write_ms += t.ms();
+
+    TraceRow base;
+    base.mesh = arg;
+    base.bvh = bvh_kind;
+    base.triangles = mesh.triangle_count();
+    base.clusters = use_clusters ? clusters.cluster_count() : 0;
+    base.width = rc.width, base.height = rc.height;
+    base.threads = threads;
+    base.frame = f;
+    base.ao_samples = rc.ao_samples;
+    base.setup_ms = first ? tracer.moving_setup_ms() : 0.0;
+    base.static_build_ms = first ? tracer.static_build_ms() : 0.0;
+    base.update_ms = fr.times.update_ms;
+    base.build_ms = fr.times.build_ms;
+    base.stages = fr.times.stages;
+    base.static_triangles = static_tris, base.moving_triangles = moving_tris;
+    auto pass = [&](const char* name, const PassStats& s, bool lead) {
+      TraceRow row = base;
+      row.pass = name;
+      row.stats = s;
+      rows.push_back(std::move(row));
+      out << (lead ? fmt::format("{:>6} {:>10.2f} {:>9.2f} ", f, fr.times.update_ms, fr.times.build_ms)
+                   : fmt::format("{:>28}", ""))
+          << fmt::format("{:<8} {:>10} {:>10} {:>10.2f} {:>9.2f} {:>10.2f} {:>10.2f}\n", name, s.rays, s.hits,
+                         s.trace_ms, s.mrays_per_s(), per_ray(s.nodes_visited, s.rays), per_ray(s.triangles_tested, s.rays));
+    };
+    pass("primary", r.primary_stats, true);
+    if (rc.shadows) pass("shadow", r.shadow_stats, false);
+    if (rc.ao_samples > 0) pass("ao", r.ao_stats, false);
+    per_frame.push_back({{"frame", f}, {"rays", r.primary_stats.rays}, {"hits", r.primary_stats.hits}});
+  });
+  manifest.add_timing_ms("positions", positions_ms);
+  manifest.add_timing_ms("render", render_ms);
+  sw.restart();
+  const Table table = trace_table(rows);
+  dir.write("trace.csv", table.csv.str());
+  manifest.add_output("trace.csv", table.schema.id());
+  manifest.add_output("manifest.json");
+
+  manifest.set_parameter("scene", arg);
+  manifest.set_parameter("frames", {range.first, range.last});
+  manifest.set_parameter("bvh", bvh_kind);
+  manifest.set_parameter("split", tracer.split() ? "static triangle BVH built once + moving BVH updated per frame"
+                                  : tracer.all_static() ? "all static: one BVH built once"
+                                                        : "all moving: one BVH updated per frame");
+  manifest.set_parameter("parts", [&] {
+    nlohmann::json a = nlohmann::json::array();
+    for (std::size_t p = 0; p < scene.part_count(); ++p)
+      a.push_back({{"name", scene.part(p).name}, {"static", scene.is_static(p)},
+                   {"triangles", {scene.triangle_offset(p), scene.triangle_offset(p + 1)}}});
+    return a;
+  }());
+  if (use_clusters) manifest.set_parameter("clusters", opt.clusters.string());
+  if (use_clusters) manifest.set_parameter("cluster_group_size", opt.cluster_group_size);
+  manifest.set_parameter("width", rc.width);
+  manifest.set_parameter("height", rc.height);
+  manifest.set_parameter("threads", threads);
+  manifest.set_parameter("shadows", rc.shadows);
+  manifest.set_parameter("ao_samples", rc.ao_samples);
+  manifest.set_parameter("ao_distance_rel", rc.ao_distance_rel);
+  manifest.set_parameter("seed", rc.seed);
+  manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)},
+                                    {"right", vec_json(cam.right)}, {"up", vec_json(cam.up)},
+                                    {"fov_y_deg", cam.fov_y_deg}, {"from_scene", scene.has_own_camera()},
+                                    {"given", {{"eye", bool(opt.camera.eye)}, {"look_at", bool(opt.camera.look_at)},
+                                               {"up", bool(opt.camera.up)}, {"fov", bool(opt.camera.fov_deg)}}}});
+  manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
+  manifest.set_parameter("ray_offset", "origin = p + 2^-18 M n, M = max |coordinate| of bounds and p in the trace frame");
+  manifest.set_result("images", images);
+  manifest.set_result("rays", std::uint64_t(rc.width) * std::uint64_t(rc.height));  // per frame
+  manifest.set_result("hits", per_frame.empty() ? nlohmann::json(0) : per_frame[0]["hits"]);  // first frame
+  manifest.set_result("frames", per_frame);
+  manifest.add_timing_ms("write", write_ms + sw.ms());
+  nlohmann::json mj = manifest.to_json();
+  mj["schema"] = "ptc-trace/3";
+  dir.write("manifest.json", dump_json(mj));
+  dir.commit();
+
+  const std::string names = "{shaded,depth,normal,cost_nodes,cost_triangles" + std::string(rc.ao_samples > 0 ? ",ao" : "") + "}";
+  out << "wrote " << opt.out_dir.string() << "/"
+      << (sequence ? fmt::format("{}_{:04d}..{:04d}.png", names, range.first, range.last) : names + ".png")
+      << ", cost_legend.png, trace.csv, manifest.json\n";
+}
+
+}  // namespace ptc

@@ -1,0 +1,42 @@
+// `ptc trace` as a library call (apps/ptc only parses the arguments).
+#pragma once
+
+#include <filesystem>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "render/images.h"
+#include "render/camera.h"
+#include "render/view.h"
+#include "toolkit/anim/scene.h"
+
+namespace ptc {
+
+struct TraceCommandOptions {
+  std::filesystem::path input;         ///< SCENE: built-in name, .json scene file, mesh/asset file, frame directory
+  SceneOptions scene_options;          ///< data and assets directories of built-in scenes / scene files
+  std::optional<std::string> frame;    ///< "F": one frame (default: the scene's first)
+  std::optional<std::string> frames;   ///< "A:B": a sequence (images named shaded_0000.png ..., CSV rows per frame)
+  bool extend_frames = false;          ///< --extend-frames: frames outside the scene's listed range
+  std::filesystem::path clusters;      ///< directory of `ptc cluster` (triangles.csv); empty: triangle BVH
+  std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;  ///< two-level build (0: plain)
+  std::filesystem::path out_dir;       ///< images, trace.csv, manifest.json (required)
+  CameraSpec camera;
+  RenderConfig render;                 ///< size, shadows, AO, seed, light, threads (0 = all cores)
+  std::vector<std::string> argv;       ///< recorded in the manifest
+};
+
+/// Opens the scene (toolkit/anim/scene_file.h open_scene) and its clusters, builds the static parts'
+/// BVH once and the moving parts' BVH (bvh/scene_tracer.h), and per frame (one: --frame or
+/// the scene's first; a sequence: --frames A:B) updates the moving BVH from the positions,
+/// renders the view and writes shaded, depth, normal, cost_nodes, cost_triangles (and ao) PNGs
+/// (named shaded.png for one frame, shaded_0007.png for frame 7 of a sequence), cost_legend.png,
+/// trace.csv (rows per frame and pass, analysis/experiments/trace.h) and manifest.json into `out_dir`
+/// atomically; prints a summary table to `out`. Camera: given fields > the scene's camera
+/// (built-in scenes, scene files with "camera") > framing the first frame; light likewise.
+/// Bad input -> InputError.
+void cmd_trace(const TraceCommandOptions& opt, std::ostream& out);
+
+}  // namespace ptc

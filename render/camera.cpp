@@ -1,0 +1,88 @@
+#include "render/camera.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "toolkit/core/error.h"
+
+namespace ptc {
+namespace {
+
+bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+std::string fmt_vec(const Vec3& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%g,%g,%g", v.x(), v.y(), v.z());
+  return buf;
+}
+
+}  // namespace
+
+bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int width, int height) {
+  if (width < 1 || height < 1) throw std::invalid_argument("make_camera: image size must be positive");
+  const double fov = spec.fov_deg.value_or(kDefaultFovDeg);
+  if (!(fov > 0.0 && fov < 180.0))
+    throw InputError("", "", "--fov", "the field of view must be in (0, 180) degrees, got " + std::to_string(fov));
+  for (const auto& [name, v] : {std::pair{"--eye", spec.eye}, std::pair{"--look-at", spec.look_at}, std::pair{"--up", spec.up}})
+    if (v && !finite(*v)) throw InputError("", "", name, "not a finite vector");
+  const bool box_ok = !bounds.empty() && finite(bounds.lo) && finite(bounds.hi);
+  if (!spec.look_at && !box_ok) throw InputError("", "", "--look-at", "the mesh has no finite bounds to look at");
+  const Vec3 look = spec.look_at.value_or(box_ok ? bounds.center() : Vec3::Zero());
+  const Vec3 up = spec.up.value_or(Vec3(0, 1, 0));
+  if (!(up.norm() > 0.0)) throw InputError("", "", "--up", "the up vector is zero");
+  const Vec3 upn = up.normalized();
+
+  Vec3 forward;
+  if (spec.eye) {
+    const Vec3 d = look - *spec.eye;
+    if (!(d.norm() > 0.0))
+      throw InputError("", "", "--eye", "eye and look-at are the same point " + fmt_vec(*spec.eye));
+    forward = d.normalized();
+    if (!std::isfinite(forward.x()))  // a difference that overflows
+      throw InputError("", "", "--eye", "eye and look-at are too far apart");
+  } else {
+    forward = Vec3(0, 0, -1);
+    if (upn.cross(forward).norm() < 1e-6) forward = Vec3(0, -1, 0);  // a z-up mesh: look along -y
+  }
+  // sin of the angle between up and the view direction; below 1e-6 the image's up is undefined.
+  if (upn.cross(forward).norm() < 1e-6)
+    throw InputError("", "", "--up", "the up vector " + fmt_vec(up) + " is parallel to the view direction " + fmt_vec(forward));
+
+  bvh::PinholeCamera c;
+  c.fov_y_deg = fov;
+  c.forward = forward;
+  c.right = forward.cross(upn).normalized();
+  c.up = c.right.cross(forward);
+  if (spec.eye) {
+    c.eye = *spec.eye;
+    return c;
+  }
+  if (!box_ok) throw InputError("", "", "--eye", "the mesh has no finite bounds to frame");
+  // Distance d from look_at such that every corner q (relative to look_at) satisfies
+  // |q.right| <= tw (d + q.fwd) / 1.05 and |q.up| <= th (d + q.fwd) / 1.05 (5% margin).
+  const double th = std::tan(0.5 * fov * M_PI / 180.0);
+  const double tw = th * double(width) / double(height);
+  double dist = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 q = Vec3(k & 1 ? bounds.hi.x() : bounds.lo.x(), k & 2 ? bounds.hi.y() : bounds.lo.y(),
+                        k & 4 ? bounds.hi.z() : bounds.lo.z()) - look;
+    const double need = std::max(std::abs(q.dot(c.right)) / tw, std::abs(q.dot(c.up)) / th) * 1.05 - q.dot(forward);
+    dist = std::max(dist, need);
+  }
+  // A box that is a point (or a line along the view) needs no distance; keep the eye off it.
+  const double diag = (bounds.hi - bounds.lo).norm();
+  const double scale = std::max({diag, look.cwiseAbs().maxCoeff() * 1e-6, 1e-30});
+  dist = std::max(dist, 1e-3 * scale);
+  c.eye = look - dist * forward;
+  if (!finite(c.eye)) throw InputError("", "", "--eye", "the mesh's bounds are too large to frame");
+  return c;
+}
+
+bvh::RayBatch camera_rays(const bvh::PinholeCamera& cam, int width, int height) {
+  if (width < 1 || height < 1 || width > 16384 || height > 16384)
+    throw std::invalid_argument("camera_rays: image size must be 1..16384 per side");
+  return bvh::primary_rays(cam, width, height);
+}
+
+}  // namespace ptc

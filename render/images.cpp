@@ -1,0 +1,67 @@
+#include "render/images.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ptc {
+
+RgbImage::RgbImage(int w, int h, Rgb8 fill) : width(w), height(h) {
+  if (w < 0 || h < 0) throw std::invalid_argument("RgbImage: negative size");
+  rgb.resize(3 * pixel_count());
+  for (std::size_t i = 0; i < pixel_count(); ++i) set(i, fill);
+}
+
+Rgb8 RgbImage::at(int x, int y) const {
+  const std::size_t i = 3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x));
+  return {rgb[i], rgb[i + 1], rgb[i + 2]};
+}
+
+void RgbImage::set(int x, int y, Rgb8 c) {
+  set(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x), c);
+}
+
+std::uint8_t to_u8(double x) {
+  if (!(x > 0.0)) return 0;  // also NaN
+  if (x >= 1.0) return 255;
+  return static_cast<std::uint8_t>(std::lround(255.0 * x));
+}
+
+Rgb8 viridis(double x) {
+  // matplotlib's viridis at 0, 1/8, ..., 1 (#440154 #472d7b #3b528b #2c728e #21918c #28ae80
+  // #5ec962 #addc30 #fde725).
+  static constexpr double k[9][3] = {{68, 1, 84},    {71, 45, 123},  {59, 82, 139},  {44, 114, 142}, {33, 145, 140},
+                                     {40, 174, 128}, {94, 201, 98},  {173, 220, 48}, {253, 231, 37}};
+  if (!(x > 0.0)) x = 0.0;
+  if (x > 1.0) x = 1.0;
+  const double s = 8.0 * x;
+  const int i = std::min(7, static_cast<int>(s));
+  const double f = s - i;
+  Rgb8 c;
+  for (int a = 0; a < 3; ++a)
+    c[a] = static_cast<std::uint8_t>(std::lround(k[i][a] + f * (k[i + 1][a] - k[i][a])));
+  return c;
+}
+
+RgbImage cost_heatmap(std::span<const std::uint32_t> counts, int width, int height, ColorLegend& legend) {
+  RgbImage img(width, height);
+  if (counts.size() != img.pixel_count()) throw std::invalid_argument("cost_heatmap: counts do not match the image size");
+  std::uint32_t mx = 0;
+  for (std::uint32_t c : counts) mx = std::max(mx, c);
+  legend.colormap = "viridis";
+  legend.min = 0;
+  legend.max = mx;
+  for (std::size_t i = 0; i < counts.size(); ++i) img.set(i, viridis(mx ? double(counts[i]) / double(mx) : 0.0));
+  return img;
+}
+
+RgbImage viridis_bar(int width, int height) {
+  RgbImage img(width, height);
+  for (int x = 0; x < width; ++x) {
+    const Rgb8 c = viridis(width > 1 ? double(x) / double(width - 1) : 0.0);
+    for (int y = 0; y < height; ++y) img.set(x, y, c);
+  }
+  return img;
+}
+
+}  // namespace ptc

@@ -1,0 +1,189 @@
+// The Embree side-by-side benchmark on a small mesh: every configuration and frame present,
+// zero mismatches of the closest triangle, summaries equal to medians recomputed from the rows,
+// through the one frame loop over a scene (a deformer moving the mesh).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "analysis/experiments/bench.h"
+#include "toolkit/anim/deformers.h"
+#include "toolkit/core/stats.h"
+#include "toolkit/mesh/subdivision.h"
+
+using ptc::Mesh;
+using ptc::Vec3;
+
+namespace {
+
+Mesh sphere(int levels) {
+  std::vector<Vec3> p{{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  std::vector<ptc::Tri> t{{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  Mesh m = ptc::subdivide(Mesh(std::move(t), std::move(p)), ptc::SubdivisionScheme::Midpoint, levels);
+  std::vector<Vec3> q;
+  for (const Vec3& v : m.positions()) q.push_back(Vec3(v.normalized().cwiseProduct(Vec3(1.0, 2.0, 0.7))));
+  return m.with_positions(std::move(q));
+}
+
+// The mesh under a deformer (deform_preset(kind) unless params are given), frames 0..59.
+ptc::Scene scene_of(const Mesh& m, ptc::DeformKind kind = ptc::DeformKind::Twist,
+                    std::optional<ptc::DeformParams> params = {}) {
+  std::vector<ptc::ScenePart> parts;
+  parts.push_back({"mesh", ptc::make_deformer(m, params ? *params : ptc::deform_preset(kind))});
+  return ptc::Scene("test", std::move(parts), std::nullopt, std::nullopt, ptc::FrameRange{0, 59});
+}
+
+std::vector<std::string> names_of_configs() {
+  std::vector<std::string> n;
+  for (auto k : ptc::loop::kAllAccelKinds) n.emplace_back(ptc::loop::to_string(k));
+  return n;
+}
+
+std::vector<std::string> split_lines(const std::string& s) {
+  std::vector<std::string> out;
+  std::istringstream in(s);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+}  // namespace
+
+TEST(PeerBench, SmallMeshAllConfigurationsNoMismatches) {
+  const Mesh m = sphere(4);  // 2048 triangles
+  ptc::PeerBenchConfig cfg;
+  cfg.frames = {0, 2};
+  cfg.width = 40, cfg.height = 32;
+  cfg.max_count = 20;
+  ptc::Scene sc = scene_of(m);
+  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, nullptr, cfg);
+  const auto names = names_of_configs();
+  ASSERT_EQ(r.rows.size(), 3u * names.size());
+  EXPECT_EQ(r.rays, 40u * 32u);
+  EXPECT_GT(r.clusters, 20u);
+  for (int f = 0; f < 3; ++f) {
+    std::uint64_t hits = 0;
+    for (std::size_t c = 0; c < names.size(); ++c) {
+      const ptc::BenchRow& row = r.rows[std::size_t(f) * names.size() + c];
+      EXPECT_EQ(row.frame, f);
+      EXPECT_EQ(row.config, names[c]);
+      EXPECT_EQ(row.rays, r.rays);
+      EXPECT_EQ(row.agreement.mismatches(), 0u) << row.config << " frame " << f;
+      EXPECT_EQ(row.agreement.rays, c == 0 ? 0u : r.rays);
+      EXPECT_GT(row.times.build_ms, 0.0) << row.config;
+      EXPECT_GE(row.times.update_ms, 0.0) << row.config;
+      if (c < 2) EXPECT_GT(row.sah_cost, 0.0) << row.config;  // ours: the tree's SAH cost
+      else EXPECT_TRUE(std::isnan(row.sah_cost)) << row.config;
+      EXPECT_GT(row.trace_ms, 0.0) << row.config;
+      if (c == 0) hits = row.hits;
+      EXPECT_EQ(row.hits, hits) << row.config << " frame " << f;
+    }
+    EXPECT_GT(hits, 200u);
+  }
+  // Summaries: medians over frames 1..2 (frame 0 skipped), recomputed here from the rows.
+  EXPECT_EQ(r.median_first_frame, 1);
+  ASSERT_EQ(r.summary.size(), names.size());
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const auto& a = r.rows[names.size() + c];
+    const auto& b = r.rows[2 * names.size() + c];
+    EXPECT_EQ(r.summary[c].config, names[c]);
+    EXPECT_DOUBLE_EQ(r.summary[c].trace_ms, 0.5 * (a.trace_ms + b.trace_ms));
+    EXPECT_DOUBLE_EQ(r.summary[c].build_ms, 0.5 * (a.times.build_ms + b.times.build_ms));
+    EXPECT_DOUBLE_EQ(r.summary[c].update_build_ms,
+                     0.5 * (a.times.update_ms + a.times.build_ms + b.times.update_ms + b.times.build_ms));
+  }
+  // The CSVs: one row per frame and configuration; summary one per configuration with the ratios.
+  const auto bench = split_lines(ptc::bench_table(r).csv.str());
+  ASSERT_EQ(bench.size(), 1 + r.rows.size());
+  EXPECT_EQ(bench[0].rfind("frame,config,update_ms,build_ms,", 0), 0u) << bench[0];
+  std::set<std::string> seen;
+  for (std::size_t i = 1; i < bench.size(); ++i) seen.insert(bench[i].substr(bench[i].find(',') + 1, bench[i].find(',', bench[i].find(',') + 1) - bench[i].find(',') - 1));
+  EXPECT_EQ(seen, std::set<std::string>(names.begin(), names.end()));
+  const auto summary = split_lines(ptc::bench_summary_table(r).csv.str());
+  ASSERT_EQ(summary.size(), 1 + names.size());
+  EXPECT_NE(summary[0].find("trace_speed_vs_embree_refit"), std::string::npos);
+  const std::string table = ptc::bench_text(r);
+  for (const auto& n : names) EXPECT_NE(table.find(n), std::string::npos);
+}
+
+TEST(PeerBench, GivenClusteringAndLinearLeavesAlsoMatch) {
+  const Mesh m = sphere(3);
+  // Clusters: the 8 octants of the octahedron (each connected).
+  std::vector<std::uint32_t> label(m.triangle_count());
+  for (std::size_t t = 0; t < m.triangle_count(); ++t) label[t] = std::uint32_t(t / (m.triangle_count() / 8));
+  const ptc::Clustering c = ptc::clustering_from_labels(label, m.triangles());
+  ptc::PeerBenchConfig cfg;
+  cfg.frames = {0, 1};
+  cfg.width = cfg.height = 24;
+  cfg.cluster_leaf = ptc::bvh::ClusterLeaf::Linear;
+  cfg.threads = 2;
+  ptc::Scene sc = scene_of(m, ptc::DeformKind::Wave);
+  const auto r = ptc::run_peer_bench(sc, &c, cfg);
+  EXPECT_EQ(r.clusters, 8u);
+  for (const auto& row : r.rows) EXPECT_EQ(row.agreement.mismatches(), 0u) << row.config << " frame " << row.frame;
+  ptc::Scene sc2 = scene_of(m, ptc::DeformKind::Wave);
+  EXPECT_THROW((void)ptc::run_peer_bench(sc2, &c, [&] { auto x = cfg; x.frames = {3, 2}; return x; }()),
+               std::invalid_argument);
+}
+
+TEST(PeerBench, MedianAndSummarize) {
+  EXPECT_EQ(ptc::median({}), 0.0);
+  EXPECT_EQ(ptc::median({3}), 3.0);
+  EXPECT_EQ(ptc::median({4, 1, 3}), 3.0);
+  EXPECT_EQ(ptc::median({4, 1, 3, 10}), 3.5);
+  std::vector<ptc::BenchRow> rows;
+  for (int f = 0; f < 4; ++f) {
+    ptc::BenchRow r;
+    r.frame = f;
+    r.config = "x";
+    r.trace_ms = f == 0 ? 1000.0 : double(f);  // a slow first frame must not count
+    r.agreement.hit_miss = f == 0 ? 2 : 0;
+    rows.push_back(r);
+  }
+  const auto s = ptc::summarize(rows, 1);
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_EQ(s[0].trace_ms, 2.0);
+  EXPECT_EQ(s[0].mismatches, 2u);  // mismatches are summed over every frame
+}
+
+// Frames from a scene: rows carry the scene frames of the range, and every configuration sees
+// the scene's positions (a rigid motion carries the mesh out of the view: fewer hits each frame,
+// all configurations agreeing). The vertex renumbering and the file's order give the same hits.
+TEST(PeerBench, ScenePositionsDriveTheFrames) {
+  const Mesh m = sphere(3);
+  ptc::PeerBenchConfig cfg;
+  cfg.frames = {4, 6};
+  cfg.width = cfg.height = 24;
+  cfg.max_count = 16;
+  ptc::DeformParams rigid = ptc::deform_preset(ptc::DeformKind::Rigid);
+  rigid.amplitude = 0.0;                  // no turn
+  rigid.velocity = Vec3(0.07, 0.0, 0.0);  // 7% of the diagonal per frame along x
+  ptc::Scene sc = scene_of(m, ptc::DeformKind::Rigid, rigid);
+  // The camera frames the rest pose (scene frame 0), so the moving mesh leaves the view.
+  const auto r = ptc::run_peer_bench(sc, nullptr, cfg);
+  EXPECT_EQ(r.vertex_order, "clusters");
+  EXPECT_TRUE(r.fused_vertex_pass);
+  const std::size_t nc = names_of_configs().size();
+  ASSERT_EQ(r.rows.size(), 3 * nc);
+  for (const auto& row : r.rows) {
+    EXPECT_EQ(row.scene_frame, 4 + row.frame);
+    EXPECT_EQ(row.agreement.mismatches(), 0u) << row.config << " frame " << row.frame;
+  }
+  EXPECT_GT(r.rows[0].hits, r.rows[nc].hits);
+  EXPECT_GT(r.rows[nc].hits, r.rows[2 * nc].hits);
+  const auto bench = split_lines(ptc::bench_table(r).csv.str());
+  EXPECT_NE(bench[0].find(",scene_frame,source_ms"), std::string::npos);
+
+  // The file's vertex order: the cluster path gathers; the same hits, frame by frame.
+  cfg.cluster_vertex_order = false;
+  ptc::Scene sc2 = scene_of(m, ptc::DeformKind::Rigid, rigid);
+  const auto ri = ptc::run_peer_bench(sc2, nullptr, cfg);
+  EXPECT_EQ(ri.vertex_order, "input");
+  EXPECT_FALSE(ri.fused_vertex_pass);
+  ASSERT_EQ(ri.rows.size(), r.rows.size());
+  for (std::size_t i = 0; i < r.rows.size(); ++i) {
+    EXPECT_EQ(ri.rows[i].hits, r.rows[i].hits) << r.rows[i].config;
+    EXPECT_EQ(ri.rows[i].agreement.mismatches(), 0u);
+  }
+}

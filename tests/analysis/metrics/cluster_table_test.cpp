@@ -1,0 +1,89 @@
+// The per-cluster rows and CSV files of `ptc cluster` against independent recomputation.
+#include "analysis/metrics/cluster_table.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "toolkit/io/mesh_io.h"
+#include "toolkit/mesh/mesh_report.h"
+
+namespace ptc {
+namespace {
+
+std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> f;
+    std::istringstream ls(line);
+    for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
+    rows.push_back(f);
+  }
+  return rows;
+}
+
+TEST(ClusterReport, RowsMatchMetricsRecomputedPerCluster) {
+  const Mesh m = read_mesh(std::string(PTC_TEST_DATA) + "/meshes/elephant.off").mesh;
+  ClusterConfig cfg;
+  cfg.method = ClusterMethod::Growth;
+  const Clustering c = cluster_mesh(m, cfg);
+  const auto rows = cluster_rows(m, c, cfg);
+  ASSERT_EQ(rows.size(), c.cluster_count());
+  ClusterParams p;
+  p.max_count = cfg.max_count;
+  p.max_size = cfg.max_size;
+  p.avg_sa = average_triangle_sphere_area(m.positions(), m.triangles());
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const auto tris = c.triangles_of(k);
+    const ClusterMetrics ref = cluster_metrics(m, tris, SphereMethod::Cgal);
+    EXPECT_EQ(rows[k].m.triangles, tris.size());
+    EXPECT_EQ(rows[k].m.vertices, c.vertices_of(k).size());
+    EXPECT_EQ(rows[k].m.reg, ref.reg);
+    EXPECT_EQ(rows[k].acc, cluster_acc(ref, p)) << k;
+    EXPECT_GT(rows[k].acc, 0.0) << "growth closes a cluster only while Acc stays positive";
+  }
+  // clusters.csv: one row per cluster, values as computed (shortest round-trip text).
+  const auto csv = parse_csv(clusters_table(rows).csv.str());
+  ASSERT_EQ(csv.size(), rows.size() + 1);
+  EXPECT_EQ(csv[0][0], "cluster_id");
+  EXPECT_EQ(csv[0][4], "reg");
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    EXPECT_EQ(std::stoull(csv[k + 1][0]), k);
+    EXPECT_EQ(std::stod(csv[k + 1][4]), rows[k].m.reg);
+  }
+  // triangles.csv: triangle_id,cluster_id in input order; every triangle once.
+  const auto tcsv = parse_csv(triangles_table(c).csv.str());
+  ASSERT_EQ(tcsv.size(), m.triangle_count() + 1);
+  const auto label = c.cluster_of_triangle();
+  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+    EXPECT_EQ(std::stoull(tcsv[t + 1][0]), t);
+    EXPECT_EQ(std::stoull(tcsv[t + 1][1]), label[t]);
+  }
+  // Distributions equal summarize() over the column.
+  const auto dist = cluster_distributions(rows);
+  std::vector<double> reg;
+  for (const auto& r : rows) reg.push_back(r.m.reg);
+  const Summary s = summarize(reg);
+  EXPECT_EQ(dist["reg"]["p95"].get<double>(), s.p95);
+  EXPECT_EQ(dist["reg"]["min"].get<double>(), s.min);
+  EXPECT_EQ(dist["reg"]["count"].get<std::size_t>(), rows.size());
+}
+
+TEST(ClusterReport, NoObjectiveGivesNanAccAndNullDistribution) {
+  const Mesh m({{0, 1, 2}, {0, 2, 3}}, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  ClusterConfig cfg;
+  cfg.method = ClusterMethod::Growth;
+  cfg.max_count = 0;
+  cfg.max_size = 0;
+  const Clustering c = cluster_mesh(m, cfg);
+  ASSERT_EQ(c.cluster_count(), 2u);  // one triangle per cluster
+  const auto rows = cluster_rows(m, c, cfg);
+  EXPECT_TRUE(std::isnan(rows[0].acc));
+  EXPECT_TRUE(cluster_distributions(rows)["acc"].is_null());
+  EXPECT_EQ(cluster_distributions(rows)["triangles"]["max"].get<double>(), 1.0);
+}
+
+}  // namespace
+}  // namespace ptc

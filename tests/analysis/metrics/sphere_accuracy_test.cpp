@@ -1,0 +1,92 @@
+#include "analysis/metrics/sphere_accuracy.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <set>
+
+#include "toolkit/geometry/morton.h"
+
+namespace ptc {
+namespace {
+
+Mesh random_surface(std::size_t n, std::uint64_t seed) {
+  // A bumpy height field: realistic, spatially coherent triangles.
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(-0.05, 0.05);
+  std::vector<Vec3> p;
+  std::vector<Tri> t;
+  for (std::size_t j = 0; j <= n; ++j)
+    for (std::size_t i = 0; i <= n; ++i)
+      p.emplace_back(double(i), double(j), std::sin(0.3 * double(i)) * std::cos(0.2 * double(j)) + U(rng));
+  auto id = [&](std::size_t i, std::size_t j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+  for (std::size_t j = 0; j < n; ++j)
+    for (std::size_t i = 0; i < n; ++i) {
+      t.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      t.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return Mesh(t, p);
+}
+
+TEST(SphereReport, EmptyMeshGivesEmptyReport) {
+  const auto r = run_sphere_report(Mesh(), {});
+  EXPECT_TRUE(r.exact_radius.empty());
+  EXPECT_EQ(sphere_methods_table(r).csv.rows(), r.methods.size());
+}
+
+TEST(SphereReport, RejectsBadConfig) {
+  SphereReportConfig c;
+  c.min_run = 10;
+  c.max_run = 5;
+  EXPECT_THROW((void)run_sphere_report(random_surface(4, 1), c), std::invalid_argument);
+  c = {};
+  c.repeats = 0;
+  EXPECT_THROW((void)run_sphere_report(random_surface(4, 1), c), std::invalid_argument);
+}
+
+TEST(SphereReport, SetsAndErrorsAgainstIndependentRecomputation) {
+  const Mesh m = random_surface(20, 2);  // 800 triangles
+  SphereReportConfig c;
+  c.min_run = c.max_run = 64;
+  c.repeats = 1;
+  const auto r = run_sphere_report(m, c);
+  ASSERT_EQ(r.exact_radius.size(), (800 + 63) / 64);
+  // Recompute each set's points from the Morton order and its exact sphere.
+  const auto order = morton_order(m.positions(), m.triangles());
+  for (std::size_t s = 0; s < r.exact_radius.size(); ++s) {
+    std::set<std::uint32_t> verts;
+    for (std::uint32_t i = r.run_first[s]; i < r.run_first[s + 1]; ++i)
+      for (auto v : m.triangle(order[i])) verts.insert(v);
+    std::vector<Vec3> pts;
+    for (auto v : verts) pts.push_back(m.position(v));
+    EXPECT_EQ(r.run_points[s], pts.size());
+    EXPECT_EQ(r.exact_radius[s], min_sphere_exact(pts).radius);
+  }
+  for (std::size_t mi = 0; mi < r.methods.size(); ++mi) {
+    const auto& s = r.methods[mi];
+    // Errors recomputed independently from the per-set radii, set by set.
+    double mean = 0, mx = -1e300;
+    for (std::size_t k = 0; k < r.exact_radius.size(); ++k) {
+      const double err = (r.radius[mi][k] - r.exact_radius[k]) / r.exact_radius[k];
+      EXPECT_GE(err, -1e-12) << to_string(s.method) << " set " << k;  // never below the minimal radius
+      mean += err;
+      mx = std::max(mx, err);
+    }
+    EXPECT_DOUBLE_EQ(s.rel_err_mean, mean / double(r.exact_radius.size())) << to_string(s.method);
+    EXPECT_EQ(s.rel_err_max, mx) << to_string(s.method);
+    EXPECT_EQ(s.not_containing, 0u) << to_string(s.method);
+    EXPECT_GE(s.rel_err_mean, -1e-12) << to_string(s.method);  // nothing beats the minimal sphere
+    if (s.method == SphereMethod::Exact) {
+      EXPECT_EQ(s.rel_err_max, 0.0);
+    }
+    if (s.method == SphereMethod::Cgal) {
+      EXPECT_LT(s.rel_err_max, 1e-12);
+    }
+    EXPECT_GT(s.ns_per_sphere_median, 0.0);
+  }
+  const auto csv = sphere_sets_table(r).csv;
+  EXPECT_EQ(csv.rows(), r.methods.size() * r.exact_radius.size());
+}
+
+}  // namespace
+}  // namespace ptc

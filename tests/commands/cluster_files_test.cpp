@@ -1,0 +1,125 @@
+// Reading `ptc cluster`'s triangles.csv back for tracing: the writer's output reads back to the
+// same clustering; every defect is an InputError naming the file and line.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "analysis/metrics/cluster_table.h"
+#include "commands/cluster_files.h"
+#include "toolkit/clustering/cluster.h"
+#include "toolkit/core/error.h"
+#include "toolkit/mesh/subdivision.h"
+
+namespace fs = std::filesystem;
+using ptc::Mesh;
+using ptc::Vec3;
+
+namespace {
+
+// A strip of 2n triangles along x (triangle k shares an edge with k - 1 and k + 1).
+Mesh strip(int n) {
+  std::vector<Vec3> p;
+  std::vector<ptc::Tri> t;
+  for (int i = 0; i <= n; ++i) p.push_back(Vec3(i, 0, 0)), p.push_back(Vec3(i, 1, 0));
+  for (int i = 0; i < n; ++i) {
+    const auto a = std::uint32_t(2 * i);
+    t.push_back({a, a + 2, a + 1});
+    t.push_back({a + 1, a + 2, a + 3});
+  }
+  return Mesh(std::move(t), std::move(p));
+}
+
+class TraceClusters : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("ptc_trace_clusters_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path write(const std::string& text) const {
+    std::ofstream(dir_ / "triangles.csv", std::ios::binary) << text;
+    return dir_;
+  }
+  // The message of the InputError thrown by read_clusters (fails the test if none).
+  std::string error(const std::string& text, const Mesh& m) const {
+    write(text);
+    try {
+      (void)ptc::read_clusters(dir_, m);
+    } catch (const ptc::InputError& e) {
+      const std::string w = e.what();
+      EXPECT_EQ(w.find('\n'), std::string::npos);
+      EXPECT_NE(w.find("triangles.csv"), std::string::npos) << w;
+      return w;
+    }
+    ADD_FAILURE() << "no error for:\n" << text;
+    return "";
+  }
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(TraceClusters, WriterOutputReadsBackToTheSameClustering) {
+  Mesh m = ptc::subdivide(strip(6), ptc::SubdivisionScheme::Midpoint, 2);
+  ptc::ClusterConfig cc;
+  cc.method = ptc::ClusterMethod::Growth;
+  cc.max_count = 8;
+  cc.max_size = 8;
+  const ptc::Clustering c = ptc::cluster_mesh(m, cc);
+  ASSERT_GT(c.cluster_count(), 3u);
+  write(ptc::triangles_table(c).csv.str());
+  const ptc::Clustering back = ptc::read_clusters(dir_, m);
+  EXPECT_EQ(back.cluster_of_triangle(), c.cluster_of_triangle());
+  EXPECT_EQ(back.triangle_order, c.triangle_order);
+  EXPECT_EQ(back.vertices, c.vertices);
+  // The file itself can be named too.
+  EXPECT_EQ(ptc::read_clusters(dir_ / "triangles.csv", m).triangle_offsets, c.triangle_offsets);
+}
+
+TEST_F(TraceClusters, RowsInAnyOrderCrlfAndSparseIds) {
+  const Mesh m = strip(2);  // 4 triangles
+  const ptc::Clustering c = ptc::read_clusters(write("triangle_id,cluster_id\r\n3,900\r\n0,7\r\n2,900\r\n1,7\r\n"), m);
+  ASSERT_EQ(c.cluster_count(), 2u);
+  EXPECT_EQ(c.cluster_of_triangle(), (std::vector<std::uint32_t>{0, 0, 1, 1}));
+}
+
+TEST_F(TraceClusters, DefectsNameFileLineAndElement) {
+  const Mesh m = strip(2);  // 4 triangles: 0-1-2-3 in a chain
+  const std::string h = "triangle_id,cluster_id\n";
+  EXPECT_NE(error("", m).find("empty"), std::string::npos);
+  EXPECT_NE(error("tri,cluster\n0,0\n", m).find("line 1: header"), std::string::npos);
+  EXPECT_NE(error(h + "0,0\n1,0\n2,0\n", m).find("triangle 3: missing"), std::string::npos);            // too few
+  EXPECT_NE(error(h + "0,0\n1,0\n2,0\n3,0\n4,0\n", m).find("line 6: triangle 4: out of range"), std::string::npos);
+  EXPECT_NE(error(h + "0,0\n1,0\n1,0\n3,0\n", m).find("line 4: triangle 1: listed twice (first on line 3)"),
+            std::string::npos);
+  EXPECT_NE(error(h + "0,0\n1,x\n2,0\n3,0\n", m).find("line 3: triangle 1: cluster id 'x'"), std::string::npos);
+  EXPECT_NE(error(h + "0,0\n-1,0\n2,0\n3,0\n", m).find("line 3"), std::string::npos);
+  EXPECT_NE(error(h + "0,0\n1,0,5\n2,0\n3,0\n", m).find("line 3"), std::string::npos);
+  EXPECT_NE(error(h + "0,0\n1,4294967296\n2,0\n3,0\n", m).find("line 3"), std::string::npos);
+  EXPECT_NE(error(h + "0,0\n\n1,0\n2,0\n3,0\n", m).find("line 3: empty line"), std::string::npos);
+  // Cluster 5 = triangles 0 and 3: not connected through shared edges (named at 3's line).
+  EXPECT_NE(error(h + "0,5\n1,6\n2,6\n3,5\n", m).find("line 5: triangle 3: cluster 5 is not connected"), std::string::npos);
+  // No such file / directory.
+  try {
+    (void)ptc::read_clusters(dir_ / "nowhere", m);
+    ADD_FAILURE();
+  } catch (const ptc::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no such file"), std::string::npos);
+  }
+}
+
+TEST_F(TraceClusters, ClustersOfAnotherMeshWithTheSameTriangleCountAreRefused) {
+  // Same triangle count, other topology: triangle order reversed pairs up non-neighbours.
+  const Mesh m = strip(4);  // 8 triangles
+  std::vector<ptc::Tri> t(m.triangles().begin(), m.triangles().end());
+  std::swap(t[1], t[6]);
+  const Mesh other(t, std::vector<Vec3>(m.positions().begin(), m.positions().end()));
+  const std::string csv = "triangle_id,cluster_id\n0,0\n1,0\n2,1\n3,1\n4,2\n5,2\n6,3\n7,3\n";
+  write(csv);
+  EXPECT_NO_THROW((void)ptc::read_clusters(dir_, m));
+  EXPECT_NE(error(csv, other).find("is not connected"), std::string::npos);
+}

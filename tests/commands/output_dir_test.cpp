@@ -1,0 +1,119 @@
+// Output directories written whole or not at all, and the inputs recorded in manifests.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <charconv>
+#include <cstring>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <sstream>
+
+#include "commands/inputs.h"
+#include "commands/output_dir.h"
+#include "toolkit/core/error.h"
+
+namespace ptc {
+namespace {
+namespace fs = std::filesystem;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+TEST(OutputDir, CommitReplacesAndFailureKeepsTheOld) {
+  const fs::path base = fs::temp_directory_path() / ("ptc_outdir_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  const fs::path target = base / "nested" / "run";
+  {
+    OutputDir d(target);
+    d.write("a.csv", "first\n");
+    EXPECT_FALSE(fs::exists(target));  // nothing visible before commit
+    d.commit();
+  }
+  EXPECT_EQ(slurp(target / "a.csv"), "first\n");
+  {
+    OutputDir d(target);
+    d.write("a.csv", "second\n");
+    // destroyed without commit: a failed run
+  }
+  EXPECT_EQ(slurp(target / "a.csv"), "first\n");
+  {
+    OutputDir d(target);
+    d.write("b.csv", "third\n");
+    d.commit();
+  }
+  EXPECT_FALSE(fs::exists(target / "a.csv"));  // the whole directory was replaced
+  EXPECT_EQ(slurp(target / "b.csv"), "third\n");
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(base / "nested")) ++entries;
+  EXPECT_EQ(entries, 1u);  // no temporaries left behind
+  // A file where the directory should go is a clear error.
+  std::ofstream(base / "file") << "x";
+  EXPECT_THROW(OutputDir(base / "file"), InputError);
+  fs::remove_all(base);
+}
+
+TEST(OutputDir, NeverReplacesADirectoryItDidNotWrite) {
+  const fs::path base = fs::temp_directory_path() / ("ptc_outdir2_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  fs::create_directories(base / "precious");
+  std::ofstream(base / "precious" / "thesis.txt") << "years of work";
+  try {
+    OutputDir d(base / "precious");
+    FAIL() << "a foreign directory was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("precious"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(slurp(base / "precious" / "thesis.txt"), "years of work");
+  // An empty directory is fine, and so is a trailing separator.
+  fs::create_directories(base / "empty");
+  {
+    OutputDir d(base / "empty/");
+    d.write("x.csv", "1\n");
+    d.commit();
+    EXPECT_EQ(d.target(), base / "empty");
+  }
+  EXPECT_EQ(slurp(base / "empty" / "x.csv"), "1\n");
+  EXPECT_TRUE(fs::exists(base / "empty" / OutputDir::kMarker));
+  // ... and the marked directory can be replaced by the next run.
+  {
+    OutputDir d(base / "empty");
+    d.write("y.csv", "2\n");
+    d.commit();
+  }
+  EXPECT_FALSE(fs::exists(base / "empty" / "x.csv"));
+  EXPECT_THROW(OutputDir(base / ".."), InputError);
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(base)) ++entries;
+  EXPECT_EQ(entries, 2u);  // precious and empty, no temporaries
+  fs::remove_all(base);
+}
+
+TEST(Manifest, HashIsFnv1aAndRecordsEverything) {
+  const fs::path p = fs::temp_directory_path() / ("ptc_hash_" + std::to_string(::getpid()));
+  std::ofstream(p, std::ios::binary) << "a";
+  // FNV-1a 64 of "a" (published test vector).
+  EXPECT_EQ(file_fnv1a64(p), "af63dc4c8601ec8c");
+  std::ofstream(p, std::ios::binary | std::ios::trunc) << "";
+  EXPECT_EQ(file_fnv1a64(p), "cbf29ce484222325");
+  EXPECT_THROW((void)file_fnv1a64(p.string() + ".missing"), InputError);
+  RunManifest m("test", {"ptc", "test"});
+  record_input(m, p);
+  m.set_parameter("k", 3);
+  m.add_timing_ms("stage", 1.5);
+  const auto j = m.to_json();
+  EXPECT_EQ(j["parameters"]["k"], 3);
+  EXPECT_EQ(j["timings_ms"]["stage"], 1.5);
+  EXPECT_EQ(j["inputs"][0]["bytes"], 0);
+  EXPECT_EQ(j["build"]["git_commit"].get<std::string>().size() >= 7 || j["build"]["git_commit"] == "unknown", true);
+  fs::remove(p);
+}
+
+}  // namespace
+}  // namespace ptc

@@ -1,0 +1,105 @@
+// Cameras of `ptc trace`: vector parsing, every degenerate camera refused with an InputError
+// naming the option, and the default camera framing every vertex for any aspect ratio.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render/camera.h"
+#include "toolkit/core/error.h"
+
+using ptc::Vec3;
+
+namespace {
+
+// Pixel coordinates of a world point (independent of primary_rays: the pinhole projection).
+Eigen::Vector2d project(const ptc::bvh::PinholeCamera& c, const Vec3& p, int w, int h) {
+  const Vec3 q = p - c.eye;
+  const double z = q.dot(c.forward);
+  const double th = std::tan(0.5 * c.fov_y_deg * M_PI / 180.0), tw = th * w / h;
+  const double sx = q.dot(c.right) / z / tw, sy = q.dot(c.up) / z / th;  // in [-1, 1] inside
+  return {0.5 * (sx + 1.0) * w, 0.5 * (1.0 - sy) * h};
+}
+
+std::string element_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const ptc::InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
+    return e.element();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+TEST(TraceCamera, DegenerateCamerasAreRefusedNamingTheOption) {
+  ptc::Box3 b;
+  b.extend(Vec3(-1, -1, -1));
+  b.extend(Vec3(1, 1, 1));
+  auto cam = [&](ptc::CameraSpec s) { return [s, &b] { (void)ptc::make_camera(s, b, 10, 10); }; };
+  EXPECT_EQ(element_of(cam({Vec3(0, 0, 5), Vec3(0, 0, 5), {}, {}})), "--eye");             // eye == look-at
+  EXPECT_EQ(element_of(cam({Vec3(0, 0, 5), {}, Vec3(0, 0, 0), {}})), "--up");              // zero up
+  EXPECT_EQ(element_of(cam({Vec3(0, 0, 5), {}, Vec3(0, 0, -2), {}})), "--up");             // up parallel to view
+  EXPECT_EQ(element_of(cam({Vec3(0, 0, 5), {}, Vec3(1e-9, 0, 1), {}})), "--up");           // almost parallel
+  EXPECT_EQ(element_of(cam({{}, {}, {}, 0.0})), "--fov");
+  EXPECT_EQ(element_of(cam({{}, {}, {}, 180.0})), "--fov");
+  EXPECT_EQ(element_of(cam({{}, {}, {}, -5.0})), "--fov");
+  EXPECT_EQ(element_of(cam({{}, {}, {}, std::nan("")})), "--fov");
+  EXPECT_EQ(element_of(cam({Vec3(std::nan(""), 0, 0), {}, {}, {}})), "--eye");
+  EXPECT_EQ(element_of(cam({{}, Vec3(0, INFINITY, 0), {}, {}})), "--look-at");
+  // Without an eye the view is along -z; an up along z switches it to -y (a z-up mesh), not an error.
+  const auto c = ptc::make_camera({{}, {}, Vec3(0, 0, 1), {}}, b, 10, 10);
+  EXPECT_NEAR(c.forward.dot(Vec3(0, -1, 0)), 1.0, 1e-12);
+  // An empty mesh cannot be framed.
+  EXPECT_EQ(element_of([] { (void)ptc::make_camera({}, ptc::Box3{}, 10, 10); }), "--look-at");
+}
+
+TEST(TraceCamera, GivenCameraIsOrthonormalAndLooksAtTarget) {
+  ptc::Box3 b;
+  b.extend(Vec3(0, 0, 0));
+  const auto c = ptc::make_camera({Vec3(3, 4, 5), Vec3(1, -2, 0.5), Vec3(0.2, 1, 0.1), 30.0}, b, 41, 41);
+  EXPECT_EQ(c.eye, Vec3(3, 4, 5));
+  EXPECT_NEAR(c.forward.dot((Vec3(1, -2, 0.5) - Vec3(3, 4, 5)).normalized()), 1.0, 1e-12);
+  EXPECT_NEAR(c.forward.norm(), 1, 1e-12);
+  EXPECT_NEAR(c.right.norm(), 1, 1e-12);
+  EXPECT_NEAR(c.up.norm(), 1, 1e-12);
+  EXPECT_NEAR(c.right.dot(c.forward), 0, 1e-12);
+  EXPECT_NEAR(c.up.dot(c.forward), 0, 1e-12);
+  EXPECT_GT(c.up.dot(Vec3(0.2, 1, 0.1)), 0.0);           // image up follows the hint
+  EXPECT_NEAR(c.right.cross(c.up).dot(-c.forward), 1, 1e-12);  // right-handed: right x up = -forward
+  // The centre pixel (odd size) looks exactly at the target.
+  const auto rays = ptc::camera_rays(c, 41, 41);
+  const std::size_t mid = 20 * 41 + 20;
+  const Vec3 d(rays.dx[mid], rays.dy[mid], rays.dz[mid]);
+  EXPECT_NEAR(d.normalized().dot(c.forward), 1.0, 1e-7);
+  // Pixel (0, 0) is top-left: up and to the left of the centre.
+  const Vec3 d0(rays.dx[0], rays.dy[0], rays.dz[0]);
+  EXPECT_GT(d0.dot(c.up), 0);
+  EXPECT_LT(d0.dot(c.right), 0);
+}
+
+TEST(TraceCamera, DefaultCameraFramesEveryCornerForAnyAspect) {
+  ptc::Box3 b;
+  b.extend(Vec3(-3, 10, 1e3));
+  b.extend(Vec3(5, 11, 1e3 + 0.5));  // wide and flat, far from the origin
+  for (auto [w, h] : {std::pair{100, 100}, std::pair{200, 50}, std::pair{50, 200}, std::pair{1, 1}}) {
+    const auto c = ptc::make_camera({}, b, w, h);
+    double margin = 1e9;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 q(k & 1 ? b.hi.x() : b.lo.x(), k & 2 ? b.hi.y() : b.lo.y(), k & 4 ? b.hi.z() : b.lo.z());
+      const auto p = project(c, q, w, h);
+      EXPECT_GE(p.x(), 0.0) << w << "x" << h;
+      EXPECT_LE(p.x(), w) << w << "x" << h;
+      EXPECT_GE(p.y(), 0.0);
+      EXPECT_LE(p.y(), h);
+      EXPECT_GT((q - c.eye).dot(c.forward), 0.0);  // in front of the camera
+      margin = std::min({margin, p.x() / w, 1 - p.x() / w, p.y() / h, 1 - p.y() / h});
+    }
+    EXPECT_LT(margin, 0.05) << "the framing is not tight";  // a 5% margin on the tightest side
+  }
+  // A point-like mesh still gets a camera off the point.
+  ptc::Box3 pt;
+  pt.extend(Vec3(1, 2, 3));
+  const auto c = ptc::make_camera({}, pt, 10, 10);
+  EXPECT_GT((c.eye - Vec3(1, 2, 3)).norm(), 0.0);
+}

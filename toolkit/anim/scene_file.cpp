@@ -1,0 +1,323 @@
+#include "toolkit/anim/scene_file.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "toolkit/anim/cloth.h"
+#include "toolkit/anim/deformers.h"
+#include "toolkit/anim/static_source.h"
+#include "toolkit/anim/subdivided.h"
+#include "toolkit/core/error.h"
+#include "toolkit/io/mesh_io.h"
+#include "toolkit/mesh/subdivision.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace ptc {
+namespace {
+
+// Reads typed values out of a JSON object, naming the JSON path in every error.
+class Reader {
+ public:
+  Reader(std::string file, fs::path base, const SceneOptions& opt) : file_(std::move(file)), base_(std::move(base)), opt_(opt) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& reason) const {
+    throw InputError(file_, "", path, reason);
+  }
+
+  void expect_object(const json& j, const std::string& path) const {
+    if (!j.is_object()) fail(path, fmt::format("expected an object, found {}", j.type_name()));
+  }
+
+  /// Rejects keys not in `allowed` (catches typos such as "amplitde").
+  void only_keys(const json& j, const std::string& path, std::initializer_list<const char*> allowed) const {
+    for (auto it = j.begin(); it != j.end(); ++it)
+      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* k) { return it.key() == k; }))
+        fail(join(path, it.key()), "unknown key");
+  }
+
+  static std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
+
+  double number(const json& j, const std::string& path) const {
+    if (!j.is_number()) fail(path, fmt::format("expected a number, found {}", j.type_name()));
+    const double x = j.get<double>();
+    if (!std::isfinite(x)) fail(path, "not a finite number");
+    return x;
+  }
+  std::int64_t integer(const json& j, const std::string& path) const {
+    if (!j.is_number_integer()) fail(path, fmt::format("expected an integer, found {}", j.type_name()));
+    return j.get<std::int64_t>();
+  }
+  std::string string(const json& j, const std::string& path) const {
+    if (!j.is_string()) fail(path, fmt::format("expected a string, found {}", j.type_name()));
+    return j.get<std::string>();
+  }
+  bool boolean(const json& j, const std::string& path) const {
+    if (!j.is_boolean()) fail(path, fmt::format("expected true or false, found {}", j.type_name()));
+    return j.get<bool>();
+  }
+  Vec3 vec3(const json& j, const std::string& path) const {
+    if (!j.is_array() || j.size() != 3) fail(path, "expected an array of 3 numbers");
+    return {number(j[0], path + "[0]"), number(j[1], path + "[1]"), number(j[2], path + "[2]")};
+  }
+  int axis(const json& j, const std::string& path) const {
+    const auto a = parse_axis(string(j, path));
+    if (!a) fail(path, "expected \"x\", \"y\" or \"z\"");
+    return *a;
+  }
+
+  fs::path resolve(const std::string& s, const std::string& path) const {
+    if (s.empty()) fail(path, "empty path");
+    auto under = [&](std::string_view prefix, const fs::path& dir) -> std::optional<fs::path> {
+      if (s.rfind(prefix, 0) != 0) return std::nullopt;
+      if (dir.empty()) fail(path, "no data directory (pass --data-dir or set PTC_DATA_DIR)");
+      return dir / s.substr(prefix.size());
+    };
+    if (auto p = under("${data}/", opt_.data_dir.empty() ? default_data_dir() : opt_.data_dir)) return *p;
+    if (auto p = under("${assets}/", opt_.assets_dir)) return *p;
+    const fs::path p(s);
+    return p.is_absolute() ? p : base_ / p;
+  }
+
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+  fs::path base_;
+  const SceneOptions& opt_;
+};
+
+DeformParams read_deform(const Reader& r, const json& j, const std::string& path) {
+  r.expect_object(j, path);
+  r.only_keys(j, path, {"kind", "axis", "direction", "amplitude", "period", "wavelength", "velocity"});
+  DeformParams d;
+  if (!j.contains("kind")) r.fail(path + ".kind", "missing (twist, bend, wave, rigid or explode)");
+  const auto kind = parse_deform_kind(r.string(j["kind"], path + ".kind"));
+  if (!kind) r.fail(path + ".kind", "expected twist, bend, wave, rigid or explode");
+  d.kind = *kind;
+  if (j.contains("axis")) d.axis = r.axis(j["axis"], path + ".axis");
+  if (j.contains("direction")) d.direction = r.axis(j["direction"], path + ".direction");
+  else if (d.direction == d.axis) d.direction = (d.axis + 1) % 3;
+  if (j.contains("amplitude")) d.amplitude = r.number(j["amplitude"], path + ".amplitude");
+  if (j.contains("period")) d.period = r.number(j["period"], path + ".period");
+  if (j.contains("wavelength")) d.wavelength = r.number(j["wavelength"], path + ".wavelength");
+  if (j.contains("velocity")) d.velocity = r.vec3(j["velocity"], path + ".velocity");
+  if (const std::string why = check(d); !why.empty()) r.fail(path, why);
+  return d;
+}
+
+ClothParams read_cloth(const Reader& r, const json& j, const std::string& path) {
+  r.expect_object(j, path);
+  r.only_keys(j, path,
+              {"resolution", "size", "sphere_center", "sphere_radius", "drop", "offset", "floor", "gravity", "fps",
+               "substeps", "iterations", "stretch_stiffness", "shear_stiffness", "bend_stiffness", "damping", "friction",
+               "thickness"});
+  ClothParams c;
+  auto num = [&](const char* k, double& v) {
+    if (j.contains(k)) v = r.number(j[k], path + "." + k);
+  };
+  auto integer = [&](const char* k, int& v) {
+    if (!j.contains(k)) return;
+    const std::int64_t x = r.integer(j[k], path + "." + k);
+    if (x < 0 || x > 1000000) r.fail(path + "." + k, "out of range");
+    v = static_cast<int>(x);
+  };
+  integer("resolution", c.resolution);
+  num("size", c.size);
+  if (j.contains("sphere_center")) c.sphere_center = r.vec3(j["sphere_center"], path + ".sphere_center");
+  num("sphere_radius", c.sphere_radius);
+  num("drop", c.drop);
+  num("offset", c.offset);
+  if (j.contains("floor")) c.floor = r.boolean(j["floor"], path + ".floor");
+  num("gravity", c.gravity);
+  num("fps", c.fps);
+  integer("substeps", c.substeps);
+  integer("iterations", c.iterations);
+  num("stretch_stiffness", c.stretch_stiffness);
+  num("shear_stiffness", c.shear_stiffness);
+  num("bend_stiffness", c.bend_stiffness);
+  num("damping", c.damping);
+  num("friction", c.friction);
+  num("thickness", c.thickness);
+  if (const std::string why = check(c); !why.empty()) r.fail(path, why);
+  return c;
+}
+
+ScenePart read_mesh_entry(const Reader& r, const json& j, const std::string& path, std::size_t index) {
+  r.expect_object(j, path);
+  r.only_keys(j, path, {"name", "file", "cloth", "sphere", "deform", "subdivide"});
+  const int sources = int(j.contains("file")) + int(j.contains("cloth")) + int(j.contains("sphere"));
+  if (sources != 1) r.fail(path, "needs exactly one of \"file\", \"cloth\" or \"sphere\"");
+
+  std::optional<DeformParams> deform;
+  if (j.contains("deform")) deform = read_deform(r, j["deform"], path + ".deform");
+  std::optional<std::pair<SubdivisionScheme, int>> sub;
+  if (j.contains("subdivide")) {
+    const std::string sp = path + ".subdivide";
+    const json& s = j["subdivide"];
+    r.expect_object(s, sp);
+    r.only_keys(s, sp, {"scheme", "levels"});
+    SubdivisionScheme scheme = SubdivisionScheme::Midpoint;
+    if (s.contains("scheme")) {
+      const auto sc = parse_subdivision_scheme(r.string(s["scheme"], sp + ".scheme"));
+      if (!sc) r.fail(sp + ".scheme", "expected \"midpoint\" or \"loop\"");
+      scheme = *sc;
+    }
+    const std::int64_t levels = s.contains("levels") ? r.integer(s["levels"], sp + ".levels") : 1;
+    if (levels < 0 || levels > 8) r.fail(sp + ".levels", "expected 0..8");
+    sub = std::make_pair(scheme, static_cast<int>(levels));
+  }
+
+  ScenePart part;
+  part.name = j.contains("name") ? r.string(j["name"], path + ".name") : fmt::format("mesh{}", index);
+  // Errors of what an entry refers to (a bad mesh file, Loop on a non-manifold mesh) name the
+  // entry's JSON path and keep their own message.
+  auto wrap = [&](const std::string& where, auto&& f) {
+    try {
+      return f();
+    } catch (const InputError& e) {
+      r.fail(where, e.what());
+    }
+  };
+
+  std::optional<Mesh> mesh;  // a static mesh that a deformer or StaticSource will own
+  AnimationPtr anim;
+  if (j.contains("file")) {
+    const fs::path p = r.resolve(r.string(j["file"], path + ".file"), path + ".file");
+    if (!fs::is_directory(p) && format_from_extension(p)) {
+      mesh = wrap(path + ".file", [&] { return read_mesh(p).mesh; });
+    } else {
+      if (deform) r.fail(path + ".deform", "a deformer applies to a mesh file or sphere, not to an animated source");
+      anim = wrap(path + ".file", [&] { return open_animation_file(p); });
+    }
+  } else if (j.contains("sphere")) {
+    const std::string sp = path + ".sphere";
+    const json& s = j["sphere"];
+    r.expect_object(s, sp);
+    r.only_keys(s, sp, {"center", "radius", "levels"});
+    const Vec3 c = s.contains("center") ? r.vec3(s["center"], sp + ".center") : Vec3::Zero();
+    const double rad = s.contains("radius") ? r.number(s["radius"], sp + ".radius") : 1.0;
+    if (!(rad > 0)) r.fail(sp + ".radius", "must be > 0");
+    const std::int64_t lv = s.contains("levels") ? r.integer(s["levels"], sp + ".levels") : 3;
+    if (lv < 0 || lv > 8) r.fail(sp + ".levels", "expected 0..8");
+    mesh = make_sphere_mesh(c, rad, static_cast<int>(lv));
+  } else {
+    if (deform) r.fail(path + ".deform", "a deformer applies to a mesh file or sphere, not to a cloth");
+    anim = wrap(path + ".cloth", [&] { return AnimationPtr(std::make_unique<ClothSimulation>(read_cloth(r, j["cloth"], path + ".cloth"))); });
+  }
+
+  if (mesh) {
+    if (sub) mesh = wrap(path + ".subdivide", [&] { return subdivide(*mesh, sub->first, sub->second); });
+    if (deform)
+      part.source = wrap(path + ".deform", [&] { return make_deformer(std::move(*mesh), *deform); });
+    else
+      part.source = std::make_unique<StaticSource>(std::move(*mesh), part.name);
+  } else {
+    if (sub)
+      anim = wrap(path + ".subdivide",
+                  [&] { return AnimationPtr(std::make_unique<SubdividedAnimation>(std::move(anim), sub->first, sub->second)); });
+    part.source = std::move(anim);
+  }
+  return part;
+}
+
+}  // namespace
+
+Scene parse_scene_json(std::string_view text, const std::string& name, const fs::path& base_dir, const SceneOptions& opt) {
+  json root;
+  try {
+    root = json::parse(text.begin(), text.end());
+  } catch (const json::parse_error& e) {
+    std::string why = e.what();
+    // nlohmann's message: "[json.exception.parse_error.101] parse error at line 1, column 5: ..."
+    if (const auto k = why.find("] "); k != std::string::npos) why = why.substr(k + 2);
+    throw InputError(name, byte_loc(e.byte), "", "invalid JSON: " + why);
+  }
+  const Reader r(name, base_dir, opt);
+  r.expect_object(root, "(root)");
+  r.only_keys(root, "", {"schema", "name", "frames", "camera", "light", "meshes"});
+  if (root.contains("schema") && r.string(root["schema"], "schema") != "ptc-scene/1")
+    r.fail("schema", "unsupported schema (expected \"ptc-scene/1\")");
+
+  std::string scene_name = fs::path(name).stem().string();
+  if (root.contains("name")) scene_name = r.string(root["name"], "name");
+
+  if (!root.contains("meshes")) r.fail("meshes", "missing (an array of mesh entries)");
+  const json& meshes = root["meshes"];
+  if (!meshes.is_array() || meshes.empty()) r.fail("meshes", "expected a non-empty array");
+  std::vector<ScenePart> parts;
+  for (std::size_t i = 0; i < meshes.size(); ++i)
+    parts.push_back(read_mesh_entry(r, meshes[i], fmt::format("meshes[{}]", i), i));
+
+  std::optional<FrameRange> frames;
+  if (root.contains("frames")) {
+    const json& f = root["frames"];
+    if (!f.is_array() || f.size() != 2) r.fail("frames", "expected [first, last]");
+    frames = FrameRange{r.integer(f[0], "frames[0]"), r.integer(f[1], "frames[1]")};
+    if (frames->first < 0) r.fail("frames[0]", "must be >= 0");
+    if (frames->last < frames->first) r.fail("frames[1]", "the last frame is before the first");
+  }
+  std::optional<SceneCamera> cam;
+  if (root.contains("camera")) {
+    const json& c = root["camera"];
+    r.expect_object(c, "camera");
+    r.only_keys(c, "camera", {"eye", "look_at", "up", "fov"});
+    SceneCamera sc;
+    if (!c.contains("eye")) r.fail("camera.eye", "missing");
+    if (!c.contains("look_at")) r.fail("camera.look_at", "missing");
+    sc.eye = r.vec3(c["eye"], "camera.eye");
+    sc.look_at = r.vec3(c["look_at"], "camera.look_at");
+    if (c.contains("up")) sc.up = r.vec3(c["up"], "camera.up");
+    if (c.contains("fov")) sc.fov_deg = r.number(c["fov"], "camera.fov");
+    if (!(sc.fov_deg > 0 && sc.fov_deg < 180)) r.fail("camera.fov", "expected a vertical field of view in (0, 180) degrees");
+    if ((sc.eye - sc.look_at).norm() == 0) r.fail("camera", "eye and look_at coincide");
+    if (sc.up.norm() == 0 || sc.up.cross(sc.look_at - sc.eye).norm() == 0) r.fail("camera.up", "zero or parallel to the view direction");
+    cam = sc;
+  }
+  std::optional<SceneLight> light;
+  if (root.contains("light")) {
+    const json& l = root["light"];
+    r.expect_object(l, "light");
+    r.only_keys(l, "light", {"position", "intensity"});
+    SceneLight sl;
+    if (!l.contains("position")) r.fail("light.position", "missing");
+    sl.position = r.vec3(l["position"], "light.position");
+    if (l.contains("intensity")) sl.intensity = r.number(l["intensity"], "light.intensity");
+    if (sl.intensity < 0) r.fail("light.intensity", "must be >= 0");
+    light = sl;
+  }
+  try {
+    return Scene(scene_name, std::move(parts), cam, light, frames);
+  } catch (const InputError& e) {
+    if (e.element() == "scene frames") r.fail("frames", e.reason());
+    r.fail("", e.reason());
+  }
+}
+
+Scene load_scene_file(const fs::path& path, const SceneOptions& opt) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path.string(), "", "", "no such file");
+  if (fs::is_directory(path, ec)) throw InputError(path.string(), "", "", "is a directory, not a scene file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string(), "", "", "cannot open");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw InputError(path.string(), "", "", "read error");
+  return parse_scene_json(ss.str(), path.string(), path.parent_path(), opt);
+}
+
+Scene open_scene(const std::string& arg, const SceneOptions& opt) {
+  std::string ext = fs::path(arg).extension().string();
+  std::ranges::transform(ext, ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".json") return load_scene_file(arg, opt);
+  return open_scene_input(arg, opt);
+}
+
+}  // namespace ptc
