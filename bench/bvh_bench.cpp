@@ -3,7 +3,7 @@
 //
 //   build/bin/bvh_bench [MESH] [--levels 2] [--reps 5] [--size 1024] [--threads 1]
 //                       [--clusters acc,meshopt] [--max-count 50] [--max-size 50]
-//                       [--leaves linear,block_tree] [--leaf 8] [--ct 1] [--ci 0.3]
+//                       [--leaves linear,block-tree] [--leaf 8] [--ct 1] [--ci 0.3]
 //                       [--isa auto|sse2|avx2] [--embree all|none] [--amplitude 0.01]
 //                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--median 4]
 //                       [--vertex-order clusters|input] [--groups 8]
@@ -59,7 +59,7 @@
 #include "commands/output_dir.h"
 #include "bvh/camera.h"
 #include "bvh/embree_peer.h"
-#include "bvh/morton_runs.h"
+#include "toolkit/clustering/morton_runs.h"
 #include "bvh/trace_scene.h"
 #include "bvh/tracer.h"
 #include "bvh/vertex_order.h"
@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
   unsigned threads = 1, max_count = 50;
   double max_size = 50, amplitude = 0.01;
   std::string vertex_order_arg = "clusters";
-  std::string clusters_arg = "acc,meshopt", leaves_arg = "linear,block_tree", isa_arg = "auto", embree_arg = "all",
+  std::string clusters_arg = "acc,meshopt", leaves_arg = "linear,block-tree", isa_arg = "auto", embree_arg = "all",
               clock_arg = "wall", out_dir;
   SceneConfig tcfg = triangle_scene_defaults(), ccfg = cluster_scene_defaults();
   std::vector<std::string> args(argv, argv + argc);
@@ -212,7 +212,7 @@ int main(int argc, char** argv) {
     std::cerr << "bvh_bench: --embree must be all or none\n";
     return 2;
   }
-  if (vertex_order_arg != "clusters" && vertex_order_arg != "input") {
+  if (!parse_vertex_order(vertex_order_arg)) {
     std::cerr << "bvh_bench: --vertex-order must be clusters or input\n";
     return 2;
   }
@@ -228,10 +228,9 @@ int main(int argc, char** argv) {
   tcfg.clock = ccfg.clock = clock;
   std::vector<ClusterLeaf> leaf_modes;
   for (const std::string& l : split_list(leaves_arg)) {
-    if (l == "linear") leaf_modes.push_back(ClusterLeaf::Linear);
-    else if (l == "block_tree") leaf_modes.push_back(ClusterLeaf::BlockTree);
+    if (const auto m = parse_cluster_leaf(l)) leaf_modes.push_back(*m);
     else {
-      std::cerr << "bvh_bench: --leaves: unknown leaf mode " << l << " (linear, block_tree)\n";
+      std::cerr << "bvh_bench: --leaves: unknown leaf mode " << l << " (linear, block-tree)\n";
       return 2;
     }
   }
@@ -250,7 +249,7 @@ int main(int argc, char** argv) {
 
   // Clusterings, made once from the rest pose.
   std::vector<std::pair<std::string, Clustering>> clusterings;
-  std::unique_ptr<MortonRuns> runs;
+  std::unique_ptr<Clustering> runs;
   std::vector<std::pair<std::string, ClusterView>> views;
   bool renumbered = false, want_morton = false;
   for (const std::string& c : split_list(clusters_arg)) {
@@ -279,7 +278,7 @@ int main(int argc, char** argv) {
     // --vertex-order clusters: the mesh renumbered once after the first clustering, so that its
     // clusters own consecutive vertices (the fused conversion + box pass); later clusterings are
     // made on the renumbered mesh (their scenes gather unless their order happens to match).
-    if (vertex_order_arg == "clusters" && clusterings.size() == 1 && !renumbered) {
+    if (parse_vertex_order(vertex_order_arg) == VertexOrder::Clusters && clusterings.size() == 1 && !renumbered) {
       const auto t1 = Clock::now();
       Clustering& c0 = clusterings.front().second;
       const std::vector<std::uint32_t> to_old = cluster_vertex_order(mesh, view_of(c0), {}, ccfg);
@@ -292,11 +291,11 @@ int main(int argc, char** argv) {
   }
   if (want_morton) {
     const auto t0 = Clock::now();
-    runs = std::make_unique<MortonRuns>(morton_runs(mesh, 80));
+    runs = std::make_unique<Clustering>(ptc::morton_runs(mesh, 80));
     manifest.add_timing_ms("clustering_morton", ms_since(t0));
   }
   for (const auto& [name, cl] : clusterings) views.push_back({name, view_of(cl)});
-  if (runs) views.push_back({"morton80", runs->view()});
+  if (runs) views.push_back({"morton80", view_of(*runs)});
 
   const Vec3 origin = mesh.bounds().center();
   tcfg.origin = ccfg.origin = origin;

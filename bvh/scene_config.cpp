@@ -5,7 +5,13 @@
 
 namespace ptc::bvh {
 
-const char* to_string(ClusterLeaf l) { return l == ClusterLeaf::Linear ? "linear" : "block_tree"; }
+const char* to_string(ClusterLeaf l) { return l == ClusterLeaf::Linear ? "linear" : "block-tree"; }
+
+std::optional<ClusterLeaf> parse_cluster_leaf(std::string_view s) {
+  if (s == "linear") return ClusterLeaf::Linear;
+  if (s == "block-tree") return ClusterLeaf::BlockTree;
+  return std::nullopt;
+}
 
 SceneConfig triangle_scene_defaults() {
   SceneConfig c;

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string_view>
 
 #include "bvh/build_config.h"
 #include "bvh/stage_clock.h"
@@ -26,7 +27,9 @@ struct StageTimes {
 
 /// How a cluster leaf's triangles are tested (see cluster_scene.h).
 enum class ClusterLeaf { Linear, BlockTree };
+/// "linear", "block-tree" (the spelling of the command line, manifests and docs).
 [[nodiscard]] const char* to_string(ClusterLeaf l);
+[[nodiscard]] std::optional<ClusterLeaf> parse_cluster_leaf(std::string_view s);
 
 struct SceneConfig {
   BuildConfig build{};  ///< builder settings (max_leaf_size counts primitives: triangles or clusters)

@@ -10,6 +10,15 @@
 
 namespace ptc::bvh {
 
+const char* to_string(VertexOrder o) { return o == VertexOrder::Clusters ? "clusters" : "input"; }
+
+std::optional<VertexOrder> parse_vertex_order(std::string_view s) {
+  if (s == "clusters") return VertexOrder::Clusters;
+  if (s == "input") return VertexOrder::Input;
+  return std::nullopt;
+}
+
+
 namespace {
 
 // Four vertices as 48 contiguous bytes in three registers, lanes (x y z x)(y z x y)(z x y z),

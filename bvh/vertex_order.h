@@ -17,6 +17,15 @@
 
 namespace ptc::bvh {
 
+/// The vertex numbering a per-frame comparison runs on: Clusters = renumbered once with
+/// cluster_vertex_order (every cluster's own vertices consecutive: the cluster path streams),
+/// Input = the file's order (the cluster path gathers per frame).
+enum class VertexOrder { Clusters, Input };
+/// "clusters", "input".
+[[nodiscard]] const char* to_string(VertexOrder o);
+[[nodiscard]] std::optional<VertexOrder> parse_vertex_order(std::string_view s);
+
+
 /// A vertex numbering for per-frame group boxes (once per clustering): vertices renumbered in
 /// first-touch order over the groups' index lists, so that group g owns the contiguous new
 /// indices [own_offsets[g], own_offsets[g+1]) (the vertices it touches first) and lists the

@@ -33,6 +33,7 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
   std::optional<FrameRange> asked;
   if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
 
+  refuse_overwriting_input(opt.out_dir, opt.scene);
   RunManifest manifest("animate", opt.argv);
   Stopwatch t0;
   Scene scene = open_scene(opt.scene, opt.scene_options);

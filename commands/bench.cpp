@@ -1,6 +1,8 @@
 // `ptc bench`.
 #include "commands/bench.h"
 
+#include <tbb/info.h>
+
 #include <ostream>
 
 #include <fmt/format.h>
@@ -22,7 +24,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   PeerBenchConfig c = opt.config;
   if (c.width < 1 || c.height < 1 || c.width > 16384 || c.height > 16384)
     throw UsageError("--width/--height", "the image size must be 1..16384 pixels per side");
-  if (c.threads < 1) throw UsageError("--threads", "must be >= 1");
+  if (c.threads == 0) c.threads = static_cast<unsigned>(tbb::info::default_concurrency());  // all cores
   std::optional<FrameRange> asked;
   if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
   std::optional<DeformKind> deform;
@@ -34,6 +36,8 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
                        fmt::format("'{}' is not a deformer (twist, bend, wave, rigid, explode or none)", *opt.deform));
   }
 
+  refuse_overwriting_input(opt.out_dir, opt.input);
+  refuse_overwriting_input(opt.out_dir, opt.clusters);
   RunManifest manifest("bench", opt.argv);
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
@@ -65,7 +69,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.add_timing_ms("bench", sw.ms());
   if (r.cluster_ms > 0) manifest.add_timing_ms("cluster", r.cluster_ms);
   manifest.add_timing_ms("cluster_scene_setup", r.cluster_scene_setup_ms);
-  if (c.cluster_vertex_order) manifest.add_timing_ms("renumber_vertices", r.renumber_ms);
+  if (c.vertex_order == bvh::VertexOrder::Clusters) manifest.add_timing_ms("renumber_vertices", r.renumber_ms);
 
   const Table bench = bench_table(r), summary = bench_summary_table(r);
   dir.write("bench.csv", bench.csv.str());

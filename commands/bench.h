@@ -25,7 +25,7 @@ struct BenchCommandOptions {
   std::optional<std::string> deform;
   std::filesystem::path clusters;  ///< triangles.csv directory; empty: growth/Acc clustering with max_count
   std::filesystem::path out_dir;   ///< bench.csv, summary.csv, manifest.json (required)
-  PeerBenchConfig config;          ///< frames are set from `frames`
+  PeerBenchConfig config;          ///< frames are set from `frames`; threads 0 = all cores
   bool json = false;               ///< print the summary as JSON
   std::vector<std::string> argv;
 };

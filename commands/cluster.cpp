@@ -66,6 +66,7 @@ void check_cluster_options(const ClusterConfig& c, const std::vector<std::string
 void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
   check_cluster_options(opt.config, opt.given);
+  refuse_overwriting_input(opt.out_dir, opt.input);
   RunManifest manifest("cluster", opt.argv);
   Stopwatch t0;
   const LoadedMesh lm = read_mesh(opt.input);

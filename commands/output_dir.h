@@ -4,15 +4,25 @@
 // leaves whatever the user had intact.
 //
 // Only ptc's own output is ever replaced: every directory this class creates holds a marker file
-// `.ptc-output`; an existing target that is neither empty nor marked (a user's home, a source
-// tree, a thesis) is refused with an InputError before any work is done.
+// `.ptc-output` listing the files the run wrote; an existing target that is neither empty nor
+// marked (a user's home, a source tree, a thesis) is refused with an InputError before any work
+// is done. Files a user added to a marked directory (not listed in its marker) are kept: they
+// move into the new output (as NAME.kept when the new run writes a file of that name), and
+// commit() says so in one line on stderr.
 #pragma once
 
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace ptc {
+
+/// UsageError naming `out_flag` when writing `out` would replace `input` or a file inside it
+/// (the same path, or `input` inside the directory `out`): an output never overwrites what the
+/// run reads. Paths are compared after resolving symbolic links and "..".
+void refuse_overwriting_input(const std::filesystem::path& out, const std::filesystem::path& input,
+                              std::string_view out_flag = "--out");
 
 class OutputDir {
  public:
@@ -33,6 +43,8 @@ class OutputDir {
   void commit();
 
   [[nodiscard]] const std::filesystem::path& target() const { return target_; }
+  /// After commit(): the files of the previous output that were not ptc's and were kept.
+  [[nodiscard]] const std::vector<std::string>& kept() const { return kept_; }
 
   /// Name of the marker file written into every output directory.
   static constexpr const char* kMarker = ".ptc-output";
@@ -40,6 +52,7 @@ class OutputDir {
  private:
   std::filesystem::path target_, tmp_;
   bool committed_ = false;
+  std::vector<std::string> kept_;
 };
 
 }  // namespace ptc

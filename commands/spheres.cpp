@@ -16,6 +16,7 @@
 namespace ptc {
 
 void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
+  refuse_overwriting_input(opt.out_dir, opt.input);
   RunManifest manifest("spheres", opt.argv);
   Stopwatch t0;
   const LoadedMesh lm = read_mesh(opt.input);

@@ -9,13 +9,15 @@
 #include "analysis/schema/json.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
+#include "commands/output_dir.h"
 #include "toolkit/io/mesh_io.h"
 
 namespace ptc {
 
 void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
   if (const auto f = format_from_extension(opt.output); !f || *f == MeshFormat::Stl)
-    throw InputError(opt.output.string(), "", "", "cannot write this format (use .off, .obj or .ply)");
+    throw UsageError("--out", "'" + opt.output.string() + "': cannot write this format (use .off, .obj or .ply)");
+  refuse_overwriting_input(opt.output, opt.input);
   Stopwatch t0;
   const LoadedMesh lm = read_mesh(opt.input);
   const double read_ms = t0.ms();

@@ -5,6 +5,7 @@
 #include <tbb/info.h>
 
 #include <ostream>
+#include <sstream>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -86,6 +87,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
   const bool sequence = opt.frames.has_value();
 
+  refuse_overwriting_input(opt.out_dir, opt.input);
+  refuse_overwriting_input(opt.out_dir, opt.clusters);
   RunManifest manifest("trace", opt.argv);
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
@@ -132,7 +135,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   double render_ms = 0, write_ms = 0, positions_ms = 0;
   nlohmann::json per_frame = nlohmann::json::array();
 
-  out << fmt::format("{}: {} triangles ({} static, {} moving; {} part(s)), {}; {}x{} pixels, {} thread(s); "
+  std::ostringstream text;  // the table; --json prints the rows as JSON instead
+  text << fmt::format("{}: {} triangles ({} static, {} moving; {} part(s)), {}; {}x{} pixels, {} thread(s); "
                      "static BVH {:.1f} ms{}\n",
                      arg, mesh.triangle_count(), static_tris, moving_tris, scene.part_count(),
                      tracer.all_static() ? fmt::format("one {} BVH built once", use_clusters ? "cluster" : "triangle")
@@ -140,7 +144,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
                                       : fmt::format("one {} BVH updated per frame", use_clusters ? "cluster" : "triangle"),
                      rc.width, rc.height, threads, tracer.static_build_ms(),
                      tracer.all_static() ? "" : fmt::format(", moving BVH setup {:.1f} ms", tracer.moving_setup_ms()));
-  out << fmt::format("{:>6} {:>10} {:>9} {:<8} {:>10} {:>10} {:>10} {:>9} {:>10} {:>10}\n", "frame", "update_ms",
+  text << fmt::format("{:>6} {:>10} {:>9} {:<8} {:>10} {:>10} {:>10} {:>9} {:>10} {:>10}\n", "frame", "update_ms",
                      "build_ms", "pass", "rays", "hits", "trace_ms", "Mrays/s", "nodes/ray", "tris/ray");
 
   loop::LoopOptions lo;
@@ -181,7 +185,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
       row.pass = name;
       row.stats = s;
       rows.push_back(std::move(row));
-      out << (lead ? fmt::format("{:>6} {:>10.2f} {:>9.2f} ", f, fr.times.update_ms, fr.times.build_ms)
+      text << (lead ? fmt::format("{:>6} {:>10.2f} {:>9.2f} ", f, fr.times.update_ms, fr.times.build_ms)
                    : fmt::format("{:>28}", ""))
           << fmt::format("{:<8} {:>10} {:>10} {:>10.2f} {:>9.2f} {:>10.2f} {:>10.2f}\n", name, s.rays, s.hits,
                          s.trace_ms, s.mrays_per_s(), per_ray(s.nodes_visited, s.rays), per_ray(s.triangles_tested, s.rays));
@@ -238,6 +242,18 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   dir.write("manifest.json", dump_json(mj));
   dir.commit();
 
+  if (opt.json) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const TraceRow& row : rows)
+      j.push_back({{"frame", row.frame}, {"pass", row.pass}, {"rays", row.stats.rays}, {"hits", row.stats.hits},
+                   {"trace_ms", row.stats.trace_ms}, {"mrays_per_s", row.stats.mrays_per_s()},
+                   {"nodes_per_ray", per_ray(row.stats.nodes_visited, row.stats.rays)},
+                   {"triangles_per_ray", per_ray(row.stats.triangles_tested, row.stats.rays)},
+                   {"update_ms", row.update_ms}, {"build_ms", row.build_ms}});
+    out << dump_json({{"schema", "ptc-trace-summary/1"}, {"scene", arg}, {"bvh", bvh_kind}, {"rows", j}});
+    return;
+  }
+  out << text.str();
   const std::string names = "{shaded,depth,normal,cost_nodes,cost_triangles" + std::string(rc.ao_samples > 0 ? ",ao" : "") + "}";
   out << "wrote " << opt.out_dir.string() << "/"
       << (sequence ? fmt::format("{}_{:04d}..{:04d}.png", names, range.first, range.last) : names + ".png")

@@ -25,6 +25,7 @@ struct TraceCommandOptions {
   std::filesystem::path out_dir;       ///< images, trace.csv, manifest.json (required)
   CameraSpec camera;
   RenderConfig render;                 ///< size, shadows, AO, seed, light, threads (0 = all cores)
+  bool json = false;                   ///< stdout: JSON (schema ptc-trace-summary/1) instead of the table
   std::vector<std::string> argv;       ///< recorded in the manifest
 };
 

@@ -75,7 +75,8 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     Stopwatch sw;
     own = cluster_mesh(scene.rest(), cc);
     res.cluster_ms = sw.ms();
-    res.clustering = fmt::format("growth/acc MaxCount={} MaxSize={}", cfg.max_count, cfg.max_count);
+    res.clustering = cfg.max_count == 0 ? std::string("one triangle per cluster (MaxCount = MaxSize = 0)")
+                                        : fmt::format("growth/acc MaxCount={} MaxSize={}", cfg.max_count, cfg.max_count);
     clusters = &own;
   } else {
     res.clustering = "given";
@@ -94,8 +95,8 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
   // are consecutive; the scene renumbers its sources (or gathers, which it then says).
   Clustering renumbered;
-  res.vertex_order = cfg.cluster_vertex_order ? "clusters" : "input";
-  if (cfg.cluster_vertex_order) {
+  res.vertex_order = to_string(cfg.vertex_order);
+  if (cfg.vertex_order == bvh::VertexOrder::Clusters) {
     Stopwatch sw;
     const std::vector<std::uint32_t> to_old = bvh::cluster_vertex_order(
         scene.rest(), bvh::view_of(*clusters), scene.vertex_offsets(), loop::cluster_scene_config(setup));

@@ -22,6 +22,7 @@
 #include "analysis/loop/accel.h"
 #include "analysis/metrics/hit_agreement.h"
 #include "analysis/schema/table.h"
+#include "bvh/vertex_order.h"
 #include "render/camera.h"
 #include "toolkit/anim/scene.h"
 #include "toolkit/clustering/clustering.h"
@@ -38,12 +39,12 @@ struct PeerBenchConfig {
   /// Two-level build of the cluster BVH over groups of at most this many clusters; 0: plain.
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
   TieRule tie;                            ///< what counts as a tie in the hit agreement
-  /// Vertex order of the benchmark mesh. true (default): the scene is renumbered once, after
+  /// Vertex order of the benchmark mesh. Clusters (default): the scene is renumbered once, after
   /// clustering, with bvh::cluster_vertex_order (every cluster's own vertices consecutive, parts
   /// kept in place), so that the cluster path converts and boxes in one pass over the positions
   /// (ClusterScene::fused_vertex_pass); every configuration sees the same renumbered mesh,
-  /// triangle ids unchanged. false: the input order (the cluster path gathers per frame).
-  bool cluster_vertex_order = true;
+  /// triangle ids unchanged. Input: the file's order (the cluster path gathers per frame).
+  bvh::VertexOrder vertex_order = bvh::VertexOrder::Clusters;
 };
 
 struct BenchRow {
@@ -81,7 +82,7 @@ struct PeerBenchResult {
 
 /// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()
 /// (validated by the caller), or nullptr to compute growth / Acc with MaxCount = MaxSize =
-/// cfg.max_count (timed as cluster_ms). With cfg.cluster_vertex_order the scene is renumbered
+/// cfg.max_count (timed as cluster_ms). With VertexOrder::Clusters the scene is renumbered
 /// in place (Scene::renumber_vertices). Throws std::invalid_argument for a bad configuration,
 /// std::runtime_error when Embree fails.
 [[nodiscard]] PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const PeerBenchConfig& cfg);

@@ -2,40 +2,42 @@
 
 #include <algorithm>
 #include <chrono>
-#include <random>
 #include <limits>
 #include <stdexcept>
 
 #include "toolkit/core/stopwatch.h"
+#include "toolkit/clustering/morton_runs.h"
 #include "toolkit/geometry/morton.h"
 
 namespace ptc {
 
 std::vector<std::vector<Vec3>> morton_point_sets(const Mesh& mesh, const SphereReportConfig& cfg,
                                                  std::vector<std::uint32_t>* run_first) {
-  if (cfg.min_run < 1 || cfg.max_run < cfg.min_run)
+  if (cfg.min_run < 1 || cfg.max_run < cfg.min_run || cfg.max_run > 0xffffffffu)
     throw std::invalid_argument("sphere report: need 1 <= min_run <= max_run");
-  const auto order = morton_order(mesh.positions(), mesh.triangles());
-  std::mt19937_64 rng(cfg.seed);
-  std::uniform_int_distribution<std::size_t> len(cfg.min_run, cfg.max_run);
+  const Clustering runs = morton_runs(
+      mesh, MortonRunsConfig{static_cast<std::uint32_t>(cfg.min_run), static_cast<std::uint32_t>(cfg.max_run), cfg.seed});
+  // A set's points in the order its run first touches them along the Morton order (the order
+  // the approximate methods see; the exact radius does not depend on it).
+  const std::vector<std::uint32_t> order = morton_order(mesh.positions(), mesh.triangles());
+  std::vector<std::uint32_t> rank(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) rank[order[i]] = static_cast<std::uint32_t>(i);
   std::vector<std::vector<Vec3>> sets;
-  std::vector<std::uint32_t> stamp(mesh.vertex_count(), 0xffffffffu);
-  if (run_first) run_first->clear();
-  for (std::size_t first = 0; first < order.size();) {
-    const std::size_t last = std::min(order.size(), first + len(rng));
-    const auto id = static_cast<std::uint32_t>(sets.size());
+  std::vector<std::uint32_t> stamp(mesh.vertex_count(), 0xffffffffu), tris;
+  if (run_first) run_first->assign(runs.triangle_offsets.begin(), runs.triangle_offsets.end());
+  for (std::size_t k = 0; k < runs.cluster_count(); ++k) {
+    const auto t = runs.triangles_of(k);
+    tris.assign(t.begin(), t.end());
+    std::sort(tris.begin(), tris.end(), [&](std::uint32_t a, std::uint32_t b) { return rank[a] < rank[b]; });
     std::vector<Vec3> pts;
-    for (std::size_t i = first; i < last; ++i)
-      for (std::uint32_t v : mesh.triangle(order[i]))
-        if (stamp[v] != id) {
-          stamp[v] = id;
+    for (std::uint32_t tri : tris)
+      for (std::uint32_t v : mesh.triangle(tri))
+        if (stamp[v] != k) {
+          stamp[v] = static_cast<std::uint32_t>(k);
           pts.push_back(mesh.position(v));
         }
-    if (run_first) run_first->push_back(static_cast<std::uint32_t>(first));
     sets.push_back(std::move(pts));
-    first = last;
   }
-  if (run_first) run_first->push_back(static_cast<std::uint32_t>(order.size()));
   return sets;
 }
 

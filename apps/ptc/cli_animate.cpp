@@ -18,7 +18,7 @@ struct AnimateArgs {
 void register_animate(CLI::App& app, Context& ctx) {
   auto a = std::make_shared<AnimateArgs>();
   auto* c = ctx.add(app, "animate", "write the frames of a scene as a mesh sequence (frame_0000.ply ...)", [a, &ctx] {
-    a->opt.format = a->format == "obj" ? MeshFormat::Obj : MeshFormat::Ply;
+    a->opt.format = *parse_mesh_format(a->format);
     a->opt.scene_options.data_dir = a->data_dir;
     a->opt.argv = ctx.args;
     if (a->frames_opt->count() > 0) a->opt.frames = a->frames;

@@ -1,5 +1,5 @@
-// `ptc bench SCENE [--clusters DIR | --max-count N] [--frames N|A:B] [--data-dir DIR] [--width W --height H]
-// [--threads T] [--deform twist|wave|none] [--vertex-order clusters|input] --out DIR` (analysis/experiments/bench.h).
+// `ptc bench SCENE [--clusters DIR | --max-count N] [--frames A:B] [--data-dir DIR] [--width W --height H]
+// [--threads T] [--deform KIND|none] [--vertex-order clusters|input] [--json] --out DIR` (commands/bench.h).
 #include <iostream>
 
 #include "commands/bench.h"
@@ -12,7 +12,6 @@ struct BenchArgs {
   BenchCommandOptions opt;
   std::string deform, cluster_leaf = "linear", frames, data_dir, vertex_order = "clusters";
   CLI::App* app = nullptr;
-  int threads = 1;
 };
 }  // namespace
 
@@ -25,9 +24,9 @@ void register_bench(CLI::App& app, Context& ctx) {
                       auto& o = a->opt;
                       if (a->app->count("--deform")) o.deform = a->deform;
                       o.config.cluster_leaf =
-                          a->cluster_leaf == "linear" ? bvh::ClusterLeaf::Linear : bvh::ClusterLeaf::BlockTree;
-                      o.config.threads = static_cast<unsigned>(a->threads);
-                      o.config.cluster_vertex_order = a->vertex_order == "clusters";
+                          *bvh::parse_cluster_leaf(a->cluster_leaf);
+                      o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
+                      o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       if (a->app->count("--frames")) o.frames = a->frames;
                       if (!a->data_dir.empty()) o.scene_options.data_dir = a->data_dir;
                       o.argv = ctx.args;
@@ -39,8 +38,10 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->required();
   c->add_option("--data-dir", a->data_dir, "meshes of built-in scenes (default: $PTC_DATA_DIR or <ptc>/../data)");
   auto* cl = c->add_option("--clusters", a->opt.clusters, "use the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
-  c->add_option("--max-count", cfg.max_count, "otherwise: growth/Acc clustering with MaxCount = MaxSize = N")
-      ->check(CLI::Range(1u, 1u << 20))
+  c->add_option("--max-count", cfg.max_count,
+                "otherwise: growth/Acc clustering with MaxCount = MaxSize = N (0: one triangle per cluster, the "
+                "paper's standard)")
+      ->check(CLI::Range(0u, 1u << 20))
       ->excludes(cl)
       ->capture_default_str();
   c->add_option("--frames", a->frames,
@@ -49,15 +50,13 @@ void register_bench(CLI::App& app, Context& ctx) {
   c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
   c->add_option("--width", cfg.width, "primary rays per image row")->check(CLI::Range(1, 16384))->capture_default_str();
   c->add_option("--height", cfg.height, "image rows")->check(CLI::Range(1, 16384))->capture_default_str();
-  c->add_option("--threads", a->threads, "threads of our builder and tracer and of Embree's device (default 1)")
-      ->check(CLI::Range(1, 4096))
-      ->capture_default_str();
+  add_threads_option(c, ctx.threads);  // ours and Embree's device alike
   c->add_option("--deform", a->deform,
                 "stand-in motion of a static scene (mesh file): twist (default), bend, wave, rigid, explode (the "
                 "built-in scenes' deformers) or none")
       ->check(CLI::IsMember({"twist", "bend", "wave", "rigid", "explode", "none"}));
   c->add_option("--cluster-leaf", a->cluster_leaf, "cluster leaves: linear (the paper's, default) or block-tree")
-      ->check(CLI::IsMember({"block-tree", "linear"}))
+      ->check(enum_validator("cluster leaf", bvh::parse_cluster_leaf))
       ->capture_default_str();
   c->add_option("--cluster-groups", cfg.cluster_group_size,
                 "two-level cluster BVH build over fixed groups of at most N clusters (subtrees of the rest-pose "
@@ -67,7 +66,7 @@ void register_bench(CLI::App& app, Context& ctx) {
   c->add_option("--vertex-order", a->vertex_order,
                 "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "
                 "streams, no gather; every configuration sees the same mesh), or input: keep the file's order")
-      ->check(CLI::IsMember({"clusters", "input"}))
+      ->check(enum_validator("vertex order", bvh::parse_vertex_order))
       ->capture_default_str();
   c->add_option("--out", a->opt.out_dir, "output directory: bench.csv, summary.csv, manifest.json")->required();
   c->add_flag("--json", a->opt.json, "print the summary as JSON");

@@ -86,6 +86,7 @@ void register_trace(CLI::App& app, Context& ctx) {
       ->capture_default_str();
   c->add_option("--seed", rc.seed, "seed of the AO directions")->capture_default_str();
   c->add_option("--out", a->opt.out_dir, "output directory (written atomically)")->required();
+  c->add_flag("--json", a->opt.json, "print the per-frame, per-pass figures as JSON");
   add_threads_option(c, ctx.threads);
 }
 

@@ -7,7 +7,7 @@
 #include <oneapi/tbb/global_control.h>
 
 #include "apps/ptc/cli.h"
-#include "toolkit/core/error.h"
+#include "commands/errors.h"
 
 int main(int argc, char** argv) {
   using namespace ptc;

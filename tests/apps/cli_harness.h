@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "common/temp_dir.h"
+
 namespace ptc::test {
 
 namespace fs = std::filesystem;
@@ -23,13 +25,6 @@ struct RunResult {
   int code = -1;  ///< exit code, or -signal when killed by a signal
   std::string out, err;
 };
-
-inline std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 /// Single-quoted for the shell.
 inline std::string quote(const std::string& s) {
@@ -46,17 +41,8 @@ inline const char* const kCube =
     "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
 
 /// Base fixture: dir_ is a fresh directory named after the test, removed afterwards.
-class CliTest : public ::testing::Test {
+class CliTest : public TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ptc_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->test_suite_name()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   RunResult ptc(const std::vector<std::string>& args) const {
     std::string cmd = quote(PTC_BIN);
     for (const auto& a : args) cmd.append(" ").append(quote(a));
@@ -75,7 +61,6 @@ class CliTest : public ::testing::Test {
     std::ofstream(p, std::ios::binary) << text;
     return p;
   }
-  fs::path dir_;
 };
 
 }  // namespace ptc::test

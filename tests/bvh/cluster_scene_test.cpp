@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "bvh/morton_runs.h"
+#include "toolkit/clustering/morton_runs.h"
 #include "bvh/scene_config.h"
 #include "test_util.h"
 
@@ -50,13 +50,13 @@ TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
   const Mesh m = test::load_mesh("bunny00.off");
   const Mesh moved = test::deformed(m, 0.05);  // the order is the rest pose's, whatever the frame
   for (std::uint32_t run : {7u, 37u, 200u}) {
-    const MortonRuns runs = morton_runs(m, run);
+    const Clustering runs = ptc::morton_runs(m, run);
     for (std::uint32_t groups : {0u, 8u}) {
       SceneConfig cfg = cluster_scene_defaults();
       cfg.cluster_group_size = groups;
-      ClusterScene s(m, runs.view(), cfg);
+      ClusterScene s(m, view_of(runs), cfg);
       s.update(moved.positions());
-      const std::vector<std::uint32_t> visit = cluster_visit_order(m, runs.view(), cfg);
+      const std::vector<std::uint32_t> visit = cluster_visit_order(m, view_of(runs), cfg);
       EXPECT_EQ(s.cluster_ids(), visit);
       // The BVH's primitive i is scene cluster prim_order[i], traced through ranges[i].
       const TraceData& d = s.data();

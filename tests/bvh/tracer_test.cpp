@@ -10,7 +10,7 @@
 #include <random>
 #include <variant>
 
-#include "bvh/morton_runs.h"
+#include "toolkit/clustering/morton_runs.h"
 #include "bvh/trace_scene.h"
 #include "test_util.h"
 #include "toolkit/clustering/cluster.h"
@@ -38,7 +38,7 @@ const Kind kAllKinds[] = {Kind::Triangles,  Kind::TrianglesLeaf1,   Kind::Triang
 
 // Owns a scene of either flavour (and the clustering it was made from).
 struct AnyScene {
-  std::unique_ptr<MortonRuns> runs;
+  std::unique_ptr<Clustering> runs;
   std::variant<std::monostate, TriangleScene, ClusterScene> scene;
   const TraceData& data() const {
     return scene.index() == 1 ? std::get<1>(scene).data() : std::get<2>(scene).data();
@@ -57,11 +57,11 @@ AnyScene make_scene(const Mesh& m, Kind k, std::optional<Vec3> origin = std::nul
     case Kind::Clusters80Linear:
     case Kind::Clusters80Leaf4:
     case Kind::Clusters7:
-      s.runs = std::make_unique<MortonRuns>(morton_runs(m, k == Kind::Clusters7 ? 7 : 80));
+      s.runs = std::make_unique<Clustering>(ptc::morton_runs(m, k == Kind::Clusters7 ? 7 : 80));
       cfg.build.max_leaf_size = k == Kind::Clusters80 || k == Kind::Clusters80Linear ? 1 : 4;
       if (k == Kind::Clusters80Linear || k == Kind::Clusters7) cfg.cluster_leaf = ClusterLeaf::Linear;
       if (k == Kind::Clusters7) cfg.build.cost.traversal = 50.0;  // leaves of several clusters (indirect)
-      s.scene.emplace<2>(m, s.runs->view(), cfg);
+      s.scene.emplace<2>(m, view_of(*s.runs), cfg);
       break;
   }
   if (k == Kind::Clusters7) {
@@ -388,20 +388,20 @@ TEST(Tracer, EmptyMeshAndDegenerateRays) {
 
 TEST(Tracer, ClusterSceneRejectsBadClusterings) {
   const Mesh m = test::load_mesh("bunny00.off");
-  MortonRuns r = morton_runs(m, 50);
+  Clustering r = ptc::morton_runs(m, 50);
   r.triangle_order[0] = r.triangle_order[1];
-  EXPECT_THROW(ClusterScene(m, r.view()), std::invalid_argument);
-  r = morton_runs(m, 50);
+  EXPECT_THROW(ClusterScene(m, view_of(r)), std::invalid_argument);
+  r = ptc::morton_runs(m, 50);
   r.triangle_offsets.back() -= 1;
-  EXPECT_THROW(ClusterScene(m, r.view()), std::invalid_argument);
+  EXPECT_THROW(ClusterScene(m, view_of(r)), std::invalid_argument);
 }
 
 TEST(Tracer, UpdateFollowsTheAnimation) {
   const Mesh m = test::load_mesh("bunny00.off");
   const Mesh moved = test::deformed(m, 0.05);
-  const MortonRuns runs = morton_runs(m, 64);
+  const Clustering runs = ptc::morton_runs(m, 64);
   TriangleScene ts(m);
-  ClusterScene cs(m, runs.view());
+  ClusterScene cs(m, view_of(runs));
   ts.update(moved.positions());
   cs.update(moved.positions());
   EXPECT_TRUE(validate(ts.data(), m.triangle_count()).empty());
@@ -518,7 +518,7 @@ TEST(Tracer, ClusterBoxesEqualBruteForceOverTheOriginalVertices) {
   const Mesh base = test::load_mesh("bunny00.off");
   const Mesh m = with_unreferenced_ends(base);
   const Clustering cl = acc50(m);
-  const MortonRuns runs = morton_runs(m, 37);
+  const Clustering runs = ptc::morton_runs(m, 37);
   std::vector<std::uint32_t> corner_offsets{0}, corners;  // the runs' implied vertex lists
   for (std::size_t c = 0; c + 1 < runs.triangle_offsets.size(); ++c) {
     for (std::uint32_t i = runs.triangle_offsets[c]; i < runs.triangle_offsets[c + 1]; ++i)
@@ -527,7 +527,7 @@ TEST(Tracer, ClusterBoxesEqualBruteForceOverTheOriginalVertices) {
   }
   const Mesh moved = test::deformed(m, 0.04);
   for (int which = 0; which < 2; ++which) {
-    const ClusterView view = which == 0 ? view_of(cl) : runs.view();
+    const ClusterView view = which == 0 ? view_of(cl) : view_of(runs);
     const std::span<const std::uint32_t> offs = which == 0 ? std::span<const std::uint32_t>(cl.vertex_offsets)
                                                            : std::span<const std::uint32_t>(corner_offsets);
     const std::span<const std::uint32_t> verts =
@@ -607,7 +607,7 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
   }
   // A clustering given without vertex lists (the scene uses the triangles' corners) takes the
   // fused pass when the mesh was renumbered over those corner lists.
-  const MortonRuns runs = morton_runs(m, 37);
+  const Clustering runs = ptc::morton_runs(m, 37);
   const ClusterView no_lists{runs.triangle_order, runs.triangle_offsets, {}, {}};
   const Mesh rr = renumber_vertices(m, cluster_vertex_order(m, no_lists, {}, cluster_scene_defaults()));
   ClusterScene c(rr, no_lists), c_old(m, no_lists);

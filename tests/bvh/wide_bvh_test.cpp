@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "bvh/morton_runs.h"
+#include "toolkit/clustering/morton_runs.h"
 #include "bvh/sah_builder.h"
 #include "bvh/trace_scene.h"
 #include "test_util.h"
@@ -68,10 +68,10 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
       if (n.is_leaf(k)) n.count[k] = 0, n.child[k] = 0;  // leaves dropped
   EXPECT_FALSE(validate(d, m.triangle_count()).empty());
 
-  const MortonRuns runs = morton_runs(m, 80);
+  const Clustering runs = ptc::morton_runs(m, 80);
   SceneConfig linear = cluster_scene_defaults();
   linear.cluster_leaf = ClusterLeaf::Linear;
-  ClusterScene cs(m, runs.view(), linear);
+  ClusterScene cs(m, view_of(runs), linear);
   ASSERT_TRUE(validate(cs.data(), m.triangle_count()).empty()) << test::joined(validate(cs.data(), m.triangle_count()));
   d = cs.data();
   bool corrupted = false;
@@ -84,7 +84,7 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
   SceneConfig many = linear;
   many.build.max_leaf_size = 4;
   many.build.cost.traversal = 1000.0;  // leaves as large as allowed
-  ClusterScene cs4(m, runs.view(), many);
+  ClusterScene cs4(m, view_of(runs), many);
   ASSERT_TRUE(validate(cs4.data(), m.triangle_count()).empty());
   std::size_t indirect = 0;
   for (const WideNode& n : cs4.data().wide.nodes)
@@ -96,7 +96,7 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
   // Block trees: valid (boxes contain, not equal, their children's), and refitted per frame.
   SceneConfig block_tree = cluster_scene_defaults();
   block_tree.cluster_leaf = ClusterLeaf::BlockTree;
-  ClusterScene bt(m, runs.view(), block_tree);
+  ClusterScene bt(m, view_of(runs), block_tree);
   EXPECT_GT(bt.subtree_nodes(), 0u);
   EXPECT_TRUE(validate(bt.data(), m.triangle_count(), false).empty()) << test::joined(validate(bt.data(), m.triangle_count(), false));
   bt.update(test::deformed(m, 0.05).positions());

@@ -115,5 +115,50 @@ TEST(Manifest, HashIsFnv1aAndRecordsEverything) {
   fs::remove(p);
 }
 
+// A rerun into a ptc output directory keeps what the user added there (and says so), drops
+// ptc's own stale files, and keeps a user's file whose name the new run writes as NAME.kept.
+TEST(OutputDir, RerunKeepsFilesTheUserAdded) {
+  const fs::path base = fs::temp_directory_path() / ("ptc_keep_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  const fs::path target = base / "out";
+  {
+    OutputDir d(target);
+    d.write("a.csv", "first a");
+    d.write("stale.csv", "only in the first run");
+    d.commit();
+    EXPECT_TRUE(d.kept().empty());
+  }
+  std::ofstream(target / "notes.txt") << "mine";
+  fs::create_directories(target / "plots");
+  std::ofstream(target / "plots" / "p.py") << "mine too";
+  {
+    OutputDir d(target);
+    d.write("a.csv", "second a");
+    d.write("b.csv", "second b");
+    d.commit();
+    EXPECT_EQ(d.kept(), (std::vector<std::string>{"notes.txt", "plots"}));
+  }
+  EXPECT_EQ(slurp(target / "a.csv"), "second a");
+  EXPECT_EQ(slurp(target / "notes.txt"), "mine");
+  EXPECT_EQ(slurp(target / "plots" / "p.py"), "mine too");
+  EXPECT_FALSE(fs::exists(target / "stale.csv"));  // ptc's own, not written again
+  // The user's files stay the user's: a third run that writes "notes.txt" keeps theirs aside.
+  {
+    OutputDir d(target);
+    d.write("notes.txt", "ptc's notes");
+    d.commit();
+    EXPECT_EQ(d.kept(), (std::vector<std::string>{"notes.txt.kept", "plots"}));
+  }
+  EXPECT_EQ(slurp(target / "notes.txt"), "ptc's notes");
+  EXPECT_EQ(slurp(target / "notes.txt.kept"), "mine");
+  EXPECT_FALSE(fs::exists(target / "a.csv"));
+  // Every file a run wrote is listed in its marker; the kept ones are not.
+  const std::string marker = slurp(target / OutputDir::kMarker);
+  EXPECT_NE(marker.find("\nnotes.txt\n"), std::string::npos) << marker;
+  EXPECT_EQ(marker.find("kept"), std::string::npos) << marker;
+  EXPECT_EQ(marker.find("plots"), std::string::npos) << marker;
+  fs::remove_all(base);
+}
+
 }  // namespace
 }  // namespace ptc

@@ -17,7 +17,7 @@
 #include <sstream>
 #include <string>
 
-#include "temp_dir.h"
+#include "common/temp_dir.h"
 #include "toolkit/anim/assimp_source.h"
 #include "toolkit/anim/frame_sequence.h"
 #include "toolkit/anim/load_animation.h"

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "temp_dir.h"
+#include "common/temp_dir.h"
 #include "toolkit/core/error.h"
 #include "toolkit/io/atomic_file.h"
 #include "toolkit/io/mesh_io.h"

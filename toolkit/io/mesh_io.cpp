@@ -22,6 +22,12 @@ std::string_view to_string(MeshFormat f) {
   return "?";
 }
 
+std::optional<MeshFormat> parse_mesh_format(std::string_view s) {
+  for (MeshFormat f : {MeshFormat::Off, MeshFormat::Obj, MeshFormat::Ply, MeshFormat::Stl})
+    if (to_string(f) == s) return f;
+  return std::nullopt;
+}
+
 namespace {
 
 // The whole file in memory (one read; the parsers index into it).

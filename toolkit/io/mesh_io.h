@@ -28,6 +28,7 @@ namespace ptc {
 enum class MeshFormat { Off, Obj, Ply, Stl };
 /// "off", "obj", "ply", "stl".
 [[nodiscard]] std::string_view to_string(MeshFormat f);
+[[nodiscard]] std::optional<MeshFormat> parse_mesh_format(std::string_view s);
 
 /// What the reader found in the file besides the mesh itself.
 struct ReadReport {

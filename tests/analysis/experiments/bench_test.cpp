@@ -176,7 +176,7 @@ TEST(PeerBench, ScenePositionsDriveTheFrames) {
   EXPECT_NE(bench[0].find(",scene_frame,source_ms"), std::string::npos);
 
   // The file's vertex order: the cluster path gathers; the same hits, frame by frame.
-  cfg.cluster_vertex_order = false;
+  cfg.vertex_order = ptc::bvh::VertexOrder::Input;
   ptc::Scene sc2 = scene_of(m, ptc::DeformKind::Rigid, rigid);
   const auto ri = ptc::run_peer_bench(sc2, nullptr, cfg);
   EXPECT_EQ(ri.vertex_order, "input");

@@ -12,7 +12,6 @@
 
 #include "analysis/schema/csv.h"
 #include "analysis/schema/manifest.h"
-#include "commands/output_dir.h"
 #include "toolkit/core/error.h"
 
 namespace ptc {

@@ -1,0 +1,158 @@
+// Scene files (toolkit/anim/scene_file.h): every key, and errors naming the file and the JSON
+// path of the offending element.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "common/temp_dir.h"
+#include "toolkit/anim/cloth.h"
+#include "toolkit/anim/deformers.h"
+#include "toolkit/anim/scene_file.h"
+#include "toolkit/core/error.h"
+#include "toolkit/io/mesh_io.h"
+
+namespace fs = std::filesystem;
+
+namespace ptc {
+namespace {
+
+const fs::path kData = PTC_TEST_DATA;
+
+constexpr const char* kCube =
+    "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+    "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
+
+class SceneFile : public test::TempDirTest {
+ protected:
+  void SetUp() override {
+    TempDirTest::SetUp();
+    write("cube.off", kCube);
+  }
+  fs::path write(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    test::spit(p, text);
+    return p;
+  }
+  // Error message of parsing `json` as a scene file (empty when it parses).
+  std::string scene_error(const std::string& json) const {
+    const fs::path p = write("scene.json", json);
+    try {
+      (void)load_scene_file(p);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return {};
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Scene files
+
+TEST_F(SceneFile, SceneFileGood) {
+  const fs::path p = write("good.json", R"({
+    "schema": "ptc-scene/1",
+    "name": "mine",
+    "frames": [2, 5],
+    "camera": {"eye": [0, 1, 5], "look_at": [0, 0, 0], "fov": 30},
+    "light": {"position": [3, 3, 3], "intensity": 2},
+    "meshes": [
+      {"name": "floor", "file": "cube.off"},
+      {"name": "spin", "file": "cube.off", "subdivide": {"scheme": "loop", "levels": 1},
+       "deform": {"kind": "rigid", "axis": "z", "period": 10}},
+      {"name": "ball", "sphere": {"center": [0, 3, 0], "radius": 0.5, "levels": 1}},
+      {"name": "sheet", "cloth": {"resolution": 5, "substeps": 2}},
+      {"name": "arm", "file": "${data}/meshes/cube.off", "deform": {"kind": "wave", "axis": "x", "direction": "y", "amplitude": 0.1}}
+    ]
+  })");
+  SceneOptions o;
+  o.data_dir = kData;
+  Scene s = load_scene_file(p, o);
+  EXPECT_EQ(s.name(), "mine");
+  ASSERT_EQ(s.part_count(), 5u);
+  EXPECT_TRUE(s.is_static(0));
+  EXPECT_FALSE(s.is_static(1));
+  EXPECT_TRUE(s.is_static(2));
+  EXPECT_FALSE(s.is_static(3));
+  EXPECT_FALSE(s.is_static(4));
+  EXPECT_EQ(s.triangle_offset(1), 12u);
+  EXPECT_EQ(s.triangle_offset(2), 12u + 48u);        // Loop, one level
+  EXPECT_EQ(s.triangle_offset(3), 60u + 80u);        // icosphere, one level
+  EXPECT_EQ(s.triangle_offset(4), 140u + 2 * 4 * 4);  // 5 x 5 cloth
+  EXPECT_EQ(s.frames().first, 2);
+  EXPECT_EQ(s.frames().last, 5);
+  EXPECT_EQ(s.camera().eye, Vec3(0, 1, 5));
+  EXPECT_EQ(s.camera().fov_deg, 30);
+  EXPECT_EQ(s.light().intensity, 2);
+  // The cloth part is the cloth asked for: same positions as a ClothSimulation made here.
+  ClothParams cp;
+  cp.resolution = 5;
+  cp.substeps = 2;
+  ClothSimulation ref(cp);
+  std::vector<Vec3> all(s.rest().vertex_count()), own(ref.rest().vertex_count());
+  s.positions(4, all);
+  ref.positions(4, own);
+  for (std::size_t i = 0; i < own.size(); ++i) ASSERT_EQ(all[s.vertex_offset(3) + i], own[i]);
+}
+
+TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
+  const std::string f = (dir_ / "scene.json").string();
+  auto has = [&](const std::string& msg, const std::string& part) {
+    EXPECT_NE(msg.find(part), std::string::npos) << "message: " << msg << "\nexpected to contain: " << part;
+  };
+  std::string e;
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}, {"file": "cube.off", "deform": {"kind": "twist", "amplitude": "big"}}]})");
+  has(e, f);
+  has(e, "meshes[1].deform.amplitude");
+  has(e, "expected a number");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "wobble"}}]})");
+  has(e, "meshes[0].deform.kind");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "bend", "axis": "y", "direction": "y"}}]})");
+  has(e, "meshes[0].deform");
+  has(e, "direction must differ");
+  e = scene_error(R"({"meshes": [{"file": "missing.off"}]})");
+  has(e, f);
+  has(e, "meshes[0].file");
+  has(e, "missing.off");
+  e = scene_error(R"({"meshes": [{"cloth": {"resolution": 1}}]})");
+  has(e, "meshes[0].cloth");
+  has(e, "resolution must be >= 2");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "colour": "red"}]})");
+  has(e, "meshes[0].colour");
+  has(e, "unknown key");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "cloth": {}}]})");
+  has(e, "needs exactly one of");
+  e = scene_error(R"({"meshes": []})");
+  has(e, "meshes");
+  e = scene_error(R"({"frames": [5, 2], "meshes": [{"file": "cube.off"}]})");
+  has(e, "frames[1]");
+  e = scene_error(R"({"camera": {"eye": [0, 0, 1], "look_at": [0, 0, 1]}, "meshes": [{"file": "cube.off"}]})");
+  has(e, "camera");
+  e = scene_error(R"({"camera": {"eye": [0, 0], "look_at": [0, 0, 1]}, "meshes": [{"file": "cube.off"}]})");
+  has(e, "camera.eye");
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}], "schema": "ptc-scene/9"})");
+  has(e, "schema");
+  e = scene_error("{\"meshes\": [{\"file\": \"cube.off\"}");  // truncated
+  has(e, f);
+  has(e, "byte");
+  has(e, "invalid JSON");
+  e = scene_error("[1, 2]");
+  has(e, "expected an object");
+  // Loop on a non-manifold mesh: the subdivider's reason under the entry's path.
+  write("book.off", "OFF\n5 3 0\n0 0 0\n1 0 0\n0 1 0\n0 -1 0\n0 0 1\n3 0 1 2\n3 1 0 3\n3 0 1 4\n");
+  e = scene_error(R"({"meshes": [{"file": "book.off", "subdivide": {"scheme": "loop"}}]})");
+  has(e, "meshes[0].subdivide");
+  try {
+    (void)load_scene_file(dir_ / "nope.json");
+    FAIL();
+  } catch (const InputError& err) {
+    has(err.what(), (dir_ / "nope.json").string());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// ptc animate
+
+}  // namespace
+}  // namespace ptc
