@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -146,8 +147,13 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
   }
   EXPECT_EQ(lines(slurp(dir_ / "out" / "summary.csv")), 6u);
   const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
-  EXPECT_EQ(m["parameters"]["threads"], 1);
+  // The one thread default of every command: all cores; --threads 1 gives one-thread figures.
+  EXPECT_EQ(m["parameters"]["threads"], std::thread::hardware_concurrency());
   EXPECT_EQ(m["parameters"]["embree_set_affinity"], false);
+  const CmdResult one = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--threads", "1",
+                             "--out", (dir_ / "one").string()});
+  ASSERT_EQ(one.code, 0) << one.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "one" / "manifest.json"))["parameters"]["threads"], 1);
 }
 
 namespace {
