@@ -34,7 +34,7 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
   if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
 
   refuse_overwriting_input(opt.out_dir, opt.scene);
-  RunManifest manifest("animate", opt.argv);
+  RunManifest manifest("animate", opt.argv, "ptc-animate/1");
   Stopwatch t0;
   Scene scene = open_scene(opt.scene, opt.scene_options);
   manifest.add_timing_ms("load", t0.ms());
@@ -107,11 +107,7 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
                                  {"fov", scene.camera().fov_deg}});
   manifest.set_result("light", {{"position", vec_json(scene.light().position)}, {"intensity", scene.light().intensity}});
   manifest.set_result("files", files);
-  manifest.add_output("manifest.json");
-  nlohmann::json doc = manifest.to_json();
-  doc["schema"] = "ptc-animate/1";
-  dir.write("manifest.json", dump_json(doc));
-  dir.commit();
+  const nlohmann::json doc = commit_with_manifest(dir, manifest);
 
   if (opt.json) {
     out << dump_json(doc["results"]);

@@ -38,7 +38,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
 
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
-  RunManifest manifest("bench", opt.argv);
+  RunManifest manifest("bench", opt.argv, "ptc-bench/2");
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
   const bool animated = !scene.all_static();
@@ -76,7 +76,6 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   dir.write("summary.csv", summary.csv.str());
   manifest.add_output("bench.csv", bench.schema.id());
   manifest.add_output("summary.csv", summary.schema.id());
-  manifest.add_output("manifest.json");
   manifest.set_parameter("scene", arg);
   manifest.set_parameter("frames", {range.first, range.last});
   manifest.set_parameter("motion", motion);
@@ -98,10 +97,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_result("scene_after_renumbering", scene.describe());
   manifest.set_result("median_frames",
                       nlohmann::json::array({r.median_first_frame, static_cast<int>(range.count()) - 1}));
-  nlohmann::json mj = manifest.to_json();
-  mj["schema"] = "ptc-bench/2";
-  dir.write("manifest.json", dump_json(mj));
-  dir.commit();
+  (void)commit_with_manifest(dir, manifest);
 
   if (opt.json) {
     nlohmann::json j = nlohmann::json::array();

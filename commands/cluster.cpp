@@ -67,7 +67,7 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
   check_cluster_options(opt.config, opt.given);
   refuse_overwriting_input(opt.out_dir, opt.input);
-  RunManifest manifest("cluster", opt.argv);
+  RunManifest manifest("cluster", opt.argv, "ptc-cluster/1");
   Stopwatch t0;
   const LoadedMesh lm = read_mesh(opt.input);
   manifest.add_timing_ms("read", t0.ms());
@@ -110,20 +110,18 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   manifest.add_timing_ms("write", t0.ms());
   manifest.add_output("triangles.csv", tri_table.schema.id());
   manifest.add_output("clusters.csv", cluster_table.schema.id());
-  for (const char* f : {"clusters.ply", "summary.json", "manifest.json"}) manifest.add_output(f);
+  for (const char* f : {"clusters.ply", "summary.json"}) manifest.add_output(f);
   manifest.set_result("triangles", lm.mesh.triangle_count());
   manifest.set_result("clusters", clustering.cluster_count());
   manifest.set_result("mean_triangles_per_cluster",
                       clustering.cluster_count() ? double(lm.mesh.triangle_count()) / double(clustering.cluster_count()) : 0.0);
   manifest.set_result("validation", "ok");
   manifest.set_result("distributions", dist);
-  const nlohmann::json mj = manifest.to_json();
   // summary.json: the results alone (counts and the distribution of every clusters.csv column).
-  nlohmann::json summary = mj["results"];
+  nlohmann::json summary = manifest.to_json()["results"];
   summary["schema"] = "ptc-cluster-summary/2";
   dir.write("summary.json", dump_json(summary));
-  dir.write("manifest.json", dump_json(mj));
-  dir.commit();
+  const nlohmann::json mj = commit_with_manifest(dir, manifest);
 
   if (opt.json) {
     out << dump_json(summary);

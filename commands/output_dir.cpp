@@ -9,6 +9,8 @@
 #include <vector>
 #include <system_error>
 
+#include "analysis/schema/json.h"
+#include "analysis/schema/manifest.h"
 #include "toolkit/core/error.h"
 #include "toolkit/io/atomic_file.h"
 
@@ -24,6 +26,14 @@ std::string unique_suffix() {
   return std::to_string(::getpid()) + "-" + std::to_string(counter++);
 }
 }  // namespace
+
+nlohmann::json commit_with_manifest(OutputDir& dir, RunManifest& manifest) {
+  manifest.add_output("manifest.json");
+  nlohmann::json j = manifest.to_json();
+  dir.write("manifest.json", dump_json(j));
+  dir.commit();
+  return j;
+}
 
 void refuse_overwriting_input(const fs::path& out, const fs::path& input, std::string_view out_flag) {
   std::error_code ec;

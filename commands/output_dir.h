@@ -16,6 +16,8 @@
 #include <string_view>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 namespace ptc {
 
 /// UsageError naming `out_flag` when writing `out` would replace `input` or a file inside it
@@ -23,6 +25,13 @@ namespace ptc {
 /// run reads. Paths are compared after resolving symbolic links and "..".
 void refuse_overwriting_input(const std::filesystem::path& out, const std::filesystem::path& input,
                               std::string_view out_flag = "--out");
+
+class RunManifest;
+class OutputDir;
+
+/// The last step of every command that writes a directory: lists manifest.json among the
+/// outputs, writes it (RunManifest::to_json) and commits the directory. Returns the manifest.
+nlohmann::json commit_with_manifest(OutputDir& dir, RunManifest& manifest);
 
 class OutputDir {
  public:

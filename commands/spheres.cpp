@@ -17,7 +17,7 @@ namespace ptc {
 
 void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
   refuse_overwriting_input(opt.out_dir, opt.input);
-  RunManifest manifest("spheres", opt.argv);
+  RunManifest manifest("spheres", opt.argv, "ptc-spheres-run/1");
   Stopwatch t0;
   const LoadedMesh lm = read_mesh(opt.input);
   manifest.add_timing_ms("read", t0.ms());
@@ -42,10 +42,8 @@ void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
     dir.write("sphere_sets.csv", sets.csv.str());
     manifest.add_output("spheres.csv", table.schema.id());
     manifest.add_output("sphere_sets.csv", sets.schema.id());
-    manifest.add_output("manifest.json");
     manifest.set_result("point_sets", rep.exact_radius.size());
-    dir.write("manifest.json", dump_json(manifest.to_json()));
-    dir.commit();
+    (void)commit_with_manifest(dir, manifest);
   }
   if (opt.json) {
     nlohmann::json j = nlohmann::json::array();

@@ -89,7 +89,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
 
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
-  RunManifest manifest("trace", opt.argv);
+  RunManifest manifest("trace", opt.argv, "ptc-trace/3");
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
   const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};
@@ -201,7 +201,6 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   const Table table = trace_table(rows);
   dir.write("trace.csv", table.csv.str());
   manifest.add_output("trace.csv", table.schema.id());
-  manifest.add_output("manifest.json");
 
   manifest.set_parameter("scene", arg);
   manifest.set_parameter("frames", {range.first, range.last});
@@ -237,10 +236,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   manifest.set_result("hits", per_frame.empty() ? nlohmann::json(0) : per_frame[0]["hits"]);  // first frame
   manifest.set_result("frames", per_frame);
   manifest.add_timing_ms("write", write_ms + sw.ms());
-  nlohmann::json mj = manifest.to_json();
-  mj["schema"] = "ptc-trace/3";
-  dir.write("manifest.json", dump_json(mj));
-  dir.commit();
+  (void)commit_with_manifest(dir, manifest);
 
   if (opt.json) {
     nlohmann::json j = nlohmann::json::array();

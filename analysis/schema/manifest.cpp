@@ -93,8 +93,8 @@ std::string utc_now() {
 }
 }  // namespace
 
-RunManifest::RunManifest(std::string command, std::vector<std::string> argv)
-    : command_(std::move(command)), argv_(std::move(argv)), started_utc_(utc_now()), t0_(std::chrono::steady_clock::now()) {}
+RunManifest::RunManifest(std::string command, std::vector<std::string> argv, std::string schema)
+    : command_(std::move(command)), schema_(std::move(schema)), argv_(std::move(argv)), started_utc_(utc_now()), t0_(std::chrono::steady_clock::now()) {}
 
 void RunManifest::add_output(const std::string& file, const std::string& schema) {
   outputs_.push_back(file);
@@ -103,7 +103,7 @@ void RunManifest::add_output(const std::string& file, const std::string& schema)
 
 nlohmann::json RunManifest::to_json() const {
   nlohmann::json j;
-  j["schema"] = "ptc-manifest/1";
+  j["schema"] = schema_;
   j["command"] = command_;
   j["argv"] = argv_;
   j["started_utc"] = started_utc_;

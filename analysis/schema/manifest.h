@@ -23,7 +23,9 @@ namespace ptc {
 class RunManifest {
  public:
   /// `command`: the subcommand ("spheres"); `argv`: the full command line as given.
-  RunManifest(std::string command, std::vector<std::string> argv);
+  /// `schema`: the manifest's own schema, one per command ("ptc-bench/2"): what its parameters
+  /// and results hold (docs/tables.md).
+  RunManifest(std::string command, std::vector<std::string> argv, std::string schema = "ptc-manifest/1");
 
   /// An input's record (commands/inputs.h record_input: path, absolute path, bytes, FNV-1a hash).
   void add_input(nlohmann::json entry) { inputs_.push_back(std::move(entry)); }
@@ -36,7 +38,7 @@ class RunManifest {
   [[nodiscard]] nlohmann::json to_json() const;
 
  private:
-  std::string command_;
+  std::string command_, schema_;
   std::vector<std::string> argv_;
   std::string started_utc_;
   std::chrono::steady_clock::time_point t0_;

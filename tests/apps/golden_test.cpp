@@ -20,11 +20,13 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_harness.h"
+#include "common/csv_rows.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
+using ptc::test::csv_table;
 using ptc::test::slurp;
 
 const fs::path kGolden = fs::path(PTC_SOURCE_DIR) / "tests" / "golden";
@@ -41,34 +43,6 @@ bool timing_column(const std::string& c) {
   return ends("_ms") || ends("_s") || c.find("mrays_per_s") != std::string::npos ||
          c.rfind("ns_per_sphere", 0) == 0 || c.find("speedup") != std::string::npos ||
          c.find("speed_vs") != std::string::npos;
-}
-
-// RFC 4180 fields of one line (quotes allowed).
-std::vector<std::string> csv_fields(const std::string& line) {
-  std::vector<std::string> f(1);
-  bool q = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char ch = line[i];
-    if (q) {
-      if (ch == '"' && i + 1 < line.size() && line[i + 1] == '"') f.back() += '"', ++i;
-      else if (ch == '"') q = false;
-      else f.back() += ch;
-    } else if (ch == '"') {
-      q = true;
-    } else if (ch == ',') {
-      f.emplace_back();
-    } else {
-      f.back() += ch;
-    }
-  }
-  return f;
-}
-
-std::vector<std::vector<std::string>> csv_table(const std::string& text) {
-  std::vector<std::vector<std::string>> t;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) t.push_back(csv_fields(l));
-  return t;
 }
 
 // Every non-timing column of `want` must exist in `got` with the same value, row by row.

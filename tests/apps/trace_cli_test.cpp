@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_harness.h"
+#include "common/csv_rows.h"
 
 namespace fs = std::filesystem;
 
@@ -23,26 +24,7 @@ using ptc::test::kCube;
 using ptc::test::lines;
 using ptc::test::slurp;
 using CmdResult = ptc::test::RunResult;
-
-// CSV (no quoted fields) as one map column -> value per data row.
-std::vector<std::map<std::string, std::string>> csv_rows(const std::string& csv) {
-  std::vector<std::vector<std::string>> t;
-  std::istringstream in(csv);
-  for (std::string l; std::getline(in, l);) {
-    std::vector<std::string> f;
-    std::istringstream ls(l);
-    for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
-    t.push_back(f);
-  }
-  std::vector<std::map<std::string, std::string>> out;
-  for (std::size_t r = 1; r < t.size(); ++r) {
-    std::map<std::string, std::string> m;
-    for (std::size_t c = 0; c < t[0].size() && c < t[r].size(); ++c) m[t[0][c]] = t[r][c];
-    out.push_back(m);
-  }
-  return out;
-}
-
+using ptc::test::csv_rows;
 
 class TraceCli : public ptc::test::CliTest {
  protected:

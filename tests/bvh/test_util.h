@@ -59,26 +59,9 @@ inline std::string joined(const std::vector<std::string>& v) {
 
 #include "bvh/tracer.h"
 #include "bvh/watertight.h"
+#include "common/brute_force.h"
 
 namespace ptc::bvh::test {
-
-/// Closest hit by a loop over all triangles with the scalar watertight test, in the same trace
-/// frame as the scene: the smallest (t, triangle id) pair. The independent answer for the tracer.
-inline Hit brute_force(const Mesh& m, const Vec3& frame, const Vec3& org, const Vec3f& dir, float tmin = 0.0f,
-                       float tmax = std::numeric_limits<float>::infinity()) {
-  Hit best;
-  const WatertightRay r = make_watertight_ray(to_frame(org, frame), dir);
-  float tm = std::min(tmax, std::numeric_limits<float>::max());
-  for (std::uint32_t t = 0; t < m.triangle_count(); ++t) {
-    const auto c = m.corners(t);
-    const auto h = intersect_triangle(r, to_frame(c[0], frame), to_frame(c[1], frame), to_frame(c[2], frame), tmin, tm);
-    if (!h) continue;
-    if (h->t < best.t || !best.hit() || (h->t == best.t && t < best.triangle)) {
-      best.t = h->t, best.u = h->u, best.v = h->v, best.triangle = t;
-    }
-  }
-  return best;
-}
 
 /// Generalised winding number of point p w.r.t. a closed mesh (sum of signed solid angles /
 /// 4 pi, van Oosterom & Strackee 1983), in double: ~+-1 inside, ~0 outside.

@@ -14,17 +14,13 @@
 #include "commands/inputs.h"
 #include "commands/output_dir.h"
 #include "toolkit/core/error.h"
+#include "common/temp_dir.h"
 
 namespace ptc {
 namespace {
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::slurp;
 
 TEST(OutputDir, CommitReplacesAndFailureKeepsTheOld) {
   const fs::path base = fs::temp_directory_path() / ("ptc_outdir_" + std::to_string(::getpid()));

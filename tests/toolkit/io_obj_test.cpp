@@ -4,24 +4,14 @@
 #include <string>
 
 #include "toolkit/core/error.h"
+#include "io_helpers.h"
 #include "toolkit/io/mesh_io.h"
 
 namespace ptc {
 namespace {
 
-LoadedMesh obj(std::string_view text) { return read_mesh_from_memory(text, MeshFormat::Obj, "t.obj"); }
-
-InputError obj_error(std::string_view text) {
-  try {
-    (void)obj(text);
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.file(), "t.obj");
-    EXPECT_NE(std::string(e.what()).find("t.obj"), std::string::npos) << e.what();
-    return e;
-  }
-  ADD_FAILURE() << "no InputError for:\n" << text;
-  return InputError("", "", "", "");
-}
+LoadedMesh obj(std::string_view bytes) { return io_test::read(bytes, MeshFormat::Obj); }
+InputError obj_error(std::string_view bytes) { return io_test::read_error(bytes, MeshFormat::Obj); }
 
 TEST(IoObj, CornerFormsAndIgnoredKeywords) {
   const auto lm = obj(

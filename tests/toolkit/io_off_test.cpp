@@ -4,25 +4,14 @@
 #include <string>
 
 #include "toolkit/core/error.h"
+#include "io_helpers.h"
 #include "toolkit/io/mesh_io.h"
 
 namespace ptc {
 namespace {
 
-LoadedMesh off(std::string_view text) { return read_mesh_from_memory(text, MeshFormat::Off, "t.off"); }
-
-// The InputError reading `text` throws (any other exception propagates and fails the test).
-InputError off_error(std::string_view text) {
-  try {
-    (void)off(text);
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.file(), "t.off");
-    EXPECT_NE(std::string(e.what()).find("t.off"), std::string::npos) << e.what();
-    return e;
-  }
-  ADD_FAILURE() << "no InputError for:\n" << text;
-  return InputError("", "", "", "");
-}
+LoadedMesh off(std::string_view bytes) { return io_test::read(bytes, MeshFormat::Off); }
+InputError off_error(std::string_view bytes) { return io_test::read_error(bytes, MeshFormat::Off); }
 
 void expect_tri(const Mesh& m, std::size_t t, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
   ASSERT_LT(t, m.triangle_count());

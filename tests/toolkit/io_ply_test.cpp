@@ -7,24 +7,14 @@
 #include <string>
 
 #include "toolkit/core/error.h"
+#include "io_helpers.h"
 #include "toolkit/io/mesh_io.h"
 
 namespace ptc {
 namespace {
 
-LoadedMesh ply(std::string_view bytes) { return read_mesh_from_memory(bytes, MeshFormat::Ply, "t.ply"); }
-
-InputError ply_error(std::string_view bytes) {
-  try {
-    (void)ply(bytes);
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.file(), "t.ply");
-    EXPECT_NE(std::string(e.what()).find("t.ply"), std::string::npos) << e.what();
-    return e;
-  }
-  ADD_FAILURE() << "no InputError";
-  return InputError("", "", "", "");
-}
+LoadedMesh ply(std::string_view bytes) { return io_test::read(bytes, MeshFormat::Ply); }
+InputError ply_error(std::string_view bytes) { return io_test::read_error(bytes, MeshFormat::Ply); }
 
 // Binary data in either byte order.
 struct Bytes {

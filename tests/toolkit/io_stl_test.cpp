@@ -7,24 +7,14 @@
 #include <string>
 
 #include "toolkit/core/error.h"
+#include "io_helpers.h"
 #include "toolkit/io/mesh_io.h"
 
 namespace ptc {
 namespace {
 
-LoadedMesh stl(std::string_view bytes) { return read_mesh_from_memory(bytes, MeshFormat::Stl, "t.stl"); }
-
-InputError stl_error(std::string_view bytes) {
-  try {
-    (void)stl(bytes);
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.file(), "t.stl");
-    EXPECT_NE(std::string(e.what()).find("t.stl"), std::string::npos) << e.what();
-    return e;
-  }
-  ADD_FAILURE() << "no InputError";
-  return InputError("", "", "", "");
-}
+LoadedMesh stl(std::string_view bytes) { return io_test::read(bytes, MeshFormat::Stl); }
+InputError stl_error(std::string_view bytes) { return io_test::read_error(bytes, MeshFormat::Stl); }
 
 using Facet = std::array<std::array<float, 3>, 3>;
 

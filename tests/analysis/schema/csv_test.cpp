@@ -18,12 +18,6 @@ namespace ptc {
 namespace {
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 TEST(Csv, DoublesRoundTripBitExactly) {
   std::mt19937_64 rng(1);
