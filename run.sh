@@ -51,6 +51,6 @@ case "$mode" in
     "$build/bin/ptc" cluster "$mesh" --method growth --objective acc --max-count 50 --max-size 50 \
       --out "$build/out/cluster"
     "$build/bin/ptc" trace "$mesh" --clusters "$build/out/cluster" --shadows --out "$build/out/trace"
-    "$build/bin/ptc" bench armadillo-twist --frames 4 --width 512 --height 512 --out "$build/out/bench" ;;
+    "$build/bin/ptc" bench armadillo-twist --frames 0:3 --width 512 --height 512 --out "$build/out/bench" ;;
   *) echo "usage: ./run.sh [run|test|build]" >&2; exit 2 ;;
 esac

@@ -105,7 +105,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
       j.push_back({{"config", s.config}, {"update_ms", s.update_ms}, {"build_ms", s.build_ms},
                    {"update_build_ms", s.update_build_ms}, {"trace_ms", s.trace_ms}, {"mrays_per_s", s.mrays_per_s},
                    {"mismatches", s.mismatches}, {"ties", s.ties}});
-    out << dump_json({{"schema", "ptc-bench-summary/1"}, {"summary", j}});
+    out << dump_json({{"schema", "ptc-bench-medians/1"}, {"medians", j}});
     return;
   }
   out << fmt::format("{}: {} triangles, {} vertices; {} clusters ({}{}; cluster scene setup {:.1f} ms); frames {}..{} "
