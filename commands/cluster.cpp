@@ -68,10 +68,8 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   check_cluster_options(opt.config, opt.given);
   refuse_overwriting_input(opt.out_dir, opt.input);
   RunManifest manifest("cluster", opt.argv, "ptc-cluster/1");
+  const LoadedMesh lm = read_mesh_recorded(opt.input, manifest);
   Stopwatch t0;
-  const LoadedMesh lm = read_mesh(opt.input);
-  manifest.add_timing_ms("read", t0.ms());
-  record_input(manifest, opt.input);
   const ClusterConfig& c = opt.config;
   // What the method used, and only that (toolkit/clustering used_parameters).
   manifest.set_parameter("method", to_string(c.method));

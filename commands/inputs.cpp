@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "toolkit/core/error.h"
+#include "toolkit/core/stopwatch.h"
 
 namespace ptc {
 namespace fs = std::filesystem;
@@ -35,6 +36,14 @@ void record_input(RunManifest& manifest, const fs::path& path) {
   in["bytes"] = fs::file_size(path, ec);
   in["fnv1a64"] = file_fnv1a64(path);
   manifest.add_input(std::move(in));
+}
+
+LoadedMesh read_mesh_recorded(const fs::path& path, RunManifest& manifest) {
+  Stopwatch sw;
+  LoadedMesh lm = read_mesh(path);
+  manifest.add_timing_ms("read", sw.ms());
+  record_input(manifest, path);
+  return lm;
 }
 
 }  // namespace ptc

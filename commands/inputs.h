@@ -5,6 +5,7 @@
 #include <string>
 
 #include "analysis/schema/manifest.h"
+#include "toolkit/io/mesh_io.h"
 
 namespace ptc {
 
@@ -14,5 +15,8 @@ namespace ptc {
 
 /// Adds {path, absolute_path, bytes, fnv1a64} of `path` to the manifest's inputs.
 void record_input(RunManifest& manifest, const std::filesystem::path& path);
+
+/// read_mesh(path), recording the read time ("read") and the input in the manifest.
+[[nodiscard]] LoadedMesh read_mesh_recorded(const std::filesystem::path& path, RunManifest& manifest);
 
 }  // namespace ptc

@@ -18,10 +18,8 @@ namespace ptc {
 void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
   refuse_overwriting_input(opt.out_dir, opt.input);
   RunManifest manifest("spheres", opt.argv, "ptc-spheres-run/1");
+  const LoadedMesh lm = read_mesh_recorded(opt.input, manifest);
   Stopwatch t0;
-  const LoadedMesh lm = read_mesh(opt.input);
-  manifest.add_timing_ms("read", t0.ms());
-  record_input(manifest, opt.input);
   nlohmann::json methods = nlohmann::json::array();
   for (SphereMethod m : opt.config.methods) methods.push_back(to_string(m));
   manifest.set_parameter("min_run", opt.config.min_run);

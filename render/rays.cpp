@@ -6,13 +6,11 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 namespace ptc {
 namespace {
-
 
 // f(begin, end) over [0, n) on `threads` workers (0 = all, 1 = the calling thread).
 template <class F>
@@ -41,6 +39,32 @@ std::uint64_t splitmix64(std::uint64_t x) {
 
 // Secondary rays are made and traced in chunks of at most 2^20 rays (about 44 MiB of rays).
 constexpr std::size_t kChunkRays = std::size_t(1) << 20;
+
+// The one loop of the secondary passes: any-hit rays for the surface points `points`, `per_point`
+// consecutive rays each, made and traced in chunks of at most kChunkRays rays (memory stays
+// bounded for any points x samples). make(rays, first_slot, point) writes a point's rays (in
+// parallel); take(hits, first_slot, point) reads its results back.
+template <class Make, class Take>
+void any_hit_pass(const TraceTarget& scene, const std::vector<std::uint32_t>& points, std::size_t per_point,
+                  unsigned threads, PassStats& stats, Make&& make, Take&& take) {
+  bvh::TraceOptions opt;
+  opt.mode = bvh::HitMode::Any;
+  opt.threads = threads;
+  bvh::RayBatch rays;
+  bvh::HitBatch hits;
+  const std::size_t points_per_chunk = std::max<std::size_t>(1, kChunkRays / per_point);
+  for (std::size_t first = 0; first < points.size(); first += points_per_chunk) {
+    const std::size_t np = std::min(points_per_chunk, points.size() - first);
+    rays.resize(np * per_point);
+    parallel_ranges(np, threads, [&](std::size_t b, std::size_t e) {
+      for (std::size_t j = b; j < e; ++j) make(rays, j * per_point, points[first + j]);
+    });
+    Stopwatch t0;
+    const bvh::TraceTotals tt = scene.trace(rays, hits, opt);
+    stats.add(tt, t0.ms());
+    for (std::size_t j = 0; j < np; ++j) take(hits, j * per_point, points[first + j]);
+  }
+}
 
 }  // namespace
 
@@ -105,29 +129,18 @@ ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const
   std::vector<std::uint32_t> idx;
   for (std::size_t i = 0; i < s.size(); ++i)
     if (s.hit[i] && s.normal[i].dot(light - s.point[i]) > 0) idx.push_back(static_cast<std::uint32_t>(i));
-  bvh::TraceOptions opt;
-  opt.mode = bvh::HitMode::Any;
-  opt.threads = threads;
-  bvh::RayBatch rays;
-  bvh::HitBatch hits;
-  for (std::size_t first = 0; first < idx.size(); first += kChunkRays) {
-    const std::size_t n = std::min(kChunkRays, idx.size() - first);
-    rays.resize(n);
-    parallel_ranges(n, threads, [&](std::size_t b, std::size_t e) {
-      for (std::size_t j = b; j < e; ++j) {
-        const std::size_t i = idx[first + j];
+  any_hit_pass(
+      scene, idx, 1, threads, r.stats,
+      [&](bvh::RayBatch& rays, std::size_t slot, std::uint32_t i) {
         const Vec3 o = frame.offset_origin(s.point[i], s.normal[i]);
         const Vec3 l = light - o;
         const double dist = l.norm();
         // The direction is unit, so t is a distance; stop just short of the light itself.
-        rays.set(j, o, to_f(l / dist), 0.0f, static_cast<float>(dist * (1.0 - 1.0 / 1048576.0)));
-      }
-    });
-    Stopwatch t0;
-    const bvh::TraceTotals tt = scene.trace(rays, hits, opt);
-    r.stats.add(tt, t0.ms());
-    for (std::size_t j = 0; j < n; ++j) r.lit[idx[first + j]] = hits.triangle[j] == bvh::kNoTriangle;
-  }
+        rays.set(slot, o, to_f(l / dist), 0.0f, static_cast<float>(dist * (1.0 - 1.0 / 1048576.0)));
+      },
+      [&](const bvh::HitBatch& hits, std::size_t slot, std::uint32_t i) {
+        r.lit[i] = hits.triangle[slot] == bvh::kNoTriangle;
+      });
   return r;
 }
 
@@ -162,34 +175,20 @@ AoResult trace_ao(const TraceTarget& scene, const SurfaceHits& s, const AoConfig
   const auto spp = static_cast<std::size_t>(cfg.samples);
   const double dmax = cfg.max_distance_rel * frame.diagonal();
   const float tmax = static_cast<float>(dmax);
-  const std::size_t points_per_chunk = std::max<std::size_t>(1, kChunkRays / spp);
-  bvh::TraceOptions opt;
-  opt.mode = bvh::HitMode::Any;
-  opt.threads = threads;
-  bvh::RayBatch rays;
-  bvh::HitBatch hits;
-  for (std::size_t first = 0; first < idx.size(); first += points_per_chunk) {
-    const std::size_t np = std::min(points_per_chunk, idx.size() - first);
-    rays.resize(np * spp);
-    parallel_ranges(np, threads, [&](std::size_t b, std::size_t e) {
-      for (std::size_t j = b; j < e; ++j) {
-        const std::size_t i = idx[first + j];
+  any_hit_pass(
+      scene, idx, spp, threads, r.stats,
+      [&](bvh::RayBatch& rays, std::size_t slot, std::uint32_t i) {
         const Vec3 o = frame.offset_origin(s.point[i], s.normal[i]);
         for (std::size_t k = 0; k < spp; ++k) {
           const auto [u1, u2] = ao_uniforms(cfg.seed, i, k);
-          rays.set(j * spp + k, o, to_f(cosine_hemisphere(s.normal[i], u1, u2)), 0.0f, tmax);
+          rays.set(slot + k, o, to_f(cosine_hemisphere(s.normal[i], u1, u2)), 0.0f, tmax);
         }
-      }
-    });
-    Stopwatch t0;
-    const bvh::TraceTotals tt = scene.trace(rays, hits, opt);
-    r.stats.add(tt, t0.ms());
-    for (std::size_t j = 0; j < np; ++j) {
-      std::size_t open = 0;
-      for (std::size_t k = 0; k < spp; ++k) open += hits.triangle[j * spp + k] == bvh::kNoTriangle;
-      r.ao[idx[first + j]] = static_cast<float>(double(open) / double(spp));
-    }
-  }
+      },
+      [&](const bvh::HitBatch& hits, std::size_t slot, std::uint32_t i) {
+        std::size_t open = 0;
+        for (std::size_t k = 0; k < spp; ++k) open += hits.triangle[slot + k] == bvh::kNoTriangle;
+        r.ao[i] = static_cast<float>(double(open) / double(spp));
+      });
   return r;
 }
 

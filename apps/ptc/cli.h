@@ -3,7 +3,9 @@
 // included by apps/ptc (through a precompiled header: its headers are expensive).
 #pragma once
 
+#include <filesystem>
 #include <functional>
+#include <optional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -11,7 +13,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include "commands/args.h"
 #include "commands/errors.h"
+#include "commands/scene_args.h"  // CameraSpec, SceneOptions
 
 namespace ptc::cli {
 
@@ -53,6 +57,29 @@ inline void add_threads_option(CLI::App* cmd, int& threads) {
   // gives one-thread figures (ours and Embree's device alike).
   cmd->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
 }
+
+/// The SCENE positional argument and --data-dir, as every command that takes a scene spells them.
+struct SceneArg {
+  std::filesystem::path input;
+  std::string data_dir;
+  void add_to(CLI::App* cmd);
+  /// Fills the command's scene options (data directory of built-in scenes).
+  void apply(SceneOptions& o) const {
+    if (!data_dir.empty()) o.data_dir = data_dir;
+  }
+};
+
+/// --eye, --look-at, --up, --fov and (with light = true) --light, as `ptc trace` and `ptc bench`
+/// spell them; the values given become the CameraSpec's fields (commands/scene_args.h: flag >
+/// the scene's camera > framing the mesh).
+struct CameraArgs {
+  std::string eye, look_at, up, light;
+  double fov = kDefaultFovDeg;
+  CLI::Option* fov_opt = nullptr;
+  void add_to(CLI::App* cmd, bool with_light);
+  [[nodiscard]] CameraSpec spec() const;
+  [[nodiscard]] std::optional<Vec3> light_position() const;
+};
 
 // One register function per subcommand (cli_<name>.cpp).
 void register_info(CLI::App& app, Context& ctx);

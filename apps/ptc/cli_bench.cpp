@@ -10,7 +10,9 @@ namespace ptc::cli {
 namespace {
 struct BenchArgs {
   BenchCommandOptions opt;
-  std::string deform, cluster_leaf = "linear", frames, data_dir, vertex_order = "clusters";
+  SceneArg scene;
+  CameraArgs camera;
+  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -28,15 +30,15 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       if (a->app->count("--frames")) o.frames = a->frames;
-                      if (!a->data_dir.empty()) o.scene_options.data_dir = a->data_dir;
+                      o.input = a->scene.input;
+                      a->scene.apply(o.scene_options);
+                      o.config.camera = a->camera.spec();
                       o.argv = ctx.args;
                       cmd_bench(o, std::cout);
                     });
   a->app = c;
-  c->add_option("SCENE", a->opt.input,
-                "built-in scene name ('ptc scenes'), scene file (.json), mesh or animated asset file, or directory of frames")
-      ->required();
-  c->add_option("--data-dir", a->data_dir, "meshes of built-in scenes (default: $PTC_DATA_DIR or <ptc>/../data)");
+  a->scene.add_to(c);
+  a->camera.add_to(c, /*with_light=*/false);
   auto* cl = c->add_option("--clusters", a->opt.clusters, "use the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--max-count", cfg.max_count,
                 "otherwise: growth/Acc clustering with MaxCount = MaxSize = N (0: one triangle per cluster, the "
