@@ -14,8 +14,6 @@
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/info.h>
 
-#include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <functional>
 #include <string>
@@ -27,6 +25,8 @@
 #include "toolkit/anim/static_source.h"
 #include "toolkit/anim/subdivided.h"
 #include "toolkit/core/error.h"
+#include "toolkit/core/stats.h"
+#include "toolkit/core/stopwatch.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/subdivision.h"
 
@@ -34,20 +34,15 @@ using namespace ptc;
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
 // Median ms of one positions() call over `frames` consecutive frames (after one warm-up frame).
 double time_frames(Animation& a, int frames, double start) {
   std::vector<Vec3> out(a.rest().vertex_count());
   a.positions(start, out);  // warm-up (and for the cloth: frame `start` simulated)
   std::vector<double> ms;
   for (int k = 1; k <= frames; ++k) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch sw;
     a.positions(start + k, out);
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    ms.push_back(sw.ms());
   }
   return median(ms);
 }

@@ -19,7 +19,6 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -35,40 +34,34 @@
 #include "toolkit/anim/frame_sequence.h"
 #include "toolkit/anim/md3.h"
 #include "toolkit/anim/skinning.h"
+#include "toolkit/core/stats.h"
+#include "toolkit/core/stopwatch.h"
 #include "toolkit/io/mesh_io.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 using ptc::Vec3;
 
 const std::string kModels = "/usr/share/assimp/models";
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // Median seconds per call of f(i) over `reps` repetitions of a batch lasting >= 20 ms.
 double time_per_call(const std::function<void(std::size_t)>& f, int reps) {
   std::size_t batch = 1;
   for (;;) {  // calibrate
-    const auto t0 = Clock::now();
+    const ptc::Stopwatch sw;
     for (std::size_t i = 0; i < batch; ++i) f(i);
-    const double s = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (s >= 0.02 || batch >= (1u << 20)) break;
+    if (sw.ms() >= 20.0 || batch >= (1u << 20)) break;
     batch *= 2;
   }
   std::vector<double> per;
   std::size_t call = 0;
   for (int r = 0; r < reps; ++r) {
-    const auto t0 = Clock::now();
+    const ptc::Stopwatch sw;
     for (std::size_t i = 0; i < batch; ++i) f(call++);
-    per.push_back(std::chrono::duration<double>(Clock::now() - t0).count() / static_cast<double>(batch));
+    per.push_back(sw.ms() * 1e-3 / static_cast<double>(batch));
   }
-  return median(per);
+  return ptc::median(per);
 }
 
 struct Row {

@@ -33,7 +33,6 @@
 #include <time.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -43,14 +42,17 @@
 #include <string>
 #include <vector>
 
-#include "analysis/schema/csv.h"
 #include "analysis/schema/manifest.h"
+#include "analysis/schema/table.h"
+#include "commands/inputs.h"
 #include "commands/output_dir.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/clustering.h"
 #include "toolkit/clustering/contraction.h"
 #include "toolkit/clustering/growth.h"
 #include "toolkit/clustering/objectives.h"
+#include "toolkit/core/stats.h"
+#include "toolkit/core/stopwatch.h"
 #include "toolkit/geometry/cluster_metrics.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/subdivision.h"
@@ -58,7 +60,6 @@
 namespace {
 
 using namespace ptc;
-using Clock = std::chrono::steady_clock;
 
 /// CPU time of this process (the timed code is single-threaded).
 double cpu_seconds() {
@@ -100,7 +101,7 @@ void run_algorithm(const Mesh& mesh, const ClusterTables& tables, O& objective, 
 /// One timed run of the pipeline cluster_mesh performs (see the file comment).
 Result cluster_once(const Mesh& mesh, const Job& job) {
   Result r;
-  const auto t0 = Clock::now();
+  const Stopwatch wall;
   const double c0 = cpu_seconds();
   if (!uses_objective(job.method)) {
     ClusterConfig cfg;
@@ -135,17 +136,11 @@ Result cluster_once(const Mesh& mesh, const Job& job) {
       }
     }
   }
-  r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  r.seconds = wall.ms() * 1e-3;
   r.cpu = cpu_seconds() - c0;
   r.run.labels.clear();
   r.run.labels.shrink_to_fit();
   return r;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /// `repeats` runs; the last run's result with the median wall and CPU times. Every run must give
@@ -192,17 +187,114 @@ Quality quality(const Mesh& mesh, const Clustering& c, std::uint32_t size, Spher
           static_cast<double>(mesh.triangle_count()) / dn};
 }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
+// The three tables (schemas ptc-clustering-speed/1, ptc-clustering-spheres/1,
+// ptc-clustering-start-rules/1): one row type and one visitor each, over shared column groups.
+struct Timed {
+  double wall_s = 0, cpu_s = 0;
+  std::uint64_t clusters = 0;
+};
+Timed timed(const Result& r) { return {r.seconds, r.cpu, r.clustering.cluster_count()}; }
+void visit_timed(const Timed& t, Columns& col) {
+  col("wall_s", t.wall_s);
+  col("cpu_s", t.cpu_s);
+  col("clusters", t.clusters);
+}
+void visit_quality(const Quality& q, Columns& col) {
+  col("triangles_per_cluster", q.mean_triangles);
+  col("mean_reg", q.mean_reg);
+  col("mean_acc", q.mean_acc);
+}
+
+struct SpeedRow {
+  std::string mesh;
+  std::uint64_t triangles = 0;
+  std::string method, objective;
+  std::uint64_t size = 0;
+  Timed t;
+  Quality q;
+  std::uint64_t exact_evaluations = 0, bound_evaluations = 0, spheres = 0;
+};
+void visit_speed(const SpeedRow& r, Columns& col) {
+  col("mesh", r.mesh);
+  col("triangles", r.triangles);
+  col("method", r.method);
+  col("objective", r.objective);
+  col("size", r.size);
+  visit_timed(r.t, col);
+  visit_quality(r.q, col);
+  col("exact_evaluations", r.exact_evaluations);
+  col("bound_evaluations", r.bound_evaluations);
+  col("sphere_computations", r.spheres);
+}
+
+struct SphereRow {
+  std::string mesh;
+  std::uint64_t triangles = 0;
+  std::string method;
+  std::uint64_t size = 0;
+  std::string sphere;
+  Timed t;
+  Quality q;  // with the exact sphere
+  double d_reg_vs_cgal = 0, d_acc_vs_cgal = 0, d_reg_vs_exact = 0, d_acc_vs_exact = 0, time_ratio_vs_cgal = 0;
+};
+void visit_sphere(const SphereRow& r, Columns& col) {
+  col("mesh", r.mesh);
+  col("triangles", r.triangles);
+  col("method", r.method);
+  col("size", r.size);
+  col("sphere", r.sphere);
+  visit_timed(r.t, col);
+  col("mean_reg_exact", r.q.mean_reg);
+  col("mean_acc_exact", r.q.mean_acc);
+  col("d_reg_vs_cgal", r.d_reg_vs_cgal);
+  col("d_acc_vs_cgal", r.d_acc_vs_cgal);
+  col("d_reg_vs_exact", r.d_reg_vs_exact);
+  col("d_acc_vs_exact", r.d_acc_vs_exact);
+  col("time_ratio_vs_cgal", r.time_ratio_vs_cgal);
+}
+
+struct StartRow {
+  std::string mesh;
+  std::uint64_t triangles = 0;
+  std::string objective;
+  std::uint64_t size = 0;
+  std::string start;
+  Timed t;
+  Quality q;
+};
+void visit_start(const StartRow& r, Columns& col) {
+  col("mesh", r.mesh);
+  col("triangles", r.triangles);
+  col("objective", r.objective);
+  col("size", r.size);
+  col("start", r.start);
+  visit_timed(r.t, col);
+  visit_quality(r.q, col);
 }
 
 [[noreturn]] void usage_error(const std::string& msg) {
   std::fprintf(stderr, "clustering_bench: %s\n", msg.c_str());
   std::exit(2);
+}
+
+/// Every non-empty item of a comma list through `parse` (which exits with a usage error for a bad one).
+template <class F>
+auto parse_each(const std::string& list, F parse) {
+  std::vector<decltype(parse(list))> out;
+  std::stringstream ss(list);
+  for (std::string item; std::getline(ss, item, ',');)
+    if (!item.empty()) out.push_back(parse(item));
+  return out;
+}
+
+/// A parse_* of an enum name as a `parse_each` item parser; `what` names the kind in the error.
+template <class Parse>
+auto named(Parse parse, const char* what) {
+  return [parse, what](const std::string& s) {
+    const auto v = parse(s);
+    if (!v) usage_error(std::string("unknown ") + what + " " + s);
+    return *v;
+  };
 }
 
 std::string str(std::string_view s) { return std::string(s); }
@@ -258,26 +350,15 @@ int main(int argc, char** argv) {
     } else if (a == "--sphere-size") {
       sphere_size = static_cast<std::uint32_t>(number(value()));
     } else if (a == "--sections") {
-      sections = split(value());
-      for (const auto& s : sections)
-        if (s != "speed" && s != "spheres" && s != "start") usage_error("unknown section " + s);
+      sections = parse_each(value(), named([](const std::string& s) {
+        return s == "speed" || s == "spheres" || s == "start" ? std::optional(s) : std::nullopt;
+      }, "section"));
     } else if (a == "--methods" || a == "--only") {
-      methods.clear();
-      for (const auto& s : split(value())) {
-        const auto m = parse_cluster_method(s);
-        if (!m) usage_error("unknown method " + s);
-        methods.push_back(*m);
-      }
+      methods = parse_each(value(), named([](const std::string& s) { return parse_cluster_method(s); }, "method"));
     } else if (a == "--objectives") {
-      objectives.clear();
-      for (const auto& s : split(value())) {
-        const auto o = parse_objective(s);
-        if (!o) usage_error("unknown objective " + s);
-        objectives.push_back(*o);
-      }
+      objectives = parse_each(value(), named([](const std::string& s) { return parse_objective(s); }, "objective"));
     } else if (a == "--sizes") {
-      sizes.clear();
-      for (const auto& s : split(value())) sizes.push_back(static_cast<std::uint32_t>(number(s)));
+      sizes = parse_each(value(), [&](const std::string& s) { return static_cast<std::uint32_t>(number(s)); });
       sizes_given = true;
     } else {
       usage_error("unknown argument " + a);
@@ -292,7 +373,6 @@ int main(int argc, char** argv) {
   auto has_section = [&](const char* s) { return std::find(sections.begin(), sections.end(), s) != sections.end(); };
 
   RunManifest manifest("clustering_bench", args);
-  manifest.add_input(mesh_path);
   manifest.set_parameter("levels", skip_large ? 0 : levels);
   manifest.set_parameter("repeats", repeats);
   manifest.set_parameter("quick", quick);
@@ -303,9 +383,10 @@ int main(int argc, char** argv) {
   manifest.set_parameter("timing", "median of repeats; cpu_s = process CPU time, wall_s = wall clock");
 
   std::vector<std::pair<std::string, Mesh>> meshes;
-  auto t_load = Clock::now();
+  const Stopwatch t_load;
   try {
     meshes.emplace_back("armadillo", read_mesh(mesh_path).mesh);
+    record_input(manifest, mesh_path);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "clustering_bench: %s\n", e.what());
     return 1;
@@ -313,16 +394,11 @@ int main(int argc, char** argv) {
   if (!skip_large)
     meshes.emplace_back("armadillo/mid" + std::to_string(levels),
                         subdivide(meshes.front().second, SubdivisionScheme::Midpoint, levels));
-  manifest.add_timing_ms("load_and_subdivide", std::chrono::duration<double, std::milli>(Clock::now() - t_load).count());
+  manifest.add_timing_ms("load_and_subdivide", t_load.ms());
 
-  CsvTable speed_csv({"mesh", "triangles", "method", "objective", "size", "wall_s", "cpu_s", "clusters",
-                      "triangles_per_cluster", "mean_reg", "mean_acc", "exact_evaluations", "bound_evaluations",
-                      "sphere_computations"});
-  CsvTable sphere_csv({"mesh", "triangles", "method", "size", "sphere", "wall_s", "cpu_s", "clusters",
-                       "mean_reg_exact", "mean_acc_exact", "d_reg_vs_cgal", "d_acc_vs_cgal", "d_reg_vs_exact",
-                       "d_acc_vs_exact", "time_ratio_vs_cgal"});
-  CsvTable start_csv({"mesh", "triangles", "objective", "size", "start", "wall_s", "cpu_s", "clusters",
-                      "triangles_per_cluster", "mean_reg", "mean_acc"});
+  std::vector<SpeedRow> speed_rows;
+  std::vector<SphereRow> sphere_rows;
+  std::vector<StartRow> start_rows;
 
   if (has_section("speed")) {
     std::printf("# clustering time, one thread, median of %d (growth: spatial start rule; sphere: cgal)\n", repeats);
@@ -349,9 +425,8 @@ int main(int argc, char** argv) {
                         static_cast<unsigned long long>(r.run.bound_evaluations),
                         static_cast<unsigned long long>(r.spheres));
             std::fflush(stdout);
-            speed_csv.add_row({name, std::uint64_t{mesh.triangle_count()}, str(to_string(m)), obj, std::uint64_t{s},
-                               r.seconds, r.cpu, std::uint64_t{r.clustering.cluster_count()}, q.mean_triangles,
-                               q.mean_reg, q.mean_acc, r.run.exact_evaluations, r.run.bound_evaluations, r.spheres});
+            speed_rows.push_back({name, mesh.triangle_count(), str(to_string(m)), obj, s, timed(r), q,
+                                  r.run.exact_evaluations, r.run.bound_evaluations, r.spheres});
           }
       }
   }
@@ -401,9 +476,8 @@ int main(int argc, char** argv) {
                       name.c_str(), str(to_string(m)).c_str(), str(to_string(sm)).c_str(), r.seconds, r.cpu, ratio,
                       r.clustering.cluster_count(), q.mean_reg, q.mean_acc, drc, dac, dre, dae);
           std::fflush(stdout);
-          sphere_csv.add_row({name, std::uint64_t{mesh.triangle_count()}, str(to_string(m)), std::uint64_t{size},
-                              str(to_string(sm)), r.seconds, r.cpu, std::uint64_t{r.clustering.cluster_count()},
-                              q.mean_reg, q.mean_acc, drc, dac, dre, dae, ratio});
+          sphere_rows.push_back({name, mesh.triangle_count(), str(to_string(m)), size, str(to_string(sm)), timed(r), q,
+                                 drc, dac, dre, dae, ratio});
         }
       }
   }
@@ -428,26 +502,30 @@ int main(int argc, char** argv) {
                       str(to_string(o)).c_str(), str(to_string(rule)).c_str(), r.seconds, r.cpu,
                       r.clustering.cluster_count(), q.mean_triangles, q.mean_reg, q.mean_acc);
           std::fflush(stdout);
-          start_csv.add_row({name, std::uint64_t{mesh.triangle_count()}, str(to_string(o)), std::uint64_t{size},
-                             str(to_string(rule)), r.seconds, r.cpu, std::uint64_t{r.clustering.cluster_count()},
-                             q.mean_triangles, q.mean_reg, q.mean_acc});
+          start_rows.push_back(
+              {name, mesh.triangle_count(), str(to_string(o)), size, str(to_string(rule)), timed(r), q});
         }
   }
 
   if (!out_dir.empty()) {
     OutputDir dir{std::filesystem::path(out_dir)};
     std::vector<std::string> written;
-    if (has_section("speed")) dir.write("speed.csv", speed_csv.str()), written.push_back("speed.csv");
-    if (has_section("spheres")) dir.write("spheres.csv", sphere_csv.str()), written.push_back("spheres.csv");
-    if (has_section("start")) dir.write("start_rules.csv", start_csv.str()), written.push_back("start_rules.csv");
-    for (const auto& f : written) manifest.add_output(f);
+    auto write = [&](const char* section, const std::string& file, const Table& t) {
+      if (!has_section(section)) return;
+      dir.write(file, t.csv.str());
+      manifest.add_output(file, t.schema.id());
+      written.push_back(file);
+    };
+    write("speed", "speed.csv", tabulate(Schema{"ptc-clustering-speed", 1}, speed_rows, visit_speed));
+    write("spheres", "spheres.csv", tabulate(Schema{"ptc-clustering-spheres", 1}, sphere_rows, visit_sphere));
+    write("start", "start_rules.csv", tabulate(Schema{"ptc-clustering-start-rules", 1}, start_rows, visit_start));
     manifest.add_output("manifest.json");
     nlohmann::json meshes_json = nlohmann::json::array();
     for (const auto& [name, mesh] : meshes)
       meshes_json.push_back({{"name", name}, {"triangles", mesh.triangle_count()}, {"vertices", mesh.vertex_count()}});
     manifest.set_result("meshes", meshes_json);
-    manifest.set_result("rows", {{"speed", speed_csv.rows()}, {"spheres", sphere_csv.rows()},
-                                 {"start_rules", start_csv.rows()}});
+    manifest.set_result("rows", {{"speed", speed_rows.size()}, {"spheres", sphere_rows.size()},
+                                 {"start_rules", start_rows.size()}});
     dir.write("manifest.json", dump_json(manifest.to_json()));
     dir.commit();
     std::printf("\nwrote %s/{%s manifest.json}\n", out_dir.c_str(), [&] {

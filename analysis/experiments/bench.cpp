@@ -149,6 +149,16 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     row.hits = tt.hits;
     row.mrays_per_s = row.trace_ms > 0 ? double(tt.rays) / (row.trace_ms * 1e3) : 0.0;
     if (fr.accel > 0) row.agreement = compare_hits(ref, hits, cfg.tie);
+    if (a.sah_cost()) {  // ours: the counters, from an untimed trace with them on
+      bvh::HitBatch counted;
+      bvh::TraceOptions with = opt;
+      with.counters = true;
+      const bvh::TraceTotals c = a.trace(rays, counted, with);
+      row.nodes_per_ray = c.rays ? double(c.nodes_visited) / double(c.rays) : 0.0;
+      row.triangles_per_ray = c.rays ? double(c.triangles_tested) / double(c.rays) : 0.0;
+    } else {
+      row.nodes_per_ray = row.triangles_per_ray = nan();
+    }
     res.rows.push_back(std::move(row));
   });
   res.median_first_frame = cfg.frames.count() > 1 ? 1 : 0;
@@ -181,6 +191,8 @@ Table bench_table(const PeerBenchResult& r) {
     col("leaf_data_ms", x.times.stages.leaf_data_ms);
     col("refit_ms", x.times.stages.refit_ms);
     col("sah_cost", x.sah_cost);
+    col("nodes_per_ray", x.nodes_per_ray);
+    col("triangles_per_ray", x.triangles_per_ray);
   });
 }
 

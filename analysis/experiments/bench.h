@@ -57,6 +57,9 @@ struct BenchRow {
   double trace_ms = 0, mrays_per_s = 0;
   std::uint64_t rays = 0, hits = 0;
   HitAgreement agreement;        ///< against ours_triangles of the same frame (zero for itself)
+  /// Per-ray traversal counters of ours (an untimed second trace with counters on: the timed one
+  /// runs without them); NaN for Embree, which has none.
+  double nodes_per_ray = 0, triangles_per_ray = 0;
   double sah_cost = 0;           ///< SAH cost of our binary BVH (NaN for Embree)
 };
 

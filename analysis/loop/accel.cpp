@@ -57,13 +57,13 @@ class OursAccel final : public Accel {
 
 class EmbreeAccel final : public Accel {
  public:
-  EmbreeAccel(AccelKind kind, const Mesh& mesh, const Vec3& origin, unsigned threads)
+  EmbreeAccel(AccelKind kind, const Mesh& mesh, const Vec3& origin, unsigned threads, bvh::StageClock clock)
       : kind_(kind), origin_(origin), threads_(threads),
         scene_(mesh, origin,
                bvh::EmbreeConfig{kind == AccelKind::EmbreeMedium ? bvh::EmbreeMode::StaticMedium
                                  : kind == AccelKind::EmbreeLow  ? bvh::EmbreeMode::DynamicLow
                                                                  : bvh::EmbreeMode::DynamicRefit,
-                                 threads, ""}) {}
+                                 threads, "", clock}) {}
   [[nodiscard]] std::string_view name() const override { return to_string(kind_); }
   void update(std::span<const Vec3> positions) override { scene_.update(positions); }
   [[nodiscard]] UpdateTimes last_update() const override {
@@ -88,6 +88,8 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   cfg.origin = s.origin;
   cfg.cluster_leaf = s.cluster_leaf;
   cfg.cluster_group_size = s.cluster_group_size;
+  cfg.clock = s.clock;
+  if (s.cluster_build) cfg.build = *s.cluster_build;
   return cfg;
 }
 
@@ -96,6 +98,8 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const Mesh& mesh, const AccelS
     case AccelKind::OursTriangles: {
       bvh::SceneConfig cfg = bvh::triangle_scene_defaults();
       cfg.origin = s.origin;
+      cfg.clock = s.clock;
+      if (s.triangle_build) cfg.build = *s.triangle_build;
       return std::make_unique<OursAccel<bvh::TriangleScene>>(kind, std::make_unique<bvh::TriangleScene>(mesh, cfg));
     }
     case AccelKind::OursClusters: {
@@ -105,7 +109,7 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const Mesh& mesh, const AccelS
     }
     case AccelKind::EmbreeMedium:
     case AccelKind::EmbreeLow:
-    case AccelKind::EmbreeRefit: return std::make_unique<EmbreeAccel>(kind, mesh, s.origin, s.threads);
+    case AccelKind::EmbreeRefit: return std::make_unique<EmbreeAccel>(kind, mesh, s.origin, s.threads, s.clock);
   }
   throw std::invalid_argument("unknown acceleration configuration");
 }

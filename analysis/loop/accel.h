@@ -66,6 +66,9 @@ struct AccelSetup {
   /// ours_clusters: two-level build over groups of at most this many clusters (0: plain build).
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
   unsigned threads = 1;                  ///< Embree's device threads (ours: the caller's oneTBB limit)
+  bvh::StageClock clock = bvh::StageClock::Wall;   ///< clock of every configuration's stage times
+  std::optional<bvh::BuildConfig> triangle_build;  ///< ours_triangles' builder (default: triangle_scene_defaults())
+  std::optional<bvh::BuildConfig> cluster_build;   ///< ours_clusters' builder (default: cluster_scene_defaults())
 };
 
 /// The cluster scene settings of ours_clusters under `setup` (the method's precomputation, such
