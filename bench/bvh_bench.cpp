@@ -82,6 +82,7 @@
 #include "toolkit/core/stopwatch.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/subdivision.h"
+#include "toolkit/core/strings.h"
 
 namespace {
 
@@ -119,9 +120,7 @@ struct Options {
 template <class T, class Parse>
 std::vector<T> parse_list(const std::string& text, const char* flag, const char* choices, Parse parse) {
   std::vector<T> out;
-  for (const auto part : std::views::split(text, ',')) {
-    const std::string item(part.begin(), part.end());
-    if (item.empty()) continue;
+  for (const std::string& item : split_list(text)) {
     const std::optional<T> v = parse(item);
     if (!v) usage(std::string(flag) + ": unknown value " + item + " (" + choices + ")");
     out.push_back(*v);

@@ -56,6 +56,7 @@
 #include "toolkit/geometry/cluster_metrics.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/subdivision.h"
+#include "toolkit/core/strings.h"
 
 namespace {
 
@@ -281,9 +282,7 @@ void visit_start(const StartRow& r, Columns& col) {
 template <class F>
 auto parse_each(const std::string& list, F parse) {
   std::vector<decltype(parse(list))> out;
-  std::stringstream ss(list);
-  for (std::string item; std::getline(ss, item, ',');)
-    if (!item.empty()) out.push_back(parse(item));
+  for (const std::string& item : split_list(list)) out.push_back(parse(item));
   return out;
 }
 

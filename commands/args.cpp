@@ -76,9 +76,11 @@ void check_frames(const Scene& scene, const FrameRange& r, const std::string& sc
   const FrameRange& listed = scene.frames();
   if (!extend && (r.first < listed.first || r.last > listed.last))
     throw UsageError(std::string(flag),
-                     fmt::format("frames {}:{} are outside the range {}:{} of '{}' (--extend-frames allows frames "
-                                 "that its sources can still give)",
-                                 r.first, r.last, listed.first, listed.last, scene_arg));
+                     fmt::format("{} outside the range {}:{} of '{}' (--extend-frames allows frames that its "
+                                 "sources can still give)",
+                                 r.count() == 1 ? fmt::format("frame {} is", r.first)
+                                                : fmt::format("frames {}:{} are", r.first, r.last),
+                                 listed.first, listed.last, scene_arg));
   if (const std::size_t fc = scene.frame_count(); fc > 0 && r.last >= static_cast<std::int64_t>(fc))
     throw UsageError(std::string(flag),
                      fmt::format("frame {} is beyond the last frame of '{}' (frames 0..{})", r.last, scene_arg, fc - 1));

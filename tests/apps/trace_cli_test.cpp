@@ -227,7 +227,7 @@ TEST_F(TraceCli, BadFramesAreOneLineErrors) {
   fs::copy_file(cube_, dir_ / "seq" / "f_0001.off");
   // Frames and ranges have one syntax and one meaning in every command; a malformed one, or one
   // outside the scene's range, is bad usage (exit 2).
-  expect_error({"trace", (dir_ / "seq").string(), "--frame", "5", "--out", out}, 2, "--frame: frames 5:5 are outside");
+  expect_error({"trace", (dir_ / "seq").string(), "--frame", "5", "--out", out}, 2, "--frame: frame 5 is outside");
   expect_error({"trace", (dir_ / "seq").string(), "--frames", "0:2", "--out", out}, 2, "--frames: frames 0:2 are outside");
   expect_error({"trace", (dir_ / "seq").string(), "--frames", "0:2", "--extend-frames", "--out", out}, 2,
                "--frames: frame 2 is beyond");
