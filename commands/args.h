@@ -1,6 +1,6 @@
 // The one parser of each argument shape that several commands share: frame numbers and ranges
 // ("F", "A:B"), vectors ("X,Y,Z"); and the one check of a frame range against a scene. Errors
-// are InputError with the flag as the element, in the flag's own words.
+// are UsageError (exit 2) with the flag as the element, in the flag's own words.
 #pragma once
 
 #include <cstdint>
@@ -26,7 +26,7 @@ namespace ptc {
 /// Frames a command may use: those of the scene's listed range (Scene::frames(): a scene file's
 /// "frames", a built-in scene's range), or with `extend` (--extend-frames) any frame the sources
 /// can give (procedural sources go on forever; a finite source stops at its last frame).
-/// InputError naming `flag` and the scene's range otherwise.
+/// UsageError naming `flag` and the scene's range otherwise.
 void check_frames(const Scene& scene, const FrameRange& range, const std::string& scene_arg, std::string_view flag,
                   bool extend);
 

@@ -56,7 +56,8 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   }
   const FrameRange range = asked ? *asked : animated ? scene.frames() : FrameRange{0, 4};
   if (range.count() > 100000) throw UsageError("--frames", "at most 100000 frames");
-  check_frames(scene, range, arg, "--frames", opt.extend_frames || (!animated && deform_none));
+  // The stand-in motion of a static scene has no range of its own (a periodic deformer): any frame.
+  check_frames(scene, range, arg, "--frames", opt.extend_frames || !animated);
   c.frames = range;
   c.camera = camera_for(c.camera, scene);
   (void)make_camera(c.camera, scene.rest().bounds(), c.width, c.height);  // bad vectors fail before any work

@@ -74,6 +74,11 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   // What the method used, and only that (toolkit/clustering used_parameters).
   manifest.set_parameter("method", to_string(c.method));
   for (std::string_view p : used_parameters(c)) manifest.set_parameter(std::string(p), value_of(c, p));
+  // The Acc, reg_bound and size_bound columns of clusters.csv are evaluated for every method
+  // with these (for a method without Acc: the defaults), so a clustering of any method can be
+  // scored by the paper's objective.
+  manifest.set_parameter("metrics", {{"max_count", c.max_count}, {"max_size", c.max_size},
+                                     {"size_bound", to_string(c.size_bound_mode)}, {"sphere", "cgal"}});
 
   OutputDir dir(opt.out_dir);  // a refused target fails before the clustering
   t0.restart();

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <fstream>
 #include <iostream>
+#include <stdexcept>
 #include <vector>
 #include <system_error>
 
@@ -36,10 +37,19 @@ nlohmann::json commit_with_manifest(OutputDir& dir, RunManifest& manifest) {
 }
 
 void refuse_overwriting_input(const fs::path& out, const fs::path& input, std::string_view out_flag) {
-  std::error_code ec;
-  if (out.empty() || input.empty() || !fs::exists(input, ec)) return;
-  const fs::path o = fs::weakly_canonical(out, ec), in = fs::weakly_canonical(input, ec);
-  if (ec) return;
+  if (out.empty() || input.empty()) return;
+  // A glob of frame files ("frames/*.ply") reads what is in the directory before its first
+  // wildcard.
+  fs::path read = input;
+  if (const std::string s = input.string(); s.find_first_of("*?[") != std::string::npos) {
+    const std::size_t cut = s.find_first_of("*?[");
+    const std::size_t slash = s.rfind('/', cut);
+    read = slash == std::string::npos ? fs::path(".") : fs::path(s.substr(0, slash == 0 ? 1 : slash));
+  }
+  std::error_code ec_in, ec_out;
+  if (!fs::exists(read, ec_in)) return;
+  const fs::path in = fs::weakly_canonical(read, ec_in), o = fs::weakly_canonical(out, ec_out);
+  if (ec_in || ec_out || o.empty() || in.empty()) return;
   const auto [a, b] = std::mismatch(o.begin(), o.end(), in.begin(), in.end());
   if (a == o.end())  // `out` is `input` or one of its parent directories
     throw UsageError(std::string(out_flag), "'" + out.string() + "' would overwrite the input '" + input.string() +
@@ -52,8 +62,12 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
   if (!target_.has_filename()) target_ = target_.parent_path();  // "dir/" -> "dir"
   const std::string leaf = target_.filename().string();
   if (leaf.empty() || leaf == "." || leaf == "..")
-    throw InputError(target_.string(), "", "", "not usable as an output directory name");
+    throw UsageError("--out", "'" + target_.string() + "' is not usable as an output directory name");
   std::error_code ec;
+  if (fs::is_symlink(target_, ec))
+    throw InputError(target_.string(), "", "",
+                     "is a symbolic link; give the directory it points to (" + fs::read_symlink(target_, ec).string() +
+                         ") instead");
   if (fs::exists(target_, ec)) {
     if (!fs::is_directory(target_, ec)) throw InputError(target_.string(), "", "", "exists and is not a directory");
     if (!fs::is_empty(target_, ec) && !fs::exists(target_ / kMarker, ec))
@@ -93,16 +107,33 @@ void OutputDir::write(std::string_view name, std::string_view bytes) const {
 
 namespace {
 
-// The files a previous run listed in its marker (one name a line after the header; a marker
-// without the list, from an older ptc, lists nothing).
-std::vector<std::string> listed_files(const fs::path& marker) {
-  std::vector<std::string> names;
+// What the previous run's marker says: the files it wrote (a marker from a ptc before the lists
+// has only its header: `legacy`), or that there is no marker at all.
+struct PreviousMarker {
+  bool present = false, legacy = false;
+  std::vector<std::string> listed;
+};
+
+constexpr const char* kLegacyHeader = "written by ptc; a later run with the same --out replaces this directory";
+
+PreviousMarker read_marker(const fs::path& marker) {
+  PreviousMarker m;
   std::ifstream in(marker);
   std::string line;
-  std::getline(in, line);  // header
+  if (!in || !std::getline(in, line)) return m;
+  m.present = true;
+  m.legacy = line == kLegacyHeader;
   while (std::getline(in, line))
-    if (!line.empty()) names.push_back(line);
-  return names;
+    if (!line.empty()) m.listed.push_back(line);
+  return m;
+}
+
+// A free name for a kept file in `dir`: NAME.kept, NAME.kept.2, ...
+fs::path free_name(const fs::path& dir, const std::string& name) {
+  std::error_code ec;
+  fs::path p = dir / (name + ".kept");
+  for (int k = 2; fs::exists(p, ec) || fs::is_symlink(p, ec); ++k) p = dir / (name + ".kept." + std::to_string(k));
+  return p;
 }
 
 }  // namespace
@@ -111,9 +142,14 @@ void OutputDir::commit() {
   if (committed_) return;
   std::error_code ec;
   // The marker lists what this run wrote, so that a later run can tell its files from the user's.
+  // Outputs are flat: a listed name is one file (a run that writes subdirectories would need
+  // relative paths in the marker, so that a user's file inside one is not taken for ptc's).
   std::vector<std::string> written;
-  for (const auto& e : fs::directory_iterator(tmp_, ec))
-    if (e.path().filename() != kMarker) written.push_back(e.path().filename().string());
+  for (const auto& e : fs::directory_iterator(tmp_, ec)) {
+    if (e.path().filename() == kMarker) continue;
+    if (e.is_directory()) throw std::logic_error("OutputDir: outputs are flat files; '" + e.path().string() + "' is a directory");
+    written.push_back(e.path().filename().string());
+  }
   std::sort(written.begin(), written.end());
   {
     std::string m = kMarkerHeader;
@@ -121,45 +157,72 @@ void OutputDir::commit() {
     write(kMarker, m);
   }
   // Files the user put into the previous output (neither written now nor listed by the run that
-  // wrote it) move into the new directory; one that this run also wrote is kept as NAME.kept.
+  // wrote it) move into the new directory; one whose name this run writes too is kept as
+  // NAME.kept (NAME.kept.2, ...). Every move is undone if the commit fails, so nothing of the
+  // user's is lost whatever happens.
   kept_.clear();
-  if (fs::is_directory(target_, ec)) {
-    const std::vector<std::string> listed = listed_files(target_ / kMarker);
-    for (const auto& e : fs::directory_iterator(target_, ec)) {
-      const std::string name = e.path().filename().string();
-      if (name == kMarker) continue;
-      if (std::find(listed.begin(), listed.end(), name) != listed.end()) continue;  // ptc's own, stale or replaced
-      const bool clash = std::binary_search(written.begin(), written.end(), name);
-      // A marker without a list (an older ptc): a name this run writes again was ptc's too.
-      if (clash && listed.empty()) continue;
-      fs::path dest = tmp_ / (clash ? name + ".kept" : name);
-      std::error_code rc;
-      fs::rename(e.path(), dest, rc);
-      if (rc) throw InputError(e.path().string(), "", "", "cannot keep this file in the new output: " + rc.message());
-      kept_.push_back(dest.filename().string());
+  std::vector<std::pair<fs::path, fs::path>> moved;  // (from, to)
+  auto undo_moves = [&] {
+    for (auto it = moved.rbegin(); it != moved.rend(); ++it) {
+      std::error_code ignore;
+      fs::rename(it->second, it->first, ignore);
     }
-    std::sort(kept_.begin(), kept_.end());
-    if (!kept_.empty()) {
-      std::string m = kMarkerHeader;  // the kept files are not ptc's: the marker lists only what it wrote
-      for (const auto& w : written) m += w + "\n";
-      write(kMarker, m);
-    }
-  }
+    moved.clear();
+  };
   fs::path old;
-  if (fs::exists(target_, ec)) {
-    old = tmp_;
-    old += ".old";
-    fs::rename(target_, old, ec);
-    if (ec) throw InputError(target_.string(), "", "", "cannot move the previous output aside: " + ec.message());
-  }
-  fs::rename(tmp_, target_, ec);
-  if (ec) {
-    std::error_code ignore;
-    if (!old.empty()) fs::rename(old, target_, ignore);  // put the user's directory back
-    throw InputError(target_.string(), "", "", "cannot move the output into place: " + ec.message());
+  try {
+    if (fs::is_directory(target_, ec)) {
+      const PreviousMarker prev = read_marker(target_ / kMarker);
+      if (!prev.present && !fs::is_empty(target_, ec))
+        throw InputError(target_.string(), "", "",
+                         "is no longer a ptc output directory (its .ptc-output marker is gone); nothing was replaced");
+      std::vector<std::string> keep, keep_renamed;  // the user's files; those whose name this run writes
+      for (const auto& e : fs::directory_iterator(target_, ec)) {
+        const std::string name = e.path().filename().string();
+        if (name == kMarker) continue;
+        if (std::find(prev.listed.begin(), prev.listed.end(), name) != prev.listed.end()) continue;  // ptc's own
+        const bool clash = std::binary_search(written.begin(), written.end(), name);
+        // A marker of an older ptc lists nothing: a name this run writes again was ptc's too.
+        if (clash && prev.legacy) continue;
+        (clash ? keep_renamed : keep).push_back(name);
+      }
+      // Names that clash with nothing move first, so that a free NAME.kept.N chosen after them
+      // never lands on one of them.
+      std::sort(keep.begin(), keep.end());
+      std::sort(keep_renamed.begin(), keep_renamed.end());
+      auto move = [&](const std::string& name, const fs::path& dest) {
+        std::error_code rc;
+        fs::rename(target_ / name, dest, rc);
+        if (rc) throw InputError((target_ / name).string(), "", "", "cannot keep this file in the new output: " + rc.message());
+        moved.emplace_back(target_ / name, dest);
+        kept_.push_back(dest.filename().string());
+      };
+      for (const auto& name : keep) move(name, tmp_ / name);
+      for (const auto& name : keep_renamed) move(name, free_name(tmp_, name));
+      std::sort(kept_.begin(), kept_.end());
+    }
+    if (fs::exists(target_, ec)) {
+      old = tmp_;
+      old += ".old";
+      fs::rename(target_, old, ec);
+      if (ec) throw InputError(target_.string(), "", "", "cannot move the previous output aside: " + ec.message());
+    }
+    fs::rename(tmp_, target_, ec);
+    if (ec) {
+      std::error_code ignore;
+      if (!old.empty()) fs::rename(old, target_, ignore);  // put the previous directory back
+      throw InputError(target_.string(), "", "", "cannot move the output into place: " + ec.message());
+    }
+  } catch (...) {
+    undo_moves();  // the user's files go back where they were (the previous directory is in place)
+    kept_.clear();
+    throw;
   }
   committed_ = true;
-  if (!old.empty()) fs::remove_all(old, ec);
+  if (!old.empty()) {
+    fs::remove_all(old, ec);
+    if (ec) std::cerr << "ptc: note: could not remove the previous output, left as " << old.string() << "\n";
+  }
   if (!kept_.empty()) {
     std::string list;
     for (std::size_t i = 0; i < kept_.size() && i < 8; ++i) list += (i ? ", " : "") + kept_[i];

@@ -7,8 +7,11 @@
 // `.ptc-output` listing the files the run wrote; an existing target that is neither empty nor
 // marked (a user's home, a source tree, a thesis) is refused with an InputError before any work
 // is done. Files a user added to a marked directory (not listed in its marker) are kept: they
-// move into the new output (as NAME.kept when the new run writes a file of that name), and
-// commit() says so in one line on stderr.
+// move into the new output (as NAME.kept, NAME.kept.2, ... when the new run writes a file of that
+// name), commit() says so in one line on stderr, and a commit that fails moves them back. A
+// file the marker lists is ptc's and is replaced or dropped. Outputs are flat files (a
+// directory among them is a programmer error: the marker would need relative paths). A
+// symbolic link as the target is refused.
 #pragma once
 
 #include <filesystem>
@@ -21,8 +24,10 @@
 namespace ptc {
 
 /// UsageError naming `out_flag` when writing `out` would replace `input` or a file inside it
-/// (the same path, or `input` inside the directory `out`): an output never overwrites what the
-/// run reads. Paths are compared after resolving symbolic links and "..".
+/// (the same path, or `input` inside the directory `out`; for a glob of frame files, the
+/// directory it reads): an output never overwrites an input the command was given. Paths are
+/// compared after resolving symbolic links and "..". Files that a scene file refers to are not
+/// followed.
 void refuse_overwriting_input(const std::filesystem::path& out, const std::filesystem::path& input,
                               std::string_view out_flag = "--out");
 

@@ -1,6 +1,7 @@
 // `ptc spheres`.
 #include "commands/commands.h"
 
+#include <optional>
 #include <ostream>
 
 #include <fmt/format.h>
@@ -17,6 +18,8 @@ namespace ptc {
 
 void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
   refuse_overwriting_input(opt.out_dir, opt.input);
+  std::optional<OutputDir> dir;  // a refused --out fails before the (long) report
+  if (!opt.out_dir.empty()) dir.emplace(opt.out_dir);
   RunManifest manifest("spheres", opt.argv, "ptc-spheres-run/1");
   const LoadedMesh lm = read_mesh_recorded(opt.input, manifest);
   Stopwatch t0;
@@ -34,14 +37,13 @@ void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
   manifest.add_timing_ms("report", t0.ms());
   const Table table = sphere_methods_table(rep), sets = sphere_sets_table(rep);
 
-  if (!opt.out_dir.empty()) {
-    OutputDir dir(opt.out_dir);
-    dir.write("spheres.csv", table.csv.str());
-    dir.write("sphere_sets.csv", sets.csv.str());
+  if (dir) {
+    dir->write("spheres.csv", table.csv.str());
+    dir->write("sphere_sets.csv", sets.csv.str());
     manifest.add_output("spheres.csv", table.schema.id());
     manifest.add_output("sphere_sets.csv", sets.schema.id());
     manifest.set_result("point_sets", rep.exact_radius.size());
-    (void)commit_with_manifest(dir, manifest);
+    (void)commit_with_manifest(*dir, manifest);
   }
   if (opt.json) {
     nlohmann::json j = nlohmann::json::array();

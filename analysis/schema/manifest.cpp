@@ -94,7 +94,7 @@ std::string utc_now() {
 }  // namespace
 
 RunManifest::RunManifest(std::string command, std::vector<std::string> argv, std::string schema)
-    : command_(std::move(command)), schema_(std::move(schema)), argv_(std::move(argv)), started_utc_(utc_now()), t0_(std::chrono::steady_clock::now()) {}
+    : command_(std::move(command)), schema_(std::move(schema)), argv_(std::move(argv)), started_utc_(utc_now()) {}
 
 void RunManifest::add_output(const std::string& file, const std::string& schema) {
   outputs_.push_back(file);
@@ -107,7 +107,7 @@ nlohmann::json RunManifest::to_json() const {
   j["command"] = command_;
   j["argv"] = argv_;
   j["started_utc"] = started_utc_;
-  j["wall_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_).count();
+  j["wall_ms"] = since_start_.ms();
   j["inputs"] = inputs_;
   j["parameters"] = parameters_;
   j["timings_ms"] = timings_;

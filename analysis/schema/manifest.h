@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/schema/json.h"
+#include "toolkit/core/stopwatch.h"
 
 namespace ptc {
 
@@ -41,7 +42,7 @@ class RunManifest {
   std::string command_, schema_;
   std::vector<std::string> argv_;
   std::string started_utc_;
-  std::chrono::steady_clock::time_point t0_;
+  Stopwatch since_start_;
   nlohmann::json inputs_ = nlohmann::json::array();
   nlohmann::json parameters_ = nlohmann::json::object();
   nlohmann::json timings_ = nlohmann::json::object();

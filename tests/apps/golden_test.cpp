@@ -37,8 +37,10 @@ bool recording() {
   return e && std::string(e) == "1";
 }
 
-// A column whose values are times or ratios of times (not deterministic).
+// A column whose values are times or ratios of times (not deterministic), or the machine's core
+// count (threads defaults to all cores).
 bool timing_column(const std::string& c) {
+  if (c == "threads") return true;
   auto ends = [&](const std::string& s) { return c.size() >= s.size() && c.compare(c.size() - s.size(), s.size(), s) == 0; };
   return ends("_ms") || ends("_s") || c.find("mrays_per_s") != std::string::npos ||
          c.rfind("ns_per_sphere", 0) == 0 || c.find("speedup") != std::string::npos ||

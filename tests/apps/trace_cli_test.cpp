@@ -1,5 +1,6 @@
 // `ptc trace` and `ptc bench` as a user runs them: outputs, exit codes and one-line errors.
 #include <gtest/gtest.h>
+#include <tbb/info.h>
 #include <sys/wait.h>
 
 #include <unistd.h>
@@ -9,7 +10,6 @@
 #include <fstream>
 #include <map>
 #include <sstream>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -130,7 +130,7 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
   EXPECT_EQ(lines(slurp(dir_ / "out" / "summary.csv")), 6u);
   const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
   // The one thread default of every command: all cores; --threads 1 gives one-thread figures.
-  EXPECT_EQ(m["parameters"]["threads"], std::thread::hardware_concurrency());
+  EXPECT_EQ(m["parameters"]["threads"], tbb::info::default_concurrency());
   EXPECT_EQ(m["parameters"]["embree_set_affinity"], false);
   const CmdResult one = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--threads", "1",
                              "--out", (dir_ / "one").string()});

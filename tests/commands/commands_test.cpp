@@ -137,6 +137,14 @@ TEST_F(Commands, ClusterRefusesWhatTheMethodDoesNotUse) {
   c.objective = ObjectiveKind::Naive;
   EXPECT_EQ(usage_flag([&] { check_cluster_options(c, {"max_size"}); }), "--max-size");
   EXPECT_EQ(usage_flag([&] { check_cluster_options(c, {"start"}); }), "");
+  c.max_count = 2;  // Naive's vertex limit must let any triangle in
+  EXPECT_EQ(usage_flag([&] { check_cluster_options(c, {}); }), "--max-count");
+  c.max_count = 50;
+  c.method = ClusterMethod::Meshopt;
+  c.max_count = 1000;  // meshoptimizer 0.18 takes at most 255 vertices
+  EXPECT_EQ(usage_flag([&] { check_cluster_options(c, {}); }), "--max-count");
+  c.method = ClusterMethod::Growth;
+  c.max_count = 50;
   c.objective = ObjectiveKind::Acc;
   c.max_count = 0;
   c.max_size = 5;

@@ -156,5 +156,67 @@ TEST(OutputDir, RerunKeepsFilesTheUserAdded) {
   fs::remove_all(base);
 }
 
+// A user's file kept twice under the same name gets a free name; a directory whose marker is gone
+// by the commit is not replaced; a symbolic link as --out is refused; an output never lands on
+// an input (a file, a directory it is inside, the directory of a glob).
+TEST(OutputDir, KeptNamesNeverCollideAndOddTargetsAreRefused) {
+  const fs::path base = fs::temp_directory_path() / ("ptc_odd_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  const fs::path target = base / "out";
+  auto run = [&](const char* name, const char* text) {
+    OutputDir d(target);
+    d.write(name, text);
+    d.commit();
+    return d.kept();
+  };
+  (void)run("a.csv", "ptc");
+  std::ofstream(target / "b.csv") << "user 1";
+  EXPECT_EQ(run("b.csv", "ptc"), std::vector<std::string>{"b.csv.kept"});
+  // The next run does not write b.csv: ptc's b.csv goes, the user's b.csv.kept stays.
+  EXPECT_EQ(run("a.csv", "ptc"), std::vector<std::string>{"b.csv.kept"});
+  EXPECT_FALSE(fs::exists(target / "b.csv"));
+  // The user adds b.csv again and a run writes b.csv: theirs becomes b.csv.kept.2, whatever the
+  // order the directory lists them in, and b.csv.kept (user 1) is not overwritten.
+  std::ofstream(target / "b.csv") << "user 3";
+  std::ofstream(target / "c.csv") << "user 2";
+  EXPECT_EQ(run("b.csv", "ptc"), (std::vector<std::string>{"b.csv.kept", "b.csv.kept.2", "c.csv"}));
+  EXPECT_EQ(slurp(target / "b.csv.kept"), "user 1");
+  EXPECT_EQ(slurp(target / "b.csv.kept.2"), "user 3");
+  EXPECT_EQ(slurp(target / "c.csv"), "user 2");
+  // The marker removed while a run works: the commit refuses and nothing is replaced.
+  {
+    OutputDir d(target);
+    d.write("a.csv", "new");
+    fs::remove(target / OutputDir::kMarker);
+    EXPECT_THROW(d.commit(), InputError);
+  }
+  EXPECT_EQ(slurp(target / "b.csv"), "ptc");  // the last committed run's output, untouched
+  EXPECT_EQ(slurp(target / "b.csv.kept"), "user 1");
+  // A symbolic link as the target is refused (a rename would move the link, not the directory).
+  fs::create_directory_symlink(target, base / "link");
+  EXPECT_THROW(OutputDir(base / "link"), InputError);
+  // Outputs over inputs.
+  std::ofstream(base / "in.off") << "OFF";
+  fs::create_directories(base / "frames");
+  std::ofstream(base / "frames" / "f0.ply") << "";
+  auto flag = [](const fs::path& out, const fs::path& in) {
+    try {
+      refuse_overwriting_input(out, in);
+    } catch (const UsageError& e) {
+      return e.element();
+    }
+    return std::string();
+  };
+  EXPECT_EQ(flag(base / "in.off", base / "in.off"), "--out");
+  EXPECT_EQ(flag(base / "x" / ".." / "in.off", base / "in.off"), "--out");
+  EXPECT_EQ(flag(base / "frames", base / "frames" / "f0.ply"), "--out");
+  EXPECT_EQ(flag(base / "frames/", base / "frames" / "f0.ply"), "--out");
+  EXPECT_EQ(flag(base / "frames", (base / "frames" / "*.ply").string()), "--out");
+  EXPECT_EQ(flag(base / "other", base / "frames" / "f0.ply"), "");
+  EXPECT_EQ(flag(base / "frames" / "sub", base / "frames"), "");  // inside an input directory: no overwrite
+  EXPECT_EQ(flag(base / "in.off", "armadillo-twist"), "");  // not a path
+  fs::remove_all(base);
+}
+
 }  // namespace
 }  // namespace ptc

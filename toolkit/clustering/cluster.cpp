@@ -149,8 +149,11 @@ std::optional<ConfigProblem> check(const ClusterConfig& c) {
     } catch (const std::invalid_argument& e) {
       const std::string why = e.what();
       const auto colon = why.find(": ");
-      return ConfigProblem{why.find("max_triangles") != std::string::npos ? "max_triangles" : "max_count",
-                           colon == std::string::npos ? why : why.substr(colon + 2)};
+      std::string reason = colon == std::string::npos ? why : why.substr(colon + 2);
+      for (auto [from, to] : {std::pair<std::string, std::string>{"max_count", "MaxCount"},
+                              {"max_triangles", "the triangle limit"}})
+        for (std::size_t p; (p = reason.find(from)) != std::string::npos;) reason.replace(p, from.size(), to);
+      return ConfigProblem{why.find("max_triangles") != std::string::npos ? "max_triangles" : "max_count", reason};
     }
     return std::nullopt;
   }
@@ -162,7 +165,7 @@ std::optional<ConfigProblem> check(const ClusterConfig& c) {
       return std::nullopt;
     case ObjectiveKind::Naive:
     case ObjectiveKind::Gwh01:
-      if (c.max_count == 0)
+      if (c.max_count < 3)
         return ConfigProblem{"max_count", std::string("MaxCount must be >= 3 for the ") +
                                               std::string(to_string(c.objective)) + " objective (its vertex limit)"};
       return std::nullopt;
