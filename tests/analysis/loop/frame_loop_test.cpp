@@ -1,0 +1,171 @@
+// The one frame loop and the acceleration configurations (analysis/loop): every configuration's
+// closest hits against brute force ray by ray, the loop's order and its positions against the
+// scene's own, the static + moving scene against one BVH over the whole mesh.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "analysis/loop/accel.h"
+#include "analysis/loop/frame_loop.h"
+#include "common/brute_force.h"
+#include "render/camera.h"
+#include "toolkit/anim/deformers.h"
+#include "toolkit/anim/static_source.h"
+#include "toolkit/clustering/cluster.h"
+
+namespace ptc::loop {
+namespace {
+
+Scene twisting_ball(int levels = 2) {
+  std::vector<ScenePart> parts;
+  parts.push_back({"ball", make_deformer(make_sphere_mesh(Vec3(0.2, 0.1, 0.0), 1.0, levels), deform_preset(DeformKind::Twist))});
+  return Scene("ball", std::move(parts), std::nullopt, std::nullopt, FrameRange{0, 59});
+}
+
+bvh::RayBatch rays_for(const Mesh& m, int w, int h) {
+  return camera_rays(make_camera({}, m.bounds(), w, h), w, h);
+}
+
+TEST(AccelKinds, NamesRoundTrip) {
+  for (AccelKind k : kAllAccelKinds) EXPECT_EQ(parse_accel_kind(to_string(k)), k);
+  EXPECT_FALSE(parse_accel_kind("embree"));
+  EXPECT_TRUE(is_embree(AccelKind::EmbreeRefit));
+  EXPECT_FALSE(is_embree(AccelKind::OursClusters));
+}
+
+// Every configuration, updated over three frames of a twist, hits what a loop over all
+// triangles hits, ray by ray (Embree may differ only by a tie on a shared edge).
+TEST(FrameLoop, EveryConfigurationAgreesWithBruteForceEveryFrame) {
+  Scene scene = twisting_ball();
+  const Mesh rest = scene.rest();
+  ClusterConfig cc;
+  cc.method = ClusterMethod::Growth;
+  cc.max_count = 20;
+  cc.max_size = 20;
+  const Clustering clusters = cluster_mesh(rest, cc);
+  AccelSetup setup;
+  setup.origin = rest.bounds().center();
+  setup.clusters = &clusters;
+  std::vector<std::unique_ptr<Accel>> owned;
+  std::vector<Accel*> accels;
+  for (AccelKind k : kAllAccelKinds) {
+    owned.push_back(make_accel(k, rest, setup));
+    accels.push_back(owned.back().get());
+    EXPECT_EQ(accels.back()->name(), to_string(k));
+    EXPECT_EQ(accels.back()->sah_cost().has_value(), !is_embree(k));
+  }
+  EXPECT_NE(cluster_scene_of(*accels[1]), nullptr);
+  EXPECT_EQ(cluster_scene_of(*accels[0]), nullptr);
+  const bvh::RayBatch rays = rays_for(rest, 24, 18);
+  std::vector<Vec3> pos(rest.positions().begin(), rest.positions().end()), want(pos.size());
+  LoopOptions lo;
+  lo.frames = {2, 4};
+  std::vector<std::pair<std::int64_t, std::size_t>> order;
+  run_frame_loop(scene, pos, accels, lo, [&](const FrameRecord& r, Accel& a, std::span<const Vec3> p) {
+    order.emplace_back(r.frame, r.accel);
+    EXPECT_EQ(r.index, int(r.frame - 2));
+    EXPECT_EQ(&a, accels[r.accel]);
+    // The positions the configuration was updated with are the scene's at that frame.
+    scene.positions(double(r.frame), want);
+    for (std::size_t v = 0; v < want.size(); ++v) ASSERT_EQ(p[v], want[v]) << "frame " << r.frame;
+    EXPECT_GE(r.update_wall_ms, 0.0);
+    EXPECT_GE(r.times.build_ms, 0.0);
+    const Mesh now = rest.with_positions(std::vector<Vec3>(p.begin(), p.end()));
+    bvh::HitBatch hits;
+    bvh::TraceOptions opt;
+    opt.threads = 1;
+    a.trace(rays, hits, opt);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const bvh::Hit bf = bvh::test::brute_force(now, a.origin(), Vec3(rays.ox[i], rays.oy[i], rays.oz[i]),
+                                                 {rays.dx[i], rays.dy[i], rays.dz[i]});
+      ASSERT_EQ(hits.triangle[i] != bvh::kNoTriangle, bf.hit()) << a.name() << " frame " << r.frame << " ray " << i;
+      if (bf.hit() && hits.triangle[i] != bf.triangle) {  // only a tie may differ
+        EXPECT_NEAR(hits.t[i], bf.t, 1e-5f * bf.t) << a.name() << " frame " << r.frame << " ray " << i;
+      }
+      if (!is_embree(parse_accel_kind(a.name()).value()) && bf.hit()) {
+        ASSERT_EQ(hits.triangle[i], bf.triangle) << a.name() << " ray " << i;  // ours: the smallest (t, id)
+      }
+    }
+  });
+  // Frame-major, configurations in order.
+  ASSERT_EQ(order.size(), 3 * accels.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    EXPECT_EQ(order[i].first, 2 + std::int64_t(i / accels.size()));
+    EXPECT_EQ(order[i].second, i % accels.size());
+  }
+  // The buffer holds the last frame.
+  scene.positions(4.0, want);
+  EXPECT_EQ(pos, want);
+}
+
+// Without fresh copies every configuration reads the loop's buffer itself; with update_static
+// false the static parts are written on the first frame only.
+TEST(FrameLoop, BufferAndStaticParts) {
+  std::vector<ScenePart> parts;
+  parts.push_back({"floor", std::make_unique<StaticSource>(make_sphere_mesh(Vec3(0, -3, 0), 1.0, 1), "floor")});
+  parts.push_back({"ball", make_deformer(make_sphere_mesh(Vec3::Zero(), 1.0, 1), deform_preset(DeformKind::Wave))});
+  Scene scene("two", std::move(parts), std::nullopt, std::nullopt, FrameRange{0, 9});
+  const Mesh rest = scene.rest();
+  AccelSetup setup;
+  setup.origin = rest.bounds().center();
+  auto tri = make_accel(AccelKind::OursTriangles, rest, setup);
+  Accel* accels[] = {tri.get()};
+  std::vector<Vec3> pos(rest.vertex_count(), Vec3(9, 9, 9));  // not the rest pose
+  LoopOptions lo;
+  lo.frames = {0, 2};
+  lo.fresh_positions = false;
+  lo.update_static = false;
+  std::vector<Vec3> want(pos.size());
+  run_frame_loop(scene, pos, accels, lo, [&](const FrameRecord& r, Accel&, std::span<const Vec3> p) {
+    EXPECT_EQ(p.data(), pos.data());  // the buffer itself
+    scene.positions(double(r.frame), want);
+    for (std::size_t v = 0; v < want.size(); ++v) ASSERT_EQ(p[v], want[v]) << "frame " << r.frame << " vertex " << v;
+  });
+  std::vector<Vec3> small(3);
+  EXPECT_THROW(run_frame_loop(scene, small, accels, lo, [](const FrameRecord&, Accel&, std::span<const Vec3>) {}),
+               std::invalid_argument);
+  lo.frames = {3, 2};
+  EXPECT_THROW(run_frame_loop(scene, pos, accels, lo, [](const FrameRecord&, Accel&, std::span<const Vec3>) {}),
+               std::invalid_argument);
+  // ours_clusters without a clustering is refused.
+  EXPECT_THROW((void)make_accel(AccelKind::OursClusters, rest, setup), std::invalid_argument);
+}
+
+// `ptc trace`'s configuration (static parts built once + moving parts per frame) returns what a
+// triangle BVH over the whole mesh returns, ray by ray, frame by frame.
+TEST(SceneAccel, EqualsOneBvhOverTheWholeMesh) {
+  std::vector<ScenePart> parts;
+  parts.push_back({"floor", std::make_unique<StaticSource>(make_sphere_mesh(Vec3(0, -1.5, 0), 1.0, 2), "floor")});
+  parts.push_back({"ball", make_deformer(make_sphere_mesh(Vec3(0.3, 0.4, 0), 0.8, 2), deform_preset(DeformKind::Rigid))});
+  Scene scene("two", std::move(parts), std::nullopt, std::nullopt, FrameRange{0, 9});
+  const Mesh rest = scene.rest();
+  bvh::SceneTracerConfig tcfg;
+  tcfg.origin = rest.bounds().center();
+  SceneAccel split(rest, bvh::PartLayout::of(scene), tcfg);
+  AccelSetup setup;
+  setup.origin = *tcfg.origin;
+  auto whole = make_accel(AccelKind::OursTriangles, rest, setup);
+  EXPECT_TRUE(split.tracer().split());
+  EXPECT_FALSE(split.sah_cost());
+  Accel* accels[] = {&split, whole.get()};
+  const bvh::RayBatch rays = rays_for(rest, 20, 20);
+  std::vector<Vec3> pos(rest.positions().begin(), rest.positions().end());
+  LoopOptions lo;
+  lo.frames = {0, 3};
+  bvh::HitBatch first;
+  run_frame_loop(scene, pos, accels, lo, [&](const FrameRecord& r, Accel& a, std::span<const Vec3>) {
+    bvh::HitBatch h;
+    a.trace(rays, h, {});
+    if (r.accel == 0) {
+      first = h;
+      return;
+    }
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      ASSERT_EQ(first.triangle[i], h.triangle[i]) << "frame " << r.frame << " ray " << i;
+      ASSERT_EQ(first.t[i], h.t[i]) << "frame " << r.frame << " ray " << i;
+    }
+  });
+}
+
+}  // namespace
+}  // namespace ptc::loop
