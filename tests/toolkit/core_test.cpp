@@ -31,6 +31,21 @@ TEST(Stats, MedianAndPercentilesInterpolateBetweenOrderStatistics) {
   EXPECT_DOUBLE_EQ(s.p95, percentile(v, 0.95));
 }
 
+TEST(Stats, RanksAndCorrelations) {
+  EXPECT_EQ(fractional_ranks(std::vector<double>{10, 30, 20, 30}), (std::vector<double>{1, 3.5, 2, 3.5}));
+  const std::vector<double> x{1, 2, 3, 4, 5}, y{5, 6, 7, 8, 7};
+  // By hand: ranks of y = 1, 2, 3.5, 5, 3.5; sum dx dy = 8, sum dx^2 = 10, sum dy^2 = 9.5.
+  EXPECT_NEAR(spearman(x, y), 8.0 / std::sqrt(95.0), 1e-15);
+  EXPECT_NEAR(pearson(x, std::vector<double>{2, 4, 6, 8, 10}), 1.0, 1e-15);
+  const std::vector<double> cubes{1, 8, 27, 64, 125}, down{9, 7, 5, 3, 1};
+  EXPECT_EQ(spearman(x, cubes), 1.0);  // monotone, not linear
+  EXPECT_LT(pearson(x, cubes), 1.0);
+  EXPECT_EQ(spearman(x, down), -1.0);
+  EXPECT_TRUE(std::isnan(spearman(x, std::vector<double>{3, 3, 3, 3, 3})));
+  EXPECT_TRUE(std::isnan(spearman(std::vector<double>{1}, std::vector<double>{2})));
+  EXPECT_THROW((void)spearman(x, std::vector<double>{1, 2}), std::invalid_argument);
+}
+
 TEST(Stopwatch, MeasuresAndLaps) {
   Stopwatch sw;
   std::this_thread::sleep_for(std::chrono::milliseconds(5));

@@ -1,6 +1,9 @@
 #include "toolkit/core/stats.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
 
 namespace ptc {
 
@@ -22,6 +25,44 @@ double median(std::vector<double> values) {
   const std::size_t n = values.size();
   if (n == 0) return 0.0;
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+std::vector<double> fractional_ranks(std::span<const double> values) {
+  const std::size_t n = values.size();
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return values[a] < values[b]; });
+  std::vector<double> rank(n);
+  for (std::size_t i = 0; i < n;) {
+    std::size_t j = i + 1;
+    while (j < n && values[order[j]] == values[order[i]]) ++j;
+    const double r = 0.5 * (double(i + 1) + double(j));  // mean of ranks i+1 .. j
+    for (std::size_t k = i; k < j; ++k) rank[order[k]] = r;
+    i = j;
+  }
+  return rank;
+}
+
+double pearson(std::span<const double> x, std::span<const double> y) {
+  if (x.size() != y.size()) throw std::invalid_argument("pearson: x and y differ in size");
+  const std::size_t n = x.size();
+  if (n < 2) return std::numeric_limits<double>::quiet_NaN();
+  long double mx = 0, my = 0;
+  for (std::size_t i = 0; i < n; ++i) mx += x[i], my += y[i];
+  mx /= static_cast<long double>(n), my /= static_cast<long double>(n);
+  long double sxy = 0, sxx = 0, syy = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const long double dx = x[i] - mx, dy = y[i] - my;
+    sxy += dx * dy, sxx += dx * dx, syy += dy * dy;
+  }
+  if (sxx == 0 || syy == 0) return std::numeric_limits<double>::quiet_NaN();
+  return static_cast<double>(sxy / std::sqrt(sxx * syy));
+}
+
+double spearman(std::span<const double> x, std::span<const double> y) {
+  if (x.size() != y.size()) throw std::invalid_argument("spearman: x and y differ in size");
+  const std::vector<double> rx = fractional_ranks(x), ry = fractional_ranks(y);
+  return pearson(rx, ry);
 }
 
 Summary summarize(std::span<const double> values) {

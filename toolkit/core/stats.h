@@ -33,4 +33,15 @@ struct Summary {
 /// Median (percentile 0.5): the mean of the two middle values for an even count; 0 for none.
 [[nodiscard]] double median(std::vector<double> values);
 
+/// Ranks 1..n of the values, ties sharing the mean of their ranks ("fractional" ranking).
+[[nodiscard]] std::vector<double> fractional_ranks(std::span<const double> values);
+
+/// Pearson's correlation coefficient of x and y (equal sizes, std::invalid_argument otherwise);
+/// NaN for fewer than two pairs or when either has zero variance.
+[[nodiscard]] double pearson(std::span<const double> x, std::span<const double> y);
+
+/// Spearman's rank correlation: Pearson's coefficient of the fractional ranks (ties handled as
+/// averages, as scipy.stats.spearmanr does). NaN as for pearson().
+[[nodiscard]] double spearman(std::span<const double> x, std::span<const double> y);
+
 }  // namespace ptc
