@@ -31,7 +31,10 @@ std::vector<double> fractional_ranks(std::span<const double> values) {
   const std::size_t n = values.size();
   std::vector<std::size_t> order(n);
   for (std::size_t i = 0; i < n; ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return values[a] < values[b]; });
+  // std::sort with the index as tie-break (the order a stable sort gives; libstdc++ 12's
+  // stable_sort buffer trips AddressSanitizer's alloc-dealloc check).
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return values[a] < values[b] || (values[a] == values[b] && a < b); });
   std::vector<double> rank(n);
   for (std::size_t i = 0; i < n;) {
     std::size_t j = i + 1;
