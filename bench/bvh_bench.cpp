@@ -290,7 +290,6 @@ int run_build_loop(const ClusterScene& cs, const Mesh& mesh, const ClusterView& 
   row(label, "3 SAH build", ms);
   // The box stage alone on the same clustering (rest pose).
   std::vector<Vec3f> fp;
-  frame_positions(mesh.positions(), origin, fp);
   std::vector<Box3f> bx;
   std::vector<Vec3f> cx;
   ms.clear();

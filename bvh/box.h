@@ -89,6 +89,15 @@ struct Box3f {
           static_cast<float>(p.z() - origin.z())};
 }
 
+/// A double box in the frame at `origin`: its corners through to_frame (nearest floats; for
+/// metrics on boxes, not for traversal, which needs the outward-rounded boxes below).
+[[nodiscard]] inline Box3f to_frame(const Box3& b, const Vec3& origin) {
+  Box3f f;
+  f.extend(to_frame(b.lo, origin));
+  f.extend(to_frame(b.hi, origin));
+  return f;
+}
+
 /// One box per triangle in the frame at `origin`, rounded outward (contains the float triangle
 /// to_frame(corners)). Precondition: indices < positions.size() (asserted by the Mesh class).
 [[nodiscard]] std::vector<Box3f> triangle_boxes(std::span<const Vec3> positions, std::span<const Tri> triangles,

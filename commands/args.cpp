@@ -1,10 +1,13 @@
 #include "commands/args.h"
 
+#include <tbb/info.h>
+
 #include <charconv>
 #include <cmath>
 
 #include <fmt/format.h>
 
+#include "render/camera.h"
 #include "toolkit/core/error.h"
 
 namespace ptc {
@@ -69,6 +72,15 @@ std::optional<Vec3> parse_vec3(std::string_view s, std::string* why) {
     if (!std::isfinite(v[k])) return fail(quoted(tok).append(" is not a finite number"));
   }
   return Vec3(v[0], v[1], v[2]);
+}
+
+void check_image_size(int width, int height) {
+  if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide)
+    throw UsageError("--width/--height", fmt::format("the image size must be 1..{} pixels per side", kMaxImageSide));
+}
+
+unsigned resolve_threads(unsigned threads) {
+  return threads ? threads : static_cast<unsigned>(tbb::info::default_concurrency());
 }
 
 void check_frames(const Scene& scene, const FrameRange& r, const std::string& scene_arg, std::string_view flag,

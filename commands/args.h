@@ -23,6 +23,13 @@ namespace ptc {
 /// nullopt with `why` set ("expected 3 comma-separated numbers", "not a finite number 'nan'").
 [[nodiscard]] std::optional<Vec3> parse_vec3(std::string_view s, std::string* why = nullptr);
 
+/// --width/--height: 1..kMaxImageSide (render/camera.h) each; UsageError otherwise.
+void check_image_size(int width, int height);
+
+/// --threads: 0 (not given) = all cores (oneTBB's default concurrency), the one default of every
+/// command; any other value as given.
+[[nodiscard]] unsigned resolve_threads(unsigned threads);
+
 /// Frames a command may use: those of the scene's listed range (Scene::frames(): a scene file's
 /// "frames", a built-in scene's range), or with `extend` (--extend-frames) any frame the sources
 /// can give (procedural sources go on forever; a finite source stops at its last frame).

@@ -1,8 +1,6 @@
 // `ptc bench`.
 #include "commands/bench.h"
 
-#include <tbb/info.h>
-
 #include <ostream>
 
 #include <fmt/format.h>
@@ -22,9 +20,8 @@ namespace ptc {
 void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
   PeerBenchConfig c = opt.config;
-  if (c.width < 1 || c.height < 1 || c.width > 16384 || c.height > 16384)
-    throw UsageError("--width/--height", "the image size must be 1..16384 pixels per side");
-  if (c.threads == 0) c.threads = static_cast<unsigned>(tbb::info::default_concurrency());  // all cores
+  check_image_size(c.width, c.height);
+  c.threads = resolve_threads(c.threads);
   std::optional<FrameRange> asked;
   if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
   std::optional<DeformKind> deform;

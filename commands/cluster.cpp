@@ -22,14 +22,6 @@ namespace ptc {
 
 namespace {
 
-// A ClusterConfig parameter as the user spells it: "max_count" -> "--max-count".
-std::string flag_of(std::string_view parameter) {
-  std::string f = "--" + std::string(parameter);
-  for (char& ch : f)
-    if (ch == '_') ch = '-';
-  return f;
-}
-
 // The value of a used parameter, for the manifest.
 nlohmann::json value_of(const ClusterConfig& c, std::string_view p) {
   if (p == "objective") return to_string(c.objective);
@@ -47,6 +39,13 @@ nlohmann::json value_of(const ClusterConfig& c, std::string_view p) {
 }
 
 }  // namespace
+
+std::string flag_of(std::string_view parameter) {
+  std::string f = "--" + std::string(parameter);
+  for (char& ch : f)
+    if (ch == '_') ch = '-';
+  return f;
+}
 
 void check_cluster_options(const ClusterConfig& c, const std::vector<std::string>& given) {
   const std::vector<std::string_view> used = used_parameters(c);

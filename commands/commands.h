@@ -48,6 +48,9 @@ struct ClusterOptions {
   bool json = false;
   std::vector<std::string> argv;
 };
+/// A ClusterConfig parameter (cluster.h kClusterParameters) as the user spells it: "max_count"
+/// -> "--max-count".
+[[nodiscard]] std::string flag_of(std::string_view parameter);
 /// UsageError (naming the flag) for a given parameter the configuration does not use, or a
 /// configuration cluster_mesh would refuse.
 void check_cluster_options(const ClusterConfig& config, const std::vector<std::string>& given);

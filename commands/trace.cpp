@@ -2,8 +2,6 @@
 // frame the rendered view, its images and its rows of trace.csv.
 #include "commands/trace.h"
 
-#include <tbb/info.h>
-
 #include <ostream>
 #include <sstream>
 
@@ -30,11 +28,8 @@ nlohmann::json legend_json(const ColorLegend& l) {
 
 double per_ray(std::uint64_t total, std::uint64_t rays) { return rays ? double(total) / double(rays) : 0.0; }
 
-unsigned effective_threads(unsigned t) { return t ? t : static_cast<unsigned>(tbb::info::default_concurrency()); }
-
 void check_render_options(const RenderConfig& rc) {
-  if (rc.width < 1 || rc.height < 1 || rc.width > 16384 || rc.height > 16384)
-    throw UsageError("--width/--height", "the image size must be 1..16384 pixels per side");
+  check_image_size(rc.width, rc.height);
   if (rc.ao_samples < 0) throw UsageError("--ao", "the sample count must be >= 0");
   if (rc.light && !rc.light->allFinite()) throw UsageError("--light", "not a finite vector");
 }
@@ -112,10 +107,6 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   Clustering clusters;
   const bool use_clusters = !opt.clusters.empty();
   if (use_clusters) clusters = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
-  std::size_t static_tris = 0;
-  for (std::size_t p = 0; p < scene.part_count(); ++p)
-    if (scene.is_static(p)) static_tris += scene.triangle_offset(p + 1) - scene.triangle_offset(p);
-  const std::size_t moving_tris = mesh.triangle_count() - static_tris;
 
   // The one configuration: the static BVH built once, the moving BVH updated per frame.
   bvh::SceneTracerConfig tcfg;
@@ -127,11 +118,17 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   manifest.add_timing_ms("static_build", tracer.static_build_ms());
   manifest.add_timing_ms("setup", tracer.moving_setup_ms());
   const char* bvh_kind = use_clusters ? "clusters" : "triangles";
+  // The scene's static parts (the tracer's own split differs: with clusters, an all-static
+  // scene is one cluster BVH).
+  std::size_t static_tris = 0;
+  for (std::size_t p = 0; p < scene.part_count(); ++p)
+    if (scene.is_static(p)) static_tris += scene.triangle_offset(p + 1) - scene.triangle_offset(p);
+  const std::size_t moving_tris = mesh.triangle_count() - static_tris;
 
   OutputDir dir(opt.out_dir);
   nlohmann::json images = nlohmann::json::object();
   std::vector<TraceRow> rows;
-  const unsigned threads = effective_threads(rc.threads);
+  const unsigned threads = resolve_threads(rc.threads);
   double render_ms = 0, write_ms = 0, positions_ms = 0;
   nlohmann::json per_frame = nlohmann::json::array();
 
@@ -151,6 +148,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   lo.frames = range;
   lo.fresh_positions = false;  // one configuration: nothing to keep apart
   lo.update_static = false;    // the static parts' positions stay those of the first frame
+  lo.first_frame_given = true; // computed above for the camera and the trace frame
   loop::Accel* const accels[] = {&accel};
   loop::run_frame_loop(scene, mesh.positions(), accels, lo, [&](const loop::FrameRecord& fr, loop::Accel& a,
                                                                   std::span<const Vec3>) {

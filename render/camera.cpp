@@ -80,7 +80,7 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
 }
 
 bvh::RayBatch camera_rays(const bvh::PinholeCamera& cam, int width, int height) {
-  if (width < 1 || height < 1 || width > 16384 || height > 16384)
+  if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide)
     throw std::invalid_argument("camera_rays: image size must be 1..16384 per side");
   return bvh::primary_rays(cam, width, height);
 }

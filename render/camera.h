@@ -23,6 +23,9 @@ struct CameraSpec {
   std::optional<double> fov_deg;  ///< vertical, degrees, in (0, 180)
 };
 
+/// Largest image side (pixels) a camera, a command and the benchmark accept.
+inline constexpr int kMaxImageSide = 16384;
+
 /// Default field of view, degrees.
 inline constexpr double kDefaultFovDeg = 45.0;
 
@@ -37,7 +40,7 @@ inline constexpr double kDefaultFovDeg = 45.0;
 /// direction; and for an empty or non-finite mesh bounds without an explicit eye.
 [[nodiscard]] bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int width, int height);
 
-/// Primary rays of the camera (bvh::primary_rays; validates the image size: 1..16384 per side,
+/// Primary rays of the camera (bvh::primary_rays; validates the image size: 1..kMaxImageSide per side,
 /// std::invalid_argument otherwise).
 [[nodiscard]] bvh::RayBatch camera_rays(const bvh::PinholeCamera& cam, int width, int height);
 

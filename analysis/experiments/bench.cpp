@@ -57,7 +57,7 @@ std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first
 PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const PeerBenchConfig& cfg) {
   if (cfg.frames.first < 0 || cfg.frames.count() < 1) throw std::invalid_argument("frames must be a range A:B, 0 <= A <= B");
   if (cfg.threads < 1) throw std::invalid_argument("threads must be >= 1");
-  if (cfg.width < 1 || cfg.height < 1 || cfg.width > 16384 || cfg.height > 16384)
+  if (cfg.width < 1 || cfg.height < 1 || cfg.width > kMaxImageSide || cfg.height > kMaxImageSide)
     throw std::invalid_argument("image size must be 1..16384 per side");
   if (scene.rest().empty()) throw std::invalid_argument("the mesh has no triangles");
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, cfg.threads);
@@ -129,7 +129,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   opt.threads = cfg.threads;
   opt.counters = false;
   std::vector<Vec3> pos(mesh.positions().begin(), mesh.positions().end());
-  bvh::HitBatch ref, hits;
+  bvh::HitBatch ref, hits, counted;
   loop::LoopOptions lo;
   lo.frames = cfg.frames;
   loop::run_frame_loop(scene, pos, order, lo, [&](const loop::FrameRecord& fr, loop::Accel& a, std::span<const Vec3>) {
@@ -149,8 +149,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     row.hits = tt.hits;
     row.mrays_per_s = row.trace_ms > 0 ? double(tt.rays) / (row.trace_ms * 1e3) : 0.0;
     if (fr.accel > 0) row.agreement = compare_hits(ref, hits, cfg.tie);
-    if (a.sah_cost()) {  // ours: the counters, from an untimed trace with them on
-      bvh::HitBatch counted;
+    if (!loop::is_embree(loop::kAllAccelKinds[fr.accel])) {  // ours: the counters, from an untimed trace with them on
       bvh::TraceOptions with = opt;
       with.counters = true;
       const bvh::TraceTotals c = a.trace(rays, counted, with);

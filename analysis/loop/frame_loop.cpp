@@ -16,7 +16,7 @@ void run_frame_loop(Scene& scene, std::span<Vec3> positions, std::span<Accel* co
   for (std::int64_t f = opt.frames.first; f <= opt.frames.last; ++f) {
     const int index = static_cast<int>(f - opt.frames.first);
     Stopwatch sw;
-    scene.positions(double(f), positions, opt.update_static || index == 0);
+    if (!(index == 0 && opt.first_frame_given)) scene.positions(double(f), positions, opt.update_static || index == 0);
     const double source_ms = sw.ms();
     for (std::size_t a = 0; a < accels.size(); ++a) {
       std::span<const Vec3> p = positions;

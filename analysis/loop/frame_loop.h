@@ -40,6 +40,9 @@ struct LoopOptions {
   /// Scene::positions(update_static): false leaves the static parts' ranges as the caller filled
   /// them (the first frame always fills everything).
   bool update_static = true;
+  /// The buffer already holds the first frame (the caller needed it before the loop, e.g. to
+  /// frame the camera): the loop does not make it again (its source_ms is 0).
+  bool first_frame_given = false;
 };
 
 /// measure(record, configuration, positions it was updated with).

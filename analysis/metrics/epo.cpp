@@ -22,11 +22,10 @@ EpoResult end_point_overlap(const bvh::Bvh& t, std::span<const Tri> tris, std::s
   auto triangles_of = [&](std::uint32_t p) {
     return identity ? std::span<const std::uint32_t>() : prim_triangles.subspan(prim_offsets[p], prim_offsets[p + 1] - prim_offsets[p]);
   };
-  auto tri_box = [&](std::uint32_t id) {
-    Box3 b;
-    for (std::uint32_t v : tris[id]) b.extend(pos[v]);
-    return b;
-  };
+  std::vector<Box3> tri_boxes(tris.size());
+  for (std::size_t id = 0; id < tris.size(); ++id)
+    for (std::uint32_t v : tris[id]) tri_boxes[id].extend(pos[v]);
+  auto tri_box = [&](std::uint32_t id) -> const Box3& { return tri_boxes[id]; };
   // Bottom-up: node boxes in double, and the end of each subtree in pre-order (the subtree of
   // node i is nodes [i, end[i])).
   const std::size_t N = t.nodes.size();

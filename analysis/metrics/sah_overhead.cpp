@@ -8,13 +8,6 @@
 namespace ptc {
 namespace {
 
-bvh::Box3f to_float(const Box3& b) {
-  bvh::Box3f f;
-  f.extend(bvh::Vec3f{float(b.lo.x()), float(b.lo.y()), float(b.lo.z())});
-  f.extend(bvh::Vec3f{float(b.hi.x()), float(b.hi.y()), float(b.hi.z())});
-  return f;
-}
-
 // Absolute SAH cost (traversal 1, intersection 1, one primitive per leaf) of a binned build.
 double absolute_sah(const std::vector<bvh::Box3f>& boxes) {
   if (boxes.empty()) return 0.0;
@@ -44,7 +37,7 @@ SahOverhead sah_overhead(const Mesh& mesh, const Clustering& c) {
   SahOverhead r;
   std::vector<bvh::Box3f> all, tops, one;
   all.reserve(mesh.triangle_count());
-  for (std::uint32_t t = 0; t < mesh.triangle_count(); ++t) all.push_back(to_float(triangle_box(mesh, t)));
+  for (std::uint32_t t = 0; t < mesh.triangle_count(); ++t) all.push_back(bvh::to_frame(triangle_box(mesh, t), Vec3::Zero()));
   for (std::size_t k = 0; k < c.cluster_count(); ++k) {
     one.clear();
     bvh::Box3f box;

@@ -50,8 +50,8 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "scene frames A:B (default: an animated scene's range, else 0:4 of --deform); the first is left "
                 "out of the medians");
   c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
-  c->add_option("--width", cfg.width, "primary rays per image row")->check(CLI::Range(1, 16384))->capture_default_str();
-  c->add_option("--height", cfg.height, "image rows")->check(CLI::Range(1, 16384))->capture_default_str();
+  c->add_option("--width", cfg.width, "primary rays per image row")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
+  c->add_option("--height", cfg.height, "image rows")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
   add_threads_option(c, ctx.threads);  // ours and Embree's device alike
   c->add_option("--deform", a->deform,
                 "stand-in motion of a static scene (mesh file): twist (default), bend, wave, rigid, explode (the "

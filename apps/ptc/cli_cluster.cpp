@@ -1,7 +1,6 @@
 #include "commands/commands.h"
 #include "apps/ptc/cli.h"
 
-#include <algorithm>
 #include <iostream>
 
 namespace ptc::cli {
@@ -26,12 +25,8 @@ void register_cluster(CLI::App& app, Context& ctx) {
     cf.sphere = *parse_sphere_method(a->sphere);
     cf.start = *parse_start_rule(a->start);
     cf.gwh.weight = *parse_gwh_weight(a->gwh_weight);
-    for (const char* f : {"objective", "max_count", "max_size", "size_bound", "sphere", "start", "gwh_a1", "gwh_a2",
-                          "gwh_weight", "target_clusters", "max_triangles"}) {
-      std::string flag = std::string("--") + f;
-      std::replace(flag.begin(), flag.end(), '_', '-');
-      if (a->app->count(flag)) a->opt.given.emplace_back(f);
-    }
+    for (std::string_view p : kClusterParameters)
+      if (a->app->count(flag_of(p))) a->opt.given.emplace_back(p);
     a->opt.argv = ctx.args;
     cmd_cluster(a->opt, std::cout);
   });

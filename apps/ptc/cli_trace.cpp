@@ -43,8 +43,8 @@ void register_trace(CLI::App& app, Context& ctx) {
                 "with --clusters: two-level BVH build over fixed groups of at most N clusters; 0 = plain build")
       ->check(CLI::Range(0u, 1u << 20))
       ->capture_default_str();
-  c->add_option("--width", rc.width, "image width in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
-  c->add_option("--height", rc.height, "image height in pixels")->check(CLI::Range(1, 16384))->capture_default_str();
+  c->add_option("--width", rc.width, "image width in pixels")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
+  c->add_option("--height", rc.height, "image height in pixels")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
   a->camera.add_to(c, /*with_light=*/true);
   c->add_flag("--shadows", rc.shadows, "trace shadow rays to the point light");
   c->add_option("--ao", rc.ao_samples, "ambient-occlusion rays per pixel (0 = none)")->check(CLI::Range(0, 4096))->capture_default_str();

@@ -66,6 +66,11 @@ struct ClusterConfig {
 /// cluster) reads nothing else.
 [[nodiscard]] std::vector<std::string_view> used_parameters(const ClusterConfig& config);
 
+/// Every name used_parameters() can return.
+inline constexpr std::string_view kClusterParameters[] = {"objective", "max_count",       "max_size",     "size_bound",
+                                                          "sphere",    "start",           "gwh_a1",       "gwh_a2",
+                                                          "gwh_weight", "target_clusters", "max_triangles"};
+
 /// The hard limits every cluster of cluster_mesh(mesh, config) keeps (for validate()):
 /// sah-split and meshopt their vertex and triangle limits, Naive and GWH01 MaxCount vertices,
 /// Acc none (its bounds are soft), MaxCount = MaxSize = 0 one triangle.

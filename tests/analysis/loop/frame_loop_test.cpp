@@ -121,6 +121,18 @@ TEST(FrameLoop, BufferAndStaticParts) {
     scene.positions(double(r.frame), want);
     for (std::size_t v = 0; v < want.size(); ++v) ASSERT_EQ(p[v], want[v]) << "frame " << r.frame << " vertex " << v;
   });
+  // A first frame the caller already made is not made again.
+  std::vector<Vec3> given(pos.size(), Vec3(7, 7, 7));
+  lo.first_frame_given = true;
+  run_frame_loop(scene, given, accels, lo, [&](const FrameRecord& r, Accel&, std::span<const Vec3> p) {
+    if (r.index == 0) {
+      EXPECT_EQ(p[0], Vec3(7, 7, 7));
+      return;
+    }
+    scene.positions(double(r.frame), want);
+    EXPECT_EQ(p[p.size() - 1], want.back()) << "frame " << r.frame;
+  });
+  lo.first_frame_given = false;
   std::vector<Vec3> small(3);
   EXPECT_THROW(run_frame_loop(scene, small, accels, lo, [](const FrameRecord&, Accel&, std::span<const Vec3>) {}),
                std::invalid_argument);

@@ -13,13 +13,6 @@
 namespace ptc {
 namespace {
 
-bvh::Box3f fbox(const Box3& b) {
-  bvh::Box3f f;
-  f.extend(bvh::Vec3f{float(b.lo.x()), float(b.lo.y()), float(b.lo.z())});
-  f.extend(bvh::Vec3f{float(b.hi.x()), float(b.hi.y()), float(b.hi.z())});
-  return f;
-}
-
 // The tree over primitive boxes (primitive p = the triangles `members(p)`).
 bvh::Bvh build(const Mesh& m, std::size_t prims, const std::function<std::vector<std::uint32_t>(std::size_t)>& members,
                std::uint32_t leaf) {
@@ -29,7 +22,7 @@ bvh::Bvh build(const Mesh& m, std::size_t prims, const std::function<std::vector
     Box3 b;
     for (std::uint32_t t : members(p))
       for (std::uint32_t v : m.triangle(t)) b.extend(m.position(v));
-    boxes.push_back(fbox(b));
+    boxes.push_back(bvh::to_frame(b, Vec3::Zero()));
     centroids.push_back(boxes.back().center());
   }
   bvh::BuildConfig cfg;
