@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # ptc set-up, build and run.  usage:
-#   ./run.sh          install what is missing, build (Release), run the default job
+#   ./run.sh          install what is missing, build (Release), run the main job: the paper's
+#                     experiment (sweep, compare, drift) on scenes/paper-default.json -> out/
+#   ./run.sh full     the same study on the four full-size scenes -> out/full/ (hours; README)
 #   ./run.sh test     install what is missing, build, run the whole test suite (ctest)
 #   ./run.sh build    install what is missing and build only
 # Environment: BUILD_DIR (default build), PTC_SANITIZE=1 (ASan+UBSan build in build-asan),
@@ -40,17 +42,64 @@ fi
 cmake -S . -B "$build" -G Ninja "${extra[@]}" >/dev/null
 cmake --build "$build" -j "$jobs"
 
+# The key numbers of a study directory (sweep/, compare/, drift/ of ptc experiment), from its CSVs.
+key_numbers() {
+  local d=$1
+  echo
+  echo "key numbers ($d; every figure is a median over the frames after the first, from the CSVs there):"
+  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+    $c["stage"] == "build" { b[$c["max_count"]] = $c["speedup_vs_max_count_0"] }
+    $c["stage"] == "trace" { t[$c["max_count"]] = $c["speedup_vs_max_count_0"] }
+    $c["stage"] == "total" { o[$c["max_count"]] = $c["speedup_vs_max_count_0"]; n[++k] = $c["max_count"] }
+    END { for (i = 1; i <= k; i++) printf "  sweep  MaxCount %4s: build %6.2fx faster, trace %5.2fx, frame %5.2fx than MaxCount 0\n", n[i], b[n[i]], t[n[i]], o[n[i]] }' \
+    "$d/sweep/sweep_summary.csv"
+  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+    { printf "  compare %-16s frame time %8.2f ms, perf_factor %5.2f (first %5.2f, last %5.2f) against %s\n", $c["config"], $c["total_ms"], $c["perf_factor"], $c["perf_factor_first"], $c["perf_factor_last"], $c["reference"] }' \
+    "$d/compare/compare_summary.csv"
+  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+    $c["y"] == "box_area_drift" { printf "  drift  %-16s Spearman(connectivity, box-area drift) %7.3f over %s clusters\n", $c["clustering"], $c["spearman"], $c["clusters"] }' \
+    "$d/drift/correlation.csv"
+  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+    { last[$c["clustering"]] = $0; if (!($c["clustering"] in seen)) { seen[$c["clustering"]] = 1; order[++k] = $c["clustering"] } }
+    END { for (i = 1; i <= k; i++) { split(last[order[i]], f, ","); if (order[i] != "triangles")
+      printf "  drift  %-16s last frame: box area ratio p95 %6.3f, max %6.3f; SAH cost %7.2f (triangle BVH %7.2f)\n", order[i], f[c["box_area_ratio_p95"]], f[c["box_area_ratio_max"]], f[c["sah_cost"]], f[c["sah_cost_triangles"]] } }' \
+    "$d/drift/frames.csv"
+}
+
 case "$mode" in
   build) ;;
   test)
     ctest --test-dir "$build" --output-on-failure -j "$jobs" ;;
   run)
-    mesh="$build/data/meshes/armadillo.off"
-    "$build/bin/ptc" info "$mesh"
-    "$build/bin/ptc" spheres "$mesh" --out "$build/out/spheres"
-    "$build/bin/ptc" cluster "$mesh" --method growth --objective acc --max-count 50 --max-size 50 \
-      --out "$build/out/cluster"
-    "$build/bin/ptc" trace "$mesh" --clusters "$build/out/cluster" --shadows --out "$build/out/trace"
-    "$build/bin/ptc" bench armadillo-twist --frames 0:3 --width 512 --height 512 --out "$build/out/bench" ;;
-  *) echo "usage: ./run.sh [run|test|build]" >&2; exit 2 ;;
+    # The main job (docs/experiments.md): the paper's experiment on the armadillo of Debian's
+    # libcgal-demo, Loop-subdivided once (208k triangles) and twisted over 31 frames: the
+    # clusterings, Figure 6 (sweep), Figure 7 (compare) and the drift of cluster quality, every
+    # table under out/ with its manifest; then the key numbers. About five minutes on two cores.
+    ptc="$build/bin/ptc"
+    scene=${PTC_SCENE:-scenes/paper-default.json}
+    rm -rf out.tmp && mkdir -p out.tmp
+    run_experiment() {  # KIND [flags]: out.tmp/KIND, moved to out/KIND when all have run
+      local kind=$1; shift
+      echo "== ptc experiment $kind $scene $*" >&2
+      "$ptc" experiment "$kind" "$scene" "$@" --out "out.tmp/$kind"
+    }
+    run_experiment sweep --width 512 --height 512
+    run_experiment compare --width 512 --height 512
+    run_experiment drift --width 256 --height 256
+    # Nothing of an earlier out/ is lost: it is replaced only once every experiment has finished.
+    if [ -e out ]; then rm -rf out.old && mv out out.old; fi
+    mv out.tmp out && rm -rf out.old
+    key_numbers out ;;
+  full)
+    # The full-size study: the four animated scenes from real data, as the paper had four (a
+    # keyframed one, a skinned one, the cloth, a real mesh under a deformer) at 670k-1.3M triangles.
+    ptc="$build/bin/ptc"
+    for scene in faerie-670k epileptic-1.3m cloth-sphere-832k armadillo-832k-twist; do
+      for kind in sweep compare drift; do
+        echo "== ptc experiment $kind $scene" >&2
+        "$ptc" experiment "$kind" "$scene" --width 1024 --height 1024 --out "out/full/$scene/$kind"
+      done
+      key_numbers "out/full/$scene"
+    done ;;
+  *) echo "usage: ./run.sh [run|full|test|build]" >&2; exit 2 ;;
 esac

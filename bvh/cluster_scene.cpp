@@ -9,6 +9,7 @@
 
 #include "bvh/leaf_blocks.h"
 #include "bvh/stage_clock.h"
+#include "bvh/sweep_sah_builder.h"
 #include "toolkit/geometry/morton.h"
 #include "toolkit/geometry/triangle.h"
 
@@ -178,6 +179,8 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   // Clusters are kept in the order of the rest-pose BVH over them (cluster_visit_order): the
   // blocks are laid out in it, and the groups of the two-level build are its subtrees.
   {
+    if (cfg_.builder == SahBuilder::Sweep && cfg_.cluster_group_size > 1)
+      throw std::invalid_argument("the sweep builder has no two-level build: cluster_group_size must be 0 with it");
     const Bvh rest = rest_tree(mesh, cv, cfg_, data.origin);
     cluster_ids_ = rest.prim_order;
     if (cfg_.cluster_group_size > 1 && !rest.nodes.empty()) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
@@ -341,7 +344,8 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   }
 
   t0 = clock_ms(cfg_.clock);
-  build_binned_sah({f_.boxes, f_.centroids, weights_, group_offsets_}, cfg_.build, f_.bvh, f_.ws);
+  if (cfg_.builder == SahBuilder::Sweep) f_.bvh = build_sweep_sah({f_.boxes, f_.centroids, weights_}, cfg_.build);
+  else build_binned_sah({f_.boxes, f_.centroids, weights_, group_offsets_}, cfg_.build, f_.bvh, f_.ws);
   times.build_ms = clock_ms(cfg_.clock) - t0;
 
   t0 = clock_ms(cfg_.clock);

@@ -7,6 +7,8 @@ namespace ptc::bvh {
 
 const char* to_string(ClusterLeaf l) { return l == ClusterLeaf::Linear ? "linear" : "block-tree"; }
 
+const char* to_string(SahBuilder b) { return b == SahBuilder::Binned ? "binned" : "sweep"; }
+
 std::optional<ClusterLeaf> parse_cluster_leaf(std::string_view s) {
   if (s == "linear") return ClusterLeaf::Linear;
   if (s == "block-tree") return ClusterLeaf::BlockTree;

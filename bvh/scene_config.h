@@ -16,7 +16,7 @@ namespace ptc::bvh {
 struct StageTimes {
   double vertices_ms = 0;   ///< positions into the trace frame (float); 0 when fused into boxes_ms
   double boxes_ms = 0;      ///< primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion)
-  double build_ms = 0;      ///< binned SAH build
+  double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder)
   double collapse_ms = 0;   ///< binary -> 4-wide, and (clusters) linking
   double leaf_data_ms = 0;  ///< SoA triangle blocks
   double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees
@@ -31,6 +31,13 @@ enum class ClusterLeaf { Linear, BlockTree };
 [[nodiscard]] const char* to_string(ClusterLeaf l);
 [[nodiscard]] std::optional<ClusterLeaf> parse_cluster_leaf(std::string_view s);
 
+/// Which SAH builder a scene runs per frame: Binned (Wald 2007, the per-frame one) or Sweep (the
+/// exact full sweep, sah_builder.h: the quality reference, for accuracy studies; it has no
+/// two-level build, so a cluster scene refuses it with cluster_group_size > 1).
+enum class SahBuilder { Binned, Sweep };
+/// "binned", "sweep".
+[[nodiscard]] const char* to_string(SahBuilder b);
+
 struct SceneConfig {
   BuildConfig build{};  ///< builder settings (max_leaf_size counts primitives: triangles or clusters)
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
@@ -41,6 +48,7 @@ struct SceneConfig {
   /// frame the top is built over the groups' boxes and each group over its clusters' boxes.
   /// 0 (or 1): the plain build over all cluster boxes (the paper's).
   std::uint32_t cluster_group_size = 0;
+  SahBuilder builder = SahBuilder::Binned;  ///< the per-frame SAH builder (see SahBuilder)
 };
 
 /// Default build settings of a triangle scene: SAH traversal 1, intersection 0.3 (a 4-wide node

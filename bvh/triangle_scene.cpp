@@ -2,6 +2,7 @@
 
 #include "bvh/leaf_blocks.h"
 #include "bvh/stage_clock.h"
+#include "bvh/sweep_sah_builder.h"
 
 namespace ptc::bvh {
 
@@ -28,7 +29,8 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   times.boxes_ms = clock_ms(cfg_.clock) - t0;
 
   t0 = clock_ms(cfg_.clock);
-  build_binned_sah({f_.boxes, f_.centroids, {}}, cfg_.build, f_.bvh, f_.ws);
+  if (cfg_.builder == SahBuilder::Sweep) f_.bvh = build_sweep_sah({f_.boxes, f_.centroids, {}}, cfg_.build);
+  else build_binned_sah({f_.boxes, f_.centroids, {}}, cfg_.build, f_.bvh, f_.ws);
   times.build_ms = clock_ms(cfg_.clock) - t0;
 
   t0 = clock_ms(cfg_.clock);

@@ -11,7 +11,6 @@
 #include "commands/args.h"
 #include "commands/output_dir.h"
 #include "commands/scene_args.h"
-#include "toolkit/anim/deformers.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
 
@@ -22,39 +21,14 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   PeerBenchConfig c = opt.config;
   check_image_size(c.width, c.height);
   c.threads = resolve_threads(c.threads);
-  std::optional<FrameRange> asked;
-  if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
-  std::optional<DeformKind> deform;
-  const bool deform_none = opt.deform && *opt.deform == "none";
-  if (opt.deform && !deform_none) {
-    deform = parse_deform_kind(*opt.deform);
-    if (!deform)
-      throw UsageError("--deform",
-                       fmt::format("'{}' is not a deformer (twist, bend, wave, rigid, explode or none)", *opt.deform));
-  }
-
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
   RunManifest manifest("bench", opt.argv, "ptc-bench/2");
   const std::string arg = opt.input.string();
-  Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
-  const bool animated = !scene.all_static();
-  if (animated && opt.deform)
-    throw UsageError("--deform",
-                     fmt::format("'{}' is animated: the stand-in motion applies to static scenes (mesh files) only", arg));
-  // A static scene moves by its stand-in motion (the built-in scenes' deformer of that kind).
-  std::string motion = "scene";
-  if (!animated && !deform_none) {
-    const DeformKind k = deform.value_or(DeformKind::Twist);
-    scene = deform_scene(scene, deform_preset(k));
-    motion = fmt::format("stand-in: the {} deformer (deform_preset)", to_string(k));
-  } else if (!animated) {
-    motion = "none: the rest pose every frame";
-  }
-  const FrameRange range = asked ? *asked : animated ? scene.frames() : FrameRange{0, 4};
-  if (range.count() > 100000) throw UsageError("--frames", "at most 100000 frames");
-  // The stand-in motion of a static scene has no range of its own (a periodic deformer): any frame.
-  check_frames(scene, range, arg, "--frames", opt.extend_frames || !animated);
+  MovingScene ms = open_moving_scene(opt.input, opt.scene_options, opt.deform, opt.frames, opt.extend_frames, manifest);
+  Scene& scene = ms.scene;
+  const FrameRange range = ms.range;
+  const std::string& motion = ms.motion;
   c.frames = range;
   c.camera = camera_for(c.camera, scene);
   (void)make_camera(c.camera, scene.rest().bounds(), c.width, c.height);  // bad vectors fail before any work

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "toolkit/core/cancel.h"
+
 namespace ptc {
 
 ProgressBar::ProgressBar(std::string label)
@@ -15,6 +17,8 @@ ProgressBar::~ProgressBar() {
 }
 
 void ProgressBar::update(double fraction) {
+  // A step of the work is a clean point to stop at, with or without a terminal.
+  throw_if_cancelled();
   if (!tty_) return;
   const auto now = std::chrono::steady_clock::now();
   if (now - start_ < std::chrono::seconds(1)) return;

@@ -15,7 +15,9 @@ class ProgressBar {
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
 
-  /// fraction in [0, 1]; redraws at most ~10 times a second. Safe to call often.
+  /// fraction in [0, 1]; redraws at most ~10 times a second. Safe to call often. Throws
+  /// ptc::Interrupted when cancel was requested (toolkit/core/cancel.h): call it only from the
+  /// thread that runs the command, never from a TBB task.
   void update(double fraction);
 
  private:

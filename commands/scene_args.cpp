@@ -1,9 +1,14 @@
 #include "commands/scene_args.h"
 
+#include <fmt/format.h>
+
+#include "commands/args.h"
 #include "commands/cluster_files.h"
 #include "commands/inputs.h"
 #include "render/view.h"
+#include "toolkit/anim/deformers.h"
 #include "toolkit/anim/scene_file.h"
+#include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
 
 namespace ptc {
@@ -15,6 +20,40 @@ Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions
   std::error_code ec;
   if (std::filesystem::is_regular_file(input, ec)) record_input(manifest, input);
   return scene;
+}
+
+MovingScene open_moving_scene(const std::filesystem::path& input, const SceneOptions& options,
+                              const std::optional<std::string>& deform_arg, const std::optional<std::string>& frames,
+                              bool extend, RunManifest& manifest) {
+  std::optional<FrameRange> asked;
+  if (frames) asked = parse_frame_range(*frames, "--frames");
+  std::optional<DeformKind> deform;
+  const bool deform_none = deform_arg && *deform_arg == "none";
+  if (deform_arg && !deform_none) {
+    deform = parse_deform_kind(*deform_arg);
+    if (!deform)
+      throw UsageError("--deform",
+                       fmt::format("'{}' is not a deformer (twist, bend, wave, rigid, explode or none)", *deform_arg));
+  }
+  const std::string arg = input.string();
+  MovingScene m{open_scene_recorded(input, options, manifest), {}, "scene"};
+  const bool animated = !m.scene.all_static();
+  if (animated && deform_arg)
+    throw UsageError("--deform",
+                     fmt::format("'{}' is animated: the stand-in motion applies to static scenes (mesh files) only", arg));
+  // A static scene moves by its stand-in motion (the built-in scenes' deformer of that kind).
+  if (!animated && !deform_none) {
+    const DeformKind k = deform.value_or(DeformKind::Twist);
+    m.scene = deform_scene(m.scene, deform_preset(k));
+    m.motion = fmt::format("stand-in: the {} deformer (deform_preset)", to_string(k));
+  } else if (!animated) {
+    m.motion = "none: the rest pose every frame";
+  }
+  m.range = asked ? *asked : animated ? m.scene.frames() : FrameRange{0, 4};
+  if (m.range.count() > 100000) throw UsageError("--frames", "at most 100000 frames");
+  // The stand-in motion of a static scene has no range of its own (a periodic deformer): any frame.
+  check_frames(m.scene, m.range, arg, "--frames", extend || !animated);
+  return m;
 }
 
 Clustering read_clusters_recorded(const std::filesystem::path& clusters, const Mesh& mesh, RunManifest& manifest) {

@@ -19,6 +19,22 @@ namespace ptc {
 [[nodiscard]] Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions& options,
                                         RunManifest& manifest);
 
+/// A scene that moves over a frame range, as `ptc bench` and `ptc experiment` take it: an animated
+/// scene with its own motion, or a static one (a mesh file) with a stand-in motion.
+struct MovingScene {
+  Scene scene;
+  FrameRange range;
+  std::string motion;  ///< "scene", "stand-in: the twist deformer (deform_preset)" or "none: ..."
+};
+/// Opens SCENE (open_scene_recorded) and its motion: `deform` (--deform KIND|none) gives a static
+/// scene its stand-in motion (default twist); an animated scene refuses it. `frames` (--frames,
+/// parse_frame_range) defaults to an animated scene's range, else 0:4; frames outside an animated
+/// scene's range need `extend` (--extend-frames). UsageError naming the flag otherwise.
+[[nodiscard]] MovingScene open_moving_scene(const std::filesystem::path& input, const SceneOptions& options,
+                                            const std::optional<std::string>& deform,
+                                            const std::optional<std::string>& frames, bool extend,
+                                            RunManifest& manifest);
+
 /// read_clusters (commands/cluster_files.h), recording the read time and the file.
 [[nodiscard]] Clustering read_clusters_recorded(const std::filesystem::path& clusters, const Mesh& mesh,
                                                 RunManifest& manifest);

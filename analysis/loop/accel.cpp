@@ -89,6 +89,7 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   cfg.cluster_leaf = s.cluster_leaf;
   cfg.cluster_group_size = s.cluster_group_size;
   cfg.clock = s.clock;
+  cfg.builder = s.builder;
   if (s.cluster_build) cfg.build = *s.cluster_build;
   return cfg;
 }
@@ -99,6 +100,7 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const Mesh& mesh, const AccelS
       bvh::SceneConfig cfg = bvh::triangle_scene_defaults();
       cfg.origin = s.origin;
       cfg.clock = s.clock;
+      cfg.builder = s.builder;
       if (s.triangle_build) cfg.build = *s.triangle_build;
       return std::make_unique<OursAccel<bvh::TriangleScene>>(kind, std::make_unique<bvh::TriangleScene>(mesh, cfg));
     }
@@ -116,6 +118,11 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const Mesh& mesh, const AccelS
 
 const bvh::ClusterScene* cluster_scene_of(const Accel& a) {
   const auto* c = dynamic_cast<const OursAccel<bvh::ClusterScene>*>(&a);
+  return c ? &c->scene() : nullptr;
+}
+
+const bvh::TriangleScene* triangle_scene_of(const Accel& a) {
+  const auto* c = dynamic_cast<const OursAccel<bvh::TriangleScene>*>(&a);
   return c ? &c->scene() : nullptr;
 }
 

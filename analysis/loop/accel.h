@@ -69,6 +69,9 @@ struct AccelSetup {
   bvh::StageClock clock = bvh::StageClock::Wall;   ///< clock of every configuration's stage times
   std::optional<bvh::BuildConfig> triangle_build;  ///< ours_triangles' builder (default: triangle_scene_defaults())
   std::optional<bvh::BuildConfig> cluster_build;   ///< ours_clusters' builder (default: cluster_scene_defaults())
+  /// The SAH builder of ours_triangles and ours_clusters (Sweep: the exact reference, without
+  /// the two-level build; accuracy studies).
+  bvh::SahBuilder builder = bvh::SahBuilder::Binned;
 };
 
 /// The cluster scene settings of ours_clusters under `setup` (the method's precomputation, such
@@ -81,6 +84,8 @@ struct AccelSetup {
 
 /// The ClusterScene inside an ours_clusters configuration (nullptr for any other).
 [[nodiscard]] const bvh::ClusterScene* cluster_scene_of(const Accel& a);
+/// The TriangleScene inside an ours_triangles configuration (nullptr for any other).
+[[nodiscard]] const bvh::TriangleScene* triangle_scene_of(const Accel& a);
 
 /// `ptc trace`'s configuration: bvh::SceneTracer (static parts built once, moving parts updated).
 class SceneAccel final : public Accel {

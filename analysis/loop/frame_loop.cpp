@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/stopwatch.h"
 
 namespace ptc::loop {
@@ -14,11 +15,14 @@ void run_frame_loop(Scene& scene, std::span<Vec3> positions, std::span<Accel* co
   if (opt.frames.count() < 1) throw std::invalid_argument("run_frame_loop: no frames");
   std::vector<Vec3> fresh(opt.fresh_positions ? positions.size() : 0);
   for (std::int64_t f = opt.frames.first; f <= opt.frames.last; ++f) {
+    // Ctrl-C stops here (toolkit/core/cancel.h), between steps, outside every timed region.
+    throw_if_cancelled();
     const int index = static_cast<int>(f - opt.frames.first);
     Stopwatch sw;
     if (!(index == 0 && opt.first_frame_given)) scene.positions(double(f), positions, opt.update_static || index == 0);
     const double source_ms = sw.ms();
     for (std::size_t a = 0; a < accels.size(); ++a) {
+      throw_if_cancelled();  // a frame of several large configurations can take seconds
       std::span<const Vec3> p = positions;
       if (opt.fresh_positions) {
         std::copy(positions.begin(), positions.end(), fresh.begin());

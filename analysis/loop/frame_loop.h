@@ -49,7 +49,9 @@ struct LoopOptions {
 using Measure = std::function<void(const FrameRecord&, Accel&, std::span<const Vec3>)>;
 
 /// Runs the loop. `positions` (the scene's vertex count) is the frame buffer: on return it
-/// holds the last frame. std::invalid_argument for a wrong buffer size or an empty range.
+/// holds the last frame. std::invalid_argument for a wrong buffer size or an empty range;
+/// ptc::Interrupted (toolkit/core/cancel.h) when cancel was requested, checked before each frame
+/// and before each configuration's update.
 void run_frame_loop(Scene& scene, std::span<Vec3> positions, std::span<Accel* const> accels, const LoopOptions& opt,
                     const Measure& measure);
 

@@ -32,4 +32,25 @@ class CsvTable {
 /// Shortest round-trip decimal form of a double ("nan", "inf", "-inf" for non-finite).
 [[nodiscard]] std::string format_double(double x);
 
+/// A CSV read back as text: what `ptc merge` and the derived tables of the experiments work on,
+/// so that a single run, a shard and a merge of shards derive their summaries from the same
+/// cells. Fields are kept verbatim (written back unchanged by str()).
+struct CsvText {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  /// Index of a column; std::invalid_argument naming it when there is none.
+  [[nodiscard]] std::size_t column(std::string_view name) const;
+  [[nodiscard]] bool has_column(std::string_view name) const;
+  /// The cell as a double (nan/inf/-inf as written by format_double); std::invalid_argument
+  /// naming the row and column when it is not a number.
+  [[nodiscard]] double number(std::size_t row, std::size_t col) const;
+  /// The same quoting rules as CsvTable::str().
+  [[nodiscard]] std::string str() const;
+};
+
+/// Parses RFC 4180 text (quoted fields, "\n" or "\r\n" line ends; a final line end optional).
+/// std::invalid_argument "line L: ..." for an unterminated quote or a row whose field count
+/// differs from the header's; an empty text has no header.
+[[nodiscard]] CsvText parse_csv(std::string_view text);
+
 }  // namespace ptc

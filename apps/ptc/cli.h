@@ -16,6 +16,7 @@
 #include "commands/args.h"
 #include "commands/errors.h"
 #include "commands/scene_args.h"  // CameraSpec, SceneOptions
+#include "commands/commands.h"  // ClusterConfig, flag_of
 
 namespace ptc::cli {
 
@@ -81,6 +82,19 @@ struct CameraArgs {
   [[nodiscard]] std::optional<Vec3> light_position() const;
 };
 
+/// The clustering flags, as `ptc cluster` spells them (--method, --objective, --max-count, ...);
+/// `ptc experiment` takes the same. apply() fills the ClusterConfig and lists the parameters the
+/// user set (names of kClusterParameters) in `given`.
+struct ClusterFlags {
+  std::string method = "contraction", objective = "acc", size_bound = "max", sphere = "cgal", start = "spatial",
+              gwh_weight = "area";
+  CLI::App* app = nullptr;
+  /// with_method: --method and --objective (sweep and cluster; compare and drift name their
+  /// clusterings instead).
+  void add_to(CLI::App* cmd, ClusterConfig& cfg, bool with_method);
+  void apply(ClusterConfig& cfg, std::vector<std::string>& given) const;
+};
+
 // One register function per subcommand (cli_<name>.cpp).
 void register_info(CLI::App& app, Context& ctx);
 void register_subdivide(CLI::App& app, Context& ctx);
@@ -90,5 +104,7 @@ void register_animate(CLI::App& app, Context& ctx);
 void register_scenes(CLI::App& app, Context& ctx);
 void register_trace(CLI::App& app, Context& ctx);
 void register_bench(CLI::App& app, Context& ctx);
+void register_experiment(CLI::App& app, Context& ctx);
+void register_merge(CLI::App& app, Context& ctx);
 
 }  // namespace ptc::cli

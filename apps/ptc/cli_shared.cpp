@@ -1,5 +1,6 @@
 // The flags several subcommands share, defined once (cli.h).
 #include "apps/ptc/cli.h"
+#include "commands/commands.h"
 
 namespace ptc::cli {
 
@@ -59,6 +60,55 @@ CameraSpec CameraArgs::spec() const {
 
 std::optional<Vec3> CameraArgs::light_position() const {
   return light.empty() ? std::nullopt : parse_vec3(light);
+}
+
+void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
+  app = c;
+  if (with_method) {
+    c->add_option("--method", method, "growth, contraction, sah-split or meshopt")
+        ->check(enum_validator("method", parse_cluster_method))
+        ->capture_default_str();
+    c->add_option("--objective", objective, "acc (Garanzha 2009), naive (SAH clusters) or gwh01 (Garland et al. 2001)")
+        ->check(enum_validator("objective", parse_objective))
+        ->capture_default_str();
+  }
+  c->add_option("--max-count", cfg.max_count, "MaxCount (vertices); 0 with --max-size 0 = one triangle per cluster")
+      ->check(CLI::Range(0u, 1u << 20))
+      ->capture_default_str();
+  c->add_option("--max-size", cfg.max_size, "MaxSize (sphere area in units of the mean triangle sphere area)")
+      ->check(CLI::Range(0.0, 1e12))
+      ->capture_default_str();
+  c->add_option("--size-bound", size_bound, "max (as printed in the paper) or min")
+      ->check(enum_validator("size bound", parse_size_bound_mode))
+      ->capture_default_str();
+  c->add_option("--sphere", sphere, "bounding sphere inside the objective: exact cgal ritter epos6 epos14 epos26")
+      ->check(enum_validator("sphere method", parse_sphere_method))
+      ->capture_default_str();
+  c->add_option("--start", start, "growth start rule: index, spatial or fewest-free")
+      ->check(enum_validator("start rule", parse_start_rule))
+      ->capture_default_str();
+  c->add_option("--gwh-a1", cfg.gwh.a1, "GWH01 weight of E_dir")->check(CLI::Range(0.0, 1e6))->capture_default_str();
+  c->add_option("--gwh-a2", cfg.gwh.a2, "GWH01 weight of E_shape")->check(CLI::Range(0.0, 1e6))->capture_default_str();
+  c->add_option("--gwh-weight", gwh_weight, "GWH01 E_dir weights: area or sqrt-area")
+      ->check(enum_validator("weight", parse_gwh_weight))
+      ->capture_default_str();
+  c->add_option("--target-clusters", cfg.target_clusters, "GWH01 contraction: stop at this many clusters (0 = off)")
+      ->capture_default_str();
+  c->add_option("--max-triangles", cfg.max_triangles, "sah-split/meshopt triangle limit (0 = 2 x max-count)")
+      ->capture_default_str();
+}
+
+void ClusterFlags::apply(ClusterConfig& cf, std::vector<std::string>& given) const {
+  cf.method = *parse_cluster_method(method);
+  cf.objective = *parse_objective(objective);
+  cf.size_bound_mode = *parse_size_bound_mode(size_bound);
+  cf.sphere = *parse_sphere_method(sphere);
+  cf.start = *parse_start_rule(start);
+  cf.gwh.weight = *parse_gwh_weight(gwh_weight);
+  for (std::string_view p : kClusterParameters) {
+    const std::string flag = flag_of(p);
+    if (app->get_option_no_throw(flag) && app->count(flag)) given.emplace_back(p);
+  }
 }
 
 }  // namespace ptc::cli

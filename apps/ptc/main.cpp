@@ -1,6 +1,9 @@
 // The `ptc` command: parses arguments (CLI11, only in apps/ptc), calls the library, maps errors
-// to exit codes: 0 success, 1 bad input or failed run (one line on stderr), 2 bad usage.
+// to exit codes: 0 success, 1 bad input or failed run (one line on stderr), 2 bad usage,
+// 130 interrupted (SIGINT or SIGTERM; nothing written, a previous output intact).
 // Each subcommand is registered from its own cli_<name>.cpp (see cli.h).
+#include <signal.h>
+
 #include <iostream>
 #include <optional>
 
@@ -8,6 +11,46 @@
 
 #include "apps/ptc/cli.h"
 #include "commands/errors.h"
+
+namespace {
+
+// The first SIGINT / SIGTERM asks the run to stop at its next clean point (toolkit/core/cancel.h:
+// the exception unwinds, so an uncommitted OutputDir removes its temporary directory). It also
+// puts back the default action, so a second Ctrl-C stops at once (leaving a temporary sibling
+// directory behind, but never a half-written output under the real name). Only async-signal-safe
+// calls here: an atomic store and sigaction.
+extern "C" void on_stop_signal(int) {
+  ptc::request_cancel();
+  struct sigaction dfl {};
+  dfl.sa_handler = SIG_DFL;
+  sigemptyset(&dfl.sa_mask);
+  sigaction(SIGINT, &dfl, nullptr);
+  sigaction(SIGTERM, &dfl, nullptr);
+}
+
+void install_stop_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  // SA_RESTART: a write or fsync interrupted by the signal resumes instead of failing with EINTR,
+  // which would report an I/O error (exit 1) instead of the interrupt.
+  sa.sa_flags = SA_RESTART;
+  for (int sig : {SIGINT, SIGTERM}) {
+    struct sigaction old {};
+    // A signal ignored on entry (a background job of a non-interactive shell, nohup) stays
+    // ignored, as the shell meant.
+    if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    sigaction(sig, &sa, nullptr);
+  }
+}
+
+// "--out DIR" of the subcommand that ran, if it has one and it was given ("" otherwise).
+std::string out_of(const CLI::App& cmd) {
+  const CLI::Option* o = cmd.get_option_no_throw("--out");
+  return o && o->count() > 0 ? o->as<std::string>() : std::string();
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace ptc;
@@ -26,6 +69,8 @@ int main(int argc, char** argv) {
   cli::register_scenes(app, ctx);
   cli::register_trace(app, ctx);
   cli::register_bench(app, ctx);
+  cli::register_experiment(app, ctx);
+  cli::register_merge(app, ctx);
 
   try {
     app.parse(argc, argv);
@@ -43,9 +88,20 @@ int main(int argc, char** argv) {
   std::optional<oneapi::tbb::global_control> thread_limit;
   if (ctx.threads > 0) thread_limit.emplace(oneapi::tbb::global_control::max_allowed_parallelism, ctx.threads);
 
+  install_stop_handlers();
+  std::string out;  // the output of the command being run, for the interrupt message
   try {
     for (const auto& c : ctx.commands)
-      if (*c.app) c.run();
+      if (*c.app) {
+        out = out_of(*c.app);
+        c.run();
+      }
+  } catch (const Interrupted&) {
+    if (out.empty())
+      std::cerr << "ptc: interrupted (no output was written)\n";
+    else
+      std::cerr << "ptc: interrupted: nothing was written to " << out << "\n";
+    return 130;  // 128 + SIGINT, what a shell reports for a Ctrl-C (also after SIGTERM)
   } catch (const UsageError& e) {
     std::cerr << "ptc: " << e.what() << " (run 'ptc --help')\n";
     return 2;

@@ -75,6 +75,20 @@ TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
   }
 }
 
+TEST(ClusterScene, TheSweepBuilderHasNoTwoLevelBuild) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const Clustering runs = ptc::morton_runs(m, 20);
+  SceneConfig cfg = cluster_scene_defaults();
+  cfg.builder = SahBuilder::Sweep;
+  cfg.cluster_group_size = 8;
+  EXPECT_THROW(ClusterScene(m, view_of(runs), cfg), std::invalid_argument);
+  cfg.cluster_group_size = 0;
+  const ClusterScene s(m, view_of(runs), cfg);
+  EXPECT_EQ(s.data().ranges.size(), runs.cluster_count());
+  EXPECT_STREQ(to_string(SahBuilder::Sweep), "sweep");
+  EXPECT_STREQ(to_string(SahBuilder::Binned), "binned");
+}
+
 TEST(SceneConfig, TraceFrameOrigin) {
   EXPECT_EQ(trace_frame_origin(Mesh(), SceneConfig{}), Vec3::Zero());
   const Mesh m = test::grid_cube(2, 1.0, Vec3(10, 20, 30));

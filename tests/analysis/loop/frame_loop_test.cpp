@@ -12,6 +12,7 @@
 #include "toolkit/anim/deformers.h"
 #include "toolkit/anim/static_source.h"
 #include "toolkit/clustering/cluster.h"
+#include "toolkit/core/cancel.h"
 
 namespace ptc::loop {
 namespace {
@@ -141,6 +142,97 @@ TEST(FrameLoop, BufferAndStaticParts) {
                std::invalid_argument);
   // ours_clusters without a clustering is refused.
   EXPECT_THROW((void)make_accel(AccelKind::OursClusters, rest, setup), std::invalid_argument);
+}
+
+// An ours_triangles configuration that counts its updates, so that a test sees which updates the
+// loop made before it stopped.
+class CountingAccel final : public Accel {
+ public:
+  explicit CountingAccel(std::unique_ptr<Accel> inner) : inner_(std::move(inner)) {}
+  std::string_view name() const override { return inner_->name(); }
+  void update(std::span<const Vec3> positions) override {
+    ++updates;
+    inner_->update(positions);
+  }
+  UpdateTimes last_update() const override { return inner_->last_update(); }
+  bvh::TraceTotals trace(const bvh::RayBatch& rays, bvh::HitBatch& hits, const bvh::TraceOptions& opt) const override {
+    return inner_->trace(rays, hits, opt);
+  }
+  Vec3 origin() const override { return inner_->origin(); }
+  int updates = 0;
+
+ private:
+  std::unique_ptr<Accel> inner_;
+};
+
+// The cancel flag is process-wide: cleared before and after, whatever the test asserts.
+class FrameLoopCancel : public ::testing::Test {
+ protected:
+  void SetUp() override { reset_cancel(); }
+  void TearDown() override { reset_cancel(); }
+};
+
+// A Ctrl-C (toolkit/core/cancel.h) stops the loop before the next frame or configuration: what
+// ran is exactly the steps before the request, and nothing after it.
+TEST_F(FrameLoopCancel, StopsBeforeTheNextFrameAndTheNextConfiguration) {
+  Scene scene = twisting_ball(1);
+  const Mesh rest = scene.rest();
+  AccelSetup setup;
+  setup.origin = rest.bounds().center();
+  CountingAccel a0(make_accel(AccelKind::OursTriangles, rest, setup)), a1(make_accel(AccelKind::OursTriangles, rest, setup));
+  Accel* accels[] = {&a0, &a1};
+  std::vector<Vec3> pos(rest.positions().begin(), rest.positions().end()), want(pos.size());
+  LoopOptions lo;
+  lo.frames = {0, 9};
+  using Step = std::pair<std::int64_t, std::size_t>;
+  std::vector<Step> order;
+  auto record = [&](const FrameRecord& r, Accel&, std::span<const Vec3>) { order.emplace_back(r.frame, r.accel); };
+
+  // Requested before the loop: no frame is made, no configuration updated or measured.
+  request_cancel();
+  std::vector<Vec3> untouched(pos.size(), Vec3(9, 9, 9));
+  EXPECT_THROW(run_frame_loop(scene, untouched, accels, lo, record), Interrupted);
+  EXPECT_TRUE(order.empty());
+  EXPECT_EQ(a0.updates, 0);
+  EXPECT_EQ(a1.updates, 0);
+  EXPECT_EQ(untouched.front(), Vec3(9, 9, 9));  // scene.positions was not called
+  EXPECT_TRUE(cancel_requested());              // the request stays for every loop up the stack
+  reset_cancel();
+
+  // Requested while configuration 0 of frame 3 is measured: configuration 1 is not updated for
+  // frame 3, and frame 4 is never made.
+  EXPECT_THROW(run_frame_loop(scene, pos, accels, lo,
+                              [&](const FrameRecord& r, Accel& a, std::span<const Vec3> p) {
+                                record(r, a, p);
+                                if (r.frame == 3 && r.accel == 0) request_cancel();
+                              }),
+               Interrupted);
+  std::vector<Step> expected;
+  for (std::int64_t f = 0; f <= 3; ++f)
+    for (std::size_t k = 0; k < 2; ++k)
+      if (!(f == 3 && k == 1)) expected.emplace_back(f, k);
+  EXPECT_EQ(order, expected);
+  EXPECT_EQ(a0.updates, 4);
+  EXPECT_EQ(a1.updates, 3);
+  scene.positions(3.0, want);
+  for (std::size_t v = 0; v < want.size(); ++v) ASSERT_EQ(pos[v], want[v]) << "vertex " << v;  // still frame 3
+
+  // Requested after the last configuration of the last frame: the loop has nothing left to stop.
+  reset_cancel();
+  order.clear();
+  lo.frames = {0, 1};
+  EXPECT_NO_THROW(run_frame_loop(scene, pos, accels, lo, [&](const FrameRecord& r, Accel& a, std::span<const Vec3> p) {
+    record(r, a, p);
+    if (r.frame == 1 && r.accel == 1) request_cancel();
+  }));
+  EXPECT_EQ(order, (std::vector<Step>{{0, 0}, {0, 1}, {1, 0}, {1, 1}}));
+
+  // After reset_cancel() the loop runs every frame again.
+  reset_cancel();
+  order.clear();
+  lo.frames = {0, 2};
+  EXPECT_NO_THROW(run_frame_loop(scene, pos, accels, lo, record));
+  EXPECT_EQ(order.size(), 6u);
 }
 
 // `ptc trace`'s configuration (static parts built once + moving parts per frame) returns what a

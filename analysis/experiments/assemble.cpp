@@ -1,0 +1,268 @@
+// assemble(): the derived columns and tables of every experiment and its printed summary, from
+// the primary files' rows (CSV text). The same code serves a single run, a shard and `ptc merge`.
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "analysis/experiments/accuracy.h"
+#include "analysis/experiments/experiments.h"
+#include "toolkit/core/stats.h"
+
+namespace ptc {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+FileRows& file_of(std::vector<FileRows>& files, std::string_view name) {
+  for (auto& f : files)
+    if (f.file == name) return f;
+  throw std::invalid_argument("no " + std::string(name) + " among the experiment's files");
+}
+
+// Rows grouped by the values of some columns, groups in order of first appearance.
+struct Groups {
+  std::vector<std::vector<std::string>> keys;
+  std::vector<std::vector<std::size_t>> rows;
+};
+Groups group_by(const CsvText& t, const std::vector<std::string>& columns,
+                const std::function<bool(std::size_t)>& keep = nullptr) {
+  std::vector<std::size_t> idx;
+  for (const auto& c : columns) idx.push_back(t.column(c));
+  Groups g;
+  std::map<std::vector<std::string>, std::size_t> at;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    if (keep && !keep(r)) continue;
+    std::vector<std::string> k;
+    for (std::size_t i : idx) k.push_back(t.rows[r][i]);
+    auto [it, fresh] = at.emplace(k, g.keys.size());
+    if (fresh) g.keys.push_back(k), g.rows.emplace_back();
+    g.rows[it->second].push_back(r);
+  }
+  return g;
+}
+
+double median_of(const CsvText& t, const std::vector<std::size_t>& rows, std::size_t col) {
+  std::vector<double> v;
+  for (std::size_t r : rows) {
+    const double x = t.number(r, col);
+    if (!std::isnan(x)) v.push_back(x);
+  }
+  return v.empty() ? kNaN : median(v);
+}
+
+// Rows that summaries use: not the warm-up frame.
+std::function<bool(std::size_t)> measured(const CsvText& t) {
+  const std::size_t w = t.column("warmup");
+  return [&t, w](std::size_t r) { return t.rows[r][w] != "1"; };
+}
+
+FileRows derived(std::string file, Schema schema, std::vector<std::string> header) {
+  FileRows f;
+  f.file = std::move(file);
+  f.schema = std::move(schema);
+  f.rows.header = std::move(header);
+  return f;
+}
+
+std::string num(double x) { return format_double(x); }
+
+std::string ratio_text(double x) { return std::isfinite(x) ? fmt::format("{:.2f}x", x) : std::string("-"); }
+
+// ---------------------------------------------------------------- sweep
+
+void assemble_sweep(std::vector<FileRows>& files, std::string& text) {
+  const CsvText& s = file_of(files, "sweep.csv").rows;
+  FileRows out = derived("sweep_summary.csv", {"ptc-sweep-summary", 1},
+                         {"scene", "max_count", "primitives", "stage", "frames", "median_ms", "speedup_vs_max_count_0"});
+  const Groups g = group_by(s, {"scene", "max_count", "primitives", "stage"}, measured(s));
+  const std::size_t ms = s.column("ms");
+  std::map<std::pair<std::string, std::string>, double> standard;  // (scene, stage) -> median at MaxCount 0
+  std::vector<double> med(g.keys.size());
+  for (std::size_t i = 0; i < g.keys.size(); ++i) {
+    med[i] = median_of(s, g.rows[i], ms);
+    if (g.keys[i][1] == "0") standard[{g.keys[i][0], g.keys[i][3]}] = med[i];
+  }
+  std::map<std::string, std::map<std::string, double>> by_count;  // max_count -> stage -> median
+  std::map<std::string, std::string> clusters_of;
+  std::vector<std::string> counts;
+  for (std::size_t i = 0; i < g.keys.size(); ++i) {
+    const auto it = standard.find({g.keys[i][0], g.keys[i][3]});
+    const double speedup = it != standard.end() && med[i] > 0 ? it->second / med[i] : kNaN;
+    out.rows.rows.push_back({g.keys[i][0], g.keys[i][1], g.keys[i][2], g.keys[i][3], std::to_string(g.rows[i].size()),
+                             num(med[i]), num(speedup)});
+    if (!by_count.count(g.keys[i][1])) counts.push_back(g.keys[i][1]);
+    by_count[g.keys[i][1]][g.keys[i][3]] = med[i];
+    clusters_of[g.keys[i][1]] = g.keys[i][2];
+  }
+  text += "sweep (the paper's Figure 6): medians per MaxCount = MaxSize, ms; ratios against MaxCount 0 (> 1: faster)\n";
+  text += fmt::format("{:>9} {:>9} {:>10} {:>10} {:>10} {:>10} {:>13} {:>11} {:>11}\n", "MaxCount", "prims", "update",
+                      "build", "trace", "total", "upd+build vs0", "trace vs0", "total vs0");
+  const auto zero = by_count.find("0");
+  for (const auto& c : counts) {
+    auto& st = by_count[c];
+    const double ub = st["update"] + st["build"];
+    double ub0 = kNaN, tr0 = kNaN, to0 = kNaN;
+    if (zero != by_count.end()) {
+      ub0 = zero->second["update"] + zero->second["build"];
+      tr0 = zero->second["trace"];
+      to0 = zero->second["total"];
+    }
+    text += fmt::format("{:>9} {:>9} {:>10.2f} {:>10.2f} {:>10.2f} {:>10.2f} {:>13} {:>11} {:>11}\n", c, clusters_of[c],
+                        st["update"], st["build"], st["trace"], st["total"], ratio_text(ub > 0 ? ub0 / ub : kNaN),
+                        ratio_text(st["trace"] > 0 ? tr0 / st["trace"] : kNaN),
+                        ratio_text(st["total"] > 0 ? to0 / st["total"] : kNaN));
+  }
+  files.push_back(std::move(out));
+}
+
+// ---------------------------------------------------------------- compare
+
+void assemble_compare(std::vector<FileRows>& files, std::string& text, const std::string& reference) {
+  CsvText& c = file_of(files, "compare.csv").rows;
+  const std::size_t total = c.column("total_ms"), pf = c.column("perf_factor"), cfg = c.column("config"),
+                    frame = c.column("frame"), scene = c.column("scene");
+  std::map<std::pair<std::string, std::string>, double> ref;  // (scene, frame) -> the reference's total
+  for (const auto& r : c.rows)
+    if (r[cfg] == reference) ref[{r[scene], r[frame]}] = c.number(&r - c.rows.data(), total);
+  for (std::size_t i = 0; i < c.rows.size(); ++i) {
+    const auto it = ref.find({c.rows[i][scene], c.rows[i][frame]});
+    const double t = c.number(i, total);
+    c.rows[i][pf] = num(it != ref.end() && it->second > 0 ? t / it->second : kNaN);
+  }
+  FileRows out = derived("compare_summary.csv", {"ptc-compare-summary", 1},
+                         {"scene", "config", "reference", "frames", "update_ms", "build_ms", "trace_ms", "total_ms",
+                          "perf_factor", "perf_factor_first", "perf_factor_last", "perf_factor_min", "perf_factor_max"});
+  const Groups g = group_by(c, {"scene", "config"}, measured(c));
+  text += fmt::format("compare (the paper's Figure 7): medians per configuration, ms; perf_factor = total / total of {} "
+                      "(> 1: slower than it)\n",
+                      reference);
+  text += fmt::format("{:<16} {:>9} {:>9} {:>9} {:>9} {:>11} {:>11} {:>11}\n", "config", "update", "build", "trace",
+                      "total", "perf_factor", "pf first", "pf last");
+  for (std::size_t i = 0; i < g.keys.size(); ++i) {
+    const auto& rows = g.rows[i];
+    std::vector<double> pfs;
+    for (std::size_t r : rows) pfs.push_back(c.number(r, pf));
+    const double u = median_of(c, rows, c.column("update_ms")), b = median_of(c, rows, c.column("build_ms")),
+                 t = median_of(c, rows, c.column("trace_ms")), to = median_of(c, rows, total),
+                 p = median_of(c, rows, pf);
+    const double first = pfs.empty() ? kNaN : pfs.front(), last = pfs.empty() ? kNaN : pfs.back();
+    double lo = kNaN, hi = kNaN;
+    for (double x : pfs)
+      if (std::isfinite(x)) lo = std::isnan(lo) ? x : std::min(lo, x), hi = std::isnan(hi) ? x : std::max(hi, x);
+    out.rows.rows.push_back({g.keys[i][0], g.keys[i][1], reference, std::to_string(rows.size()), num(u), num(b), num(t),
+                             num(to), num(p), num(first), num(last), num(lo), num(hi)});
+    text += fmt::format("{:<16} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>11} {:>11} {:>11}\n", g.keys[i][1], u, b, t, to,
+                        ratio_text(p), ratio_text(first), ratio_text(last));
+  }
+  if (ref.empty()) text += fmt::format("(the reference {} is not among these rows: perf_factor is nan)\n", reference);
+  files.push_back(std::move(out));
+}
+
+// ---------------------------------------------------------------- drift
+
+struct Fit {
+  double a = kNaN, b = kNaN, c = kNaN, r2 = kNaN;
+};
+// Least squares y = X beta (columns of X: the regressors and a 1), R^2 = 1 - SSres / SStot.
+Fit least_squares(const std::vector<std::vector<double>>& x, const std::vector<double>& y) {
+  Fit f;
+  const std::size_t n = y.size(), k = x.size();
+  if (n < k + 2) return f;
+  Eigen::MatrixXd a(n, k + 1);
+  Eigen::VectorXd b(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < k; ++j) a(i, j) = x[j][i];
+    a(i, k) = 1.0;
+    b(i) = y[i];
+  }
+  const Eigen::VectorXd beta = a.colPivHouseholderQr().solve(b);
+  const double mean = b.mean();
+  const double ss_tot = (b.array() - mean).square().sum(), ss_res = (a * beta - b).squaredNorm();
+  if (k >= 1) f.a = beta(0);
+  if (k >= 2) f.b = beta(1);
+  f.c = beta(k);
+  f.r2 = ss_tot > 0 ? 1.0 - ss_res / ss_tot : kNaN;
+  return f;
+}
+
+void assemble_drift(std::vector<FileRows>& files, std::string& text) {
+  const CsvText& rays = file_of(files, "rays.csv").rows;
+  const CsvText& frames = file_of(files, "frames.csv").rows;
+  const CsvText& corr = file_of(files, "correlation.csv").rows;
+  FileRows reg = derived("regression.csv", {"ptc-drift-regression", 1},
+                         {"ray_type", "model", "points", "coef_sah", "coef_epo", "intercept", "r2", "epo_weight"});
+  const Groups g = group_by(rays, {"ray_type"});
+  const std::size_t y = rays.column("cost_per_ray"), sah = rays.column("sah_cost"), epo = rays.column("epo");
+  constexpr double kTinyBvhEpoWeight = 0.71;
+  std::string fits;
+  for (std::size_t i = 0; i < g.keys.size(); ++i) {
+    std::vector<double> ys, ss, es, combined;
+    for (std::size_t r : g.rows[i]) {
+      const double yy = rays.number(r, y), s = rays.number(r, sah), e = rays.number(r, epo);
+      if (!std::isfinite(yy) || !std::isfinite(s) || !std::isfinite(e)) continue;
+      ys.push_back(yy), ss.push_back(s), es.push_back(e), combined.push_back(s + kTinyBvhEpoWeight * e);
+    }
+    const std::string& type = g.keys[i][0];
+    auto row = [&](const char* model, const Fit& f, double cs, double ce) {
+      reg.rows.rows.push_back({type, model, std::to_string(ys.size()), num(cs), num(ce), num(f.c), num(f.r2),
+                               num(std::isfinite(cs) && std::isfinite(ce) && cs != 0 ? ce / cs : kNaN)});
+    };
+    const Fit fs = least_squares({ss}, ys), fe = least_squares({es}, ys), fse = least_squares({ss, es}, ys),
+              ft = least_squares({combined}, ys);
+    row("sah", fs, fs.a, kNaN);
+    row("epo", fe, kNaN, fe.a);
+    row("sah+epo", fse, fse.a, fse.b);
+    row("sah+0.71epo", ft, ft.a, ft.a * kTinyBvhEpoWeight);
+    fits += fmt::format("  {:<8} {:>4} points: R^2 sah {:.3f}, epo {:.3f}, sah+epo {:.3f} (EPO weight {:.3g}), "
+                        "sah+0.71 epo {:.3f}\n",
+                        type, ys.size(), fs.r2, fe.r2, fse.r2, fse.a != 0 ? fse.b / fse.a : kNaN, ft.r2);
+  }
+  // Per clustering: the first and last frame.
+  text += "drift: per clustering, first -> last frame (box_area_ratio against the first frame)\n";
+  text += fmt::format("{:<16} {:>9} {:>17} {:>17} {:>15} {:>15} {:>12} {:>12} {:>10}\n", "clustering", "clusters",
+                      "SAH cost", "SAH triangles", "EPO", "nodes/ray", "box max", "box p95", "spearman");
+  const Groups fg = group_by(frames, {"clustering"});
+  std::map<std::string, double> rho;
+  for (std::size_t r = 0; r < corr.rows.size(); ++r)
+    if (corr.rows[r][corr.column("y")] == "box_area_drift")
+      rho[corr.rows[r][corr.column("clustering")]] = corr.number(r, corr.column("spearman"));
+  auto cell = [&](std::size_t r, const char* col) { return frames.number(r, frames.column(col)); };
+  for (std::size_t i = 0; i < fg.keys.size(); ++i) {
+    const std::size_t a = fg.rows[i].front(), b = fg.rows[i].back();
+    const auto it = rho.find(fg.keys[i][0]);
+    text += fmt::format("{:<16} {:>9} {:>7.2f} -> {:>6.2f} {:>7.2f} -> {:>6.2f} {:>6.2f} -> {:>5.2f} {:>6.1f} -> {:>5.1f} "
+                        "{:>12.3f} {:>12.3f} {:>10}\n",
+                        fg.keys[i][0], frames.rows[a][frames.column("clusters")], cell(a, "sah_cost"), cell(b, "sah_cost"),
+                        cell(a, "sah_cost_triangles"), cell(b, "sah_cost_triangles"), cell(a, "epo"), cell(b, "epo"),
+                        cell(a, "nodes_per_ray"), cell(b, "nodes_per_ray"), cell(b, "box_area_ratio_max"),
+                        cell(b, "box_area_ratio_p95"),
+                        it != rho.end() && std::isfinite(it->second) ? fmt::format("{:.3f}", it->second) : "-");
+  }
+  text += "spearman: rank correlation over clusters of connectivity (N_T/N_V) with box-area drift (mean |ln box area "
+          "ratio| over the frames after the first); < 0: denser clusters deform less\n";
+  text += "fit of the measured cost per ray (traversal x nodes + intersection x triangles) to SAH and EPO:\n" + fits;
+  files.push_back(std::move(reg));
+}
+
+}  // namespace
+
+Assembled assemble(ExperimentKind kind, std::vector<FileRows> primaries, const std::string& reference) {
+  Assembled a;
+  a.files = std::move(primaries);
+  switch (kind) {
+    case ExperimentKind::Sweep: assemble_sweep(a.files, a.text); break;
+    case ExperimentKind::Compare: assemble_compare(a.files, a.text, reference); break;
+    case ExperimentKind::Drift: assemble_drift(a.files, a.text); break;
+    case ExperimentKind::Accuracy: a.text = accuracy_text(file_of(a.files, "accuracy.csv").rows); break;
+  }
+  return a;
+}
+
+}  // namespace ptc

@@ -1,0 +1,667 @@
+#include "analysis/experiments/experiments.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "analysis/experiments/accuracy.h"
+#include "analysis/metrics/cluster_table.h"
+#include "analysis/metrics/drift.h"
+#include "analysis/metrics/epo.h"
+#include "analysis/metrics/meshlet_stats.h"
+#include "analysis/metrics/sah_overhead.h"
+#include "analysis/metrics/sah_share.h"
+#include "bvh/trace_scene.h"
+#include "toolkit/core/cancel.h"
+#include "toolkit/core/stats.h"
+#include "toolkit/core/stopwatch.h"
+
+namespace ptc {
+
+const char* to_string(ExperimentKind k) {
+  switch (k) {
+    case ExperimentKind::Sweep: return "sweep";
+    case ExperimentKind::Compare: return "compare";
+    case ExperimentKind::Drift: return "drift";
+    case ExperimentKind::Accuracy: return "accuracy";
+  }
+  return "?";
+}
+
+std::optional<ExperimentKind> parse_experiment_kind(std::string_view s) {
+  for (ExperimentKind k : {ExperimentKind::Sweep, ExperimentKind::Compare, ExperimentKind::Drift, ExperimentKind::Accuracy})
+    if (s == to_string(k)) return k;
+  return std::nullopt;
+}
+
+std::vector<std::string> default_compare_configs(bool given) {
+  std::vector<std::string> c;
+  if (given) c.emplace_back("given");
+  else c.insert(c.end(), {"acc_growth", "acc_contraction"});
+  c.insert(c.end(), {"standard", "naive", "gwh01", "meshopt", "sah_split", "embree_low", "embree_refit", "embree_medium"});
+  return c;
+}
+
+std::vector<std::string> default_drift_clusterings(bool given) {
+  std::vector<std::string> c;
+  if (given) c.emplace_back("given");
+  else c.insert(c.end(), {"acc_growth", "acc_contraction"});
+  c.insert(c.end(), {"naive", "gwh01", "meshopt", "sah_split"});
+  return c;
+}
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The configuration a sweep value is: the user's method and objective with MaxCount = MaxSize =
+// the value; 0 is one triangle per cluster (the paper's standard, any method; run as the triangle BVH).
+ClusterConfig sweep_config(const ClusterConfig& base, std::uint32_t n) {
+  ClusterConfig c = base;
+  c.max_count = n;
+  c.max_size = n;
+  if (n == 0) c.method = ClusterMethod::Growth, c.objective = ObjectiveKind::Acc;
+  return c;
+}
+
+study::ConfigSpec spec_of(const std::string& name, const ExperimentParams& p) {
+  study::ConfigSpec s;
+  s.name = name;
+  if (name == "given") {
+    if (!p.given) throw std::invalid_argument("configuration 'given' needs a clustering (--clusters DIR)");
+    s.given = p.given;
+    return s;
+  }
+  if (name == "standard" || name == "triangles") {
+    s.kind = loop::AccelKind::OursTriangles;
+    return s;
+  }
+  for (loop::AccelKind k : {loop::AccelKind::EmbreeLow, loop::AccelKind::EmbreeRefit, loop::AccelKind::EmbreeMedium})
+    if (name == loop::to_string(k)) {
+      s.kind = k;
+      return s;
+    }
+  s.cluster = study::clustering_config(name, p.cluster);
+  if (!s.cluster) throw std::invalid_argument("'" + name + "' is not a configuration");
+  if (const auto problem = check(*s.cluster))
+    throw std::invalid_argument(fmt::format("{}: {} ({})", name, problem->reason, problem->parameter));
+  return s;
+}
+
+// ---------------------------------------------------------------- rows shared by the kinds
+
+struct ConfigRow {
+  std::string scene, config, structure, method, objective;
+  std::int64_t max_count = 0;
+  double max_size = 0;
+  std::uint64_t clusters = 0, triangles = 0;
+  double triangles_per_cluster = 0, cluster_ms = 0, setup_ms = 0;
+  bool fused_vertex_pass = false;
+};
+void visit_config(const ConfigRow& r, Columns& col) {
+  col("scene", r.scene);
+  col("config", r.config);
+  col("structure", r.structure);
+  col("method", r.method);
+  col("objective", r.objective);
+  col("max_count", r.max_count);
+  col("max_size", r.max_size);
+  col("clusters", r.clusters);
+  col("triangles", r.triangles);
+  col("triangles_per_cluster", r.triangles_per_cluster);
+  col("cluster_ms", r.cluster_ms);
+  col("setup_ms", r.setup_ms);
+  col("fused_vertex_pass", r.fused_vertex_pass);
+}
+ConfigRow config_row(const std::string& scene, const study::Prepared& p) {
+  ConfigRow r;
+  r.scene = scene;
+  r.config = p.spec.name;
+  r.structure = std::string(loop::to_string(p.spec.kind));
+  r.triangles = p.mesh.triangle_count();
+  if (p.spec.cluster) {
+    const ClusterConfig& c = *p.spec.cluster;
+    const bool none = c.max_count == 0 && c.max_size == 0;
+    r.method = none ? "none" : to_string(c.method);
+    r.objective = none || (c.method != ClusterMethod::Growth && c.method != ClusterMethod::Contraction)
+                      ? "" : to_string(c.objective);
+    r.max_count = c.max_count;
+    r.max_size = c.max_size;
+  } else if (p.spec.given) {
+    r.method = "given";
+  }
+  if (p.has_clusters) {
+    r.clusters = p.clustering.cluster_count();
+    r.triangles_per_cluster = r.clusters ? double(r.triangles) / double(r.clusters) : 0.0;
+    if (const auto* cs = loop::cluster_scene_of(*p.accel)) r.fused_vertex_pass = cs->fused_vertex_pass();
+  }
+  r.cluster_ms = p.cluster_ms;
+  r.setup_ms = p.setup_ms;
+  return r;
+}
+
+// Adds the rows of one item to a file's rows.
+void add_rows(FileRows& f, std::size_t item, const Table& t) {
+  CsvText c = parse_csv(t.csv.str());
+  if (f.rows.header.empty()) f.rows.header = c.header;
+  if (f.schema.name.empty()) f.schema = t.schema;
+  f.item_rows.emplace_back(item, c.rows.size());
+  for (auto& r : c.rows) f.rows.rows.push_back(std::move(r));
+}
+
+FileRows empty_file(std::string name, Schema schema, std::vector<std::string> header) {
+  FileRows f;
+  f.file = std::move(name);
+  f.schema = std::move(schema);
+  f.rows.header = std::move(header);
+  return f;
+}
+
+double per_ray(std::uint64_t n, std::uint64_t rays) { return rays ? double(n) / double(rays) : kNaN; }
+
+// ---------------------------------------------------------------- sweep
+
+const Schema kSweepSchema{"ptc-sweep", 1};
+struct SweepRow {
+  std::string scene;
+  std::int64_t max_count = 0;
+  double max_size = 0;
+  std::uint64_t clusters = 0;
+  std::int64_t frame = 0;
+  bool warmup = false;
+  std::string stage;
+  double ms = 0;
+};
+void visit_sweep(const SweepRow& r, Columns& col) {
+  col("scene", r.scene);
+  col("max_count", r.max_count);
+  col("max_size", r.max_size);
+  col("primitives", r.clusters);
+  col("frame", r.frame);
+  col("warmup", r.warmup);
+  col("stage", r.stage);
+  col("ms", r.ms);
+}
+
+// ---------------------------------------------------------------- compare
+
+const Schema kCompareSchema{"ptc-compare", 1};
+struct CompareRow {
+  std::string scene;
+  std::int64_t frame = 0;
+  bool warmup = false;
+  std::string config, structure;
+  std::uint64_t clusters = 0;
+  double update_ms = 0, build_ms = 0, trace_ms = 0, trace_primary_ms = 0, trace_shadow_ms = 0, total_ms = 0;
+  double perf_factor = kNaN;  // filled by assemble()
+  std::uint64_t rays = 0, shadow_rays = 0, hits = 0;
+  double sah_cost = kNaN;
+};
+void visit_compare(const CompareRow& r, Columns& col) {
+  col("scene", r.scene);
+  col("frame", r.frame);
+  col("warmup", r.warmup);
+  col("config", r.config);
+  col("structure", r.structure);
+  col("clusters", r.clusters);
+  col("update_ms", r.update_ms);
+  col("build_ms", r.build_ms);
+  col("trace_ms", r.trace_ms);
+  col("trace_primary_ms", r.trace_primary_ms);
+  col("trace_shadow_ms", r.trace_shadow_ms);
+  col("total_ms", r.total_ms);
+  col("perf_factor", r.perf_factor);
+  col("rays", r.rays);
+  col("shadow_rays", r.shadow_rays);
+  col("hits", r.hits);
+  col("sah_cost", r.sah_cost);
+}
+
+// ---------------------------------------------------------------- drift
+
+const Schema kClustersFramesSchema{"ptc-drift-clusters", 1};
+struct ClusterFrameRow {
+  std::string clustering;
+  std::int64_t frame = 0;
+  std::uint32_t cluster_id = 0;
+  std::uint64_t triangles = 0, vertices = 0;
+  double connectivity = 0, reg = 0, acc = 0, sphere_radius = 0, sphere_radius_ratio = 0, box_area = 0,
+         box_area_ratio = 0, box_area_ratio_prev = 0, p_hit = 0, sah_share = 0;
+  std::uint32_t boundary_vertices = 0, components = 0;
+};
+void visit_cluster_frame(const ClusterFrameRow& r, Columns& col) {
+  col("clustering", r.clustering);
+  col("frame", r.frame);
+  col("cluster_id", r.cluster_id);
+  col("triangles", r.triangles);
+  col("vertices", r.vertices);
+  col("connectivity", r.connectivity);
+  col("reg", r.reg);
+  col("acc", r.acc);
+  col("sphere_radius", r.sphere_radius);
+  col("sphere_radius_ratio", r.sphere_radius_ratio);
+  col("box_area", r.box_area);
+  col("box_area_ratio", r.box_area_ratio);
+  col("box_area_ratio_prev", r.box_area_ratio_prev);
+  col("p_hit", r.p_hit);
+  col("sah_share", r.sah_share);
+  col("boundary_vertices", r.boundary_vertices);
+  col("components", r.components);
+}
+
+const Schema kFramesSchema{"ptc-drift-frames", 1};
+struct DriftFrameRow {
+  std::string scene, clustering;
+  std::int64_t frame = 0;
+  bool warmup = false;
+  std::uint64_t clusters = 0;
+  double sah_cost = 0, sah_cost_triangles = 0, sah_overhead = 0, epo = 0, nodes_per_ray = 0, triangles_per_ray = 0;
+  double reg_mean = kNaN, acc_mean = kNaN, sphere_radius_ratio_max = kNaN, box_area_ratio_mean = kNaN,
+         box_area_ratio_p95 = kNaN, box_area_ratio_max = kNaN;
+  std::string worst_clusters;
+  double metrics_ms = 0;
+};
+void visit_drift_frame(const DriftFrameRow& r, Columns& col) {
+  col("scene", r.scene);
+  col("clustering", r.clustering);
+  col("frame", r.frame);
+  col("warmup", r.warmup);
+  col("clusters", r.clusters);
+  col("sah_cost", r.sah_cost);
+  col("sah_cost_triangles", r.sah_cost_triangles);
+  col("sah_overhead", r.sah_overhead);
+  col("epo", r.epo);
+  col("nodes_per_ray", r.nodes_per_ray);
+  col("triangles_per_ray", r.triangles_per_ray);
+  col("reg_mean", r.reg_mean);
+  col("acc_mean", r.acc_mean);
+  col("sphere_radius_ratio_max", r.sphere_radius_ratio_max);
+  col("box_area_ratio_mean", r.box_area_ratio_mean);
+  col("box_area_ratio_p95", r.box_area_ratio_p95);
+  col("box_area_ratio_max", r.box_area_ratio_max);
+  col("worst_clusters", r.worst_clusters);
+  col("metrics_ms", r.metrics_ms);
+}
+
+const Schema kRaysSchema{"ptc-drift-rays", 1};
+struct RayRow {
+  std::string clustering;
+  std::int64_t frame = 0;
+  std::string ray_type;
+  std::uint64_t rays = 0;
+  double nodes_per_ray = 0, triangles_per_ray = 0, cost_per_ray = 0, sah_cost = 0, epo = 0, trace_ms = 0;
+};
+void visit_ray(const RayRow& r, Columns& col) {
+  col("clustering", r.clustering);
+  col("frame", r.frame);
+  col("ray_type", r.ray_type);
+  col("rays", r.rays);
+  col("nodes_per_ray", r.nodes_per_ray);
+  col("triangles_per_ray", r.triangles_per_ray);
+  col("cost_per_ray", r.cost_per_ray);
+  col("sah_cost", r.sah_cost);
+  col("epo", r.epo);
+  col("trace_ms", r.trace_ms);
+}
+
+const Schema kCorrelationSchema{"ptc-drift-correlation", 1};
+struct CorrelationRow {
+  std::string scene, clustering, x, y;
+  std::uint64_t clusters = 0, frames = 0;
+  double spearman = kNaN, pearson = kNaN;
+};
+void visit_correlation(const CorrelationRow& r, Columns& col) {
+  col("scene", r.scene);
+  col("clustering", r.clustering);
+  col("x", r.x);
+  col("y", r.y);
+  col("clusters", r.clusters);
+  col("frames", r.frames);
+  col("spearman", r.spearman);
+  col("pearson", r.pearson);
+}
+
+const Schema kConfigsSchema{"ptc-experiment-configs", 1};
+
+std::vector<study::Prepared> prepare_all(const Scene& scene, const std::vector<study::ConfigSpec>& specs,
+                                         const study::StudySetup& setup, const loop::AccelSetup& as,
+                                         ExperimentRun& run, FileRows& configs, const std::string& scene_label) {
+  std::vector<study::Prepared> out;
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    throw_if_cancelled();
+    out.push_back(study::prepare(scene.rest(), specs[i], setup, as));
+    const ConfigRow row = config_row(scene_label, out.back());
+    run.timings_ms["prepare_" + specs[i].name] = out.back().cluster_ms + out.back().setup_ms;
+    std::vector<ConfigRow> one{row};
+    add_rows(configs, run.done[i], tabulate(kConfigsSchema, one, visit_config));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> experiment_items(const ExperimentParams& p) {
+  std::vector<std::string> items;
+  switch (p.kind) {
+    case ExperimentKind::Sweep:
+      for (std::uint32_t n : p.max_counts) items.push_back(fmt::format("max_count={}", n));
+      break;
+    case ExperimentKind::Compare:
+      items = p.configs.empty() ? default_compare_configs(p.given != nullptr) : p.configs;
+      break;
+    case ExperimentKind::Drift:
+      items.emplace_back("triangles");
+      for (const auto& c : p.clusterings.empty() ? default_drift_clusterings(p.given != nullptr) : p.clusterings)
+        items.push_back(c);
+      break;
+    case ExperimentKind::Accuracy: items = accuracy_items(p.given != nullptr); break;
+  }
+  return items;
+}
+
+std::vector<std::string> primary_files(ExperimentKind kind) {
+  switch (kind) {
+    case ExperimentKind::Sweep: return {"configs.csv", "sweep.csv"};
+    case ExperimentKind::Compare: return {"configs.csv", "compare.csv"};
+    case ExperimentKind::Drift: return {"configs.csv", "clusters_frames.csv", "frames.csv", "rays.csv", "correlation.csv"};
+    case ExperimentKind::Accuracy: return {"accuracy.csv"};
+  }
+  return {};
+}
+
+ExperimentRun run_experiment(Scene& scene, const ExperimentParams& p, const study::StudySetup& setup) {
+  if (scene.rest().empty()) throw std::invalid_argument("the mesh has no triangles");
+  if (setup.shard.count < 1 || setup.shard.index >= setup.shard.count) throw std::invalid_argument("bad shard");
+  ExperimentRun run;
+  run.items = experiment_items(p);
+  {
+    std::set<std::string> seen;
+    for (const auto& i : run.items)
+      if (!seen.insert(i).second) throw std::invalid_argument("'" + i + "' is listed twice");
+  }
+  for (std::size_t i = 0; i < run.items.size(); ++i)
+    if (setup.shard.has(i)) run.done.push_back(i);
+  run.triangles = scene.rest().triangle_count();
+  run.vertices = scene.rest().vertex_count();
+
+  if (p.kind == ExperimentKind::Accuracy) {
+    AccuracyRun a = run_accuracy(scene, p, setup, run.items, run.done);
+    run.files = std::move(a.files);
+    run.rays = a.rays;
+    return run;
+  }
+
+  const study::StudyRays rays = study::study_rays(scene.rest(), setup);
+  run.rays = rays.primary.size();
+  loop::AccelSetup as;
+  as.origin = rays.origin;
+  as.cluster_leaf = setup.cluster_leaf;
+  as.cluster_group_size = setup.cluster_group_size;
+  as.threads = setup.threads;
+
+  // The shard's configurations.
+  std::vector<study::ConfigSpec> specs;
+  for (std::size_t i : run.done) {
+    const std::string& name = run.items[i];
+    if (p.kind == ExperimentKind::Sweep) {
+      study::ConfigSpec s;
+      s.name = name;
+      s.cluster = sweep_config(p.cluster, p.max_counts[i]);
+      // MaxCount = MaxSize = 0 is the paper's standard: the triangle BVH (ours_triangles), not
+      // the cluster path over one-triangle clusters.
+      if (p.max_counts[i] == 0) s.kind = loop::AccelKind::OursTriangles;
+      if (const auto problem = check(*s.cluster))
+        throw std::invalid_argument(fmt::format("MaxCount {}: {}", p.max_counts[i], problem->reason));
+      specs.push_back(s);
+    } else {
+      specs.push_back(spec_of(name, p));
+    }
+  }
+  FileRows configs = empty_file("configs.csv", kConfigsSchema, columns_of<ConfigRow>(visit_config));
+  std::vector<study::Prepared> prepared = prepare_all(scene, specs, setup, as, run, configs, p.scene);
+  run.files.push_back(std::move(configs));
+
+  study::PassOptions timed;
+  timed.shadows = true;
+  timed.threads = setup.threads;
+
+  if (p.kind == ExperimentKind::Sweep) {
+    FileRows f = empty_file("sweep.csv", kSweepSchema, columns_of<SweepRow>(visit_sweep));
+    std::vector<std::vector<SweepRow>> rows(prepared.size());
+    study::run_study(scene, prepared, setup, [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
+      const study::Passes ps = study::trace_passes(pr, rays, setup.light, timed);
+      const double trace = ps.primary.trace_ms + ps.shadow.trace_ms;
+      SweepRow r;
+      r.scene = p.scene;
+      r.max_count = pr.spec.cluster->max_count;
+      r.max_size = pr.spec.cluster->max_size;
+      r.clusters = pr.has_clusters ? pr.clustering.cluster_count() : pr.mesh.triangle_count();
+      r.frame = sf.frame;
+      r.warmup = sf.warmup;
+      const std::pair<const char*, double> stages[] = {{"update", sf.times.update_ms},
+                                                       {"build", sf.times.build_ms},
+                                                       {"trace", trace},
+                                                       {"total", sf.times.update_ms + sf.times.build_ms + trace}};
+      for (const auto& [stage, ms] : stages) {
+        r.stage = stage;
+        r.ms = ms;
+        rows[c].push_back(r);
+      }
+    });
+    for (std::size_t c = 0; c < prepared.size(); ++c) add_rows(f, run.done[c], tabulate(kSweepSchema, rows[c], visit_sweep));
+    run.files.push_back(std::move(f));
+    return run;
+  }
+
+  if (p.kind == ExperimentKind::Compare) {
+    FileRows f = empty_file("compare.csv", kCompareSchema, columns_of<CompareRow>(visit_compare));
+    std::vector<std::vector<CompareRow>> rows(prepared.size());
+    study::run_study(scene, prepared, setup, [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
+      const study::Passes ps = study::trace_passes(pr, rays, setup.light, timed);
+      CompareRow r;
+      r.scene = p.scene;
+      r.frame = sf.frame;
+      r.warmup = sf.warmup;
+      r.config = pr.spec.name;
+      r.structure = std::string(loop::to_string(pr.spec.kind));
+      r.clusters = pr.has_clusters ? pr.clustering.cluster_count() : 0;
+      r.update_ms = sf.times.update_ms;
+      r.build_ms = sf.times.build_ms;
+      r.trace_primary_ms = ps.primary.trace_ms;
+      r.trace_shadow_ms = ps.shadow.trace_ms;
+      r.trace_ms = r.trace_primary_ms + r.trace_shadow_ms;
+      r.total_ms = r.update_ms + r.build_ms + r.trace_ms;
+      r.rays = ps.primary.rays;
+      r.shadow_rays = ps.shadow.rays;
+      r.hits = ps.primary.hits;
+      r.sah_cost = pr.accel->sah_cost().value_or(kNaN);
+      rows[c].push_back(r);
+    });
+    for (std::size_t c = 0; c < prepared.size(); ++c)
+      add_rows(f, run.done[c], tabulate(kCompareSchema, rows[c], visit_compare));
+    run.files.push_back(std::move(f));
+    return run;
+  }
+
+  // drift
+  FileRows fc = empty_file("clusters_frames.csv", kClustersFramesSchema, columns_of<ClusterFrameRow>(visit_cluster_frame));
+  FileRows ff = empty_file("frames.csv", kFramesSchema, columns_of<DriftFrameRow>(visit_drift_frame));
+  FileRows fr = empty_file("rays.csv", kRaysSchema, columns_of<RayRow>(visit_ray));
+  FileRows fk = empty_file("correlation.csv", kCorrelationSchema, columns_of<CorrelationRow>(visit_correlation));
+  study::PassOptions counted = timed;
+  counted.counters = true;
+  counted.ao_samples = p.ao_samples;
+  const bvh::SahCostModel cost = bvh::cluster_scene_defaults().build.cost;
+  struct Track {
+    std::vector<ClusterRow> first, prev;
+    std::vector<MeshletShape> shapes;
+    std::vector<double> drift_sum;  // per cluster: sum over frames after the first of |log box_area_ratio|
+    std::vector<double> radius_sum;
+    std::size_t frames_summed = 0;
+    std::vector<ClusterFrameRow> cluster_rows;
+    std::vector<DriftFrameRow> frame_rows;
+    std::vector<RayRow> ray_rows;
+  };
+  std::vector<Track> tracks(prepared.size());
+  for (std::size_t c = 0; c < prepared.size(); ++c)
+    if (prepared[c].has_clusters) {
+      const ClusterConfig mc = prepared[c].spec.cluster.value_or(p.cluster);
+      tracks[c].shapes = meshlet_shapes(prepared[c].clustering, prepared[c].mesh.triangles(),
+                                        prepared[c].mesh.vertex_count(), std::max<std::uint32_t>(mc.max_count, 1));
+    }
+  study::run_study(scene, prepared, setup, [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
+    Stopwatch sw;
+    Track& tr = tracks[c];
+    const study::Passes ps = study::trace_passes(pr, rays, setup.light, counted);
+    DriftFrameRow d;
+    d.scene = p.scene;
+    d.clustering = pr.spec.name;
+    d.frame = sf.frame;
+    d.warmup = sf.warmup;
+    const Mesh& m = pr.mesh;
+    // The triangle BVH of the same frame (its own structure, or built here for a clustering).
+    std::unique_ptr<bvh::TriangleScene> own_ts;
+    const bvh::TriangleScene* ts = loop::triangle_scene_of(*pr.accel);
+    if (!ts) own_ts = std::make_unique<bvh::TriangleScene>(m), ts = own_ts.get();
+    d.sah_cost_triangles = ts->bvh().cost;
+    double epo = 0;
+    if (pr.has_clusters) {
+      const bvh::ClusterScene* cs = loop::cluster_scene_of(*pr.accel);
+      d.clusters = pr.clustering.cluster_count();
+      d.sah_cost = cs->bvh().cost;
+      const SahShares shares = sah_shares(cs->bvh(), cs->boxes(), cs->weights(), cost);
+      std::vector<double> share(pr.clustering.cluster_count(), 0.0);
+      std::vector<std::uint32_t> offsets{0}, ids;
+      for (std::size_t i = 0; i < cs->cluster_ids().size(); ++i) {
+        const std::uint32_t k = cs->cluster_ids()[i];
+        share[k] = shares.share[i];
+        const auto t = pr.clustering.triangles_of(k);
+        ids.insert(ids.end(), t.begin(), t.end());
+        offsets.push_back(static_cast<std::uint32_t>(ids.size()));
+      }
+      epo = end_point_overlap(cs->bvh(), m.triangles(), m.positions(), offsets, ids, cost).epo;
+      d.sah_overhead = sah_overhead(m, pr.clustering).overhead;
+      const ClusterConfig mc = pr.spec.cluster.value_or(p.cluster);
+      const std::vector<ClusterRow> rows = cluster_rows(m, pr.clustering, mc);
+      if (tr.first.empty()) {
+        tr.first = rows, tr.prev = rows;
+        tr.drift_sum.assign(rows.size(), 0.0), tr.radius_sum.assign(rows.size(), 0.0);
+      }
+      const std::vector<ClusterDrift> dr = cluster_drift(tr.first, rows), dp = cluster_drift(tr.prev, rows);
+      if (sf.index > 0) {
+        for (std::size_t k = 0; k < rows.size(); ++k) {
+          tr.drift_sum[k] += std::abs(std::log(dr[k].box_area_ratio));
+          tr.radius_sum[k] += std::abs(std::log(dr[k].sphere_radius_ratio));
+        }
+        ++tr.frames_summed;
+      }
+      const DriftSummary ds = summarize_drift(dr, 5);
+      std::vector<double> reg, acc;
+      for (std::size_t k = 0; k < rows.size(); ++k) {
+        ClusterFrameRow r;
+        r.clustering = pr.spec.name;
+        r.frame = sf.frame;
+        r.cluster_id = static_cast<std::uint32_t>(k);
+        r.triangles = rows[k].m.triangles;
+        r.vertices = rows[k].m.vertices;
+        r.connectivity = rows[k].m.connectivity;
+        r.reg = rows[k].m.reg;
+        r.acc = rows[k].acc;
+        r.sphere_radius = rows[k].m.sphere.radius;
+        r.sphere_radius_ratio = dr[k].sphere_radius_ratio;
+        r.box_area = rows[k].m.box.surface_area();
+        r.box_area_ratio = dr[k].box_area_ratio;
+        r.box_area_ratio_prev = dp[k].box_area_ratio;
+        r.p_hit = rows[k].m.p_hit;
+        r.sah_share = share[k];
+        r.boundary_vertices = tr.shapes[k].boundary_vertices;
+        r.components = tr.shapes[k].components;
+        tr.cluster_rows.push_back(r);
+        reg.push_back(rows[k].m.reg);
+        if (std::isfinite(rows[k].acc)) acc.push_back(rows[k].acc);
+      }
+      d.reg_mean = summarize(reg).mean;
+      d.acc_mean = acc.empty() ? kNaN : summarize(acc).mean;
+      d.sphere_radius_ratio_max = ds.sphere_radius_ratio.count ? ds.sphere_radius_ratio.max : kNaN;
+      if (ds.box_area_ratio.count) {
+        d.box_area_ratio_mean = ds.box_area_ratio.mean;
+        d.box_area_ratio_p95 = ds.box_area_ratio.p95;
+        d.box_area_ratio_max = ds.box_area_ratio.max;
+      }
+      for (std::uint32_t w : ds.worst_box_area) d.worst_clusters += (d.worst_clusters.empty() ? "" : ";") + std::to_string(w);
+      tr.prev = rows;
+    } else {
+      d.sah_cost = d.sah_cost_triangles;
+      d.sah_overhead = 1.0;
+      epo = end_point_overlap(ts->bvh(), m.triangles(), m.positions(), {}, {}, cost).epo;
+    }
+    d.epo = epo;
+    d.nodes_per_ray = per_ray(ps.primary.nodes_visited, ps.primary.rays);
+    d.triangles_per_ray = per_ray(ps.primary.triangles_tested, ps.primary.rays);
+    const std::pair<const char*, const PassStats*> passes[] = {{"primary", &ps.primary}, {"shadow", &ps.shadow}, {"ao", &ps.ao}};
+    for (const auto& [type, st] : passes) {
+      if (st->rays == 0) continue;
+      RayRow r;
+      r.clustering = pr.spec.name;
+      r.frame = sf.frame;
+      r.ray_type = type;
+      r.rays = st->rays;
+      r.nodes_per_ray = per_ray(st->nodes_visited, st->rays);
+      r.triangles_per_ray = per_ray(st->triangles_tested, st->rays);
+      r.cost_per_ray = cost.traversal * r.nodes_per_ray + cost.intersection * r.triangles_per_ray;
+      r.sah_cost = d.sah_cost;
+      r.epo = epo;
+      r.trace_ms = st->trace_ms;
+      tr.ray_rows.push_back(r);
+    }
+    d.metrics_ms = sw.ms();
+    tr.frame_rows.push_back(d);
+  });
+  for (std::size_t c = 0; c < prepared.size(); ++c) {
+    const std::size_t item = run.done[c];
+    Track& tr = tracks[c];
+    add_rows(fc, item, tabulate(kClustersFramesSchema, tr.cluster_rows, visit_cluster_frame));
+    add_rows(ff, item, tabulate(kFramesSchema, tr.frame_rows, visit_drift_frame));
+    add_rows(fr, item, tabulate(kRaysSchema, tr.ray_rows, visit_ray));
+    std::vector<CorrelationRow> corr;
+    if (prepared[c].has_clusters) {
+      std::vector<double> conn, boxd, radd;
+      for (std::size_t k = 0; k < tr.first.size(); ++k) {
+        conn.push_back(tr.first[k].m.connectivity);
+        const double n = tr.frames_summed ? double(tr.frames_summed) : kNaN;
+        boxd.push_back(tr.drift_sum[k] / n);
+        radd.push_back(tr.radius_sum[k] / n);
+      }
+      // NaN drifts (a cluster of zero box area at the first frame) are left out pairwise.
+      auto pairs = [&](const std::vector<double>& y, const char* name) {
+        std::vector<double> xs, ys;
+        for (std::size_t k = 0; k < y.size(); ++k)
+          if (std::isfinite(y[k])) xs.push_back(conn[k]), ys.push_back(y[k]);
+        CorrelationRow r;
+        r.scene = p.scene;
+        r.clustering = prepared[c].spec.name;
+        r.x = "connectivity";
+        r.y = name;
+        r.clusters = xs.size();
+        r.frames = tr.frames_summed;
+        if (xs.size() >= 3) r.spearman = spearman(xs, ys), r.pearson = pearson(xs, ys);
+        corr.push_back(r);
+      };
+      pairs(boxd, "box_area_drift");
+      pairs(radd, "sphere_radius_drift");
+    }
+    add_rows(fk, item, tabulate(kCorrelationSchema, corr, visit_correlation));
+  }
+  run.files.push_back(std::move(fc));
+  run.files.push_back(std::move(ff));
+  run.files.push_back(std::move(fr));
+  run.files.push_back(std::move(fk));
+  return run;
+}
+
+}  // namespace ptc

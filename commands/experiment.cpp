@@ -1,0 +1,471 @@
+// `ptc experiment` and `ptc merge`.
+#include "commands/experiment.h"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <ostream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/schema/json.h"
+#include "analysis/schema/manifest.h"
+#include "commands/args.h"
+#include "commands/commands.h"
+#include "commands/inputs.h"
+#include "commands/output_dir.h"
+#include "commands/progress.h"
+#include "commands/scene_args.h"
+#include "toolkit/core/error.h"
+#include "toolkit/core/stopwatch.h"
+#include "toolkit/core/strings.h"
+
+namespace ptc {
+
+namespace {
+
+constexpr const char* kManifestSchema = "ptc-experiment/1";
+
+study::Shard parse_shard(const std::string& s) {
+  const auto slash = s.find('/');
+  auto bad = [&] { return UsageError("--shard", fmt::format("'{}' is not K/N with 1 <= K <= N <= 100000", s)); };
+  if (slash == std::string::npos) throw bad();
+  const std::string k = s.substr(0, slash), n = s.substr(slash + 1);
+  auto digits = [](const std::string& x) {
+    return !x.empty() && x.size() <= 6 && std::all_of(x.begin(), x.end(), [](char c) { return c >= '0' && c <= '9'; });
+  };
+  if (!digits(k) || !digits(n)) throw bad();
+  const long kk = std::stol(k), nn = std::stol(n);
+  if (kk < 1 || nn < 1 || kk > nn || nn > 100000) throw bad();
+  return {static_cast<std::uint32_t>(kk - 1), static_cast<std::uint32_t>(nn)};
+}
+
+bool is_structure(std::string_view s) {
+  for (const char* n : kCompareStructures)
+    if (s == n) return true;
+  return false;
+}
+bool is_clustering(std::string_view s) {
+  for (const char* n : study::kClusteringNames)
+    if (s == n) return true;
+  return false;
+}
+std::string names_list(bool structures) {
+  std::string s;
+  for (const char* n : study::kClusteringNames) s += std::string(s.empty() ? "" : ", ") + n;
+  s += ", given";
+  if (structures)
+    for (const char* n : kCompareStructures) s += std::string(", ") + n;
+  return s;
+}
+
+// The clusterings (ClusterConfigs) the experiment's items make, to check the flags against.
+std::vector<ClusterConfig> item_clusterings(const ExperimentParams& p, const std::vector<std::string>& items) {
+  std::vector<ClusterConfig> out;
+  if (p.kind == ExperimentKind::Sweep) {
+    for (std::uint32_t n : p.max_counts) {
+      ClusterConfig c = p.cluster;
+      c.max_count = n, c.max_size = n;
+      if (n > 0) out.push_back(c);
+    }
+    return out;
+  }
+  if (p.kind == ExperimentKind::Accuracy) {
+    ClusterConfig c = p.cluster;
+    c.method = ClusterMethod::Contraction, c.objective = ObjectiveKind::Acc;
+    out.push_back(c);
+    return out;
+  }
+  for (const auto& i : items)
+    if (auto c = study::clustering_config(i, p.cluster)) out.push_back(*c);
+  return out;
+}
+
+nlohmann::json cluster_parameters(const ClusterConfig& c) {
+  return {{"max_count", c.max_count},           {"max_size", c.max_size},
+          {"size_bound", to_string(c.size_bound_mode)}, {"sphere", to_string(c.sphere)},
+          {"start", to_string(c.start)},         {"gwh_a1", c.gwh.a1},
+          {"gwh_a2", c.gwh.a2},                  {"gwh_weight", to_string(c.gwh.weight)},
+          {"target_clusters", c.target_clusters}, {"max_triangles", c.max_triangles},
+          {"method", to_string(c.method)},       {"objective", to_string(c.objective)}};
+}
+
+nlohmann::json item_rows_json(const std::vector<FileRows>& files) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& f : files) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& [item, rows] : f.item_rows) a.push_back({item, rows});
+    j[f.file] = a;
+  }
+  return j;
+}
+
+// Writes the assembled files and the summary; lists them in the manifest.
+void write_assembled(OutputDir& dir, RunManifest& manifest, const Assembled& a) {
+  for (const auto& f : a.files) {
+    dir.write(f.file, f.rows.str());
+    manifest.add_output(f.file, f.schema.id());
+  }
+  dir.write("summary.txt", a.text);
+  manifest.add_output("summary.txt");
+}
+
+nlohmann::json summary_json(const Assembled& a, std::string_view schema) {
+  nlohmann::json files = nlohmann::json::object();
+  for (const auto& f : a.files) {
+    if (f.file.find("summary") == std::string::npos && f.file != "regression.csv" && f.file != "accuracy.csv") continue;
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& r : f.rows.rows) {
+      nlohmann::json o = nlohmann::json::object();
+      for (std::size_t i = 0; i < r.size(); ++i) o[f.rows.header[i]] = r[i];
+      rows.push_back(o);
+    }
+    files[f.file] = rows;
+  }
+  return {{"schema", schema}, {"tables", files}};
+}
+
+}  // namespace
+
+void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
+  const auto kind = parse_experiment_kind(opt.kind);
+  if (!kind) throw UsageError("KIND", fmt::format("'{}' is not an experiment (sweep, compare, drift or accuracy)", opt.kind));
+  if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
+  check_image_size(opt.width, opt.height);
+  const char* k = to_string(*kind);
+  auto only = [&](bool present, ExperimentKind for_kind, const char* flag) {
+    if (present && *kind != for_kind)
+      throw UsageError(flag, fmt::format("is for `ptc experiment {}`, not {}", to_string(for_kind), k));
+  };
+  only(opt.max_counts.has_value(), ExperimentKind::Sweep, "--max-counts");
+  only(opt.configs.has_value(), ExperimentKind::Compare, "--configs");
+  only(opt.reference.has_value(), ExperimentKind::Compare, "--reference");
+  only(opt.clusterings.has_value(), ExperimentKind::Drift, "--clusterings");
+
+  ExperimentParams p;
+  p.kind = *kind;
+  p.scene = opt.input.string();
+  p.cluster = opt.cluster;
+  p.ao_samples = opt.ao_samples;
+  p.reference_rays = opt.reference_rays;
+  if (*kind == ExperimentKind::Sweep) {
+    if (!opt.clusters.empty())
+      throw UsageError("--clusters", "sweep makes its own clustering per --max-counts value (compare, drift and "
+                                     "accuracy take one)");
+    for (const char* f : {"max_count", "max_size"})
+      if (std::find(opt.given.begin(), opt.given.end(), f) != opt.given.end())
+        throw UsageError(flag_of(f), "sweep sets MaxCount = MaxSize to each --max-counts value");
+    if (opt.max_counts) {
+      p.max_counts.clear();
+      for (const std::string& v : split_list(*opt.max_counts)) {
+        const bool digits = v.size() <= 7 && std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
+        if (!digits) throw UsageError("--max-counts", fmt::format("'{}' is not a whole number 0..1000000", v));
+        p.max_counts.push_back(static_cast<std::uint32_t>(std::stoul(v)));
+      }
+      if (p.max_counts.empty()) throw UsageError("--max-counts", "no values");
+    }
+  }
+  const bool given = !opt.clusters.empty();
+  if (opt.configs) {
+    p.configs = split_list(*opt.configs);
+    if (p.configs.empty()) throw UsageError("--configs", "no configurations");
+    for (const auto& c : p.configs)
+      if (!is_clustering(c) && !is_structure(c) && c != "given")
+        throw UsageError("--configs", fmt::format("'{}' is not a configuration ({})", c, names_list(true)));
+  }
+  if (opt.clusterings) {
+    p.clusterings = split_list(*opt.clusterings);
+    if (p.clusterings.empty()) throw UsageError("--clusterings", "no clusterings");
+    for (const auto& c : p.clusterings)
+      if (!is_clustering(c) && c != "given")
+        throw UsageError("--clusterings", fmt::format("'{}' is not a clustering ({})", c, names_list(false)));
+  }
+  const std::vector<std::string> items = experiment_items(p);
+  {
+    std::set<std::string> seen;
+    for (const auto& i : items)
+      if (!seen.insert(i).second)
+        throw UsageError(*kind == ExperimentKind::Sweep ? "--max-counts" : *kind == ExperimentKind::Compare ? "--configs"
+                                                                                                           : "--clusterings",
+                         fmt::format("'{}' is listed twice", i));
+    if (!given && seen.count("given"))
+      throw UsageError("--clusters", "configuration 'given' needs --clusters DIR (a `ptc cluster` output)");
+    if (given && *kind != ExperimentKind::Accuracy && !seen.count("given"))
+      throw UsageError("--clusters", "--clusters is used by the configuration 'given': list it");
+  }
+  if (*kind == ExperimentKind::Compare) {
+    p.reference = opt.reference ? *opt.reference : given ? "given" : "acc_contraction";
+    if (std::find(items.begin(), items.end(), p.reference) == items.end())
+      throw UsageError("--reference", fmt::format("'{}' is not among the configurations compared", p.reference));
+  }
+  // Every clustering flag the user set must be used by one of the clusterings.
+  const std::vector<ClusterConfig> made = item_clusterings(p, items);
+  for (const std::string& g : opt.given) {
+    bool used = false;
+    for (const ClusterConfig& c : made) {
+      const auto u = used_parameters(c);
+      used = used || std::find(u.begin(), u.end(), g) != u.end();
+    }
+    if (!used) throw UsageError(flag_of(g), fmt::format("not used by any clustering of this {}", k));
+  }
+  for (const ClusterConfig& c : made)
+    if (const auto problem = check(c)) throw UsageError(flag_of(problem->parameter), problem->reason);
+
+  study::StudySetup setup;
+  if (opt.shard) setup.shard = parse_shard(*opt.shard);
+  setup.width = opt.width;
+  setup.height = opt.height;
+  setup.threads = resolve_threads(opt.threads);
+  setup.cluster_leaf = opt.cluster_leaf;
+  setup.cluster_group_size = opt.cluster_group_size;
+  setup.vertex_order = opt.vertex_order;
+
+  refuse_overwriting_input(opt.out_dir, opt.input);
+  refuse_overwriting_input(opt.out_dir, opt.clusters);
+  RunManifest manifest("experiment", opt.argv, kManifestSchema);
+  MovingScene ms = open_moving_scene(opt.input, opt.scene_options, opt.deform, opt.frames, opt.extend_frames, manifest);
+  setup.frames = ms.range;
+  setup.camera = camera_for(opt.camera, ms.scene);
+  const Box3 bounds = ms.scene.rest().bounds();
+  const bvh::PinholeCamera cam = make_camera(setup.camera, bounds, setup.width, setup.height);
+  const LightChoice light = light_for(opt.light, ms.scene, cam, bounds);
+  setup.light = light.position;
+  OutputDir dir(opt.out_dir);  // a refused target fails before the (long) run
+  Clustering clusters;
+  if (given) clusters = read_clusters_recorded(opt.clusters, ms.scene.rest(), manifest);
+  p.given = given ? &clusters : nullptr;
+
+  Stopwatch sw;
+  ExperimentRun run;
+  {
+    ProgressBar bar{std::string(k)};
+    if (!opt.quiet) setup.progress = [&bar](double f) { bar.update(f); };
+    try {
+      run = run_experiment(ms.scene, p, setup);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(p.scene, "", "", e.what());
+    }
+  }
+  manifest.add_timing_ms("experiment", sw.ms());
+  for (const auto& [key, ms_] : run.timings_ms) manifest.add_timing_ms(key, ms_);
+  const nlohmann::json rows = item_rows_json(run.files);
+  std::vector<std::string> primaries;
+  for (const auto& f : run.files) primaries.push_back(f.file);
+  const Assembled a = assemble(p.kind, std::move(run.files), p.reference);
+
+  manifest.set_parameter("experiment", k);
+  manifest.set_parameter("scene", p.scene);
+  manifest.set_parameter("frames", {setup.frames.first, setup.frames.last});
+  manifest.set_parameter("motion", ms.motion);
+  manifest.set_parameter("width", setup.width);
+  manifest.set_parameter("height", setup.height);
+  manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)},
+                                    {"up", vec_json(cam.up)}, {"fov_y_deg", cam.fov_y_deg}});
+  manifest.set_parameter("light", {{"position", vec_json(setup.light)}, {"from", light.from}});
+  manifest.set_parameter("threads", setup.threads);
+  manifest.set_parameter("cluster", cluster_parameters(p.cluster));
+  manifest.set_parameter("clusters_given", given);
+  manifest.set_parameter("cluster_leaf", bvh::to_string(setup.cluster_leaf));
+  manifest.set_parameter("cluster_group_size", setup.cluster_group_size);
+  manifest.set_parameter("vertex_order", bvh::to_string(setup.vertex_order));
+  manifest.set_parameter("sah_cost_model", {{"traversal", 1.0}, {"intersection", 0.3}});
+  if (*kind == ExperimentKind::Sweep) manifest.set_parameter("max_counts", p.max_counts);
+  if (*kind == ExperimentKind::Compare) manifest.set_parameter("reference", p.reference);
+  if (*kind == ExperimentKind::Drift) manifest.set_parameter("ao_samples", p.ao_samples);
+  if (*kind == ExperimentKind::Accuracy) manifest.set_parameter("reference_rays", p.reference_rays);
+  manifest.set_parameter("items", items);
+  manifest.set_parameter("shard", {{"index", setup.shard.index + 1}, {"count", setup.shard.count}});
+  manifest.set_result("items_done", run.done);
+  manifest.set_result("primary_files", primaries);
+  manifest.set_result("item_rows", rows);
+  manifest.set_result("triangles", run.triangles);
+  manifest.set_result("vertices", run.vertices);
+  manifest.set_result("rays", run.rays);
+  write_assembled(dir, manifest, a);
+  (void)commit_with_manifest(dir, manifest);
+
+  if (opt.json) {
+    out << dump_json(summary_json(a, "ptc-experiment-summary/1"));
+    return;
+  }
+  out << fmt::format("{} {}: {} triangles, frames {}..{} ({}), {} rays per frame, {} thread(s){}\n", k, p.scene,
+                     run.triangles, setup.frames.first, setup.frames.last, ms.motion, run.rays, setup.threads,
+                     setup.shard.whole() ? std::string()
+                                         : fmt::format(", shard {} ({} of {} items)", setup.shard.str(), run.done.size(),
+                                                       items.size()));
+  out << a.text;
+  out << "wrote " << opt.out_dir.string() << "/ (" << a.files.size() << " CSV files, summary.txt, manifest.json)\n";
+}
+
+// ---------------------------------------------------------------- merge
+
+namespace {
+
+struct ShardIn {
+  std::filesystem::path dir;
+  nlohmann::json manifest;
+};
+
+nlohmann::json read_manifest(const std::filesystem::path& dir) {
+  const std::filesystem::path f = dir / "manifest.json";
+  std::ifstream in(f);
+  if (!in) throw InputError(f.string(), "", "", "cannot read it (is the directory an output of `ptc experiment`?)");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  try {
+    return nlohmann::json::parse(ss.str());
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(f.string(), "", "", std::string("not valid JSON: ") + e.what());
+  }
+}
+
+std::string read_text(const std::filesystem::path& f) {
+  std::ifstream in(f, std::ios::binary);
+  if (!in) throw InputError(f.string(), "", "", "cannot read it (the shard's manifest lists it)");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// What must agree between the shards of one study.
+nlohmann::json identity(const nlohmann::json& m) {
+  nlohmann::json id;
+  id["command"] = m.value("command", "");
+  id["schema"] = m.value("schema", "");
+  nlohmann::json p = m.value("parameters", nlohmann::json::object());
+  p.erase("shard");
+  id["parameters"] = p;
+  nlohmann::json inputs = nlohmann::json::array();
+  for (const auto& i : m.value("inputs", nlohmann::json::array()))
+    inputs.push_back({{"bytes", i.value("bytes", nlohmann::json())}, {"fnv1a64", i.value("fnv1a64", nlohmann::json())}});
+  id["inputs"] = inputs;
+  const nlohmann::json b = m.value("build", nlohmann::json::object());
+  id["ptc"] = b.value("ptc", "");
+  id["git_commit"] = b.value("git_commit", "");
+  return id;
+}
+
+// The first difference between two identities, as "parameters.threads: 1 vs 2".
+std::string first_difference(const nlohmann::json& a, const nlohmann::json& b, const std::string& path = "") {
+  if (a.is_object() && b.is_object()) {
+    std::set<std::string> keys;
+    for (auto it = a.begin(); it != a.end(); ++it) keys.insert(it.key());
+    for (auto it = b.begin(); it != b.end(); ++it) keys.insert(it.key());
+    for (const auto& k : keys) {
+      const std::string sub = path.empty() ? k : path + "." + k;
+      if (!a.contains(k) || !b.contains(k)) return sub + ": only in one of them";
+      if (a[k] != b[k]) return first_difference(a[k], b[k], sub);
+    }
+    return "";
+  }
+  return fmt::format("{}: {} vs {}", path, a.dump(), b.dump());
+}
+
+}  // namespace
+
+void cmd_merge(const MergeOptions& opt, std::ostream& out) {
+  if (opt.out_dir.empty()) throw UsageError("--out", "an output directory is required");
+  if (opt.shards.empty()) throw UsageError("DIR", "no shard directories given");
+  std::vector<ShardIn> shards;
+  for (const auto& d : opt.shards) {
+    refuse_overwriting_input(opt.out_dir, d);
+    ShardIn s{d, read_manifest(d)};
+    if (s.manifest.value("command", "") != "experiment")
+      throw InputError((d / "manifest.json").string(), "", "", "not the manifest of a `ptc experiment` run");
+    shards.push_back(std::move(s));
+  }
+  const nlohmann::json id0 = identity(shards[0].manifest);
+  const auto& params = shards[0].manifest["parameters"];
+  const std::uint32_t n = params["shard"]["count"].get<std::uint32_t>();
+  std::map<std::uint32_t, std::filesystem::path> seen;
+  for (const auto& s : shards) {
+    const nlohmann::json id = identity(s.manifest);
+    if (id != id0)
+      throw InputError(s.dir.string(), "", "",
+                       fmt::format("not a shard of the same study as {}: {}", shards[0].dir.string(),
+                                   first_difference(id0, id)));
+    const auto& sh = s.manifest["parameters"]["shard"];
+    const std::uint32_t k = sh["index"].get<std::uint32_t>(), nn = sh["count"].get<std::uint32_t>();
+    if (nn != n)
+      throw InputError(s.dir.string(), "", "", fmt::format("shard {}/{} of a split into {} (the first is split into {})", k, nn, nn, n));
+    if (!seen.emplace(k, s.dir).second)
+      throw InputError(s.dir.string(), "", "", fmt::format("shard {}/{} is given twice (also {})", k, n, seen[k].string()));
+  }
+  for (std::uint32_t k = 1; k <= n; ++k)
+    if (!seen.count(k)) throw UsageError("DIR", fmt::format("shard {}/{} is missing (got {} of {})", k, n, seen.size(), n));
+
+  const auto kind = parse_experiment_kind(params["experiment"].get<std::string>());
+  if (!kind) throw InputError((shards[0].dir / "manifest.json").string(), "", "", "unknown experiment");
+  const std::vector<std::string> primaries = shards[0].manifest["results"]["primary_files"].get<std::vector<std::string>>();
+  std::vector<FileRows> files;
+  for (const auto& name : primaries) {
+    FileRows f;
+    f.file = name;
+    const std::string schema = shards[0].manifest["output_schemas"].value(name, "");
+    const auto slash = schema.rfind('/');
+    f.schema = {schema.substr(0, slash), slash == std::string::npos ? 1 : std::stoi(schema.substr(slash + 1))};
+    std::vector<std::pair<std::size_t, std::vector<std::vector<std::string>>>> slices;
+    for (const auto& s : shards) {
+      const std::filesystem::path path = s.dir / name;
+      CsvText t;
+      try {
+        t = parse_csv(read_text(path));
+      } catch (const std::invalid_argument& e) {
+        throw InputError(path.string(), "", "", e.what());
+      }
+      if (f.rows.header.empty()) f.rows.header = t.header;
+      if (t.header != f.rows.header)
+        throw InputError(path.string(), "line 1", "header", "its columns differ from " + (shards[0].dir / name).string());
+      std::size_t at = 0;
+      for (const auto& ir : s.manifest["results"]["item_rows"][name]) {
+        const std::size_t item = ir[0].get<std::size_t>(), count = ir[1].get<std::size_t>();
+        if (at + count > t.rows.size())
+          throw InputError(path.string(), "", "", "fewer rows than its manifest lists (a truncated or edited file)");
+        slices.emplace_back(item, std::vector<std::vector<std::string>>(t.rows.begin() + long(at),
+                                                                        t.rows.begin() + long(at + count)));
+        at += count;
+      }
+      if (at != t.rows.size())
+        throw InputError(path.string(), "", "", "more rows than its manifest lists (an edited file)");
+    }
+    std::stable_sort(slices.begin(), slices.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto& [item, rows] : slices) {
+      f.item_rows.emplace_back(item, rows.size());
+      for (auto& r : rows) f.rows.rows.push_back(std::move(r));
+    }
+    files.push_back(std::move(f));
+  }
+  const nlohmann::json rows = item_rows_json(files);
+  const std::string reference = params.value("reference", "");
+  const Assembled a = assemble(*kind, std::move(files), reference);
+
+  OutputDir dir(opt.out_dir);
+  RunManifest manifest("merge", opt.argv, "ptc-merge/1");
+  for (const auto& s : shards) record_input(manifest, s.dir / "manifest.json");
+  for (auto it = params.begin(); it != params.end(); ++it)
+    if (it.key() != "shard") manifest.set_parameter(it.key(), it.value());
+  nlohmann::json from = nlohmann::json::array();
+  for (std::uint32_t k = 1; k <= n; ++k) from.push_back(seen[k].string());
+  manifest.set_parameter("shards", from);
+  manifest.set_parameter("shard", {{"index", 1}, {"count", 1}});
+  manifest.set_result("primary_files", primaries);
+  manifest.set_result("item_rows", rows);
+  for (const char* key : {"triangles", "vertices", "rays"})
+    manifest.set_result(key, shards[0].manifest["results"].value(key, nlohmann::json()));
+  manifest.set_result("source_builds", shards[0].manifest["build"]);
+  write_assembled(dir, manifest, a);
+  (void)commit_with_manifest(dir, manifest);
+  if (opt.json) {
+    out << dump_json(summary_json(a, "ptc-experiment-summary/1"));
+    return;
+  }
+  out << fmt::format("merged {} shards of {} {}\n", n, params["experiment"].get<std::string>(),
+                     params["scene"].get<std::string>());
+  out << a.text;
+  out << "wrote " << opt.out_dir.string() << "/ (" << a.files.size() << " CSV files, summary.txt, manifest.json)\n";
+}
+
+}  // namespace ptc

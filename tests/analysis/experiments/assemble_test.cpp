@@ -1,0 +1,119 @@
+// assemble(): the derived columns and tables of the experiments, from rows whose answer is known
+// by construction (medians of chosen values, an exactly linear cost, a missing reference).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "analysis/experiments/experiments.h"
+
+namespace ptc {
+namespace {
+
+FileRows file(std::string name, std::vector<std::string> header, std::vector<std::vector<std::string>> rows) {
+  FileRows f;
+  f.file = std::move(name);
+  f.schema = {"test", 1};
+  f.rows.header = std::move(header);
+  f.rows.rows = std::move(rows);
+  return f;
+}
+
+const FileRows& find(const Assembled& a, const std::string& name) {
+  for (const auto& f : a.files)
+    if (f.file == name) return f;
+  throw std::runtime_error("no " + name);
+}
+
+std::map<std::string, std::string> row_map(const FileRows& f, std::size_t r) {
+  std::map<std::string, std::string> m;
+  for (std::size_t i = 0; i < f.rows.header.size(); ++i) m[f.rows.header[i]] = f.rows.rows.at(r)[i];
+  return m;
+}
+
+TEST(Assemble, SweepMediansLeaveOutTheWarmupAndCompareWithMaxCountZero) {
+  std::vector<std::vector<std::string>> rows;
+  // MaxCount 0: build 100 (warm-up), then 10, 30, 20 -> median 20; MaxCount 50: 1000 (warm-up), 2, 4, 3 -> 3.
+  const std::pair<const char*, std::vector<const char*>> series[] = {{"0", {"100", "10", "30", "20"}},
+                                                                     {"50", {"1000", "2", "4", "3"}}};
+  for (const auto& [n, ms] : series)
+    for (int f = 0; f < 4; ++f)
+      rows.push_back({"s", n, n, n[0] == '0' ? "1000" : "40", std::to_string(f), f == 0 ? "1" : "0", "build", ms[f]});
+  const Assembled a = assemble(
+      ExperimentKind::Sweep,
+      {file("sweep.csv", {"scene", "max_count", "max_size", "primitives", "frame", "warmup", "stage", "ms"}, rows)}, "");
+  const FileRows& s = find(a, "sweep_summary.csv");
+  ASSERT_EQ(s.rows.rows.size(), 2u);
+  auto r0 = row_map(s, 0), r1 = row_map(s, 1);
+  EXPECT_EQ(r0["max_count"], "0");
+  EXPECT_EQ(r0["frames"], "3");
+  EXPECT_EQ(std::stod(r0["median_ms"]), 20.0);
+  EXPECT_EQ(std::stod(r0["speedup_vs_max_count_0"]), 1.0);
+  EXPECT_EQ(std::stod(r1["median_ms"]), 3.0);
+  EXPECT_DOUBLE_EQ(std::stod(r1["speedup_vs_max_count_0"]), 20.0 / 3.0);
+  EXPECT_NE(a.text.find("MaxCount"), std::string::npos);
+}
+
+TEST(Assemble, ComparePerfFactorIsFrameByFrameAndNanWithoutTheReference) {
+  const std::vector<std::string> h = {"scene", "frame", "warmup", "config", "update_ms", "build_ms", "trace_ms",
+                                      "total_ms", "perf_factor"};
+  std::vector<std::vector<std::string>> rows = {
+      {"s", "0", "1", "method", "1", "1", "2", "4", "nan"}, {"s", "0", "1", "other", "1", "1", "10", "12", "nan"},
+      {"s", "1", "0", "method", "1", "1", "3", "5", "nan"}, {"s", "1", "0", "other", "1", "1", "18", "20", "nan"}};
+  Assembled a = assemble(ExperimentKind::Compare, {file("compare.csv", h, rows)}, "method");
+  const FileRows& c = find(a, "compare.csv");
+  const std::size_t pf = c.rows.column("perf_factor");
+  EXPECT_EQ(c.rows.number(0, pf), 1.0);
+  EXPECT_EQ(c.rows.number(1, pf), 3.0);
+  EXPECT_EQ(c.rows.number(2, pf), 1.0);
+  EXPECT_EQ(c.rows.number(3, pf), 4.0);
+  const FileRows& s = find(a, "compare_summary.csv");
+  ASSERT_EQ(s.rows.rows.size(), 2u);
+  EXPECT_EQ(std::stod(row_map(s, 1)["perf_factor"]), 4.0);  // the warm-up frame left out
+  EXPECT_EQ(row_map(s, 1)["frames"], "1");
+
+  a = assemble(ExperimentKind::Compare, {file("compare.csv", h, rows)}, "absent");
+  for (std::size_t r = 0; r < 4; ++r) EXPECT_TRUE(std::isnan(find(a, "compare.csv").rows.number(r, pf)));
+  EXPECT_NE(a.text.find("is not among these rows"), std::string::npos) << a.text;
+}
+
+TEST(Assemble, DriftRegressionRecoversAnExactlyLinearCost) {
+  // cost = 0.5 SAH + 2 EPO + 1 exactly, over points where SAH and EPO are not collinear.
+  std::vector<std::vector<std::string>> rays, frames;
+  for (int i = 0; i < 12; ++i) {
+    const double sah = 20.0 + i, epo = 3.0 + (i * 7 % 5);
+    const double cost = 0.5 * sah + 2.0 * epo + 1.0;
+    rays.push_back({"c", std::to_string(i), "primary", "100", "0", "0", format_double(cost), format_double(sah),
+                    format_double(epo), "1"});
+    frames.push_back({"s", "c", std::to_string(i), "0", "10", format_double(sah), "20", "1.2", format_double(epo), "3",
+                      "1", "1.5", "1.1", "", "2"});
+  }
+  const std::vector<std::string> fh = {"scene", "clustering", "frame", "warmup", "clusters", "sah_cost",
+                                       "sah_cost_triangles", "sah_overhead", "epo", "nodes_per_ray", "triangles_per_ray",
+                                       "box_area_ratio_max", "box_area_ratio_p95", "worst_clusters", "metrics_ms"};
+  const Assembled a = assemble(
+      ExperimentKind::Drift,
+      {file("rays.csv",
+            {"clustering", "frame", "ray_type", "rays", "nodes_per_ray", "triangles_per_ray", "cost_per_ray", "sah_cost",
+             "epo", "trace_ms"},
+            rays),
+       file("frames.csv", fh, frames),
+       file("correlation.csv", {"scene", "clustering", "x", "y", "clusters", "frames", "spearman", "pearson"},
+            {{"s", "c", "connectivity", "box_area_drift", "10", "11", "-0.5", "-0.4"}})},
+      "");
+  const FileRows& r = find(a, "regression.csv");
+  ASSERT_EQ(r.rows.rows.size(), 4u);  // sah, epo, sah+epo, sah+0.71epo for the one ray type
+  auto both = row_map(r, 2);
+  EXPECT_EQ(both["model"], "sah+epo");
+  EXPECT_EQ(both["points"], "12");
+  EXPECT_NEAR(std::stod(both["coef_sah"]), 0.5, 1e-9);
+  EXPECT_NEAR(std::stod(both["coef_epo"]), 2.0, 1e-9);
+  EXPECT_NEAR(std::stod(both["intercept"]), 1.0, 1e-8);
+  EXPECT_NEAR(std::stod(both["r2"]), 1.0, 1e-12);
+  EXPECT_NEAR(std::stod(both["epo_weight"]), 4.0, 1e-8);
+  EXPECT_LT(std::stod(row_map(r, 0)["r2"]), 0.99);  // SAH alone does not explain it
+  EXPECT_NE(a.text.find("-0.500"), std::string::npos) << a.text;  // the Spearman in the summary
+}
+
+}  // namespace
+}  // namespace ptc

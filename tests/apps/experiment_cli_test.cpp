@@ -1,0 +1,235 @@
+// `ptc experiment` and `ptc merge` end to end: shards merged give the single run's files row by
+// row (timings aside), merge refuses shards that do not belong together, the derived columns
+// recomputed independently from the rows, and the flags' usage errors.
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "apps/cli_harness.h"
+#include "common/csv_rows.h"
+
+namespace ptc::test {
+namespace {
+
+class Experiment : public CliTest {};
+
+// A timing (or derived from one) column: not reproducible between runs.
+bool timing_column(const std::string& c) {
+  return c == "ms" || (c.size() > 3 && c.substr(c.size() - 3) == "_ms") || c.rfind("speedup", 0) == 0 ||
+         c.rfind("perf_factor", 0) == 0;
+}
+
+// Every row and every non-timing cell of two CSV files equal, item by item.
+void expect_same_rows(const fs::path& a, const fs::path& b) {
+  const auto ta = csv_table(slurp(a)), tb = csv_table(slurp(b));
+  ASSERT_FALSE(ta.empty()) << a;
+  ASSERT_EQ(ta.size(), tb.size()) << a << " vs " << b;
+  ASSERT_EQ(ta[0], tb[0]) << "headers of " << a;
+  for (std::size_t r = 1; r < ta.size(); ++r) {
+    ASSERT_EQ(ta[r].size(), tb[r].size());
+    for (std::size_t c = 0; c < ta[0].size(); ++c)
+      if (!timing_column(ta[0][c])) EXPECT_EQ(ta[r][c], tb[r][c]) << a.filename() << " row " << r << " column " << ta[0][c];
+  }
+}
+
+TEST_F(Experiment, SweepAsThreeShardsMergesToTheSingleRun) {
+  const std::vector<std::string> base = {"experiment", "sweep", "armadillo-twist", "--frames", "0:2", "--width", "48",
+                                         "--height", "48", "--quiet", "--threads", "2"};
+  auto with = [&](std::vector<std::string> extra) {
+    auto a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  const RunResult one = ptc(with({"--out", (dir_ / "one").string()}));
+  ASSERT_EQ(one.code, 0) << one.err;
+  std::vector<std::string> merge = {"merge"};
+  for (int k = 3; k >= 1; --k) {  // shards given out of order
+    const std::string d = (dir_ / ("s" + std::to_string(k))).string();
+    const RunResult s = ptc(with({"--shard", std::to_string(k) + "/3", "--out", d}));
+    ASSERT_EQ(s.code, 0) << s.err;
+    merge.push_back(d);
+  }
+  merge.insert(merge.end(), {"--out", (dir_ / "merged").string()});
+  const RunResult m = ptc(merge);
+  ASSERT_EQ(m.code, 0) << m.err;
+  for (const char* f : {"configs.csv", "sweep.csv", "sweep_summary.csv"}) expect_same_rows(dir_ / "one" / f, dir_ / "merged" / f);
+  // The shards split the 4 items 2 + 1 + 1 (items 0 and 3 in shard 1).
+  const auto s1 = csv_rows(slurp(dir_ / "s1" / "configs.csv"));
+  ASSERT_EQ(s1.size(), 2u);
+  EXPECT_EQ(s1[0].at("config"), "max_count=0");
+  EXPECT_EQ(s1[1].at("config"), "max_count=100");
+  EXPECT_NE(m.out.find("MaxCount"), std::string::npos);
+
+  // The rows themselves: 4 stages per (MaxCount, frame), total = update + build + trace, the
+  // primitives are the triangles at MaxCount 0 and the clusters of configs.csv otherwise.
+  const auto rows = csv_rows(slurp(dir_ / "one" / "sweep.csv"));
+  const auto configs = csv_rows(slurp(dir_ / "one" / "configs.csv"));
+  ASSERT_EQ(rows.size(), 4u * 3u * 4u);
+  std::map<std::string, std::string> clusters;
+  for (const auto& c : configs) clusters[c.at("max_count")] = c.at("clusters");
+  for (std::size_t i = 0; i < rows.size(); i += 4) {
+    EXPECT_EQ(rows[i].at("stage"), "update");
+    EXPECT_EQ(rows[i + 1].at("stage"), "build");
+    EXPECT_EQ(rows[i + 2].at("stage"), "trace");
+    EXPECT_EQ(rows[i + 3].at("stage"), "total");
+    const double sum = std::stod(rows[i].at("ms")) + std::stod(rows[i + 1].at("ms")) + std::stod(rows[i + 2].at("ms"));
+    EXPECT_NEAR(std::stod(rows[i + 3].at("ms")), sum, 1e-9 * sum);
+    EXPECT_EQ(rows[i].at("warmup"), rows[i].at("frame") == "0" ? "1" : "0");
+    const std::string& n = rows[i].at("max_count");
+    EXPECT_EQ(rows[i].at("primitives"), n == "0" ? "52000" : clusters.at(n)) << n;
+  }
+}
+
+TEST_F(Experiment, DriftShardsMergeWithTheDerivedTablesOfTheSingleRun) {
+  const std::vector<std::string> base = {"experiment", "drift", "cloth-sphere-32", "--frames", "0:3", "--width", "32",
+                                         "--height", "32", "--clusterings", "acc_growth,naive,meshopt", "--quiet"};
+  auto run = [&](std::vector<std::string> extra) {
+    auto a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return ptc(a);
+  };
+  ASSERT_EQ(run({"--out", (dir_ / "one").string()}).code, 0);
+  ASSERT_EQ(run({"--shard", "1/2", "--out", (dir_ / "a").string()}).code, 0);
+  ASSERT_EQ(run({"--shard", "2/2", "--out", (dir_ / "b").string()}).code, 0);
+  const RunResult m = ptc({"merge", (dir_ / "a").string(), (dir_ / "b").string(), "--out", (dir_ / "m").string()});
+  ASSERT_EQ(m.code, 0) << m.err;
+  // No timing enters these (counters, SAH, EPO, drift): the merged files equal the single run's.
+  for (const char* f : {"clusters_frames.csv", "frames.csv", "rays.csv", "correlation.csv", "regression.csv"})
+    expect_same_rows(dir_ / "one" / f, dir_ / "m" / f);
+  EXPECT_EQ(slurp(dir_ / "one" / "regression.csv"), slurp(dir_ / "m" / "regression.csv"));
+
+  // The correlation recomputed from clusters_frames.csv: per clustering, Spearman over clusters of
+  // connectivity against the mean |ln box_area_ratio| of the frames after the first.
+  const auto cf = csv_rows(slurp(dir_ / "one" / "clusters_frames.csv"));
+  std::map<std::string, std::map<std::string, std::pair<double, double>>> acc;  // clustering -> cluster -> (conn, sum)
+  for (const auto& r : cf) {
+    auto& e = acc[r.at("clustering")][r.at("cluster_id")];
+    e.first = std::stod(r.at("connectivity"));
+    if (r.at("frame") != "0") e.second += std::abs(std::log(std::stod(r.at("box_area_ratio"))));
+  }
+  for (const auto& c : csv_rows(slurp(dir_ / "one" / "correlation.csv"))) {
+    if (c.at("y") != "box_area_drift") continue;
+    std::vector<std::pair<double, double>> v;
+    for (const auto& [id, e] : acc.at(c.at("clustering")))
+      if (std::isfinite(e.second)) v.emplace_back(e.first, e.second / 3.0);
+    // Spearman = Pearson of the average ranks.
+    auto ranks = [](std::vector<double> x) {
+      std::vector<std::size_t> idx(x.size());
+      for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+      std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return x[a] < x[b]; });
+      std::vector<double> r(x.size());
+      for (std::size_t i = 0; i < idx.size();) {
+        std::size_t j = i;
+        while (j + 1 < idx.size() && x[idx[j + 1]] == x[idx[i]]) ++j;
+        for (std::size_t k = i; k <= j; ++k) r[idx[k]] = 0.5 * double(i + j) + 1.0;
+        i = j + 1;
+      }
+      return r;
+    };
+    std::vector<double> xs, ys;
+    for (const auto& [x, y] : v) xs.push_back(x), ys.push_back(y);
+    const auto rx = ranks(xs), ry = ranks(ys);
+    double mx = 0, my = 0;
+    for (std::size_t i = 0; i < rx.size(); ++i) mx += rx[i], my += ry[i];
+    mx /= double(rx.size()), my /= double(ry.size());
+    double sxy = 0, sxx = 0, syy = 0;
+    for (std::size_t i = 0; i < rx.size(); ++i)
+      sxy += (rx[i] - mx) * (ry[i] - my), sxx += (rx[i] - mx) * (rx[i] - mx), syy += (ry[i] - my) * (ry[i] - my);
+    EXPECT_EQ(std::stoul(c.at("clusters")), v.size());
+    EXPECT_NEAR(std::stod(c.at("spearman")), sxy / std::sqrt(sxx * syy), 1e-9) << c.at("clustering");
+  }
+}
+
+TEST_F(Experiment, CompareDividesByTheReferenceFrameByFrame) {
+  const RunResult r = ptc({"experiment", "compare", "armadillo-twist", "--frames", "0:2", "--width", "32", "--height",
+                           "32", "--configs", "acc_growth,standard,embree_refit", "--reference", "standard", "--quiet",
+                           "--out", (dir_ / "c").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = csv_rows(slurp(dir_ / "c" / "compare.csv"));
+  ASSERT_EQ(rows.size(), 9u);
+  std::map<std::string, double> ref;
+  for (const auto& x : rows)
+    if (x.at("config") == "standard") ref[x.at("frame")] = std::stod(x.at("total_ms"));
+  std::set<std::string> configs;
+  for (const auto& x : rows) {
+    configs.insert(x.at("config"));
+    const double total = std::stod(x.at("total_ms"));
+    EXPECT_NEAR(total, std::stod(x.at("update_ms")) + std::stod(x.at("build_ms")) + std::stod(x.at("trace_ms")),
+                1e-9 * total);
+    EXPECT_NEAR(std::stod(x.at("perf_factor")), total / ref.at(x.at("frame")), 1e-12);
+    EXPECT_EQ(x.at("rays"), "1024");
+  }
+  EXPECT_EQ(configs, (std::set<std::string>{"acc_growth", "standard", "embree_refit"}));
+}
+
+TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
+  const std::vector<std::string> base = {"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,10", "--width",
+                                         "16", "--height", "16", "--quiet"};
+  auto run = [&](std::vector<std::string> extra, const std::string& out) {
+    auto a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    a.insert(a.end(), {"--out", (dir_ / out).string()});
+    return ptc(a);
+  };
+  ASSERT_EQ(run({"--frames", "0:1", "--shard", "1/2"}, "a").code, 0);
+  ASSERT_EQ(run({"--frames", "0:1", "--shard", "2/2"}, "b").code, 0);
+  ASSERT_EQ(run({"--frames", "0:2", "--shard", "2/2"}, "other").code, 0);
+  ASSERT_EQ(run({"--frames", "0:1", "--shard", "1/3"}, "third").code, 0);
+  const std::string a = (dir_ / "a").string(), b = (dir_ / "b").string(), out = (dir_ / "m").string();
+
+  RunResult r = ptc({"merge", a, "--out", out});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("shard 2/2 is missing"), std::string::npos) << r.err;
+  r = ptc({"merge", a, a, "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("given twice"), std::string::npos) << r.err;
+  r = ptc({"merge", a, (dir_ / "other").string(), "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("parameters.frames"), std::string::npos) << r.err;
+  r = ptc({"merge", a, (dir_ / "third").string(), "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("split into 3"), std::string::npos) << r.err;
+  r = ptc({"merge", (dir_ / "nothing").string(), "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("manifest.json"), std::string::npos) << r.err;
+  // An edited shard: a row removed.
+  std::string text = slurp(dir_ / "b" / "sweep.csv");
+  text.erase(text.rfind('\n', text.size() - 2) + 1);
+  spit(dir_ / "b" / "sweep.csv", text);
+  r = ptc({"merge", a, b, "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("fewer rows than its manifest"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  for (const auto& e : {r.err}) EXPECT_EQ(lines(e), 1u) << e;
+}
+
+TEST_F(Experiment, UsageErrorsNameTheFlag) {
+  const std::string out = (dir_ / "x").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"experiment", "compare", "cloth-sphere-32", "--max-counts", "0,10"}, "--max-counts"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--clusters", "somewhere"}, "--clusters"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--max-count", "20"}, "--max-count"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,x"}, "--max-counts"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--max-counts", "10,10"}, "listed twice"},
+      {{"experiment", "compare", "cloth-sphere-32", "--configs", "acc_growth,bogus"}, "'bogus' is not a configuration"},
+      {{"experiment", "compare", "cloth-sphere-32", "--configs", "given"}, "--clusters"},
+      {{"experiment", "compare", "cloth-sphere-32", "--configs", "acc_growth", "--reference", "standard"}, "--reference"},
+      {{"experiment", "drift", "cloth-sphere-32", "--clusterings", "standard"}, "--clusterings"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--gwh-a1", "0.5"}, "--gwh-a1"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--shard", "0/3"}, "--shard"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--shard", "4/3"}, "--shard"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--frames", "5:2"}, "--frames"},
+      {{"experiment", "bogus", "cloth-sphere-32"}, "KIND"},
+  };
+  for (auto [args, what] : cases) {
+    args.insert(args.end(), {"--quiet", "--out", out});
+    const RunResult r = ptc(args);
+    EXPECT_EQ(r.code, 2) << args[1] << " " << args[3] << ": " << r.err;
+    EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+}  // namespace
+}  // namespace ptc::test

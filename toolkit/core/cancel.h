@@ -1,0 +1,33 @@
+// Stopping a long run at the user's request (Ctrl-C, SIGTERM): one process-wide flag. A signal
+// handler only sets it (request_cancel: a lock-free atomic store, async-signal-safe); the long
+// loops poll it at points where stopping is clean (throw_if_cancelled: before each frame and
+// each configuration's update in analysis/loop/frame_loop.cpp, at each progress-bar step in
+// commands/). The exception then unwinds like any failure, so an OutputDir that was not
+// committed removes its temporary directory and a previous output stays as it was; apps/ptc
+// maps Interrupted to exit code 130 (128 + SIGINT, what a shell reports for a Ctrl-C).
+//
+// Poll only on the thread that runs the command: never inside a TBB task (a worker's exception
+// would cancel the task group at an arbitrary point) nor in a destructor.
+#pragma once
+
+#include <stdexcept>
+
+namespace ptc {
+
+/// The run was stopped by request_cancel(); what() is "interrupted".
+class Interrupted : public std::runtime_error {
+ public:
+  Interrupted() : std::runtime_error("interrupted") {}
+};
+
+/// Sets the flag. Async-signal-safe: callable from a signal handler.
+void request_cancel() noexcept;
+/// Whether request_cancel() was called since the start or the last reset_cancel().
+[[nodiscard]] bool cancel_requested() noexcept;
+/// Clears the flag (tests; a process that runs several commands in turn).
+void reset_cancel() noexcept;
+/// Throws Interrupted when cancel_requested(). One relaxed atomic load otherwise: cheap enough to
+/// call once per frame and configuration.
+void throw_if_cancelled();
+
+}  // namespace ptc
