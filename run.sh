@@ -46,7 +46,8 @@ cmake --build "$build" -j "$jobs"
 key_numbers() {
   local d=$1
   echo
-  echo "key numbers ($d; every figure is a median over the frames after the first, from the CSVs there):"
+  echo "key numbers ($d, from the CSVs there; sweep and compare: medians over the frames after the first; drift:"
+  echo "correlations over the clusters and the last frame's values):"
   awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
     $c["stage"] == "build" { b[$c["max_count"]] = $c["speedup_vs_max_count_0"] }
     $c["stage"] == "trace" { t[$c["max_count"]] = $c["speedup_vs_max_count_0"] }
@@ -72,7 +73,7 @@ case "$mode" in
     ctest --test-dir "$build" --output-on-failure -j "$jobs" ;;
   run)
     # The main job (docs/experiments.md): the paper's experiment on the armadillo of Debian's
-    # libcgal-demo, Loop-subdivided once (208k triangles) and twisted over 31 frames: the
+    # libcgal-demo, Loop-subdivided once (208k triangles) and twisted more every frame over 61 frames: the
     # clusterings, Figure 6 (sweep), Figure 7 (compare) and the drift of cluster quality, every
     # table under out/ with its manifest; then the key numbers. About five minutes on two cores.
     ptc="$build/bin/ptc"
@@ -85,7 +86,7 @@ case "$mode" in
     }
     run_experiment sweep --width 512 --height 512
     run_experiment compare --width 512 --height 512
-    run_experiment drift --width 256 --height 256
+    run_experiment drift --width 512 --height 512
     # Nothing of an earlier out/ is lost: it is replaced only once every experiment has finished.
     if [ -e out ]; then rm -rf out.old && mv out out.old; fi
     mv out.tmp out && rm -rf out.old

@@ -1,10 +1,12 @@
 // The cluster-quality metrics of one frame at the issue-12 target size (armadillo subdivided
 // twice, 832k triangles, ~27k growth/Acc clusters, MaxCount = MaxSize = 50), each timed on ONE
 // thread: per-cluster metrics with their spheres, SAH shares, the end-point overlap of the
-// triangle and the cluster BVH, meshoptimizer's statistics and SAH overhead. Target (issue 12,
-// "Speed"): all of it under 10 s. Prints ms per metric and the total.
+// triangle and the cluster BVH, meshoptimizer's statistics and SAH overhead, and the per-ray
+// counters (nodes visited, triangles tested) of primary, shadow and AO rays (512^2 camera rays,
+// one AO ray per hit) on both BVHs. Target (issue 12, "Speed"): all of it under 10 s. Prints ms
+// per metric and the total.
 //
-//   build/bin/metrics_bench [MESH] [--levels 2] [--max-count 50]
+//   build/bin/metrics_bench [MESH] [--levels 2] [--max-count 50] [--width 512]
 #include <oneapi/tbb/global_control.h>
 
 #include <cstdio>
@@ -17,6 +19,9 @@
 #include "analysis/metrics/sah_overhead.h"
 #include "analysis/metrics/sah_share.h"
 #include "bvh/trace_scene.h"
+#include "render/camera.h"
+#include "render/rays.h"
+#include "render/view.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/core/stopwatch.h"
 #include "toolkit/io/mesh_io.h"
@@ -28,9 +33,11 @@ int main(int argc, char** argv) {
   std::string path = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
   int levels = 2;
   std::uint32_t max_count = 50;
+  int width = 512;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--levels" && i + 1 < argc) levels = std::atoi(argv[++i]);
+    else if (a == "--width" && i + 1 < argc) width = std::atoi(argv[++i]);
     else if (a == "--max-count" && i + 1 < argc) max_count = static_cast<std::uint32_t>(std::atoi(argv[++i]));
     else if (a[0] != '-') path = a;
     else {
@@ -83,6 +90,34 @@ int main(int argc, char** argv) {
         "avg boundary " + std::to_string(mr.avg_boundary) + ", avg connected " + std::to_string(mr.avg_connected));
     const SahOverhead so = sah_overhead(mesh, c);
     row("meshoptimizer SAH overhead", sw.lap_ms(), "overhead " + std::to_string(so.overhead));
+    // The counters: every pass traced with them on (as the drift experiment's untimed trace).
+    const bvh::PinholeCamera cam = make_camera({}, mesh.bounds(), width, width);
+    const bvh::RayBatch rays = camera_rays(cam, width, width);
+    const Vec3 light = default_light(cam, mesh.bounds());
+    bvh::TraceOptions with;
+    with.threads = 1;
+    with.counters = true;
+    sw.restart();
+    for (const bvh::TraceData* d : {&ts.data(), &cs.data()}) {
+      bvh::HitBatch hits;
+      const bvh::TraceTotals p = bvh::trace(*d, rays, hits, with);
+      const SurfaceHits sh = surface_hits(mesh, rays, hits);
+      const RayFrame frame{mesh.bounds(), d->origin};
+      const TraceTarget counting{[d](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
+                                   bvh::TraceOptions c2 = o;
+                                   c2.counters = true;
+                                   return bvh::trace(*d, r, h, c2);
+                                 },
+                                 d->origin};
+      const PassStats shadow = trace_shadows(counting, sh, light, frame, 1).stats;
+      AoConfig ao;
+      ao.samples = 1;
+      const PassStats occ = trace_ao(counting, sh, ao, frame, 1).stats;
+      row(d == &ts.data() ? "counters, triangle BVH" : "counters, cluster BVH", sw.lap_ms(),
+          "nodes/ray primary " + std::to_string(p.rays ? double(p.nodes_visited) / double(p.rays) : 0.0) + ", shadow " +
+              std::to_string(shadow.rays ? double(shadow.nodes_visited) / double(shadow.rays) : 0.0) + ", ao " +
+              std::to_string(occ.rays ? double(occ.nodes_visited) / double(occ.rays) : 0.0));
+    }
     std::printf("%-34s %10.1f ms   (issue 12 target: < 10000 ms)\n", "total", total);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "metrics_bench: %s\n", e.what());

@@ -43,6 +43,13 @@ study::Shard parse_shard(const std::string& s) {
   return {static_cast<std::uint32_t>(kk - 1), static_cast<std::uint32_t>(nn)};
 }
 
+// A comma-separated flag value: every item non-empty.
+std::vector<std::string> flag_list(const std::string& s, const char* flag) {
+  if (s.empty() || s.front() == ',' || s.back() == ',' || s.find(",,") != std::string::npos)
+    throw UsageError(flag, fmt::format("'{}' has an empty item (a comma-separated list)", s));
+  return split_list(s);
+}
+
 bool is_structure(std::string_view s) {
   for (const char* n : kCompareStructures)
     if (s == n) return true;
@@ -144,13 +151,23 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   only(opt.configs.has_value(), ExperimentKind::Compare, "--configs");
   only(opt.reference.has_value(), ExperimentKind::Compare, "--reference");
   only(opt.clusterings.has_value(), ExperimentKind::Drift, "--clusterings");
+  only(opt.ao_samples.has_value(), ExperimentKind::Drift, "--ao-samples");
+  only(opt.reference_rays.has_value(), ExperimentKind::Accuracy, "--reference-rays");
+  if (opt.method_given && *kind != ExperimentKind::Sweep)
+    throw UsageError(std::find(opt.given.begin(), opt.given.end(), "objective") != opt.given.end() ? "--objective"
+                                                                                                  : "--method",
+                     *kind == ExperimentKind::Compare ? "compare names its clusterings in --configs (acc_growth, "
+                                                        "acc_contraction, naive, gwh01, meshopt, sah_split, given)"
+                     : *kind == ExperimentKind::Drift ? "drift names its clusterings in --clusterings (acc_growth, "
+                                                        "acc_contraction, naive, gwh01, meshopt, sah_split, given)"
+                                                      : "accuracy measures contraction with Acc (or --clusters DIR)");
 
   ExperimentParams p;
   p.kind = *kind;
   p.scene = opt.input.string();
   p.cluster = opt.cluster;
-  p.ao_samples = opt.ao_samples;
-  p.reference_rays = opt.reference_rays;
+  p.ao_samples = opt.ao_samples.value_or(1);
+  p.reference_rays = opt.reference_rays.value_or(512);
   if (*kind == ExperimentKind::Sweep) {
     if (!opt.clusters.empty())
       throw UsageError("--clusters", "sweep makes its own clustering per --max-counts value (compare, drift and "
@@ -160,25 +177,24 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
         throw UsageError(flag_of(f), "sweep sets MaxCount = MaxSize to each --max-counts value");
     if (opt.max_counts) {
       p.max_counts.clear();
-      for (const std::string& v : split_list(*opt.max_counts)) {
+      for (const std::string& v : flag_list(*opt.max_counts, "--max-counts")) {
         const bool digits = v.size() <= 7 && std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
-        if (!digits) throw UsageError("--max-counts", fmt::format("'{}' is not a whole number 0..1000000", v));
+        if (!digits || std::stoul(v) > (1u << 20))
+          throw UsageError("--max-counts", fmt::format("'{}' is not a whole number 0..{}", v, 1u << 20));
         p.max_counts.push_back(static_cast<std::uint32_t>(std::stoul(v)));
       }
-      if (p.max_counts.empty()) throw UsageError("--max-counts", "no values");
     }
   }
   const bool given = !opt.clusters.empty();
+  p.clusters_given = given;
   if (opt.configs) {
-    p.configs = split_list(*opt.configs);
-    if (p.configs.empty()) throw UsageError("--configs", "no configurations");
+    p.configs = flag_list(*opt.configs, "--configs");
     for (const auto& c : p.configs)
       if (!is_clustering(c) && !is_structure(c) && c != "given")
         throw UsageError("--configs", fmt::format("'{}' is not a configuration ({})", c, names_list(true)));
   }
   if (opt.clusterings) {
-    p.clusterings = split_list(*opt.clusterings);
-    if (p.clusterings.empty()) throw UsageError("--clusterings", "no clusterings");
+    p.clusterings = flag_list(*opt.clusterings, "--clusterings");
     for (const auto& c : p.clusterings)
       if (!is_clustering(c) && c != "given")
         throw UsageError("--clusterings", fmt::format("'{}' is not a clustering ({})", c, names_list(false)));
@@ -197,7 +213,12 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
       throw UsageError("--clusters", "--clusters is used by the configuration 'given': list it");
   }
   if (*kind == ExperimentKind::Compare) {
-    p.reference = opt.reference ? *opt.reference : given ? "given" : "acc_contraction";
+    // Default: the method (the given clustering, else contraction with Acc), else the first listed.
+    const auto listed = [&](const std::string& c) { return std::find(items.begin(), items.end(), c) != items.end(); };
+    p.reference = opt.reference                        ? *opt.reference
+                  : listed("given")                    ? "given"
+                  : listed("acc_contraction")          ? "acc_contraction"
+                                                       : items.front();
     if (std::find(items.begin(), items.end(), p.reference) == items.end())
       throw UsageError("--reference", fmt::format("'{}' is not among the configurations compared", p.reference));
   }
@@ -212,7 +233,12 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
     if (!used) throw UsageError(flag_of(g), fmt::format("not used by any clustering of this {}", k));
   }
   for (const ClusterConfig& c : made)
-    if (const auto problem = check(c)) throw UsageError(flag_of(problem->parameter), problem->reason);
+    if (const auto problem = check(c)) {
+      // sweep's MaxCount and MaxSize come from --max-counts
+      const bool swept = *kind == ExperimentKind::Sweep && (problem->parameter == "max_count" || problem->parameter == "max_size");
+      throw UsageError(swept ? "--max-counts" : flag_of(problem->parameter),
+                       swept ? fmt::format("MaxCount {}: {}", c.max_count, problem->reason) : problem->reason);
+    }
 
   study::StudySetup setup;
   if (opt.shard) setup.shard = parse_shard(*opt.shard);
@@ -238,6 +264,8 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   if (given) clusters = read_clusters_recorded(opt.clusters, ms.scene.rest(), manifest);
   p.given = given ? &clusters : nullptr;
 
+  // The rest mesh as loaded (before any renumbering): what merge compares, whatever the files.
+  const std::string rest_hash = mesh_fnv1a64(ms.scene.rest());
   Stopwatch sw;
   ExperimentRun run;
   {
@@ -266,12 +294,15 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
                                     {"up", vec_json(cam.up)}, {"fov_y_deg", cam.fov_y_deg}});
   manifest.set_parameter("light", {{"position", vec_json(setup.light)}, {"from", light.from}});
   manifest.set_parameter("threads", setup.threads);
-  manifest.set_parameter("cluster", cluster_parameters(p.cluster));
+  nlohmann::json cp = cluster_parameters(p.cluster);
+  if (*kind != ExperimentKind::Sweep) cp.erase("method"), cp.erase("objective");  // named by the items instead
+  manifest.set_parameter("cluster", cp);
   manifest.set_parameter("clusters_given", given);
   manifest.set_parameter("cluster_leaf", bvh::to_string(setup.cluster_leaf));
   manifest.set_parameter("cluster_group_size", setup.cluster_group_size);
   manifest.set_parameter("vertex_order", bvh::to_string(setup.vertex_order));
-  manifest.set_parameter("sah_cost_model", {{"traversal", 1.0}, {"intersection", 0.3}});
+  const bvh::SahCostModel model = bvh::cluster_scene_defaults().build.cost;
+  manifest.set_parameter("sah_cost_model", {{"traversal", model.traversal}, {"intersection", model.intersection}});
   if (*kind == ExperimentKind::Sweep) manifest.set_parameter("max_counts", p.max_counts);
   if (*kind == ExperimentKind::Compare) manifest.set_parameter("reference", p.reference);
   if (*kind == ExperimentKind::Drift) manifest.set_parameter("ao_samples", p.ao_samples);
@@ -284,6 +315,7 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   manifest.set_result("triangles", run.triangles);
   manifest.set_result("vertices", run.vertices);
   manifest.set_result("rays", run.rays);
+  manifest.set_result("rest_mesh_fnv1a64", rest_hash);
   write_assembled(dir, manifest, a);
   (void)commit_with_manifest(dir, manifest);
 
@@ -330,22 +362,64 @@ std::string read_text(const std::filesystem::path& f) {
   return ss.str();
 }
 
-// What must agree between the shards of one study.
+// What must agree between the shards of one study: the command and its schema, every parameter
+// but the shard, the inputs' contents (sizes and hashes, not their paths), the rest mesh as
+// loaded (built-in and asset scenes have no input file), and the ptc build (version, commit,
+// uncommitted changes). A scene given as a file is compared by its contents, not its path, so
+// shards may name it differently on different machines.
 nlohmann::json identity(const nlohmann::json& m) {
   nlohmann::json id;
   id["command"] = m.value("command", "");
   id["schema"] = m.value("schema", "");
   nlohmann::json p = m.value("parameters", nlohmann::json::object());
   p.erase("shard");
-  id["parameters"] = p;
   nlohmann::json inputs = nlohmann::json::array();
   for (const auto& i : m.value("inputs", nlohmann::json::array()))
     inputs.push_back({{"bytes", i.value("bytes", nlohmann::json())}, {"fnv1a64", i.value("fnv1a64", nlohmann::json())}});
+  if (!inputs.empty()) p.erase("scene");
+  id["parameters"] = p;
   id["inputs"] = inputs;
+  id["rest_mesh_fnv1a64"] = m.value("results", nlohmann::json::object()).value("rest_mesh_fnv1a64", nlohmann::json());
   const nlohmann::json b = m.value("build", nlohmann::json::object());
   id["ptc"] = b.value("ptc", "");
   id["git_commit"] = b.value("git_commit", "");
+  id["git_dirty"] = b.value("git_dirty", nlohmann::json());
   return id;
+}
+
+// Every field merge reads, present and of its type (an edited or foreign manifest is bad input,
+// named, not a crash).
+void check_shard_manifest(const nlohmann::json& m, const std::filesystem::path& file) {
+  auto bad = [&](const std::string& what) { return InputError(file.string(), "", what, "missing or of the wrong type"); };
+  if (!m.is_object() || m.value("command", "") != "experiment")
+    throw InputError(file.string(), "", "", "not the manifest of a `ptc experiment` run");
+  const auto get = [&](const nlohmann::json& j, const char* key) -> const nlohmann::json& {
+    if (!j.is_object() || !j.contains(key)) throw bad(key);
+    return j.at(key);
+  };
+  const auto& params = get(m, "parameters");
+  const auto& shard = get(params, "shard");
+  for (const char* k : {"index", "count"})
+    if (!get(shard, k).is_number_unsigned() || get(shard, k).get<std::uint64_t>() < 1) throw bad(std::string("parameters.shard.") + k);
+  if (get(shard, "index").get<std::uint64_t>() > get(shard, "count").get<std::uint64_t>()) throw bad("parameters.shard.index");
+  if (!get(params, "experiment").is_string() || !parse_experiment_kind(get(params, "experiment").get<std::string>()))
+    throw bad("parameters.experiment");
+  const auto& results = get(m, "results");
+  const auto& files = get(results, "primary_files");
+  if (!files.is_array()) throw bad("results.primary_files");
+  const auto& rows = get(results, "item_rows");
+  const auto& schemas = get(m, "output_schemas");
+  for (const auto& f : files) {
+    if (!f.is_string()) throw bad("results.primary_files");
+    const std::string name = f.get<std::string>();
+    if (name.find('/') != std::string::npos || name.find("..") != std::string::npos) throw bad("results.primary_files");
+    if (!get(schemas, name.c_str()).is_string()) throw bad("output_schemas." + name);
+    const auto& ir = get(rows, name.c_str());
+    if (!ir.is_array()) throw bad("results.item_rows." + name);
+    for (const auto& e : ir)
+      if (!e.is_array() || e.size() != 2 || !e[0].is_number_unsigned() || !e[1].is_number_unsigned())
+        throw bad("results.item_rows." + name);
+  }
 }
 
 // The first difference between two identities, as "parameters.threads: 1 vs 2".
@@ -373,8 +447,7 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
   for (const auto& d : opt.shards) {
     refuse_overwriting_input(opt.out_dir, d);
     ShardIn s{d, read_manifest(d)};
-    if (s.manifest.value("command", "") != "experiment")
-      throw InputError((d / "manifest.json").string(), "", "", "not the manifest of a `ptc experiment` run");
+    check_shard_manifest(s.manifest, d / "manifest.json");
     shards.push_back(std::move(s));
   }
   const nlohmann::json id0 = identity(shards[0].manifest);
@@ -406,7 +479,14 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
     f.file = name;
     const std::string schema = shards[0].manifest["output_schemas"].value(name, "");
     const auto slash = schema.rfind('/');
-    f.schema = {schema.substr(0, slash), slash == std::string::npos ? 1 : std::stoi(schema.substr(slash + 1))};
+    int version = 1;
+    if (slash != std::string::npos) {
+      const std::string v = schema.substr(slash + 1);
+      if (v.empty() || v.size() > 6 || !std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; }))
+        throw InputError((shards[0].dir / "manifest.json").string(), "", "output_schemas." + name, "not NAME/VERSION");
+      version = std::stoi(v);
+    }
+    f.schema = {schema.substr(0, slash), version};
     std::vector<std::pair<std::size_t, std::vector<std::vector<std::string>>>> slices;
     for (const auto& s : shards) {
       const std::filesystem::path path = s.dir / name;

@@ -28,8 +28,9 @@ struct ExperimentCommandOptions {
   std::optional<std::string> configs;      ///< compare: "acc_growth,standard,..."
   std::optional<std::string> reference;    ///< compare: perf_factor's denominator
   std::optional<std::string> clusterings;  ///< drift: "acc_growth,naive,..."
-  int ao_samples = 1;               ///< drift
-  std::size_t reference_rays = 512;  ///< accuracy
+  std::optional<int> ao_samples;            ///< drift (default 1)
+  std::optional<std::size_t> reference_rays;  ///< accuracy (default 512)
+  bool method_given = false;        ///< --method or --objective was given (sweep only)
   int width = 256, height = 256;
   CameraSpec camera;
   std::optional<Vec3> light;

@@ -10,6 +10,19 @@
 namespace ptc {
 namespace fs = std::filesystem;
 
+std::string mesh_fnv1a64(const Mesh& mesh) {
+  std::uint64_t h = 14695981039346656037ull;
+  auto bytes = [&h](const void* p, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    for (std::size_t i = 0; i < n; ++i) h ^= b[i], h *= 1099511628211ull;
+  };
+  for (const Tri& t : mesh.triangles()) bytes(t.data(), sizeof(Tri));
+  for (const Vec3& v : mesh.positions()) bytes(v.data(), 3 * sizeof(double));
+  char out[17];
+  std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
+  return out;
+}
+
 std::string file_fnv1a64(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "", "", "cannot open file");

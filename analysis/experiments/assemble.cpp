@@ -119,6 +119,23 @@ void assemble_sweep(std::vector<FileRows>& files, std::string& text) {
                         ratio_text(st["trace"] > 0 ? tr0 / st["trace"] : kNaN),
                         ratio_text(st["total"] > 0 ? to0 / st["total"] : kNaN));
   }
+  // Against the paper (Garanzha 2009, "Expected results" of issue 12), with the criterion stated.
+  const auto at = [&](const char* n) -> std::map<std::string, double>* { return by_count.count(n) ? &by_count[n] : nullptr; };
+  if (auto *z = at("0"), *f = at("50"); z && f) {
+    const double ub = ((*z)["update"] + (*z)["build"]) / ((*f)["update"] + (*f)["build"]);
+    text += fmt::format("paper: update+build about an order of magnitude faster at MaxCount 50 -> {:.1f}x: {} (criterion "
+                        "3.2x..32x)\n",
+                        ub, ub >= 3.16 && ub <= 31.6 ? "agrees" : "DISAGREES");
+    const double tr = (*z)["trace"] / (*f)["trace"];
+    text += fmt::format("paper: trace time about unchanged at MaxCount 50 -> {:.2f}x of MaxCount 0: {} (criterion "
+                        "0.8x..1.25x)\n",
+                        tr, tr >= 0.8 && tr <= 1.25 ? "agrees" : "DISAGREES");
+    if (auto* h = at("100")) {
+      const double tr100 = (*z)["trace"] / (*h)["trace"];
+      text += fmt::format("paper: trace worse at MaxCount 100 than at 50 -> {:.2f}x vs {:.2f}x: {}\n", tr100, tr,
+                          tr100 < tr ? "agrees" : "DISAGREES");
+    }
+  }
   files.push_back(std::move(out));
 }
 
@@ -138,8 +155,10 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
   }
   FileRows out = derived("compare_summary.csv", {"ptc-compare-summary", 1},
                          {"scene", "config", "reference", "frames", "update_ms", "build_ms", "trace_ms", "total_ms",
-                          "perf_factor", "perf_factor_first", "perf_factor_last", "perf_factor_min", "perf_factor_max"});
+                          "perf_factor", "perf_factor_first", "perf_factor_last", "perf_factor_early", "perf_factor_late",
+                          "perf_factor_min", "perf_factor_max"});
   const Groups g = group_by(c, {"scene", "config"}, measured(c));
+  std::map<std::string, std::pair<double, double>> early_late;
   text += fmt::format("compare (the paper's Figure 7): medians per configuration, ms; perf_factor = total / total of {} "
                       "(> 1: slower than it)\n",
                       reference);
@@ -147,8 +166,9 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
                       "total", "perf_factor", "pf first", "pf last");
   for (std::size_t i = 0; i < g.keys.size(); ++i) {
     const auto& rows = g.rows[i];
-    std::vector<double> pfs;
-    for (std::size_t r : rows) pfs.push_back(c.number(r, pf));
+    std::vector<double> pfs;  // the measured frames' factors in frame order (NaN ones left out)
+    for (std::size_t r : rows)
+      if (const double x = c.number(r, pf); !std::isnan(x)) pfs.push_back(x);
     const double u = median_of(c, rows, c.column("update_ms")), b = median_of(c, rows, c.column("build_ms")),
                  t = median_of(c, rows, c.column("trace_ms")), to = median_of(c, rows, total),
                  p = median_of(c, rows, pf);
@@ -156,12 +176,29 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
     double lo = kNaN, hi = kNaN;
     for (double x : pfs)
       if (std::isfinite(x)) lo = std::isnan(lo) ? x : std::min(lo, x), hi = std::isnan(hi) ? x : std::max(hi, x);
+    // Early and late: the medians over the first and the last quarter of the measured frames.
+    const std::size_t q = std::max<std::size_t>(1, pfs.size() / 4);
+    std::vector<double> e(pfs.begin(), pfs.begin() + long(std::min(q, pfs.size()))),
+        l(pfs.end() - long(std::min(q, pfs.size())), pfs.end());
+    const double early = pfs.empty() ? kNaN : median(e), late = pfs.empty() ? kNaN : median(l);
+    early_late[g.keys[i][1]] = {early, late};
     out.rows.rows.push_back({g.keys[i][0], g.keys[i][1], reference, std::to_string(rows.size()), num(u), num(b), num(t),
-                             num(to), num(p), num(first), num(last), num(lo), num(hi)});
+                             num(to), num(p), num(first), num(last), num(early), num(late), num(lo), num(hi)});
     text += fmt::format("{:<16} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>11} {:>11} {:>11}\n", g.keys[i][1], u, b, t, to,
                         ratio_text(p), ratio_text(first), ratio_text(last));
   }
   if (ref.empty()) text += fmt::format("(the reference {} is not among these rows: perf_factor is nan)\n", reference);
+  else if (reference == "given" || reference.rfind("acc_", 0) == 0)  // the paper's claim is against the method
+    for (const char* b : {"naive", "gwh01"}) {
+      const auto it = early_late.find(b);
+      if (it == early_late.end()) continue;
+      const auto [e, l] = it->second;
+      const bool close = std::abs(e - 1.0) <= 0.1, behind = l > e * 1.05;
+      text += fmt::format("paper: {} clusters close to the method early and behind it later -> perf_factor {:.2f} over "
+                          "the first quarter of the frames, {:.2f} over the last: {} (criterion: early within 10% of 1, "
+                          "late 5% above early)\n",
+                          b, e, l, close && behind ? "agrees" : close ? "DISAGREES (not behind later)" : "DISAGREES (not close early)");
+    }
   files.push_back(std::move(out));
 }
 
@@ -182,7 +219,11 @@ Fit least_squares(const std::vector<std::vector<double>>& x, const std::vector<d
     a(i, k) = 1.0;
     b(i) = y[i];
   }
-  const Eigen::VectorXd beta = a.colPivHouseholderQr().solve(b);
+  const auto qr = a.colPivHouseholderQr();
+  // A regressor that does not vary (or two that vary together) leaves the fit undetermined:
+  // no coefficients rather than made-up ones.
+  if (qr.rank() < static_cast<Eigen::Index>(k + 1)) return f;
+  const Eigen::VectorXd beta = qr.solve(b);
   const double mean = b.mean();
   const double ss_tot = (b.array() - mean).square().sum(), ss_res = (a * beta - b).squaredNorm();
   if (k >= 1) f.a = beta(0);
@@ -197,32 +238,51 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
   const CsvText& frames = file_of(files, "frames.csv").rows;
   const CsvText& corr = file_of(files, "correlation.csv").rows;
   FileRows reg = derived("regression.csv", {"ptc-drift-regression", 1},
-                         {"ray_type", "model", "points", "coef_sah", "coef_epo", "intercept", "r2", "epo_weight"});
+                         {"ray_type", "target", "model", "points", "coef_sah", "coef_epo", "coef_nodes", "coef_triangles",
+                          "intercept", "r2", "epo_weight", "triangle_weight"});
   const Groups g = group_by(rays, {"ray_type"});
-  const std::size_t y = rays.column("cost_per_ray"), sah = rays.column("sah_cost"), epo = rays.column("epo");
+  const std::size_t sah = rays.column("sah_cost"), epo = rays.column("epo"), nodes = rays.column("nodes_per_ray"),
+                    tris = rays.column("triangles_per_ray");
   constexpr double kTinyBvhEpoWeight = 0.71;
   std::string fits;
-  for (std::size_t i = 0; i < g.keys.size(); ++i) {
-    std::vector<double> ys, ss, es, combined;
-    for (std::size_t r : g.rows[i]) {
-      const double yy = rays.number(r, y), s = rays.number(r, sah), e = rays.number(r, epo);
-      if (!std::isfinite(yy) || !std::isfinite(s) || !std::isfinite(e)) continue;
-      ys.push_back(yy), ss.push_back(s), es.push_back(e), combined.push_back(s + kTinyBvhEpoWeight * e);
+  // The measured cost per ray: the counters weighted by the SAH model (cost_per_ray), and the
+  // time (ns_per_ray); the second also against the counters themselves, which gives what a
+  // triangle test costs relative to a node visit in this tracer (triangle_weight).
+  for (const char* target : {"cost_per_ray", "ns_per_ray"}) {
+    const std::size_t y = rays.column(target);
+    for (std::size_t i = 0; i < g.keys.size(); ++i) {
+      std::vector<double> ys, ss, es, combined, ns, ts;
+      for (std::size_t r : g.rows[i]) {
+        const double yy = rays.number(r, y), s = rays.number(r, sah), e = rays.number(r, epo),
+                     n = rays.number(r, nodes), t = rays.number(r, tris);
+        if (!std::isfinite(yy) || !std::isfinite(s) || !std::isfinite(e) || !std::isfinite(n) || !std::isfinite(t)) continue;
+        ys.push_back(yy), ss.push_back(s), es.push_back(e), combined.push_back(s + kTinyBvhEpoWeight * e);
+        ns.push_back(n), ts.push_back(t);
+      }
+      const std::string& type = g.keys[i][0];
+      auto row = [&](const char* model, const Fit& f, double cs, double ce, double cn, double ct) {
+        reg.rows.rows.push_back({type, target, model, std::to_string(ys.size()), num(cs), num(ce), num(cn), num(ct),
+                                 num(f.c), num(f.r2),
+                                 num(std::isfinite(cs) && std::isfinite(ce) && cs != 0 ? ce / cs : kNaN),
+                                 num(std::isfinite(cn) && std::isfinite(ct) && cn != 0 ? ct / cn : kNaN)});
+      };
+      const Fit fs = least_squares({ss}, ys), fe = least_squares({es}, ys), fse = least_squares({ss, es}, ys),
+                ft = least_squares({combined}, ys);
+      row("sah", fs, fs.a, kNaN, kNaN, kNaN);
+      row("epo", fe, kNaN, fe.a, kNaN, kNaN);
+      row("sah+epo", fse, fse.a, fse.b, kNaN, kNaN);
+      row("sah+0.71epo", ft, ft.a, ft.a * kTinyBvhEpoWeight, kNaN, kNaN);
+      std::string counters;
+      if (std::string_view(target) == "ns_per_ray") {
+        const Fit fc = least_squares({ns, ts}, ys);
+        row("nodes+triangles", fc, kNaN, kNaN, fc.a, fc.b);
+        counters = fmt::format(", nodes+triangles {:.3f} (a triangle test = {:.3g} node visits)", fc.r2,
+                               fc.a != 0 ? fc.b / fc.a : kNaN);
+      }
+      fits += fmt::format("  {:<12} {:<8} {:>4} points: R^2 sah {:.3f}, epo {:.3f}, sah+epo {:.3f} (EPO weight {:.3g}), "
+                          "sah+0.71 epo {:.3f}{}\n",
+                          target, type, ys.size(), fs.r2, fe.r2, fse.r2, fse.a != 0 ? fse.b / fse.a : kNaN, ft.r2, counters);
     }
-    const std::string& type = g.keys[i][0];
-    auto row = [&](const char* model, const Fit& f, double cs, double ce) {
-      reg.rows.rows.push_back({type, model, std::to_string(ys.size()), num(cs), num(ce), num(f.c), num(f.r2),
-                               num(std::isfinite(cs) && std::isfinite(ce) && cs != 0 ? ce / cs : kNaN)});
-    };
-    const Fit fs = least_squares({ss}, ys), fe = least_squares({es}, ys), fse = least_squares({ss, es}, ys),
-              ft = least_squares({combined}, ys);
-    row("sah", fs, fs.a, kNaN);
-    row("epo", fe, kNaN, fe.a);
-    row("sah+epo", fse, fse.a, fse.b);
-    row("sah+0.71epo", ft, ft.a, ft.a * kTinyBvhEpoWeight);
-    fits += fmt::format("  {:<8} {:>4} points: R^2 sah {:.3f}, epo {:.3f}, sah+epo {:.3f} (EPO weight {:.3g}), "
-                        "sah+0.71 epo {:.3f}\n",
-                        type, ys.size(), fs.r2, fe.r2, fse.r2, fse.a != 0 ? fse.b / fse.a : kNaN, ft.r2);
   }
   // Per clustering: the first and last frame.
   text += "drift: per clustering, first -> last frame (box_area_ratio against the first frame)\n";
@@ -247,7 +307,18 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
   }
   text += "spearman: rank correlation over clusters of connectivity (N_T/N_V) with box-area drift (mean |ln box area "
           "ratio| over the frames after the first); < 0: denser clusters deform less\n";
-  text += "fit of the measured cost per ray (traversal x nodes + intersection x triangles) to SAH and EPO:\n" + fits;
+  for (const auto& [name, r] : rho) {
+    if (!std::isfinite(r)) continue;
+    text += fmt::format("paper: connectivity predicts drift ({}) -> Spearman {:.3f}: {} (criterion <= -0.3)\n", name, r,
+                        r <= -0.3 ? "agrees" : r < 0 ? "DISAGREES (weak)" : "DISAGREES");
+  }
+  // The per-frame cost of the experiment itself.
+  std::string cost;
+  for (std::size_t i = 0; i < fg.keys.size(); ++i)
+    cost += fmt::format("{}{} {:.0f} ms", i ? ", " : "", fg.keys[i][0], median_of(frames, fg.rows[i], frames.column("metrics_ms")));
+  text += "metrics per frame (median): " + cost + "\n";
+  text += "fits of the measured cost per ray (cost_per_ray = traversal x nodes + intersection x triangles; ns_per_ray = "
+          "trace time) to SAH and EPO:\n" + fits;
   files.push_back(std::move(reg));
 }
 

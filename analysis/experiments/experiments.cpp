@@ -230,9 +230,10 @@ struct ClusterFrameRow {
   std::int64_t frame = 0;
   std::uint32_t cluster_id = 0;
   std::uint64_t triangles = 0, vertices = 0;
-  double connectivity = 0, reg = 0, acc = 0, sphere_radius = 0, sphere_radius_ratio = 0, box_area = 0,
-         box_area_ratio = 0, box_area_ratio_prev = 0, p_hit = 0, sah_share = 0;
+  double connectivity = 0, reg = 0, acc = 0, reg_delta = 0, acc_delta = 0, sphere_radius = 0, sphere_radius_ratio = 0,
+         sphere_radius_ratio_prev = 0, box_area = 0, box_area_ratio = 0, box_area_ratio_prev = 0, p_hit = 0, sah_share = 0;
   std::uint32_t boundary_vertices = 0, components = 0;
+  bool not_full = false;
 };
 void visit_cluster_frame(const ClusterFrameRow& r, Columns& col) {
   col("clustering", r.clustering);
@@ -243,8 +244,11 @@ void visit_cluster_frame(const ClusterFrameRow& r, Columns& col) {
   col("connectivity", r.connectivity);
   col("reg", r.reg);
   col("acc", r.acc);
+  col("reg_delta", r.reg_delta);
+  col("acc_delta", r.acc_delta);
   col("sphere_radius", r.sphere_radius);
   col("sphere_radius_ratio", r.sphere_radius_ratio);
+  col("sphere_radius_ratio_prev", r.sphere_radius_ratio_prev);
   col("box_area", r.box_area);
   col("box_area_ratio", r.box_area_ratio);
   col("box_area_ratio_prev", r.box_area_ratio_prev);
@@ -252,6 +256,7 @@ void visit_cluster_frame(const ClusterFrameRow& r, Columns& col) {
   col("sah_share", r.sah_share);
   col("boundary_vertices", r.boundary_vertices);
   col("components", r.components);
+  col("not_full", r.not_full);
 }
 
 const Schema kFramesSchema{"ptc-drift-frames", 1};
@@ -262,7 +267,8 @@ struct DriftFrameRow {
   std::uint64_t clusters = 0;
   double sah_cost = 0, sah_cost_triangles = 0, sah_overhead = 0, epo = 0, nodes_per_ray = 0, triangles_per_ray = 0;
   double reg_mean = kNaN, acc_mean = kNaN, sphere_radius_ratio_max = kNaN, box_area_ratio_mean = kNaN,
-         box_area_ratio_p95 = kNaN, box_area_ratio_max = kNaN;
+         box_area_ratio_p50 = kNaN, box_area_ratio_p95 = kNaN, box_area_ratio_max = kNaN,
+         box_area_ratio_prev_p95 = kNaN, box_area_ratio_prev_max = kNaN;
   std::string worst_clusters;
   double metrics_ms = 0;
 };
@@ -282,8 +288,11 @@ void visit_drift_frame(const DriftFrameRow& r, Columns& col) {
   col("acc_mean", r.acc_mean);
   col("sphere_radius_ratio_max", r.sphere_radius_ratio_max);
   col("box_area_ratio_mean", r.box_area_ratio_mean);
+  col("box_area_ratio_p50", r.box_area_ratio_p50);
   col("box_area_ratio_p95", r.box_area_ratio_p95);
   col("box_area_ratio_max", r.box_area_ratio_max);
+  col("box_area_ratio_prev_p95", r.box_area_ratio_prev_p95);
+  col("box_area_ratio_prev_max", r.box_area_ratio_prev_max);
   col("worst_clusters", r.worst_clusters);
   col("metrics_ms", r.metrics_ms);
 }
@@ -292,13 +301,15 @@ const Schema kRaysSchema{"ptc-drift-rays", 1};
 struct RayRow {
   std::string clustering;
   std::int64_t frame = 0;
+  bool warmup = false;
   std::string ray_type;
   std::uint64_t rays = 0;
-  double nodes_per_ray = 0, triangles_per_ray = 0, cost_per_ray = 0, sah_cost = 0, epo = 0, trace_ms = 0;
+  double nodes_per_ray = 0, triangles_per_ray = 0, cost_per_ray = 0, sah_cost = 0, epo = 0, trace_ms = 0, ns_per_ray = 0;
 };
 void visit_ray(const RayRow& r, Columns& col) {
   col("clustering", r.clustering);
   col("frame", r.frame);
+  col("warmup", r.warmup);
   col("ray_type", r.ray_type);
   col("rays", r.rays);
   col("nodes_per_ray", r.nodes_per_ray);
@@ -307,6 +318,7 @@ void visit_ray(const RayRow& r, Columns& col) {
   col("sah_cost", r.sah_cost);
   col("epo", r.epo);
   col("trace_ms", r.trace_ms);
+  col("ns_per_ray", r.ns_per_ray);
 }
 
 const Schema kCorrelationSchema{"ptc-drift-correlation", 1};
@@ -328,6 +340,10 @@ void visit_correlation(const CorrelationRow& r, Columns& col) {
 
 const Schema kConfigsSchema{"ptc-experiment-configs", 1};
 
+// The preparation (clusterings, renumbering, first builds) takes the first kPrepareShare of the
+// progress bar: at 1M triangles six clusterings take minutes.
+constexpr double kPrepareShare = 0.2;
+
 std::vector<study::Prepared> prepare_all(const Scene& scene, const std::vector<study::ConfigSpec>& specs,
                                          const study::StudySetup& setup, const loop::AccelSetup& as,
                                          ExperimentRun& run, FileRows& configs, const std::string& scene_label) {
@@ -339,8 +355,275 @@ std::vector<study::Prepared> prepare_all(const Scene& scene, const std::vector<s
     run.timings_ms["prepare_" + specs[i].name] = out.back().cluster_ms + out.back().setup_ms;
     std::vector<ConfigRow> one{row};
     add_rows(configs, run.done[i], tabulate(kConfigsSchema, one, visit_config));
+    if (setup.progress) setup.progress(kPrepareShare * double(i + 1) / double(specs.size()));
   }
   return out;
+}
+
+// The study loop with the progress of the loop mapped after the preparation's share.
+study::StudySetup loop_setup(const study::StudySetup& setup) {
+  study::StudySetup s = setup;
+  if (setup.progress) s.progress = [f = setup.progress](double x) { f(kPrepareShare + (1.0 - kPrepareShare) * x); };
+  return s;
+}
+
+struct Context {
+  Scene& scene;
+  const ExperimentParams& p;
+  const study::StudySetup& setup;
+  const study::StudyRays& rays;
+  ExperimentRun& run;
+  std::vector<study::Prepared>& prepared;
+};
+
+void run_sweep(Context& x) {
+  study::PassOptions timed;
+  timed.threads = x.setup.threads;
+  FileRows f = empty_file("sweep.csv", kSweepSchema, columns_of<SweepRow>(visit_sweep));
+  std::vector<std::vector<SweepRow>> rows(x.prepared.size());
+  study::run_study(x.scene, x.prepared, loop_setup(x.setup), [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
+    const study::Passes ps = study::trace_passes(pr, x.rays, x.setup.light, timed);
+    const double trace = ps.primary.trace_ms + ps.shadow.trace_ms;
+    SweepRow r;
+    r.scene = x.p.scene;
+    r.max_count = pr.spec.cluster->max_count;
+    r.max_size = pr.spec.cluster->max_size;
+    r.clusters = pr.has_clusters ? pr.clustering.cluster_count() : pr.mesh.triangle_count();
+    r.frame = sf.frame;
+    r.warmup = sf.warmup;
+    const std::pair<const char*, double> stages[] = {{"update", sf.times.update_ms},
+                                                     {"build", sf.times.build_ms},
+                                                     {"trace", trace},
+                                                     {"total", sf.times.update_ms + sf.times.build_ms + trace}};
+    for (const auto& [stage, ms] : stages) {
+      r.stage = stage;
+      r.ms = ms;
+      rows[c].push_back(r);
+    }
+  });
+  for (std::size_t c = 0; c < x.prepared.size(); ++c) add_rows(f, x.run.done[c], tabulate(kSweepSchema, rows[c], visit_sweep));
+  x.run.files.push_back(std::move(f));
+}
+
+void run_compare(Context& x) {
+  study::PassOptions timed;
+  timed.threads = x.setup.threads;
+  FileRows f = empty_file("compare.csv", kCompareSchema, columns_of<CompareRow>(visit_compare));
+  std::vector<std::vector<CompareRow>> rows(x.prepared.size());
+  study::run_study(x.scene, x.prepared, loop_setup(x.setup), [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
+    const study::Passes ps = study::trace_passes(pr, x.rays, x.setup.light, timed);
+    CompareRow r;
+    r.scene = x.p.scene;
+    r.frame = sf.frame;
+    r.warmup = sf.warmup;
+    r.config = pr.spec.name;
+    r.structure = std::string(loop::to_string(pr.spec.kind));
+    r.clusters = pr.has_clusters ? pr.clustering.cluster_count() : 0;
+    r.update_ms = sf.times.update_ms;
+    r.build_ms = sf.times.build_ms;
+    r.trace_primary_ms = ps.primary.trace_ms;
+    r.trace_shadow_ms = ps.shadow.trace_ms;
+    r.trace_ms = r.trace_primary_ms + r.trace_shadow_ms;
+    r.total_ms = r.update_ms + r.build_ms + r.trace_ms;
+    r.rays = ps.primary.rays;
+    r.shadow_rays = ps.shadow.rays;
+    r.hits = ps.primary.hits;
+    r.sah_cost = x.prepared[c].accel->sah_cost().value_or(kNaN);
+    rows[c].push_back(r);
+  });
+  for (std::size_t c = 0; c < x.prepared.size(); ++c)
+    add_rows(f, x.run.done[c], tabulate(kCompareSchema, rows[c], visit_compare));
+  x.run.files.push_back(std::move(f));
+}
+
+// What drift keeps per configuration over the frames.
+struct Track {
+  std::vector<ClusterRow> first, prev;
+  std::vector<MeshletShape> shapes;
+  std::vector<double> drift_sum;   // per cluster: sum over the frames after the first of |ln box_area_ratio|
+  std::vector<double> radius_sum;  // the same of the sphere radius
+  std::size_t frames_summed = 0;
+  std::vector<ClusterFrameRow> cluster_rows;
+  std::vector<DriftFrameRow> frame_rows;
+  std::vector<RayRow> ray_rows;
+};
+
+// The cluster BVH's metrics at the frame: SAH shares per cluster id, EPO, meshoptimizer's SAH
+// overhead, every cluster's row (against the first and the previous frame) and the frame's
+// summaries.
+void drift_clusters(const ExperimentParams& p, const study::StudyFrame& sf, study::Prepared& pr, Track& tr,
+                    const bvh::SahCostModel& cost, DriftFrameRow& d) {
+  const Mesh& m = pr.mesh;
+  const bvh::ClusterScene* cs = loop::cluster_scene_of(*pr.accel);
+  d.clusters = pr.clustering.cluster_count();
+  d.sah_cost = cs->bvh().cost;
+  const SahShares shares = sah_shares(cs->bvh(), cs->boxes(), cs->weights(), cost);
+  std::vector<double> share(pr.clustering.cluster_count(), 0.0);
+  std::vector<std::uint32_t> offsets{0}, ids;
+  for (std::size_t i = 0; i < cs->cluster_ids().size(); ++i) {
+    const std::uint32_t k = cs->cluster_ids()[i];
+    share[k] = shares.share[i];
+    const auto t = pr.clustering.triangles_of(k);
+    ids.insert(ids.end(), t.begin(), t.end());
+    offsets.push_back(static_cast<std::uint32_t>(ids.size()));
+  }
+  d.epo = end_point_overlap(cs->bvh(), m.triangles(), m.positions(), offsets, ids, cost).epo;
+  d.sah_overhead = sah_overhead(m, pr.clustering).overhead;
+  const ClusterConfig mc = pr.spec.cluster.value_or(p.cluster);
+  const std::vector<ClusterRow> rows = cluster_rows(m, pr.clustering, mc);
+  if (tr.first.empty()) {
+    tr.first = rows, tr.prev = rows;
+    tr.drift_sum.assign(rows.size(), 0.0), tr.radius_sum.assign(rows.size(), 0.0);
+  }
+  const std::vector<ClusterDrift> dr = cluster_drift(tr.first, rows), dp = cluster_drift(tr.prev, rows);
+  if (sf.index > 0) {
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      tr.drift_sum[k] += std::abs(std::log(dr[k].box_area_ratio));
+      tr.radius_sum[k] += std::abs(std::log(dr[k].sphere_radius_ratio));
+    }
+    ++tr.frames_summed;
+  }
+  const DriftSummary ds = summarize_drift(dr, 5);
+  std::vector<double> reg, acc;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    ClusterFrameRow r;
+    r.clustering = pr.spec.name;
+    r.frame = sf.frame;
+    r.cluster_id = static_cast<std::uint32_t>(k);
+    r.triangles = rows[k].m.triangles;
+    r.vertices = rows[k].m.vertices;
+    r.connectivity = rows[k].m.connectivity;
+    r.reg = rows[k].m.reg;
+    r.acc = rows[k].acc;
+    r.reg_delta = dr[k].reg_delta;
+    r.acc_delta = dr[k].acc_delta;
+    r.sphere_radius = rows[k].m.sphere.radius;
+    r.sphere_radius_ratio = dr[k].sphere_radius_ratio;
+    r.sphere_radius_ratio_prev = dp[k].sphere_radius_ratio;
+    r.box_area = rows[k].m.box.surface_area();
+    r.box_area_ratio = dr[k].box_area_ratio;
+    r.box_area_ratio_prev = dp[k].box_area_ratio;
+    r.p_hit = rows[k].m.p_hit;
+    r.sah_share = share[k];
+    r.boundary_vertices = tr.shapes[k].boundary_vertices;
+    r.components = tr.shapes[k].components;
+    r.not_full = tr.shapes[k].not_full;
+    tr.cluster_rows.push_back(r);
+    reg.push_back(rows[k].m.reg);
+    if (std::isfinite(rows[k].acc)) acc.push_back(rows[k].acc);
+  }
+  d.reg_mean = summarize(reg).mean;
+  d.acc_mean = acc.empty() ? kNaN : summarize(acc).mean;
+  d.sphere_radius_ratio_max = ds.sphere_radius_ratio.count ? ds.sphere_radius_ratio.max : kNaN;
+  if (ds.box_area_ratio.count) {
+    d.box_area_ratio_mean = ds.box_area_ratio.mean;
+    d.box_area_ratio_p50 = ds.box_area_ratio.p50;
+    d.box_area_ratio_p95 = ds.box_area_ratio.p95;
+    d.box_area_ratio_max = ds.box_area_ratio.max;
+  }
+  if (const DriftSummary dps = summarize_drift(dp, 0); dps.box_area_ratio.count) {
+    d.box_area_ratio_prev_p95 = dps.box_area_ratio.p95;
+    d.box_area_ratio_prev_max = dps.box_area_ratio.max;
+  }
+  for (std::uint32_t w : ds.worst_box_area) d.worst_clusters += (d.worst_clusters.empty() ? "" : ";") + std::to_string(w);
+  tr.prev = rows;
+}
+
+// Spearman (and Pearson) over the clusters of connectivity against the mean drift over the frames
+// after the first; NaN drifts (a cluster of zero box area at the first frame) are left out.
+std::vector<CorrelationRow> drift_correlations(const ExperimentParams& p, const study::Prepared& pr, const Track& tr) {
+  std::vector<CorrelationRow> corr;
+  if (!pr.has_clusters) return corr;
+  const double n = tr.frames_summed ? double(tr.frames_summed) : kNaN;
+  for (const auto& [sums, name] : {std::pair{&tr.drift_sum, "box_area_drift"}, std::pair{&tr.radius_sum, "sphere_radius_drift"}}) {
+    std::vector<double> xs, ys;
+    for (std::size_t k = 0; k < tr.first.size(); ++k) {
+      const double y = (*sums)[k] / n;
+      if (std::isfinite(y)) xs.push_back(tr.first[k].m.connectivity), ys.push_back(y);
+    }
+    CorrelationRow r;
+    r.scene = p.scene;
+    r.clustering = pr.spec.name;
+    r.x = "connectivity";
+    r.y = name;
+    r.clusters = xs.size();
+    r.frames = tr.frames_summed;
+    if (xs.size() >= 3) r.spearman = spearman(xs, ys), r.pearson = pearson(xs, ys);
+    corr.push_back(r);
+  }
+  return corr;
+}
+
+void run_drift(Context& x) {
+  FileRows fc = empty_file("clusters_frames.csv", kClustersFramesSchema, columns_of<ClusterFrameRow>(visit_cluster_frame));
+  FileRows ff = empty_file("frames.csv", kFramesSchema, columns_of<DriftFrameRow>(visit_drift_frame));
+  FileRows fr = empty_file("rays.csv", kRaysSchema, columns_of<RayRow>(visit_ray));
+  FileRows fk = empty_file("correlation.csv", kCorrelationSchema, columns_of<CorrelationRow>(visit_correlation));
+  study::PassOptions counted;
+  counted.threads = x.setup.threads;
+  counted.counters = true;
+  counted.ao_samples = x.p.ao_samples;
+  const bvh::SahCostModel cost = bvh::cluster_scene_defaults().build.cost;
+  std::vector<Track> tracks(x.prepared.size());
+  for (std::size_t c = 0; c < x.prepared.size(); ++c)
+    if (x.prepared[c].has_clusters) {
+      const ClusterConfig mc = x.prepared[c].spec.cluster.value_or(x.p.cluster);
+      tracks[c].shapes = meshlet_shapes(x.prepared[c].clustering, x.prepared[c].mesh.triangles(),
+                                        x.prepared[c].mesh.vertex_count(), std::max<std::uint32_t>(mc.max_count, 1));
+    }
+  study::run_study(x.scene, x.prepared, loop_setup(x.setup), [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
+    Stopwatch sw;
+    Track& tr = tracks[c];
+    const study::Passes ps = study::trace_passes(pr, x.rays, x.setup.light, counted);
+    DriftFrameRow d;
+    d.scene = x.p.scene;
+    d.clustering = pr.spec.name;
+    d.frame = sf.frame;
+    d.warmup = sf.warmup;
+    // The triangle BVH of the same frame (its own structure, or built here for a clustering).
+    std::unique_ptr<bvh::TriangleScene> own_ts;
+    const bvh::TriangleScene* ts = loop::triangle_scene_of(*pr.accel);
+    if (!ts) own_ts = std::make_unique<bvh::TriangleScene>(pr.mesh), ts = own_ts.get();
+    d.sah_cost_triangles = ts->bvh().cost;
+    if (pr.has_clusters) {
+      drift_clusters(x.p, sf, pr, tr, cost, d);
+    } else {
+      d.sah_cost = d.sah_cost_triangles;
+      d.sah_overhead = 1.0;
+      d.epo = end_point_overlap(ts->bvh(), pr.mesh.triangles(), pr.mesh.positions(), {}, {}, cost).epo;
+    }
+    d.nodes_per_ray = per_ray(ps.primary.nodes_visited, ps.primary.rays);
+    d.triangles_per_ray = per_ray(ps.primary.triangles_tested, ps.primary.rays);
+    const std::pair<const char*, const PassStats*> passes[] = {{"primary", &ps.primary}, {"shadow", &ps.shadow}, {"ao", &ps.ao}};
+    for (const auto& [type, st] : passes) {
+      if (st->rays == 0) continue;
+      RayRow r;
+      r.clustering = pr.spec.name;
+      r.frame = sf.frame;
+      r.warmup = sf.warmup;
+      r.ray_type = type;
+      r.rays = st->rays;
+      r.nodes_per_ray = per_ray(st->nodes_visited, st->rays);
+      r.triangles_per_ray = per_ray(st->triangles_tested, st->rays);
+      r.cost_per_ray = cost.traversal * r.nodes_per_ray + cost.intersection * r.triangles_per_ray;
+      r.sah_cost = d.sah_cost;
+      r.epo = d.epo;
+      r.trace_ms = st->trace_ms;
+      r.ns_per_ray = st->trace_ms * 1e6 / double(st->rays);
+      tr.ray_rows.push_back(r);
+    }
+    d.metrics_ms = sw.ms();
+    tr.frame_rows.push_back(d);
+  });
+  for (std::size_t c = 0; c < x.prepared.size(); ++c) {
+    const std::size_t item = x.run.done[c];
+    const Track& tr = tracks[c];
+    add_rows(fc, item, tabulate(kClustersFramesSchema, tr.cluster_rows, visit_cluster_frame));
+    add_rows(ff, item, tabulate(kFramesSchema, tr.frame_rows, visit_drift_frame));
+    add_rows(fr, item, tabulate(kRaysSchema, tr.ray_rows, visit_ray));
+    add_rows(fk, item, tabulate(kCorrelationSchema, drift_correlations(x.p, x.prepared[c], tr), visit_correlation));
+  }
+  for (FileRows* f : {&fc, &ff, &fr, &fk}) x.run.files.push_back(std::move(*f));
 }
 
 }  // namespace
@@ -352,14 +635,14 @@ std::vector<std::string> experiment_items(const ExperimentParams& p) {
       for (std::uint32_t n : p.max_counts) items.push_back(fmt::format("max_count={}", n));
       break;
     case ExperimentKind::Compare:
-      items = p.configs.empty() ? default_compare_configs(p.given != nullptr) : p.configs;
+      items = p.configs.empty() ? default_compare_configs(p.has_given()) : p.configs;
       break;
     case ExperimentKind::Drift:
       items.emplace_back("triangles");
-      for (const auto& c : p.clusterings.empty() ? default_drift_clusterings(p.given != nullptr) : p.clusterings)
+      for (const auto& c : p.clusterings.empty() ? default_drift_clusterings(p.has_given()) : p.clusterings)
         items.push_back(c);
       break;
-    case ExperimentKind::Accuracy: items = accuracy_items(p.given != nullptr); break;
+    case ExperimentKind::Accuracy: items = accuracy_items(p.has_given()); break;
   }
   return items;
 }
@@ -425,242 +708,10 @@ ExperimentRun run_experiment(Scene& scene, const ExperimentParams& p, const stud
   FileRows configs = empty_file("configs.csv", kConfigsSchema, columns_of<ConfigRow>(visit_config));
   std::vector<study::Prepared> prepared = prepare_all(scene, specs, setup, as, run, configs, p.scene);
   run.files.push_back(std::move(configs));
-
-  study::PassOptions timed;
-  timed.shadows = true;
-  timed.threads = setup.threads;
-
-  if (p.kind == ExperimentKind::Sweep) {
-    FileRows f = empty_file("sweep.csv", kSweepSchema, columns_of<SweepRow>(visit_sweep));
-    std::vector<std::vector<SweepRow>> rows(prepared.size());
-    study::run_study(scene, prepared, setup, [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
-      const study::Passes ps = study::trace_passes(pr, rays, setup.light, timed);
-      const double trace = ps.primary.trace_ms + ps.shadow.trace_ms;
-      SweepRow r;
-      r.scene = p.scene;
-      r.max_count = pr.spec.cluster->max_count;
-      r.max_size = pr.spec.cluster->max_size;
-      r.clusters = pr.has_clusters ? pr.clustering.cluster_count() : pr.mesh.triangle_count();
-      r.frame = sf.frame;
-      r.warmup = sf.warmup;
-      const std::pair<const char*, double> stages[] = {{"update", sf.times.update_ms},
-                                                       {"build", sf.times.build_ms},
-                                                       {"trace", trace},
-                                                       {"total", sf.times.update_ms + sf.times.build_ms + trace}};
-      for (const auto& [stage, ms] : stages) {
-        r.stage = stage;
-        r.ms = ms;
-        rows[c].push_back(r);
-      }
-    });
-    for (std::size_t c = 0; c < prepared.size(); ++c) add_rows(f, run.done[c], tabulate(kSweepSchema, rows[c], visit_sweep));
-    run.files.push_back(std::move(f));
-    return run;
-  }
-
-  if (p.kind == ExperimentKind::Compare) {
-    FileRows f = empty_file("compare.csv", kCompareSchema, columns_of<CompareRow>(visit_compare));
-    std::vector<std::vector<CompareRow>> rows(prepared.size());
-    study::run_study(scene, prepared, setup, [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
-      const study::Passes ps = study::trace_passes(pr, rays, setup.light, timed);
-      CompareRow r;
-      r.scene = p.scene;
-      r.frame = sf.frame;
-      r.warmup = sf.warmup;
-      r.config = pr.spec.name;
-      r.structure = std::string(loop::to_string(pr.spec.kind));
-      r.clusters = pr.has_clusters ? pr.clustering.cluster_count() : 0;
-      r.update_ms = sf.times.update_ms;
-      r.build_ms = sf.times.build_ms;
-      r.trace_primary_ms = ps.primary.trace_ms;
-      r.trace_shadow_ms = ps.shadow.trace_ms;
-      r.trace_ms = r.trace_primary_ms + r.trace_shadow_ms;
-      r.total_ms = r.update_ms + r.build_ms + r.trace_ms;
-      r.rays = ps.primary.rays;
-      r.shadow_rays = ps.shadow.rays;
-      r.hits = ps.primary.hits;
-      r.sah_cost = pr.accel->sah_cost().value_or(kNaN);
-      rows[c].push_back(r);
-    });
-    for (std::size_t c = 0; c < prepared.size(); ++c)
-      add_rows(f, run.done[c], tabulate(kCompareSchema, rows[c], visit_compare));
-    run.files.push_back(std::move(f));
-    return run;
-  }
-
-  // drift
-  FileRows fc = empty_file("clusters_frames.csv", kClustersFramesSchema, columns_of<ClusterFrameRow>(visit_cluster_frame));
-  FileRows ff = empty_file("frames.csv", kFramesSchema, columns_of<DriftFrameRow>(visit_drift_frame));
-  FileRows fr = empty_file("rays.csv", kRaysSchema, columns_of<RayRow>(visit_ray));
-  FileRows fk = empty_file("correlation.csv", kCorrelationSchema, columns_of<CorrelationRow>(visit_correlation));
-  study::PassOptions counted = timed;
-  counted.counters = true;
-  counted.ao_samples = p.ao_samples;
-  const bvh::SahCostModel cost = bvh::cluster_scene_defaults().build.cost;
-  struct Track {
-    std::vector<ClusterRow> first, prev;
-    std::vector<MeshletShape> shapes;
-    std::vector<double> drift_sum;  // per cluster: sum over frames after the first of |log box_area_ratio|
-    std::vector<double> radius_sum;
-    std::size_t frames_summed = 0;
-    std::vector<ClusterFrameRow> cluster_rows;
-    std::vector<DriftFrameRow> frame_rows;
-    std::vector<RayRow> ray_rows;
-  };
-  std::vector<Track> tracks(prepared.size());
-  for (std::size_t c = 0; c < prepared.size(); ++c)
-    if (prepared[c].has_clusters) {
-      const ClusterConfig mc = prepared[c].spec.cluster.value_or(p.cluster);
-      tracks[c].shapes = meshlet_shapes(prepared[c].clustering, prepared[c].mesh.triangles(),
-                                        prepared[c].mesh.vertex_count(), std::max<std::uint32_t>(mc.max_count, 1));
-    }
-  study::run_study(scene, prepared, setup, [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
-    Stopwatch sw;
-    Track& tr = tracks[c];
-    const study::Passes ps = study::trace_passes(pr, rays, setup.light, counted);
-    DriftFrameRow d;
-    d.scene = p.scene;
-    d.clustering = pr.spec.name;
-    d.frame = sf.frame;
-    d.warmup = sf.warmup;
-    const Mesh& m = pr.mesh;
-    // The triangle BVH of the same frame (its own structure, or built here for a clustering).
-    std::unique_ptr<bvh::TriangleScene> own_ts;
-    const bvh::TriangleScene* ts = loop::triangle_scene_of(*pr.accel);
-    if (!ts) own_ts = std::make_unique<bvh::TriangleScene>(m), ts = own_ts.get();
-    d.sah_cost_triangles = ts->bvh().cost;
-    double epo = 0;
-    if (pr.has_clusters) {
-      const bvh::ClusterScene* cs = loop::cluster_scene_of(*pr.accel);
-      d.clusters = pr.clustering.cluster_count();
-      d.sah_cost = cs->bvh().cost;
-      const SahShares shares = sah_shares(cs->bvh(), cs->boxes(), cs->weights(), cost);
-      std::vector<double> share(pr.clustering.cluster_count(), 0.0);
-      std::vector<std::uint32_t> offsets{0}, ids;
-      for (std::size_t i = 0; i < cs->cluster_ids().size(); ++i) {
-        const std::uint32_t k = cs->cluster_ids()[i];
-        share[k] = shares.share[i];
-        const auto t = pr.clustering.triangles_of(k);
-        ids.insert(ids.end(), t.begin(), t.end());
-        offsets.push_back(static_cast<std::uint32_t>(ids.size()));
-      }
-      epo = end_point_overlap(cs->bvh(), m.triangles(), m.positions(), offsets, ids, cost).epo;
-      d.sah_overhead = sah_overhead(m, pr.clustering).overhead;
-      const ClusterConfig mc = pr.spec.cluster.value_or(p.cluster);
-      const std::vector<ClusterRow> rows = cluster_rows(m, pr.clustering, mc);
-      if (tr.first.empty()) {
-        tr.first = rows, tr.prev = rows;
-        tr.drift_sum.assign(rows.size(), 0.0), tr.radius_sum.assign(rows.size(), 0.0);
-      }
-      const std::vector<ClusterDrift> dr = cluster_drift(tr.first, rows), dp = cluster_drift(tr.prev, rows);
-      if (sf.index > 0) {
-        for (std::size_t k = 0; k < rows.size(); ++k) {
-          tr.drift_sum[k] += std::abs(std::log(dr[k].box_area_ratio));
-          tr.radius_sum[k] += std::abs(std::log(dr[k].sphere_radius_ratio));
-        }
-        ++tr.frames_summed;
-      }
-      const DriftSummary ds = summarize_drift(dr, 5);
-      std::vector<double> reg, acc;
-      for (std::size_t k = 0; k < rows.size(); ++k) {
-        ClusterFrameRow r;
-        r.clustering = pr.spec.name;
-        r.frame = sf.frame;
-        r.cluster_id = static_cast<std::uint32_t>(k);
-        r.triangles = rows[k].m.triangles;
-        r.vertices = rows[k].m.vertices;
-        r.connectivity = rows[k].m.connectivity;
-        r.reg = rows[k].m.reg;
-        r.acc = rows[k].acc;
-        r.sphere_radius = rows[k].m.sphere.radius;
-        r.sphere_radius_ratio = dr[k].sphere_radius_ratio;
-        r.box_area = rows[k].m.box.surface_area();
-        r.box_area_ratio = dr[k].box_area_ratio;
-        r.box_area_ratio_prev = dp[k].box_area_ratio;
-        r.p_hit = rows[k].m.p_hit;
-        r.sah_share = share[k];
-        r.boundary_vertices = tr.shapes[k].boundary_vertices;
-        r.components = tr.shapes[k].components;
-        tr.cluster_rows.push_back(r);
-        reg.push_back(rows[k].m.reg);
-        if (std::isfinite(rows[k].acc)) acc.push_back(rows[k].acc);
-      }
-      d.reg_mean = summarize(reg).mean;
-      d.acc_mean = acc.empty() ? kNaN : summarize(acc).mean;
-      d.sphere_radius_ratio_max = ds.sphere_radius_ratio.count ? ds.sphere_radius_ratio.max : kNaN;
-      if (ds.box_area_ratio.count) {
-        d.box_area_ratio_mean = ds.box_area_ratio.mean;
-        d.box_area_ratio_p95 = ds.box_area_ratio.p95;
-        d.box_area_ratio_max = ds.box_area_ratio.max;
-      }
-      for (std::uint32_t w : ds.worst_box_area) d.worst_clusters += (d.worst_clusters.empty() ? "" : ";") + std::to_string(w);
-      tr.prev = rows;
-    } else {
-      d.sah_cost = d.sah_cost_triangles;
-      d.sah_overhead = 1.0;
-      epo = end_point_overlap(ts->bvh(), m.triangles(), m.positions(), {}, {}, cost).epo;
-    }
-    d.epo = epo;
-    d.nodes_per_ray = per_ray(ps.primary.nodes_visited, ps.primary.rays);
-    d.triangles_per_ray = per_ray(ps.primary.triangles_tested, ps.primary.rays);
-    const std::pair<const char*, const PassStats*> passes[] = {{"primary", &ps.primary}, {"shadow", &ps.shadow}, {"ao", &ps.ao}};
-    for (const auto& [type, st] : passes) {
-      if (st->rays == 0) continue;
-      RayRow r;
-      r.clustering = pr.spec.name;
-      r.frame = sf.frame;
-      r.ray_type = type;
-      r.rays = st->rays;
-      r.nodes_per_ray = per_ray(st->nodes_visited, st->rays);
-      r.triangles_per_ray = per_ray(st->triangles_tested, st->rays);
-      r.cost_per_ray = cost.traversal * r.nodes_per_ray + cost.intersection * r.triangles_per_ray;
-      r.sah_cost = d.sah_cost;
-      r.epo = epo;
-      r.trace_ms = st->trace_ms;
-      tr.ray_rows.push_back(r);
-    }
-    d.metrics_ms = sw.ms();
-    tr.frame_rows.push_back(d);
-  });
-  for (std::size_t c = 0; c < prepared.size(); ++c) {
-    const std::size_t item = run.done[c];
-    Track& tr = tracks[c];
-    add_rows(fc, item, tabulate(kClustersFramesSchema, tr.cluster_rows, visit_cluster_frame));
-    add_rows(ff, item, tabulate(kFramesSchema, tr.frame_rows, visit_drift_frame));
-    add_rows(fr, item, tabulate(kRaysSchema, tr.ray_rows, visit_ray));
-    std::vector<CorrelationRow> corr;
-    if (prepared[c].has_clusters) {
-      std::vector<double> conn, boxd, radd;
-      for (std::size_t k = 0; k < tr.first.size(); ++k) {
-        conn.push_back(tr.first[k].m.connectivity);
-        const double n = tr.frames_summed ? double(tr.frames_summed) : kNaN;
-        boxd.push_back(tr.drift_sum[k] / n);
-        radd.push_back(tr.radius_sum[k] / n);
-      }
-      // NaN drifts (a cluster of zero box area at the first frame) are left out pairwise.
-      auto pairs = [&](const std::vector<double>& y, const char* name) {
-        std::vector<double> xs, ys;
-        for (std::size_t k = 0; k < y.size(); ++k)
-          if (std::isfinite(y[k])) xs.push_back(conn[k]), ys.push_back(y[k]);
-        CorrelationRow r;
-        r.scene = p.scene;
-        r.clustering = prepared[c].spec.name;
-        r.x = "connectivity";
-        r.y = name;
-        r.clusters = xs.size();
-        r.frames = tr.frames_summed;
-        if (xs.size() >= 3) r.spearman = spearman(xs, ys), r.pearson = pearson(xs, ys);
-        corr.push_back(r);
-      };
-      pairs(boxd, "box_area_drift");
-      pairs(radd, "sphere_radius_drift");
-    }
-    add_rows(fk, item, tabulate(kCorrelationSchema, corr, visit_correlation));
-  }
-  run.files.push_back(std::move(fc));
-  run.files.push_back(std::move(ff));
-  run.files.push_back(std::move(fr));
-  run.files.push_back(std::move(fk));
+  Context x{scene, p, setup, rays, run, prepared};
+  if (p.kind == ExperimentKind::Sweep) run_sweep(x);
+  else if (p.kind == ExperimentKind::Compare) run_compare(x);
+  else run_drift(x);
   return run;
 }
 

@@ -43,6 +43,9 @@ struct ExperimentParams {
   std::string scene;                 ///< the SCENE argument as given (the `scene` column)
   ClusterConfig cluster;             ///< the user's clustering parameters (method/objective: sweep's)
   const Clustering* given = nullptr;  ///< --clusters DIR: compare's and drift's method, accuracy's clustering
+  /// A clustering will be given (the item list is known before it is read); implied by `given`.
+  bool clusters_given = false;
+  [[nodiscard]] bool has_given() const { return given != nullptr || clusters_given; }
   /// sweep: the MaxCount = MaxSize values (0: one triangle per cluster, the standard).
   std::vector<std::uint32_t> max_counts{0, 10, 50, 100};
   /// compare: the configurations (clusterings by name, "given", kCompareStructures).

@@ -75,7 +75,8 @@ Passes trace_passes(Prepared& p, const StudyRays& rays, const Vec3& light, const
   t.counters = false;
   const loop::Accel& a = *p.accel;
   const bool counted = opt.counters && !loop::is_embree(p.spec.kind);
-  bvh::HitBatch hits;
+  bvh::HitBatch& hits = p.hits;
+  hits.resize(rays.primary.size());  // allocated and touched outside the timed trace
   Stopwatch sw;
   const bvh::TraceTotals tp = a.trace(rays.primary, hits, t);  // timed alone (argument order is unspecified)
   out.primary.add(tp, sw.ms());

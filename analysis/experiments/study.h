@@ -92,6 +92,7 @@ struct Prepared {
   std::unique_ptr<loop::Accel> accel;
   double cluster_ms = 0;               ///< making the clustering (0 when given)
   double setup_ms = 0;                 ///< renumbering and building the structure, once
+  bvh::HitBatch hits;                  ///< the primary hits of the last trace_passes (kept: no allocation in the timed trace)
 };
 
 /// Clusters (when the configuration has them), renumbers (VertexOrder::Clusters) and builds

@@ -15,6 +15,8 @@ struct ExperimentArgs {
   ClusterFlags flags;
   std::string frames, deform, max_counts, configs, reference, clusterings, shard, cluster_leaf = "linear",
       vertex_order = "clusters";
+  int ao_samples = 1;
+  std::size_t reference_rays = 512;
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -34,6 +36,9 @@ void register_experiment(CLI::App& app, Context& ctx) {
         if (given("--reference")) o.reference = a->reference;
         if (given("--clusterings")) o.clusterings = a->clusterings;
         if (given("--shard")) o.shard = a->shard;
+        if (given("--ao-samples")) o.ao_samples = a->ao_samples;
+        if (given("--reference-rays")) o.reference_rays = a->reference_rays;
+        o.method_given = given("--method") || given("--objective");
         a->flags.apply(o.cluster, o.given);
         o.cluster_leaf = *bvh::parse_cluster_leaf(a->cluster_leaf);
         o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
@@ -62,15 +67,15 @@ void register_experiment(CLI::App& app, Context& ctx) {
   c->add_option("--configs", a->configs,
                 "compare: configurations, comma-separated (default: acc_growth, acc_contraction (or given), standard, "
                 "naive, gwh01, meshopt, sah_split, embree_low, embree_refit, embree_medium)");
-  c->add_option("--reference", a->reference, "compare: the configuration perf_factor divides by (default acc_contraction, "
-                                             "or given)");
+  c->add_option("--reference", a->reference, "compare: the configuration perf_factor divides by (default: given, else "
+                                             "acc_contraction, else the first of --configs)");
   c->add_option("--clusterings", a->clusterings,
                 "drift: clusterings, comma-separated (default: acc_growth, acc_contraction (or given), naive, gwh01, "
                 "meshopt, sah_split); the triangle BVH is always measured beside them");
-  c->add_option("--ao-samples", a->opt.ao_samples, "drift: AO rays per primary hit for the ray counters (0: no AO pass)")
+  c->add_option("--ao-samples", a->ao_samples, "drift: AO rays per primary hit for the ray counters (0: no AO pass)")
       ->check(CLI::Range(0, 64))
       ->capture_default_str();
-  c->add_option("--reference-rays", a->opt.reference_rays,
+  c->add_option("--reference-rays", a->reference_rays,
                 "accuracy: primary rays checked against the double-precision brute force")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20))
       ->capture_default_str();

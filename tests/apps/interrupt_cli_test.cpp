@@ -133,8 +133,8 @@ class Interrupt : public ptc::test::CliTest {
 
   // Starts the long run, signals it once it works, and checks what every interrupted run must
   // show: exit 130, one line on stderr saying so and naming the output, no temporary sibling.
-  RunResult interrupt(const fs::path& out, int sig) {
-    const pid_t pid = start(long_bench(out));
+  RunResult interrupt(const fs::path& out, int sig, std::vector<std::string> args = {}) {
+    const pid_t pid = start(args.empty() ? long_bench(out) : args);
     if (pid <= 0) return {};
     if (!wait_until_working(pid, out)) {
       if (!exited_early_) {  // an ended process is reaped already: its pid may be another's now
@@ -171,6 +171,17 @@ TEST_F(Interrupt, CtrlCLeavesNoOutputAndNoTemporaryDirectory) {
 TEST_F(Interrupt, SigtermStopsTheSameWay) {
   const fs::path out = dir_ / "out";
   (void)interrupt(out, SIGTERM);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// `ptc experiment` stops the same way (its study loop is the frame loop; the clusterings before it
+// stop at their progress steps).
+TEST_F(Interrupt, AnExperimentStopsTheSameWay) {
+  const fs::path out = dir_ / "out";
+  (void)interrupt(out, SIGINT,
+                  {"experiment", "compare", "armadillo-twist", "--data-dir", kData, "--frames", "0:2000",
+                   "--extend-frames", "--configs", "acc_growth,standard", "--width", "128", "--height", "128",
+                   "--quiet", "--out", out.string()});
   EXPECT_FALSE(fs::exists(out));
 }
 

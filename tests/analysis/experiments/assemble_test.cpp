@@ -77,14 +77,15 @@ TEST(Assemble, ComparePerfFactorIsFrameByFrameAndNanWithoutTheReference) {
   EXPECT_NE(a.text.find("is not among these rows"), std::string::npos) << a.text;
 }
 
-TEST(Assemble, DriftRegressionRecoversAnExactlyLinearCost) {
-  // cost = 0.5 SAH + 2 EPO + 1 exactly, over points where SAH and EPO are not collinear.
+TEST(Assemble, DriftRegressionRecoversExactlyLinearCosts) {
+  // cost_per_ray = 0.5 SAH + 2 EPO + 1 and ns_per_ray = 10 nodes + 0.5 triangles + 3, exactly,
+  // over points where SAH and EPO (and nodes and triangles) are not collinear.
   std::vector<std::vector<std::string>> rays, frames;
   for (int i = 0; i < 12; ++i) {
-    const double sah = 20.0 + i, epo = 3.0 + (i * 7 % 5);
-    const double cost = 0.5 * sah + 2.0 * epo + 1.0;
-    rays.push_back({"c", std::to_string(i), "primary", "100", "0", "0", format_double(cost), format_double(sah),
-                    format_double(epo), "1"});
+    const double sah = 20.0 + i, epo = 3.0 + (i * 7 % 5), nodes = 4.0 + (i * 5 % 7), tris = 10.0 + 3 * i;
+    const double cost = 0.5 * sah + 2.0 * epo + 1.0, ns = 10.0 * nodes + 0.5 * tris + 3.0;
+    rays.push_back({"c", std::to_string(i), "shadow", "100", format_double(nodes), format_double(tris),
+                    format_double(cost), format_double(sah), format_double(epo), "1", format_double(ns)});
     frames.push_back({"s", "c", std::to_string(i), "0", "10", format_double(sah), "20", "1.2", format_double(epo), "3",
                       "1", "1.5", "1.1", "", "2"});
   }
@@ -95,24 +96,36 @@ TEST(Assemble, DriftRegressionRecoversAnExactlyLinearCost) {
       ExperimentKind::Drift,
       {file("rays.csv",
             {"clustering", "frame", "ray_type", "rays", "nodes_per_ray", "triangles_per_ray", "cost_per_ray", "sah_cost",
-             "epo", "trace_ms"},
+             "epo", "trace_ms", "ns_per_ray"},
             rays),
        file("frames.csv", fh, frames),
        file("correlation.csv", {"scene", "clustering", "x", "y", "clusters", "frames", "spearman", "pearson"},
             {{"s", "c", "connectivity", "box_area_drift", "10", "11", "-0.5", "-0.4"}})},
       "");
   const FileRows& r = find(a, "regression.csv");
-  ASSERT_EQ(r.rows.rows.size(), 4u);  // sah, epo, sah+epo, sah+0.71epo for the one ray type
-  auto both = row_map(r, 2);
-  EXPECT_EQ(both["model"], "sah+epo");
-  EXPECT_EQ(both["points"], "12");
+  // cost_per_ray: sah, epo, sah+epo, sah+0.71epo; ns_per_ray: the same and nodes+triangles.
+  ASSERT_EQ(r.rows.rows.size(), 9u);
+  std::map<std::string, std::map<std::string, std::string>> by;
+  for (std::size_t i = 0; i < r.rows.rows.size(); ++i) {
+    auto m = row_map(r, i);
+    EXPECT_EQ(m["ray_type"], "shadow");
+    EXPECT_EQ(m["points"], "12");
+    by[m["target"] + "/" + m["model"]] = m;
+  }
+  auto& both = by["cost_per_ray/sah+epo"];
   EXPECT_NEAR(std::stod(both["coef_sah"]), 0.5, 1e-9);
   EXPECT_NEAR(std::stod(both["coef_epo"]), 2.0, 1e-9);
   EXPECT_NEAR(std::stod(both["intercept"]), 1.0, 1e-8);
   EXPECT_NEAR(std::stod(both["r2"]), 1.0, 1e-12);
   EXPECT_NEAR(std::stod(both["epo_weight"]), 4.0, 1e-8);
-  EXPECT_LT(std::stod(row_map(r, 0)["r2"]), 0.99);  // SAH alone does not explain it
+  EXPECT_LT(std::stod(by["cost_per_ray/sah"]["r2"]), 0.99);  // SAH alone does not explain it
+  auto& counters = by["ns_per_ray/nodes+triangles"];
+  EXPECT_NEAR(std::stod(counters["coef_nodes"]), 10.0, 1e-9);
+  EXPECT_NEAR(std::stod(counters["coef_triangles"]), 0.5, 1e-9);
+  EXPECT_NEAR(std::stod(counters["triangle_weight"]), 0.05, 1e-10);
+  EXPECT_NEAR(std::stod(counters["r2"]), 1.0, 1e-12);
   EXPECT_NE(a.text.find("-0.500"), std::string::npos) << a.text;  // the Spearman in the summary
+  EXPECT_NE(a.text.find("a triangle test = 0.05 node visits"), std::string::npos) << a.text;
 }
 
 }  // namespace
