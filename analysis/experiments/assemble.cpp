@@ -240,7 +240,7 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
   FileRows reg = derived("regression.csv", {"ptc-drift-regression", 1},
                          {"ray_type", "target", "model", "points", "coef_sah", "coef_epo", "coef_nodes", "coef_triangles",
                           "intercept", "r2", "epo_weight", "triangle_weight"});
-  const Groups g = group_by(rays, {"ray_type"});
+  const Groups g = group_by(rays, {"ray_type"}, measured(rays));  // the warm-up frame left out, as everywhere
   const std::size_t sah = rays.column("sah_cost"), epo = rays.column("epo"), nodes = rays.column("nodes_per_ray"),
                     tris = rays.column("triangles_per_ray");
   constexpr double kTinyBvhEpoWeight = 0.71;
