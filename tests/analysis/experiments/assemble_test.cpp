@@ -84,19 +84,21 @@ TEST(Assemble, DriftRegressionRecoversExactlyLinearCosts) {
   for (int i = 0; i < 12; ++i) {
     const double sah = 20.0 + i, epo = 3.0 + (i * 7 % 5), nodes = 4.0 + (i * 5 % 7), tris = 10.0 + 3 * i;
     const double cost = 0.5 * sah + 2.0 * epo + 1.0, ns = 10.0 * nodes + 0.5 * tris + 3.0;
-    rays.push_back({"c", std::to_string(i), "shadow", "100", format_double(nodes), format_double(tris),
+    rays.push_back({"c", std::to_string(i), "0", "shadow", "100", format_double(nodes), format_double(tris),
                     format_double(cost), format_double(sah), format_double(epo), "1", format_double(ns)});
     frames.push_back({"s", "c", std::to_string(i), "0", "10", format_double(sah), "20", "1.2", format_double(epo), "3",
                       "1", "1.5", "1.1", "", "2"});
   }
+  // A warm-up row far off both lines: counted, it would spoil the exact fits.
+  rays.push_back({"c", "99", "1", "shadow", "100", "50", "50", "1000", "30", "5", "1", "99999"});
   const std::vector<std::string> fh = {"scene", "clustering", "frame", "warmup", "clusters", "sah_cost",
                                        "sah_cost_triangles", "sah_overhead", "epo", "nodes_per_ray", "triangles_per_ray",
                                        "box_area_ratio_max", "box_area_ratio_p95", "worst_clusters", "metrics_ms"};
   const Assembled a = assemble(
       ExperimentKind::Drift,
       {file("rays.csv",
-            {"clustering", "frame", "ray_type", "rays", "nodes_per_ray", "triangles_per_ray", "cost_per_ray", "sah_cost",
-             "epo", "trace_ms", "ns_per_ray"},
+            {"clustering", "frame", "warmup", "ray_type", "rays", "nodes_per_ray", "triangles_per_ray", "cost_per_ray",
+             "sah_cost", "epo", "trace_ms", "ns_per_ray"},
             rays),
        file("frames.csv", fh, frames),
        file("correlation.csv", {"scene", "clustering", "x", "y", "clusters", "frames", "spearman", "pearson"},
