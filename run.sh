@@ -2,7 +2,7 @@
 # ptc set-up, build and run.  usage:
 #   ./run.sh          install what is missing, build (Release), run the main job: the paper's
 #                     experiment (sweep, compare, drift) on scenes/paper-default.json -> out/
-#   ./run.sh full     the same study on the four full-size scenes -> out/full/ (hours; README)
+#   ./run.sh full     the same study on the four full-size scenes -> out-full/ (about an hour; README)
 #   ./run.sh test     install what is missing, build, run the whole test suite (ctest)
 #   ./run.sh build    install what is missing and build only
 # Environment: BUILD_DIR (default build), PTC_SANITIZE=1 (ASan+UBSan build in build-asan),
@@ -93,14 +93,16 @@ case "$mode" in
     key_numbers out ;;
   full)
     # The full-size study: the four animated scenes from real data, as the paper had four (a
-    # keyframed one, a skinned one, the cloth, a real mesh under a deformer) at 670k-1.3M triangles.
+    # keyframed one, a skinned one, the cloth, a real mesh under a deformer) at 670k-1.3M
+    # triangles, their first 30 frames; into out-full/ (out/ is the main job's).
     ptc="$build/bin/ptc"
     for scene in faerie-670k epileptic-1.3m cloth-sphere-832k armadillo-832k-twist; do
       for kind in sweep compare drift; do
-        echo "== ptc experiment $kind $scene" >&2
-        "$ptc" experiment "$kind" "$scene" --width 1024 --height 1024 --out "out/full/$scene/$kind"
+        rays=1024; [ "$kind" = drift ] && rays=512
+        echo "== ptc experiment $kind $scene --frames 0:29 --width $rays --height $rays" >&2
+        "$ptc" experiment "$kind" "$scene" --frames 0:29 --width "$rays" --height "$rays" --out "out-full/$scene/$kind"
       done
-      key_numbers "out/full/$scene"
+      key_numbers "out-full/$scene"
     done ;;
   *) echo "usage: ./run.sh [run|full|test|build]" >&2; exit 2 ;;
 esac

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "analysis/schema/json.h"
@@ -242,6 +243,9 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
 
   study::StudySetup setup;
   if (opt.shard) setup.shard = parse_shard(*opt.shard);
+  if (setup.shard.count > items.size())
+    throw UsageError("--shard", fmt::format("{} shards for {} work items ({}): at most one shard per item",
+                                            setup.shard.count, items.size(), fmt::join(items, ", ")));
   setup.width = opt.width;
   setup.height = opt.height;
   setup.threads = resolve_threads(opt.threads);

@@ -273,6 +273,7 @@ TEST_F(Experiment, UsageErrorsNameTheFlag) {
       {{"experiment", "sweep", "cloth-sphere-32", "--gwh-a1", "0.5"}, "--gwh-a1"},
       {{"experiment", "sweep", "cloth-sphere-32", "--shard", "0/3"}, "--shard"},
       {{"experiment", "sweep", "cloth-sphere-32", "--shard", "4/3"}, "--shard"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,10", "--shard", "1/3"}, "at most one shard per item"},
       {{"experiment", "sweep", "cloth-sphere-32", "--frames", "5:2"}, "--frames"},
       {{"experiment", "bogus", "cloth-sphere-32"}, "KIND"},
       {{"experiment", "compare", "cloth-sphere-32", "--method", "growth"}, "--method"},
