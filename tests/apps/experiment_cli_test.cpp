@@ -167,7 +167,8 @@ TEST_F(Experiment, CompareDividesByTheReferenceFrameByFrame) {
 }
 
 TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
-  const std::vector<std::string> base = {"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,10", "--width",
+  // Three items, so that the same study can also be split in three.
+  const std::vector<std::string> base = {"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,10,20", "--width",
                                          "16", "--height", "16", "--quiet"};
   auto run = [&](std::vector<std::string> extra, const std::string& out) {
     auto a = base;
