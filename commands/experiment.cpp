@@ -2,6 +2,7 @@
 #include "commands/experiment.h"
 
 #include <algorithm>
+#include <charconv>
 #include <fstream>
 #include <map>
 #include <ostream>
@@ -121,6 +122,20 @@ void write_assembled(OutputDir& dir, RunManifest& manifest, const Assembled& a) 
   manifest.add_output("summary.txt");
 }
 
+// A CSV cell as JSON: a number when the whole cell is one (nan and inf: null, as JSON has none),
+// else the text.
+nlohmann::json cell_json(const std::string& c) {
+  if (c == "nan" || c == "inf" || c == "-inf") return nullptr;
+  std::int64_t n = 0;
+  if (const auto ri = std::from_chars(c.data(), c.data() + c.size(), n); !c.empty() && ri.ec == std::errc() &&
+                                                                         ri.ptr == c.data() + c.size())
+    return n;
+  double v = 0;
+  const auto res = std::from_chars(c.data(), c.data() + c.size(), v);
+  if (!c.empty() && res.ec == std::errc() && res.ptr == c.data() + c.size()) return v;
+  return c;
+}
+
 nlohmann::json summary_json(const Assembled& a, std::string_view schema) {
   nlohmann::json files = nlohmann::json::object();
   for (const auto& f : a.files) {
@@ -128,7 +143,7 @@ nlohmann::json summary_json(const Assembled& a, std::string_view schema) {
     nlohmann::json rows = nlohmann::json::array();
     for (const auto& r : f.rows.rows) {
       nlohmann::json o = nlohmann::json::object();
-      for (std::size_t i = 0; i < r.size(); ++i) o[f.rows.header[i]] = r[i];
+      for (std::size_t i = 0; i < r.size(); ++i) o[f.rows.header[i]] = cell_json(r[i]);
       rows.push_back(o);
     }
     files[f.file] = rows;

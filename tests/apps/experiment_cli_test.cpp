@@ -8,6 +8,8 @@
 #include "apps/cli_harness.h"
 #include "common/csv_rows.h"
 
+#include <nlohmann/json.hpp>
+
 namespace ptc::test {
 namespace {
 
@@ -164,6 +166,20 @@ TEST_F(Experiment, CompareDividesByTheReferenceFrameByFrame) {
     EXPECT_EQ(x.at("rays"), "1024");
   }
   EXPECT_EQ(configs, (std::set<std::string>{"acc_growth", "standard", "embree_refit"}));
+
+  // --json: the summary tables with numbers as numbers (the reference's factor is exactly 1).
+  const RunResult j = ptc({"experiment", "compare", "armadillo-twist", "--frames", "0:2", "--width", "16", "--height",
+                           "16", "--configs", "acc_growth,standard", "--reference", "standard", "--quiet", "--json",
+                           "--out", (dir_ / "j").string()});
+  ASSERT_EQ(j.code, 0) << j.err;
+  const auto js = nlohmann::json::parse(j.out);
+  EXPECT_EQ(js.at("schema"), "ptc-experiment-summary/1");
+  const auto& summary = js.at("tables").at("compare_summary.csv");
+  ASSERT_EQ(summary.size(), 2u);
+  for (const auto& row : summary) {
+    EXPECT_TRUE(row.at("frames").is_number_integer());
+    if (row.at("config") == "standard") EXPECT_EQ(row.at("perf_factor").get<double>(), 1.0);
+  }
 }
 
 TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
