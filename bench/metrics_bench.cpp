@@ -103,12 +103,7 @@ int main(int argc, char** argv) {
       const bvh::TraceTotals p = bvh::trace(*d, rays, hits, with);
       const SurfaceHits sh = surface_hits(mesh, rays, hits);
       const RayFrame frame{mesh.bounds(), d->origin};
-      const TraceTarget counting{[d](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
-                                   bvh::TraceOptions c2 = o;
-                                   c2.counters = true;
-                                   return bvh::trace(*d, r, h, c2);
-                                 },
-                                 d->origin};
+      const TraceTarget counting = with_counters(target_of(*d));
       const PassStats shadow = trace_shadows(counting, sh, light, frame, 1).stats;
       AoConfig ao;
       ao.samples = 1;

@@ -57,11 +57,7 @@ bool is_structure(std::string_view s) {
     if (s == n) return true;
   return false;
 }
-bool is_clustering(std::string_view s) {
-  for (const char* n : study::kClusteringNames)
-    if (s == n) return true;
-  return false;
-}
+bool is_clustering(std::string_view s) { return study::clustering_config(s, {}).has_value(); }
 std::string names_list(bool structures) {
   std::string s;
   for (const char* n : study::kClusteringNames) s += std::string(s.empty() ? "" : ", ") + n;
@@ -360,25 +356,22 @@ struct ShardIn {
   nlohmann::json manifest;
 };
 
-nlohmann::json read_manifest(const std::filesystem::path& dir) {
-  const std::filesystem::path f = dir / "manifest.json";
-  std::ifstream in(f);
-  if (!in) throw InputError(f.string(), "", "", "cannot read it (is the directory an output of `ptc experiment`?)");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  try {
-    return nlohmann::json::parse(ss.str());
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(f.string(), "", "", std::string("not valid JSON: ") + e.what());
-  }
-}
-
-std::string read_text(const std::filesystem::path& f) {
+std::string read_text(const std::filesystem::path& f, const char* why) {
   std::ifstream in(f, std::ios::binary);
-  if (!in) throw InputError(f.string(), "", "", "cannot read it (the shard's manifest lists it)");
+  if (!in) throw InputError(f.string(), "", "", std::string("cannot read it (") + why + ")");
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+nlohmann::json read_manifest(const std::filesystem::path& dir) {
+  const std::filesystem::path f = dir / "manifest.json";
+  const std::string text = read_text(f, "is the directory an output of `ptc experiment`?");
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(f.string(), "", "", std::string("not valid JSON: ") + e.what());
+  }
 }
 
 // What must agree between the shards of one study: the command and its schema, every parameter
@@ -511,7 +504,7 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
       const std::filesystem::path path = s.dir / name;
       CsvText t;
       try {
-        t = parse_csv(read_text(path));
+        t = parse_csv(read_text(path, "the shard's manifest lists it"));
       } catch (const std::invalid_argument& e) {
         throw InputError(path.string(), "", "", e.what());
       }

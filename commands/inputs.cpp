@@ -10,35 +10,41 @@
 namespace ptc {
 namespace fs = std::filesystem;
 
-std::string mesh_fnv1a64(const Mesh& mesh) {
-  std::uint64_t h = 14695981039346656037ull;
-  auto bytes = [&h](const void* p, std::size_t n) {
+namespace {
+
+// FNV-1a, 64 bits, over bytes fed in any number of pieces; hex() is the manifests' spelling.
+struct Fnv1a64 {
+  std::uint64_t h = 14695981039346656037ull;  // offset basis
+  void add(const void* p, std::size_t n) {
     const auto* b = static_cast<const unsigned char*>(p);
     for (std::size_t i = 0; i < n; ++i) h ^= b[i], h *= 1099511628211ull;
-  };
-  for (const Tri& t : mesh.triangles()) bytes(t.data(), sizeof(Tri));
-  for (const Vec3& v : mesh.positions()) bytes(v.data(), 3 * sizeof(double));
-  char out[17];
-  std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
-  return out;
+  }
+  [[nodiscard]] std::string hex() const {
+    char out[17];
+    std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
+    return out;
+  }
+};
+
+}  // namespace
+
+std::string mesh_fnv1a64(const Mesh& mesh) {
+  Fnv1a64 f;
+  for (const Tri& t : mesh.triangles()) f.add(t.data(), sizeof(Tri));
+  for (const Vec3& v : mesh.positions()) f.add(v.data(), 3 * sizeof(double));
+  return f.hex();
 }
 
 std::string file_fnv1a64(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "", "", "cannot open file");
-  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64 offset basis
+  Fnv1a64 f;
   std::vector<char> buf(1 << 20);
   while (in) {
     in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-    const auto n = in.gcount();
-    for (std::streamsize i = 0; i < n; ++i) {
-      h ^= static_cast<unsigned char>(buf[static_cast<std::size_t>(i)]);
-      h *= 1099511628211ull;
-    }
+    f.add(buf.data(), static_cast<std::size_t>(in.gcount()));
   }
-  char out[17];
-  std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
-  return out;
+  return f.hex();
 }
 
 void record_input(RunManifest& manifest, const fs::path& path) {

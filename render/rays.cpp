@@ -69,6 +69,16 @@ void any_hit_pass(const TraceTarget& scene, const std::vector<std::uint32_t>& po
 
 }  // namespace
 
+TraceTarget with_counters(TraceTarget target) {
+  auto inner = std::move(target.trace);
+  target.trace = [inner = std::move(inner)](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
+    bvh::TraceOptions c = o;
+    c.counters = true;
+    return inner(r, h, c);
+  };
+  return target;
+}
+
 void PassStats::add(const bvh::TraceTotals& t, double ms) {
   rays += t.rays, hits += t.hits, nodes_visited += t.nodes_visited, triangles_tested += t.triangles_tested;
   trace_ms += ms;

@@ -77,6 +77,10 @@ template <class Tracer>
           tracer.origin()};
 }
 
+/// The same target tracing with the per-ray counters on, whatever the pass asks (the untimed
+/// counted trace of the experiments and benchmarks).
+[[nodiscard]] TraceTarget with_counters(TraceTarget target);
+
 /// Totals and wall time of one trace pass.
 struct PassStats {
   std::uint64_t rays = 0, hits = 0, nodes_visited = 0, triangles_tested = 0;

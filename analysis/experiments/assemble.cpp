@@ -63,14 +63,6 @@ std::function<bool(std::size_t)> measured(const CsvText& t) {
   return [&t, w](std::size_t r) { return t.rows[r][w] != "1"; };
 }
 
-FileRows derived(std::string file, Schema schema, std::vector<std::string> header) {
-  FileRows f;
-  f.file = std::move(file);
-  f.schema = std::move(schema);
-  f.rows.header = std::move(header);
-  return f;
-}
-
 std::string num(double x) { return format_double(x); }
 
 std::string ratio_text(double x) { return std::isfinite(x) ? fmt::format("{:.2f}x", x) : std::string("-"); }
@@ -79,7 +71,7 @@ std::string ratio_text(double x) { return std::isfinite(x) ? fmt::format("{:.2f}
 
 void assemble_sweep(std::vector<FileRows>& files, std::string& text) {
   const CsvText& s = file_of(files, "sweep.csv").rows;
-  FileRows out = derived("sweep_summary.csv", {"ptc-sweep-summary", 1},
+  FileRows out = file_rows("sweep_summary.csv", {"ptc-sweep-summary", 1},
                          {"scene", "max_count", "primitives", "stage", "frames", "median_ms", "speedup_vs_max_count_0"});
   const Groups g = group_by(s, {"scene", "max_count", "primitives", "stage"}, measured(s));
   const std::size_t ms = s.column("ms");
@@ -153,7 +145,7 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
     const double t = c.number(i, total);
     c.rows[i][pf] = num(it != ref.end() && it->second > 0 ? t / it->second : kNaN);
   }
-  FileRows out = derived("compare_summary.csv", {"ptc-compare-summary", 1},
+  FileRows out = file_rows("compare_summary.csv", {"ptc-compare-summary", 1},
                          {"scene", "config", "reference", "frames", "update_ms", "build_ms", "trace_ms", "total_ms",
                           "perf_factor", "perf_factor_first", "perf_factor_last", "perf_factor_early", "perf_factor_late",
                           "perf_factor_min", "perf_factor_max"});
@@ -237,7 +229,7 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
   const CsvText& rays = file_of(files, "rays.csv").rows;
   const CsvText& frames = file_of(files, "frames.csv").rows;
   const CsvText& corr = file_of(files, "correlation.csv").rows;
-  FileRows reg = derived("regression.csv", {"ptc-drift-regression", 1},
+  FileRows reg = file_rows("regression.csv", {"ptc-drift-regression", 1},
                          {"ray_type", "target", "model", "points", "coef_sah", "coef_epo", "coef_nodes", "coef_triangles",
                           "intercept", "r2", "epo_weight", "triangle_weight"});
   const Groups g = group_by(rays, {"ray_type"}, measured(rays));  // the warm-up frame left out, as everywhere

@@ -145,23 +145,6 @@ ConfigRow config_row(const std::string& scene, const study::Prepared& p) {
   return r;
 }
 
-// Adds the rows of one item to a file's rows.
-void add_rows(FileRows& f, std::size_t item, const Table& t) {
-  CsvText c = parse_csv(t.csv.str());
-  if (f.rows.header.empty()) f.rows.header = c.header;
-  if (f.schema.name.empty()) f.schema = t.schema;
-  f.item_rows.emplace_back(item, c.rows.size());
-  for (auto& r : c.rows) f.rows.rows.push_back(std::move(r));
-}
-
-FileRows empty_file(std::string name, Schema schema, std::vector<std::string> header) {
-  FileRows f;
-  f.file = std::move(name);
-  f.schema = std::move(schema);
-  f.rows.header = std::move(header);
-  return f;
-}
-
 double per_ray(std::uint64_t n, std::uint64_t rays) { return rays ? double(n) / double(rays) : kNaN; }
 
 // ---------------------------------------------------------------- sweep
@@ -354,7 +337,7 @@ std::vector<study::Prepared> prepare_all(const Scene& scene, const std::vector<s
     const ConfigRow row = config_row(scene_label, out.back());
     run.timings_ms["prepare_" + specs[i].name] = out.back().cluster_ms + out.back().setup_ms;
     std::vector<ConfigRow> one{row};
-    add_rows(configs, run.done[i], tabulate(kConfigsSchema, one, visit_config));
+    add_item_rows(configs, run.done[i], tabulate(kConfigsSchema, one, visit_config));
     if (setup.progress) setup.progress(kPrepareShare * double(i + 1) / double(specs.size()));
   }
   return out;
@@ -372,6 +355,7 @@ struct Context {
   const ExperimentParams& p;
   const study::StudySetup& setup;
   const study::StudyRays& rays;
+  const loop::AccelSetup& as;  ///< the trace frame and settings every structure shares
   ExperimentRun& run;
   std::vector<study::Prepared>& prepared;
 };
@@ -379,7 +363,7 @@ struct Context {
 void run_sweep(Context& x) {
   study::PassOptions timed;
   timed.threads = x.setup.threads;
-  FileRows f = empty_file("sweep.csv", kSweepSchema, columns_of<SweepRow>(visit_sweep));
+  FileRows f = file_rows("sweep.csv", kSweepSchema, columns_of<SweepRow>(visit_sweep));
   std::vector<std::vector<SweepRow>> rows(x.prepared.size());
   study::run_study(x.scene, x.prepared, loop_setup(x.setup), [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
     const study::Passes ps = study::trace_passes(pr, x.rays, x.setup.light, timed);
@@ -401,14 +385,14 @@ void run_sweep(Context& x) {
       rows[c].push_back(r);
     }
   });
-  for (std::size_t c = 0; c < x.prepared.size(); ++c) add_rows(f, x.run.done[c], tabulate(kSweepSchema, rows[c], visit_sweep));
+  for (std::size_t c = 0; c < x.prepared.size(); ++c) add_item_rows(f, x.run.done[c], tabulate(kSweepSchema, rows[c], visit_sweep));
   x.run.files.push_back(std::move(f));
 }
 
 void run_compare(Context& x) {
   study::PassOptions timed;
   timed.threads = x.setup.threads;
-  FileRows f = empty_file("compare.csv", kCompareSchema, columns_of<CompareRow>(visit_compare));
+  FileRows f = file_rows("compare.csv", kCompareSchema, columns_of<CompareRow>(visit_compare));
   std::vector<std::vector<CompareRow>> rows(x.prepared.size());
   study::run_study(x.scene, x.prepared, loop_setup(x.setup), [&](const study::StudyFrame& sf, std::size_t c, study::Prepared& pr) {
     const study::Passes ps = study::trace_passes(pr, x.rays, x.setup.light, timed);
@@ -432,7 +416,7 @@ void run_compare(Context& x) {
     rows[c].push_back(r);
   });
   for (std::size_t c = 0; c < x.prepared.size(); ++c)
-    add_rows(f, x.run.done[c], tabulate(kCompareSchema, rows[c], visit_compare));
+    add_item_rows(f, x.run.done[c], tabulate(kCompareSchema, rows[c], visit_compare));
   x.run.files.push_back(std::move(f));
 }
 
@@ -446,6 +430,9 @@ struct Track {
   std::vector<ClusterFrameRow> cluster_rows;
   std::vector<DriftFrameRow> frame_rows;
   std::vector<RayRow> ray_rows;
+  /// A clustering's triangle BVH of the same frame: one structure updated per frame, in the
+  /// study's trace frame, as the triangles item's own.
+  std::unique_ptr<loop::Accel> triangles;
 };
 
 // The cluster BVH's metrics at the frame: SAH shares per cluster id, EPO, meshoptimizer's SAH
@@ -555,10 +542,10 @@ std::vector<CorrelationRow> drift_correlations(const ExperimentParams& p, const 
 }
 
 void run_drift(Context& x) {
-  FileRows fc = empty_file("clusters_frames.csv", kClustersFramesSchema, columns_of<ClusterFrameRow>(visit_cluster_frame));
-  FileRows ff = empty_file("frames.csv", kFramesSchema, columns_of<DriftFrameRow>(visit_drift_frame));
-  FileRows fr = empty_file("rays.csv", kRaysSchema, columns_of<RayRow>(visit_ray));
-  FileRows fk = empty_file("correlation.csv", kCorrelationSchema, columns_of<CorrelationRow>(visit_correlation));
+  FileRows fc = file_rows("clusters_frames.csv", kClustersFramesSchema, columns_of<ClusterFrameRow>(visit_cluster_frame));
+  FileRows ff = file_rows("frames.csv", kFramesSchema, columns_of<DriftFrameRow>(visit_drift_frame));
+  FileRows fr = file_rows("rays.csv", kRaysSchema, columns_of<RayRow>(visit_ray));
+  FileRows fk = file_rows("correlation.csv", kCorrelationSchema, columns_of<CorrelationRow>(visit_correlation));
   study::PassOptions counted;
   counted.threads = x.setup.threads;
   counted.counters = true;
@@ -580,10 +567,13 @@ void run_drift(Context& x) {
     d.clustering = pr.spec.name;
     d.frame = sf.frame;
     d.warmup = sf.warmup;
-    // The triangle BVH of the same frame (its own structure, or built here for a clustering).
-    std::unique_ptr<bvh::TriangleScene> own_ts;
+    // The triangle BVH of the same frame (its own structure, or one kept beside a clustering).
     const bvh::TriangleScene* ts = loop::triangle_scene_of(*pr.accel);
-    if (!ts) own_ts = std::make_unique<bvh::TriangleScene>(pr.mesh), ts = own_ts.get();
+    if (!ts) {
+      if (!tr.triangles) tr.triangles = loop::make_accel(loop::AccelKind::OursTriangles, pr.mesh, x.as);
+      else tr.triangles->update(pr.mesh.positions());
+      ts = loop::triangle_scene_of(*tr.triangles);
+    }
     d.sah_cost_triangles = ts->bvh().cost;
     if (pr.has_clusters) {
       drift_clusters(x.p, sf, pr, tr, cost, d);
@@ -618,15 +608,30 @@ void run_drift(Context& x) {
   for (std::size_t c = 0; c < x.prepared.size(); ++c) {
     const std::size_t item = x.run.done[c];
     const Track& tr = tracks[c];
-    add_rows(fc, item, tabulate(kClustersFramesSchema, tr.cluster_rows, visit_cluster_frame));
-    add_rows(ff, item, tabulate(kFramesSchema, tr.frame_rows, visit_drift_frame));
-    add_rows(fr, item, tabulate(kRaysSchema, tr.ray_rows, visit_ray));
-    add_rows(fk, item, tabulate(kCorrelationSchema, drift_correlations(x.p, x.prepared[c], tr), visit_correlation));
+    add_item_rows(fc, item, tabulate(kClustersFramesSchema, tr.cluster_rows, visit_cluster_frame));
+    add_item_rows(ff, item, tabulate(kFramesSchema, tr.frame_rows, visit_drift_frame));
+    add_item_rows(fr, item, tabulate(kRaysSchema, tr.ray_rows, visit_ray));
+    add_item_rows(fk, item, tabulate(kCorrelationSchema, drift_correlations(x.p, x.prepared[c], tr), visit_correlation));
   }
   for (FileRows* f : {&fc, &ff, &fr, &fk}) x.run.files.push_back(std::move(*f));
 }
 
 }  // namespace
+
+FileRows file_rows(std::string file, Schema schema, std::vector<std::string> header) {
+  FileRows f;
+  f.file = std::move(file);
+  f.schema = std::move(schema);
+  f.rows.header = std::move(header);
+  return f;
+}
+
+void add_item_rows(FileRows& f, std::size_t item, const Table& t) {
+  CsvText c = parse_csv(t.csv.str());
+  if (c.header != f.rows.header) throw std::logic_error(f.file + ": an item's columns differ from the file's");
+  f.item_rows.emplace_back(item, c.rows.size());
+  for (auto& r : c.rows) f.rows.rows.push_back(std::move(r));
+}
 
 std::vector<std::string> experiment_items(const ExperimentParams& p) {
   std::vector<std::string> items;
@@ -705,10 +710,10 @@ ExperimentRun run_experiment(Scene& scene, const ExperimentParams& p, const stud
       specs.push_back(spec_of(name, p));
     }
   }
-  FileRows configs = empty_file("configs.csv", kConfigsSchema, columns_of<ConfigRow>(visit_config));
+  FileRows configs = file_rows("configs.csv", kConfigsSchema, columns_of<ConfigRow>(visit_config));
   std::vector<study::Prepared> prepared = prepare_all(scene, specs, setup, as, run, configs, p.scene);
   run.files.push_back(std::move(configs));
-  Context x{scene, p, setup, rays, run, prepared};
+  Context x{scene, p, setup, rays, as, run, prepared};
   if (p.kind == ExperimentKind::Sweep) run_sweep(x);
   else if (p.kind == ExperimentKind::Compare) run_compare(x);
   else run_drift(x);

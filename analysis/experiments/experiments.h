@@ -74,6 +74,11 @@ struct FileRows {
   std::vector<std::pair<std::size_t, std::size_t>> item_rows;  ///< (item index, rows), in row order
 };
 
+/// An empty file of rows (no items yet).
+[[nodiscard]] FileRows file_rows(std::string file, Schema schema, std::vector<std::string> header);
+/// Appends the rows of one item (a table of the file's schema and columns) to `f`.
+void add_item_rows(FileRows& f, std::size_t item, const Table& t);
+
 struct ExperimentRun {
   std::vector<std::string> items;     ///< every item of the experiment
   std::vector<std::size_t> done;      ///< the items this run measured (the shard's)

@@ -91,14 +91,7 @@ Passes trace_passes(Prepared& p, const StudyRays& rays, const Vec3& light, const
   const SurfaceHits s = surface_hits(p.mesh, rays.primary, hits);
   const RayFrame frame{p.mesh.bounds(), a.origin()};
   const TraceTarget target = target_of(a);
-  // The secondary passes trace through a TraceTarget that counts when asked: a counted target
-  // is the same structure with counters on (its times are not used).
-  const TraceTarget counting{[&a](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
-                               bvh::TraceOptions c = o;
-                               c.counters = true;
-                               return a.trace(r, h, c);
-                             },
-                             a.origin()};
+  const TraceTarget counting = with_counters(target);  // the untimed counted passes
   if (opt.shadows) {
     out.shadow = trace_shadows(target, s, light, frame, opt.threads).stats;
     if (counted) {
