@@ -1,0 +1,250 @@
+// VTK pictures checked pixel by pixel against an independent answer: the closest triangle of
+// every pixel's primary ray by brute force (tests/common/brute_force.h), with the camera of
+// `ptc trace`. Pixels whose 3x3 neighbourhood sees one triangle must show exactly that
+// triangle's colour (unlit) or a multiple of it (lit); the orientation, the camera conventions
+// and the pixel centres are all in that check. Every test starts its own Xvfb.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <set>
+
+#include "common/brute_force.h"
+#include "render/camera.h"
+#include "toolkit/core/error.h"
+#include "viz/display.h"
+#include "viz/partition_colours.h"
+#include "viz/renderer.h"
+
+namespace ptc::viz {
+namespace {
+
+// An n x n grid of quads (2 triangles each) in the plane z = 0, bent a little so that the lit
+// picture has different shades, spanning [0, n] x [0, n].
+Mesh grid(int n, double bend = 0.0) {
+  std::vector<Vec3> p;
+  std::vector<Tri> t;
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) p.emplace_back(x, y, bend * (x - n / 2.0) * (x - n / 2.0));
+  const auto id = [n](int x, int y) { return static_cast<std::uint32_t>(y * (n + 1) + x); };
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      t.push_back({id(x, y), id(x + 1, y), id(x + 1, y + 1)});
+      t.push_back({id(x, y), id(x + 1, y + 1), id(x, y + 1)});
+    }
+  return Mesh(std::move(t), std::move(p));
+}
+
+Rgb8 id_colour(std::uint32_t t) {  // distinct, never the background
+  return {static_cast<std::uint8_t>(40 + (t * 53) % 200), static_cast<std::uint8_t>(10 + (t * 97) % 240),
+          static_cast<std::uint8_t>(200 - (t * 31) % 150)};
+}
+
+constexpr std::uint32_t kMiss = 0xffffffffu;
+
+// Closest triangle per pixel (kMiss for a miss), row-major from the top-left.
+std::vector<std::uint32_t> brute_ids(const Mesh& m, const bvh::PinholeCamera& cam, int w, int h) {
+  const bvh::RayBatch rays = camera_rays(cam, w, h);
+  std::vector<std::uint32_t> ids(static_cast<std::size_t>(w) * h);
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    const bvh::Hit hit = bvh::test::brute_force(m, Vec3::Zero(), Vec3(rays.ox[i], rays.oy[i], rays.oz[i]),
+                                                     bvh::Vec3f{rays.dx[i], rays.dy[i], rays.dz[i]});
+    ids[i] = hit.hit() ? hit.triangle : kMiss;
+  }
+  return ids;
+}
+
+bool interior(const std::vector<std::uint32_t>& ids, int w, int h, int x, int y) {
+  if (x < 1 || y < 1 || x >= w - 1 || y >= h - 1) return false;
+  const std::uint32_t c = ids[static_cast<std::size_t>(y) * w + x];
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx)
+      if (ids[static_cast<std::size_t>(y + dy) * w + x + dx] != c) return false;
+  return true;
+}
+
+TEST(Display, StartsItsOwnXvfbAndStopsIt) {
+  const char* before = std::getenv("DISPLAY");
+  const std::string saved = before ? before : "";
+  pid_t pid = 0;
+  {
+    Display::Options o;
+    o.force_xvfb = true;
+    Display d = Display::acquire(o);
+    ASSERT_TRUE(d.own_server());
+    pid = d.server_pid();
+    EXPECT_GT(pid, 0);
+    EXPECT_EQ(std::string(std::getenv("DISPLAY")), d.name());
+    EXPECT_TRUE(display_usable(d.name()));
+    EXPECT_EQ(kill(pid, 0), 0) << "the server runs while the Display lives";
+    EXPECT_EQ(getpgid(pid), pid) << "its own process group: a terminal's Ctrl-C is not sent to it";
+  }
+  EXPECT_NE(kill(pid, 0), 0) << "the server is gone (and reaped) after the Display";
+  const char* after = std::getenv("DISPLAY");
+  EXPECT_EQ(after ? std::string(after) : std::string(), saved);
+}
+
+TEST(Display, MissingXvfbIsOneLineSayingWhatToInstall) {
+  const char* before = std::getenv("DISPLAY");
+  const std::string saved = before ? before : "";
+  unsetenv("DISPLAY");
+  Display::Options o;
+  o.xvfb = "ptc-no-such-xvfb-program";
+  try {
+    (void)Display::acquire(o);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("no X display is reachable"), std::string::npos) << w;
+    EXPECT_NE(w.find("apt-get install --no-install-recommends xvfb"), std::string::npos) << w;
+    EXPECT_EQ(w.find('\n'), std::string::npos) << w;
+  }
+  o.interactive = true;
+  try {
+    (void)Display::acquire(o);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--interactive needs a display"), std::string::npos) << e.what();
+  }
+  if (!saved.empty()) setenv("DISPLAY", saved.c_str(), 1);
+}
+
+TEST(Display, AServerThatFailsIsReportedWithItsMessage) {
+  Display::Options o;
+  o.force_xvfb = true;
+  o.xvfb = "/bin/false";
+  try {
+    (void)Display::acquire(o);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("Xvfb did not start"), std::string::npos) << e.what();
+  }
+}
+
+class RendererTest : public ::testing::Test {
+ protected:
+  static Display::Options xvfb() {
+    Display::Options o;
+    o.force_xvfb = true;
+    return o;
+  }
+  Display display_ = Display::acquire(xvfb());
+  Renderer renderer_{display_};
+};
+
+TEST_F(RendererTest, UnlitPixelsAreTheColourOfTheTriangleTheTracerHits) {
+  const Mesh m = grid(6);
+  const int w = 120, h = 90;
+  CameraSpec spec;
+  spec.eye = Vec3(-0.5, 1.0, 5.5);  // oblique, so the perspective and the up vector matter
+  spec.look_at = Vec3(3.0, 3.2, 0.0);
+  spec.up = Vec3(0.2, 1.0, 0.0);
+  spec.fov_deg = 50;
+  const bvh::PinholeCamera cam = make_camera(spec, m.bounds(), w, h);
+  MeshStyle st;
+  st.lighting = false;
+  for (std::uint32_t t = 0; t < m.triangle_count(); ++t) st.triangle_colours.push_back(id_colour(t));
+  const RgbImage img = renderer_.mesh(m, st, cam, w, h);
+  ASSERT_EQ(img.width, w);
+  ASSERT_EQ(img.height, h);
+  const auto ids = brute_ids(m, cam, w, h);
+  int checked = 0, hit_pixels = 0, miss_pixels = 0;
+  std::set<std::uint32_t> seen;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (!interior(ids, w, h, x, y)) continue;
+      const std::uint32_t t = ids[static_cast<std::size_t>(y) * w + x];
+      const Rgb8 want = t == kMiss ? kBackground : id_colour(t);
+      EXPECT_EQ(img.at(x, y), want) << "pixel (" << x << ", " << y << ") triangle " << t;
+      ++checked;
+      (t == kMiss ? miss_pixels : hit_pixels)++;
+      if (t != kMiss) seen.insert(t);
+    }
+  EXPECT_GT(hit_pixels, 2000);
+  EXPECT_GT(miss_pixels, 500);
+  EXPECT_GT(seen.size(), 40u) << "most triangles are checked somewhere";
+  EXPECT_GT(checked, w * h / 2);
+}
+
+TEST_F(RendererTest, LitPixelsKeepTheirTriangleHueAndBordersAreDrawn) {
+  const Mesh m = grid(4, 0.15);
+  const int w = 64, h = 64;
+  CameraSpec spec;
+  spec.eye = Vec3(2.0, 2.0, 6.0);
+  const bvh::PinholeCamera cam = make_camera(spec, m.bounds(), w, h);
+  MeshStyle st;
+  for (std::uint32_t t = 0; t < m.triangle_count(); ++t) st.triangle_colours.push_back(palette_colour(t % 12));
+  const RgbImage img = renderer_.mesh(m, st, cam, w, h);
+  const auto ids = brute_ids(m, cam, w, h);
+  int checked = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (!interior(ids, w, h, x, y)) continue;
+      const std::uint32_t t = ids[static_cast<std::size_t>(y) * w + x];
+      if (t == kMiss) continue;
+      // Lambert without specular: pixel = k * colour with one k for the three channels.
+      const Rgb8 c = palette_colour(t % 12), p = img.at(x, y);
+      const double k = (p[0] + p[1] + p[2]) / double(c[0] + c[1] + c[2]);
+      EXPECT_GT(k, 0.3);
+      EXPECT_LE(k, 1.02);
+      for (int i = 0; i < 3; ++i) EXPECT_NEAR(p[i], k * c[i], 4.0) << "pixel (" << x << ", " << y << ") channel " << i;
+      ++checked;
+    }
+  EXPECT_GT(checked, 800);
+
+  // Black border lines along the grid's middle column line x = 2: pixels on it turn dark.
+  MeshStyle lined = st;
+  for (int y = 0; y < 4; ++y) lined.lines.push_back({static_cast<std::uint32_t>(y * 5 + 2), static_cast<std::uint32_t>((y + 1) * 5 + 2)});
+  lined.line_width = 2.0f;
+  const RgbImage with_lines = renderer_.mesh(m, lined, cam, w, h);
+  int darkened = 0, changed_elsewhere = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const Rgb8 a = img.at(x, y), b = with_lines.at(x, y);
+      const bool dark = b[0] + b[1] + b[2] < 30 && a[0] + a[1] + a[2] > 90;
+      darkened += dark;
+      // The camera looks straight at x = 2 (the centre), so the line is the middle column.
+      if (a != b && std::abs(x - w / 2) > 4) ++changed_elsewhere;
+    }
+  EXPECT_GT(darkened, 30);
+  EXPECT_EQ(changed_elsewhere, 0);
+}
+
+TEST_F(RendererTest, TextStripsHaveTextWhereTheItemsAreAndNothingElse) {
+  TextItem a{"frame 12", 40, 20, 16, -1};
+  TextItem b{"0.125", 150, 20, 16, 1};
+  const std::vector<TextItem> items{a, b};
+  const RgbImage img = renderer_.text(200, 40, items);
+  int lit_left = 0, lit_right = 0, lit_middle = 0;
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 200; ++x) {
+      const Rgb8 p = img.at(x, y);
+      if (p == kBackground) continue;
+      if (x >= 38 && x < 130) ++lit_left;
+      if (x >= 95 && x <= 152) ++lit_right;
+      if (x < 36 || x > 154 || y < 8 || y > 32) ++lit_middle;
+    }
+  EXPECT_GT(lit_left, 40);
+  EXPECT_GT(lit_right, 20);
+  EXPECT_EQ(lit_middle, 0) << "no ink outside the two items";
+}
+
+TEST_F(RendererTest, SizesAndColourCountsAreChecked) {
+  const Mesh m = grid(1);
+  MeshStyle st;
+  st.triangle_colours = {Rgb8{1, 2, 3}};
+  const bvh::PinholeCamera cam = make_camera({}, m.bounds(), 8, 8);
+  EXPECT_THROW((void)renderer_.mesh(m, st, cam, 8, 8), std::invalid_argument);
+  st.triangle_colours.push_back(Rgb8{4, 5, 6});
+  EXPECT_THROW((void)renderer_.mesh(m, st, cam, 0, 8), std::invalid_argument);
+  EXPECT_THROW((void)renderer_.mesh(m, st, cam, 8, 9000), std::invalid_argument);
+  const RgbImage one = renderer_.mesh(m, st, cam, 1, 1);
+  EXPECT_EQ(one.pixel_count(), 1u);
+}
+
+}  // namespace
+}  // namespace ptc::viz

@@ -1,0 +1,232 @@
+#include "viz/renderer.h"
+
+#include <vtkActor.h>
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkInteractorStyleTrackballCamera.h>
+#include <vtkMapper.h>
+#include <vtkNew.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderWindowInteractor.h>
+#include <vtkRenderer.h>
+#include <vtkSmartPointer.h>
+#include <vtkTextActor.h>
+#include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace ptc::viz {
+namespace {
+
+constexpr int kMaxSide = 8192;
+
+void check_size(int w, int h) {
+  if (w < 1 || h < 1 || w > kMaxSide || h > kMaxSide)
+    throw std::invalid_argument("picture size " + std::to_string(w) + "x" + std::to_string(h) + " outside 1..8192");
+}
+
+void set_background(vtkRenderer* r, Rgb8 c) { r->SetBackground(c[0] / 255.0, c[1] / 255.0, c[2] / 255.0); }
+
+// The surface and line actors of a mesh picture.
+struct MeshActors {
+  vtkSmartPointer<vtkActor> surface, lines;
+};
+
+MeshActors make_actors(const Mesh& mesh, const MeshStyle& style, const Vec3& eye) {
+  if (style.triangle_colours.size() != mesh.triangle_count())
+    throw std::invalid_argument("one colour per triangle needed: " + std::to_string(style.triangle_colours.size()) +
+                                " colours for " + std::to_string(mesh.triangle_count()) + " triangles");
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(mesh.vertex_count()));
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const Vec3& p = mesh.position(v);
+    points->SetPoint(static_cast<vtkIdType>(v), p.x(), p.y(), p.z());
+  }
+  vtkNew<vtkCellArray> polys;
+  polys->AllocateExact(static_cast<vtkIdType>(mesh.triangle_count()), static_cast<vtkIdType>(3 * mesh.triangle_count()));
+  vtkNew<vtkUnsignedCharArray> colours;
+  colours->SetName("colour");
+  colours->SetNumberOfComponents(3);
+  colours->SetNumberOfTuples(static_cast<vtkIdType>(mesh.triangle_count()));
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const Tri& f = mesh.triangle(t);
+    const vtkIdType ids[3] = {static_cast<vtkIdType>(f[0]), static_cast<vtkIdType>(f[1]), static_cast<vtkIdType>(f[2])};
+    polys->InsertNextCell(3, ids);
+    for (int k = 0; k < 3; ++k) colours->SetTypedComponent(static_cast<vtkIdType>(t), k, style.triangle_colours[t][k]);
+  }
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(points);
+  poly->SetPolys(polys);
+  poly->GetCellData()->SetScalars(colours);
+
+  MeshActors a;
+  vtkNew<vtkPolyDataMapper> mapper;
+  mapper->SetInputData(poly);
+  mapper->SetScalarModeToUseCellData();
+  mapper->SetColorModeToDirectScalars();
+  mapper->ScalarVisibilityOn();
+  a.surface = vtkSmartPointer<vtkActor>::New();
+  a.surface->SetMapper(mapper);
+  vtkProperty* prop = a.surface->GetProperty();
+  prop->SetInterpolationToFlat();
+  if (style.lighting) {
+    prop->SetAmbient(0.2);
+    prop->SetDiffuse(0.8);
+    prop->SetSpecular(0.0);
+  } else {
+    prop->LightingOff();
+  }
+  if (!style.lines.empty()) {
+    // Lines lie on the surface's edges; GL's polygon offset does not keep them in front on
+    // Debian's VTK + llvmpipe, so their points move 0.2% of the way towards the eye instead.
+    vtkNew<vtkPoints> lifted;
+    lifted->SetDataTypeToDouble();
+    vtkNew<vtkCellArray> segs;
+    for (const auto& e : style.lines) {
+      if (e[0] >= mesh.vertex_count() || e[1] >= mesh.vertex_count()) throw std::invalid_argument("line vertex out of range");
+      vtkIdType ids[2];
+      for (int k = 0; k < 2; ++k) {
+        const Vec3& p = mesh.position(e[k]);
+        const Vec3 q = p + 0.002 * (eye - p);
+        ids[k] = lifted->InsertNextPoint(q.x(), q.y(), q.z());
+      }
+      segs->InsertNextCell(2, ids);
+    }
+    vtkNew<vtkPolyData> lp;
+    lp->SetPoints(lifted);
+    lp->SetLines(segs);
+    vtkNew<vtkPolyDataMapper> lm;
+    lm->SetInputData(lp);
+    lm->ScalarVisibilityOff();
+    a.lines = vtkSmartPointer<vtkActor>::New();
+    a.lines->SetMapper(lm);
+    a.lines->GetProperty()->LightingOff();
+    a.lines->GetProperty()->SetColor(style.line_colour[0] / 255.0, style.line_colour[1] / 255.0, style.line_colour[2] / 255.0);
+    a.lines->GetProperty()->SetLineWidth(style.line_width);
+  }
+  return a;
+}
+
+void set_camera(vtkRenderer* r, const Mesh& mesh, const bvh::PinholeCamera& cam) {
+  vtkCamera* c = r->GetActiveCamera();
+  // The focal distance only sets where VTK's trackball turns about: the distance to the mesh's
+  // centre along the view direction (at least a small positive value).
+  const Box3 b = mesh.bounds();
+  double d = 1.0;
+  if (!b.empty()) d = std::max((b.center() - cam.eye).dot(cam.forward), 1e-6 * std::max(1.0, b.extent().norm()));
+  const Vec3 f = cam.eye + d * cam.forward;
+  c->SetPosition(cam.eye.x(), cam.eye.y(), cam.eye.z());
+  c->SetFocalPoint(f.x(), f.y(), f.z());
+  c->SetViewUp(cam.up.x(), cam.up.y(), cam.up.z());
+  c->SetViewAngle(cam.fov_y_deg);  // vertical, as ours (UseHorizontalViewAngle is off)
+  r->ResetCameraClippingRange();
+}
+
+RgbImage read_back(vtkRenderWindow* win, int w, int h) {
+  vtkNew<vtkUnsignedCharArray> px;
+  win->GetPixelData(0, 0, w - 1, h - 1, /*front=*/0, px, /*right=*/0);
+  RgbImage img(w, h);
+  const unsigned char* p = px->GetPointer(0);
+  for (int y = 0; y < h; ++y)  // VTK's row 0 is the bottom one
+    std::copy(p + 3 * static_cast<std::size_t>(h - 1 - y) * w, p + 3 * static_cast<std::size_t>(h - y) * w,
+              img.rgb.begin() + 3 * static_cast<std::ptrdiff_t>(y) * w);
+  return img;
+}
+
+}  // namespace
+
+struct Renderer::Impl {
+  vtkSmartPointer<vtkRenderWindow> window;
+  vtkSmartPointer<vtkRenderer> renderer;
+};
+
+Renderer::Renderer(const Display& display) : impl_(std::make_unique<Impl>()) {
+  if (display.name().empty()) throw std::logic_error("viz::Renderer needs a live Display");
+  vtkMapper::SetResolveCoincidentTopologyToPolygonOffset();
+  impl_->window = vtkSmartPointer<vtkRenderWindow>::New();
+  impl_->window->SetOffScreenRendering(1);
+  impl_->window->SetMultiSamples(0);
+  impl_->window->SetDisplayId(nullptr);
+  impl_->renderer = vtkSmartPointer<vtkRenderer>::New();
+  impl_->window->AddRenderer(impl_->renderer);
+}
+
+Renderer::~Renderer() {
+  if (impl_ && impl_->window) impl_->window->Finalize();
+}
+
+RgbImage Renderer::mesh(const Mesh& mesh, const MeshStyle& style, const bvh::PinholeCamera& cam, int width, int height) {
+  check_size(width, height);
+  MeshActors a = make_actors(mesh, style, cam.eye);
+  vtkRenderer* r = impl_->renderer;
+  r->RemoveAllViewProps();
+  r->AddActor(a.surface);
+  if (a.lines) r->AddActor(a.lines);
+  set_background(r, style.background);
+  impl_->window->SetSize(width, height);
+  set_camera(r, mesh, cam);
+  impl_->window->Render();
+  RgbImage img = read_back(impl_->window, width, height);
+  r->RemoveAllViewProps();
+  return img;
+}
+
+RgbImage Renderer::text(int width, int height, std::span<const TextItem> items, Rgb8 background) {
+  check_size(width, height);
+  vtkRenderer* r = impl_->renderer;
+  r->RemoveAllViewProps();
+  set_background(r, background);
+  for (const TextItem& t : items) {
+    vtkNew<vtkTextActor> a;
+    a->SetInput(t.text.c_str());
+    vtkTextProperty* p = a->GetTextProperty();
+    p->SetFontFamilyToArial();
+    p->SetFontSize(t.size);
+    p->SetBold(t.bold);
+    p->SetColor(t.colour[0] / 255.0, t.colour[1] / 255.0, t.colour[2] / 255.0);
+    if (t.align < 0) p->SetJustificationToLeft();
+    else if (t.align > 0) p->SetJustificationToRight();
+    else p->SetJustificationToCentered();
+    p->SetVerticalJustificationToCentered();
+    a->SetDisplayPosition(t.x, height - 1 - t.y);
+    r->AddActor2D(a);
+  }
+  impl_->window->SetSize(width, height);
+  impl_->window->Render();
+  RgbImage img = read_back(impl_->window, width, height);
+  r->RemoveAllViewProps();
+  return img;
+}
+
+void Renderer::interact(const Mesh& mesh, const MeshStyle& style, const bvh::PinholeCamera& cam, int width, int height,
+                        const std::string& title) {
+  check_size(width, height);
+  MeshActors a = make_actors(mesh, style, cam.eye);
+  vtkNew<vtkRenderer> r;
+  r->AddActor(a.surface);
+  if (a.lines) r->AddActor(a.lines);
+  set_background(r, style.background);
+  vtkNew<vtkRenderWindow> win;
+  win->AddRenderer(r);
+  win->SetSize(width, height);
+  win->SetWindowName(title.c_str());
+  set_camera(r, mesh, cam);
+  vtkNew<vtkRenderWindowInteractor> iren;
+  vtkNew<vtkInteractorStyleTrackballCamera> st;
+  iren->SetInteractorStyle(st);
+  iren->SetRenderWindow(win);
+  win->Render();
+  iren->Start();
+  win->Finalize();
+}
+
+}  // namespace ptc::viz
