@@ -43,6 +43,21 @@ Rgb8 viridis(double x) {
   return c;
 }
 
+Rgb8 coolwarm(double x) {
+  // matplotlib's coolwarm (Moreland 2009) at 0, 1/8, ..., 1.
+  static constexpr double k[9][3] = {{59, 76, 192},   {98, 130, 234},  {141, 176, 254}, {184, 208, 249}, {221, 221, 221},
+                                     {245, 196, 173}, {244, 154, 123}, {222, 96, 77},   {180, 4, 38}};
+  if (!(x > 0.0)) x = 0.0;
+  if (x > 1.0) x = 1.0;
+  const double s = 8.0 * x;
+  const int i = std::min(7, static_cast<int>(s));
+  const double f = s - i;
+  Rgb8 c;
+  for (int a = 0; a < 3; ++a)
+    c[a] = static_cast<std::uint8_t>(std::lround(k[i][a] + f * (k[i + 1][a] - k[i][a])));
+  return c;
+}
+
 RgbImage cost_heatmap(std::span<const std::uint32_t> counts, int width, int height, ColorLegend& legend) {
   RgbImage img(width, height);
   if (counts.size() != img.pixel_count()) throw std::invalid_argument("cost_heatmap: counts do not match the image size");

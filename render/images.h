@@ -34,6 +34,10 @@ struct RgbImage {
 /// control points and interpolated linearly in sRGB: x in [0, 1] (clamped; NaN -> 0).
 [[nodiscard]] Rgb8 viridis(double x);
 
+/// The diverging "coolwarm" map (Moreland 2009; matplotlib's table at 9 control points,
+/// interpolated linearly): blue at 0, light grey at 0.5, red at 1; x clamped, NaN -> 0.
+[[nodiscard]] Rgb8 coolwarm(double x);
+
 /// How a scalar image was mapped to colours (recorded in the manifest as the image's legend).
 struct ColorLegend {
   std::string quantity;  ///< what a pixel holds ("nodes_visited", "depth", ...)

@@ -24,6 +24,8 @@ namespace {
 
 [[noreturn]] void fail(const std::string& reason) { throw InputError("", "", "display", reason); }
 
+}  // namespace
+
 std::string find_program(const std::string& name) {
   if (name.find('/') != std::string::npos) return access(name.c_str(), X_OK) == 0 ? name : std::string();
   const char* path = std::getenv("PATH");
@@ -40,6 +42,8 @@ std::string find_program(const std::string& name) {
   }
   return {};
 }
+
+namespace {
 
 // Xlib's default handler for a lost connection calls exit(); while probing, a refused or broken
 // display only makes XOpenDisplay return null, which is all we need.

@@ -55,6 +55,10 @@ class Display {
   pid_t pid_ = 0;
 };
 
+/// The path of program `name` in $PATH (or `name` itself when it contains '/' and is
+/// executable); "" when there is none.
+[[nodiscard]] std::string find_program(const std::string& name);
+
 /// Whether the X display `name` answers and offers GLX (false for "").
 [[nodiscard]] bool display_usable(const std::string& name);
 

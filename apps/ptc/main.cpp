@@ -71,6 +71,7 @@ int main(int argc, char** argv) {
   cli::register_bench(app, ctx);
   cli::register_experiment(app, ctx);
   cli::register_merge(app, ctx);
+  cli::register_viz(app, ctx);
 
   try {
     app.parse(argc, argv);

@@ -10,9 +10,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <map>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -183,6 +185,38 @@ TEST_F(Interrupt, AnExperimentStopsTheSameWay) {
                    "--extend-frames", "--configs", "acc_growth,standard", "--width", "128", "--height", "128",
                    "--quiet", "--out", out.string()});
   EXPECT_FALSE(fs::exists(out));
+}
+
+// Xvfb servers whose parent is init (a server ptc started and left behind would be one).
+std::vector<pid_t> orphan_xvfbs() {
+  std::vector<pid_t> out;
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const std::string stat = slurp(e.path() / "stat");
+    const std::size_t close = stat.rfind(')');
+    if (stat.find("(Xvfb)") == std::string::npos || close == std::string::npos) continue;
+    std::istringstream rest(stat.substr(close + 2));
+    std::string state;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == 1) out.push_back(static_cast<pid_t>(std::stol(name)));
+  }
+  return out;
+}
+
+// `ptc viz` stops the same way, and the Xvfb it started goes with it.
+TEST_F(Interrupt, AVizSeriesStopsAndTakesItsXvfbAlong) {
+  const fs::path out = dir_ / "out";
+  const std::vector<pid_t> before = orphan_xvfbs();
+  (void)interrupt(out, SIGINT,
+                  {"viz", "heatmap", "armadillo-twist", "--data-dir", kData, "--frames", "0:2000", "--extend-frames",
+                   "--metric", "nodes_visited", "--range", "0:60", "--width", "128", "--height", "128", "--xvfb",
+                   "--out", out.string()});
+  EXPECT_FALSE(fs::exists(out));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  for (pid_t p : orphan_xvfbs())
+    EXPECT_NE(std::find(before.begin(), before.end(), p), before.end()) << "Xvfb " << p << " was left running";
 }
 
 // An earlier complete output in the target directory is left as it was, file by file, byte for

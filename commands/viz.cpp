@@ -1,0 +1,485 @@
+// `ptc viz`: partitions, heatmaps and panels rendered with VTK beside the tracer's images, and
+// the ParaView export. Inputs are checked before a display is opened (an error never waits for
+// an Xvfb); the export needs no display at all.
+#include "commands/viz.h"
+
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <ostream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/loop/accel.h"
+#include "analysis/metrics/cluster_frame.h"
+#include "analysis/schema/json.h"
+#include "analysis/schema/manifest.h"
+#include "commands/args.h"
+#include "commands/output_dir.h"
+#include "commands/scene_args.h"
+#include "render/view.h"
+#include "toolkit/core/cancel.h"
+#include "toolkit/core/error.h"
+#include "toolkit/core/stopwatch.h"
+#include "viz/colour_scale.h"
+#include "viz/display.h"
+#include "viz/legend.h"
+#include "viz/partition_colours.h"
+#include "viz/png.h"
+#include "viz/renderer.h"
+#include "viz/vtp.h"
+
+extern char** environ;
+
+namespace ptc {
+
+std::optional<VizKind> parse_viz_kind(std::string_view s) {
+  if (s == "partition") return VizKind::Partition;
+  if (s == "heatmap") return VizKind::Heatmap;
+  if (s == "panel") return VizKind::Panel;
+  if (s == "export") return VizKind::Export;
+  return std::nullopt;
+}
+
+std::string_view to_string(VizKind k) {
+  switch (k) {
+    case VizKind::Partition: return "partition";
+    case VizKind::Heatmap: return "heatmap";
+    case VizKind::Panel: return "panel";
+    case VizKind::Export: return "export";
+  }
+  return "?";
+}
+
+namespace {
+
+constexpr int kGap = 4;
+
+bool is_pixel_metric(const std::string& m) {
+  return std::find_if(std::begin(kPixelMetrics), std::end(kPixelMetrics), [&](const char* p) { return m == p; }) !=
+         std::end(kPixelMetrics);
+}
+
+std::pair<double, double> parse_range(const std::string& s) {
+  // MIN:MAX with either side possibly negative ("-1:1", "-2.5:-0.5"): split at the colon that
+  // is not the first character.
+  const std::size_t c = s.find(':', 1);
+  auto num = [&](const std::string& t) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(t, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (t.empty() || used != t.size() || !std::isfinite(v))
+      throw UsageError("--range", fmt::format("'{}' is not MIN:MAX with two finite numbers", s));
+    return v;
+  };
+  if (c == std::string::npos) throw UsageError("--range", fmt::format("'{}' is not MIN:MAX with two finite numbers", s));
+  const double lo = num(s.substr(0, c)), hi = num(s.substr(c + 1));
+  if (!(lo < hi)) throw UsageError("--range", fmt::format("'{}': MIN must be below MAX", s));
+  return {lo, hi};
+}
+
+// The clustering's parameters, from DIR/manifest.json of `ptc cluster` when it is there (Acc and
+// the title need MaxCount and MaxSize); the defaults otherwise.
+struct ClusteringInfo {
+  ClusterConfig cfg;
+  std::string title;  // "contraction / acc, MaxCount 50, MaxSize 50"
+  std::string from;   // "DIR/manifest.json" or "defaults (no manifest.json beside triangles.csv)"
+};
+
+ClusteringInfo clustering_info(const std::filesystem::path& clusters) {
+  ClusteringInfo ci;
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::is_directory(clusters, ec) ? clusters : clusters.parent_path();
+  const std::filesystem::path mpath = dir / "manifest.json";
+  ci.from = "defaults (no manifest.json beside triangles.csv)";
+  ci.title = "clusters of " + clusters.string();
+  std::ifstream in(mpath);
+  if (!in) return ci;
+  const nlohmann::json m = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (m.is_discarded() || !m.contains("parameters") || !m["parameters"].is_object()) return ci;
+  const nlohmann::json& p = m["parameters"];
+  auto str = [&](const char* k) { return p.contains(k) && p[k].is_string() ? p[k].get<std::string>() : std::string(); };
+  if (p.contains("max_count") && p["max_count"].is_number_unsigned()) ci.cfg.max_count = p["max_count"].get<std::uint32_t>();
+  if (p.contains("max_size") && p["max_size"].is_number()) ci.cfg.max_size = p["max_size"].get<double>();
+  if (const auto s = parse_size_bound_mode(str("size_bound"))) ci.cfg.size_bound_mode = *s;
+  if (const auto s = parse_sphere_method(str("sphere"))) ci.cfg.sphere = *s;
+  if (const auto s = parse_cluster_method(str("method"))) ci.cfg.method = *s;
+  if (const auto s = parse_objective(str("objective"))) ci.cfg.objective = *s;
+  ci.from = mpath.string();
+  const std::string method = str("method"), objective = str("objective");
+  ci.title = fmt::format("{}{}{}, MaxCount {}, MaxSize {:g}", method.empty() ? "clusters" : method,
+                         objective.empty() ? "" : " / ", objective, ci.cfg.max_count, ci.cfg.max_size);
+  return ci;
+}
+
+// Runs ffmpeg on the numbered PNGs; returns "" or why there is no MP4.
+std::string make_mp4(const std::filesystem::path& dir, const std::string& base, std::int64_t first, const std::string& mp4) {
+  const std::string ffmpeg = viz::find_program("ffmpeg");
+  if (ffmpeg.empty()) return "ffmpeg is not installed (Debian package ffmpeg): no MP4, the numbered PNGs are the series";
+  std::vector<std::string> args = {ffmpeg, "-nostdin", "-y", "-loglevel", "error", "-framerate", "24", "-start_number",
+                                   std::to_string(first), "-i", (dir / (base + "_%04d.png")).string(),
+                                   "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p",
+                                   (dir / mp4).string()};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawn(&pid, ffmpeg.c_str(), nullptr, nullptr, argv.data(), environ) != 0) return "ffmpeg could not be started: no MP4";
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "ffmpeg failed: no MP4";
+  return "";
+}
+
+nlohmann::json scale_json(const viz::ColourScale& s, const viz::OutOfRange& o) {
+  return {{"metric", s.title}, {"colormap", s.colormap}, {"min", s.min}, {"max", s.max}, {"range_from", s.from},
+          {"below_range", o.below}, {"above_range", o.above}, {"nan", o.nan}};
+}
+
+std::string range_note(const viz::OutOfRange& o, const char* what) {
+  std::string n;
+  if (o.below) n += fmt::format("{} {} below the range drawn at the bottom colour", o.below, what);
+  if (o.above) n += fmt::format("{}{} {} above the range drawn at the top colour", n.empty() ? "" : "; ", o.above, what);
+  if (o.nan) n += fmt::format("{}{} {} not a number (grey)", n.empty() ? "" : "; ", o.nan, what);
+  return n;
+}
+
+}  // namespace
+
+void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
+  const VizKind kind = opt.kind;
+  // ---- usage, before anything is read
+  if (opt.out_dir.empty() && !opt.interactive) throw UsageError("--out", "an output directory is required");
+  check_image_size(opt.width, opt.height);
+  if (opt.width > 8192 || opt.height > 8192) throw UsageError(opt.width > 8192 ? "--width" : "--height", "at most 8192 pixels for VTK pictures");
+  if (opt.frame && opt.frames) throw UsageError("--frame/--frames", "give one frame or one range, not both");
+  std::string metric = opt.metric;
+  if (kind == VizKind::Panel && metric.empty()) metric = "nodes_visited";
+  if (kind == VizKind::Heatmap && metric.empty())
+    throw UsageError("--metric", fmt::format("a heatmap needs --metric NAME ({}, {}, {})", kPixelMetrics[0], kPixelMetrics[1],
+                                             cluster_metric_names()));
+  if ((kind == VizKind::Partition || kind == VizKind::Export) && !metric.empty())
+    throw UsageError("--metric", fmt::format("{} draws no metric (heatmap and panel do)", to_string(kind)));
+  const bool pixel_metric = is_pixel_metric(metric);
+  const std::optional<ClusterMetricInfo> cmetric = metric.empty() || pixel_metric ? std::nullopt : find_cluster_metric(metric);
+  if (!metric.empty() && !pixel_metric && !cmetric)
+    throw UsageError("--metric", fmt::format("'{}' is not a metric ({}, {}, {})", metric, kPixelMetrics[0], kPixelMetrics[1],
+                                             cluster_metric_names()));
+  if (opt.clusters.empty() && !(kind == VizKind::Heatmap && pixel_metric))
+    throw UsageError("--clusters", fmt::format("viz {}{} needs --clusters DIR (a `ptc cluster` output)", to_string(kind),
+                                               kind == VizKind::Heatmap ? " of a per-cluster metric" : ""));
+  if (opt.range && metric.empty()) throw UsageError("--range", "only heatmaps and panels have a colour range");
+  const std::optional<std::pair<double, double>> fixed = opt.range ? std::optional(parse_range(*opt.range)) : std::nullopt;
+  if (opt.interactive && (kind == VizKind::Panel || kind == VizKind::Export || pixel_metric))
+    throw UsageError("--interactive", "a window shows the mesh: viz partition or a heatmap of a per-cluster metric");
+  if (opt.interactive && opt.frames) throw UsageError("--interactive", "a window shows one frame (--frame F)");
+  if (opt.light && !opt.light->allFinite()) throw UsageError("--light", "not a finite vector");
+  std::optional<FrameRange> asked;
+  if (opt.frame) {
+    const std::int64_t f = parse_frame(*opt.frame, "--frame");
+    asked = FrameRange{f, f};
+  }
+  if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
+  const bool series = opt.frames.has_value();
+
+  if (!opt.out_dir.empty()) {
+    refuse_overwriting_input(opt.out_dir, opt.input);
+    if (!opt.clusters.empty()) refuse_overwriting_input(opt.out_dir, opt.clusters);
+  }
+  RunManifest manifest("viz", opt.argv, "ptc-viz/1");
+  const std::string arg = opt.input.string();
+  Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
+  const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};
+  check_frames(scene, range, arg, opt.frames ? "--frames" : "--frame", opt.extend_frames);
+  const std::int64_t reference_frame = scene.frames().first;
+
+  Mesh mesh = scene.rest();
+  scene.positions(double(range.first), mesh.positions(), true);
+  const Box3 first_bounds = mesh.bounds();
+  const bvh::PinholeCamera cam = make_camera(camera_for(opt.camera, scene), first_bounds, opt.width, opt.height);
+
+  const bool use_clusters = !opt.clusters.empty();
+  Clustering clusters;
+  ClusteringInfo ci;
+  if (use_clusters) {
+    clusters = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
+    ci = clustering_info(opt.clusters);
+  }
+  const std::vector<std::uint32_t> cluster_of = use_clusters ? clusters.cluster_of_triangle() : std::vector<std::uint32_t>();
+
+  // Partition colours: fixed by the connectivity, so one colouring serves every frame.
+  std::vector<std::uint32_t> colour;
+  std::uint32_t colours_used = 0;
+  std::vector<std::array<std::uint32_t, 2>> borders;
+  if (use_clusters) {
+    colour = viz::dsatur_colouring(viz::cluster_graph(scene.rest(), clusters));
+    for (std::uint32_t c : colour) colours_used = std::max(colours_used, c + 1);
+    if (opt.borders) borders = viz::border_edges(scene.rest(), clusters);
+  }
+
+  const bool needs_trace = kind == VizKind::Panel || pixel_metric;
+  const bool needs_metrics = kind == VizKind::Export || cmetric.has_value();
+  RenderConfig rc;
+  rc.width = opt.width, rc.height = opt.height, rc.shadows = opt.shadows, rc.threads = opt.threads;
+  const LightChoice light = light_for(opt.light, scene, cam, first_bounds);
+  rc.light = light.position;
+  std::unique_ptr<loop::SceneAccel> accel;
+  if (needs_trace) {
+    bvh::SceneTracerConfig tcfg;
+    tcfg.clusters = use_clusters ? &clusters : nullptr;
+    tcfg.origin = first_bounds.center();
+    accel = std::make_unique<loop::SceneAccel>(mesh, bvh::PartLayout::of(scene), tcfg);
+  }
+
+  // The reference frame's rows (drift "since frame 0": the scene's first frame) and positions.
+  std::vector<ClusterRow> ref_rows;
+  std::vector<Vec3> ref_positions;
+  if (needs_metrics) {
+    Mesh ref = scene.rest();
+    scene.positions(double(reference_frame), ref.positions(), true);
+    ref_positions.assign(ref.positions().begin(), ref.positions().end());
+    ref_rows = cluster_frame_metrics(ref, clusters, ci.cfg, {}, {}).rows;
+  }
+
+  // One frame's metric values: per cluster (cluster metrics) or per pixel (the tracer's counters).
+  std::vector<ClusterRow> prev_rows;
+  struct FrameData {
+    std::optional<ClusterFrameMetrics> metrics;
+    std::optional<Render> render;
+    std::vector<double> values;
+  };
+  auto frame_data = [&](std::int64_t f, bool for_range_only) {
+    FrameData d;
+    scene.positions(double(f), mesh.positions(), true);
+    if (needs_trace && (pixel_metric || !for_range_only)) {
+      accel->update(mesh.positions());
+      d.render = render_view(target_of(*accel), mesh, cam, rc);
+      if (pixel_metric) {
+        const auto& counts = metric == "nodes_visited" ? d.render->primary.nodes_visited : d.render->primary.triangles_tested;
+        d.values.assign(counts.begin(), counts.end());
+      }
+    }
+    if (needs_metrics) {
+      d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows.empty() ? ref_rows : prev_rows);
+      prev_rows = d.metrics->rows;
+      if (cmetric) d.values = d.metrics->of(metric);
+    }
+    return d;
+  };
+
+  // A fixed colour range over a series: the values of every frame first (unless --range).
+  std::optional<viz::ColourScale> series_scale;
+  if (!metric.empty() && series && !fixed && range.count() > 1) {
+    std::vector<double> lohi;
+    for (std::int64_t f = range.first; f <= range.last; ++f) {
+      throw_if_cancelled();
+      const FrameData d = frame_data(f, true);
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (double v : d.values)
+        if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+      if (lo <= hi) lohi.push_back(lo), lohi.push_back(hi);
+    }
+    series_scale = viz::make_scale(metric, lohi, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0, std::nullopt, pixel_metric);
+    series_scale->from = fmt::format("values of frames {}:{}", range.first, range.last);
+    prev_rows.clear();
+  }
+
+  // ---- the display (not for the export) and the pictures
+  std::optional<viz::Display> display;
+  std::unique_ptr<viz::Renderer> renderer;
+  if (kind != VizKind::Export) {
+    viz::Display::Options dopt;
+    dopt.interactive = opt.interactive;
+    dopt.force_xvfb = opt.force_xvfb;
+    display.emplace(viz::Display::acquire(dopt));
+    renderer = std::make_unique<viz::Renderer>(*display);
+    manifest.set_parameter("display", display->describe());
+  }
+
+  std::optional<OutputDir> dir;
+  if (!opt.out_dir.empty()) dir.emplace(opt.out_dir);
+  nlohmann::json images = nlohmann::json::object();
+  std::vector<std::pair<double, std::string>> pvd;
+  std::vector<std::string> written;
+  const std::string scene_name = opt.input.filename().string().empty() ? arg : opt.input.filename().string();
+  const std::string base = kind == VizKind::Partition ? "partition"
+                           : kind == VizKind::Heatmap ? "heatmap_" + metric
+                           : kind == VizKind::Panel   ? "panel"
+                                                      : "clusters";
+  auto put_png = [&](const std::string& name, const RgbImage& img, nlohmann::json info) {
+    if (!dir) return;
+    viz::write_png(dir->path(name), img);
+    manifest.add_output(name);
+    images[name] = std::move(info);
+    written.push_back(name);
+  };
+  viz::MeshStyle partition_style;
+  if (use_clusters) {
+    partition_style.triangle_colours.resize(mesh.triangle_count());
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
+      partition_style.triangle_colours[t] = viz::palette_colour(colour[cluster_of[t]]);
+    partition_style.lines = borders;
+    partition_style.lighting = opt.lighting;
+  }
+  Stopwatch sw;
+  double render_ms = 0;
+  for (std::int64_t f = range.first; f <= range.last; ++f) {
+    throw_if_cancelled();
+    FrameData d = frame_data(f, false);
+    const std::string suffix = series ? fmt::format("_{:04d}", f) : "";
+    if (kind == VizKind::Export) {
+      viz::VtpArrays a;
+      std::vector<std::int32_t> cid(mesh.triangle_count()), cix(mesh.triangle_count());
+      for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
+        cid[t] = static_cast<std::int32_t>(cluster_of[t]), cix[t] = static_cast<std::int32_t>(colour[cluster_of[t]]);
+      a.cell_int = {{"cluster_id", std::move(cid)}, {"colour_index", std::move(cix)}};
+      for (std::size_t i = 0; i < cluster_metric_infos().size(); ++i) {
+        std::vector<double> v(mesh.triangle_count());
+        for (std::size_t t = 0; t < v.size(); ++t) v[t] = d.metrics->values[i][cluster_of[t]];
+        a.cell.emplace_back(std::string(cluster_metric_infos()[i].name), std::move(v));
+      }
+      std::vector<Vec3> disp(mesh.vertex_count());
+      for (std::size_t v = 0; v < disp.size(); ++v) disp[v] = mesh.position(v) - ref_positions[v];
+      a.point = {{"displacement", std::move(disp)}};
+      const std::string name = fmt::format("clusters_{:04d}.vtp", f);
+      viz::write_vtp(dir->path(name), mesh, a);
+      manifest.add_output(name);
+      written.push_back(name);
+      pvd.emplace_back(double(f), name);
+      continue;
+    }
+    Stopwatch rt;
+    // The pictures of the frame.
+    auto partition_picture = [&] { return renderer->mesh(mesh, partition_style, cam, opt.width, opt.height); };
+    viz::ColourScale scale;
+    viz::OutOfRange oor;
+    RgbImage heat;
+    if (!metric.empty()) {
+      scale = series_scale ? *series_scale
+                           : viz::make_scale(metric, d.values, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0,
+                                             fixed, pixel_metric);
+      if (!series_scale && !fixed) scale.from = fmt::format("values of frame {}", f);
+      scale.integer = pixel_metric || metric == "triangles" || metric == "vertices" || metric == "boundary_vertices" ||
+                      metric == "components";
+      oor = viz::out_of_range(scale, d.values);
+      if (pixel_metric) {
+        heat = RgbImage(opt.width, opt.height);
+        for (std::size_t i = 0; i < d.values.size(); ++i) heat.set(i, viz::colour_of(scale, d.values[i]));
+      } else {
+        viz::MeshStyle hs;
+        hs.lighting = opt.lighting;
+        hs.triangle_colours.resize(mesh.triangle_count());
+        for (std::size_t t = 0; t < mesh.triangle_count(); ++t) hs.triangle_colours[t] = viz::colour_of(scale, d.values[cluster_of[t]]);
+        if (opt.interactive) {
+          renderer->interact(mesh, hs, cam, opt.width, opt.height, fmt::format("ptc viz heatmap {} - {}", metric, scene_name));
+        }
+        heat = renderer->mesh(mesh, hs, cam, opt.width, opt.height);
+      }
+      const std::string note = range_note(oor, pixel_metric ? "pixels" : "clusters");
+      heat = viz::vstack(std::vector<RgbImage>{heat, viz::legend_strip(*renderer, scale, opt.width, note)}, 0, viz::kBackground);
+    }
+    const nlohmann::json frame_info = {{"frame", f}};
+    if (kind == VizKind::Partition) {
+      if (opt.interactive)
+        renderer->interact(mesh, partition_style, cam, opt.width, opt.height, fmt::format("ptc viz partition - {}", scene_name));
+      put_png(base + suffix + ".png", partition_picture(),
+              {{"frame", f}, {"clusters", clusters.cluster_count()}, {"colours", colours_used}, {"borders", opt.borders}});
+    } else if (kind == VizKind::Heatmap) {
+      put_png(base + suffix + ".png", heat, {{"frame", f}, {"scale", scale_json(scale, oor)}});
+    } else {  // panel: partition | shaded | heatmap, a title line above
+      const RgbImage part = partition_picture();
+      const RgbImage shaded = shaded_image(*d.render);
+      const viz::LegendLayout ll = viz::legend_layout(opt.width);
+      auto caption = [&](const std::string& text) {
+        const std::vector<viz::TextItem> items{{text, ll.bar_x0, 11, 14, -1, {235, 235, 235}, true}};
+        return renderer->text(ll.width, ll.height, items);
+      };
+      const RgbImage left = viz::vstack(std::vector<RgbImage>{part, caption(fmt::format("partition: {} clusters, {} colours",
+                                                                                           clusters.cluster_count(), colours_used))},
+                                        0, viz::kBackground);
+      const RgbImage middle = viz::vstack(
+          std::vector<RgbImage>{shaded, caption(std::string("shaded: ptc's tracer, cluster BVH") + (opt.shadows ? ", shadows" : ""))}, 0,
+          viz::kBackground);
+      const RgbImage row = viz::hstack(std::vector<RgbImage>{left, middle, heat}, kGap, viz::kBackground);
+      const std::vector<viz::TextItem> title{{fmt::format("{}  |  frame {}  |  {}  |  {} triangles, {} clusters", scene_name, f,
+                                                          ci.title, mesh.triangle_count(), clusters.cluster_count()),
+                                              8, 14, 15, -1, {245, 245, 245}, true}};
+      const RgbImage top = renderer->text(row.width, 28, title);
+      put_png(base + suffix + ".png", viz::vstack(std::vector<RgbImage>{top, row}, 0, viz::kBackground),
+              {{"frame", f}, {"left", "partition"}, {"middle", "shaded"}, {"right", scale_json(scale, oor)}});
+    }
+    render_ms += rt.ms();
+  }
+  std::string mp4_note;
+  if (kind == VizKind::Export && dir) {
+    dir->write("clusters.pvd", viz::pvd_xml(pvd));
+    manifest.add_output("clusters.pvd");
+    written.push_back("clusters.pvd");
+  } else if (series && dir && range.count() > 1) {
+    mp4_note = make_mp4(dir->path(""), base, range.first, base + ".mp4");
+    if (mp4_note.empty()) {
+      manifest.add_output(base + ".mp4");
+      written.push_back(base + ".mp4");
+    }
+  }
+
+  manifest.add_timing_ms("render", render_ms);
+  manifest.add_timing_ms("frames", sw.ms());
+  manifest.set_parameter("kind", std::string(to_string(kind)));
+  manifest.set_parameter("scene", arg);
+  manifest.set_parameter("frames", {range.first, range.last});
+  manifest.set_parameter("reference_frame", reference_frame);
+  if (!metric.empty()) manifest.set_parameter("metric", metric);
+  if (fixed) manifest.set_parameter("range", {fixed->first, fixed->second});
+  if (use_clusters) {
+    manifest.set_parameter("clusters", opt.clusters.string());
+    manifest.set_parameter("clustering", ci.title);
+    manifest.set_parameter("metric_parameters_from", ci.from);
+  }
+  manifest.set_parameter("width", opt.width);
+  manifest.set_parameter("height", opt.height);
+  manifest.set_parameter("borders", opt.borders);
+  manifest.set_parameter("lighting", opt.lighting ? "headlight, ambient 0.2, diffuse 0.8" : "none: flat colours");
+  manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)}, {"right", vec_json(cam.right)},
+                                    {"up", vec_json(cam.up)}, {"fov_y_deg", cam.fov_y_deg}});
+  if (needs_trace) manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
+  if (use_clusters) {
+    manifest.set_result("clusters", clusters.cluster_count());
+    manifest.set_result("colours", colours_used);
+  }
+  manifest.set_result("images", images);
+  if (!mp4_note.empty()) manifest.set_result("mp4", mp4_note);
+  if (dir) (void)commit_with_manifest(*dir, manifest);
+
+  if (opt.json) {
+    out << dump_json({{"schema", "ptc-viz-summary/1"}, {"kind", std::string(to_string(kind))}, {"scene", arg},
+                      {"frames", {range.first, range.last}}, {"clusters", use_clusters ? clusters.cluster_count() : 0},
+                      {"colours", colours_used}, {"outputs", written}, {"images", images},
+                      {"mp4", mp4_note.empty() ? nlohmann::json(nullptr) : nlohmann::json(mp4_note)}});
+    return;
+  }
+  if (use_clusters)
+    out << fmt::format("{}: {} triangles, {} clusters in {} colours (no two clusters that share an edge alike)\n", arg,
+                       mesh.triangle_count(), clusters.cluster_count(), colours_used);
+  if (!mp4_note.empty()) out << "note: " << mp4_note << "\n";
+  if (dir) {
+    out << "wrote " << opt.out_dir.string() << "/";
+    if (written.size() == 1) out << written[0];
+    else if (series && kind != VizKind::Export) out << fmt::format("{}_{:04d}..{:04d}.png", base, range.first, range.last)
+                                                    << (mp4_note.empty() && range.count() > 1 ? ", " + base + ".mp4" : "");
+    else out << fmt::format("{}_{:04d}..{:04d}.vtp, clusters.pvd", base, range.first, range.last);
+    out << ", manifest.json\n";
+  }
+}
+
+}  // namespace ptc

@@ -1,0 +1,94 @@
+// The per-frame cluster metrics of the pictures, checked against facts that do not depend on how
+// they are computed: a translated frame changes no metric; a frame scaled by s about any point
+// has every box area s^2 and every sphere radius s times the reference's, reg and Acc unchanged;
+// the SAH shares sum to 1; triangle counts sum to the mesh's; the columns are in
+// clusters_frames.csv's order.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "analysis/metrics/cluster_frame.h"
+#include "toolkit/clustering/cluster.h"
+#include "toolkit/io/mesh_io.h"
+
+namespace ptc {
+namespace {
+
+struct Fixture {
+  Mesh mesh = read_mesh(std::string(PTC_TEST_DATA) + "/meshes/bunny00.off").mesh;
+  ClusterConfig cfg;
+  Clustering c;
+  Fixture() {
+    cfg.method = ClusterMethod::Growth;
+    c = cluster_mesh(mesh, cfg);
+  }
+  Mesh moved(const Vec3& shift, double scale) const {
+    Mesh m = mesh;
+    std::vector<Vec3> p(m.positions().begin(), m.positions().end());
+    const Vec3 pivot(0.3, -0.2, 0.1);
+    for (auto& q : p) q = pivot + scale * (q - pivot) + shift;
+    m.set_positions(std::move(p));
+    return m;
+  }
+};
+
+TEST(ClusterFrame, NamesFollowTheDriftTable) {
+  const std::vector<std::string> want = {"triangles", "vertices", "connectivity", "reg", "acc", "reg_delta", "acc_delta",
+                                         "sphere_radius", "sphere_radius_ratio", "sphere_radius_ratio_prev", "box_area",
+                                         "box_area_ratio", "box_area_ratio_prev", "p_hit", "sah_share",
+                                         "boundary_vertices", "components"};
+  ASSERT_EQ(cluster_metric_infos().size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) EXPECT_EQ(cluster_metric_infos()[i].name, want[i]);
+  EXPECT_TRUE(find_cluster_metric("box_area_ratio")->diverging);
+  EXPECT_EQ(find_cluster_metric("box_area_ratio")->centre, 1.0);
+  EXPECT_TRUE(find_cluster_metric("acc_delta")->diverging);
+  EXPECT_FALSE(find_cluster_metric("reg")->diverging);
+  EXPECT_FALSE(find_cluster_metric("nodes_visited"));
+}
+
+TEST(ClusterFrame, ScaledFrameScalesBoxesAndSpheresAndKeepsShapes) {
+  const Fixture f;
+  const ClusterFrameMetrics ref = cluster_frame_metrics(f.mesh, f.c, f.cfg, {}, {});
+  const std::size_t n = f.c.cluster_count();
+  for (std::size_t k = 0; k < n; ++k) {
+    EXPECT_EQ(ref.of("box_area_ratio")[k], 1.0);
+    EXPECT_EQ(ref.of("reg_delta")[k], 0.0);
+  }
+  const double tris = std::accumulate(ref.of("triangles").begin(), ref.of("triangles").end(), 0.0);
+  EXPECT_EQ(tris, double(f.mesh.triangle_count()));
+  const double shares = std::accumulate(ref.of("sah_share").begin(), ref.of("sah_share").end(), 0.0);
+  EXPECT_NEAR(shares, 1.0, 1e-9);
+
+  const Mesh big = f.moved(Vec3(5, -3, 2), 2.0);
+  const ClusterFrameMetrics m = cluster_frame_metrics(big, f.c, f.cfg, ref.rows, ref.rows);
+  for (std::size_t k = 0; k < n; ++k) {
+    EXPECT_NEAR(m.of("box_area_ratio")[k], 4.0, 1e-9) << k;
+    EXPECT_NEAR(m.of("box_area_ratio_prev")[k], 4.0, 1e-9) << k;
+    EXPECT_NEAR(m.of("sphere_radius_ratio")[k], 2.0, 1e-9) << k;
+    EXPECT_NEAR(m.of("box_area")[k], 4.0 * ref.of("box_area")[k], 1e-9 * ref.of("box_area")[k]) << k;
+    EXPECT_NEAR(m.of("reg_delta")[k], 0.0, 1e-9) << k;
+    EXPECT_NEAR(m.of("reg")[k], ref.of("reg")[k], 1e-9) << k;
+    EXPECT_EQ(m.of("triangles")[k], ref.of("triangles")[k]);
+    EXPECT_EQ(m.of("components")[k], ref.of("components")[k]);
+  }
+  // Only translated: the shares of the SAH cost stay (the tree is built over the same shapes).
+  const ClusterFrameMetrics t = cluster_frame_metrics(f.moved(Vec3(1e3, 0, 0), 1.0), f.c, f.cfg, ref.rows, ref.rows);
+  for (std::size_t k = 0; k < n; ++k) {
+    EXPECT_NEAR(t.of("box_area_ratio")[k], 1.0, 1e-6) << k;
+    EXPECT_NEAR(t.of("sah_share")[k], ref.of("sah_share")[k], 1e-6) << k;
+  }
+}
+
+TEST(ClusterFrame, AnotherClusteringAsReferenceIsRefused) {
+  const Fixture f;
+  ClusterConfig other = f.cfg;
+  other.max_count = 10, other.max_size = 10;
+  const Clustering c2 = cluster_mesh(f.mesh, other);
+  const ClusterFrameMetrics ref = cluster_frame_metrics(f.mesh, c2, other, {}, {});
+  EXPECT_THROW((void)cluster_frame_metrics(f.mesh, f.c, f.cfg, ref.rows, {}), std::invalid_argument);
+  EXPECT_THROW((void)ref.of("nodes_visited"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ptc

@@ -1,0 +1,55 @@
+// Colour scales of the heatmaps: a metric's values to colours through viridis (sequential) or
+// coolwarm (diverging about a centre, symmetric), with the range the user fixed (--range MIN:MAX,
+// so that frames, runs and BVHs compare by eye) or the range of the values (over a whole frame
+// series when the caller collects it). Values outside the range take the end colours and are
+// counted (the legend says how many); NaN takes kNanColour. Also the compositing of pictures
+// into panels. No VTK here; legend_strip() (legend.h) draws the scale with its numbers.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "render/images.h"
+
+namespace ptc::viz {
+
+/// Colour of values that are not numbers (a cluster whose reference had a zero box, ...).
+inline constexpr Rgb8 kNanColour = {110, 110, 110};
+
+struct ColourScale {
+  std::string title;           ///< the metric's name as in the CSVs ("box_area_ratio", "nodes_visited")
+  std::string colormap = "viridis";  ///< "viridis" or "coolwarm"
+  double min = 0, max = 1;     ///< values drawn at the two ends
+  bool integer = false;        ///< label the ticks as integers (counters)
+  std::string from;            ///< where the range came from: "--range", "values of frame 3", "values of frames 0:60"
+};
+
+/// The scale for `values` (NaN ignored): `fixed` when given; else sequential: [min, max] of the
+/// values (0 .. max for non-negative counters when `from_zero`), diverging: centre -+ the largest
+/// distance of a value from the centre. A constant or empty set widens to a non-empty range
+/// (value -+ 0.5, or 0 .. 1).
+[[nodiscard]] ColourScale make_scale(std::string title, std::span<const double> values, bool diverging, double centre,
+                                     const std::optional<std::pair<double, double>>& fixed, bool from_zero = false);
+
+/// The colour of v on the scale (NaN -> kNanColour; outside the range: the end colour).
+[[nodiscard]] Rgb8 colour_of(const ColourScale& s, double v);
+
+/// How many of `values` fall below min and above max (NaN counted apart).
+struct OutOfRange {
+  std::size_t below = 0, above = 0, nan = 0;
+};
+[[nodiscard]] OutOfRange out_of_range(const ColourScale& s, std::span<const double> values);
+
+/// Images side by side (top-aligned, `gap` pixels of `fill` between them and below shorter
+/// ones) and one above the other (left-aligned).
+[[nodiscard]] RgbImage hstack(std::span<const RgbImage> images, int gap, Rgb8 fill);
+[[nodiscard]] RgbImage vstack(std::span<const RgbImage> images, int gap, Rgb8 fill);
+
+/// Tick values for a legend: `count` values from min to max inclusive, as text ("{:.4g}", or
+/// integers when the scale is integer and the range allows).
+[[nodiscard]] std::vector<std::string> tick_labels(const ColourScale& s, int count);
+
+}  // namespace ptc::viz
