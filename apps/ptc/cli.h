@@ -106,6 +106,7 @@ void register_trace(CLI::App& app, Context& ctx);
 void register_bench(CLI::App& app, Context& ctx);
 void register_experiment(CLI::App& app, Context& ctx);
 void register_viz(CLI::App& app, Context& ctx);
+void register_notebook(CLI::App& app, Context& ctx);
 void register_merge(CLI::App& app, Context& ctx);
 
 }  // namespace ptc::cli

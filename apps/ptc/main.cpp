@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
   cli::register_experiment(app, ctx);
   cli::register_merge(app, ctx);
   cli::register_viz(app, ctx);
+  cli::register_notebook(app, ctx);
 
   try {
     app.parse(argc, argv);
