@@ -18,6 +18,7 @@ PACKAGES=(
   libvtk9-dev libgtest-dev libgmock-dev libbenchmark-dev libembree-dev libtbb-dev
   libcli11-dev libfmt-dev nlohmann-json3-dev libmeshoptimizer-dev libassimp-dev
   libcgal-demo assimp-testmodels xvfb xauth
+  python3-pandas python3-matplotlib python3-nbformat jupyter-nbconvert python3-ipykernel
 )
 
 missing=()
@@ -87,10 +88,25 @@ case "$mode" in
     run_experiment sweep --width 512 --height 512
     run_experiment compare --width 512 --height 512
     run_experiment drift --width 512 --height 512
-    # Nothing of an earlier out/ is lost: it is replaced only once every experiment has finished.
+    # The pictures: the paper's figures as a notebook (executed headless) and PNG/SVG, and a
+    # partition | shaded | heatmap panel of the scene's last frame with the method's clusters of
+    # its mesh (the armadillo Loop-subdivided once, as the scene file does).
+    echo "== ptc notebook out/{sweep,compare,drift} --execute; ptc viz panel $scene" >&2
+    "$ptc" notebook out.tmp/sweep out.tmp/compare out.tmp/drift --execute --out out.tmp/notebooks >/dev/null
+    if [ "$scene" = scenes/paper-default.json ]; then
+      "$ptc" subdivide "$build/data/meshes/armadillo.off" --levels 1 --scheme loop --out "$build/data/armadillo-loop1.off" >/dev/null
+      "$ptc" cluster "$build/data/armadillo-loop1.off" --out out.tmp/clusters >/dev/null
+      "$ptc" viz panel "$scene" --clusters out.tmp/clusters --frame 60 --shadows --out out.tmp/panel >/dev/null
+    fi
+    # Nothing of an earlier out/ is lost: it is replaced only once every step has finished.
     if [ -e out ]; then rm -rf out.old && mv out out.old; fi
     mv out.tmp out && rm -rf out.old
-    key_numbers out ;;
+    key_numbers out
+    echo
+    echo "figures: out/notebooks/paper_figures.ipynb (executed; open with jupyter), out/notebooks/*.png and *.svg"
+    echo "         (redraw: /usr/bin/python3 out/notebooks/paper_figures.py)"
+    [ -e out/panel/panel.png ] && echo "panel:   out/panel/panel.png (partition | shaded | nodes visited per pixel, frame 60)"
+    true ;;
   full)
     # The full-size study: the four animated scenes from real data, as the paper had four (a
     # keyframed one, a skinned one, the cloth, a real mesh under a deformer) at 670k-1.3M

@@ -80,7 +80,7 @@ for ax, scene in zip(axes[:, 0], scenes):
     for i, cfg in enumerate(configs):
         e = d[d["config"] == cfg].sort_values("frame")
         ax.plot(e["frame"], e["perf_factor"], label=cfg, **line_style(i))
-    ax.axhline(1.0, color="0.5", linewidth=0.8)
+    ax.axhline(1.0, color="black", linestyle=":", linewidth=0.8)
     ref = summary[summary["scene"] == scene]["reference"].iloc[0]
     ax.set_xlabel("frame")
     ax.set_ylabel(f"whole-frame time / {ref}'s")
@@ -100,7 +100,7 @@ for i, cl in enumerate(clusterings):
         a.plot(e["frame"], e["box_area_ratio_p95"], label=cl, **line_style(i))
     b.plot(e["frame"], e["sah_cost"], label=cl, **line_style(i))
     drawn += 1
-a.axhline(1.0, color="0.5", linewidth=0.8)
+a.axhline(1.0, color="black", linestyle=":", linewidth=0.8)
 a.set_xlabel("frame"); a.set_ylabel("p95 over clusters of box area / frame 0's"); a.set_title("box-area drift per clustering")
 b.set_xlabel("frame"); b.set_ylabel("SAH cost of the frame's BVH"); b.set_title("SAH cost per frame (triangles: the triangle BVH)")
 a.legend(fontsize=8); b.legend(fontsize=8)
@@ -129,7 +129,7 @@ for i, cl in enumerate(clusterings):
         p = p.iloc[np.sort(rng.choice(len(p), 3000, replace=False))]
     rho = corr[corr["clustering"] == cl]["spearman"]
     label = f"{cl} (Spearman {rho.iloc[0]:+.2f})" if len(rho) else cl
-    ax.scatter(p["conn"], p["drift"], s=4, alpha=0.5, color=COLOURS[i % 10], label=label)
+    ax.scatter(p["conn"], p["drift"], s=4, color=COLOURS[i % 10], label=label)
 ax.set_xlabel("connectivity (triangles / vertices)")
 ax.set_ylabel("mean |ln(box area / frame 0's)| over the frames after the first")
 ax.set_title("connectivity against box-area drift (up to 3000 clusters per clustering)")
@@ -163,19 +163,25 @@ plt.show()
 
 const char* kSpeedError = R"PY(acc = study_csv("accuracy", "accuracy.csv")
 groups = list(dict.fromkeys(acc["group"]))
-fig, ax = plt.subplots(figsize=(8, 5))
+cols = 2 if len(groups) > 1 else 1
+rows = math.ceil(len(groups) / cols)
+fig, axes = plt.subplots(rows, cols, figsize=(6.5 * cols, 4 * rows), squeeze=False)
 for i, g in enumerate(groups):
-    e = acc[acc["group"] == g].groupby("choice").agg(speedup=("speedup", "median"), error=("error", "median")).reset_index()
-    ax.scatter(e["speedup"], e["error"], s=30, color=COLOURS[i % 10], label=g)
+    ax = axes[i // cols][i % cols]
+    d = acc[acc["group"] == g]
+    e = d.groupby("choice", sort=False).agg(speedup=("speedup", "median"), err=("error_mean", "median")).reset_index()
+    ax.scatter(e["speedup"], e["err"], s=36, color=COLOURS[i % 10], label=g)
     for _, r in e.iterrows():
-        ax.annotate(r["choice"], (r["speedup"], r["error"]), fontsize=7, xytext=(3, 3), textcoords="offset points")
-ax.set_xscale("log")
-if (acc["error"] > 0).any():
-    ax.set_yscale("symlog", linthresh=1e-9)
-ax.set_xlabel("speed-up against the reference (median over frames)")
-ax.set_ylabel("error against the reference (median)")
-ax.set_title("speed against error")
-ax.legend(fontsize=8)
+        ax.annotate(r["choice"], (r["speedup"], r["err"]), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    if (e["speedup"] > 0).all():
+        ax.set_xscale("log")
+    small = e["err"].abs()[e["err"] != 0]
+    ax.set_yscale("symlog", linthresh=float(small.min()) if len(small) else 1e-12)
+    ax.set_xlabel(f"speed-up over {d['reference'].iloc[0]} (median over frames)")
+    ax.set_ylabel(f"{d['error'].iloc[0]} (mean, median over frames)")
+    ax.set_title(f"speed against error: {g}")
+for j in range(len(groups), rows * cols):
+    axes[j // cols][j % cols].axis("off")
 save(fig, "speed_vs_error", len(groups))
 plt.show()
 )PY";
@@ -255,7 +261,8 @@ std::vector<Figure> figures_for(const StudyInputs& in) {
   if (has("accuracy"))
     f.push_back({"speed_vs_error", "accuracy",
                  "## Speed against error\n\nEvery approximation of `ptc experiment accuracy` (`accuracy.csv`): its "
-                 "speed-up over the reference and its error, medians over the frames, one colour per group.",
+                 "speed-up over its reference and its error (`error` names the measure, `error_mean` is its value), "
+                 "medians over the frames, one panel and colour per group.",
                  kSpeedError});
   return f;
 }

@@ -83,14 +83,20 @@ RgbImage vstack(std::span<const RgbImage> images, int gap, Rgb8 fill) {
   return out;
 }
 
-std::vector<std::string> tick_labels(const ColourScale& s, int count) {
+std::vector<Tick> ticks(const ColourScale& s, int count) {
   if (count < 2) throw std::invalid_argument("at least two ticks");
-  std::vector<std::string> out;
-  const bool ints = s.integer && std::floor(s.min) == s.min && std::floor(s.max) == s.max &&
-                    std::fmod(s.max - s.min, count - 1) == 0;
+  std::vector<Tick> out;
   for (int i = 0; i < count; ++i) {
-    const double v = s.min + (s.max - s.min) * i / (count - 1);
-    out.push_back(ints ? fmt::format("{:.0f}", v) : fmt::format("{:.4g}", v));
+    double v = s.min + (s.max - s.min) * i / (count - 1);
+    if (s.integer) {
+      v = std::round(v);
+      if (v < s.min) v += 1;
+      if (v > s.max) v -= 1;
+      if (v < s.min || (!out.empty() && v <= out.back().value)) continue;
+      out.push_back({v, fmt::format("{:.0f}", v)});
+    } else {
+      out.push_back({v, fmt::format("{:.4g}", v)});
+    }
   }
   return out;
 }

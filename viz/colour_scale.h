@@ -48,8 +48,13 @@ struct OutOfRange {
 [[nodiscard]] RgbImage hstack(std::span<const RgbImage> images, int gap, Rgb8 fill);
 [[nodiscard]] RgbImage vstack(std::span<const RgbImage> images, int gap, Rgb8 fill);
 
-/// Tick values for a legend: `count` values from min to max inclusive, as text ("{:.4g}", or
-/// integers when the scale is integer and the range allows).
-[[nodiscard]] std::vector<std::string> tick_labels(const ColourScale& s, int count);
+/// Ticks for a legend: `count` values evenly from min to max inclusive with their text
+/// ("{:.4g}"); on an integer scale the values are rounded to integers (duplicates dropped) and
+/// written as integers, each at its own position.
+struct Tick {
+  double value = 0;
+  std::string text;
+};
+[[nodiscard]] std::vector<Tick> ticks(const ColourScale& s, int count);
 
 }  // namespace ptc::viz

@@ -32,7 +32,7 @@ struct MeshStyle {
   /// Segments drawn over the surface (vertex ids of the mesh), e.g. viz::border_edges().
   std::vector<std::array<std::uint32_t, 2>> lines;
   Rgb8 line_colour = {0, 0, 0};
-  float line_width = 1.5f;
+  float line_width = 1.0f;
   Rgb8 background = kBackground;
 };
 

@@ -214,7 +214,7 @@ TEST_F(Viz, PartitionNeverGivesNeighboursOneColour) {
           const std::uint32_t t = ids[static_cast<std::size_t>(y) * img.width + x];
           if (t == kMiss) continue;
           bool border = false;
-          for (int dy = -2; dy <= 2; ++dy)  // the line is 1.5 pixels wide
+          for (int dy = -2; dy <= 2; ++dy)  // a line touches pixels near the edge
             for (int dx = -2; dx <= 2; ++dx) {
               const std::uint32_t u = ids[static_cast<std::size_t>(y + dy) * img.width + x + dx];
               border = border || u == kMiss || label_[u] != label_[t];
