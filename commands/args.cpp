@@ -98,4 +98,25 @@ void check_frames(const Scene& scene, const FrameRange& r, const std::string& sc
                      fmt::format("frame {} is beyond the last frame of '{}' (frames 0..{})", r.last, scene_arg, fc - 1));
 }
 
+std::pair<double, double> parse_value_range(const std::string& s, std::string_view flag) {
+  // Split at the first colon after the first character, so that MIN may be negative.
+  const std::size_t c = s.size() > 1 ? s.find(':', 1) : std::string::npos;
+  const std::string bad = fmt::format("'{}' is not MIN:MAX with two finite numbers", s);
+  auto num = [&](const std::string& t) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(t, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (t.empty() || used != t.size() || !std::isfinite(v)) throw UsageError(std::string(flag), bad);
+    return v;
+  };
+  if (c == std::string::npos) throw UsageError(std::string(flag), bad);
+  const double lo = num(s.substr(0, c)), hi = num(s.substr(c + 1));
+  if (!(lo < hi)) throw UsageError(std::string(flag), fmt::format("'{}': MIN must be below MAX", s));
+  return {lo, hi};
+}
+
 }  // namespace ptc

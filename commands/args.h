@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <string>
 #include <string_view>
 
@@ -21,6 +22,10 @@ namespace ptc {
 
 /// "X,Y,Z" (three finite decimal numbers separated by commas, blanks around them allowed) or
 /// nullopt with `why` set ("expected 3 comma-separated numbers", "not a finite number 'nan'").
+/// "MIN:MAX" with two finite numbers, MIN < MAX, either possibly negative ("-1:1", "-2.5:-0.5");
+/// UsageError naming `flag` otherwise.
+[[nodiscard]] std::pair<double, double> parse_value_range(const std::string& s, std::string_view flag);
+
 [[nodiscard]] std::optional<Vec3> parse_vec3(std::string_view s, std::string* why = nullptr);
 
 /// --width/--height: 1..kMaxImageSide (render/camera.h) each; UsageError otherwise.

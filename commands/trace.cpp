@@ -37,7 +37,8 @@ void check_render_options(const RenderConfig& rc) {
 // The images of one frame into `dir` (suffix "" for one frame, "_0007" in a sequence), each
 // recorded with its legend.
 void write_frame_images(const OutputDir& dir, const Render& r, const RenderConfig& rc, const std::string& suffix,
-                        bool first, RunManifest& manifest, nlohmann::json& images) {
+                        bool first, const std::optional<std::pair<double, double>>& cost_range, RunManifest& manifest,
+                        nlohmann::json& images) {
   auto put = [&](const std::string& base, const RgbImage& img, nlohmann::json legend) {
     const std::string name = base + suffix + ".png";
     viz::write_png(dir.path(name), img);
@@ -45,7 +46,8 @@ void write_frame_images(const OutputDir& dir, const Render& r, const RenderConfi
     images[name] = std::move(legend);
   };
   ColorLegend dl, nl, tl;  // filled by the image functions, so those run before the legends are read
-  const RgbImage depth = depth_image(r, dl), nodes = nodes_image(r, nl), tris = triangles_image(r, tl);
+  const RgbImage depth = depth_image(r, dl), nodes = nodes_image(r, nl, cost_range),
+                 tris = triangles_image(r, tl, cost_range);
   put("shaded", shaded_image(r),
       {{"quantity", "Lambert shading"},
        {"note", fmt::format("albedo 0.9, ambient 0.2{}, diffuse 0.8{}; background (32,32,40)",
@@ -81,6 +83,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   }
   if (opt.frames) asked = parse_frame_range(*opt.frames, "--frames");
   const bool sequence = opt.frames.has_value();
+  const std::optional<std::pair<double, double>> cost_range =
+      opt.cost_range ? std::optional(parse_value_range(*opt.cost_range, "--cost-range")) : std::nullopt;
 
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
@@ -160,7 +164,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     render_ms += t.ms();
 
     t.restart();
-    write_frame_images(dir, r, rc, sequence ? fmt::format("_{:04d}", f) : "", first, manifest, images);
+    write_frame_images(dir, r, rc, sequence ? fmt::format("_{:04d}", f) : "", first, cost_range, manifest, images);
     write_ms += t.ms();
 
     TraceRow base;
@@ -222,6 +226,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("ao_samples", rc.ao_samples);
   manifest.set_parameter("ao_distance_rel", rc.ao_distance_rel);
   manifest.set_parameter("seed", rc.seed);
+  if (cost_range) manifest.set_parameter("cost_range", {cost_range->first, cost_range->second});
   manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)},
                                     {"right", vec_json(cam.right)}, {"up", vec_json(cam.up)},
                                     {"fov_y_deg", cam.fov_y_deg}, {"from_scene", scene.has_own_camera()},

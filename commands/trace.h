@@ -25,6 +25,9 @@ struct TraceCommandOptions {
   std::filesystem::path out_dir;       ///< images, trace.csv, manifest.json (required)
   CameraSpec camera;
   RenderConfig render;                 ///< size, shadows, AO, seed, light, threads (0 = all cores)
+  /// "MIN:MAX": the cost images' colour range (default: each image's 0..max), so that frames,
+  /// runs and the triangle and cluster BVHs compare; `ptc viz heatmap` draws them with numbers.
+  std::optional<std::string> cost_range;
   bool json = false;                   ///< stdout: JSON (schema ptc-trace-summary/1) instead of the table
   std::vector<std::string> argv;       ///< recorded in the manifest
 };

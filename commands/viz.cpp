@@ -23,6 +23,7 @@
 #include "commands/output_dir.h"
 #include "commands/scene_args.h"
 #include "render/view.h"
+#include "toolkit/anim/deformers.h"
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
@@ -63,28 +64,6 @@ constexpr int kGap = 4;
 bool is_pixel_metric(const std::string& m) {
   return std::find_if(std::begin(kPixelMetrics), std::end(kPixelMetrics), [&](const char* p) { return m == p; }) !=
          std::end(kPixelMetrics);
-}
-
-std::pair<double, double> parse_range(const std::string& s) {
-  // MIN:MAX with either side possibly negative ("-1:1", "-2.5:-0.5"): split at the colon that
-  // is not the first character.
-  const std::size_t c = s.find(':', 1);
-  auto num = [&](const std::string& t) {
-    std::size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(t, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (t.empty() || used != t.size() || !std::isfinite(v))
-      throw UsageError("--range", fmt::format("'{}' is not MIN:MAX with two finite numbers", s));
-    return v;
-  };
-  if (c == std::string::npos) throw UsageError("--range", fmt::format("'{}' is not MIN:MAX with two finite numbers", s));
-  const double lo = num(s.substr(0, c)), hi = num(s.substr(c + 1));
-  if (!(lo < hi)) throw UsageError("--range", fmt::format("'{}': MIN must be below MAX", s));
-  return {lo, hi};
 }
 
 // The clustering's parameters, from DIR/manifest.json of `ptc cluster` when it is there (Acc and
@@ -179,7 +158,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     throw UsageError("--clusters", fmt::format("viz {}{} needs --clusters DIR (a `ptc cluster` output)", to_string(kind),
                                                kind == VizKind::Heatmap ? " of a per-cluster metric" : ""));
   if (opt.range && metric.empty()) throw UsageError("--range", "only heatmaps and panels have a colour range");
-  const std::optional<std::pair<double, double>> fixed = opt.range ? std::optional(parse_range(*opt.range)) : std::nullopt;
+  const std::optional<std::pair<double, double>> fixed = opt.range ? std::optional(parse_value_range(*opt.range, "--range")) : std::nullopt;
   if (opt.interactive && (kind == VizKind::Panel || kind == VizKind::Export || pixel_metric))
     throw UsageError("--interactive", "a window shows the mesh: viz partition or a heatmap of a per-cluster metric");
   if (opt.interactive && opt.frames) throw UsageError("--interactive", "a window shows one frame (--frame F)");
@@ -199,8 +178,18 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   RunManifest manifest("viz", opt.argv, "ptc-viz/1");
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
+  std::string motion = scene.all_static() ? "none: the rest pose every frame" : "scene";
+  if (opt.deform) {
+    const std::optional<DeformKind> k = parse_deform_kind(*opt.deform);
+    if (!k) throw UsageError("--deform", fmt::format("'{}' is not a deformer (twist, bend, wave, rigid or explode)", *opt.deform));
+    if (!scene.all_static())
+      throw UsageError("--deform", fmt::format("'{}' is animated: the stand-in motion applies to static scenes only", arg));
+    scene = deform_scene(scene, deform_preset(*k));
+    motion = fmt::format("stand-in: the {} deformer (deform_preset)", to_string(*k));
+  }
+  manifest.set_parameter("motion", motion);
   const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};
-  check_frames(scene, range, arg, opt.frames ? "--frames" : "--frame", opt.extend_frames);
+  check_frames(scene, range, arg, opt.frames ? "--frames" : "--frame", opt.extend_frames || opt.deform.has_value());
   const std::int64_t reference_frame = scene.frames().first;
 
   Mesh mesh = scene.rest();

@@ -26,6 +26,7 @@ struct VizCommandOptions {
   std::optional<std::string> frame;  ///< "F" (default: the scene's first frame)
   std::optional<std::string> frames; ///< "A:B": a series (numbered files, one fixed colour range)
   bool extend_frames = false;
+  std::optional<std::string> deform; ///< --deform KIND: a static scene's stand-in motion (twist, bend, wave, rigid, explode)
   std::filesystem::path clusters;    ///< `ptc cluster --out DIR` (needed by every kind but a pixel heatmap)
   std::string metric;                ///< heatmap / panel: a per-cluster metric or nodes_visited | triangles_tested
   std::optional<std::string> range;  ///< "MIN:MAX": the colour range (default: the values', over the series)

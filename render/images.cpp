@@ -58,12 +58,27 @@ Rgb8 coolwarm(double x) {
   return c;
 }
 
-RgbImage cost_heatmap(std::span<const std::uint32_t> counts, int width, int height, ColorLegend& legend) {
+RgbImage cost_heatmap(std::span<const std::uint32_t> counts, int width, int height, ColorLegend& legend,
+                      const std::optional<std::pair<double, double>>& range) {
   RgbImage img(width, height);
   if (counts.size() != img.pixel_count()) throw std::invalid_argument("cost_heatmap: counts do not match the image size");
+  legend.colormap = "viridis";
+  if (range) {
+    if (!(range->first < range->second)) throw std::invalid_argument("cost_heatmap: the range needs MIN < MAX");
+    legend.min = range->first;
+    legend.max = range->second;
+    std::size_t below = 0, above = 0;
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      below += counts[i] < range->first;
+      above += counts[i] > range->second;
+      img.set(i, viridis((double(counts[i]) - range->first) / (range->second - range->first)));
+    }
+    if (below) legend.note += "; " + std::to_string(below) + " pixels below the range drawn at the bottom colour";
+    if (above) legend.note += "; " + std::to_string(above) + " pixels above the range drawn at the top colour";
+    return img;
+  }
   std::uint32_t mx = 0;
   for (std::uint32_t c : counts) mx = std::max(mx, c);
-  legend.colormap = "viridis";
   legend.min = 0;
   legend.max = mx;
   for (std::size_t i = 0; i < counts.size(); ++i) img.set(i, viridis(mx ? double(counts[i]) / double(mx) : 0.0));

@@ -5,8 +5,10 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ptc {
@@ -49,9 +51,11 @@ struct ColorLegend {
 /// Heatmap of per-pixel counts: value / max over the image through viridis (min = 0, so a
 /// count's colour reads the same on every image of a run with the same max); pixels whose
 /// `hit` is false (missed rays) still show their count (a miss can be expensive too).
-/// `counts.size()` must be width * height (std::invalid_argument otherwise).
+/// `counts.size()` must be width * height (std::invalid_argument otherwise). With `range`
+/// (MIN < MAX) the map runs from MIN to MAX instead, so images of frames, runs and BVHs compare;
+/// counts outside take the end colours and the legend's note says how many pixels did.
 [[nodiscard]] RgbImage cost_heatmap(std::span<const std::uint32_t> counts, int width, int height,
-                                    ColorLegend& legend);
+                                    ColorLegend& legend, const std::optional<std::pair<double, double>>& range = {});
 
 /// A horizontal colour bar of the map (left = min, right = max), for a legend next to a heatmap.
 [[nodiscard]] RgbImage viridis_bar(int width, int height);

@@ -112,16 +112,16 @@ RgbImage ao_image(const Render& r) {
   return img;
 }
 
-RgbImage nodes_image(const Render& r, ColorLegend& legend) {
+RgbImage nodes_image(const Render& r, ColorLegend& legend, const std::optional<std::pair<double, double>>& range) {
   legend.quantity = "nodes_visited";
   legend.note = "4-wide nodes whose boxes a primary ray tested; viridis from min (dark) to max (yellow)";
-  return cost_heatmap(r.primary.nodes_visited, r.width, r.height, legend);
+  return cost_heatmap(r.primary.nodes_visited, r.width, r.height, legend, range);
 }
 
-RgbImage triangles_image(const Render& r, ColorLegend& legend) {
+RgbImage triangles_image(const Render& r, ColorLegend& legend, const std::optional<std::pair<double, double>>& range) {
   legend.quantity = "triangles_tested";
   legend.note = "triangles a primary ray tested (padding lanes not counted); viridis from min (dark) to max (yellow)";
-  return cost_heatmap(r.primary.triangles_tested, r.width, r.height, legend);
+  return cost_heatmap(r.primary.triangles_tested, r.width, r.height, legend, range);
 }
 
 }  // namespace ptc

@@ -57,8 +57,9 @@ struct Render {
 [[nodiscard]] RgbImage normal_image(const Render& r);
 /// AO fraction as grey (1 = white); missed rays: black. Requires r.ao.
 [[nodiscard]] RgbImage ao_image(const Render& r);
-/// Per-pixel primary-ray cost heatmaps (viridis, legend 0..max).
-[[nodiscard]] RgbImage nodes_image(const Render& r, ColorLegend& legend);
-[[nodiscard]] RgbImage triangles_image(const Render& r, ColorLegend& legend);
+/// Per-pixel primary-ray cost heatmaps (viridis, legend 0..max, or the given range: cost_heatmap).
+[[nodiscard]] RgbImage nodes_image(const Render& r, ColorLegend& legend, const std::optional<std::pair<double, double>>& range = {});
+[[nodiscard]] RgbImage triangles_image(const Render& r, ColorLegend& legend,
+                                       const std::optional<std::pair<double, double>>& range = {});
 
 }  // namespace ptc

@@ -12,7 +12,7 @@ struct TraceArgs {
   TraceCommandOptions opt;
   SceneArg scene;
   CameraArgs camera;
-  std::string frame, frames;
+  std::string frame, frames, cost_range;
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -28,6 +28,7 @@ void register_trace(CLI::App& app, Context& ctx) {
     o.render.light = a->camera.light_position();
     if (a->app->count("--frame")) o.frame = a->frame;
     if (a->app->count("--frames")) o.frames = a->frames;
+    if (a->app->count("--cost-range")) o.cost_range = a->cost_range;
     o.render.threads = static_cast<unsigned>(ctx.threads);
     o.argv = ctx.args;
     cmd_trace(o, std::cout);
@@ -52,6 +53,8 @@ void register_trace(CLI::App& app, Context& ctx) {
       ->check(CLI::Range(1e-9, 1e9))
       ->capture_default_str();
   c->add_option("--seed", rc.seed, "seed of the AO directions")->capture_default_str();
+  c->add_option("--cost-range", a->cost_range,
+                "colour range MIN:MAX of the cost images (default: each image's 0..max); with numbers: ptc viz heatmap");
   c->add_option("--out", a->opt.out_dir, "output directory (written atomically)")->required();
   c->add_flag("--json", a->opt.json, "print the per-frame, per-pass figures as JSON");
   add_threads_option(c, ctx.threads);

@@ -13,7 +13,7 @@ struct VizArgs {
   VizCommandOptions opt;
   SceneArg scene;
   CameraArgs camera;
-  std::string kind, frame, frames, range;
+  std::string kind, frame, frames, range, deform;
   bool no_borders = false, flat = false;
   CLI::App* app = nullptr;
 };
@@ -34,6 +34,7 @@ void register_viz(CLI::App& app, Context& ctx) {
                       if (a->app->count("--frame")) o.frame = a->frame;
                       if (a->app->count("--frames")) o.frames = a->frames;
                       if (a->app->count("--range")) o.range = a->range;
+                      if (a->app->count("--deform")) o.deform = a->deform;
                       o.borders = !a->no_borders;
                       o.lighting = !a->flat;
                       o.threads = static_cast<unsigned>(ctx.threads);
@@ -49,6 +50,8 @@ void register_viz(CLI::App& app, Context& ctx) {
   c->add_option("--frames", a->frames, "frames A:B: numbered pictures with one colour range (and an MP4 when ffmpeg is installed)")
       ->excludes(one);
   c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
+  c->add_option("--deform", a->deform, "stand-in motion of a static scene: twist, bend, wave, rigid or explode")
+      ->check(CLI::IsMember({"twist", "bend", "wave", "rigid", "explode"}));
   c->add_option("--clusters", a->opt.clusters, "the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--metric", a->opt.metric,
                 "heatmap / panel: a per-cluster metric (reg, connectivity, acc, box_area_ratio, sah_share, ...) or "

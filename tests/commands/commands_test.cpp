@@ -25,6 +25,7 @@
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/mesh_report.h"
 #include "toolkit/mesh/subdivision.h"
+#include "viz/png.h"
 
 namespace fs = std::filesystem;
 
@@ -242,6 +243,25 @@ TEST_F(Commands, TraceHitsEqualBruteForce) {
   EXPECT_GT(std::stoull(rows[1].at("rays")), 0u);
   for (const char* f : {"shaded.png", "depth.png", "normal.png", "cost_nodes.png", "cost_triangles.png", "cost_legend.png"})
     EXPECT_TRUE(fs::exists(dir_ / "t" / f)) << f;
+  // --cost-range: counts 0, 1 and >= 2 are the only colours of the nodes image with 0:2.
+  o.cost_range = "0:2";
+  o.out_dir = dir_ / "tr";
+  cmd_trace(o, out);
+  {
+    const nlohmann::json m = nlohmann::json::parse(slurp(dir_ / "tr" / "manifest.json"));
+    EXPECT_EQ(m["parameters"]["cost_range"], nlohmann::json::array({0.0, 2.0}));
+    EXPECT_EQ(m["results"]["images"]["cost_nodes.png"]["max"], 2.0);
+    EXPECT_NE(m["results"]["images"]["cost_nodes.png"]["note"].get<std::string>().find("above the range"), std::string::npos);
+    const RgbImage img = viz::read_png(dir_ / "tr" / "cost_nodes.png");
+    for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+      const Rgb8 p{img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2]};
+      EXPECT_TRUE(p == viridis(0) || p == viridis(0.5) || p == viridis(1)) << "pixel " << i;
+    }
+  }
+  o.cost_range = "2:1";
+  EXPECT_EQ(usage_flag([&] { cmd_trace(o, out); }), "--cost-range");
+  o.cost_range.reset();
+  o.out_dir = dir_ / "t";
   // Usage errors name their flag.
   o.frame = "x";
   EXPECT_EQ(usage_flag([&] { cmd_trace(o, out); }), "--frame");

@@ -402,6 +402,37 @@ TEST_F(Viz, ExportReadsBackWithVtkCellByCell) {
   }
 }
 
+TEST_F(Viz, AStaticMeshMovesOnlyWithAStandInMotion) {
+  // Without --deform a mesh file stays in its rest pose; with --deform twist it moves, and an
+  // animated scene refuses the flag.
+  for (const bool deform : {false, true}) {
+    VizCommandOptions o = options(VizKind::Export, deform ? "twist" : "rest");
+    o.frames = "0:2";
+    if (deform) o.deform = "twist";
+    std::ostringstream out;
+    cmd_viz(o, out);
+    const viz::VtpContents a = viz::read_vtp(dir_ / (deform ? "twist" : "rest") / "clusters_0000.vtp");
+    const viz::VtpContents b = viz::read_vtp(dir_ / (deform ? "twist" : "rest") / "clusters_0002.vtp");
+    double moved = 0;
+    for (std::size_t v = 0; v < a.points.size(); ++v) moved = std::max(moved, (b.points[v] - a.points[v]).norm());
+    if (deform) EXPECT_GT(moved, 1e-3);
+    else EXPECT_EQ(moved, 0.0);
+    EXPECT_EQ(manifest(deform ? "twist" : "rest")["parameters"]["motion"],
+              deform ? "stand-in: the twist deformer (deform_preset)" : "none: the rest pose every frame");
+  }
+  const fs::path scene = dir_ / "scene.json";
+  spit(scene, R"({"schema": "ptc-scene/1", "frames": [0, 2], "meshes": [{"name": "s", "file": ")" +
+                  (kMeshes / "mushroom.off").string() + R"(", "deform": {"kind": "wave", "axis": "y"}}]})");
+  VizCommandOptions o = options(VizKind::Export, "anim");
+  o.input = scene;
+  o.deform = "twist";
+  std::ostringstream out;
+  EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--deform");
+  o.deform = "melt";
+  o.input = kMeshes / "mushroom.off";
+  EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--deform");
+}
+
 TEST_F(Viz, SeriesShareOneRangeAndSayWhyThereIsNoMp4) {
   const fs::path scene = dir_ / "scene.json";
   spit(scene, R"({"schema": "ptc-scene/1", "frames": [0, 2], "meshes": [{"name": "s", "file": ")" +

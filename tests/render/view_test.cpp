@@ -135,6 +135,21 @@ TEST(TraceRender, ClusterBvhHitsTheSameTrianglePerPixelAsTheTriangleBvh) {
   }
 }
 
+TEST(TraceRender, HeatmapWithAFixedRangeCountsWhatFallsOutside) {
+  const std::vector<std::uint32_t> counts{0, 5, 10, 20};
+  ptc::ColorLegend l;
+  const ptc::RgbImage img = ptc::cost_heatmap(counts, 4, 1, l, std::pair{5.0, 15.0});
+  EXPECT_EQ(l.min, 5.0);
+  EXPECT_EQ(l.max, 15.0);
+  EXPECT_EQ(img.at(0, 0), ptc::viridis(0.0));
+  EXPECT_EQ(img.at(1, 0), ptc::viridis(0.0));
+  EXPECT_EQ(img.at(2, 0), ptc::viridis(0.5));
+  EXPECT_EQ(img.at(3, 0), ptc::viridis(1.0));
+  EXPECT_NE(l.note.find("1 pixels below the range"), std::string::npos) << l.note;
+  EXPECT_NE(l.note.find("1 pixels above the range"), std::string::npos) << l.note;
+  EXPECT_THROW((void)ptc::cost_heatmap(counts, 4, 1, l, std::pair{3.0, 3.0}), std::invalid_argument);
+}
+
 TEST(TraceRender, HeatmapLegendAndColourMap) {
   // Counts 0, 5, 10 on a 3x1 image: legend 0..10, ends of viridis, middle its midpoint.
   const std::vector<std::uint32_t> counts{0, 5, 10};
