@@ -118,7 +118,9 @@ case "$mode" in
         echo "== ptc experiment $kind $scene --frames 0:29 --width $rays --height $rays" >&2
         "$ptc" experiment "$kind" "$scene" --frames 0:29 --width "$rays" --height "$rays" --out "out-full/$scene/$kind"
       done
+      "$ptc" notebook "out-full/$scene/sweep" "out-full/$scene/compare" "out-full/$scene/drift" --out "out-full/$scene/notebooks" >/dev/null
       key_numbers "out-full/$scene"
+      echo "figures: out-full/$scene/notebooks/ (paper_figures.ipynb, *.png, *.svg)"
     done ;;
   *) echo "usage: ./run.sh [run|full|test|build]" >&2; exit 2 ;;
 esac

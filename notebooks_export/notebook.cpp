@@ -141,23 +141,26 @@ plt.show()
 const char* kCostFit = R"PY(rays = after_warmup(study_csv("drift", "rays.csv"))
 rays = rays[rays["ray_type"] == "primary"]
 reg = study_csv("drift", "regression.csv")
-fit = reg[(reg["ray_type"] == "primary") & (reg["target"] == "cost_per_ray") & (reg["model"] == "sah")]
+reg = reg[(reg["ray_type"] == "primary") & (reg["target"] == "cost_per_ray")]
 clusterings = list(dict.fromkeys(rays["clustering"]))
-fig, ax = plt.subplots(figsize=(7.5, 5))
-for i, cl in enumerate(clusterings):
-    e = rays[rays["clustering"] == cl]
-    ax.scatter(e["sah_cost"], e["cost_per_ray"], s=10, color=COLOURS[i % 10], label=cl)
-series = len(clusterings)
-if len(fit):
-    f = fit.iloc[0]
-    x = np.linspace(rays["sah_cost"].min(), rays["sah_cost"].max(), 50)
-    ax.plot(x, f["coef_sah"] * x + f["intercept"], "k-", label=f"fit: {f['coef_sah']:.3f} SAH + {f['intercept']:.2f}, R^2 {f['r2']:.3f}")
-    series += 1
-ax.set_xlabel("SAH cost of the frame's BVH")
-ax.set_ylabel("measured cost per primary ray (nodes + weighted triangles)")
-ax.set_title("SAH against the measured cost (primary rays, frames after the warm-up)")
-ax.legend(fontsize=8)
-save(fig, "cost_fit", series)
+fig, axes = plt.subplots(1, 2, figsize=(13, 4.8))
+fits = 0
+for ax, col, model in zip(axes, ["sah_cost", "epo"], ["sah", "epo"]):
+    for i, cl in enumerate(clusterings):
+        e = rays[rays["clustering"] == cl]
+        ax.scatter(e[col], e["cost_per_ray"], s=10, color=COLOURS[i % 10], label=cl)
+    f = reg[reg["model"] == model]
+    if len(f) and rays[col].notna().any():
+        f = f.iloc[0]
+        coef = f["coef_sah"] if model == "sah" else f["coef_epo"]
+        x = np.linspace(rays[col].min(), rays[col].max(), 50)
+        ax.plot(x, coef * x + f["intercept"], "k-", label=f"fit: {coef:.3f} {model.upper()} + {f['intercept']:.2f}, R^2 {f['r2']:.3f}")
+        fits = 1
+    ax.set_xlabel("SAH cost of the frame's BVH" if model == "sah" else "EPO of the frame's BVH")
+    ax.set_ylabel("measured cost per primary ray (nodes + weighted triangles)")
+    ax.set_title(f"{model.upper()} against the measured cost (primary rays)")
+    ax.legend(fontsize=8)
+save(fig, "cost_fit", len(clusterings) + fits)
 plt.show()
 )PY";
 
@@ -253,9 +256,10 @@ std::vector<Figure> figures_for(const StudyInputs& in) {
                  "all clusters (the scatter shows at most 3000 per clustering).",
                  kDriftCorrelation});
     f.push_back({"cost_fit", "drift",
-                 "## SAH against the measured cost\n\nPer frame and clustering: the SAH cost of the BVH against the "
-                 "measured cost per primary ray (`rays.csv`), with the least-squares line of `regression.csv` "
-                 "(model `sah`, its R^2). `regression.csv` also holds the EPO and SAH + EPO models.",
+                 "## SAH and EPO against the measured cost\n\nPer frame and clustering: the SAH cost (left) and the "
+                 "end-point overlap EPO (right) of the frame's BVH against the measured cost per primary ray "
+                 "(`rays.csv`), each with its least-squares line from `regression.csv` (models `sah` and `epo`, "
+                 "their R^2; the file also holds SAH + EPO and the time fits).",
                  kCostFit});
   }
   if (has("accuracy"))
