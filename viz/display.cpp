@@ -1,5 +1,7 @@
 #include "viz/display.h"
 
+#include <GL/gl.h>
+#include <GL/glx.h>
 #include <X11/Xlib.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -11,12 +13,14 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 
 namespace ptc::viz {
@@ -85,32 +89,111 @@ bool display_usable(const std::string& name) {
   return ok;
 }
 
+namespace {
+
+// In a child process (a failing GL driver may abort or crash; VTK itself aborts when it cannot
+// make a context): what VTK 9.1 needs of the display, an OpenGL >= 3.2 context made current on a
+// pbuffer. Exit codes: 0 fine, 2 no display, 3 no framebuffer configuration, 4 no context,
+// 5 cannot make it current, 6 version below 3.2.
+[[noreturn]] void gl_probe_child(const char* name) {
+  XSetErrorHandler(quiet_error_handler);
+  ::Display* d = XOpenDisplay(name);
+  if (!d) _exit(2);
+  const int attrs[] = {GLX_DRAWABLE_TYPE, GLX_PBUFFER_BIT, GLX_RENDER_TYPE, GLX_RGBA_BIT, GLX_RED_SIZE, 8,
+                       GLX_GREEN_SIZE, 8, GLX_BLUE_SIZE, 8, GLX_DEPTH_SIZE, 16, None};
+  int n = 0;
+  GLXFBConfig* cfg = glXChooseFBConfig(d, DefaultScreen(d), attrs, &n);
+  if (!cfg || n == 0) _exit(3);
+  using CreateFn = GLXContext (*)(::Display*, GLXFBConfig, GLXContext, Bool, const int*);
+  const auto create = reinterpret_cast<CreateFn>(glXGetProcAddressARB(reinterpret_cast<const GLubyte*>("glXCreateContextAttribsARB")));
+  GLXContext ctx = nullptr;
+  if (create) {
+    const int core[] = {GLX_CONTEXT_MAJOR_VERSION_ARB, 3, GLX_CONTEXT_MINOR_VERSION_ARB, 2, GLX_CONTEXT_PROFILE_MASK_ARB,
+                        GLX_CONTEXT_CORE_PROFILE_BIT_ARB, None};
+    ctx = create(d, cfg[0], nullptr, True, core);
+  }
+  if (!ctx) ctx = glXCreateNewContext(d, cfg[0], GLX_RGBA_TYPE, nullptr, True);
+  if (!ctx) _exit(4);
+  const int pb_attrs[] = {GLX_PBUFFER_WIDTH, 4, GLX_PBUFFER_HEIGHT, 4, None};
+  const GLXPbuffer pb = glXCreatePbuffer(d, cfg[0], pb_attrs);
+  if (!glXMakeContextCurrent(d, pb, pb, ctx)) _exit(5);
+  const char* v = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+  int major = 0, minor = 0;
+  if (!v || std::sscanf(v, "%d.%d", &major, &minor) != 2 || major * 10 + minor < 32) _exit(6);
+  _exit(0);
+}
+
+}  // namespace
+
+std::string gl_problem(const std::string& name) {
+  if (name.empty()) return "$DISPLAY is unset";
+  const pid_t pid = fork();
+  if (pid < 0) return std::string("cannot test the display: fork: ") + std::strerror(errno);
+  if (pid == 0) gl_probe_child(name.c_str());
+  int status = 0;
+  bool done = false;
+  for (int i = 0; i < 1500 && !done; ++i) {  // 15 s
+    const pid_t r = waitpid(pid, &status, WNOHANG);
+    if (r == pid) done = true;
+    else std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (!done) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    return name + " did not answer an OpenGL test within 15 s";
+  }
+  if (WIFSIGNALED(status)) return name + ": its OpenGL driver crashed when asked for a context (signal " + std::to_string(WTERMSIG(status)) + ")";
+  switch (WIFEXITED(status) ? WEXITSTATUS(status) : -1) {
+    case 0: return "";
+    case 2: return name + " does not answer";
+    case 3: return name + " offers no RGBA pbuffer configuration";
+    case 4: return name + " gives no OpenGL context (indirect GLX?)";
+    case 5: return name + ": an OpenGL context cannot be made current";
+    case 6: return name + " offers OpenGL below 3.2 (VTK 9 needs 3.2)";
+    default: return name + ": the OpenGL test failed";
+  }
+}
+
 Display Display::acquire(const Options& o) {
   Display d;
   const char* env = std::getenv("DISPLAY");
   d.had_previous_ = env != nullptr;
   d.previous_ = env ? env : "";
   const std::string current = env ? env : "";
-  if (!o.force_xvfb && display_usable(current)) {
-    d.name_ = current;
-    return d;
+  if (o.interactive && o.force_xvfb) throw UsageError("--interactive", "a window needs the user's display, not --xvfb");
+  std::string problem = current.empty() ? "$DISPLAY is unset" : "";
+  if (!o.force_xvfb && !current.empty()) {
+    problem = display_usable(current) ? gl_problem(current) : current + " does not answer or has no GLX";
+    if (problem.empty()) {
+      d.name_ = current;
+      return d;
+    }
   }
-  if (o.interactive)
-    fail(current.empty() ? "--interactive needs a display: $DISPLAY is unset"
-                         : "--interactive needs a display: " + current + " does not answer or has no GLX");
+  if (o.interactive) fail("--interactive needs a display: " + problem);
   const std::string xvfb = find_program(o.xvfb);
   if (xvfb.empty())
     fail(std::string("no X display is reachable (") + (current.empty() ? "$DISPLAY is unset" : "$DISPLAY=" + current + " does not answer") +
          ") and Xvfb is not installed: install the Debian package xvfb (apt-get install --no-install-recommends xvfb xauth)");
 
-  int number_pipe[2], err_pipe[2];
-  if (pipe2(number_pipe, O_CLOEXEC) != 0 || pipe2(err_pipe, O_CLOEXEC) != 0)
-    fail(std::string("cannot start Xvfb: pipe: ") + std::strerror(errno));
+  int number_pipe[2] = {-1, -1}, err_pipe[2] = {-1, -1};
+  if (pipe2(number_pipe, O_CLOEXEC) != 0 || pipe2(err_pipe, O_CLOEXEC) != 0) {
+    const int e = errno;
+    for (int fd : {number_pipe[0], number_pipe[1], err_pipe[0], err_pipe[1]})
+      if (fd >= 0) close(fd);
+    fail(std::string("cannot start Xvfb: pipe: ") + std::strerror(e));
+  }
   const std::string fd_arg = std::to_string(number_pipe[1]);
   std::vector<std::string> args = {xvfb, "-displayfd", fd_arg, "-screen", "0", "1280x1024x24", "-noreset", "-nolisten", "tcp"};
+  std::vector<char*> argv;  // built before fork: the child only calls async-signal-safe functions
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
   const pid_t parent = getpid();
   const pid_t pid = fork();
-  if (pid < 0) fail(std::string("cannot start Xvfb: fork: ") + std::strerror(errno));
+  if (pid < 0) {
+    const int e = errno;
+    for (int fd : {number_pipe[0], number_pipe[1], err_pipe[0], err_pipe[1]}) close(fd);
+    fail(std::string("cannot start Xvfb: fork: ") + std::strerror(e));
+  }
   if (pid == 0) {
     // Child: its own process group (a terminal's Ctrl-C is ptc's to handle), killed with ptc.
     setpgid(0, 0);
@@ -122,10 +205,7 @@ Display Display::acquire(const Options& o) {
     const int devnull = open("/dev/null", O_RDWR);
     if (devnull >= 0) dup2(devnull, STDIN_FILENO), dup2(devnull, STDOUT_FILENO);
     signal(SIGINT, SIG_IGN);  // the process group already keeps the terminal's away
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    execv(xvfb.c_str(), argv.data());
+    execv(argv[0], argv.data());
     _exit(127);
   }
   close(number_pipe[1]);
@@ -138,6 +218,13 @@ Display Display::acquire(const Options& o) {
   bool done = false, eof_number = false;
   fcntl(err_pipe[0], F_SETFL, O_NONBLOCK);
   while (!done) {
+    if (cancel_requested()) {
+      close(number_pipe[0]);
+      close(err_pipe[0]);
+      stop_server(d.pid_);
+      d.pid_ = 0;
+      throw Interrupted();
+    }
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()).count();
     if (left <= 0) break;
     pollfd fds[2] = {{number_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
@@ -172,29 +259,49 @@ Display Display::acquire(const Options& o) {
   while (!number.empty() && (number.back() == '\n' || number.back() == ' ')) number.pop_back();
   d.name_ = ":" + number;
   setenv("DISPLAY", d.name_.c_str(), 1);
-  if (!display_usable(d.name_)) {
+  // Mesa renders into our own Xvfb directly; an inherited request for indirect GLX would fail.
+  if (const char* ind = std::getenv("LIBGL_ALWAYS_INDIRECT")) {
+    d.had_indirect_ = true;
+    d.indirect_ = ind;
+    unsetenv("LIBGL_ALWAYS_INDIRECT");
+  }
+  std::string why = display_usable(d.name_) ? gl_problem(d.name_) : "it offers no GLX";
+  if (!why.empty()) {
     stop_server(d.pid_);
     d.pid_ = 0;
-    d.had_previous_ ? setenv("DISPLAY", d.previous_.c_str(), 1) : unsetenv("DISPLAY");
-    fail("Xvfb started on " + d.name_ + " but offers no GLX (is Debian's libgl1-mesa-dri installed?)");
+    d.restore_env();
+    fail("Xvfb started on " + d.name_ + " but cannot render: " + why + " (is Debian's libgl1-mesa-dri installed?)");
   }
+  if (!problem.empty() && !current.empty()) d.note_ = "the user's display " + problem;
   return d;
 }
 
 Display::Display(Display&& other) noexcept
-    : name_(std::move(other.name_)), previous_(std::move(other.previous_)), had_previous_(other.had_previous_), pid_(other.pid_) {
+    : name_(std::move(other.name_)),
+      previous_(std::move(other.previous_)),
+      indirect_(std::move(other.indirect_)),
+      note_(std::move(other.note_)),
+      had_previous_(other.had_previous_),
+      had_indirect_(other.had_indirect_),
+      pid_(other.pid_) {
   other.pid_ = 0;
   other.name_.clear();
+}
+
+void Display::restore_env() {
+  had_previous_ ? setenv("DISPLAY", previous_.c_str(), 1) : unsetenv("DISPLAY");
+  if (had_indirect_) setenv("LIBGL_ALWAYS_INDIRECT", indirect_.c_str(), 1);
 }
 
 Display::~Display() {
   if (pid_ <= 0) return;
   stop_server(pid_);
-  had_previous_ ? setenv("DISPLAY", previous_.c_str(), 1) : unsetenv("DISPLAY");
+  restore_env();
 }
 
 std::string Display::describe() const {
-  return own_server() ? "Xvfb " + name_ + " (started by ptc)" : "DISPLAY=" + name_ + " (the user's)";
+  return own_server() ? "Xvfb " + name_ + " (started by ptc" + (note_.empty() ? "" : "; " + note_) + ")"
+                      : "DISPLAY=" + name_ + " (the user's)";
 }
 
 }  // namespace ptc::viz

@@ -2,7 +2,9 @@
 // and it aborts the process when it cannot open a display). Nothing in viz/ creates a render
 // window before a Display is alive.
 //
-// Display::acquire() uses the display in $DISPLAY when it answers and offers GLX; otherwise it
+// Display::acquire() uses the display in $DISPLAY when it answers and gives an OpenGL >= 3.2
+// context (tested in a child process: indirect GLX over ssh -X or an old driver makes VTK abort
+// or crash); otherwise it
 // starts a private Xvfb (Debian package `xvfb`): `Xvfb -displayfd FD -noreset -nolisten tcp`, so
 // that the server itself picks a free display number (no race with another Xvfb started at the
 // same moment) and does not reset when its last client leaves. The server runs in its own process
@@ -50,14 +52,20 @@ class Display {
 
  private:
   Display() = default;
+  void restore_env();
   std::string name_, previous_;  ///< previous: $DISPLAY before (empty = unset)
-  bool had_previous_ = false;
+  std::string indirect_, note_;  ///< $LIBGL_ALWAYS_INDIRECT before; why the user's display was not used
+  bool had_previous_ = false, had_indirect_ = false;
   pid_t pid_ = 0;
 };
 
 /// The path of program `name` in $PATH (or `name` itself when it contains '/' and is
 /// executable); "" when there is none.
 [[nodiscard]] std::string find_program(const std::string& name);
+
+/// "" when VTK can render on display `name` (an OpenGL >= 3.2 context made current, tested in
+/// a child process, since a driver that cannot may abort or crash), else why not.
+[[nodiscard]] std::string gl_problem(const std::string& name);
 
 /// Whether the X display `name` answers and offers GLX (false for "").
 [[nodiscard]] bool display_usable(const std::string& name);

@@ -125,6 +125,39 @@ TEST(Display, AServerThatFailsIsReportedWithItsMessage) {
   }
 }
 
+TEST(Display, AUserDisplayWithoutAUsableGlContextFallsBackToXvfb) {
+  // A working display, then the same display as ssh -X would give it (indirect GLX, which Mesa
+  // refuses for OpenGL 3.2): VTK would abort there; the probe sees it and a private Xvfb is used.
+  Display::Options o;
+  o.force_xvfb = true;
+  Display user = Display::acquire(o);
+  EXPECT_EQ(gl_problem(user.name()), "");
+  setenv("LIBGL_ALWAYS_INDIRECT", "1", 1);
+  EXPECT_NE(gl_problem(user.name()), "");
+  {
+    Display d = Display::acquire();  // $DISPLAY is the user's, which fails the probe
+    EXPECT_TRUE(d.own_server());
+    EXPECT_NE(d.name(), user.name());
+    EXPECT_NE(d.describe().find("the user's display"), std::string::npos) << d.describe();
+    EXPECT_EQ(std::getenv("LIBGL_ALWAYS_INDIRECT"), nullptr) << "not inherited by the private server's clients";
+    Renderer r(d);
+    const Mesh m = grid(2);
+    MeshStyle st;
+    st.triangle_colours.assign(m.triangle_count(), Rgb8{200, 10, 10});
+    st.lighting = false;
+    const RgbImage img = r.mesh(m, st, make_camera({}, m.bounds(), 16, 16), 16, 16);
+    EXPECT_EQ(img.at(8, 8), (Rgb8{200, 10, 10}));
+  }
+  EXPECT_STREQ(std::getenv("LIBGL_ALWAYS_INDIRECT"), "1") << "restored";
+  EXPECT_EQ(std::string(std::getenv("DISPLAY")), user.name());
+  Display::Options i;
+  i.interactive = true;
+  EXPECT_THROW((void)Display::acquire(i), InputError) << "a window on a display that cannot render: refused";
+  i.force_xvfb = true;
+  EXPECT_THROW((void)Display::acquire(i), UsageError) << "--interactive with --xvfb";
+  unsetenv("LIBGL_ALWAYS_INDIRECT");
+}
+
 class RendererTest : public ::testing::Test {
  protected:
   static Display::Options xvfb() {
