@@ -1,11 +1,6 @@
 // `ptc notebook`: the paper's figures as a notebook and a script, and their PNG/SVG.
 #include "commands/notebook.h"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <fstream>
 #include <ostream>
 #include <set>
@@ -15,6 +10,7 @@
 
 #include "analysis/schema/json.h"
 #include "analysis/schema/manifest.h"
+#include "commands/child_process.h"
 #include "commands/inputs.h"
 #include "commands/output_dir.h"
 #include "notebooks_export/notebook.h"
@@ -22,46 +18,10 @@
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
 
-extern char** environ;
-
 namespace ptc {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Run {
-  int code = -1;
-  std::string output;  // stdout + stderr
-};
-
-// Runs argv in `cwd` with stdout and stderr into a file, waiting for it (a Ctrl-C reaches the child
-// too, through the terminal's process group; the run then reports the interrupt).
-Run run_program(const std::vector<std::string>& args, const fs::path& cwd, const fs::path& log) {
-  Run r;
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, STDOUT_FILENO, STDERR_FILENO);
-  posix_spawn_file_actions_addchdir_np(&fa, cwd.c_str());
-  std::vector<std::string> a = args;
-  std::vector<char*> argv;
-  for (auto& s : a) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, a[0].c_str(), &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) return r;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-  std::ifstream in(log);
-  r.output.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  std::error_code ec;
-  fs::remove(log, ec);
-  return r;
-}
 
 std::string last_error_line(const std::string& text) {
   std::string last;
@@ -84,7 +44,8 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
   RunManifest manifest("notebook", opt.argv, "ptc-notebook/1");
   notebooks::StudyInputs in;
   std::error_code ec;
-  const fs::path out_abs = fs::absolute(opt.out_dir).lexically_normal();
+  // Symbolic links resolved on both sides, so the relative path holds in the real directories.
+  const fs::path out_abs = fs::weakly_canonical(fs::absolute(opt.out_dir));
   for (const fs::path& d : opt.studies) {
     refuse_overwriting_input(opt.out_dir, d);
     const fs::path m = d / "manifest.json";
@@ -98,9 +59,9 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
     if (in.dirs.count(kind))
       throw InputError(d.string(), "", "", fmt::format("a second {} study (one directory per experiment kind)", kind));
     // Paths as the notebook opens them: relative to the output directory (they move together).
-    const fs::path abs = fs::absolute(d).lexically_normal();
-    in.dirs[kind] = abs.lexically_relative(out_abs).string();
-    if (in.dirs[kind].empty()) in.dirs[kind] = abs.string();
+    const fs::path abs = fs::weakly_canonical(fs::absolute(d));
+    const fs::path rel = abs.lexically_relative(out_abs);
+    in.dirs[kind] = rel.empty() ? abs.string() : rel.string();
     if (j["parameters"].contains("scene") && j["parameters"]["scene"].is_string()) in.scenes[kind] = j["parameters"]["scene"];
     if (j["parameters"].contains("shard") && !j["parameters"]["shard"].is_null())
       in.notes[kind] = "shard " + j["parameters"]["shard"].dump() + ": part of the study";
@@ -108,11 +69,15 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
   }
   const std::vector<notebooks::Figure> figures = notebooks::figures_for(in);
 
-  if (opt.figures) {  // the Python first: an error should come before any work
-    if (access(opt.python.c_str(), X_OK) != 0)
-      throw InputError("", "", "--python", fmt::format("{} is not an executable Python: install Debian's python3 (or give --python PATH, or --no-figures)", opt.python));
-  }
-  if (opt.execute && access(opt.jupyter.c_str(), X_OK) != 0)
+  // The programs first (an error should come before any work), as paths that work from the
+  // temporary directory they run in.
+  const std::string python = opt.figures ? resolve_program(opt.python) : "";
+  if (opt.figures && python.empty())
+    throw InputError("", "", "--python",
+                     fmt::format("{} is not an executable Python: install Debian's python3 (or give --python PATH, or --no-figures)",
+                                 opt.python));
+  const std::string jupyter = opt.execute ? resolve_program(opt.jupyter) : "";
+  if (opt.execute && jupyter.empty())
     throw InputError("", "", "--execute",
                      fmt::format("{} is missing: install Debian's jupyter-nbconvert and python3-ipykernel", opt.jupyter));
 
@@ -129,14 +94,13 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
   Stopwatch sw;
   if (opt.figures) {
     const fs::path tmp = dir.path("");
-    Run probe = run_program({opt.python, "-c", "import pandas, matplotlib, numpy"}, tmp, dir.path(".probe.log"));
+    const ChildResult probe = run_child({python, "-c", "import pandas, matplotlib, numpy"}, tmp, dir.path(".probe.log"));
+    if (!probe.started) throw InputError("", "", "--python", fmt::format("{} could not be started", python));
     if (probe.code != 0)
       throw InputError("", "", "--python",
                        fmt::format("{} cannot import pandas and matplotlib: install Debian's python3-pandas and "
                                    "python3-matplotlib (or --no-figures)", opt.python));
-    throw_if_cancelled();
-    Run r = run_program({opt.python, "paper_figures.py"}, tmp, dir.path(".figures.log"));
-    throw_if_cancelled();
+    const ChildResult r = run_child({python, "paper_figures.py"}, tmp, dir.path(".figures.log"));
     if (r.code != 0)
       throw InputError(dir.target().string() + "/paper_figures.py", "", "", "the figure script failed: " + last_error_line(r.output));
     std::ifstream fj(dir.path("figures.json"));
@@ -153,10 +117,9 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
   }
   if (opt.execute) {
     sw.restart();
-    Run r = run_program({opt.jupyter, "nbconvert", "--to", "notebook", "--execute", "--inplace",
+    const ChildResult r = run_child({jupyter, "nbconvert", "--to", "notebook", "--execute", "--inplace",
                          "--ExecutePreprocessor.timeout=1800", "paper_figures.ipynb"},
                         dir.path(""), dir.path(".nbconvert.log"));
-    throw_if_cancelled();
     if (r.code != 0)
       throw InputError(dir.target().string() + "/paper_figures.ipynb", "", "",
                        "executing the notebook failed: " + last_error_line(r.output));
@@ -172,7 +135,8 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
   nlohmann::json studies = nlohmann::json::object();
   for (const auto& [k, d] : in.dirs) studies[k] = d;
   manifest.set_parameter("studies", studies);
-  manifest.set_parameter("python", opt.figures ? opt.python : "");
+  manifest.set_parameter("python", python);
+  manifest.set_parameter("jupyter", jupyter);
   manifest.set_parameter("executed", opt.execute);
   nlohmann::json names = nlohmann::json::array();
   for (const auto& f : figures) names.push_back(f.name);

@@ -3,9 +3,6 @@
 // an Xvfb); the export needs no display at all.
 #include "commands/viz.h"
 
-#include <spawn.h>
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -20,6 +17,7 @@
 #include "analysis/schema/json.h"
 #include "analysis/schema/manifest.h"
 #include "commands/args.h"
+#include "commands/child_process.h"
 #include "commands/output_dir.h"
 #include "commands/scene_args.h"
 #include "render/view.h"
@@ -34,8 +32,6 @@
 #include "viz/png.h"
 #include "viz/renderer.h"
 #include "viz/vtp.h"
-
-extern char** environ;
 
 namespace ptc {
 
@@ -100,23 +96,20 @@ ClusteringInfo clustering_info(const std::filesystem::path& clusters) {
   return ci;
 }
 
-// Runs ffmpeg on the numbered PNGs; returns "" or why there is no MP4.
+// Runs ffmpeg on the numbered PNGs; returns "" or why there is no MP4 (Interrupted on Ctrl-C).
 std::string make_mp4(const std::filesystem::path& dir, const std::string& base, std::int64_t first, const std::string& mp4) {
-  const std::string ffmpeg = viz::find_program("ffmpeg");
+  const std::string ffmpeg = resolve_program("ffmpeg");
   if (ffmpeg.empty()) return "ffmpeg is not installed (Debian package ffmpeg): no MP4, the numbered PNGs are the series";
-  std::vector<std::string> args = {ffmpeg, "-nostdin", "-y", "-loglevel", "error", "-framerate", "24", "-start_number",
-                                   std::to_string(first), "-i", (dir / (base + "_%04d.png")).string(),
-                                   "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p",
-                                   (dir / mp4).string()};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, ffmpeg.c_str(), nullptr, nullptr, argv.data(), environ) != 0) return "ffmpeg could not be started: no MP4";
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  const ChildResult r = run_child({ffmpeg, "-nostdin", "-y", "-loglevel", "error", "-framerate", "24", "-start_number",
+                                   std::to_string(first), "-i", base + "_%04d.png", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                                   "-c:v", "libx264", "-pix_fmt", "yuv420p", mp4},
+                                  dir, dir / ".ffmpeg.log");
+  if (!r.started) return "ffmpeg could not be started: no MP4";
+  if (r.code != 0) {
+    std::error_code ec;
+    std::filesystem::remove(dir / mp4, ec);
+    return "ffmpeg failed (exit " + std::to_string(r.code) + "): no MP4";
   }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "ffmpeg failed: no MP4";
   return "";
 }
 
@@ -142,6 +135,8 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   check_image_size(opt.width, opt.height);
   if (opt.width > 8192 || opt.height > 8192) throw UsageError(opt.width > 8192 ? "--width" : "--height", "at most 8192 pixels for VTK pictures");
   if (opt.frame && opt.frames) throw UsageError("--frame/--frames", "give one frame or one range, not both");
+  if (kind == VizKind::Panel && 3 * std::max(opt.width, viz::kMinLegendWidth) + 2 * kGap > 8192)
+    throw UsageError("--width", fmt::format("a panel is three pictures side by side: at most {} pixels each", (8192 - 2 * kGap) / 3));
   std::string metric = opt.metric;
   if (kind == VizKind::Panel && metric.empty()) metric = "nodes_visited";
   if (kind == VizKind::Heatmap && metric.empty())
@@ -240,8 +235,16 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     ref_rows = cluster_frame_metrics(ref, clusters, ci.cfg, {}, {}).rows;
   }
 
+  // The `_prev` metrics of the first frame shown compare with the frame before it (none before
+  // the reference frame: the frame itself).
+  std::vector<ClusterRow> first_prev;
+  if (needs_metrics && range.first > reference_frame) {
+    Mesh pm = scene.rest();
+    scene.positions(double(range.first - 1), pm.positions(), true);
+    first_prev = cluster_rows(pm, clusters, ci.cfg);
+  }
   // One frame's metric values: per cluster (cluster metrics) or per pixel (the tracer's counters).
-  std::vector<ClusterRow> prev_rows;
+  std::vector<ClusterRow> prev_rows = first_prev;
   struct FrameData {
     std::optional<ClusterFrameMetrics> metrics;
     std::optional<Render> render;
@@ -259,12 +262,16 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
       }
     }
     if (needs_metrics) {
-      d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows.empty() ? ref_rows : prev_rows);
+      d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows);
       prev_rows = d.metrics->rows;
       if (cmetric) d.values = d.metrics->of(metric);
     }
     return d;
   };
+
+  // The output directory before any long work or a display (a foreign directory is refused now).
+  std::optional<OutputDir> dir;
+  if (!opt.out_dir.empty()) dir.emplace(opt.out_dir);
 
   // A fixed colour range over a series: the values of every frame first (unless --range).
   std::optional<viz::ColourScale> series_scale;
@@ -280,7 +287,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     }
     series_scale = viz::make_scale(metric, lohi, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0, std::nullopt, pixel_metric);
     series_scale->from = fmt::format("values of frames {}:{}", range.first, range.last);
-    prev_rows.clear();
+    prev_rows = first_prev;
   }
 
   // ---- the display (not for the export) and the pictures
@@ -295,8 +302,6 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     manifest.set_parameter("display", display->describe());
   }
 
-  std::optional<OutputDir> dir;
-  if (!opt.out_dir.empty()) dir.emplace(opt.out_dir);
   nlohmann::json images = nlohmann::json::object();
   std::vector<std::pair<double, std::string>> pvd;
   std::vector<std::string> written;
@@ -371,6 +376,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
         for (std::size_t t = 0; t < mesh.triangle_count(); ++t) hs.triangle_colours[t] = viz::colour_of(scale, d.values[cluster_of[t]]);
         if (opt.interactive) {
           renderer->interact(mesh, hs, cam, opt.width, opt.height, fmt::format("ptc viz heatmap {} - {}", metric, scene_name));
+          throw_if_cancelled();
         }
         heat = renderer->mesh(mesh, hs, cam, opt.width, opt.height);
       }
@@ -379,8 +385,10 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     }
     const nlohmann::json frame_info = {{"frame", f}};
     if (kind == VizKind::Partition) {
-      if (opt.interactive)
+      if (opt.interactive) {
         renderer->interact(mesh, partition_style, cam, opt.width, opt.height, fmt::format("ptc viz partition - {}", scene_name));
+        throw_if_cancelled();
+      }
       put_png(base + suffix + ".png", partition_picture(),
               {{"frame", f}, {"clusters", clusters.cluster_count()}, {"colours", colours_used}, {"borders", opt.borders}});
     } else if (kind == VizKind::Heatmap) {

@@ -1,7 +1,9 @@
 #include "viz/renderer.h"
 
 #include <vtkActor.h>
+#include <vtkCallbackCommand.h>
 #include <vtkCamera.h>
+#include <vtkCommand.h>
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkInteractorStyleTrackballCamera.h>
@@ -20,6 +22,8 @@
 #include <vtkUnsignedCharArray.h>
 
 #include <algorithm>
+
+#include "toolkit/core/cancel.h"
 #include <stdexcept>
 #include <string>
 
@@ -225,6 +229,14 @@ void Renderer::interact(const Mesh& mesh, const MeshStyle& style, const bvh::Pin
   iren->SetInteractorStyle(st);
   iren->SetRenderWindow(win);
   win->Render();
+  // Ctrl-C / SIGTERM end the window's event loop (the command then stops as interrupted).
+  iren->Initialize();
+  vtkNew<vtkCallbackCommand> poll;
+  poll->SetCallback([](vtkObject* caller, unsigned long, void*, void*) {
+    if (cancel_requested()) static_cast<vtkRenderWindowInteractor*>(caller)->TerminateApp();
+  });
+  iren->AddObserver(vtkCommand::TimerEvent, poll);
+  iren->CreateRepeatingTimer(100);
   iren->Start();
   win->Finalize();
 }

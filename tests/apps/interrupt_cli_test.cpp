@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "cli_harness.h"
+#include "viz/display.h"
 
 extern char** environ;
 
@@ -161,6 +162,14 @@ class Interrupt : public ptc::test::CliTest {
     return r;
   }
 
+  // A clustering of mushroom.off (ptc cluster, run once per test).
+  fs::path cluster_dir() {
+    const fs::path d = dir_ / "mushroom_clusters";
+    const RunResult r = ptc({"cluster", kData + "/meshes/mushroom.off", "--out", d.string()});
+    EXPECT_EQ(r.code, 0) << r.err;
+    return d;
+  }
+
   bool exited_early_ = false;
 };
 
@@ -217,6 +226,18 @@ TEST_F(Interrupt, AVizSeriesStopsAndTakesItsXvfbAlong) {
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   for (pid_t p : orphan_xvfbs())
     EXPECT_NE(std::find(before.begin(), before.end(), p), before.end()) << "Xvfb " << p << " was left running";
+}
+
+// An --interactive window stops too: its event loop polls the flag.
+TEST_F(Interrupt, AnInteractiveWindowClosesOnSigterm) {
+  ptc::viz::Display::Options xo;
+  xo.force_xvfb = true;
+  const ptc::viz::Display display = ptc::viz::Display::acquire(xo);  // the "user's" display: $DISPLAY for the child
+  const fs::path out = dir_ / "out";
+  (void)interrupt(out, SIGTERM,
+                  {"viz", "partition", kData + "/meshes/mushroom.off", "--clusters", cluster_dir().string(), "--interactive",
+                   "--width", "64", "--height", "64", "--out", out.string()});
+  EXPECT_FALSE(fs::exists(out));
 }
 
 // An earlier complete output in the target directory is left as it was, file by file, byte for

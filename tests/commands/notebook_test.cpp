@@ -167,6 +167,14 @@ TEST_F(Notebook, RefusesWhatIsNotAStudyAndAPythonWithoutPandas) {
   EXPECT_TRUE(fs::exists(dir_ / "nb" / "paper_figures.ipynb"));
   EXPECT_TRUE(fs::exists(dir_ / "nb" / "paper_figures.py"));
   EXPECT_FALSE(fs::exists(dir_ / "nb" / "fig6_sweep.png"));
+  // --out through a symbolic link: the notebook's relative path holds from the real directory.
+  fs::create_directories(dir_ / "real" / "deeper");
+  fs::create_directory_symlink(dir_ / "real" / "deeper", dir_ / "link");
+  n.out_dir = dir_ / "link" / "nb";
+  cmd_notebook(n, out);
+  const nlohmann::json m = nlohmann::json::parse(slurp(dir_ / "real" / "deeper" / "nb" / "manifest.json"));
+  const std::string rel = m["parameters"]["studies"]["sweep"];
+  EXPECT_TRUE(fs::exists(dir_ / "real" / "deeper" / "nb" / rel / "sweep_summary.csv")) << rel;
 }
 
 }  // namespace

@@ -433,6 +433,29 @@ TEST_F(Viz, AStaticMeshMovesOnlyWithAStandInMotion) {
   EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--deform");
 }
 
+TEST_F(Viz, PrevMetricsCompareWithTheFrameBeforeWhateverFramesAreShown) {
+  const fs::path scene = dir_ / "scene.json";
+  spit(scene, R"({"schema": "ptc-scene/1", "frames": [0, 3], "meshes": [{"name": "s", "file": ")" +
+                  (kMeshes / "mushroom.off").string() +
+                  R"(", "deform": {"kind": "twist", "axis": "y", "amplitude": 1.0, "period": 8}}]})");
+  std::ostringstream out;
+  VizCommandOptions one = options(VizKind::Export, "one");
+  one.input = scene;
+  one.frame = "3";
+  cmd_viz(one, out);
+  VizCommandOptions two = options(VizKind::Export, "two");
+  two.input = scene;
+  two.frames = "2:3";
+  cmd_viz(two, out);
+  auto cells = [](const fs::path& f) {
+    const viz::VtpContents c = viz::read_vtp(f);
+    return std::map<std::string, std::vector<double>>(c.arrays.cell.begin(), c.arrays.cell.end());
+  };
+  auto a = cells(dir_ / "one" / "clusters_0003.vtp"), b = cells(dir_ / "two" / "clusters_0003.vtp");
+  for (const char* m : {"box_area_ratio_prev", "sphere_radius_ratio_prev", "box_area_ratio"}) EXPECT_EQ(a[m], b[m]) << m;
+  EXPECT_NE(a["box_area_ratio_prev"], a["box_area_ratio"]) << "frame 3 against frame 2, not against frame 0";
+}
+
 TEST_F(Viz, SeriesShareOneRangeAndSayWhyThereIsNoMp4) {
   const fs::path scene = dir_ / "scene.json";
   spit(scene, R"({"schema": "ptc-scene/1", "frames": [0, 2], "meshes": [{"name": "s", "file": ")" +
@@ -496,6 +519,8 @@ TEST_F(Viz, UsageErrorsNameTheFlagAndComeBeforeAnyDisplay) {
   EXPECT_EQ(usage_flag([&] { cmd_viz(q, out); }), "--frame/--frames");
   q.frames.reset();
   q.width = 9000;
+  EXPECT_EQ(usage_flag([&] { cmd_viz(q, out); }), "--width");
+  q.width = 2800;  // fine alone, but three side by side are wider than VTK's 8192
   EXPECT_EQ(usage_flag([&] { cmd_viz(q, out); }), "--width");
   EXPECT_FALSE(fs::exists(dir_ / "u"));
 }
