@@ -145,7 +145,9 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   if ((kind == VizKind::Partition || kind == VizKind::Export) && !metric.empty())
     throw UsageError("--metric", fmt::format("{} draws no metric (heatmap and panel do)", to_string(kind)));
   const bool pixel_metric = is_pixel_metric(metric);
+  // Ratios (diverging about 1) are never negative: their colour range stops at 0.
   const std::optional<ClusterMetricInfo> cmetric = metric.empty() || pixel_metric ? std::nullopt : find_cluster_metric(metric);
+  const double ratio_floor = cmetric && cmetric->diverging && cmetric->centre == 1.0 ? 0.0 : -std::numeric_limits<double>::infinity();
   if (!metric.empty() && !pixel_metric && !cmetric)
     throw UsageError("--metric", fmt::format("'{}' is not a metric ({}, {}, {})", metric, kPixelMetrics[0], kPixelMetrics[1],
                                              cluster_metric_names()));
@@ -285,7 +287,8 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
         if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
       if (lo <= hi) lohi.push_back(lo), lohi.push_back(hi);
     }
-    series_scale = viz::make_scale(metric, lohi, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0, std::nullopt, pixel_metric);
+    series_scale = viz::make_scale(metric, lohi, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0, std::nullopt,
+                                   pixel_metric, ratio_floor);
     series_scale->from = fmt::format("values of frames {}:{}", range.first, range.last);
     prev_rows = first_prev;
   }
@@ -361,7 +364,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     if (!metric.empty()) {
       scale = series_scale ? *series_scale
                            : viz::make_scale(metric, d.values, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0,
-                                             fixed, pixel_metric);
+                                             fixed, pixel_metric, ratio_floor);
       if (!series_scale && !fixed) scale.from = fmt::format("values of frame {}", f);
       scale.integer = pixel_metric || metric == "triangles" || metric == "vertices" || metric == "boundary_vertices" ||
                       metric == "components";

@@ -9,39 +9,56 @@
 
 namespace ptc::viz {
 
+double ColourScale::fraction(double v) const {
+  if (std::isnan(v)) return v;
+  if (two_slope) return v < centre ? 0.5 * (v - min) / (centre - min) : 0.5 + 0.5 * (v - centre) / (max - centre);
+  return (v - min) / (max - min);
+}
+
+double ColourScale::value_at(double f) const {
+  if (two_slope) return f < 0.5 ? min + 2 * f * (centre - min) : centre + (2 * f - 1) * (max - centre);
+  return min + f * (max - min);
+}
+
 ColourScale make_scale(std::string title, std::span<const double> values, bool diverging, double centre,
-                       const std::optional<std::pair<double, double>>& fixed, bool from_zero) {
+                       const std::optional<std::pair<double, double>>& fixed, bool from_zero, double floor) {
   ColourScale s;
   s.title = std::move(title);
   s.colormap = diverging ? "coolwarm" : "viridis";
+  s.centre = centre;
   if (fixed) {
     if (!(std::isfinite(fixed->first) && std::isfinite(fixed->second) && fixed->first < fixed->second))
       throw std::invalid_argument("a range needs finite MIN < MAX");
     s.min = fixed->first, s.max = fixed->second;
+    s.two_slope = diverging && s.min < centre && centre < s.max;
     s.from = "--range";
     return s;
   }
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (double v : values)
     if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
-  if (lo > hi) {  // nothing finite
-    s.min = diverging ? centre - 1 : 0, s.max = diverging ? centre + 1 : 1;
+  if (diverging) {
+    double d = lo > hi ? 1.0 : std::max(std::abs(hi - centre), std::abs(lo - centre));
+    // No spread beyond rounding (a rigid motion's ratios are 1 to ~1e-16): no colours for noise.
+    if (!(d > 1e-9 * std::max(1.0, std::abs(centre)))) d = 0.5;
+    s.min = std::max(centre - d, floor), s.max = centre + d;
+    if (!(s.min < centre)) s.min = centre - 0.5 * d;  // a floor at the centre: keep a lower half
+    s.two_slope = true;
     return s;
   }
-  if (diverging) {
-    const double d = std::max(std::abs(hi - centre), std::abs(lo - centre));
-    s.min = centre - (d > 0 ? d : 0.5), s.max = centre + (d > 0 ? d : 0.5);
+  if (lo > hi) {  // nothing finite
+    s.min = 0, s.max = 1;
     return s;
   }
   if (from_zero && lo >= 0) lo = 0;
-  if (hi > lo) s.min = lo, s.max = hi;
+  if (hi - lo > 1e-12 * std::max({1.0, std::abs(lo), std::abs(hi)})) s.min = lo, s.max = hi;
   else s.min = lo - 0.5, s.max = hi + 0.5;
   return s;
 }
 
 Rgb8 colour_of(const ColourScale& s, double v) {
   if (std::isnan(v)) return kNanColour;
-  const double x = (v - s.min) / (s.max - s.min);
+  const double x = s.fraction(v);
   return s.colormap == "coolwarm" ? coolwarm(x) : viridis(x);
 }
 
@@ -87,17 +104,25 @@ std::vector<Tick> ticks(const ColourScale& s, int count) {
   if (count < 2) throw std::invalid_argument("at least two ticks");
   std::vector<Tick> out;
   for (int i = 0; i < count; ++i) {
-    double v = s.min + (s.max - s.min) * i / (count - 1);
+    double v = s.value_at(double(i) / (count - 1));
+    if (i == count - 1) v = s.max;  // exactly, whatever the rounding of value_at
     if (s.integer) {
       v = std::round(v);
       if (v < s.min) v += 1;
       if (v > s.max) v -= 1;
       if (v < s.min || (!out.empty() && v <= out.back().value)) continue;
-      out.push_back({v, fmt::format("{:.0f}", v)});
+      out.push_back({v, s.fraction(v), fmt::format("{:.0f}", v)});
     } else {
-      out.push_back({v, fmt::format("{:.4g}", v)});
+      out.push_back({v, s.fraction(v), ""});
     }
   }
+  if (!s.integer)  // 4 significant digits, more when a narrow range needs them to tell ticks apart
+    for (int digits = 4; digits <= 15; ++digits) {
+      for (Tick& t : out) t.text = fmt::format("{:.{}g}", t.value, digits);
+      bool distinct = true;
+      for (std::size_t i = 1; i < out.size(); ++i) distinct = distinct && out[i].text != out[i - 1].text;
+      if (distinct) break;
+    }
   return out;
 }
 

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -25,14 +26,27 @@ struct ColourScale {
   double min = 0, max = 1;     ///< values drawn at the two ends
   bool integer = false;        ///< label the ticks as integers (counters)
   std::string from;            ///< where the range came from: "--range", "values of frame 3", "values of frames 0:60"
+  /// Diverging scales map [min, centre] to the lower half of the map and [centre, max] to the
+  /// upper half (matplotlib's TwoSlopeNorm), so the centre keeps the middle colour when the range
+  /// is not symmetric (ratios, which stop at 0). Linear when false.
+  bool two_slope = false;
+  double centre = 0;
+  /// Where v falls on the map, 0 .. 1 (outside for values outside the range; NaN for NaN).
+  [[nodiscard]] double fraction(double v) const;
+  /// The value at fraction f of the map (the inverse of fraction()).
+  [[nodiscard]] double value_at(double f) const;
 };
 
 /// The scale for `values` (NaN ignored): `fixed` when given; else sequential: [min, max] of the
 /// values (0 .. max for non-negative counters when `from_zero`), diverging: centre -+ the largest
-/// distance of a value from the centre. A constant or empty set widens to a non-empty range
-/// (value -+ 0.5, or 0 .. 1).
+/// distance of a value from the centre, but never below `floor` (0 for ratios), two-slope about
+/// the centre. A constant or empty set widens to a non-empty range (value -+ 0.5, or 0 .. 1), as
+/// does a spread below rounding (1e-9 of the centre's size for diverging scales, 1e-12 of the
+/// values' for sequential ones: a rigid motion's ratios are 1 to ~1e-16, not a picture). A
+/// fixed diverging range is two-slope when it contains the centre, else linear.
 [[nodiscard]] ColourScale make_scale(std::string title, std::span<const double> values, bool diverging, double centre,
-                                     const std::optional<std::pair<double, double>>& fixed, bool from_zero = false);
+                                     const std::optional<std::pair<double, double>>& fixed, bool from_zero = false,
+                                     double floor = -std::numeric_limits<double>::infinity());
 
 /// The colour of v on the scale (NaN -> kNanColour; outside the range: the end colour).
 [[nodiscard]] Rgb8 colour_of(const ColourScale& s, double v);
@@ -48,11 +62,11 @@ struct OutOfRange {
 [[nodiscard]] RgbImage hstack(std::span<const RgbImage> images, int gap, Rgb8 fill);
 [[nodiscard]] RgbImage vstack(std::span<const RgbImage> images, int gap, Rgb8 fill);
 
-/// Ticks for a legend: `count` values evenly from min to max inclusive with their text
+/// Ticks for a legend: `count` values at even fractions of the map (value_at) with their text
 /// ("{:.4g}"); on an integer scale the values are rounded to integers (duplicates dropped) and
-/// written as integers, each at its own position.
+/// written as integers; `fraction` is each tick's own position.
 struct Tick {
-  double value = 0;
+  double value = 0, fraction = 0;
   std::string text;
 };
 [[nodiscard]] std::vector<Tick> ticks(const ColourScale& s, int count);

@@ -20,29 +20,37 @@ LegendLayout legend_layout(int width) {
 RgbImage legend_strip(Renderer& r, const ColourScale& s, int width, const std::string& note) {
   width = std::max(width, kMinLegendWidth);
   const LegendLayout l = legend_layout(width);
-  constexpr int kTicks = 5;
-  const std::vector<Tick> tk = ticks(s, kTicks);
+  // As many ticks (5, 3 or 2) as fit without their numbers touching (~7.5 px per character).
+  const int bar_w0 = l.bar_x1 - l.bar_x0;
+  std::vector<Tick> tk;
+  for (int n : {5, 3, 2}) {
+    tk = ticks(s, n);
+    std::size_t widest = 0;
+    for (const Tick& t : tk) widest = std::max(widest, t.text.size());
+    if (tk.size() < 2 || double(bar_w0) / double(tk.size() - 1) >= 7.5 * double(widest) + 10) break;
+  }
   std::vector<TextItem> items;
-  items.push_back({s.title + (s.from.empty() ? "" : "  (range: " + s.from + ")"), l.bar_x0, 11, 14, -1,
+  // The title with where the range came from; on a narrow legend that goes to the note line.
+  const std::string range_from = s.from.empty() ? "" : "range: " + s.from;
+  const bool fits = 8.5 * double(s.title.size() + range_from.size() + 4) <= l.bar_x1 - l.bar_x0;
+  items.push_back({fits && !range_from.empty() ? s.title + "  (" + range_from + ")" : s.title, l.bar_x0, 11, 14, -1,
                    {235, 235, 235}, true});
+  const std::string note_line = fits || range_from.empty() ? note : range_from + (note.empty() ? "" : "; " + note);
   const int bar_w = l.bar_x1 - l.bar_x0;
-  auto tick_x = [&](double v) {
-    return l.bar_x0 + static_cast<int>(std::lround((v - s.min) / (s.max - s.min) * (bar_w - 1)));
-  };
+  auto tick_x = [&](double fraction) { return l.bar_x0 + static_cast<int>(std::lround(fraction * (bar_w - 1))); };
   for (std::size_t i = 0; i < tk.size(); ++i) {
-    const int x = tick_x(tk[i].value);
+    const int x = tick_x(tk[i].fraction);
     const int align = x <= l.bar_x0 + 2 ? -1 : x >= l.bar_x1 - 3 ? 1 : 0;
     items.push_back({tk[i].text, x, 52, 13, align});
   }
-  if (!note.empty()) items.push_back({note, l.bar_x0, 69, 12, -1, {200, 200, 200}});
+  if (!note_line.empty()) items.push_back({note_line, l.bar_x0, 69, 12, -1, {200, 200, 200}});
   RgbImage img = r.text(width, l.height, items);
   for (int x = l.bar_x0; x < l.bar_x1; ++x) {
-    const double v = s.min + (x - l.bar_x0 + 0.5) / bar_w * (s.max - s.min);
-    const Rgb8 c = colour_of(s, v);
+    const Rgb8 c = colour_of(s, s.value_at((x - l.bar_x0 + 0.5) / bar_w));
     for (int y = l.bar_y0; y < l.bar_y1; ++y) img.set(x, y, c);
   }
   for (const Tick& t : tk) {  // tick marks under the bar
-    const int x = tick_x(t.value);
+    const int x = tick_x(t.fraction);
     for (int y = l.bar_y1; y < l.bar_y1 + 4; ++y) img.set(x, y, Rgb8{235, 235, 235});
   }
   return img;

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <limits>
+#include <set>
+#include <string>
 #include <vector>
 
 #include "viz/colour_scale.h"
@@ -32,11 +34,37 @@ TEST(ColourScale, RangesFromTheValues) {
   s = make_scale("d", std::vector<double>{1, 1}, true, 1, std::nullopt);
   EXPECT_LT(s.min, 1);
   EXPECT_GT(s.max, 1);
+  s = make_scale("r", std::vector<double>{1.0 - 2e-16, 1.0 + 2e-16}, true, 1.0, std::nullopt, false, 0.0);
+  EXPECT_EQ(s.min, 0.5) << "rounding noise is not spread over the map";
+  EXPECT_EQ(s.max, 1.5);
   s = make_scale("e", std::vector<double>{kNaN}, false, 0, std::nullopt);
   EXPECT_LT(s.min, s.max);
   s = make_scale("f", v, false, 0, std::pair{-1.0, 1.0});
   EXPECT_EQ(s.from, "--range");
   EXPECT_THROW((void)make_scale("g", v, false, 0, std::pair{1.0, 1.0}), std::invalid_argument);
+}
+
+TEST(ColourScale, RatiosStopAtZeroAndKeepTheCentreColour) {
+  const ColourScale s = make_scale("box_area_ratio", std::vector<double>{0.5, 4.0}, true, 1.0, std::nullopt, false, 0.0);
+  EXPECT_EQ(s.min, 0.0) << "not 1 - 3 = -2: a ratio is never negative";
+  EXPECT_EQ(s.max, 4.0);
+  EXPECT_TRUE(s.two_slope);
+  EXPECT_EQ(colour_of(s, 1.0), coolwarm(0.5));
+  EXPECT_EQ(colour_of(s, 0.0), coolwarm(0.0));
+  EXPECT_EQ(colour_of(s, 4.0), coolwarm(1.0));
+  EXPECT_DOUBLE_EQ(s.fraction(0.5), 0.25);
+  EXPECT_DOUBLE_EQ(s.fraction(2.5), 0.75);
+  for (double f : {0.0, 0.1, 0.5, 0.8, 1.0}) EXPECT_NEAR(s.fraction(s.value_at(f)), f, 1e-12);
+  const auto t = ticks(s, 5);
+  ASSERT_EQ(t.size(), 5u);
+  EXPECT_EQ(t[0].text, "0");
+  EXPECT_EQ(t[2].text, "1");
+  EXPECT_EQ(t[3].text, "2.5");
+  EXPECT_EQ(t[4].text, "4");
+  EXPECT_DOUBLE_EQ(t[3].fraction, 0.75);
+  // A fixed range without the centre is linear; with it, two-slope.
+  EXPECT_FALSE(make_scale("r", std::vector<double>{}, true, 1.0, std::pair{2.0, 3.0}).two_slope);
+  EXPECT_TRUE(make_scale("r", std::vector<double>{}, true, 1.0, std::pair{0.0, 3.0}).two_slope);
 }
 
 TEST(ColourScale, ColoursEndsNanAndOutOfRange) {
@@ -78,6 +106,13 @@ TEST(ColourScale, TicksSpanTheRangeAndIntegersStayIntegers) {
   s.integer = true;
   t = ticks(s, 5);
   ASSERT_EQ(t.size(), 3u) << "0, 1, 2 once each";
+  // A narrow range gets the digits that tell its ticks apart.
+  s = make_scale("r", std::vector<double>{}, false, 0, std::pair{1.0, 1.0 + 4e-7});
+  t = ticks(s, 5);
+  std::set<std::string> texts;
+  for (const Tick& k : t) texts.insert(k.text);
+  EXPECT_EQ(texts.size(), 5u);
+  EXPECT_EQ(t[0].text, "1");
 }
 
 TEST(ColourScale, StacksKeepEveryPixel) {
