@@ -67,6 +67,20 @@ TEST(IoOff, CountsOnTheHeaderLineAndNoEdgeCount) {
   expect_tri(b.mesh, 0, 2, 1, 0);
 }
 
+TEST(IoOff, VertexCountGluedToTheKeyword) {
+  // "OFF8 6 12" (seen in files from the wild) reads as "OFF 8 6 12", also for the variants.
+  const std::string cube = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                           "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n";
+  const auto glued = off("OFF8 6 12\n" + cube), spaced = off("OFF 8 6 12\n" + cube);
+  ASSERT_EQ(glued.mesh.vertex_count(), 8u);
+  ASSERT_EQ(glued.mesh.triangle_count(), 12u);
+  for (std::size_t t = 0; t < 12; ++t) EXPECT_EQ(glued.mesh.triangle(t), spaced.mesh.triangle(t));
+  EXPECT_EQ(off("COFF3 1\n0 0 0 1 1 1\n1 0 0 1 1 1\n0 1 0 1 1 1\n3 0 1 2\n").mesh.triangle_count(), 1u);
+  // Not a count: still a bad header, named as before.
+  EXPECT_NE(off_error("OFFx 3 1\n").reason().find("missing OFF header"), std::string::npos);
+  EXPECT_NE(off_error("OFF3x 1\n").reason().find("vertex count"), std::string::npos);
+}
+
 TEST(IoOff, ColoredAndOtherVariantsIgnoreExtraFields) {
   // COFF: RGBA after xyz, and a face color after the indices.
   const auto c = off("COFF\n3 1 0\n1 2 3 255 0 0 255\n4 5 6 0 255 0 255\n7 8 9 0.1 0.2 0.3 1\n3 0 1 2 255 0 0\n");

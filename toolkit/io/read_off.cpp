@@ -73,8 +73,16 @@ struct OffParser {
       fail_at_end("header", "missing OFF header (the file has only comments and blank lines)");
     }
     Fields head(line);
-    check_keyword(head.next());
-    std::string_view tok = head.next();
+    std::string_view kw = head.next(), glued;
+    // "OFF8 6 12": the vertex count glued to the keyword (written by some exporters) is read as
+    // if a space separated them (docs/mesh_policy.md).
+    if (const std::size_t at = kw.find("OFF"); at != std::string_view::npos && at + 3 < kw.size() &&
+                                               kw[at + 3] >= '0' && kw[at + 3] <= '9') {
+      glued = kw.substr(at + 3);
+      kw = kw.substr(0, at + 3);
+    }
+    check_keyword(kw);
+    std::string_view tok = glued.empty() ? head.next() : glued;
     if (tok == "BINARY") fail("header", "binary OFF is not supported");
     if (tok.empty()) {  // counts on the next content line
       if (!lines.next_content(line)) fail_at_end("header", "file ends before the vertex and face counts");
