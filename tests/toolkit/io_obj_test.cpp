@@ -39,6 +39,22 @@ TEST(IoObj, CornerFormsAndIgnoredKeywords) {
   EXPECT_EQ(lm.report.source_face, (std::vector<std::uint32_t>{0, 1, 2, 3}));
 }
 
+TEST(IoObj, StatementsContinuedWithABackslash) {
+  // "f 1 2 \\" + "3 4" is one face; a vertex may be split too; comments and CRLF on the way.
+  const auto lm = obj("v 0 0 0\nv 1 0 \\\n  0\nv 1 1 0 # c\nv 0 1 0\nf 1 2 \\ \r\n3 4 # quad\nf 1 \\\n2 \\\n3\n");
+  ASSERT_EQ(lm.mesh.vertex_count(), 4u);
+  EXPECT_EQ(lm.mesh.position(1), Vec3(1, 0, 0));
+  ASSERT_EQ(lm.mesh.triangle_count(), 3u);  // the quad's fan and the triangle
+  EXPECT_EQ(lm.mesh.triangle(0), (Tri{0, 1, 2}));
+  EXPECT_EQ(lm.mesh.triangle(1), (Tri{0, 2, 3}));
+  EXPECT_EQ(lm.mesh.triangle(2), (Tri{0, 1, 2}));
+  // A backslash on the last line ends the statement; an error names the statement's last line.
+  EXPECT_EQ(obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 \\").mesh.triangle_count(), 1u);
+  const InputError e = obj_error("v 0 0 0\nv 1 \\\nx 0\n");
+  EXPECT_EQ(e.location(), "line 3");
+  EXPECT_EQ(e.element(), "vertex 1");
+}
+
 TEST(IoObj, NegativeIndicesAreRelativeToTheVerticesDefinedSoFar) {
   const auto lm = obj(
       "v 0 0 0\nv 1 0 0\nv 0 1 0\n"

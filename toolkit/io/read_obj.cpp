@@ -22,6 +22,27 @@ struct ObjParser {
     throw InputError(name, line_loc(lines.line()), kind + std::to_string(index), reason);
   }
 
+  // `line` without its trailing blanks ends in '\\': the statement goes on on the next line
+  // (as the OBJ specification allows; "f 1 2 \\" then "3"). The lines are joined with a space in
+  // `buf`, comments cut from each; errors then name the statement's last line.
+  std::string_view continued(std::string_view line, std::string& buf) {
+    auto ends_continued = [](std::string_view l) {
+      while (!l.empty() && is_blank(l.back())) l.remove_suffix(1);
+      return !l.empty() && l.back() == '\\' ? l.size() : std::string_view::npos;
+    };
+    std::size_t cut = ends_continued(line);
+    if (cut == std::string_view::npos) return line;
+    buf.assign(line.substr(0, cut - 1));
+    std::string_view next;
+    while (cut != std::string_view::npos && lines.next(next)) {
+      if (const std::size_t hash = next.find('#'); hash != std::string_view::npos) next = next.substr(0, hash);
+      cut = ends_continued(next);
+      buf += ' ';
+      buf.append(cut == std::string_view::npos ? next : next.substr(0, cut - 1));
+    }
+    return buf;
+  }
+
   LoadedMesh parse() {
     ReadReport report;
     report.format = MeshFormat::Obj;
@@ -32,7 +53,9 @@ struct ObjParser {
     std::uint64_t max_index = 0, max_index_line = 0, max_index_face = 0;
 
     std::string_view line;
+    std::string joined;  // a statement continued over lines with a trailing '\\'
     while (lines.next_content(line)) {
+      line = continued(line, joined);
       Fields f(line);
       const std::string_view kw = f.next();
       if (kw == "v") {
