@@ -17,24 +17,13 @@
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string last_error_line(const std::string& text) {
-  std::string last;
-  std::size_t start = 0;
-  while (start < text.size()) {
-    std::size_t nl = text.find('\n', start);
-    if (nl == std::string::npos) nl = text.size();
-    const std::string line = text.substr(start, nl - start);
-    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
-    start = nl + 1;
-  }
-  return last;
-}
 
 }  // namespace
 
@@ -102,7 +91,7 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
                                    "python3-matplotlib (or --no-figures)", opt.python));
     const ChildResult r = run_child({python, "paper_figures.py"}, tmp, dir.path(".figures.log"));
     if (r.code != 0)
-      throw InputError(dir.target().string() + "/paper_figures.py", "", "", "the figure script failed: " + last_error_line(r.output));
+      throw InputError(dir.target().string() + "/paper_figures.py", "", "", "the figure script failed: " + last_nonblank_line(r.output));
     std::ifstream fj(dir.path("figures.json"));
     drawn = nlohmann::json::parse(fj, nullptr, false);
     if (drawn.is_discarded()) throw InputError("paper_figures.py", "", "", "the figure script wrote no figures.json");
@@ -122,7 +111,7 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
                         dir.path(""), dir.path(".nbconvert.log"));
     if (r.code != 0)
       throw InputError(dir.target().string() + "/paper_figures.ipynb", "", "",
-                       "executing the notebook failed: " + last_error_line(r.output));
+                       "executing the notebook failed: " + last_nonblank_line(r.output));
     if (!opt.figures) {  // the notebook's cells wrote the figures
       std::ifstream fj(dir.path("figures.json"));
       drawn = nlohmann::json::parse(fj, nullptr, false);

@@ -208,9 +208,10 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   std::uint32_t colours_used = 0;
   std::vector<std::array<std::uint32_t, 2>> borders;
   if (use_clusters) {
-    colour = viz::dsatur_colouring(viz::cluster_graph(scene.rest(), clusters));
+    viz::PartitionTopology topo = viz::partition_topology(scene.rest(), clusters);
+    colour = viz::dsatur_colouring(topo.graph);
     for (std::uint32_t c : colour) colours_used = std::max(colours_used, c + 1);
-    if (opt.borders) borders = viz::border_edges(scene.rest(), clusters);
+    if (opt.borders) borders = std::move(topo.borders);
   }
 
   const bool needs_trace = kind == VizKind::Panel || pixel_metric;
@@ -252,7 +253,8 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     std::optional<Render> render;
     std::vector<double> values;
   };
-  auto frame_data = [&](std::int64_t f, bool for_range_only) {
+  // `known`: the frame's per-cluster values kept from the range pass (nothing to recompute).
+  auto frame_data = [&](std::int64_t f, bool for_range_only, const std::vector<double>* known) {
     FrameData d;
     scene.positions(double(f), mesh.positions(), true);
     if (needs_trace && (pixel_metric || !for_range_only)) {
@@ -263,7 +265,9 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
         d.values.assign(counts.begin(), counts.end());
       }
     }
-    if (needs_metrics) {
+    if (known) {
+      d.values = *known;
+    } else if (needs_metrics) {
       d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows);
       prev_rows = d.metrics->rows;
       if (cmetric) d.values = d.metrics->of(metric);
@@ -276,16 +280,21 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   if (!opt.out_dir.empty()) dir.emplace(opt.out_dir);
 
   // A fixed colour range over a series: the values of every frame first (unless --range).
+  // A per-cluster metric's values are kept for the rendering pass when they fit in 256 MB
+  // (clusters x frames doubles); pixel counters are traced again.
   std::optional<viz::ColourScale> series_scale;
+  std::vector<std::vector<double>> kept;
   if (!metric.empty() && series && !fixed && range.count() > 1) {
+    const bool keep = cmetric && double(clusters.cluster_count()) * double(range.count()) <= 32.0 * (1 << 20);
     std::vector<double> lohi;
     for (std::int64_t f = range.first; f <= range.last; ++f) {
       throw_if_cancelled();
-      const FrameData d = frame_data(f, true);
+      FrameData d = frame_data(f, true, nullptr);
       double lo = std::numeric_limits<double>::infinity(), hi = -lo;
       for (double v : d.values)
         if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
       if (lo <= hi) lohi.push_back(lo), lohi.push_back(hi);
+      if (keep) kept.push_back(std::move(d.values));
     }
     series_scale = viz::make_scale(metric, lohi, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0, std::nullopt,
                                    pixel_metric, ratio_floor);
@@ -332,7 +341,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   double render_ms = 0;
   for (std::int64_t f = range.first; f <= range.last; ++f) {
     throw_if_cancelled();
-    FrameData d = frame_data(f, false);
+    FrameData d = frame_data(f, false, kept.empty() ? nullptr : &kept[static_cast<std::size_t>(f - range.first)]);
     const std::string suffix = series ? fmt::format("_{:04d}", f) : "";
     if (kind == VizKind::Export) {
       viz::VtpArrays a;

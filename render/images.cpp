@@ -27,11 +27,11 @@ std::uint8_t to_u8(double x) {
   return static_cast<std::uint8_t>(std::lround(255.0 * x));
 }
 
-Rgb8 viridis(double x) {
-  // matplotlib's viridis at 0, 1/8, ..., 1 (#440154 #472d7b #3b528b #2c728e #21918c #28ae80
-  // #5ec962 #addc30 #fde725).
-  static constexpr double k[9][3] = {{68, 1, 84},    {71, 45, 123},  {59, 82, 139},  {44, 114, 142}, {33, 145, 140},
-                                     {40, 174, 128}, {94, 201, 98},  {173, 220, 48}, {253, 231, 37}};
+namespace {
+
+// A map given at 9 evenly spaced control points (0, 1/8, ..., 1), interpolated linearly in sRGB;
+// x clamped to [0, 1], NaN -> 0.
+Rgb8 sample_map(const double (&k)[9][3], double x) {
   if (!(x > 0.0)) x = 0.0;
   if (x > 1.0) x = 1.0;
   const double s = 8.0 * x;
@@ -43,19 +43,21 @@ Rgb8 viridis(double x) {
   return c;
 }
 
+}  // namespace
+
+Rgb8 viridis(double x) {
+  // matplotlib's viridis at 0, 1/8, ..., 1 (#440154 #472d7b #3b528b #2c728e #21918c #28ae80
+  // #5ec962 #addc30 #fde725).
+  static constexpr double k[9][3] = {{68, 1, 84},    {71, 45, 123},  {59, 82, 139},  {44, 114, 142}, {33, 145, 140},
+                                     {40, 174, 128}, {94, 201, 98},  {173, 220, 48}, {253, 231, 37}};
+  return sample_map(k, x);
+}
+
 Rgb8 coolwarm(double x) {
   // matplotlib's coolwarm (Moreland 2009) at 0, 1/8, ..., 1.
   static constexpr double k[9][3] = {{59, 76, 192},   {98, 130, 234},  {141, 176, 254}, {184, 208, 249}, {221, 221, 221},
                                      {245, 196, 173}, {244, 154, 123}, {222, 96, 77},   {180, 4, 38}};
-  if (!(x > 0.0)) x = 0.0;
-  if (x > 1.0) x = 1.0;
-  const double s = 8.0 * x;
-  const int i = std::min(7, static_cast<int>(s));
-  const double f = s - i;
-  Rgb8 c;
-  for (int a = 0; a < 3; ++a)
-    c[a] = static_cast<std::uint8_t>(std::lround(k[i][a] + f * (k[i + 1][a] - k[i][a])));
-  return c;
+  return sample_map(k, x);
 }
 
 RgbImage cost_heatmap(std::span<const std::uint32_t> counts, int width, int height, ColorLegend& legend,

@@ -22,6 +22,7 @@
 
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc::viz {
 namespace {
@@ -66,12 +67,6 @@ void stop_server(pid_t pid) {
   waitpid(pid, nullptr, 0);
 }
 
-std::string last_line(const std::string& text) {
-  std::string s = text;
-  while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
-  const std::size_t nl = s.rfind('\n');
-  return nl == std::string::npos ? s : s.substr(nl + 1);
-}
 
 }  // namespace
 
@@ -253,7 +248,7 @@ Display Display::acquire(const Options& o) {
   if (!done) {
     stop_server(d.pid_);
     d.pid_ = 0;
-    const std::string why = last_line(errors);
+    const std::string why = last_nonblank_line(errors);
     fail("Xvfb did not start" + (why.empty() ? std::string(" (no message)") : ": " + why));
   }
   while (!number.empty() && (number.back() == '\n' || number.back() == ' ')) number.pop_back();

@@ -36,11 +36,7 @@ std::vector<std::uint32_t> cluster_of(const Mesh& mesh, const Clustering& c) {
   return of;
 }
 
-}  // namespace
-
-ClusterGraph cluster_graph(const Mesh& mesh, const Clustering& clustering) {
-  const std::vector<std::uint32_t> of = cluster_of(mesh, clustering);
-  const EdgeMap edges = EdgeMap::build(mesh.triangles(), mesh.vertex_count());
+ClusterGraph graph_of(const EdgeMap& edges, const std::vector<std::uint32_t>& of, std::size_t n) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   std::vector<std::uint32_t> ks;
   for (std::size_t e = 0; e < edges.edge_count(); ++e) {
@@ -56,13 +52,37 @@ ClusterGraph cluster_graph(const Mesh& mesh, const Clustering& clustering) {
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   ClusterGraph g;
-  const std::size_t n = clustering.cluster_count();
   g.offsets.assign(n + 1, 0);
   for (const auto& [a, b] : pairs) ++g.offsets[a + 1];
   for (std::size_t c = 0; c < n; ++c) g.offsets[c + 1] += g.offsets[c];
   g.adjacency.reserve(pairs.size());
   for (const auto& p : pairs) g.adjacency.push_back(p.second);
   return g;
+}
+
+std::vector<std::array<std::uint32_t, 2>> borders_of(const EdgeMap& edges, const std::vector<std::uint32_t>& of) {
+  std::vector<std::array<std::uint32_t, 2>> out;
+  for (std::size_t e = 0; e < edges.edge_count(); ++e) {
+    const auto tris = edges.triangles_of(e);
+    bool border = false;
+    for (std::uint32_t t : tris) border = border || of[t] != of[tris[0]];
+    if (border) out.push_back({edges.edge(e).v0, edges.edge(e).v1});
+  }
+  return out;
+}
+
+}  // namespace
+
+ClusterGraph cluster_graph(const Mesh& mesh, const Clustering& clustering) { return partition_topology(mesh, clustering).graph; }
+
+std::vector<std::array<std::uint32_t, 2>> border_edges(const Mesh& mesh, const Clustering& clustering) {
+  return partition_topology(mesh, clustering).borders;
+}
+
+PartitionTopology partition_topology(const Mesh& mesh, const Clustering& clustering) {
+  const std::vector<std::uint32_t> of = cluster_of(mesh, clustering);
+  const EdgeMap edges = EdgeMap::build(mesh.triangles(), mesh.vertex_count());
+  return {graph_of(edges, of, clustering.cluster_count()), borders_of(edges, of)};
 }
 
 std::vector<std::uint32_t> dsatur_colouring(const ClusterGraph& g) {
@@ -117,19 +137,6 @@ Rgb8 palette_colour(std::uint32_t index) {
     default: r = c, b = x; break;
   }
   return {to_u8(r + m), to_u8(gg + m), to_u8(b + m)};
-}
-
-std::vector<std::array<std::uint32_t, 2>> border_edges(const Mesh& mesh, const Clustering& clustering) {
-  const std::vector<std::uint32_t> of = cluster_of(mesh, clustering);
-  const EdgeMap edges = EdgeMap::build(mesh.triangles(), mesh.vertex_count());
-  std::vector<std::array<std::uint32_t, 2>> out;
-  for (std::size_t e = 0; e < edges.edge_count(); ++e) {
-    const auto tris = edges.triangles_of(e);
-    bool border = false;
-    for (std::uint32_t t : tris) border = border || of[t] != of[tris[0]];
-    if (border) out.push_back({edges.edge(e).v0, edges.edge(e).v1});
-  }
-  return out;
 }
 
 }  // namespace ptc::viz

@@ -32,6 +32,13 @@ struct ClusterGraph {
 /// std::invalid_argument otherwise).
 [[nodiscard]] ClusterGraph cluster_graph(const Mesh& mesh, const Clustering& clustering);
 
+/// The graph and the border edges at once (one edge map of the mesh for both).
+struct PartitionTopology {
+  ClusterGraph graph;
+  std::vector<std::array<std::uint32_t, 2>> borders;
+};
+[[nodiscard]] PartitionTopology partition_topology(const Mesh& mesh, const Clustering& clustering);
+
 /// DSatur: repeatedly colours the uncoloured vertex with the most distinct colours among its
 /// neighbours (ties: more uncoloured neighbours, then the smaller id) with the smallest colour
 /// none of its neighbours has. Deterministic. Returns one colour index per vertex.

@@ -22,6 +22,21 @@
 
 namespace ptc::viz {
 
+namespace {
+
+// One value per triangle as a named cell array of VTK type A.
+template <class A, class V>
+void add_cell_array(vtkPolyData* poly, const std::string& name, const std::vector<V>& values, std::size_t triangles) {
+  if (values.size() != triangles) throw std::invalid_argument("cell array " + name + ": not one value per triangle");
+  vtkNew<A> arr;
+  arr->SetName(name.c_str());
+  arr->SetNumberOfTuples(static_cast<vtkIdType>(triangles));
+  for (std::size_t t = 0; t < triangles; ++t) arr->SetValue(static_cast<vtkIdType>(t), values[t]);
+  poly->GetCellData()->AddArray(arr);
+}
+
+}  // namespace
+
 void write_vtp(const std::filesystem::path& path, const Mesh& mesh, const VtpArrays& a) {
   const std::size_t T = mesh.triangle_count(), V = mesh.vertex_count();
   vtkNew<vtkPoints> points;
@@ -37,22 +52,8 @@ void write_vtp(const std::filesystem::path& path, const Mesh& mesh, const VtpArr
   vtkNew<vtkPolyData> poly;
   poly->SetPoints(points);
   poly->SetPolys(polys);
-  for (const auto& [name, values] : a.cell_int) {
-    if (values.size() != T) throw std::invalid_argument("cell array " + name + ": not one value per triangle");
-    vtkNew<vtkIntArray> arr;
-    arr->SetName(name.c_str());
-    arr->SetNumberOfTuples(static_cast<vtkIdType>(T));
-    for (std::size_t t = 0; t < T; ++t) arr->SetValue(static_cast<vtkIdType>(t), values[t]);
-    poly->GetCellData()->AddArray(arr);
-  }
-  for (const auto& [name, values] : a.cell) {
-    if (values.size() != T) throw std::invalid_argument("cell array " + name + ": not one value per triangle");
-    vtkNew<vtkDoubleArray> arr;
-    arr->SetName(name.c_str());
-    arr->SetNumberOfTuples(static_cast<vtkIdType>(T));
-    for (std::size_t t = 0; t < T; ++t) arr->SetValue(static_cast<vtkIdType>(t), values[t]);
-    poly->GetCellData()->AddArray(arr);
-  }
+  for (const auto& [name, values] : a.cell_int) add_cell_array<vtkIntArray>(poly, name, values, T);
+  for (const auto& [name, values] : a.cell) add_cell_array<vtkDoubleArray>(poly, name, values, T);
   for (const auto& [name, values] : a.point) {
     if (values.size() != V) throw std::invalid_argument("point array " + name + ": not one vector per vertex");
     vtkNew<vtkDoubleArray> arr;

@@ -18,6 +18,7 @@
 #include "common/brute_force.h"
 #include "common/csv_rows.h"
 #include "common/temp_dir.h"
+#include "common/usage_flag.h"
 #include "render/camera.h"
 #include "toolkit/anim/scene_file.h"
 #include "toolkit/clustering/cluster.h"
@@ -39,18 +40,7 @@ const fs::path kMeshes = fs::path(PTC_TEST_DATA) / "meshes";
 
 class Commands : public test::TempDirTest {};
 
-// The flag a call's UsageError names ("" when it throws none or another error).
-template <class F>
-std::string usage_flag(F&& f) {
-  try {
-    f();
-  } catch (const UsageError& e) {
-    return e.element();
-  } catch (...) {
-    return "(another error)";
-  }
-  return "";
-}
+using test::usage_flag;
 
 TEST_F(Commands, InfoJsonCountsTheMesh) {
   std::ostringstream out;

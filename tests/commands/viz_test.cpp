@@ -12,11 +12,13 @@
 #include <set>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "commands/viz.h"
 #include "common/brute_force.h"
 #include "common/temp_dir.h"
+#include "common/usage_flag.h"
 #include "render/camera.h"
 #include "render/images.h"
 #include "toolkit/clustering/cluster.h"
@@ -39,17 +41,7 @@ using test::spit;
 const fs::path kMeshes = fs::path(PTC_TEST_DATA) / "meshes";
 constexpr std::uint32_t kMiss = 0xffffffffu;
 
-template <class F>
-std::string usage_flag(F&& f) {
-  try {
-    f();
-  } catch (const UsageError& e) {
-    return e.element();
-  } catch (...) {
-    return "(another error)";
-  }
-  return "";
-}
+using test::usage_flag;
 
 class Viz : public test::TempDirTest {
  protected:
@@ -70,6 +62,15 @@ class Viz : public test::TempDirTest {
     clusters_ = c.cluster_count();
   }
   static std::string fmt_row(std::size_t t, std::size_t k) { return std::to_string(t) + "," + std::to_string(k) + "\n"; }
+
+  // A scene file: the mushroom twisted over frames 0..last.
+  fs::path twisted_scene(int last) const {
+    const fs::path scene = dir_ / "scene.json";
+    spit(scene, R"({"schema": "ptc-scene/1", "frames": [0, )" + std::to_string(last) +
+                    R"(], "meshes": [{"name": "s", "file": ")" + (kMeshes / "mushroom.off").string() +
+                    R"(", "deform": {"kind": "twist", "axis": "y", "amplitude": 1.0, "period": 8}}]})");
+    return scene;
+  }
 
   VizCommandOptions options(VizKind kind, const std::string& out) const {
     VizCommandOptions o;
@@ -339,10 +340,7 @@ TEST_F(Viz, PanelIsPartitionShadedAndHeatmapUnderATitle) {
 
 TEST_F(Viz, ExportReadsBackWithVtkCellByCell) {
   // An animated scene: the sphere twisted over frames 0..2.
-  const fs::path scene = dir_ / "scene.json";
-  spit(scene, R"({"schema": "ptc-scene/1", "frames": [0, 2], "meshes": [{"name": "s", "file": ")" +
-                  (kMeshes / "mushroom.off").string() +
-                  R"(", "deform": {"kind": "twist", "axis": "y", "amplitude": 1.0, "period": 8}}]})");
+  const fs::path scene = twisted_scene(2);
   VizCommandOptions o = options(VizKind::Export, "vtp");
   o.input = scene;
   o.frames = "0:2";
@@ -434,10 +432,7 @@ TEST_F(Viz, AStaticMeshMovesOnlyWithAStandInMotion) {
 }
 
 TEST_F(Viz, PrevMetricsCompareWithTheFrameBeforeWhateverFramesAreShown) {
-  const fs::path scene = dir_ / "scene.json";
-  spit(scene, R"({"schema": "ptc-scene/1", "frames": [0, 3], "meshes": [{"name": "s", "file": ")" +
-                  (kMeshes / "mushroom.off").string() +
-                  R"(", "deform": {"kind": "twist", "axis": "y", "amplitude": 1.0, "period": 8}}]})");
+  const fs::path scene = twisted_scene(3);
   std::ostringstream out;
   VizCommandOptions one = options(VizKind::Export, "one");
   one.input = scene;
@@ -457,10 +452,7 @@ TEST_F(Viz, PrevMetricsCompareWithTheFrameBeforeWhateverFramesAreShown) {
 }
 
 TEST_F(Viz, SeriesShareOneRangeAndSayWhyThereIsNoMp4) {
-  const fs::path scene = dir_ / "scene.json";
-  spit(scene, R"({"schema": "ptc-scene/1", "frames": [0, 2], "meshes": [{"name": "s", "file": ")" +
-                  (kMeshes / "mushroom.off").string() +
-                  R"(", "deform": {"kind": "twist", "axis": "y", "amplitude": 1.0, "period": 8}}]})");
+  const fs::path scene = twisted_scene(2);
   VizCommandOptions o = options(VizKind::Heatmap, "series");
   o.input = scene;
   o.frames = "0:2";
@@ -478,6 +470,29 @@ TEST_F(Viz, SeriesShareOneRangeAndSayWhyThereIsNoMp4) {
   }
   EXPECT_EQ(ranges.size(), 1u) << "one colour range for the whole series";
   EXPECT_GT(ranges.begin()->second, 1.0) << "the twist changes box areas";
+  // The series' frame 2 (values kept from the range pass) is the picture of frame 2 alone with
+  // that range.
+  VizCommandOptions one = options(VizKind::Heatmap, "one");
+  one.input = scene;
+  one.frame = "2";
+  one.metric = "box_area_ratio";
+  one.range = fmt::format("{:.17g}:{:.17g}", ranges.begin()->first, ranges.begin()->second);
+  {  // the series' camera (framed on its first frame), not one framed on frame 2
+    const auto& c = m["parameters"]["camera"];
+    auto v = [](const nlohmann::json& a) { return Vec3(a[0], a[1], a[2]); };
+    one.camera.eye = v(c["eye"]);
+    one.camera.look_at = v(c["eye"]) + v(c["forward"]);
+    one.camera.up = v(c["up"]);
+    one.camera.fov_deg = c["fov_y_deg"].get<double>();
+  }
+  cmd_viz(one, out);
+  const RgbImage a = viz::read_png(dir_ / "series" / "heatmap_box_area_ratio_0002.png");
+  const RgbImage b = viz::read_png(dir_ / "one" / "heatmap_box_area_ratio.png");
+  ASSERT_EQ(a.width, b.width);
+  std::size_t differ = 0;
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < a.width; ++x) differ += a.at(x, y) != b.at(x, y);
+  EXPECT_EQ(differ, 0u) << "only the legends may differ (where the range came from)";
   if (viz::find_program("ffmpeg").empty()) {
     EXPECT_NE(out.str().find("ffmpeg is not installed"), std::string::npos) << out.str();
     EXPECT_FALSE(fs::exists(dir_ / "series" / "heatmap_box_area_ratio.mp4"));

@@ -20,4 +20,19 @@ namespace ptc {
   return out;
 }
 
+/// The last line of `text` that holds more than blanks, without its line end ("" when none):
+/// the one-line reason of a program's error output.
+[[nodiscard]] inline std::string last_nonblank_line(std::string_view text) {
+  std::string_view last;
+  for (std::size_t b = 0; b < text.size();) {
+    std::size_t e = text.find('\n', b);
+    if (e == std::string_view::npos) e = text.size();
+    std::string_view line = text.substr(b, e - b);
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t')) line.remove_suffix(1);
+    if (line.find_first_not_of(" \t") != std::string_view::npos) last = line;
+    b = e + 1;
+  }
+  return std::string(last);
+}
+
 }  // namespace ptc
