@@ -23,6 +23,9 @@ nlohmann::json mesh_info_json(const std::filesystem::path& file, const ReadRepor
   j["polygons_triangulated"] = read.polygons;
   j["triangles_from_polygons"] = read.triangles_from_polygons;
   j["welded_vertices"] = read.welded_vertices;
+  j["short_faces_skipped"] = read.short_faces;
+  j["surplus_value_lines"] = read.surplus_lines;
+  j["notes"] = read_notes(read);
   j["vertices"] = r.vertices;
   j["triangles"] = r.triangles;
   j["unreferenced_vertices"] = r.unreferenced_vertices;
@@ -61,6 +64,7 @@ std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& 
   line("vertices", fmt::format("{} ({} unreferenced)", r.vertices, r.unreferenced_vertices));
   line("triangles", fmt::format("{} ({} from {} polygons)", r.triangles, read.triangles_from_polygons, read.polygons));
   if (read.welded_vertices) line("welded vertices", std::to_string(read.welded_vertices));
+  for (const std::string& note : read_notes(read)) line("note", note);
   if (!r.bounds.empty()) {
     line("bbox min", fmt::format("{:.9g} {:.9g} {:.9g}", r.bounds.lo.x(), r.bounds.lo.y(), r.bounds.lo.z()));
     line("bbox max", fmt::format("{:.9g} {:.9g} {:.9g}", r.bounds.hi.x(), r.bounds.hi.y(), r.bounds.hi.z()));

@@ -4,6 +4,7 @@
 // Each subcommand is registered from its own cli_<name>.cpp (see cli.h).
 #include <signal.h>
 
+#include <atomic>
 #include <iostream>
 #include <optional>
 
@@ -11,6 +12,7 @@
 
 #include "apps/ptc/cli.h"
 #include "commands/errors.h"
+#include "toolkit/io/mesh_io.h"
 
 namespace {
 
@@ -42,6 +44,19 @@ void install_stop_handlers() {
     if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
     sigaction(sig, &sa, nullptr);
   }
+}
+
+// What a reader tells about a file it read anyway (faces with fewer than 3 corners skipped,
+// surplus PLY values): one line each on stderr, at most kMaxNotes over a run (a frame directory
+// of such files would repeat the same note per frame).
+void print_read_note(const std::string& file, const std::string& note) {
+  constexpr int kMaxNotes = 4;
+  static std::atomic<int> printed{0};
+  const int n = printed.fetch_add(1);
+  if (n < kMaxNotes)
+    std::cerr << "ptc: note: " << file << ": " << note << "\n";
+  else if (n == kMaxNotes)
+    std::cerr << "ptc: note: further notes on the files read are not shown\n";
 }
 
 // "--out DIR" of the subcommand that ran, if it has one and it was given ("" otherwise).
@@ -91,6 +106,7 @@ int main(int argc, char** argv) {
   if (ctx.threads > 0) thread_limit.emplace(oneapi::tbb::global_control::max_allowed_parallelism, ctx.threads);
 
   install_stop_handlers();
+  set_read_note_handler(print_read_note);
   std::string out;  // the output of the command being run, for the interrupt message
   try {
     for (const auto& c : ctx.commands)

@@ -70,6 +70,35 @@ TEST_F(Cli, BadInputExitsOneWithOneLineNamingFileAndElement) {
   EXPECT_NE(r.err.find("mesh.xyz"), std::string::npos) << r.err;
 }
 
+// A file read anyway (a face with 2 corners skipped, surplus PLY values): one note per thing on
+// stderr with the file name, the counts in `ptc info`, and the rest of the run as usual.
+TEST_F(Cli, FilesReadAnywayGiveOneNoteEach) {
+  const auto shortf = write("short.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n").string();
+  auto r = ptc({"info", shortf, "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "ptc: note: " + shortf +
+                       ": 1 face has fewer than 3 corners and was skipped (first: face 1 (line 5))\n");
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["short_faces_skipped"], 1);
+  EXPECT_EQ(j["faces_in_file"], 2);
+  EXPECT_EQ(j["triangles"], 1);
+  ASSERT_EQ(j["notes"].size(), 1u);
+  const auto surplus = write("surplus.ply",
+                             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                             "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                             "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 9 9\n")
+                           .string();
+  r = ptc({"info", surplus});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("surplus.ply: 1 line carries more values than the header declares"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.out.find("note"), std::string::npos) << r.out;
+  // A clean file has no note.
+  r = ptc({"info", write("cube.off", kCube).string()});
+  EXPECT_EQ(r.err, "");
+}
+
 TEST_F(Cli, InfoJsonMatchesTheMesh) {
   const auto cube = write("cube.off", kCube).string();
   auto r = ptc({"info", cube, "--json"});

@@ -116,10 +116,28 @@ TEST(IoObj, GarbledAndShortLines) {
   e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0..5\nf 1 2 3\n");
   EXPECT_EQ(e.element(), "vertex 2");
   EXPECT_EQ(e.reason(), "coordinate 2 '0..5' is not a number");
-  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n");
-  EXPECT_EQ(e.location(), "line 5");
-  EXPECT_EQ(e.element(), "face 1");
-  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
+}
+
+// A face with fewer than three corners among good ones (issue 15, seen in exported files): it is
+// skipped and counted, keeps its face number, and the rest loads. Its indices are still checked.
+TEST(IoObj, FacesWithFewerThanThreeCornersAreSkippedAndCounted) {
+  const auto lm = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2\nf\nf 4/1 -2\nf 1 3 4\n");
+  ASSERT_EQ(lm.mesh.triangle_count(), 2u);
+  EXPECT_EQ(lm.mesh.triangle(0), (Tri{0, 1, 2}));
+  EXPECT_EQ(lm.mesh.triangle(1), (Tri{0, 2, 3}));
+  EXPECT_EQ(lm.report.faces, 5u);
+  EXPECT_EQ(lm.report.short_faces, 3u);
+  EXPECT_EQ(lm.report.source_face, (std::vector<std::uint32_t>{0, 4}));
+  EXPECT_EQ(lm.report.first_short_face, "face 1 (line 6)");
+  const auto notes = read_notes(lm.report);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0], "3 faces have fewer than 3 corners and were skipped (first: face 1 (line 6))");
+  // Still checked: a bad index in a short face is an error, and so is a file of short faces only.
+  auto e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 9\n");
+  EXPECT_EQ(e.reason(), "index 9 out of range [1, 3] (the file defines 3 vertices)");
+  e = obj_error("v 0 0 0\nv 1 0 0\nf 1 2\n");
+  EXPECT_EQ(e.reason(), "mesh has no triangles (its 1 face has fewer than 3 corners)");
+  EXPECT_TRUE(read_notes(obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").report).empty());
 }
 
 TEST(IoObj, NanInfEmptyAndNoFaces) {
@@ -141,10 +159,10 @@ TEST(IoObj, TruncatedFiles) {
   auto e = obj_error(full.substr(0, full.find("v 0 0 1") + 4) + "\n");
   EXPECT_EQ(e.location(), "line 4");
   EXPECT_EQ(e.reason(), "expected 3 coordinates, found 1");
-  // Cut in the last face's index list.
-  e = obj_error(full.substr(0, full.size() - 3));  // "f 1 3"
-  EXPECT_EQ(e.location(), "line 6");
-  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
+  // Cut in the last face's index list: "f 1 3" is a short face, skipped and counted.
+  const auto cut = obj(full.substr(0, full.size() - 3));
+  EXPECT_EQ(cut.mesh.triangle_count(), 1u);
+  EXPECT_EQ(cut.report.short_faces, 1u);
   // Cut before any face.
   e = obj_error(full.substr(0, full.find('f')));
   EXPECT_EQ(e.reason(), "mesh has no triangles");

@@ -235,14 +235,29 @@ TEST(IoOff, BadIndicesAndShortFaces) {
   EXPECT_EQ(e.reason(), "index 57 out of range [0, 3)");
   e = off_error("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
   EXPECT_EQ(e.reason(), "index 3 out of range [0, 3)");
-  e = off_error("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n2 0 1\n");
-  EXPECT_EQ(e.location(), "line 7");
-  EXPECT_EQ(e.element(), "face 1");
-  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
   e = off_error("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n");
   EXPECT_EQ(e.reason(), "expected 4 vertex indices, found 3");
   e = off_error("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n-3 0 1 2\n");
-  EXPECT_EQ(e.reason(), "face has -3 corners (at least 3 needed)");
+  EXPECT_EQ(e.reason(), "corner count -3 is negative");
+}
+
+// Faces with 0, 1 or 2 corners among good ones (issue 15): skipped, counted, face numbers kept;
+// their indices are still checked, and their declared corners must be there.
+TEST(IoOff, FacesWithFewerThanThreeCornersAreSkippedAndCounted) {
+  const auto lm = off("OFF\n4 5 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n2 0 1\n0\n1 3 255 0 0\n3 0 2 3\n");
+  ASSERT_EQ(lm.mesh.triangle_count(), 2u);
+  EXPECT_EQ(lm.mesh.triangle(1), (Tri{0, 2, 3}));
+  EXPECT_EQ(lm.report.faces, 5u);
+  EXPECT_EQ(lm.report.short_faces, 3u);
+  EXPECT_EQ(lm.report.source_face, (std::vector<std::uint32_t>{0, 4}));
+  EXPECT_EQ(lm.report.first_short_face, "face 1 (line 8)");
+  auto e = off_error("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n2 0 7\n");
+  EXPECT_EQ(e.location(), "line 7");
+  EXPECT_EQ(e.reason(), "index 7 out of range [0, 3)");
+  e = off_error("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n2 0\n");
+  EXPECT_EQ(e.reason(), "expected 2 vertex indices, found 1");
+  e = off_error("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n");
+  EXPECT_EQ(e.reason(), "mesh has no triangles (its 1 face has fewer than 3 corners)");
 }
 
 TEST(IoOff, TruncatedFiles) {

@@ -299,10 +299,6 @@ TEST(IoPly, NanInfGarbledAndBadIndicesAscii) {
   EXPECT_EQ(e.reason(), "index -1 is negative");
   e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 57\n"));
   EXPECT_EQ(e.reason(), "index 57 out of range [0, 3)");
-  e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 2\n2 0 1\n", 3, 2));
-  EXPECT_EQ(e.location(), "line 14");
-  EXPECT_EQ(e.element(), "face 1");
-  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
   e = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "", 3, 0));
   EXPECT_EQ(e.reason(), "mesh has no triangles");
   e = ply_error("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
@@ -335,9 +331,66 @@ TEST(IoPly, NanAndBadIndicesBinary) {
   EXPECT_EQ(e.reason(), "index -1 is negative");
   e = ply_error(file(0.f, 3, 3));
   EXPECT_EQ(e.reason(), "index 3 out of range [0, 3)");
-  e = ply_error(file(0.f, 2, 1));
-  EXPECT_EQ(e.location(), "byte " + std::to_string(head.size() + 36));
-  EXPECT_EQ(e.reason(), "face has 2 corners (at least 3 needed)");
+  e = ply_error(file(0.f, 2, 1));  // the only face is short
+  EXPECT_EQ(e.reason(), "mesh has no triangles (its 1 face has fewer than 3 corners)");
+  e = ply_error(file(0.f, 2, 7));  // a short face's indices are still checked
+  EXPECT_EQ(e.reason(), "index 7 out of range [0, 3)");
+}
+
+// Faces with 0, 1 or 2 corners among good ones (issue 15): skipped and counted in both encodings,
+// face numbers kept.
+TEST(IoPly, FacesWithFewerThanThreeCornersAreSkippedAndCounted) {
+  const std::string ascii = ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 2\n2 0 1\n0\n3 2 1 0\n", 3, 4);
+  std::string bin =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 4\nproperty list uchar int vertex_indices\nend_header\n";
+  Bytes b{false, {}};
+  b.put(0.f).put(0.f).put(0.f).put(1.f).put(0.f).put(0.f).put(0.f).put(1.f).put(0.f);
+  b.put(std::uint8_t{3}).put(0).put(1).put(2);
+  b.put(std::uint8_t{2}).put(0).put(1);
+  b.put(std::uint8_t{0});
+  b.put(std::uint8_t{3}).put(2).put(1).put(0);
+  bin += b.s;
+  for (const std::string& file : {ascii, bin}) {
+    const auto lm = ply(file);
+    ASSERT_EQ(lm.mesh.triangle_count(), 2u);
+    EXPECT_EQ(lm.mesh.triangle(1), (Tri{2, 1, 0}));
+    EXPECT_EQ(lm.report.faces, 4u);
+    EXPECT_EQ(lm.report.short_faces, 2u);
+    EXPECT_EQ(lm.report.source_face, (std::vector<std::uint32_t>{0, 3}));
+  }
+  EXPECT_EQ(ply(ascii).report.first_short_face, "face 1 (line 14)");
+  EXPECT_EQ(ply(bin).report.first_short_face, "face 1 (byte " + std::to_string(bin.size() - 13 - 9 - 1) + ")");
+}
+
+// ASCII PLY is read one element per line. MeshLab/VCG write face lines with more values than the
+// header declares (issue 15): the surplus is ignored and counted once, with the first line named.
+// An element whose values run onto the next line still reads.
+TEST(IoPly, AsciiSurplusValuesPerLineAreIgnoredAndCounted) {
+  const auto lm = ply(ascii_tri("0 0 0 0.5 0.5\n1 0 0\n0 1 0\n", "3 0 1 2 0 0 0 0\n3 2 1 0 7\n", 3, 2));
+  ASSERT_EQ(lm.mesh.vertex_count(), 3u);
+  EXPECT_EQ(lm.mesh.position(1), Vec3(1, 0, 0));
+  ASSERT_EQ(lm.mesh.triangle_count(), 2u);
+  EXPECT_EQ(lm.mesh.triangle(0), (Tri{0, 1, 2}));
+  EXPECT_EQ(lm.mesh.triangle(1), (Tri{2, 1, 0}));
+  EXPECT_EQ(lm.report.surplus_lines, 3u);
+  EXPECT_EQ(lm.report.first_surplus, "vertex 0 (line 10): 2 extra values");
+  const auto notes = read_notes(lm.report);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0],
+            "3 lines carry more values than the header declares; the extra values were ignored (first: vertex 0 "
+            "(line 10): 2 extra values)");
+  // Values continued on the next line, and blank lines between elements.
+  const auto wrapped = ply(ascii_tri("0 0\n0\n\n1 0 0\n0 1 0\n", "3 0\n1 2\n", 3, 1));
+  EXPECT_EQ(wrapped.mesh.triangle(0), (Tri{0, 1, 2}));
+  EXPECT_EQ(wrapped.report.surplus_lines, 0u);
+  // Surplus values are not checked as numbers (they belong to no declared property), but a file
+  // that puts several elements on one line runs short and says so.
+  EXPECT_EQ(ply(ascii_tri("0 0 0 x\n1 0 0\n0 1 0\n", "3 0 1 2\n")).report.surplus_lines, 1u);
+  const auto e = ply_error(ascii_tri("0 0 0 1 0 0 0 1 0\n", "3 0 1 2\n"));
+  EXPECT_EQ(e.reason(),
+            "file ends after 2 of 3 vertices (2 lines carried more values than the header declares, first: vertex 0 "
+            "(line 10): 6 extra values)");
 }
 
 }  // namespace

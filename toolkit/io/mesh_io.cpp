@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 
@@ -58,6 +59,8 @@ std::string read_file(const std::filesystem::path& path) {
   return data;
 }
 
+std::atomic<ReadNoteHandler> g_note_handler{nullptr};
+
 }  // namespace
 
 std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path) {
@@ -90,7 +93,25 @@ LoadedMesh read_mesh(const std::filesystem::path& path) {
             (path.extension().empty() ? std::string("(no extension)") : "'" + path.extension().string() + "'") +
             " (use .off, .obj, .ply or .stl)");
   const std::string data = read_file(path);
-  return read_mesh_from_memory(data, *f, path.string());
+  LoadedMesh lm = read_mesh_from_memory(data, *f, path.string());
+  if (const ReadNoteHandler h = g_note_handler.load())
+    for (const std::string& note : read_notes(lm.report)) h(path.string(), note);
+  return lm;
 }
+
+std::vector<std::string> read_notes(const ReadReport& r) {
+  std::vector<std::string> notes;
+  if (r.short_faces > 0)
+    notes.push_back(std::to_string(r.short_faces) + (r.short_faces == 1 ? " face has" : " faces have") +
+                    " fewer than 3 corners and " + (r.short_faces == 1 ? "was" : "were") + " skipped (first: " +
+                    r.first_short_face + ")");
+  if (r.surplus_lines > 0)
+    notes.push_back(std::to_string(r.surplus_lines) + (r.surplus_lines == 1 ? " line carries" : " lines carry") +
+                    " more values than the header declares; the extra values were ignored (first: " +
+                    r.first_surplus + ")");
+  return notes;
+}
+
+void set_read_note_handler(ReadNoteHandler h) { g_note_handler.store(h); }
 
 }  // namespace ptc

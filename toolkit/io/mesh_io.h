@@ -39,7 +39,25 @@ struct ReadReport {
   std::size_t triangles_from_polygons = 0;  ///< triangles those polygons produced
   std::size_t welded_vertices = 0;          ///< STL: corners merged into shared vertices (corners - vertices)
   std::vector<std::uint32_t> source_face;   ///< per output triangle: index of the file face it came from
+  /// Faces with fewer than three corners ("f 1 2", "2 0 1", a PLY list of length 0..2): skipped,
+  /// the rest of the file loaded. Their indices are still checked. They keep their face number,
+  /// so `source_face` still counts faces as the file does.
+  std::size_t short_faces = 0;
+  std::string first_short_face;  ///< "face 7 (line 12)" of the first one, for the note
+  /// ASCII PLY: element lines carrying more values than the header declares (MeshLab/VCG
+  /// writers); the extra values are ignored.
+  std::size_t surplus_lines = 0;
+  std::string first_surplus;  ///< "face 0 (line 13): 4 extra values" of the first one
 };
+
+/// One line per thing a user should know about a file that was read anyway (short faces skipped,
+/// surplus values ignored), without the file name; empty for a clean file.
+[[nodiscard]] std::vector<std::string> read_notes(const ReadReport& r);
+
+/// Called by read_mesh with each note of a file it read (file name, note). None by default; the
+/// `ptc` program prints them on stderr. The handler may be called from several threads at once.
+using ReadNoteHandler = void (*)(const std::string& file, const std::string& note);
+void set_read_note_handler(ReadNoteHandler h);
 
 struct LoadedMesh {
   Mesh mesh;

@@ -143,7 +143,7 @@ struct OffParser {
       std::int64_t n = 0;
       if (parse_int(t, n) != NumStatus::Ok)
         fail("face " + std::to_string(i), "corner count " + quote(t) + " is not an integer");
-      if (n < 3) fail("face " + std::to_string(i), "face has " + std::to_string(n) + " corners (at least 3 needed)");
+      if (n < 0) fail("face " + std::to_string(i), "corner count " + std::to_string(n) + " is negative");
       corners.clear();
       for (std::int64_t k = 0; k < n; ++k) {
         t = f.next();
@@ -160,6 +160,10 @@ struct OffParser {
           fail("face " + std::to_string(i),
                "index " + std::string(t) + " out of range [0, " + std::to_string(nv) + ")");
         corners.push_back(static_cast<std::uint32_t>(idx));
+      }
+      if (corners.size() < 3) {  // skipped and counted (docs/mesh_policy.md)
+        sink.skip_face([&] { return "face " + std::to_string(i) + " (" + line_loc(lines.line()) + ")"; });
+        continue;
       }
       if (sink.full(corners.size())) fail("face " + std::to_string(i), "more triangles than 32-bit ids can number");
       sink.add_face(corners);

@@ -246,7 +246,11 @@ class PlyParser {
     throw InputError(name_, location, e.name + " " + std::to_string(item), reason);
   }
   std::string truncated(const Element& e, std::uint64_t item) const {
-    return "file ends after " + std::to_string(item) + " of " + std::to_string(e.count) + " " + plural(e);
+    std::string s = "file ends after " + std::to_string(item) + " of " + std::to_string(e.count) + " " + plural(e);
+    if (report_.surplus_lines > 0)  // ascii, one element per line: did a writer put several on one?
+      s += " (" + std::to_string(report_.surplus_lines) +
+           " lines carried more values than the header declares, first: " + report_.first_surplus + ")";
+    return s;
   }
   // Checks one face index; returns it as a vertex id.
   std::uint32_t checked_index(std::int64_t v, const std::string& loc, const Element& e, std::uint64_t item) const {
@@ -257,8 +261,10 @@ class PlyParser {
     return static_cast<std::uint32_t>(v);
   }
   void add_face(const std::string& loc, const Element& e, std::uint64_t item) {
-    if (corners_.size() < 3)
-      element_error(loc, e, item, "face has " + std::to_string(corners_.size()) + " corners (at least 3 needed)");
+    if (corners_.size() < 3) {  // skipped and counted (docs/mesh_policy.md)
+      sink_.skip_face([&] { return e.name + " " + std::to_string(item) + " (" + loc + ")"; });
+      return;
+    }
     // Counts were checked against the 32-bit limit, but polygons can give more triangles.
     if (sink_.full(corners_.size())) element_error(loc, e, item, "more triangles than 32-bit ids can number");
     sink_.add_face(corners_);
@@ -343,8 +349,6 @@ class PlyParser {
           const std::size_t count_at = at_;
           const std::int64_t n = read_int(prop.count_type);
           if (n < 0) element_error(byte_loc(count_at), e, i, "list length " + std::to_string(n) + " is negative");
-          if (prop.role == Role::Indices && n < 3)
-            element_error(byte_loc(count_at), e, i, "face has " + std::to_string(n) + " corners (at least 3 needed)");
           const std::size_t unit = size_of(prop.type);
           if (static_cast<std::uint64_t>(n) > (size - at_) / unit) element_error(byte_loc(at_), e, i, truncated(e, i));
           if (prop.role != Role::Indices) {
@@ -367,8 +371,40 @@ class PlyParser {
   }
 
   // ---- ascii -----------------------------------------------------------------------------------
+  // One element per line (as the format has it); an element whose values run past its line goes
+  // on on the next one, and values left on a line after its element are surplus: counted and
+  // ignored (MeshLab/VCG write face lines with more values than their header declares).
+  class ElementLines {
+   public:
+    ElementLines(std::string_view data, std::uint64_t first_line) : lines_(data), first_line_(first_line) {}
+    /// The next value of the current element, or an empty view at the end of the data.
+    std::string_view next() {
+      for (;;) {
+        if (const std::string_view t = fields_.next(); !t.empty()) return t;
+        std::string_view l;
+        if (!lines_.next(l)) return {};
+        fields_ = Fields(l);
+      }
+    }
+    /// The element is complete: how many values its line has left (then the next element starts
+    /// on a new line).
+    std::size_t end_element() {
+      std::size_t extra = 0;
+      while (!fields_.next().empty()) ++extra;
+      fields_ = Fields({});
+      return extra;
+    }
+    /// The file's line of the value last returned.
+    [[nodiscard]] std::uint64_t line() const { return first_line_ + (lines_.line() == 0 ? 0 : lines_.line() - 1); }
+
+   private:
+    LineReader lines_;
+    Fields fields_{std::string_view{}};
+    std::uint64_t first_line_;
+  };
+
   void read_ascii() {
-    TokenReader tr(bytes_.substr(data_offset_), data_line_);
+    ElementLines tr(bytes_.substr(data_offset_), data_line_);
     for (const Element& e : elements_) {
       if (e.props.empty()) continue;  // an element without properties has no data, whatever its count
       const bool is_vertex = &e == &elements_[vertex_el_];
@@ -422,13 +458,14 @@ class PlyParser {
             for (std::int64_t k = 0; k < n; ++k) (void)number(prop);
             continue;
           }
-          if (n < 3)
-            element_error(line_loc(tr.line()), e, i, "face has " + std::to_string(n) + " corners (at least 3 needed)");
           for (std::int64_t k = 0; k < n; ++k) {
             const std::int64_t v = integer(prop, "index");
             corners_.push_back(checked_index(v, line_loc(tr.line()), e, i));
           }
         }
+        if (const std::size_t extra = tr.end_element(); extra > 0 && report_.surplus_lines++ == 0)
+          report_.first_surplus = e.name + " " + std::to_string(i) + " (" + line_loc(tr.line()) + "): " +
+                                  std::to_string(extra) + (extra == 1 ? " extra value" : " extra values");
         if (is_vertex) add_vertex(p, line_loc(first_line), e, i);
         if (is_face) add_face(line_loc(first_line), e, i);
       }

@@ -47,6 +47,13 @@ class TriangleSink {
       report_.triangles_from_polygons += n - 2;
     }
   }
+  /// One file face with fewer than 3 corners (its indices checked by the caller): it keeps its
+  /// face number and gives no triangle. `where` ("face 7 (line 12)") is built only for the first.
+  template <class Where>
+  void skip_face(Where&& where) {
+    if (report_.short_faces++ == 0) report_.first_short_face = where();
+    ++report_.faces;
+  }
   void add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     const auto face = static_cast<std::uint32_t>(report_.faces++);
     tris_.push_back({a, b, c});
@@ -71,7 +78,12 @@ class TriangleSink {
 /// The loaded mesh; throws InputError "mesh has no triangles" when there are none.
 inline LoadedMesh finish(std::vector<Tri>&& tris, std::vector<Vec3>&& positions, ReadReport&& report,
                          const std::string& name) {
-  if (tris.empty()) throw InputError(name, "", "", "mesh has no triangles");
+  if (tris.empty())
+    throw InputError(name, "", "",
+                     report.short_faces == 0
+                         ? std::string("mesh has no triangles")
+                         : "mesh has no triangles (its " + std::to_string(report.short_faces) +
+                               (report.short_faces == 1 ? " face has" : " faces have") + " fewer than 3 corners)");
   LoadedMesh out{Mesh(std::move(tris), std::move(positions)), std::move(report)};
   return out;
 }
