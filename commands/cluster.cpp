@@ -13,6 +13,7 @@
 #include "commands/inputs.h"
 #include "commands/output_dir.h"
 #include "commands/progress.h"
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
 #include "toolkit/io/mesh_io.h"
@@ -88,6 +89,7 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   }
   manifest.add_timing_ms("cluster", t0.ms());
 
+  throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
   const EdgeMap edges = EdgeMap::build(lm.mesh.triangles(), lm.mesh.vertex_count());
   const auto issues = validate(clustering, lm.mesh.triangles(), edges, limits_of(c));
@@ -95,11 +97,13 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
     throw std::runtime_error("clustering failed validation: " + issues.front());
   manifest.add_timing_ms("validate", t0.ms());
 
+  throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
   const auto rows = cluster_rows(lm.mesh, clustering, c);
   manifest.add_timing_ms("metrics", t0.ms());
   const nlohmann::json dist = cluster_distributions(rows);
 
+  throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
   const Table tri_table = triangles_table(clustering), cluster_table = clusters_table(rows);
   dir.write("triangles.csv", tri_table.csv.str());

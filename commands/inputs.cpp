@@ -4,6 +4,7 @@
 #include <fstream>
 #include <vector>
 
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
 
@@ -62,6 +63,7 @@ LoadedMesh read_mesh_recorded(const fs::path& path, RunManifest& manifest) {
   LoadedMesh lm = read_mesh(path);
   manifest.add_timing_ms("read", sw.ms());
   record_input(manifest, path);
+  throw_if_cancelled();  // reading a large mesh takes seconds
   return lm;
 }
 

@@ -12,6 +12,7 @@
 
 #include "analysis/schema/json.h"
 #include "analysis/schema/manifest.h"
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/io/atomic_file.h"
 
@@ -82,10 +83,12 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
   tmp_ = (parent.empty() ? fs::path(".") : parent) / ("." + leaf + ".tmp-" + unique_suffix());
   fs::create_directory(tmp_, ec);
   if (ec) throw InputError(target_.string(), "", "", "cannot create the output directory: " + ec.message());
+  slot_ = register_temporary(tmp_, true);
   try {
     write(kMarker, kMarkerHeader);
   } catch (...) {
     fs::remove_all(tmp_, ec);
+    unregister_temporary(slot_);
     throw;
   }
 }
@@ -95,6 +98,7 @@ OutputDir::~OutputDir() {
     std::error_code ec;
     fs::remove_all(tmp_, ec);
   }
+  unregister_temporary(slot_);
 }
 
 fs::path OutputDir::path(std::string_view name) const { return tmp_ / fs::path(name); }
@@ -140,6 +144,7 @@ fs::path free_name(const fs::path& dir, const std::string& name) {
 
 void OutputDir::commit() {
   if (committed_) return;
+  throw_if_cancelled();  // an interrupted run replaces nothing (the destructor removes tmp_)
   std::error_code ec;
   // The marker lists what this run wrote, so that a later run can tell its files from the user's.
   // Outputs are flat: a listed name is one file (a run that writes subdirectories would need
@@ -219,8 +224,14 @@ void OutputDir::commit() {
     throw;
   }
   committed_ = true;
+  unregister_temporary(slot_);
+  slot_ = -1;
   if (!old.empty()) {
+    // The previous output, now replaced: a second signal during its removal removes it too.
+    slot_ = register_temporary(old, true);
     fs::remove_all(old, ec);
+    unregister_temporary(slot_);
+    slot_ = -1;
     if (ec) std::cerr << "ptc: note: could not remove the previous output, left as " << old.string() << "\n";
   }
   if (!kept_.empty()) {

@@ -53,7 +53,8 @@ class OutputDir {
   [[nodiscard]] std::filesystem::path path(std::string_view name) const;
   /// Writes `bytes` to target/name (inside the temporary directory).
   void write(std::string_view name, std::string_view bytes) const;
-  /// Moves the finished directory into place.
+  /// Moves the finished directory into place; throws Interrupted (replacing nothing) once a stop
+  /// was requested.
   void commit();
 
   [[nodiscard]] const std::filesystem::path& target() const { return target_; }
@@ -66,6 +67,7 @@ class OutputDir {
  private:
   std::filesystem::path target_, tmp_;
   bool committed_ = false;
+  int slot_ = -1;  // register_temporary's slot of tmp_ (toolkit/core/cancel.h)
   std::vector<std::string> kept_;
 };
 

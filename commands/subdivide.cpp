@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/schema/json.h"
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
 #include "commands/output_dir.h"
@@ -21,6 +22,7 @@ void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
   Stopwatch t0;
   const LoadedMesh lm = read_mesh(opt.input);
   const double read_ms = t0.ms();
+  throw_if_cancelled();  // between stages; write_mesh polls per chunk
   t0.restart();
   // The subdivider's errors name the element (edge, triangle, levels) but not the file.
   const Subdivider sub = [&] {
@@ -31,6 +33,7 @@ void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
       throw InputError(opt.input.string(), e.location(), e.element(), e.reason());
     }
   }();
+  throw_if_cancelled();
   const Mesh refined = sub.apply(lm.mesh);
   const double sub_ms = t0.ms();
   t0.restart();

@@ -263,4 +263,132 @@ TEST_F(Interrupt, AnEarlierOutputStaysByteIdentical) {
   for (const auto& [name, bytes] : after) EXPECT_TRUE(before.count(name)) << name << " appeared";
 }
 
+
+// Every hidden temporary ptc could leave in `parent`: ".NAME.tmp-PID-N" files of AtomicFile and
+// directories of OutputDir (with their ".old").
+std::vector<std::string> any_temporaries(const fs::path& parent) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::directory_iterator(parent))
+    if (const std::string n = e.path().filename().string(); n.starts_with(".") && n.find(".tmp-") != std::string::npos)
+      found.push_back(n);
+  return found;
+}
+
+// What is at `p`: a file, or a directory's files, as name -> "SIZE bytes, FNV-1a HASH" (short
+// enough for a failure message; outputs here are tens of MB).
+std::map<std::string, std::string> contents(const fs::path& p) {
+  const auto digest = [](const std::string& b) {
+    std::uint64_t h = 1469598103934665603ull;
+    for (const char c : b) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+    return std::to_string(b.size()) + " bytes, FNV-1a " + std::to_string(h);
+  };
+  std::map<std::string, std::string> d;
+  if (!fs::is_directory(p)) {
+    d[""] = digest(slurp(p));
+    return d;
+  }
+  for (const auto& e : fs::directory_iterator(p)) d[e.path().filename().string()] = digest(slurp(e.path()));
+  return d;
+}
+
+// The long commands of issue 15, each about 0.4-1 s here, signalled at several moments of the
+// run (fractions of the time an uninterrupted run took): each run either stops with exit 130,
+// one line naming the command and the output, the earlier output byte-identical and no
+// temporary left; or it had finished (exit 0) before the signal arrived, with its output whole.
+// A second signal 20 ms after the first stops the process at once, and still leaves no temporary.
+struct LongCommand {
+  std::string name;
+  std::vector<std::string> args;  // "{out}" stands for the output path
+  std::string out_leaf;
+};
+void PrintTo(const LongCommand& c, std::ostream* os) { *os << c.name; }
+
+class InterruptAtMoments : public Interrupt, public ::testing::WithParamInterface<LongCommand> {
+ protected:
+  std::vector<std::string> with_out(const fs::path& out) const {
+    std::vector<std::string> a = GetParam().args;
+    for (std::string& x : a)
+      if (x == "{out}") x = out.string();
+    return a;
+  }
+  // Starts the command and signals it `delay` after the start (once, or twice 20 ms apart).
+  RunResult run_signalled(const fs::path& out, std::chrono::duration<double> delay, bool twice) {
+    const pid_t pid = start(with_out(out));
+    if (pid <= 0) return {};
+    std::this_thread::sleep_for(delay);
+    int status = 0;
+    if (waitpid(pid, &status, WNOHANG) == pid) {  // finished before the signal
+      RunResult r;
+      r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+      r.out = slurp(dir_ / "stdout.txt");
+      r.err = slurp(dir_ / "stderr.txt");
+      return r;
+    }
+    kill(pid, SIGINT);
+    if (twice) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      kill(pid, SIGINT);  // may find it gone already: then it stopped on the first
+    }
+    return wait_for(pid, std::chrono::seconds(10));
+  }
+};
+
+TEST_P(InterruptAtMoments, StopsCleanlyOrFinishesWhole) {
+  const fs::path out = dir_ / GetParam().out_leaf;
+  // An earlier output (the same command, uninterrupted), and how long it took.
+  const auto t0 = Clock::now();
+  const RunResult full = ptc(with_out(out));
+  const double took = std::chrono::duration<double>(Clock::now() - t0).count();
+  ASSERT_EQ(full.code, 0) << full.err;
+  auto before = contents(out);
+  int stopped = 0, finished = 0, at_once = 0;
+  for (const bool twice : {false, true})
+    for (const double f : {0.1, 0.3, 0.5, 0.7, 0.9}) {
+      SCOPED_TRACE(GetParam().name + (twice ? " signalled twice" : " signalled once") + " at " +
+                   std::to_string(f) + " of " + std::to_string(took) + " s");
+      const RunResult r = run_signalled(out, std::chrono::duration<double>(f * took), twice);
+      EXPECT_EQ(any_temporaries(dir_), std::vector<std::string>{}) << r.err;
+      if (r.code == 0) {  // finished first: the output is whole (a new run's, so only its names)
+        ++finished;
+        EXPECT_TRUE(fs::exists(out));
+        if (fs::is_directory(out)) EXPECT_TRUE(fs::exists(out / "manifest.json"));
+        before = contents(out);  // the earlier output of the next runs
+        continue;
+      }
+      ++stopped;
+      if (r.code == 130) {  // stopped at a clean point by the first signal
+        EXPECT_EQ(lines(r.err), 1u) << r.err;
+        EXPECT_NE(r.err.find("ptc: " + GetParam().name + " interrupted: nothing was written to " + out.string()),
+                  std::string::npos)
+            << r.err;
+        EXPECT_EQ(r.out, "");
+      } else {  // the second signal ended it at once
+        ++at_once;
+        EXPECT_TRUE(twice) << "exit " << r.code << ": " << r.err;
+        EXPECT_EQ(r.code, -SIGINT) << r.err;
+        EXPECT_NE(r.err.find("interrupted again: stopped at once"), std::string::npos) << r.err;
+      }
+      EXPECT_EQ(contents(out), before) << "the earlier output changed";
+    }
+  std::cout << "  " << GetParam().name << ": " << stopped << " stopped (" << at_once << " at once by the second signal), "
+            << finished << " finished (a full run took " << took << " s)\n";
+  EXPECT_GE(stopped, 4) << "too few signals landed inside the run to test it";
+}
+
+const std::string kArmadillo = kData + "/meshes/armadillo.off";
+
+INSTANTIATE_TEST_SUITE_P(
+    LongCommands, InterruptAtMoments,
+    ::testing::Values(
+        LongCommand{"subdivide", {"subdivide", kArmadillo, "--levels", "3", "--out", "{out}"}, "a3.ply"},
+        LongCommand{"cluster", {"cluster", kArmadillo, "--out", "{out}"}, "clusters"},
+        LongCommand{"animate",
+                    {"animate", "armadillo-832k-twist", "--data-dir", kData, "--frames", "0:3", "--out", "{out}"},
+                    "frames"},
+        LongCommand{"trace",
+                    {"trace", "armadillo-twist", "--data-dir", kData, "--frames", "0:20", "--width", "256",
+                     "--height", "256", "--out", "{out}"},
+                    "images"}),
+    [](const ::testing::TestParamInfo<LongCommand>& i) { return i.param.name; });
+
 }  // namespace

@@ -10,6 +10,7 @@
 // would cancel the task group at an arbitrary point) nor in a destructor.
 #pragma once
 
+#include <filesystem>
 #include <stdexcept>
 
 namespace ptc {
@@ -29,5 +30,21 @@ void reset_cancel() noexcept;
 /// Throws Interrupted when cancel_requested(). One relaxed atomic load otherwise: cheap enough to
 /// call once per frame and configuration.
 void throw_if_cancelled();
+
+/// Temporaries that must not outlive a run stopped at once: a second Ctrl-C (or SIGTERM) does not
+/// wait for the unwinding, so the signal handler removes what is registered here before the
+/// process ends (AtomicFile registers its temporary file, OutputDir its temporary directory).
+/// At most kMaxTemporaries at a time; registering more returns -1 (that one is then only
+/// removed by the normal unwinding).
+inline constexpr int kMaxTemporaries = 64;
+/// Registers `path` (a file, or a directory removed with everything in it); returns its slot.
+[[nodiscard]] int register_temporary(const std::filesystem::path& path, bool directory) noexcept;
+/// The temporary of `slot` is gone or became an output: forget it. -1 is ignored.
+void unregister_temporary(int slot) noexcept;
+/// Removes every registered temporary (directories with their contents, up to 8 levels deep).
+/// Async-signal-safe: only atomics and the open/getdents/unlink/rmdir system calls.
+void remove_temporaries_now() noexcept;
+/// How many temporaries are registered (tests).
+[[nodiscard]] int registered_temporaries() noexcept;
 
 }  // namespace ptc

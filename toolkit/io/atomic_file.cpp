@@ -9,6 +9,7 @@
 #include <cstring>
 #include <string>
 
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 
 namespace ptc {
@@ -37,6 +38,7 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
     throw InputError(target_.string(), "", "",
                      "cannot create temporary file '" + temp_.string() + "': " + errno_text(err));
   }
+  slot_ = register_temporary(temp_, false);
   if (exists) (void)::fchmod(fd_, st.st_mode & 07777);  // keep the replaced file's permissions
 }
 
@@ -51,6 +53,14 @@ void AtomicFile::discard() noexcept {
     ::unlink(temp_.c_str());
     temp_.clear();
   }
+  unregister_temporary(slot_);
+  slot_ = -1;
+}
+
+void AtomicFile::stop_if_cancelled() {
+  if (!cancel_requested()) return;
+  discard();
+  throw Interrupted();
 }
 
 void AtomicFile::fail(const char* what, int err) {
@@ -60,6 +70,7 @@ void AtomicFile::fail(const char* what, int err) {
 
 void AtomicFile::write(std::string_view bytes) {
   if (fd_ < 0) throw InputError(target_.string(), "", "", "write after commit or failure");
+  stop_if_cancelled();
   const char* p = bytes.data();
   std::size_t left = bytes.size();
   while (left > 0) {
@@ -75,12 +86,15 @@ void AtomicFile::write(std::string_view bytes) {
 
 void AtomicFile::commit() {
   if (fd_ < 0) throw InputError(target_.string(), "", "", "commit after commit or failure");
+  stop_if_cancelled();  // an interrupted run replaces nothing
   if (::fsync(fd_) != 0 && errno != EINVAL) fail("cannot flush", errno);  // EINVAL: fs without fsync
   const int fd = fd_;
   fd_ = -1;
   if (::close(fd) != 0) fail("cannot close", errno);
   if (::rename(temp_.c_str(), target_.c_str()) != 0) fail("cannot rename temporary file over it", errno);
   committed_ = true;
+  unregister_temporary(slot_);
+  slot_ = -1;
 }
 
 }  // namespace ptc

@@ -7,6 +7,10 @@
 //   f.commit();           // flush, fsync, close, rename over path
 //   // destroyed without commit(): the temporary is removed, path is unchanged
 //
+// Interrupts (toolkit/core/cancel.h): write() and commit() throw Interrupted, after removing the
+// temporary, once a stop was requested, so an interrupted run never replaces the target; the
+// temporary is registered for removal by a second signal that ends the process at once.
+//
 // Durability: commit() fsyncs the file before the rename, so the new content is on disk before it
 // becomes visible; the directory itself is not fsynced (after a power loss the rename may be
 // lost, in which case the old file is still there, whole).
@@ -40,9 +44,11 @@ class AtomicFile {
  private:
   [[noreturn]] void fail(const char* what, int err);
   void discard() noexcept;
+  void stop_if_cancelled();
 
   std::filesystem::path target_, temp_;
   int fd_ = -1;
+  int slot_ = -1;  // register_temporary's slot
   bool committed_ = false;
 };
 

@@ -11,6 +11,7 @@
 #include <oneapi/tbb/enumerable_thread_specific.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/mesh/topology.h"
 
@@ -417,6 +418,7 @@ Subdivider Subdivider::build(std::span<const Tri> triangles, std::size_t vertex_
   Csr map = identity(vertex_count);
   std::vector<std::uint8_t> corner;  // Loop only
   for (int l = 0; l < levels; ++l) {
+    throw_if_cancelled();  // a level of a 13M-triangle mesh takes seconds (toolkit/core/cancel.h)
     const EdgeMap em = EdgeMap::build(tris, V);
     Csr step;
     if (scheme == SubdivisionScheme::Loop) {

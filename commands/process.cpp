@@ -1,0 +1,81 @@
+// The `ptc` process's signal handling and reader notes (commands/process.h).
+#include "commands/process.h"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <iostream>
+#include <string>
+
+#include "toolkit/core/cancel.h"
+#include "toolkit/io/mesh_io.h"
+
+namespace ptc {
+namespace {
+
+// The first SIGINT / SIGTERM asks the run to stop at its next clean point (toolkit/core/cancel.h:
+// the exception unwinds, so an uncommitted OutputDir or AtomicFile removes its temporary and a
+// previous output stays as it was). A second one stops at once: the handler removes the
+// registered temporaries (files and directories), says so, and ends the process by the signal's
+// default action. Only async-signal-safe calls here: atomics, write, the removal's system calls,
+// sigaction and raise.
+std::atomic<int> g_stop_signals{0};
+static_assert(std::atomic<int>::is_always_lock_free);
+
+extern "C" void on_stop_signal(int sig) {
+  if (g_stop_signals.fetch_add(1) == 0) {
+    request_cancel();
+    return;
+  }
+  remove_temporaries_now();
+  static const char msg[] = "ptc: interrupted again: stopped at once (temporary files removed)\n";
+  (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
+  struct sigaction dfl {};
+  dfl.sa_handler = SIG_DFL;
+  sigemptyset(&dfl.sa_mask);
+  sigaction(sig, &dfl, nullptr);
+  raise(sig);
+}
+
+}  // namespace
+
+void install_stop_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaddset(&sa.sa_mask, SIGINT);  // one handler at a time
+  sigaddset(&sa.sa_mask, SIGTERM);
+  // SA_RESTART: a write or fsync interrupted by the signal resumes instead of failing with EINTR,
+  // which would report an I/O error (exit 1) instead of the interrupt.
+  sa.sa_flags = SA_RESTART;
+  for (int sig : {SIGINT, SIGTERM}) {
+    struct sigaction old {};
+    // A signal ignored on entry (a background job of a non-interactive shell, nohup) stays
+    // ignored, as the shell meant.
+    if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    sigaction(sig, &sa, nullptr);
+  }
+}
+
+namespace {
+
+// What a reader tells about a file it read anyway (faces with fewer than 3 corners skipped,
+// surplus PLY values): one line each on stderr, at most kMaxNotes over a run (a frame directory
+// of such files would repeat the same note per frame).
+void print_read_note(const std::string& file, const std::string& note) {
+  constexpr int kMaxNotes = 4;
+  static std::atomic<int> printed{0};
+  const int n = printed.fetch_add(1);
+  if (n < kMaxNotes)
+    std::cerr << "ptc: note: " << file << ": " << note << "\n";
+  else if (n == kMaxNotes)
+    std::cerr << "ptc: note: further notes on the files read are not shown\n";
+}
+
+}  // namespace
+
+void print_read_notes_on_stderr() { set_read_note_handler(print_read_note); }
+
+
+}  // namespace ptc
