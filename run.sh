@@ -3,7 +3,10 @@
 #   ./run.sh          install what is missing, build (Release), run the main job: the paper's
 #                     experiment (sweep, compare, drift) on scenes/paper-default.json -> out/
 #   ./run.sh full     the same study on the four full-size scenes -> out-full/ (about an hour; README)
-#   ./run.sh test     install what is missing, build, run the whole test suite (ctest)
+#   ./run.sh test     install what is missing, build, run the whole test suite (ctest), then every
+#                     fuzz target for a few seconds (PTC_FUZZ_SECONDS, default 3)
+#   ./run.sh fuzz [SECONDS]  the libFuzzer targets of every reader, SECONDS each (default 60;
+#                     clang build in build-fuzz; docs/fuzzing.md)
 #   ./run.sh build    install what is missing and build only
 # Environment: BUILD_DIR (default build), PTC_SANITIZE=1 (ASan+UBSan build in build-asan),
 #              JOBS (parallel build jobs, default: number of cores).
@@ -17,7 +20,7 @@ PACKAGES=(
   libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev libboost-graph-dev libopenmesh-dev
   libvtk9-dev libgtest-dev libgmock-dev libbenchmark-dev libembree-dev libtbb-dev
   libcli11-dev libfmt-dev nlohmann-json3-dev libmeshoptimizer-dev libassimp-dev
-  libcgal-demo assimp-testmodels xvfb xauth
+  libcgal-demo assimp-testmodels xvfb xauth clang libclang-rt-14-dev
   python3-pandas python3-matplotlib python3-nbformat jupyter-nbconvert python3-ipykernel
 )
 
@@ -68,10 +71,22 @@ key_numbers() {
     "$d/drift/frames.csv"
 }
 
+# The fuzz build (fuzz/, docs/fuzzing.md): clang with libFuzzer, ASan and UBSan, toolkit/ only.
+fuzz_build() {
+  cmake -S . -B build-fuzz -G Ninja -DPTC_FUZZ=ON -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+  cmake --build build-fuzz -j "$jobs"
+}
+
 case "$mode" in
   build) ;;
   test)
-    ctest --test-dir "$build" --output-on-failure -j "$jobs" ;;
+    ctest --test-dir "$build" --output-on-failure -j "$jobs"
+    fuzz_build
+    scripts/fuzz.sh build-fuzz "${PTC_FUZZ_SECONDS:-3}" ;;
+  fuzz)
+    fuzz_build
+    scripts/fuzz.sh build-fuzz "${2:-60}" ;;
   run)
     # The main job (docs/experiments.md): the paper's experiment on the armadillo of Debian's
     # libcgal-demo, Loop-subdivided once (208k triangles) and twisted more every frame over 61 frames: the
@@ -122,5 +137,5 @@ case "$mode" in
       key_numbers "out-full/$scene"
       echo "figures: out-full/$scene/notebooks/ (paper_figures.ipynb, *.png, *.svg)"
     done ;;
-  *) echo "usage: ./run.sh [run|full|test|build]" >&2; exit 2 ;;
+  *) echo "usage: ./run.sh [run|full|test|fuzz [SECONDS]|build]" >&2; exit 2 ;;
 esac

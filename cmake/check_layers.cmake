@@ -12,13 +12,14 @@ set(allowed_notebooks_export toolkit bvh render analysis notebooks_export)
 set(allowed_commands toolkit bvh render analysis viz notebooks_export commands)
 set(allowed_apps apps commands)
 set(allowed_bench toolkit bvh render analysis viz notebooks_export commands bench)
+set(allowed_fuzz toolkit commands fuzz)
 
 set(violations 0)
-foreach(layer toolkit bvh render analysis viz notebooks_export commands apps bench)
+foreach(layer toolkit bvh render analysis viz notebooks_export commands apps bench fuzz)
   set(dirs ${SRC}/${layer})
   # Tests sit in their folder's layer; tests/apps run the built command and may make their
   # inputs with any library.
-  if(NOT layer STREQUAL "bench" AND NOT layer STREQUAL "apps")
+  if(NOT layer STREQUAL "bench" AND NOT layer STREQUAL "apps" AND NOT layer STREQUAL "fuzz")
     list(APPEND dirs ${SRC}/tests/${layer})
   endif()
   foreach(dir ${dirs})

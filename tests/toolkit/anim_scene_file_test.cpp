@@ -106,6 +106,10 @@ TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   has(e, f);
   has(e, "meshes[1].deform.amplitude");
   has(e, "expected a number");
+  // A number beyond double is invalid JSON with its position, not an escaped library exception
+  // (found by the scene_json fuzz target: tests/fuzz_inputs/scene_json/number_overflow_1e999).
+  e = scene_error(R"({"frames": [0, 1e999]})");
+  has(e, f + ": byte 16: invalid JSON: number overflow parsing '1e999'");
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "wobble"}}]})");
   has(e, "meshes[0].deform.kind");
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "bend", "axis": "y", "direction": "y"}}]})");
