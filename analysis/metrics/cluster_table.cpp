@@ -39,14 +39,13 @@ Table triangles_table(const Clustering& c) {
   struct Row {
     std::uint64_t triangle = 0, cluster = 0;
   };
-  std::vector<Row> rows;
   const auto label = c.cluster_of_triangle();
-  rows.reserve(label.size());
-  for (std::size_t i = 0; i < label.size(); ++i) rows.push_back({i, label[i]});
-  return tabulate(Schema{"ptc-cluster-triangles", 1}, rows, [](const Row& r, Columns& col) {
-    col("triangle_id", r.triangle);
-    col("cluster_id", r.cluster);
-  });
+  return tabulate_each<Row>(
+      Schema{"ptc-cluster-triangles", 1}, label.size(), [&](std::size_t i) { return Row{i, label[i]}; },
+      [](const Row& r, Columns& col) {
+        col("triangle_id", r.triangle);
+        col("cluster_id", r.cluster);
+      });
 }
 
 namespace {

@@ -15,15 +15,6 @@ std::string format_double(double x) {
   return std::string(buf, res.ptr);
 }
 
-CsvTable::CsvTable(std::vector<std::string> columns) : columns_(std::move(columns)) {}
-
-void CsvTable::add_row(std::vector<CsvValue> row) {
-  if (row.size() != columns_.size())
-    throw std::invalid_argument("CsvTable: row of " + std::to_string(row.size()) + " values for " +
-                                std::to_string(columns_.size()) + " columns");
-  rows_.push_back(std::move(row));
-}
-
 namespace {
 void append_field(std::string& out, std::string_view s) {
   if (s.find_first_of(",\"\n\r") == std::string_view::npos) {
@@ -39,31 +30,39 @@ void append_field(std::string& out, std::string_view s) {
 }
 }  // namespace
 
-std::string CsvTable::str() const {
-  std::string out;
+CsvTable::CsvTable(std::vector<std::string> columns) : columns_(std::move(columns)) {
   for (std::size_t i = 0; i < columns_.size(); ++i) {
-    if (i) out += ',';
-    append_field(out, columns_[i]);
+    if (i) text_ += ',';
+    append_field(text_, columns_[i]);
   }
-  out += '\n';
-  for (const auto& row : rows_) {
-    for (std::size_t i = 0; i < row.size(); ++i) {
-      if (i) out += ',';
-      std::visit(
-          [&](const auto& v) {
-            using T = std::decay_t<decltype(v)>;
-            if constexpr (std::is_same_v<T, std::string>)
-              append_field(out, v);
-            else if constexpr (std::is_same_v<T, double>)
-              out += format_double(v);
-            else
-              out += std::to_string(v);
-          },
-          row[i]);
-    }
-    out += '\n';
+  text_ += '\n';
+}
+
+void CsvTable::add_row(std::vector<CsvValue> row) { add_row(std::span<const CsvValue>(row)); }
+
+void CsvTable::add_row(std::span<const CsvValue> row) {
+  if (row.size() != columns_.size())
+    throw std::invalid_argument("CsvTable: row of " + std::to_string(row.size()) + " values for " +
+                                std::to_string(columns_.size()) + " columns");
+  for (std::size_t i = 0; i < row.size(); ++i) {
+    if (i) text_ += ',';
+    std::visit(
+        [&](const auto& v) {
+          using T = std::decay_t<decltype(v)>;
+          if constexpr (std::is_same_v<T, std::string>) {
+            append_field(text_, v);
+          } else if constexpr (std::is_same_v<T, double>) {
+            text_ += format_double(v);
+          } else {
+            char buf[24];
+            const auto res = std::to_chars(buf, buf + sizeof buf, v);
+            text_.append(buf, res.ptr);
+          }
+        },
+        row[i]);
   }
-  return out;
+  text_ += '\n';
+  ++rows_;
 }
 
 std::size_t CsvText::column(std::string_view name) const {

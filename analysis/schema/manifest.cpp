@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "analysis/schema/json.h"
+#include "toolkit/core/memory.h"
 #include <thread>
 
 #include <CGAL/version.h>
@@ -96,6 +97,14 @@ std::string utc_now() {
 RunManifest::RunManifest(std::string command, std::vector<std::string> argv, std::string schema)
     : command_(std::move(command)), schema_(std::move(schema)), argv_(std::move(argv)), started_utc_(utc_now()) {}
 
+void RunManifest::add_timing_ms(const std::string& key, double ms) {
+  timings_[key] = ms;
+  // The resident size first: the kernel's peak is computed when read, so it is never below a
+  // resident size read before it.
+  if (const double mb = current_rss_mb(); mb > 0) rss_mb_[key] = mb;
+  if (const double mb = peak_rss_mb(); mb > 0) peak_rss_mb_[key] = mb;
+}
+
 void RunManifest::add_output(const std::string& file, const std::string& schema) {
   outputs_.push_back(file);
   if (!schema.empty()) schemas_[file] = schema;
@@ -111,6 +120,9 @@ nlohmann::json RunManifest::to_json() const {
   j["inputs"] = inputs_;
   j["parameters"] = parameters_;
   j["timings_ms"] = timings_;
+  j["peak_rss_mb"] = peak_rss_mb_;
+  j["rss_mb"] = rss_mb_;
+  j["max_rss_mb"] = peak_rss_mb();
   j["results"] = results_;
   j["outputs"] = outputs_;
   j["output_schemas"] = schemas_;

@@ -31,7 +31,10 @@ class RunManifest {
   /// An input's record (commands/inputs.h record_input: path, absolute path, bytes, FNV-1a hash).
   void add_input(nlohmann::json entry) { inputs_.push_back(std::move(entry)); }
   void set_parameter(const std::string& key, nlohmann::json value) { parameters_[key] = std::move(value); }
-  void add_timing_ms(const std::string& key, double ms) { timings_[key] = ms; }
+  /// A stage's time; also records the process's peak resident memory so far at the stage's end
+  /// (peak_rss_mb[key], Linux VmHWM: a stage that raised it reached that peak) and its resident
+  /// memory then (rss_mb[key], VmRSS). The peak is never reset, so /usr/bin/time agrees.
+  void add_timing_ms(const std::string& key, double ms);
   /// A file the run wrote; `schema` ("ptc-bench/1") for a table (listed under output_schemas).
   void add_output(const std::string& file, const std::string& schema = "");
   void set_result(const std::string& key, nlohmann::json value) { results_[key] = std::move(value); }
@@ -46,6 +49,8 @@ class RunManifest {
   nlohmann::json inputs_ = nlohmann::json::array();
   nlohmann::json parameters_ = nlohmann::json::object();
   nlohmann::json timings_ = nlohmann::json::object();
+  nlohmann::json peak_rss_mb_ = nlohmann::json::object();
+  nlohmann::json rss_mb_ = nlohmann::json::object();
   nlohmann::json results_ = nlohmann::json::object();
   std::vector<std::string> outputs_;
   nlohmann::json schemas_ = nlohmann::json::object();

@@ -98,6 +98,19 @@ template <class Row, class Visit>
   }
   return t;
 }
+/// The same for `n` rows made one at a time by `row_at(i)` (a table of millions of rows without
+/// a vector of them).
+template <class Row, class RowAt, class Visit>
+[[nodiscard]] Table tabulate_each(Schema schema, std::size_t n, RowAt&& row_at, Visit&& visit) {
+  const std::vector<std::string> header = columns_of<Row>(visit);
+  Table t{std::move(schema), CsvTable(header)};
+  for (std::size_t i = 0; i < n; ++i) {
+    Columns c(header);
+    visit(static_cast<const Row&>(row_at(i)), c);
+    t.csv.add_row(c.take_values());
+  }
+  return t;
+}
 template <class Row, class Visit>
 [[nodiscard]] Table tabulate(Schema schema, const std::vector<Row>& rows, Visit&& visit) {
   return tabulate(std::move(schema), std::span<const Row>(rows), std::forward<Visit>(visit));

@@ -318,6 +318,19 @@ TEST_F(Cli, ClusterWritesTheFourFilesConsistently) {
     EXPECT_EQ(manifest["parameters"].contains("objective"), objective);
     EXPECT_EQ(manifest["parameters"].contains("max_triangles"), !objective);
     EXPECT_EQ(manifest["parameters"].contains("start"), std::string(method) == "growth");
+    // Memory per stage: the peak so far and the resident size at each stage's end (MB), never
+    // above the run's peak, which is at least the mesh's own arrays.
+    const double peak = manifest["max_rss_mb"];
+    EXPECT_GT(peak, 1.0);
+    for (const auto& [stage, ms] : manifest["timings_ms"].items()) {
+      SCOPED_TRACE(stage);
+      ASSERT_TRUE(manifest["peak_rss_mb"].contains(stage));
+      ASSERT_TRUE(manifest["rss_mb"].contains(stage));
+      EXPECT_GT(manifest["rss_mb"][stage].get<double>(), 0.0);
+      EXPECT_LE(manifest["rss_mb"][stage].get<double>(), manifest["peak_rss_mb"][stage].get<double>());
+      EXPECT_LE(manifest["peak_rss_mb"][stage].get<double>(), peak);
+    }
+    EXPECT_LE(manifest["peak_rss_mb"]["read"].get<double>(), manifest["peak_rss_mb"]["write"].get<double>());
     EXPECT_EQ(lines(slurp(out / "clusters.csv")), clusters + 1);
     // triangles.csv covers every triangle of the input once, with ids < clusters.
     std::istringstream tri(slurp(out / "triangles.csv"));

@@ -33,7 +33,8 @@ std::vector<std::uint64_t> morton_codes(std::span<const Vec3> positions, std::sp
   std::vector<std::uint64_t> codes;
   if (triangles.empty()) return codes;
   const std::size_t n = positions.size();
-  std::vector<Vec3> centroids(triangles.size());
+  // Centroids are computed twice (bounds, then codes) instead of kept: 24 bytes a triangle less
+  // at the peak of a clustering of 13M triangles; triangle_centroid gives the same bits both times.
   Box3 box;
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const Tri& f = triangles[t];
@@ -41,8 +42,7 @@ std::vector<std::uint64_t> morton_codes(std::span<const Vec3> positions, std::sp
       if (v >= n)
         throw std::invalid_argument("morton_codes: triangle " + std::to_string(t) + " refers to vertex " +
                                     std::to_string(v) + " of " + std::to_string(n));
-    centroids[t] = triangle_centroid(positions[f[0]], positions[f[1]], positions[f[2]]);
-    box.extend(centroids[t]);
+    box.extend(triangle_centroid(positions[f[0]], positions[f[1]], positions[f[2]]));
   }
   constexpr double cells = static_cast<double>(1u << kMortonBits);
   constexpr std::uint32_t max_cell = (1u << kMortonBits) - 1;
@@ -54,9 +54,11 @@ std::vector<std::uint64_t> morton_codes(std::span<const Vec3> positions, std::sp
   }
   codes.resize(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const Tri& f = triangles[t];
+    const Vec3 c = triangle_centroid(positions[f[0]], positions[f[1]], positions[f[2]]);
     std::uint32_t cell[3];
     for (int a = 0; a < 3; ++a) {
-      const double q = std::floor((centroids[t][a] - box.lo[a]) * scale[a]);
+      const double q = std::floor((c[a] - box.lo[a]) * scale[a]);
       cell[a] = q >= static_cast<double>(max_cell) ? max_cell : static_cast<std::uint32_t>(std::max(0.0, q));
     }
     codes[t] = morton_encode(cell[0], cell[1], cell[2]);

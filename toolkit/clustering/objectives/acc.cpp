@@ -89,7 +89,6 @@ AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& par
   minimal_ = params.sphere == SphereMethod::Exact || params.sphere == SphereMethod::Cgal;
   inv_max_count_ = 1.0 / params.max_count;
   inv_size_unit_ = 1.0 / (params.max_size * params.avg_sa);
-  triangle_sphere_.assign(tables.triangle_count(), Sphere{Vec3::Zero(), std::numeric_limits<double>::quiet_NaN()});
   if (tuning_.vertex_memo) {
     lb_r2_.assign(tables.positions.size(), 0.0);
     lb_owner_.assign(tables.positions.size(), 0);
@@ -131,8 +130,7 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
 
 const Sphere& AccObjective::sphere_of(const Summary& s) {
   if (s.pending == 0xffffffffu) return s.sphere;
-  Sphere& out = triangle_sphere_[s.pending];
-  if (!std::isnan(out.radius)) return out;
+  Sphere& out = s.sphere;
   const ClusterTables& tb = *tables_;
   const Vec3 o = local_origin(s.box);
   if (params_.sphere == SphereMethod::Cgal) {  // closed form, minimal to rounding (local coordinates)
@@ -147,6 +145,7 @@ const Sphere& AccObjective::sphere_of(const Summary& s) {
     out = bounding_sphere(params_.sphere, std::span<const Vec3>(pts, static_cast<std::size_t>(nv)));
   }
   out.center += o;
+  s.pending = 0xffffffffu;
   return out;
 }
 

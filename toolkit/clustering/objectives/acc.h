@@ -118,9 +118,11 @@ class AccObjective {
     Vec3 cone_axis = Vec3::UnitZ();       ///< unit axis of a cone containing every non-zero n_i
     double cone_cos = 1;                  ///< cos of that cone's half-angle (any value when nonzero = 0)
     double cone_sin = 0;                  ///< sin of that half-angle
-    Sphere sphere;                        ///< S(k), see the file comment; for a singleton made by single()
-                                          ///< computed on first use (see `pending`), read it via sphere_of()
-    std::uint32_t pending = 0xffffffffu;  ///< singleton whose sphere is not computed yet: its triangle id
+    /// S(k), see the file comment; for a singleton made by single() computed on first use (see
+    /// `pending`) and kept here, read it via sphere_of(). Mutable: a cache, not a value (no
+    /// per-triangle table of spheres: 32 bytes a triangle at 13M triangles).
+    mutable Sphere sphere;
+    mutable std::uint32_t pending = 0xffffffffu;  ///< singleton whose sphere is not computed yet: its triangle id
     Box3 box;                             ///< box of the distinct vertices (the sphere's local origin)
     /// Extent of the vertices along the 4 cube diagonals (x+y+z, x+y-z, x-y+z, -x+y+z) and the 6
     /// cube edge directions (x+y, x-y, x+z, x-z, y+z, y-z), unnormalised: with the box a 26-DOP
@@ -148,7 +150,7 @@ class AccObjective {
   [[nodiscard]] Evaluation evaluate(const Summary& a, const Summary& b, const MergeContext& ctx, Precision p);
   [[nodiscard]] Summary merge(const Summary& a, const Summary& b, const MergeContext& ctx, const Evaluation& ev);
 
-  /// S(k) of a summary (computes and caches a singleton's sphere on first use).
+  /// S(k) of a summary (computes a singleton's sphere on first use and keeps it in the summary).
   [[nodiscard]] const Sphere& sphere_of(const Summary& s);
 
   [[nodiscard]] const ClusterParams& params() const { return params_; }
@@ -197,7 +199,6 @@ class AccObjective {
   std::uint32_t lineage_ = 0;
   std::vector<double> lb_r2_;
   std::vector<std::uint32_t> lb_owner_;
-  std::vector<Sphere> triangle_sphere_;  // per triangle, filled on first use (radius NaN = not yet)
   std::vector<std::uint32_t> scratch_ids_;
   std::vector<Vec3> scratch_points_, scratch_seed_points_;
   std::vector<std::uint32_t> scratch_seeds_;
