@@ -23,6 +23,7 @@ std::string out_of(const CLI::App& cmd) {
 
 int main(int argc, char** argv) {
   using namespace ptc;
+  install_stop_handlers();  // first: a Ctrl-C during the start-up is a request like any other
   cli::Context ctx;
   ctx.args.assign(argv, argv + argc);
 
@@ -59,7 +60,6 @@ int main(int argc, char** argv) {
   std::optional<oneapi::tbb::global_control> thread_limit;
   if (ctx.threads > 0) thread_limit.emplace(oneapi::tbb::global_control::max_allowed_parallelism, ctx.threads);
 
-  install_stop_handlers();
   print_read_notes_on_stderr();
   std::string out, name;  // the output and name of the command being run, for the interrupt message
   try {
@@ -69,6 +69,7 @@ int main(int argc, char** argv) {
         name = c.app->get_name();
         if (c.app->get_parent() && c.app->get_parent()->get_parent())  // "viz heatmap", "experiment drift"
           name = c.app->get_parent()->get_name() + " " + name;
+        throw_if_cancelled();  // a signal during the start-up: nothing is run
         c.run();
       }
   } catch (const Interrupted&) {
