@@ -1,9 +1,11 @@
 // `ptc info`: the mesh report as JSON (stable keys, schema "ptc-info/1") and as text.
 #include "commands/commands.h"
 
+#include <cmath>
 #include <ostream>
 
 #include "analysis/schema/json.h"
+#include "toolkit/core/memory.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/mesh_report.h"
 
@@ -12,6 +14,37 @@
 namespace ptc {
 
 namespace {
+
+// Peak memory of the commands a mesh is given to, as measured by bench/scale/scale.py on the
+// armadillo subdivided to 52k .. 13.3M triangles (about half as many vertices as triangles;
+// docs/scale.md): a fixed part (the program and its libraries) and bytes per triangle, within
+// 15% of the measurements from 208k triangles on. Keys are the `ptc` commands as run there.
+struct MemoryModel {
+  const char* command;
+  double base_mb, bytes_per_triangle;
+};
+constexpr MemoryModel kMemoryModels[] = {
+    {"cluster_growth", 30, 150},       // ptc cluster --method growth: 1938 MB at 13.3M
+    {"cluster_contraction", 30, 830},  // ptc cluster --method contraction: 10.9 GB at 13.3M
+    {"trace", 40, 215},                // ptc trace MESH --clusters DIR --frame 0: 703 MB at 3.3M
+    {"bench", 40, 730},                // ptc bench MESH --frames 0:2 (Embree beside): 2397 MB at 3.3M
+};
+
+nlohmann::json memory_estimate_json(std::size_t triangles) {
+  nlohmann::json est, largest;
+  const double machine = machine_memory_mb();
+  for (const MemoryModel& m : kMemoryModels) {
+    est[m.command] = std::round(m.base_mb + double(triangles) * m.bytes_per_triangle / 1048576.0);
+    if (machine > m.base_mb)
+      largest[m.command] = static_cast<std::uint64_t>((machine - m.base_mb) * 1048576.0 / m.bytes_per_triangle);
+  }
+  nlohmann::json j;
+  j["peak_mb"] = est;
+  j["machine_memory_mb"] = std::round(machine);
+  j["largest_triangles_for_machine"] = largest;
+  j["model"] = "peak MB = base + triangles x bytes per triangle, measured by bench/scale/scale.py (docs/scale.md)";
+  return j;
+}
 
 nlohmann::json mesh_info_json(const std::filesystem::path& file, const ReadReport& read, const MeshReport& r) {
   nlohmann::json j;
@@ -50,6 +83,7 @@ nlohmann::json mesh_info_json(const std::filesystem::path& file, const ReadRepor
   j["edge_components"] = r.edge_components;
   j["closed_manifold"] = r.closed_manifold();
   j["euler_characteristic"] = r.euler_characteristic();
+  j["memory_estimate"] = memory_estimate_json(r.triangles);
   return j;
 }
 

@@ -389,3 +389,32 @@ TEST_F(Cli, ClusterRejectsBadArguments) {
 }
 
 }  // namespace
+
+namespace {
+
+// `ptc info --json`'s memory estimate against the peak the commands themselves record (their
+// manifests' max_rss_mb, VmHWM) on the armadillo midpoint-subdivided once (208k triangles):
+// within 25% for both clusterings, and what fits into the machine follows from the same model.
+TEST_F(Cli, InfoMemoryEstimateAgreesWithTheMeasuredPeak) {
+  const auto mesh = (dir_ / "a1.ply").string();
+  ASSERT_EQ(ptc({"subdivide", std::string(PTC_TEST_DATA) + "/meshes/armadillo.off", "--levels", "1", "--out", mesh}).code, 0);
+  auto r = ptc({"info", mesh, "--json"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto est = nlohmann::json::parse(r.out)["memory_estimate"];
+  for (const char* method : {"growth", "contraction"}) {
+    SCOPED_TRACE(method);
+    const auto out = dir_ / (std::string("c_") + method);
+    r = ptc({"cluster", mesh, "--method", method, "--out", out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const double measured = nlohmann::json::parse(slurp(out / "manifest.json"))["max_rss_mb"];
+    const double estimated = est["peak_mb"][std::string("cluster_") + method];
+    EXPECT_NEAR(estimated / measured, 1.0, 0.25) << "estimated " << estimated << " MB, measured " << measured << " MB";
+  }
+  const double machine = est["machine_memory_mb"];
+  ASSERT_GT(machine, 0.0);
+  const double largest = est["largest_triangles_for_machine"]["cluster_growth"];
+  EXPECT_GT(largest, 1e6);  // any machine that builds ptc clusters a million triangles
+  EXPECT_LT(largest, machine * 1048576.0 / 100.0);  // never under 100 bytes a triangle
+}
+
+}  // namespace

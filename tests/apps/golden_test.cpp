@@ -217,7 +217,15 @@ TEST_P(Golden, SameOutputsAsRecorded) {
     ASSERT_TRUE(fs::exists(gfile)) << gfile << " is missing (record with PTC_GOLDEN_RECORD=1)";
     const std::string want = slurp(gfile);
     if (is_stdout) {
-      EXPECT_EQ(nlohmann::json::parse(got), nlohmann::json::parse(want)) << f;
+      // What depends on the machine: its memory and what fits into it (ptc info).
+      auto machine_free = [](nlohmann::json j) {
+        if (j.contains("memory_estimate")) {
+          j["memory_estimate"].erase("machine_memory_mb");
+          j["memory_estimate"].erase("largest_triangles_for_machine");
+        }
+        return j;
+      };
+      EXPECT_EQ(machine_free(nlohmann::json::parse(got)), machine_free(nlohmann::json::parse(want))) << f;
     } else if (fs::path(f).extension() == ".csv") {
       expect_same_csv(k.name + "/" + f, want, got);
     } else {

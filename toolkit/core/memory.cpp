@@ -6,9 +6,9 @@
 namespace ptc {
 namespace {
 
-// The value of "KEY:   123 kB" in /proc/self/status, in MB; 0 when absent.
-double status_mb(const char* key) {
-  std::FILE* f = std::fopen("/proc/self/status", "r");
+// The value of "KEY:   123 kB" in a /proc file, in MB; 0 when absent.
+double status_mb(const char* key, const char* file = "/proc/self/status") {
+  std::FILE* f = std::fopen(file, "r");
   if (!f) return 0;
   char line[256];
   double mb = 0;
@@ -28,5 +28,7 @@ double status_mb(const char* key) {
 double peak_rss_mb() { return status_mb("VmHWM"); }
 
 double current_rss_mb() { return status_mb("VmRSS"); }
+
+double machine_memory_mb() { return status_mb("MemTotal", "/proc/meminfo"); }
 
 }  // namespace ptc

@@ -9,5 +9,7 @@ namespace ptc {
 [[nodiscard]] double peak_rss_mb();
 /// Current resident set (VmRSS) in MB; 0 when unknown.
 [[nodiscard]] double current_rss_mb();
+/// The machine's memory (/proc/meminfo MemTotal) in MB; 0 when unknown.
+[[nodiscard]] double machine_memory_mb();
 
 }  // namespace ptc
