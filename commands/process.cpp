@@ -1,6 +1,7 @@
 // The `ptc` process's signal handling and reader notes (commands/process.h).
 #include "commands/process.h"
 
+#include <malloc.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -74,6 +75,12 @@ void print_read_note(const std::string& file, const std::string& note) {
 }
 
 }  // namespace
+
+void set_memory_policy() {
+  // Setting the thresholds turns glibc's dynamic adjustment off (mallopt(3)).
+  mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+  mallopt(M_TRIM_THRESHOLD, 4 * 1024 * 1024);
+}
 
 void print_read_notes_on_stderr() { set_read_note_handler(print_read_note); }
 

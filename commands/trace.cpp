@@ -15,6 +15,7 @@
 #include "commands/args.h"
 #include "commands/output_dir.h"
 #include "commands/scene_args.h"
+#include "toolkit/core/memory.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
 #include "viz/png.h"
@@ -88,7 +89,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
 
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
-  RunManifest manifest("trace", opt.argv, "ptc-trace/3");
+  RunManifest manifest("trace", opt.argv, "ptc-trace/4");
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
   const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};
@@ -182,6 +183,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     base.build_ms = fr.times.build_ms;
     base.stages = fr.times.stages;
     base.static_triangles = static_tris, base.moving_triangles = moving_tris;
+    base.rss_mb = current_rss_mb();  // before the peak: the kernel's peak is never below it
+    base.peak_rss_mb = peak_rss_mb();
     auto pass = [&](const char* name, const PassStats& s, bool lead) {
       TraceRow row = base;
       row.pass = name;

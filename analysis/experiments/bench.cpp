@@ -1,5 +1,7 @@
 #include "analysis/experiments/bench.h"
 
+#include "toolkit/core/memory.h"
+
 #include <tbb/global_control.h>
 
 #include <cmath>
@@ -158,6 +160,8 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     } else {
       row.nodes_per_ray = row.triangles_per_ray = nan();
     }
+    row.rss_mb = current_rss_mb();  // before the peak: the kernel's peak is never below it
+    row.peak_rss_mb = peak_rss_mb();
     res.rows.push_back(std::move(row));
   });
   res.median_first_frame = cfg.frames.count() > 1 ? 1 : 0;
@@ -166,7 +170,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
 }
 
 Table bench_table(const PeerBenchResult& r) {
-  return tabulate(Schema{"ptc-bench", 2}, r.rows, [](const BenchRow& x, Columns& col) {
+  return tabulate(Schema{"ptc-bench", 3}, r.rows, [](const BenchRow& x, Columns& col) {
     col("frame", x.frame);
     col("config", x.config);
     col("update_ms", x.times.update_ms);
@@ -192,6 +196,8 @@ Table bench_table(const PeerBenchResult& r) {
     col("sah_cost", x.sah_cost);
     col("nodes_per_ray", x.nodes_per_ray);
     col("triangles_per_ray", x.triangles_per_ray);
+    col("rss_mb", x.rss_mb);
+    col("peak_rss_mb", x.peak_rss_mb);
   });
 }
 

@@ -61,6 +61,7 @@ struct BenchRow {
   /// runs without them); NaN for Embree, which has none.
   double nodes_per_ray = 0, triangles_per_ray = 0;
   double sah_cost = 0;           ///< SAH cost of our binary BVH (NaN for Embree)
+  double rss_mb = 0, peak_rss_mb = 0;  ///< resident and peak resident memory after the row's trace
 };
 
 struct BenchSummary {
@@ -94,7 +95,7 @@ struct PeerBenchResult {
 /// and mismatch sums over all frames: the summary of run_peer_bench, recomputable from rows.
 [[nodiscard]] std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame);
 
-/// bench.csv (schema ptc-bench/2, docs/tracing.md): one row per frame and configuration.
+/// bench.csv (schema ptc-bench/3, docs/tracing.md): one row per frame and configuration.
 [[nodiscard]] Table bench_table(const PeerBenchResult& r);
 /// summary.csv (schema ptc-bench-summary/1): medians per configuration and ratios against each Embree mode.
 [[nodiscard]] Table bench_summary_table(const PeerBenchResult& r);

@@ -1,4 +1,4 @@
-// The rows of `ptc trace`'s trace.csv (schema ptc-trace/3, docs/tracing.md): one row per frame
+// The rows of `ptc trace`'s trace.csv (schema ptc-trace/4, docs/tracing.md): one row per frame
 // and pass (primary, shadow, ao), the frame's BVH figures repeated on each of its rows (tidy:
 // one observation per row). The frame loop and the renderer produce them; commands/trace.cpp
 // writes them.
@@ -29,9 +29,10 @@ struct TraceRow {
   double update_ms = 0, build_ms = 0; ///< the frame's update of the moving BVH (analysis/loop UpdateTimes)
   bvh::StageTimes stages;             ///< and its stages
   std::uint64_t static_triangles = 0, moving_triangles = 0;
+  double rss_mb = 0, peak_rss_mb = 0;  ///< resident and peak resident memory after the frame (toolkit/core/memory.h)
 };
 
-/// trace.csv (schema ptc-trace/3).
+/// trace.csv (schema ptc-trace/4).
 [[nodiscard]] Table trace_table(const std::vector<TraceRow>& rows);
 
 }  // namespace ptc

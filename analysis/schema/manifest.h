@@ -24,7 +24,7 @@ namespace ptc {
 class RunManifest {
  public:
   /// `command`: the subcommand ("spheres"); `argv`: the full command line as given.
-  /// `schema`: the manifest's own schema, one per command ("ptc-bench/2"): what its parameters
+  /// `schema`: the manifest's own schema, one per command ("ptc-bench/3"): what its parameters
   /// and results hold (docs/tables.md).
   RunManifest(std::string command, std::vector<std::string> argv, std::string schema = "ptc-manifest/1");
 

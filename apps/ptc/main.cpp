@@ -24,6 +24,7 @@ std::string out_of(const CLI::App& cmd) {
 int main(int argc, char** argv) {
   using namespace ptc;
   install_stop_handlers();  // first: a Ctrl-C during the start-up is a request like any other
+  set_memory_policy();
   cli::Context ctx;
   ctx.args.assign(argv, argv + argc);
 

@@ -42,7 +42,7 @@ bool recording() {
 bool timing_column(const std::string& c) {
   if (c == "threads") return true;
   auto ends = [&](const std::string& s) { return c.size() >= s.size() && c.compare(c.size() - s.size(), s.size(), s) == 0; };
-  return ends("_ms") || ends("_s") || c.find("mrays_per_s") != std::string::npos ||
+  return ends("_ms") || ends("_s") || ends("_mb") || c.find("mrays_per_s") != std::string::npos ||
          c.rfind("ns_per_sphere", 0) == 0 || c.find("speedup") != std::string::npos ||
          c.find("speed_vs") != std::string::npos;
 }
