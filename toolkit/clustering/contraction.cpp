@@ -154,15 +154,24 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   std::vector<std::uint32_t> single_verts(3 * std::size_t{T});
   std::vector<std::uint8_t> single_nv(T);
   std::vector<std::vector<std::uint32_t>> members_vec(T), verts_vec(T);
-  std::vector<Summary> summary;
-  summary.reserve(T);
   std::vector<std::uint32_t> version(T, 0);
   std::vector<char> alive(T, 1);
   std::uint32_t alive_count = T;
-  for (std::uint32_t t = 0; t < T; ++t) {
+  for (std::uint32_t t = 0; t < T; ++t)
     single_nv[t] = static_cast<std::uint8_t>(tb.distinct_vertices(t, &single_verts[3 * std::size_t{t}]));
-    summary.push_back(objective.single(t));
-  }
+  // Summaries: a singleton's is made when it is needed (objective.single is cheap and gives the
+  // same values every time), a merged cluster's is kept in a slot. An Acc summary is 384 bytes:
+  // one per triangle was 5 GB at 13M triangles. At most two summaries are in use at once (the
+  // pair), so two scratch summaries serve the singletons.
+  constexpr std::uint32_t kNoSlot = 0xffffffffu;
+  std::vector<std::uint32_t> summary_slot(T, kNoSlot), free_slots;
+  std::vector<Summary> merged;
+  Summary scratch[2];
+  auto summary_of = [&](std::uint32_t c, int k) -> const Summary& {
+    if (summary_slot[c] != kNoSlot) return merged[summary_slot[c]];
+    scratch[k] = objective.single(c);
+    return scratch[k];
+  };
   std::vector<std::uint32_t> iota(T);
   for (std::uint32_t t = 0; t < T; ++t) iota[t] = t;
   auto members = [&](std::uint32_t c) -> std::span<const std::uint32_t> {
@@ -294,7 +303,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     MergeContext ctx;
     make_ctx(a, b, ctx);
     if (!objective.legal(ctx)) return false;
-    const Evaluation ev = objective.evaluate(summary[a], summary[b], ctx, Precision::UpperBoundAllowed);
+    const Evaluation ev = objective.evaluate(summary_of(a, 0), summary_of(b, 1), ctx, Precision::UpperBoundAllowed);
     ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
     if (O::kMergeOnlyPositive && !(ev.score > 0.0)) return false;
     out = make_entry(a, b, ev.score, ev.exact);
@@ -343,7 +352,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     if (exact_key && slot.pair == top.pair && slot.ver_lo == top.ver_lo && slot.ver_hi == top.ver_hi) {
       ev = slot.ev;  // evaluated when it was re-inserted (the same value evaluate() gives again)
     } else {
-      ev = objective.evaluate(summary[a], summary[b], ctx, Precision::Exact);
+      ev = objective.evaluate(summary_of(a, 0), summary_of(b, 1), ctx, Precision::Exact);
       ++run.exact_evaluations;
     }
     if (!exact_key) {  // the key was an upper bound
@@ -358,7 +367,25 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
 
     // Merge hi into lo (the smaller id survives).
     const std::uint32_t keep = lo, gone = hi;
-    summary[keep] = objective.merge(summary[a], summary[b], ctx, ev);
+    {
+      Summary m = objective.merge(summary_of(a, 0), summary_of(b, 1), ctx, ev);
+      if (summary_slot[gone] != kNoSlot) {
+        free_slots.push_back(summary_slot[gone]);
+        summary_slot[gone] = kNoSlot;
+      }
+      if (summary_slot[keep] == kNoSlot) {
+        if (free_slots.empty()) {
+          summary_slot[keep] = static_cast<std::uint32_t>(merged.size());
+          merged.push_back(std::move(m));
+        } else {
+          summary_slot[keep] = free_slots.back();
+          free_slots.pop_back();
+          merged[summary_slot[keep]] = std::move(m);
+        }
+      } else {
+        merged[summary_slot[keep]] = std::move(m);
+      }
+    }
     union_verts.clear();
     const auto va = verts(a);
     std::merge(va.begin(), va.end(), added.begin(), added.end(), std::back_inserter(union_verts));

@@ -89,6 +89,7 @@ AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& par
   minimal_ = params.sphere == SphereMethod::Exact || params.sphere == SphereMethod::Cgal;
   inv_max_count_ = 1.0 / params.max_count;
   inv_size_unit_ = 1.0 / (params.max_size * params.avg_sa);
+  next_serial_ = std::uint64_t{tables.triangle_count()} + 1;  // singleton {t} has serial t + 1
   if (tuning_.vertex_memo) {
     lb_r2_.assign(tables.positions.size(), 0.0);
     lb_owner_.assign(tables.positions.size(), 0);
@@ -98,7 +99,7 @@ AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& par
 AccObjective::Summary AccObjective::single(std::uint32_t t) {
   const ClusterTables& tb = *tables_;
   Summary s;
-  s.serial = next_serial_++;
+  s.serial = std::uint64_t{t} + 1;  // the same for every summary of {t}: they describe one cluster
   const Vec3& n = tb.normal[t];
   if (!n.isZero(0.0)) {
     s.normal_sum = n;

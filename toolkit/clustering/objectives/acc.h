@@ -129,7 +129,9 @@ class AccObjective {
     /// (EPOS-26's directions), merged by min/max; its widths bound the sphere's radius from
     /// below. Empty (+inf, -inf) without AccTuning::dop_bound.
     std::array<double, 10> dop_lo{}, dop_hi{};
-    std::uint64_t serial = 0;             ///< unique per summary made by this objective (keys the memo)
+    /// Keys the memo: t + 1 for the singleton {t} (every summary single(t) makes describes the
+    /// same cluster), unique for a merged one (T + 1 on).
+    std::uint64_t serial = 0;
   };
   struct Evaluation : ScoreBase {
     Sphere sphere;                ///< S(A u B) (exact evaluations only)
