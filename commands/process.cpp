@@ -39,6 +39,19 @@ extern "C" void on_stop_signal(int sig) {
   raise(sig);
 }
 
+// What a reader tells about a file it read anyway (faces with fewer than 3 corners skipped,
+// surplus PLY values): one line each on stderr, at most kMaxNotes over a run (a frame directory
+// of such files would repeat the same note per frame).
+void print_read_note(const std::string& file, const std::string& note) {
+  constexpr int kMaxNotes = 4;
+  static std::atomic<int> printed{0};
+  const int n = printed.fetch_add(1);
+  if (n < kMaxNotes)
+    std::cerr << "ptc: note: " << file << ": " << note << "\n";
+  else if (n == kMaxNotes)
+    std::cerr << "ptc: note: further notes on the files read are not shown\n";
+}
+
 }  // namespace
 
 void install_stop_handlers() {
@@ -59,23 +72,6 @@ void install_stop_handlers() {
   }
 }
 
-namespace {
-
-// What a reader tells about a file it read anyway (faces with fewer than 3 corners skipped,
-// surplus PLY values): one line each on stderr, at most kMaxNotes over a run (a frame directory
-// of such files would repeat the same note per frame).
-void print_read_note(const std::string& file, const std::string& note) {
-  constexpr int kMaxNotes = 4;
-  static std::atomic<int> printed{0};
-  const int n = printed.fetch_add(1);
-  if (n < kMaxNotes)
-    std::cerr << "ptc: note: " << file << ": " << note << "\n";
-  else if (n == kMaxNotes)
-    std::cerr << "ptc: note: further notes on the files read are not shown\n";
-}
-
-}  // namespace
-
 void set_memory_policy() {
   // Setting the thresholds turns glibc's dynamic adjustment off (mallopt(3)).
   mallopt(M_MMAP_THRESHOLD, 128 * 1024);
@@ -83,6 +79,5 @@ void set_memory_policy() {
 }
 
 void print_read_notes_on_stderr() { set_read_note_handler(print_read_note); }
-
 
 }  // namespace ptc

@@ -183,8 +183,9 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     base.build_ms = fr.times.build_ms;
     base.stages = fr.times.stages;
     base.static_triangles = static_tris, base.moving_triangles = moving_tris;
-    base.rss_mb = current_rss_mb();  // before the peak: the kernel's peak is never below it
-    base.peak_rss_mb = peak_rss_mb();
+    const RssSample mem = rss_sample();
+    base.rss_mb = mem.rss_mb;
+    base.peak_rss_mb = mem.peak_mb;
     auto pass = [&](const char* name, const PassStats& s, bool lead) {
       TraceRow row = base;
       row.pass = name;

@@ -160,8 +160,9 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     } else {
       row.nodes_per_ray = row.triangles_per_ray = nan();
     }
-    row.rss_mb = current_rss_mb();  // before the peak: the kernel's peak is never below it
-    row.peak_rss_mb = peak_rss_mb();
+    const RssSample mem = rss_sample();
+    row.rss_mb = mem.rss_mb;
+    row.peak_rss_mb = mem.peak_mb;
     res.rows.push_back(std::move(row));
   });
   res.median_first_frame = cfg.frames.count() > 1 ? 1 : 0;

@@ -3,6 +3,7 @@
 #include <sys/utsname.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -72,12 +73,7 @@ nlohmann::json machine_info() {
       break;
     }
   j["logical_cores"] = std::thread::hardware_concurrency();
-  std::ifstream mem("/proc/meminfo");
-  for (std::string line; std::getline(mem, line);)
-    if (line.rfind("MemTotal:", 0) == 0) {
-      j["memory_kib"] = std::stoull(line.substr(9));
-      break;
-    }
+  if (const double mb = machine_memory_mb(); mb > 0) j["memory_kib"] = static_cast<std::uint64_t>(mb * 1024.0);
   struct utsname u {};
   if (::uname(&u) == 0) j["kernel"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
   return j;
@@ -99,10 +95,10 @@ RunManifest::RunManifest(std::string command, std::vector<std::string> argv, std
 
 void RunManifest::add_timing_ms(const std::string& key, double ms) {
   timings_[key] = ms;
-  // The resident size first: the kernel's peak is computed when read, so it is never below a
-  // resident size read before it.
-  if (const double mb = current_rss_mb(); mb > 0) rss_mb_[key] = mb;
-  if (const double mb = peak_rss_mb(); mb > 0) peak_rss_mb_[key] = mb;
+  if (const RssSample m = rss_sample(); m.peak_mb > 0) {
+    rss_mb_[key] = m.rss_mb;
+    peak_rss_mb_[key] = m.peak_mb;
+  }
 }
 
 void RunManifest::add_output(const std::string& file, const std::string& schema) {
@@ -122,7 +118,7 @@ nlohmann::json RunManifest::to_json() const {
   j["timings_ms"] = timings_;
   j["peak_rss_mb"] = peak_rss_mb_;
   j["rss_mb"] = rss_mb_;
-  j["max_rss_mb"] = peak_rss_mb();
+  j["max_rss_mb"] = rss_sample().peak_mb;
   j["results"] = results_;
   j["outputs"] = outputs_;
   j["output_schemas"] = schemas_;

@@ -86,20 +86,8 @@ template <class Row, class Visit>
   return c.take_names();
 }
 
-/// One row per element of `rows`, columns from `visit` (see the file comment).
-template <class Row, class Visit>
-[[nodiscard]] Table tabulate(Schema schema, std::span<const Row> rows, Visit&& visit) {
-  const std::vector<std::string> header = columns_of<Row>(visit);
-  Table t{std::move(schema), CsvTable(header)};
-  for (const Row& r : rows) {
-    Columns c(header);
-    visit(r, c);
-    t.csv.add_row(c.take_values());
-  }
-  return t;
-}
-/// The same for `n` rows made one at a time by `row_at(i)` (a table of millions of rows without
-/// a vector of them).
+/// `n` rows made one at a time by `row_at(i)` (a table of millions of rows needs no vector of
+/// them), columns from `visit` (see the file comment).
 template <class Row, class RowAt, class Visit>
 [[nodiscard]] Table tabulate_each(Schema schema, std::size_t n, RowAt&& row_at, Visit&& visit) {
   const std::vector<std::string> header = columns_of<Row>(visit);
@@ -110,6 +98,12 @@ template <class Row, class RowAt, class Visit>
     t.csv.add_row(c.take_values());
   }
   return t;
+}
+/// One row per element of `rows`.
+template <class Row, class Visit>
+[[nodiscard]] Table tabulate(Schema schema, std::span<const Row> rows, Visit&& visit) {
+  return tabulate_each<Row>(
+      std::move(schema), rows.size(), [&](std::size_t i) -> const Row& { return rows[i]; }, std::forward<Visit>(visit));
 }
 template <class Row, class Visit>
 [[nodiscard]] Table tabulate(Schema schema, const std::vector<Row>& rows, Visit&& visit) {

@@ -16,7 +16,7 @@ Meshes: Debian's armadillo (libcgal-demo, 52,000 triangles) midpoint-subdivided 
 Every command runs as a child; its wall time and peak resident memory come from wait4's rusage,
 its stages from its manifest.json (timings_ms, peak_rss_mb). Writes OUT/scale.csv (one row per
 size, command and stage) and OUT/manifest.json (commands, machine, ptc build), prints a table.
-Needs about 4 GB of free disk at level 4 and, today, 11 GB of memory for the contraction there.
+Needs about 4 GB of free disk at level 4 and 7.5 GB of memory for the contraction there.
 """
 import argparse
 import csv

@@ -4,7 +4,6 @@
 // AO rays, over three frames of an animated scene.
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -20,12 +19,6 @@ using ptc::test::RunResult;
 using ptc::test::slurp;
 
 class Determinism : public ptc::test::CliTest {};
-
-// Columns that differ between runs by nature: times, rates, memory and the thread count itself.
-bool timing_or_threads(const std::string& c) {
-  auto ends = [&](const char* s) { return c.size() >= std::strlen(s) && c.compare(c.size() - std::strlen(s), std::string::npos, s) == 0; };
-  return c == "threads" || ends("_ms") || ends("_per_s") || ends("_mb");  // times, memory
-}
 
 TEST_F(Determinism, TraceImagesAndCountersAreIdenticalAt1_2And4Threads) {
   const std::string data = PTC_TEST_DATA;
@@ -48,7 +41,7 @@ TEST_F(Determinism, TraceImagesAndCountersAreIdenticalAt1_2And4Threads) {
         if (e.path().extension() == ".png") files[e.path().filename().string()] = slurp(e.path());
       auto rows = ptc::test::csv_rows(slurp(out / "trace.csv"));
       for (auto& row : rows)
-        for (auto it = row.begin(); it != row.end();) it = timing_or_threads(it->first) ? row.erase(it) : std::next(it);
+        for (auto it = row.begin(); it != row.end();) it = ptc::test::run_dependent_column(it->first) ? row.erase(it) : std::next(it);
       if (first_files.empty()) {
         ASSERT_GE(files.size(), 15u);  // 5 kinds x 3 frames, and the legend
         ASSERT_EQ(rows.size(), 9u);    // primary, shadow, ao per frame

@@ -27,6 +27,7 @@ namespace fs = std::filesystem;
 namespace {
 
 using ptc::test::csv_table;
+using ptc::test::run_dependent_column;
 using ptc::test::slurp;
 
 const fs::path kGolden = fs::path(PTC_SOURCE_DIR) / "tests" / "golden";
@@ -35,16 +36,6 @@ const std::string kData = std::string(PTC_TEST_DATA) + "/meshes";
 bool recording() {
   const char* e = std::getenv("PTC_GOLDEN_RECORD");
   return e && std::string(e) == "1";
-}
-
-// A column whose values are times or ratios of times (not deterministic), or the machine's core
-// count (threads defaults to all cores).
-bool timing_column(const std::string& c) {
-  if (c == "threads") return true;
-  auto ends = [&](const std::string& s) { return c.size() >= s.size() && c.compare(c.size() - s.size(), s.size(), s) == 0; };
-  return ends("_ms") || ends("_s") || ends("_mb") || c.find("mrays_per_s") != std::string::npos ||
-         c.rfind("ns_per_sphere", 0) == 0 || c.find("speedup") != std::string::npos ||
-         c.find("speed_vs") != std::string::npos;
 }
 
 // Every non-timing column of `want` must exist in `got` with the same value, row by row.
@@ -58,7 +49,7 @@ void expect_same_csv(const std::string& name, const std::string& want_text, cons
   int reported = 0;
   for (std::size_t c = 0; c < want[0].size(); ++c) {
     const std::string& cn = want[0][c];
-    if (timing_column(cn)) continue;
+    if (run_dependent_column(cn)) continue;
     ASSERT_TRUE(col.count(cn)) << name << ": column '" << cn << "' is gone";
     const std::size_t gc = col[cn];
     for (std::size_t r = 1; r < want.size(); ++r) {

@@ -36,11 +36,14 @@ using Clock = std::chrono::steady_clock;
 const std::string kData = PTC_TEST_DATA;
 
 // The entries of `parent` that are a temporary sibling of `leaf` (OutputDir's ".LEAF.tmp-*" and
-// its ".old").
-std::vector<std::string> temporaries_of(const fs::path& parent, const std::string& leaf) {
+// its ".old", AtomicFile's ".LEAF.tmp-PID-N"); with no leaf, every such temporary of any name.
+std::vector<std::string> temporaries_of(const fs::path& parent, const std::string& leaf = "") {
   std::vector<std::string> found;
-  for (const auto& e : fs::directory_iterator(parent))
-    if (e.path().filename().string().starts_with("." + leaf + ".tmp-")) found.push_back(e.path().filename().string());
+  for (const auto& e : fs::directory_iterator(parent)) {
+    const std::string n = e.path().filename().string();
+    if (leaf.empty() ? n.starts_with(".") && n.find(".tmp-") != std::string::npos : n.starts_with("." + leaf + ".tmp-"))
+      found.push_back(n);
+  }
   return found;
 }
 
@@ -264,30 +267,15 @@ TEST_F(Interrupt, AnEarlierOutputStaysByteIdentical) {
 }
 
 
-// Every hidden temporary ptc could leave in `parent`: ".NAME.tmp-PID-N" files of AtomicFile and
-// directories of OutputDir (with their ".old").
-std::vector<std::string> any_temporaries(const fs::path& parent) {
-  std::vector<std::string> found;
-  for (const auto& e : fs::directory_iterator(parent))
-    if (const std::string n = e.path().filename().string(); n.starts_with(".") && n.find(".tmp-") != std::string::npos)
-      found.push_back(n);
-  return found;
-}
-
 // What is at `p`: a file, or a directory's files, as name -> "SIZE bytes, FNV-1a HASH" (short
 // enough for a failure message; outputs here are tens of MB).
 std::map<std::string, std::string> contents(const fs::path& p) {
-  const auto digest = [](const std::string& b) {
+  std::map<std::string, std::string> d = fs::is_directory(p) ? snapshot(p) : std::map<std::string, std::string>{{"", slurp(p)}};
+  for (auto& [name, bytes] : d) {
     std::uint64_t h = 1469598103934665603ull;
-    for (const char c : b) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
-    return std::to_string(b.size()) + " bytes, FNV-1a " + std::to_string(h);
-  };
-  std::map<std::string, std::string> d;
-  if (!fs::is_directory(p)) {
-    d[""] = digest(slurp(p));
-    return d;
+    for (const char c : bytes) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+    bytes = std::to_string(bytes.size()) + " bytes, FNV-1a " + std::to_string(h);
   }
-  for (const auto& e : fs::directory_iterator(p)) d[e.path().filename().string()] = digest(slurp(e.path()));
   return d;
 }
 
@@ -347,7 +335,7 @@ TEST_P(InterruptAtMoments, StopsCleanlyOrFinishesWhole) {
       SCOPED_TRACE(GetParam().name + (twice ? " signalled twice" : " signalled once") + " at " +
                    std::to_string(f) + " of " + std::to_string(took) + " s");
       const RunResult r = run_signalled(out, std::chrono::duration<double>(f * took), twice);
-      EXPECT_EQ(any_temporaries(dir_), std::vector<std::string>{}) << r.err;
+      EXPECT_EQ(temporaries_of(dir_), std::vector<std::string>{}) << r.err;
       if (r.code == 0) {  // finished first: the output is whole (a new run's, so only its names)
         ++finished;
         EXPECT_TRUE(fs::exists(out));

@@ -125,9 +125,12 @@ TEST_F(Notebook, RedrawsEveryFigureFromTheStudyAndExecutesHeadless) {
     EXPECT_GT(img.height, 200) << name;
     EXPECT_TRUE(fs::file_size(n.out_dir / (name + ".svg")) > 1000) << name;
     // Line and scatter plots draw series i in tab10 colour i: that many colours are in the picture.
-    if (name == "fig7_compare" || name == "drift_frames" || name == "drift_correlation")
+    if (name == "fig7_compare" || name == "drift_frames" || name == "drift_correlation") {
       EXPECT_EQ(tab10_colours_in(img), std::min<std::size_t>(series, 10) - (series > 7 ? 1 : 0)) << name;
-    if (name == "fig6_sweep") EXPECT_EQ(tab10_colours_in(img), 3u) << name << ": three stages as bars";
+    }
+    if (name == "fig6_sweep") {
+      EXPECT_EQ(tab10_colours_in(img), 3u) << name << ": three stages as bars";
+    }
   }
   const nlohmann::json m = nlohmann::json::parse(slurp(n.out_dir / "manifest.json"));
   EXPECT_EQ(m["results"]["figures"].size(), 6u);

@@ -8,6 +8,17 @@
 
 namespace ptc::test {
 
+/// A column whose values differ between two runs of the same command by nature: times and rates
+/// (`_ms`, `_s`, `mrays_per_s`, `ns_per_sphere*`, speed-ups), memory (`_mb`) and the thread count
+/// (all cores by default). Everything else must repeat exactly.
+inline bool run_dependent_column(const std::string& c) {
+  if (c == "threads") return true;
+  auto ends = [&](const std::string& s) { return c.size() >= s.size() && c.compare(c.size() - s.size(), s.size(), s) == 0; };
+  return ends("_ms") || ends("_s") || ends("_mb") || c.find("mrays_per_s") != std::string::npos ||
+         c.rfind("ns_per_sphere", 0) == 0 || c.find("speedup") != std::string::npos ||
+         c.find("speed_vs") != std::string::npos;
+}
+
 /// The fields of one line.
 inline std::vector<std::string> csv_fields(const std::string& line) {
   std::vector<std::string> f(1);

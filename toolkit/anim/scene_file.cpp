@@ -234,19 +234,18 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
   json root;
   try {
     root = json::parse(text.begin(), text.end());
-  } catch (const json::parse_error& e) {
-    std::string why = e.what();
-    // nlohmann's message: "[json.exception.parse_error.101] parse error at line 1, column 5: ..."
-    if (const auto k = why.find("] "); k != std::string::npos) why = why.substr(k + 2);
-    throw InputError(name, byte_loc(e.byte), "", "invalid JSON: " + why);
   } catch (const json::exception& e) {
-    // A number beyond double ("1e999": out_of_range.406) has no byte position in nlohmann's
-    // exception: the number's own text, quoted in the message, is found in the file instead.
+    // nlohmann's message: "[json.exception.parse_error.101] parse error at line 1, column 5: ...".
     std::string why = e.what();
     if (const auto k = why.find("] "); k != std::string::npos) why = why.substr(k + 2);
     std::string where;
-    if (const auto q = why.find('\''), q2 = why.rfind('\''); q != std::string::npos && q2 > q)
+    if (const auto* pe = dynamic_cast<const json::parse_error*>(&e)) {
+      where = byte_loc(pe->byte);
+    } else if (const auto q = why.find('\''), q2 = why.rfind('\''); q != std::string::npos && q2 > q) {
+      // A number beyond double ("1e999": out_of_range.406) has no byte position: the number's
+      // own text, quoted in the message, is found in the file instead.
       if (const auto at = text.find(why.substr(q + 1, q2 - q - 1)); at != std::string_view::npos) where = byte_loc(at + 1);
+    }
     throw InputError(name, where, "", "invalid JSON: " + why);
   }
   const Reader r(name, base_dir, opt);

@@ -369,22 +369,20 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     const std::uint32_t keep = lo, gone = hi;
     {
       Summary m = objective.merge(summary_of(a, 0), summary_of(b, 1), ctx, ev);
-      if (summary_slot[gone] != kNoSlot) {
-        free_slots.push_back(summary_slot[gone]);
-        summary_slot[gone] = kNoSlot;
-      }
-      if (summary_slot[keep] == kNoSlot) {
+      std::uint32_t& slot_keep = summary_slot[keep];
+      std::uint32_t& slot_gone = summary_slot[gone];
+      if (slot_keep == kNoSlot) std::swap(slot_keep, slot_gone);  // reuse gone's slot, if it had one
+      if (slot_gone != kNoSlot) free_slots.push_back(std::exchange(slot_gone, kNoSlot));
+      if (slot_keep == kNoSlot) {
         if (free_slots.empty()) {
-          summary_slot[keep] = static_cast<std::uint32_t>(merged.size());
-          merged.push_back(std::move(m));
+          slot_keep = static_cast<std::uint32_t>(merged.size());
+          merged.emplace_back();
         } else {
-          summary_slot[keep] = free_slots.back();
+          slot_keep = free_slots.back();
           free_slots.pop_back();
-          merged[summary_slot[keep]] = std::move(m);
         }
-      } else {
-        merged[summary_slot[keep]] = std::move(m);
       }
+      merged[slot_keep] = std::move(m);
     }
     union_verts.clear();
     const auto va = verts(a);

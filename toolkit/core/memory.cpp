@@ -6,29 +6,37 @@
 namespace ptc {
 namespace {
 
-// The value of "KEY:   123 kB" in a /proc file, in MB; 0 when absent.
-double status_mb(const char* key, const char* file = "/proc/self/status") {
+// The values of "KEY:   123 kB" lines of a /proc file, in MB (0 for a key that is absent).
+template <std::size_t N>
+void read_kb_lines(const char* file, const char* const (&keys)[N], double (&mb)[N]) {
+  for (double& m : mb) m = 0;
   std::FILE* f = std::fopen(file, "r");
-  if (!f) return 0;
+  if (!f) return;
   char line[256];
-  double mb = 0;
-  const std::size_t n = std::strlen(key);
   while (std::fgets(line, sizeof line, f))
-    if (std::strncmp(line, key, n) == 0 && line[n] == ':') {
+    for (std::size_t k = 0; k < N; ++k) {
+      const std::size_t n = std::strlen(keys[k]);
       long kb = 0;
-      if (std::sscanf(line + n + 1, "%ld", &kb) == 1) mb = double(kb) / 1024.0;
-      break;
+      if (std::strncmp(line, keys[k], n) == 0 && line[n] == ':' && std::sscanf(line + n + 1, "%ld", &kb) == 1)
+        mb[k] = double(kb) / 1024.0;
     }
   std::fclose(f);
-  return mb;
 }
 
 }  // namespace
 
-double peak_rss_mb() { return status_mb("VmHWM"); }
+RssSample rss_sample() {
+  static const char* const keys[] = {"VmRSS", "VmHWM"};
+  double mb[2];
+  read_kb_lines("/proc/self/status", keys, mb);
+  return {mb[0], mb[1]};
+}
 
-double current_rss_mb() { return status_mb("VmRSS"); }
-
-double machine_memory_mb() { return status_mb("MemTotal", "/proc/meminfo"); }
+double machine_memory_mb() {
+  static const char* const keys[] = {"MemTotal"};
+  double mb[1];
+  read_kb_lines("/proc/meminfo", keys, mb);
+  return mb[0];
+}
 
 }  // namespace ptc

@@ -1,14 +1,17 @@
-// Resident memory of this process (Linux /proc/self/status), for the per-stage figures of the
-// run manifests and the scale benchmark.
+// Resident memory of this process (Linux /proc/self/status) and of the machine (/proc/meminfo),
+// for the per-stage figures of the run manifests, the per-frame columns of bench.csv and
+// trace.csv, and the memory estimate of `ptc info`.
 #pragma once
 
 namespace ptc {
 
-/// Peak resident set of the process so far (VmHWM), in MB (2^20 bytes); 0 when /proc is not
-/// readable. Never reset here, so that it agrees with /usr/bin/time's maximum resident size.
-[[nodiscard]] double peak_rss_mb();
-/// Current resident set (VmRSS) in MB; 0 when unknown.
-[[nodiscard]] double current_rss_mb();
+/// Resident and peak resident memory (VmRSS, VmHWM) in MB (2^20 bytes), read together: the kernel
+/// computes both for one snapshot, so peak_mb >= rss_mb. 0 when /proc is not readable. The peak
+/// is never reset here, so it agrees with /usr/bin/time's maximum resident size.
+struct RssSample {
+  double rss_mb = 0, peak_mb = 0;
+};
+[[nodiscard]] RssSample rss_sample();
 /// The machine's memory (/proc/meminfo MemTotal) in MB; 0 when unknown.
 [[nodiscard]] double machine_memory_mb();
 

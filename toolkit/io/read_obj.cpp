@@ -108,7 +108,7 @@ struct ObjParser {
           corners.push_back(static_cast<std::uint32_t>(v));
         }
         if (corners.size() < 3) {  // skipped and counted (docs/mesh_policy.md)
-          sink.skip_face([&] { return "face " + std::to_string(sink.faces()) + " (" + line_loc(lines.line()) + ")"; });
+          sink.skip_face([&] { return line_loc(lines.line()); });
           continue;
         }
         if (sink.full(corners.size())) fail_here("more triangles than 32-bit ids can number");

@@ -162,7 +162,7 @@ struct OffParser {
         corners.push_back(static_cast<std::uint32_t>(idx));
       }
       if (corners.size() < 3) {  // skipped and counted (docs/mesh_policy.md)
-        sink.skip_face([&] { return "face " + std::to_string(i) + " (" + line_loc(lines.line()) + ")"; });
+        sink.skip_face([&] { return line_loc(lines.line()); });
         continue;
       }
       if (sink.full(corners.size())) fail("face " + std::to_string(i), "more triangles than 32-bit ids can number");

@@ -262,7 +262,7 @@ class PlyParser {
   }
   void add_face(const std::string& loc, const Element& e, std::uint64_t item) {
     if (corners_.size() < 3) {  // skipped and counted (docs/mesh_policy.md)
-      sink_.skip_face([&] { return e.name + " " + std::to_string(item) + " (" + loc + ")"; });
+      sink_.skip_face([&] { return loc; });
       return;
     }
     // Counts were checked against the 32-bit limit, but polygons can give more triangles.

@@ -48,10 +48,11 @@ class TriangleSink {
     }
   }
   /// One file face with fewer than 3 corners (its indices checked by the caller): it keeps its
-  /// face number and gives no triangle. `where` ("face 7 (line 12)") is built only for the first.
-  template <class Where>
-  void skip_face(Where&& where) {
-    if (report_.short_faces++ == 0) report_.first_short_face = where();
+  /// face number and gives no triangle. `location()` ("line 12", "byte 80") is asked for the
+  /// first one only, which is named "face 7 (line 12)".
+  template <class Location>
+  void skip_face(Location&& location) {
+    if (report_.short_faces++ == 0) report_.first_short_face = "face " + std::to_string(report_.faces) + " (" + location() + ")";
     ++report_.faces;
   }
   void add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
