@@ -269,44 +269,50 @@ inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count
 template <bool AnyHit>
 void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
   if (d.empty) return;
-  // (r is the caller's local, not copied: the copy of ~0.5 KB per ray showed in profiles)
+  // The slab constants as locals: nothing the loop stores (stack entries, results) can alias
+  // them, so they stay in registers (through `r` every store forced reloads and spills).
+  const __m128 ox = r.ox, oy = r.oy, oz = r.oz;
+  const __m128 inx = r.inx, iny = r.iny, inz = r.inz, ifx = r.ifx, ify = r.ify, ifz = r.ifz;
+  const std::ptrdiff_t nx = r.nx, ny = r.ny, nz = r.nz, fx = r.fx, fy = r.fy, fz = r.fz;
+  const __m128 tmin4 = _mm_set1_ps(r.tmin);
+  const WideNode* const nodes = d.nodes;
   float tmax = r.tmax;
   __m128 tmax4 = _mm_set1_ps(tmax);
-  const __m128 tmin4 = _mm_set1_ps(r.tmin);
   StackEntry* sp = stack;
-  *sp++ = {d.root, 0, -kBig};
-  std::uint32_t nodes = 0, tris = 0;
-  while (sp != stack) {
-    const StackEntry e = *--sp;
-    if (!AnyHit && e.t > tmax) continue;  // a closer hit was found after this entry was pushed
-    std::uint32_t ref = e.ref, cnt = e.count;
+  std::uint32_t ref = d.root, cnt = 0;  // the entry being visited (the root: entered at -inf)
+  std::uint32_t visited = 0, tris = 0;
+  for (;;) {
     bool miss = false;
     while (cnt == 0) {
-      const WideNode& n = d.nodes[ref];
-      ++nodes;
-      const float* b = &n.bounds[0][0];
-      const __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.nx), r.ox), r.inx);
-      const __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.ny), r.oy), r.iny);
-      const __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.nz), r.oz), r.inz);
-      const __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.fx), r.ox), r.ifx);
-      const __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.fy), r.oy), r.ify);
-      const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + r.fz), r.oz), r.ifz);
-      // _mm_max_ps(a, b) returns b when either is NaN: candidates first, running bound second.
-      const __m128 tn = _mm_max_ps(tnz, _mm_max_ps(tny, _mm_max_ps(tnx, tmin4)));
-      const __m128 tf = _mm_min_ps(tfz, _mm_min_ps(tfy, _mm_min_ps(tfx, tmax4)));
+      const float* b = &nodes[ref].bounds[0][0];
+      ++visited;
+      const __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nx), ox), inx);
+      const __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + ny), oy), iny);
+      const __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nz), oz), inz);
+      const __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fx), ox), ifx);
+      const __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fy), oy), ify);
+      const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fz), oz), ifz);
+      // A tree of two levels (the chain of three was the longest part of a node's latency).
+      // _mm_max_ps(a, b) returns b when either is NaN (0 * inf: an origin on a slab plane of an
+      // axis the ray does not move along), and the right-hand operands hold the ray's bounds,
+      // which are never NaN: a NaN drops itself and at most its partner from the max (min), so
+      // the interval only widens and no box the ray touches is culled.
+      const __m128 tn = _mm_max_ps(_mm_max_ps(tnx, tny), _mm_max_ps(tnz, tmin4));
+      const __m128 tf = _mm_min_ps(_mm_min_ps(tfx, tfy), _mm_min_ps(tfz, tmax4));
       unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(tn, tf)));
       if (!mask) {
         miss = true;
         break;
       }
-      alignas(16) float dist[4];
-      _mm_store_ps(dist, tn);
+      const WideNode& n = nodes[ref];
       const int i0 = ctz(mask);
       mask &= mask - 1;
       if (!mask) {
         ref = n.child[i0], cnt = n.count[i0];
         continue;
       }
+      alignas(16) float dist[4];
+      _mm_store_ps(dist, tn);
       const int i1 = ctz(mask);
       mask &= mask - 1;
       if (!mask) {
@@ -332,12 +338,21 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
       for (int i = 0; i < k - 1; ++i) *sp++ = c[i];
       ref = c[k - 1].ref, cnt = c[k - 1].count;
     }
-    if (miss) continue;
-    const float before = tmax;
-    if (intersect_leaf<AnyHit>(d, ref, cnt, r, tmax, res, tris)) break;  // any hit: done
-    if (tmax != before) tmax4 = _mm_set1_ps(tmax);
+    if (!miss) {
+      const float before = tmax;
+      if (intersect_leaf<AnyHit>(d, ref, cnt, r, tmax, res, tris)) break;  // any hit: done
+      if (tmax != before) tmax4 = _mm_set1_ps(tmax);
+    }
+    // Next entry; closest hit skips those whose box starts beyond the best hit found since.
+    for (;;) {
+      if (sp == stack) goto done;
+      --sp;
+      if (AnyHit || !(sp->t > tmax)) break;
+    }
+    ref = sp->ref, cnt = sp->count;
   }
-  res.nodes = nodes, res.tris = tris;
+done:
+  res.nodes = visited, res.tris = tris;
 }
 
 Flat flat_of(const TraceData& s) {

@@ -345,6 +345,38 @@ void axis_aligned_cube(Kind kind, double scale, const Vec3& offset, std::optiona
   EXPECT_EQ(wrong_t, 0u) << "of " << rays;
 }
 
+// Nearly axis-aligned rays: the other two direction components tiny (denormal, just below and
+// just above 1 / FLT_MAX, where 1/d overflows to inf or stays finite near FLT_MAX, and small
+// normal values), mixed with exact zeros, from origins on the cube's grid lines: slab values of
+// 0 * inf = NaN next to finite ones of the same node, and reciprocals near FLT_MAX. Every ray
+// hits, and every fourth is compared with brute force.
+TEST_P(TracerKinds, NearlyAxisAlignedRaysHitLikeBruteForce) {
+  const int n = 8;
+  const Mesh m = test::grid_cube(n, 1.0, Vec3::Zero());
+  const AnyScene s = make_scene(m, GetParam(), std::nullopt);
+  const float tiny[] = {1e-45f, 2.9e-39f, 3.0e-39f, 1e-30f};
+  std::size_t rays = 0, misses = 0;
+  for (int a = 0; a < 3; ++a)
+    for (float sign : {1.0f, -1.0f})
+      for (float e : tiny)
+        for (int pattern = 0; pattern < 3; ++pattern) {
+          Vec3f d{0.0f, 0.0f, 0.0f};
+          d[a] = sign;
+          const float e1 = pattern == 2 ? 0.0f : e, e2 = pattern == 1 ? -e : e;
+          d[(a + 1) % 3] = e1, d[(a + 2) % 3] = e2;
+          for (int i = 1; i < n; ++i)
+            for (int j = 1; j < n; ++j)
+              for (int k = 1; k < n; k += 2) {
+                const Vec3 p(2.0 * i / n - 1.0, 2.0 * j / n - 1.0, 2.0 * k / n - 1.0);
+                const Hit hit = trace_ray(s.data(), p, d);
+                ++rays;
+                misses += !hit.hit();
+                if (rays % 4 == 0) expect_same(hit, test::brute_force(m, s.data().origin, p, d), "nearly axis-aligned ray");
+              }
+        }
+  EXPECT_EQ(misses, 0u) << "of " << rays;
+}
+
 TEST_P(TracerKinds, AxisAlignedRaysUnitCube) { axis_aligned_cube(GetParam(), 1.0, Vec3::Zero(), std::nullopt); }
 TEST_P(TracerKinds, AxisAlignedRaysTinyCube) { axis_aligned_cube(GetParam(), 1e-3, Vec3::Zero(), std::nullopt); }
 TEST_P(TracerKinds, AxisAlignedRaysHugeOffsetRebased) {
