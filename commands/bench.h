@@ -25,7 +25,11 @@ struct BenchCommandOptions {
   std::optional<std::string> deform;
   std::filesystem::path clusters;  ///< triangles.csv directory; empty: growth/Acc clustering with max_count
   std::filesystem::path out_dir;   ///< bench.csv, summary.csv, manifest.json (required)
-  PeerBenchConfig config;          ///< frames are set from `frames`; threads 0 = all cores
+  PeerBenchConfig config;          ///< frames are set from `frames`; threads 0 = all cores; light from `light`
+  /// --light X,Y,Z: the shadow rays' point light; nullopt: the scene's own, else render's
+  /// default_light for the camera (commands/scene_args.h light_for).
+  std::optional<Vec3> light;
+  bool shadows = true;             ///< false (--no-shadows): primary rays only
   bool json = false;               ///< print the summary as JSON
   std::vector<std::string> argv;
 };

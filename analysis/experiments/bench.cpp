@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "analysis/loop/frame_loop.h"
+#include "render/rays.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/core/stats.h"
 #include "toolkit/core/stopwatch.h"
@@ -41,17 +42,20 @@ std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first
     by[r.config].push_back(&r);
   }
   for (auto& s : out) {
-    std::vector<double> u, b, ub, t, m;
+    std::vector<double> u, b, ub, t, m, sh, wf;
     for (const BenchRow* r : by[s.config]) {
       s.mismatches += r->agreement.mismatches();
       s.ties += r->agreement.ties;
+      s.shadow_mismatches += r->shadow_mismatches;
       if (r->frame < first_frame) continue;
       u.push_back(r->times.update_ms), b.push_back(r->times.build_ms);
       ub.push_back(r->times.update_ms + r->times.build_ms);
       t.push_back(r->trace_ms), m.push_back(r->mrays_per_s);
+      sh.push_back(r->shadow_ms), wf.push_back(r->whole_frame_ms());
     }
     s.update_ms = median(u), s.build_ms = median(b), s.update_build_ms = median(ub);
     s.trace_ms = median(t), s.mrays_per_s = median(m);
+    s.shadow_ms = median(sh), s.whole_frame_ms = median(wf);
   }
   return out;
 }
@@ -132,9 +136,16 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   opt.counters = false;
   std::vector<Vec3> pos(mesh.positions().begin(), mesh.positions().end());
   bvh::HitBatch ref, hits, counted;
+  // The shadow pass: one batch per frame, made from ours_triangles' primary hits on the frame's
+  // positions (the first configuration of the loop), traced by every configuration.
+  res.shadows = cfg.light.has_value();
+  Mesh frame_mesh = mesh;
+  SurfaceHits surface;
+  Box3 frame_bounds;
+  std::vector<std::uint8_t> ref_lit;
   loop::LoopOptions lo;
   lo.frames = cfg.frames;
-  loop::run_frame_loop(scene, pos, order, lo, [&](const loop::FrameRecord& fr, loop::Accel& a, std::span<const Vec3>) {
+  loop::run_frame_loop(scene, pos, order, lo, [&](const loop::FrameRecord& fr, loop::Accel& a, std::span<const Vec3> positions) {
     BenchRow row;
     row.frame = fr.index;
     row.scene_frame = fr.frame;
@@ -151,6 +162,19 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     row.hits = tt.hits;
     row.mrays_per_s = row.trace_ms > 0 ? double(tt.rays) / (row.trace_ms * 1e3) : 0.0;
     if (fr.accel > 0) row.agreement = compare_hits(ref, hits, cfg.tie);
+    if (cfg.light) {
+      if (fr.accel == 0) {
+        frame_mesh.set_positions(std::vector<Vec3>(positions.begin(), positions.end()));
+        surface = surface_hits(frame_mesh, rays, ref);
+        frame_bounds = frame_mesh.bounds();
+      }
+      const ShadowResult sr = trace_shadows(target_of(a), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
+                                            cfg.threads);
+      row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
+      if (fr.accel == 0) ref_lit = sr.lit;
+      else
+        for (std::size_t i = 0; i < sr.lit.size(); ++i) row.shadow_mismatches += sr.lit[i] != ref_lit[i];
+    }
     if (!loop::is_embree(loop::kAllAccelKinds[fr.accel])) {  // ours: the counters, from an untimed trace with them on
       bvh::TraceOptions with = opt;
       with.counters = true;
@@ -171,7 +195,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
 }
 
 Table bench_table(const PeerBenchResult& r) {
-  return tabulate(Schema{"ptc-bench", 3}, r.rows, [](const BenchRow& x, Columns& col) {
+  return tabulate(Schema{"ptc-bench", 4}, r.rows, [](const BenchRow& x, Columns& col) {
     col("frame", x.frame);
     col("config", x.config);
     col("update_ms", x.times.update_ms);
@@ -199,6 +223,11 @@ Table bench_table(const PeerBenchResult& r) {
     col("triangles_per_ray", x.triangles_per_ray);
     col("rss_mb", x.rss_mb);
     col("peak_rss_mb", x.peak_rss_mb);
+    col("shadow_rays", x.shadow_rays);
+    col("shadow_occluded", x.shadow_occluded);
+    col("shadow_ms", x.shadow_ms);
+    col("shadow_mismatches", x.shadow_mismatches);
+    col("whole_frame_ms", x.whole_frame_ms());
   });
 }
 
@@ -213,7 +242,7 @@ Table bench_summary_table(const PeerBenchResult& r) {
   std::vector<SummaryRow> rows;
   for (const auto& s : r.summary) rows.push_back({&s, &r});
   const int frames = r.rows.empty() ? 0 : r.rows.back().frame + 1;
-  return tabulate(Schema{"ptc-bench-summary", 1}, rows, [frames](const SummaryRow& x, Columns& col) {
+  return tabulate(Schema{"ptc-bench-summary", 2}, rows, [frames](const SummaryRow& x, Columns& col) {
     static const BenchSummary none;
     const BenchSummary& s = x.s ? *x.s : none;
     col("config", s.config);
@@ -225,6 +254,14 @@ Table bench_summary_table(const PeerBenchResult& r) {
     col("mrays_per_s", s.mrays_per_s);
     col("mismatches", s.mismatches);
     col("ties", s.ties);
+    col("shadow_ms", s.shadow_ms);
+    col("shadow_mismatches", s.shadow_mismatches);
+    col("whole_frame_ms", s.whole_frame_ms);
+    for (loop::AccelKind e : kEmbree) {
+      const BenchSummary* p = x.r ? find(x.r->summary, to_string(e)) : nullptr;
+      col(std::string("whole_frame_speedup_vs_") + std::string(to_string(e)),
+          p && s.whole_frame_ms > 0 ? p->whole_frame_ms / s.whole_frame_ms : nan());
+    }
     for (loop::AccelKind e : kEmbree) {
       const BenchSummary* p = x.r ? find(x.r->summary, to_string(e)) : nullptr;
       col(std::string("update_build_speedup_vs_") + std::string(to_string(e)),
@@ -240,16 +277,34 @@ Table bench_summary_table(const PeerBenchResult& r) {
 
 std::string bench_text(const PeerBenchResult& r) {
   const int frames = r.rows.empty() ? 0 : r.rows.back().frame + 1;
-  std::string s = fmt::format("medians over frames {}..{} ({} frames), {} rays\n", r.median_first_frame, frames - 1,
-                              frames - r.median_first_frame, r.rays);
-  s += fmt::format("{:<16} {:>10} {:>10} {:>13} {:>10} {:>10} {:>10} {:>8} {:>8}\n", "config", "update_ms",
-                   "build_ms", "upd+build_ms", "trace_ms", "Mrays/s", "hits", "mismatch", "ties");
+  std::string s = fmt::format("medians over frames {}..{} ({} frames), {} primary rays{}\n", r.median_first_frame,
+                              frames - 1, frames - r.median_first_frame, r.rays,
+                              r.shadows ? " and shadow rays to the light" : " (no shadow rays)");
+  // The whole frame first: what the method is for.
+  s += fmt::format("whole frame = update + build + primary{} (> 1: the row is faster; Embree's frame / the row's)\n",
+                   r.shadows ? " + shadow rays" : "");
+  s += fmt::format("{:<16} {:>10}", "config", "frame_ms");
+  for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>15}", "vs " + std::string(to_string(e)));
+  s += "\n";
   for (const auto& x : r.summary) {
-    std::uint64_t hits = 0;
+    s += fmt::format("{:<16} {:>10.2f}", x.config, x.whole_frame_ms);
+    for (loop::AccelKind e : kEmbree) {
+      const BenchSummary* p = find(r.summary, to_string(e));
+      s += fmt::format(" {:>14.2f}x", p && x.whole_frame_ms > 0 ? p->whole_frame_ms / x.whole_frame_ms : 0.0);
+    }
+    s += "\n";
+  }
+  s += "\n";
+  s += fmt::format("{:<16} {:>10} {:>10} {:>13} {:>10} {:>10} {:>10} {:>8} {:>8} {:>10} {:>11} {:>10}\n", "config",
+                   "update_ms", "build_ms", "upd+build_ms", "trace_ms", "Mrays/s", "hits", "mismatch", "ties",
+                   "shadow_ms", "shadow_rays", "lit_diff");
+  for (const auto& x : r.summary) {
+    std::uint64_t hits = 0, shadow_rays = 0;
     for (const auto& row : r.rows)
-      if (row.config == x.config) hits = row.hits;
-    s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>8} {:>8}\n", x.config,
-                     x.update_ms, x.build_ms, x.update_build_ms, x.trace_ms, x.mrays_per_s, hits, x.mismatches, x.ties);
+      if (row.config == x.config) hits = row.hits, shadow_rays = row.shadow_rays;
+    s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>8} {:>8} {:>10.2f} {:>11} {:>10}\n",
+                     x.config, x.update_ms, x.build_ms, x.update_build_ms, x.trace_ms, x.mrays_per_s, hits,
+                     x.mismatches, x.ties, x.shadow_ms, shadow_rays, x.shadow_mismatches);
   }
   std::vector<double> src;
   for (const auto& row : r.rows)

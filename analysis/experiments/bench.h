@@ -9,13 +9,18 @@
 //
 // Per frame and configuration: update_ms, build_ms and every stage (analysis/loop UpdateTimes),
 // trace_ms (closest hit, counters off), hits, and the agreement of the closest triangle with
-// ours_triangles of the same frame (analysis/metrics/hit_agreement.h).
+// ours_triangles of the same frame (analysis/metrics/hit_agreement.h). With a light (the
+// default of `ptc bench`): shadow rays towards it (render/rays.h trace_shadows, any hit), one
+// batch per frame made from ours_triangles' primary hits and traced by every configuration
+// (rtcOccluded1 for Embree), shadow_ms timed alone, and the points lit differently from
+// ours_triangles counted; the whole frame is update + build + primary trace + shadow trace.
 // Medians skip the first frame (first-touch page faults, caches, Embree's lazy initialisation)
 // when there is more than one. Threads: oneTBB is limited to `threads` for the whole run
 // (builds and traces), Embree's device gets "threads=N"; set_affinity is never used.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +50,9 @@ struct PeerBenchConfig {
   /// (ClusterScene::fused_vertex_pass); every configuration sees the same renumbered mesh,
   /// triangle ids unchanged. Input: the file's order (the cluster path gathers per frame).
   bvh::VertexOrder vertex_order = bvh::VertexOrder::Clusters;
+  /// Point light (world) of the shadow pass; nullopt: primary rays only (the whole frame is then
+  /// update + build + primary trace).
+  std::optional<Vec3> light;
 };
 
 struct BenchRow {
@@ -57,6 +65,12 @@ struct BenchRow {
   double trace_ms = 0, mrays_per_s = 0;
   std::uint64_t rays = 0, hits = 0;
   HitAgreement agreement;        ///< against ours_triangles of the same frame (zero for itself)
+  /// Shadow pass (zero without a light): rays (surface points facing the light), occluded rays,
+  /// trace time, and points whose lit/unlit differs from ours_triangles' of the same frame.
+  std::uint64_t shadow_rays = 0, shadow_occluded = 0, shadow_mismatches = 0;
+  double shadow_ms = 0;
+  /// update_ms + build_ms + trace_ms + shadow_ms.
+  [[nodiscard]] double whole_frame_ms() const { return times.update_ms + times.build_ms + trace_ms + shadow_ms; }
   /// Per-ray traversal counters of ours (an untimed second trace with counters on: the timed one
   /// runs without them); NaN for Embree, which has none.
   double nodes_per_ray = 0, triangles_per_ray = 0;
@@ -67,7 +81,9 @@ struct BenchRow {
 struct BenchSummary {
   std::string config;
   double update_ms = 0, build_ms = 0, update_build_ms = 0, trace_ms = 0, mrays_per_s = 0;  ///< medians
+  double shadow_ms = 0, whole_frame_ms = 0;  ///< medians (the whole frame's of the per-frame sums)
   std::uint64_t mismatches = 0, ties = 0;  ///< sums over all frames (the first included)
+  std::uint64_t shadow_mismatches = 0;     ///< sum over all frames
 };
 
 struct PeerBenchResult {
@@ -82,6 +98,7 @@ struct PeerBenchResult {
   bool fused_vertex_pass = false;      ///< the cluster scene converts and boxes in one pass (no gather)
   std::uint32_t cluster_group_size = 0;  ///< the cluster BVH's two-level build (0: plain)
   double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once
+  bool shadows = false;                ///< a shadow pass was traced (cfg.light)
 };
 
 /// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()
@@ -95,11 +112,12 @@ struct PeerBenchResult {
 /// and mismatch sums over all frames: the summary of run_peer_bench, recomputable from rows.
 [[nodiscard]] std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame);
 
-/// bench.csv (schema ptc-bench/3, docs/tracing.md): one row per frame and configuration.
+/// bench.csv (schema ptc-bench/4, docs/tracing.md): one row per frame and configuration.
 [[nodiscard]] Table bench_table(const PeerBenchResult& r);
-/// summary.csv (schema ptc-bench-summary/1): medians per configuration and ratios against each Embree mode.
+/// summary.csv (schema ptc-bench-summary/2): medians per configuration and ratios against each Embree mode.
 [[nodiscard]] Table bench_summary_table(const PeerBenchResult& r);
-/// The printed tables: medians, then ratios against each Embree mode (> 1: the row is faster).
+/// The printed tables: the whole frame against each Embree mode first, then the medians, then
+/// the ratios of each part (> 1: the row is faster).
 [[nodiscard]] std::string bench_text(const PeerBenchResult& r);
 
 }  // namespace ptc

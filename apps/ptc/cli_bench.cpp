@@ -33,12 +33,15 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.input = a->scene.input;
                       a->scene.apply(o.scene_options);
                       o.config.camera = a->camera.spec();
+                      o.light = a->camera.light_position();
                       o.argv = ctx.args;
                       cmd_bench(o, std::cout);
                     });
   a->app = c;
   a->scene.add_to(c);
-  a->camera.add_to(c, /*with_light=*/false);
+  a->camera.add_to(c, /*with_light=*/true);
+  c->add_flag("--no-shadows", [a](std::int64_t) { a->opt.shadows = false; },
+              "primary rays only (default: the whole frame includes shadow rays to the light)");
   auto* cl = c->add_option("--clusters", a->opt.clusters, "use the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--max-count", cfg.max_count,
                 "otherwise: growth/Acc clustering with MaxCount = MaxSize = N (0: one triangle per cluster, the "

@@ -115,6 +115,7 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   expect_error({"bench", mesh, "--clusters", (dir_ / "quad").string(), "--max-count", "5", "--out", out}, 2, "excludes");
   expect_error({"bench", mesh, "--deform", "spin", "--out", out}, 2, "--deform");
   expect_error({"bench", mesh, "--vertex-order", "random", "--out", out}, 2, "--vertex-order");
+  expect_error({"bench", mesh, "--light", "1,nan,2", "--out", out}, 2, "--light");
 }
 
 TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
@@ -136,6 +137,25 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
                              "--out", (dir_ / "one").string()});
   ASSERT_EQ(one.code, 0) << one.err;
   EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "one" / "manifest.json"))["parameters"]["threads"], 1);
+  // The whole frame includes shadow rays to the light by default; --no-shadows leaves them out.
+  EXPECT_NE(r.out.find("whole frame = update + build + primary + shadow rays"), std::string::npos) << r.out;
+  EXPECT_LT(r.out.find("whole frame"), r.out.find("update_ms")) << r.out;
+  EXPECT_EQ(m["parameters"]["shadows"], true);
+  EXPECT_EQ(m["parameters"]["light"]["from"], "default");
+  const auto with = csv_rows(csv);
+  ASSERT_FALSE(with.empty());
+  std::uint64_t shadow_rays = 0;
+  for (const auto& row : with) shadow_rays += std::stoull(row.at("shadow_rays"));
+  EXPECT_GT(shadow_rays, 0u);
+  const CmdResult none = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--no-shadows",
+                              "--light", "0,5,0", "--out", (dir_ / "none").string()});
+  ASSERT_EQ(none.code, 0) << none.err;
+  EXPECT_NE(none.out.find("whole frame = update + build + primary (>"), std::string::npos) << none.out;
+  for (const auto& row : csv_rows(slurp(dir_ / "none" / "bench.csv"))) {
+    EXPECT_EQ(row.at("shadow_rays"), "0");
+    EXPECT_EQ(row.at("shadow_ms"), "0");
+  }
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "none" / "manifest.json"))["parameters"]["shadows"], false);
 }
 
 namespace {

@@ -107,6 +107,79 @@ TEST(PeerBench, SmallMeshAllConfigurationsNoMismatches) {
   for (const auto& n : names) EXPECT_NE(table.find(n), std::string::npos);
 }
 
+// The shadow pass. A convex ellipsoid under a rigid motion with the light outside it: a point
+// facing the light sees it (nothing of a convex surface lies between), so no shadow ray of any
+// configuration may be occluded, and every configuration traces the same batch (the points of
+// ours_triangles' hits that face the light, counted here from the rows' primary hits).
+TEST(PeerBench, ShadowRaysOfAConvexMeshAreNeverOccluded) {
+  const Mesh m = sphere(4);
+  ptc::PeerBenchConfig cfg;
+  cfg.frames = {0, 2};
+  cfg.width = 40, cfg.height = 32;
+  cfg.max_count = 20;
+  cfg.light = Vec3(3.0, 5.0, 4.0);
+  ptc::Scene sc = scene_of(m, ptc::DeformKind::Rigid);
+  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, nullptr, cfg);
+  EXPECT_TRUE(r.shadows);
+  const auto names = names_of_configs();
+  ASSERT_EQ(r.rows.size(), 3u * names.size());
+  for (int f = 0; f < 3; ++f) {
+    const ptc::BenchRow& ref = r.rows[std::size_t(f) * names.size()];
+    EXPECT_GT(ref.shadow_rays, 50u) << "frame " << f;
+    EXPECT_LT(ref.shadow_rays, ref.hits) << "frame " << f;  // the far side of the ellipsoid faces away
+    for (std::size_t c = 0; c < names.size(); ++c) {
+      const ptc::BenchRow& row = r.rows[std::size_t(f) * names.size() + c];
+      EXPECT_EQ(row.shadow_rays, ref.shadow_rays) << row.config << " frame " << f;
+      EXPECT_EQ(row.shadow_occluded, 0u) << row.config << " frame " << f;
+      EXPECT_EQ(row.shadow_mismatches, 0u) << row.config << " frame " << f;
+      EXPECT_GT(row.shadow_ms, 0.0) << row.config;
+      EXPECT_DOUBLE_EQ(row.whole_frame_ms(),
+                       row.times.update_ms + row.times.build_ms + row.trace_ms + row.shadow_ms);
+    }
+  }
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const auto& a = r.rows[names.size() + c];
+    const auto& b = r.rows[2 * names.size() + c];
+    EXPECT_DOUBLE_EQ(r.summary[c].shadow_ms, 0.5 * (a.shadow_ms + b.shadow_ms));
+    EXPECT_DOUBLE_EQ(r.summary[c].whole_frame_ms, 0.5 * (a.whole_frame_ms() + b.whole_frame_ms()));
+  }
+  const auto summary = split_lines(ptc::bench_summary_table(r).csv.str());
+  EXPECT_NE(summary[0].find("whole_frame_speedup_vs_embree_refit"), std::string::npos);
+  const std::string text = ptc::bench_text(r);
+  EXPECT_LT(text.find("whole frame"), text.find("update_ms")) << "the whole frame is printed first";
+}
+
+// Occluders: two ellipsoids, the second between the light and the first. The shadow rays of
+// the first one's lit-side points end on the second; every configuration agrees with
+// ours_triangles point by point, and the occluded count is the same everywhere.
+TEST(PeerBench, ShadowRaysAgreeAcrossConfigurationsWithOccluders) {
+  const Mesh a = sphere(4);
+  std::vector<Vec3> p(a.positions().begin(), a.positions().end());
+  std::vector<ptc::Tri> t(a.triangles().begin(), a.triangles().end());
+  const auto n = static_cast<std::uint32_t>(p.size());
+  for (const Vec3& v : a.positions()) p.push_back(0.5 * v + Vec3(0.8, 2.5, 1.2));
+  for (const ptc::Tri& tri : a.triangles()) t.push_back({tri[0] + n, tri[1] + n, tri[2] + n});
+  const Mesh m(std::move(t), std::move(p));
+  ptc::PeerBenchConfig cfg;
+  cfg.frames = {0, 1};
+  cfg.width = cfg.height = 48;
+  cfg.max_count = 20;
+  cfg.light = Vec3(1.6, 5.0, 2.4);
+  ptc::Scene sc = scene_of(m, ptc::DeformKind::Rigid);
+  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, nullptr, cfg);
+  const auto names = names_of_configs();
+  for (int f = 0; f < 2; ++f) {
+    const ptc::BenchRow& ref = r.rows[std::size_t(f) * names.size()];
+    EXPECT_GT(ref.shadow_occluded, 10u) << "frame " << f;
+    for (std::size_t c = 1; c < names.size(); ++c) {
+      const ptc::BenchRow& row = r.rows[std::size_t(f) * names.size() + c];
+      EXPECT_EQ(row.shadow_rays, ref.shadow_rays) << row.config;
+      EXPECT_EQ(row.shadow_occluded, ref.shadow_occluded) << row.config;
+      EXPECT_EQ(row.shadow_mismatches, 0u) << row.config;
+    }
+  }
+}
+
 TEST(PeerBench, GivenClusteringAndLinearLeavesAlsoMatch) {
   const Mesh m = sphere(3);
   // Clusters: the 8 octants of the octahedron (each connected).
