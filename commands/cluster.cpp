@@ -36,6 +36,7 @@ nlohmann::json value_of(const ClusterConfig& c, std::string_view p) {
   if (p == "gwh_weight") return to_string(c.gwh.weight);
   if (p == "target_clusters") return c.target_clusters;
   if (p == "max_triangles") return c.max_triangles;
+  if (p == "regions") return c.regions;
   return nullptr;
 }
 

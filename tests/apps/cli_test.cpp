@@ -376,7 +376,9 @@ TEST_F(Cli, ClusterRejectsBadArguments) {
         {"--method", "growth", "--objective", "naive", "--max-size", "10"},
         {"--method", "contraction", "--start", "index"},
         {"--method", "growth", "--target-clusters", "5"},
-        {"--method", "growth", "--objective", "acc", "--gwh-a1", "1"}}) {
+        {"--method", "growth", "--objective", "acc", "--gwh-a1", "1"},
+        {"--method", "contraction", "--regions", "4"},
+        {"--method", "growth", "--objective", "gwh01", "--regions", "4"}}) {
     std::vector<std::string> args{"cluster", mesh, "--out", (dir_ / "x").string()};
     args.insert(args.end(), extra.begin(), extra.end());
     r = ptc(args);

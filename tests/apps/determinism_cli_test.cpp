@@ -57,3 +57,29 @@ TEST_F(Determinism, TraceImagesAndCountersAreIdenticalAt1_2And4Threads) {
 }
 
 }  // namespace
+
+// `ptc cluster --regions 8` (growth in regions, the parallel mode) at --threads 1, 2 and 4: the
+// same triangles.csv and clusters.csv byte for byte, and the manifest records the regions.
+TEST_F(Determinism, ClusterRegionsAreIdenticalAt1_2And4Threads) {
+  const std::string mesh = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
+  std::string first_triangles, first_clusters;
+  for (const char* threads : {"1", "2", "4"}) {
+    SCOPED_TRACE(std::string(threads) + " threads");
+    const fs::path out = dir_ / (std::string("r") + threads);
+    const RunResult r = ptc({"cluster", mesh, "--method", "growth", "--regions", "8", "--threads", threads, "--out",
+                             out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string tri = slurp(out / "triangles.csv"), cl = slurp(out / "clusters.csv");
+    if (first_triangles.empty()) {
+      first_triangles = tri, first_clusters = cl;
+      EXPECT_NE(slurp(out / "manifest.json").find("\"regions\": 8"), std::string::npos);
+    } else {
+      EXPECT_EQ(tri, first_triangles);
+      EXPECT_EQ(cl, first_clusters);
+    }
+  }
+  // Not the one-run clusters: they stop at region borders.
+  const fs::path seq = dir_ / "seq";
+  ASSERT_EQ(ptc({"cluster", mesh, "--method", "growth", "--out", seq.string()}).code, 0);
+  EXPECT_NE(slurp(seq / "triangles.csv"), first_triangles);
+}

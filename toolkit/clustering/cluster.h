@@ -55,6 +55,10 @@ struct ClusterConfig {
   GwhParams gwh{};                                ///< GWH01 weights (a1 = 0.2, a2 = 2, area weights)
   std::uint32_t target_clusters = 0;              ///< GWH01 contraction: stop at this many clusters (0 = only MaxCount stops)
   std::uint32_t max_triangles = 0;                ///< SAH split / meshopt: triangle limit per cluster (0 = 2 * max_count)
+  /// Growth with Acc or Naive: 0 or 1 = one run over the whole mesh; N >= 2 = grow in N
+  /// spatial regions at once (regions.h: clusters stop at region borders; the same clusters at
+  /// any thread count).
+  std::uint32_t regions = 0;
 };
 
 /// What a configuration uses, asked of the clustering layer (not decided by a command): the
@@ -69,7 +73,7 @@ struct ClusterConfig {
 /// Every name used_parameters() can return.
 inline constexpr std::string_view kClusterParameters[] = {"objective", "max_count",       "max_size",     "size_bound",
                                                           "sphere",    "start",           "gwh_a1",       "gwh_a2",
-                                                          "gwh_weight", "target_clusters", "max_triangles"};
+                                                          "gwh_weight", "target_clusters", "max_triangles", "regions"};
 
 /// The hard limits every cluster of cluster_mesh(mesh, config) keeps (for validate()):
 /// sah-split and meshopt their vertex and triangle limits, Naive and GWH01 MaxCount vertices,

@@ -1,5 +1,7 @@
 #include "toolkit/clustering/clustering.h"
 
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
@@ -133,7 +135,7 @@ Clustering clustering_from_labels(std::span<const std::uint32_t> labels, std::sp
   // Sort (label, triangle) keys: each label's run starts with its smallest triangle id.
   std::vector<std::uint64_t> key(T);
   for (std::size_t t = 0; t < T; ++t) key[t] = (std::uint64_t{labels[t]} << 32) | t;
-  std::sort(key.begin(), key.end());
+  tbb::parallel_sort(key.begin(), key.end());  // distinct keys: one sorted order, whatever the threads
   struct Run {
     std::uint32_t first_triangle, begin, end;  // [begin, end) in key
   };

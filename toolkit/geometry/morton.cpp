@@ -1,5 +1,8 @@
 #include "toolkit/geometry/morton.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -53,16 +56,19 @@ std::vector<std::uint64_t> morton_codes(std::span<const Vec3> positions, std::sp
     scale[a] = e > 0.0 ? cells / e : 0.0;  // degenerate axis: every centroid in cell 0
   }
   codes.resize(triangles.size());
-  for (std::size_t t = 0; t < triangles.size(); ++t) {
-    const Tri& f = triangles[t];
-    const Vec3 c = triangle_centroid(positions[f[0]], positions[f[1]], positions[f[2]]);
-    std::uint32_t cell[3];
-    for (int a = 0; a < 3; ++a) {
-      const double q = std::floor((c[a] - box.lo[a]) * scale[a]);
-      cell[a] = q >= static_cast<double>(max_cell) ? max_cell : static_cast<std::uint32_t>(std::max(0.0, q));
+  // Per triangle, independent: in parallel (the caller's concurrency), the same codes.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t < r.end(); ++t) {
+      const Tri& f = triangles[t];
+      const Vec3 c = triangle_centroid(positions[f[0]], positions[f[1]], positions[f[2]]);
+      std::uint32_t cell[3];
+      for (int a = 0; a < 3; ++a) {
+        const double q = std::floor((c[a] - box.lo[a]) * scale[a]);
+        cell[a] = q >= static_cast<double>(max_cell) ? max_cell : static_cast<std::uint32_t>(std::max(0.0, q));
+      }
+      codes[t] = morton_encode(cell[0], cell[1], cell[2]);
     }
-    codes[t] = morton_encode(cell[0], cell[1], cell[2]);
-  }
+  });
   return codes;
 }
 
@@ -71,7 +77,8 @@ std::vector<std::uint32_t> morton_order(std::span<const Vec3> positions, std::sp
   const std::vector<std::uint64_t> codes = morton_codes(positions, triangles, grid);
   std::vector<std::uint32_t> order(codes.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+  // (code, id) is a total order: any sort, parallel or not, gives this one permutation.
+  tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
     return codes[a] != codes[b] ? codes[a] < codes[b] : a < b;
   });
   return order;

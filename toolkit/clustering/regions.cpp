@@ -1,0 +1,163 @@
+#include "toolkit/clustering/regions.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "toolkit/clustering/growth.h"
+#include "toolkit/clustering/objectives.h"
+#include "toolkit/geometry/morton.h"
+#include "toolkit/geometry/sphere.h"
+
+namespace ptc {
+
+std::vector<std::uint32_t> growth_regions(const Mesh& mesh, std::uint32_t regions) {
+  const std::size_t T = mesh.triangle_count();
+  std::vector<std::uint32_t> region(T, 0);
+  const std::uint64_t n = std::min<std::uint64_t>(std::max<std::uint32_t>(regions, 1), std::max<std::size_t>(T, 1));
+  if (n <= 1) return region;
+  const std::vector<std::uint32_t> order = morton_order(mesh.positions(), mesh.triangles());
+  for (std::size_t rank = 0; rank < T; ++rank) region[order[rank]] = static_cast<std::uint32_t>(rank * n / T);
+  return region;
+}
+
+namespace {
+
+// One region's triangles (ascending ids) as a mesh of its own: the vertices they use, ascending.
+// `scratch` (the whole mesh's vertex count, one per thread): a stamp, then the local index, of
+// every vertex the region uses; entries of other vertices are never read.
+Mesh region_mesh(const Mesh& mesh, const std::vector<std::uint32_t>& tris, std::uint32_t stamp,
+                 std::vector<std::uint32_t>& seen, std::vector<std::uint32_t>& local) {
+  std::vector<std::uint32_t> verts;
+  verts.reserve(tris.size() / 2 + 16);
+  for (std::uint32_t t : tris)
+    for (std::uint32_t v : mesh.triangles()[t])
+      if (seen[v] != stamp) seen[v] = stamp, verts.push_back(v);
+  std::sort(verts.begin(), verts.end());
+  std::vector<Vec3> pos(verts.size());
+  for (std::size_t i = 0; i < verts.size(); ++i) {
+    local[verts[i]] = static_cast<std::uint32_t>(i);
+    pos[i] = mesh.positions()[verts[i]];
+  }
+  std::vector<Tri> sub(tris.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    const Tri& t = mesh.triangles()[tris[i]];
+    sub[i] = {local[t[0]], local[t[1]], local[t[2]]};
+  }
+  return Mesh(std::move(sub), std::move(pos));
+}
+
+// AvgSA (sphere.h average_triangle_sphere_area) summed in fixed chunks of 65,536 triangles, in
+// parallel, and the chunks' sums added in order: the same value at any thread count (it may
+// differ from the one-pass sum in the last bits).
+double chunked_average_sphere_area(const Mesh& mesh) {
+  const auto tris = mesh.triangles();
+  const auto pos = mesh.positions();
+  constexpr std::size_t kChunk = 65536;
+  const std::size_t chunks = (tris.size() + kChunk - 1) / kChunk;
+  std::vector<double> sums(chunks, 0.0);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    double s = 0.0;
+    for (std::size_t t = c * kChunk; t < std::min(tris.size(), (c + 1) * kChunk); ++t)
+      s += triangle_min_sphere(pos[tris[t][0]], pos[tris[t][1]], pos[tris[t][2]]).surface_area();
+    sums[c] = s;
+  });
+  double sum = 0.0;
+  for (double s : sums) sum += s;
+  return tris.empty() ? 0.0 : sum / static_cast<double>(tris.size());
+}
+
+}  // namespace
+
+Clustering grow_in_regions(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress) {
+  if (config.method != ClusterMethod::Growth)
+    throw std::invalid_argument("grow_in_regions: regions are a mode of growth, not of " +
+                                std::string(to_string(config.method)));
+  if (config.objective != ObjectiveKind::Acc && config.objective != ObjectiveKind::Naive)
+    throw std::invalid_argument("grow_in_regions: regions work with the acc and naive objectives, not " +
+                                std::string(to_string(config.objective)));
+  const std::size_t T = mesh.triangle_count();
+  if (T == 0) {
+    if (progress) progress(1.0);
+    return Clustering{};
+  }
+  // The objective's one whole-mesh quantity (Acc's size unit), the same in every region.
+  const double avg_sa = config.objective == ObjectiveKind::Acc ? chunked_average_sphere_area(mesh) : 0.0;
+  if (config.objective == ObjectiveKind::Acc && !(avg_sa > 0.0)) {  // every triangle a point: as cluster_mesh
+    std::vector<std::uint32_t> one(T);
+    for (std::uint32_t t = 0; t < T; ++t) one[t] = t;
+    if (progress) progress(1.0);
+    return clustering_from_labels(one, mesh.triangles());
+  }
+
+  const std::vector<std::uint32_t> region = growth_regions(mesh, config.regions);
+  const std::uint32_t R = T ? *std::max_element(region.begin(), region.end()) + 1 : 0;
+  std::vector<std::vector<std::uint32_t>> members(R);
+  for (std::uint32_t t = 0; t < T; ++t) members[region[t]].push_back(t);
+
+  std::vector<std::vector<std::uint32_t>> labels(R);  // per region: its triangles' local cluster labels
+  std::mutex progress_lock;
+  std::vector<double> done(R, 0.0);  // triangles of each region taken so far
+  double total_done = 0.0;
+  auto report = [&](std::uint32_t r, double fraction) {
+    if (!progress) return;
+    const std::lock_guard<std::mutex> lock(progress_lock);
+    const double now = fraction * static_cast<double>(members[r].size());
+    if (now <= done[r]) return;
+    total_done += now - done[r];
+    done[r] = now;
+    progress(std::min(1.0, total_done / static_cast<double>(T)));
+  };
+
+  struct Scratch {
+    std::vector<std::uint32_t> seen, local;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, R, 1), [&](const tbb::blocked_range<std::uint32_t>& range) {
+    for (std::uint32_t r = range.begin(); r < range.end(); ++r) {
+      Scratch& sc = scratch.local();
+      if (sc.seen.empty()) sc.seen.assign(mesh.vertex_count(), 0), sc.local.resize(mesh.vertex_count());
+      const Mesh sub = region_mesh(mesh, members[r], r + 1, sc.seen, sc.local);
+      const ClusterTables tables = ClusterTables::build(sub, /*edge_lengths=*/false);
+      GrowthOptions o;
+      o.start = config.start;
+      const ProgressFn region_progress = [&, r](double f) { report(r, f); };
+      ClusterRun run;
+      if (config.objective == ObjectiveKind::Acc) {
+        ClusterParams params;
+        params.max_count = config.max_count;
+        params.max_size = config.max_size;
+        params.avg_sa = avg_sa;
+        params.size_bound_mode = config.size_bound_mode;
+        params.sphere = config.sphere;
+        AccObjective objective(tables, params, AccTuning::for_growth());
+        run = grow_clusters(tables, objective, o, region_progress);
+      } else {
+        NaiveObjective objective(tables, config.max_count);
+        run = grow_clusters(tables, objective, o, region_progress);
+      }
+      labels[r] = std::move(run.labels);
+    }
+  });
+
+  // Region by region, each region's clusters after the ones before (unique labels; the
+  // clustering renames them densely by their smallest triangle).
+  std::vector<std::uint32_t> global(T);
+  std::uint32_t offset = 0;
+  for (std::uint32_t r = 0; r < R; ++r) {
+    std::uint32_t count = 0;
+    for (std::size_t i = 0; i < members[r].size(); ++i) {
+      global[members[r][i]] = offset + labels[r][i];
+      count = std::max(count, labels[r][i] + 1);
+    }
+    offset += count;
+  }
+  if (progress) progress(1.0);
+  return clustering_from_labels(global, mesh.triangles());
+}
+
+}  // namespace ptc
