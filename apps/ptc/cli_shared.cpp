@@ -97,8 +97,8 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
   c->add_option("--max-triangles", cfg.max_triangles, "sah-split/meshopt triangle limit (0 = 2 x max-count)")
       ->capture_default_str();
   c->add_option("--regions", cfg.regions,
-                "growth with acc or naive: grow in N spatial regions at once, on all --threads (clusters stop at "
-                "region borders; the same clusters at any thread count); 0 or 1 = one region")
+                "growth or contraction with acc or naive: cluster N spatial regions at once, on all --threads "
+                "(clusters stop at region borders; the same clusters at any thread count); 0 or 1 = one region")
       ->check(CLI::Range(0u, 1u << 24))
       ->capture_default_str();
 }

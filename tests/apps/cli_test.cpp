@@ -369,6 +369,12 @@ TEST_F(Cli, ClusterRejectsBadArguments) {
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(lines(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("--max-count"), std::string::npos) << r.err;
+  // Regions and a target cluster count for the whole mesh do not go together.
+  r = ptc({"cluster", mesh, "--method", "contraction", "--regions", "4", "--target-clusters", "100", "--out",
+           (dir_ / "x").string()});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("--regions"), std::string::npos) << r.err;
   // A flag the method does not use is refused, naming it and what the method uses.
   for (const std::vector<std::string>& extra :
        {std::vector<std::string>{"--method", "sah-split", "--objective", "naive"},
@@ -377,7 +383,6 @@ TEST_F(Cli, ClusterRejectsBadArguments) {
         {"--method", "contraction", "--start", "index"},
         {"--method", "growth", "--target-clusters", "5"},
         {"--method", "growth", "--objective", "acc", "--gwh-a1", "1"},
-        {"--method", "contraction", "--regions", "4"},
         {"--method", "growth", "--objective", "gwh01", "--regions", "4"}}) {
     std::vector<std::string> args{"cluster", mesh, "--out", (dir_ / "x").string()};
     args.insert(args.end(), extra.begin(), extra.end());

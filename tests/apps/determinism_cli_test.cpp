@@ -62,6 +62,18 @@ TEST_F(Determinism, TraceImagesAndCountersAreIdenticalAt1_2And4Threads) {
 // same triangles.csv and clusters.csv byte for byte, and the manifest records the regions.
 TEST_F(Determinism, ClusterRegionsAreIdenticalAt1_2And4Threads) {
   const std::string mesh = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
+  {  // contraction in regions
+    std::string first;
+    for (const char* threads : {"1", "2", "4"}) {
+      const fs::path out = dir_ / (std::string("k") + threads);
+      const RunResult r = ptc({"cluster", mesh, "--method", "contraction", "--regions", "8", "--threads", threads,
+                               "--out", out.string()});
+      ASSERT_EQ(r.code, 0) << r.err;
+      const std::string tri = slurp(out / "triangles.csv");
+      if (first.empty()) first = tri;
+      else EXPECT_EQ(tri, first) << "contraction, " << threads << " threads";
+    }
+  }
   std::string first_triangles, first_clusters;
   for (const char* threads : {"1", "2", "4"}) {
     SCOPED_TRACE(std::string(threads) + " threads");

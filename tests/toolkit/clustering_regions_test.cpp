@@ -1,15 +1,16 @@
-// Growth in regions (toolkit/clustering/regions.h), the parallel mode of clustering:
+// Clustering in regions (toolkit/clustering/regions.h), the parallel mode of growth and
+// contraction:
 // - the partition: Morton ranks cut into runs of equal size (+-1), against a sort done here;
 // - an independent answer: on a mesh of separate blobs, one region per blob, the regions'
-//   growth (Naive, index start rule) equals the one-run growth of the whole mesh cluster by
-//   cluster (a cluster never leaves its blob, and within a blob the sub-mesh keeps the relative
-//   order of ids, so every decision is the same);
+//   growth (Naive, index start rule) and contraction (Naive) equal the one run over the whole
+//   mesh cluster by cluster (a cluster never leaves its blob, and within a blob the sub-mesh
+//   keeps the relative order of ids, so every decision is the same);
 // - determinism: the same clusters bit for bit at 1, 2 and 4 threads, for Acc and Naive, every
 //   start rule;
 // - validity: every cluster edge-connected, inside one region, and the clustering covers the
 //   mesh (validate());
 // - hard cases: more regions than triangles, one region, an empty mesh, degenerate triangles,
-//   collapsed meshes (AvgSA 0), and the refusals (contraction, GWH01).
+//   collapsed meshes (AvgSA 0), and the refusals (other methods, GWH01, a target cluster count).
 #include <gtest/gtest.h>
 
 #include <oneapi/tbb/global_control.h>
@@ -47,9 +48,10 @@ void expect_same(const Clustering& a, const Clustering& b, const std::string& wh
   EXPECT_EQ(a.vertex_offsets, b.vertex_offsets) << what;
 }
 
-ClusterConfig growth(ObjectiveKind o, std::uint32_t regions, StartRule start = StartRule::SpatialOrder) {
+ClusterConfig growth(ObjectiveKind o, std::uint32_t regions, StartRule start = StartRule::SpatialOrder,
+                     ClusterMethod method = ClusterMethod::Growth) {
   ClusterConfig c;
-  c.method = ClusterMethod::Growth;
+  c.method = method;
   c.objective = o;
   c.max_count = 20;
   c.max_size = 20;
@@ -106,15 +108,30 @@ TEST(Regions, SeparateBlobsGiveTheOneRunClusters) {
   const Clustering four = cluster_mesh(m, growth(ObjectiveKind::Naive, 4, StartRule::IndexOrder));
   expect_same(four, one, "index start rule");
   EXPECT_GT(one.cluster_count(), 4u * 5u);
+  const auto contraction = growth(ObjectiveKind::Naive, 0, StartRule::IndexOrder, ClusterMethod::Contraction);
+  auto contraction4 = contraction;
+  contraction4.regions = 4;
+  expect_same(cluster_mesh(m, contraction4), cluster_mesh(m, contraction), "contraction");
 }
 
 TEST(Regions, SameClustersAtAnyThreadCount) {
   const Mesh m = armadillo_52k();
-  for (ObjectiveKind o : {ObjectiveKind::Acc, ObjectiveKind::Naive})
-    for (StartRule s : {StartRule::SpatialOrder, StartRule::IndexOrder, StartRule::FewestFree}) {
-      const ClusterConfig c = growth(o, 8, s);
+  struct Run {
+    ObjectiveKind o;
+    StartRule s;
+    ClusterMethod method;
+  };
+  std::vector<Run> runs;
+  for (ObjectiveKind o : {ObjectiveKind::Acc, ObjectiveKind::Naive}) {
+    for (StartRule s : {StartRule::SpatialOrder, StartRule::IndexOrder, StartRule::FewestFree})
+      runs.push_back({o, s, ClusterMethod::Growth});
+    runs.push_back({o, StartRule::SpatialOrder, ClusterMethod::Contraction});
+  }
+  for (const Run& run : runs) {
+      const ClusterConfig c = growth(run.o, 8, run.s, run.method);
       const Clustering t1 = with_threads(1, m, c);
-      const std::string what = std::string(to_string(o)) + " " + std::string(to_string(s));
+      const std::string what = std::string(to_string(run.method)) + " " + std::string(to_string(run.o)) + " " +
+                               std::string(to_string(run.s));
       expect_same(with_threads(2, m, c), t1, what + ", 2 threads");
       expect_same(with_threads(4, m, c), t1, what + ", 4 threads");
       EXPECT_GT(t1.cluster_count(), m.triangle_count() / 60) << what;
@@ -122,9 +139,10 @@ TEST(Regions, SameClustersAtAnyThreadCount) {
 }
 
 TEST(Regions, ClustersAreConnectedAndStayInTheirRegion) {
-  for (const Mesh& m : {armadillo_52k(), jittered(grid(30, 30), 0.1, 2), degenerate_mix(), components()}) {
+  for (const Mesh& m : {armadillo_52k(), jittered(grid(30, 30), 0.1, 2), degenerate_mix(), components()})
+    for (ClusterMethod method : {ClusterMethod::Growth, ClusterMethod::Contraction})
     for (std::uint32_t n : {2u, 5u, 16u}) {
-      const ClusterConfig c = growth(ObjectiveKind::Acc, n);
+      const ClusterConfig c = growth(ObjectiveKind::Acc, n, StartRule::SpatialOrder, method);
       const Clustering cl = cluster_mesh(m, c);
       const EdgeMap edges = EdgeMap::build(m.triangles(), m.vertex_count());
       const std::vector<std::string> issues = validate(cl, m.triangles(), edges, limits_of(c));
@@ -135,7 +153,6 @@ TEST(Regions, ClustersAreConnectedAndStayInTheirRegion) {
         for (std::uint32_t t : tris) EXPECT_EQ(region[t], region[tris[0]]) << "cluster " << k << " crosses a border";
       }
     }
-  }
 }
 
 TEST(Regions, HardCasesAndRefusals) {
@@ -150,20 +167,23 @@ TEST(Regions, HardCasesAndRefusals) {
   const Mesh collapsed = m.with_positions(std::move(same));
   expect_same(cluster_mesh(collapsed, growth(ObjectiveKind::Acc, 4)), cluster_mesh(collapsed, growth(ObjectiveKind::Acc, 0)),
               "collapsed");
-  // Regions are a mode of growth with Acc or Naive.
+  // Regions are a mode of growth and contraction with Acc or Naive, without a target count.
   ClusterConfig c = growth(ObjectiveKind::Acc, 4);
-  c.method = ClusterMethod::Contraction;
-  EXPECT_THROW((void)grow_in_regions(m, c), std::invalid_argument);
+  c.method = ClusterMethod::SahSplit;
+  EXPECT_THROW((void)cluster_in_regions(m, c), std::invalid_argument);
   c = growth(ObjectiveKind::Gwh01, 4);
-  EXPECT_THROW((void)grow_in_regions(m, c), std::invalid_argument);
+  EXPECT_THROW((void)cluster_in_regions(m, c), std::invalid_argument);
+  c = growth(ObjectiveKind::Naive, 4, StartRule::SpatialOrder, ClusterMethod::Contraction);
+  c.target_clusters = 10;
+  EXPECT_THROW((void)cluster_in_regions(m, c), std::invalid_argument);
+  ASSERT_TRUE(check(c).has_value());
+  EXPECT_EQ(check(c)->parameter, "regions");
   const auto used = used_parameters(growth(ObjectiveKind::Acc, 4));
   EXPECT_NE(std::find(used.begin(), used.end(), "regions"), used.end());
   const auto used_gwh = used_parameters(growth(ObjectiveKind::Gwh01, 4));
   EXPECT_EQ(std::find(used_gwh.begin(), used_gwh.end(), "regions"), used_gwh.end());
-  ClusterConfig cc = growth(ObjectiveKind::Acc, 4);
-  cc.method = ClusterMethod::Contraction;
-  const auto used_c = used_parameters(cc);
-  EXPECT_EQ(std::find(used_c.begin(), used_c.end(), "regions"), used_c.end());
+  const auto used_c = used_parameters(growth(ObjectiveKind::Acc, 4, StartRule::SpatialOrder, ClusterMethod::Contraction));
+  EXPECT_NE(std::find(used_c.begin(), used_c.end(), "regions"), used_c.end());
 }
 
 }  // namespace

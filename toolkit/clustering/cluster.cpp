@@ -11,7 +11,8 @@
 //   value >= 0, but max_count = 0 with max_size > 0 is rejected: without a vertex limit they
 //   would merge every edge-connected component into one cluster);
 // - SahSplit, Meshopt: the checks of sah_split.h / meshopt.h;
-// - regions (growth with Acc or Naive only; ignored elsewhere: the command line refuses it there).
+// - regions (growth and contraction with Acc or Naive only; ignored elsewhere: the command line
+//   refuses it there).
 // Acc on a mesh whose AvgSA is 0 (every triangle collapsed to a point) gives one triangle per
 // cluster: every sphere has radius 0, so reg = 0 and Acc = -regBound < 0 for every merge.
 #include "toolkit/clustering/cluster.h"
@@ -125,7 +126,7 @@ std::vector<std::string_view> used_parameters(const ClusterConfig& c) {
   if (c.objective == ObjectiveKind::Acc) u.insert(u.end(), {"max_size", "size_bound", "sphere"});
   if (c.objective == ObjectiveKind::Gwh01) u.insert(u.end(), {"gwh_a1", "gwh_a2", "gwh_weight"});
   if (c.method == ClusterMethod::Growth) u.push_back("start");
-  if (c.method == ClusterMethod::Growth && c.objective != ObjectiveKind::Gwh01) u.push_back("regions");
+  if (c.objective != ObjectiveKind::Gwh01) u.push_back("regions");  // growth and contraction
   if (c.method == ClusterMethod::Contraction) u.push_back("target_clusters");
   return u;
 }
@@ -146,6 +147,9 @@ std::optional<ConfigProblem> check(const ClusterConfig& c) {
   if (!(c.max_size >= 0.0) || !std::isfinite(c.max_size))
     return ConfigProblem{"max_size", "MaxSize must be a finite number >= 0"};
   if (c.max_count == 0 && c.max_size == 0.0) return std::nullopt;
+  if (c.regions > 1 && c.target_clusters > 0 && c.method == ClusterMethod::Contraction)
+    return ConfigProblem{"regions", "regions cannot be combined with a target cluster count (a target for the whole "
+                                    "mesh, not for each region)"};
   if (c.method == ClusterMethod::SahSplit || c.method == ClusterMethod::Meshopt) {
     try {  // the limits' own checks (sah_split.h, meshopt.h: meshoptimizer's bounds)
       (void)(c.method == ClusterMethod::SahSplit ? sah_split_limits(c) : meshopt_limits(c));
@@ -199,7 +203,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
                                     "per cluster); got max_count " + std::to_string(config.max_count) +
                                     ", max_size " + std::to_string(config.max_size));
       if (mesh.empty()) return Clustering{};
-      if (config.method == ClusterMethod::Growth && config.regions > 1) return grow_in_regions(mesh, config, progress);
+      if (config.regions > 1) return cluster_in_regions(mesh, config, progress);
       const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/false);
       ClusterParams params;
       params.max_count = config.max_count;
@@ -215,7 +219,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
     case ObjectiveKind::Naive: {
       if (config.max_count == 0)
         throw std::invalid_argument("cluster_mesh: Naive needs max_count >= 3 (its only limit)");
-      if (config.method == ClusterMethod::Growth && config.regions > 1) return grow_in_regions(mesh, config, progress);
+      if (config.regions > 1) return cluster_in_regions(mesh, config, progress);
       const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/false);
       NaiveObjective objective(tables, config.max_count);
       return run_greedy(mesh, tables, objective, config, progress);

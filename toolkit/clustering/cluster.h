@@ -55,9 +55,9 @@ struct ClusterConfig {
   GwhParams gwh{};                                ///< GWH01 weights (a1 = 0.2, a2 = 2, area weights)
   std::uint32_t target_clusters = 0;              ///< GWH01 contraction: stop at this many clusters (0 = only MaxCount stops)
   std::uint32_t max_triangles = 0;                ///< SAH split / meshopt: triangle limit per cluster (0 = 2 * max_count)
-  /// Growth with Acc or Naive: 0 or 1 = one run over the whole mesh; N >= 2 = grow in N
-  /// spatial regions at once (regions.h: clusters stop at region borders; the same clusters at
-  /// any thread count).
+  /// Growth and contraction with Acc or Naive: 0 or 1 = one run over the whole mesh; N >= 2 =
+  /// cluster N spatial regions at once (regions.h: clusters stop at region borders; the same
+  /// clusters at any thread count).
   std::uint32_t regions = 0;
 };
 

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "toolkit/clustering/contraction.h"
 #include "toolkit/clustering/growth.h"
 #include "toolkit/clustering/objectives.h"
 #include "toolkit/geometry/morton.h"
@@ -73,13 +74,15 @@ double chunked_average_sphere_area(const Mesh& mesh) {
 
 }  // namespace
 
-Clustering grow_in_regions(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress) {
-  if (config.method != ClusterMethod::Growth)
-    throw std::invalid_argument("grow_in_regions: regions are a mode of growth, not of " +
+Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress) {
+  if (config.method != ClusterMethod::Growth && config.method != ClusterMethod::Contraction)
+    throw std::invalid_argument("cluster_in_regions: regions are a mode of growth and contraction, not of " +
                                 std::string(to_string(config.method)));
   if (config.objective != ObjectiveKind::Acc && config.objective != ObjectiveKind::Naive)
-    throw std::invalid_argument("grow_in_regions: regions work with the acc and naive objectives, not " +
+    throw std::invalid_argument("cluster_in_regions: regions work with the acc and naive objectives, not " +
                                 std::string(to_string(config.objective)));
+  if (config.method == ClusterMethod::Contraction && config.target_clusters > 0)
+    throw std::invalid_argument("cluster_in_regions: a target cluster count is for the whole mesh, not for regions");
   const std::size_t T = mesh.triangle_count();
   if (T == 0) {
     if (progress) progress(1.0);
@@ -99,7 +102,7 @@ Clustering grow_in_regions(const Mesh& mesh, const ClusterConfig& config, const 
   std::vector<std::vector<std::uint32_t>> members(R);
   for (std::uint32_t t = 0; t < T; ++t) members[region[t]].push_back(t);
 
-  std::vector<std::vector<std::uint32_t>> labels(R);  // per region: its triangles' local cluster labels
+  std::vector<std::vector<std::uint32_t>> labels(R);  // per region: its triangles' cluster labels (< its size)
   std::mutex progress_lock;
   std::vector<double> done(R, 0.0);  // triangles of each region taken so far
   double total_done = 0.0;
@@ -123,9 +126,17 @@ Clustering grow_in_regions(const Mesh& mesh, const ClusterConfig& config, const 
       if (sc.seen.empty()) sc.seen.assign(mesh.vertex_count(), 0), sc.local.resize(mesh.vertex_count());
       const Mesh sub = region_mesh(mesh, members[r], r + 1, sc.seen, sc.local);
       const ClusterTables tables = ClusterTables::build(sub, /*edge_lengths=*/false);
-      GrowthOptions o;
-      o.start = config.start;
       const ProgressFn region_progress = [&, r](double f) { report(r, f); };
+      auto run_with = [&](auto& objective) {
+        if (config.method == ClusterMethod::Growth) {
+          GrowthOptions o;
+          o.start = config.start;
+          return grow_clusters(tables, objective, o, region_progress);
+        }
+        ContractionOptions o;
+        o.target_clusters = config.target_clusters;
+        return contract_clusters(tables, objective, o, region_progress);
+      };
       ClusterRun run;
       if (config.objective == ObjectiveKind::Acc) {
         ClusterParams params;
@@ -134,11 +145,13 @@ Clustering grow_in_regions(const Mesh& mesh, const ClusterConfig& config, const 
         params.avg_sa = avg_sa;
         params.size_bound_mode = config.size_bound_mode;
         params.sphere = config.sphere;
-        AccObjective objective(tables, params, AccTuning::for_growth());
-        run = grow_clusters(tables, objective, o, region_progress);
+        AccObjective objective(tables, params,
+                               config.method == ClusterMethod::Growth ? AccTuning::for_growth()
+                                                                      : AccTuning::for_contraction());
+        run = run_with(objective);
       } else {
         NaiveObjective objective(tables, config.max_count);
-        run = grow_clusters(tables, objective, o, region_progress);
+        run = run_with(objective);
       }
       labels[r] = std::move(run.labels);
     }

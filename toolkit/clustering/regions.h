@@ -1,11 +1,12 @@
-// Growth in regions: the parallel mode of clustering (ClusterConfig::regions, `ptc cluster
-// --regions N`; docs/clustering.md "Parallel growth").
+// Clustering in regions: the parallel mode of growth and contraction (ClusterConfig::regions,
+// `ptc cluster --regions N`; docs/clustering.md "Parallel clustering: regions").
 //
 //   order = morton_order(mesh)                        // the whole mesh's triangles, Z-order of centroids
 //   region r = the triangles of ranks [r T / N, (r + 1) T / N) of that order, ascending by id
 //   for every region, on any thread:                  // independent: nothing is shared but the input
 //     sub-mesh = the region's triangles (ids ascending) and the vertices they use (ids ascending)
-//     grow_clusters over the sub-mesh, with the whole mesh's AvgSA (Acc) and the config's rules
+//     grow_clusters or contract_clusters over the sub-mesh, with the whole mesh's AvgSA (Acc)
+//     and the config's rules
 //   labels = every region's clusters, region by region (clustering_from_labels renames them)
 //
 // A cluster never crosses a region border: clusters at the borders are cut there (the quality
@@ -13,8 +14,9 @@
 // adjacency is a part of the mesh's). The result depends on the mesh, the config and N, never
 // on the thread count or the order in which regions finish: the same clusters bit for bit at
 // 1, 2 or N threads (tested). Within a region the sub-mesh keeps the relative order of triangle
-// and vertex ids, so the growth's tie rules (lower id first) decide as they would on the mesh.
-// Objectives: Acc and Naive (GWH01 needs the whole mesh's mean edge length); growth only.
+// and vertex ids, so the tie rules (lower id first) decide as they would on the mesh.
+// Objectives: Acc and Naive (GWH01 needs the whole mesh's mean edge length). Memory: the
+// tables and the algorithm's state of one region per thread at a time, not of the whole mesh.
 #pragma once
 
 #include <cstdint>
@@ -29,10 +31,11 @@ namespace ptc {
 /// of equal size (+-1). regions is capped at the triangle count; 0 and 1 give one region.
 [[nodiscard]] std::vector<std::uint32_t> growth_regions(const Mesh& mesh, std::uint32_t regions);
 
-/// Growth (config.method must be Growth, objective Acc or Naive) in config.regions regions, the
-/// regions in parallel (oneTBB, under the caller's concurrency limit). Throws
-/// std::invalid_argument for another method or objective. Progress: the triangles of the
-/// regions done, monotonic; called under a lock (never concurrently).
-[[nodiscard]] Clustering grow_in_regions(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress = {});
+/// Growth or contraction (config.method), objective Acc or Naive, in config.regions regions,
+/// the regions in parallel (oneTBB, under the caller's concurrency limit). Throws
+/// std::invalid_argument for another method or objective. Progress: the regions' fractions
+/// weighted by their triangles, monotonic; called under a lock (never concurrently).
+[[nodiscard]] Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config,
+                                            const ProgressFn& progress = {});
 
 }  // namespace ptc
