@@ -10,9 +10,9 @@
 // reciprocals scaled by (1 -/+ 2^-21), which covers the rounding of the subtraction, the
 // reciprocal and the product (2 gamma_3 of Ize 2013 / pbrt), so a box the exact ray touches is
 // never culled. A zero direction component gives 1/dir = +-inf; the 0 * inf = NaN of an origin
-// exactly on a slab plane is dropped by the max/min order (the ray's own bounds are always the
-// right-hand operands, so a NaN can only widen the interval), so axis-aligned rays lose no rows
-// of pixels.
+// exactly on a slab plane is dropped by the max/min order (the ray's own bound is the outer
+// right-hand operand, so the result is never NaN; a NaN drops itself and possibly its partner:
+// the interval only widens), so axis-aligned rays lose no rows of pixels.
 // The closest hit is the smallest (t, triangle id) pair, so it does not depend on the tree:
 // ties between triangles (rays through shared edges and vertices) resolve to the lower id.
 #pragma once

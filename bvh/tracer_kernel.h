@@ -294,9 +294,11 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
       const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fz), oz), ifz);
       // A tree of two levels (the chain of three was the longest part of a node's latency).
       // _mm_max_ps(a, b) returns b when either is NaN (0 * inf: an origin on a slab plane of an
-      // axis the ray does not move along), and the right-hand operands hold the ray's bounds,
-      // which are never NaN: a NaN drops itself and at most its partner from the max (min), so
-      // the interval only widens and no box the ray touches is culled.
+      // axis the ray does not move along). The outer max's right-hand operand holds the ray's
+      // own bound and is never NaN, so the result is never NaN; a NaN drops itself and possibly
+      // its partner of the inner max (tny NaN drops tnx too): the interval only widens, no box
+      // the ray touches is culled, and an axis-aligned ray on a slab plane may visit a box its
+      // other slab would have culled.
       const __m128 tn = _mm_max_ps(_mm_max_ps(tnx, tny), _mm_max_ps(tnz, tmin4));
       const __m128 tf = _mm_min_ps(_mm_min_ps(tfx, tfy), _mm_min_ps(tfz, tmax4));
       unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(tn, tf)));

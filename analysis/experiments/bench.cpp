@@ -139,7 +139,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   // The shadow pass: one batch per frame, made from ours_triangles' primary hits on the frame's
   // positions (the first configuration of the loop), traced by every configuration.
   res.shadows = cfg.light.has_value();
-  Mesh frame_mesh = mesh;
+  std::optional<Mesh> frame_mesh;  // only with a light: the frame's positions on the mesh's triangles
   SurfaceHits surface;
   Box3 frame_bounds;
   std::vector<std::uint8_t> ref_lit;
@@ -164,9 +164,10 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     if (fr.accel > 0) row.agreement = compare_hits(ref, hits, cfg.tie);
     if (cfg.light) {
       if (fr.accel == 0) {
-        frame_mesh.set_positions(std::vector<Vec3>(positions.begin(), positions.end()));
-        surface = surface_hits(frame_mesh, rays, ref);
-        frame_bounds = frame_mesh.bounds();
+        if (!frame_mesh) frame_mesh = mesh;
+        frame_mesh->set_positions(std::vector<Vec3>(positions.begin(), positions.end()));
+        surface = surface_hits(*frame_mesh, rays, ref);
+        frame_bounds = frame_mesh->bounds();
       }
       const ShadowResult sr = trace_shadows(target_of(a), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
                                             cfg.threads);

@@ -21,11 +21,13 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/clustering.h"
 #include "toolkit/clustering/regions.h"
+#include "toolkit/core/cancel.h"
 #include "toolkit/geometry/morton.h"
 #include "toolkit/mesh/subdivision.h"
 #include "toolkit/mesh/topology.h"
@@ -72,7 +74,9 @@ TEST(Regions, PartitionCutsTheMortonOrderIntoEqualRuns) {
     for (std::size_t rank = 0; rank < order.size(); ++rank) {
       const std::uint32_t r = region[order[rank]];
       ASSERT_LT(r, n);
-      if (rank > 0) EXPECT_GE(r, region[order[rank - 1]]) << "runs of the Morton order, n = " << n;
+      if (rank > 0) {
+        EXPECT_GE(r, region[order[rank - 1]]) << "runs of the Morton order, n = " << n;
+      }
       ++size[r];
     }
     const auto [lo, hi] = std::minmax_element(size.begin(), size.end());
@@ -178,12 +182,45 @@ TEST(Regions, HardCasesAndRefusals) {
   EXPECT_THROW((void)cluster_in_regions(m, c), std::invalid_argument);
   ASSERT_TRUE(check(c).has_value());
   EXPECT_EQ(check(c)->parameter, "regions");
+  for (ClusterConfig bad : {growth(ObjectiveKind::Gwh01, 4), growth(ObjectiveKind::Acc, 4, StartRule::SpatialOrder,
+                                                                     ClusterMethod::SahSplit)}) {
+    ASSERT_TRUE(check(bad).has_value());
+    EXPECT_EQ(check(bad)->parameter, "regions");
+  }
+  EXPECT_FALSE(check(growth(ObjectiveKind::Naive, 4, StartRule::SpatialOrder, ClusterMethod::Contraction)).has_value());
   const auto used = used_parameters(growth(ObjectiveKind::Acc, 4));
   EXPECT_NE(std::find(used.begin(), used.end(), "regions"), used.end());
   const auto used_gwh = used_parameters(growth(ObjectiveKind::Gwh01, 4));
   EXPECT_EQ(std::find(used_gwh.begin(), used_gwh.end(), "regions"), used_gwh.end());
   const auto used_c = used_parameters(growth(ObjectiveKind::Acc, 4, StartRule::SpatialOrder, ClusterMethod::Contraction));
   EXPECT_NE(std::find(used_c.begin(), used_c.end(), "regions"), used_c.end());
+}
+
+// A stop request ends a clustering in regions with ptc::Interrupted (every region polls it when
+// it reports progress, on any thread), and progress is only reported on the caller's thread.
+TEST(Regions, StopsOnRequestAndReportsOnTheCallersThread) {
+  const Mesh m = armadillo_52k();
+  const std::thread::id caller = std::this_thread::get_id();
+  std::size_t calls = 0, foreign = 0;
+  double last = 0.0;
+  bool monotonic = true;
+  const Clustering c = cluster_mesh(m, growth(ObjectiveKind::Acc, 8), [&](double f) {
+    ++calls;
+    foreign += std::this_thread::get_id() != caller;
+    monotonic = monotonic && f >= last;
+    last = f;
+  });
+  EXPECT_GT(calls, 2u);
+  EXPECT_EQ(foreign, 0u);
+  EXPECT_TRUE(monotonic);
+  EXPECT_EQ(last, 1.0);
+  EXPECT_GT(c.cluster_count(), 0u);
+  request_cancel();
+  EXPECT_THROW((void)cluster_mesh(m, growth(ObjectiveKind::Acc, 8)), Interrupted);
+  EXPECT_THROW((void)cluster_mesh(m, growth(ObjectiveKind::Naive, 8, StartRule::SpatialOrder, ClusterMethod::Contraction)),
+               Interrupted);
+  reset_cancel();
+  expect_same(cluster_mesh(m, growth(ObjectiveKind::Acc, 8)), c, "after the reset");
 }
 
 }  // namespace

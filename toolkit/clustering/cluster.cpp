@@ -147,9 +147,15 @@ std::optional<ConfigProblem> check(const ClusterConfig& c) {
   if (!(c.max_size >= 0.0) || !std::isfinite(c.max_size))
     return ConfigProblem{"max_size", "MaxSize must be a finite number >= 0"};
   if (c.max_count == 0 && c.max_size == 0.0) return std::nullopt;
-  if (c.regions > 1 && c.target_clusters > 0 && c.method == ClusterMethod::Contraction)
-    return ConfigProblem{"regions", "regions cannot be combined with a target cluster count (a target for the whole "
-                                    "mesh, not for each region)"};
+  if (c.regions > 1) {
+    const bool regional = (c.method == ClusterMethod::Growth || c.method == ClusterMethod::Contraction) &&
+                          c.objective != ObjectiveKind::Gwh01;
+    if (!regional)
+      return ConfigProblem{"regions", "regions are a mode of growth and contraction with the acc or naive objective"};
+    if (c.method == ClusterMethod::Contraction && c.target_clusters > 0)
+      return ConfigProblem{"regions", "regions cannot be combined with a target cluster count (a target for the "
+                                      "whole mesh, not for each region)"};
+  }
   if (c.method == ClusterMethod::SahSplit || c.method == ClusterMethod::Meshopt) {
     try {  // the limits' own checks (sah_split.h, meshopt.h: meshoptimizer's bounds)
       (void)(c.method == ClusterMethod::SahSplit ? sah_split_limits(c) : meshopt_limits(c));

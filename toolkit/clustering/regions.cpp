@@ -2,15 +2,19 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "toolkit/clustering/contraction.h"
 #include "toolkit/clustering/growth.h"
 #include "toolkit/clustering/objectives.h"
+#include "toolkit/core/cancel.h"
 #include "toolkit/geometry/morton.h"
 #include "toolkit/geometry/sphere.h"
 
@@ -103,17 +107,23 @@ Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, con
   for (std::uint32_t t = 0; t < T; ++t) members[region[t]].push_back(t);
 
   std::vector<std::vector<std::uint32_t>> labels(R);  // per region: its triangles' cluster labels (< its size)
+  // Progress: every region adds its triangles done to one total; only the caller's thread calls
+  // `progress` (a progress bar is not for TBB tasks, and may throw Interrupted), and every
+  // region's report polls the stop request, so an interrupt ends the running regions promptly.
   std::mutex progress_lock;
   std::vector<double> done(R, 0.0);  // triangles of each region taken so far
   double total_done = 0.0;
+  const std::thread::id caller = std::this_thread::get_id();
   auto report = [&](std::uint32_t r, double fraction) {
-    if (!progress) return;
-    const std::lock_guard<std::mutex> lock(progress_lock);
-    const double now = fraction * static_cast<double>(members[r].size());
-    if (now <= done[r]) return;
-    total_done += now - done[r];
-    done[r] = now;
-    progress(std::min(1.0, total_done / static_cast<double>(T)));
+    throw_if_cancelled();
+    double total;
+    {
+      const std::lock_guard<std::mutex> lock(progress_lock);
+      const double now = fraction * static_cast<double>(members[r].size());
+      if (now > done[r]) total_done += now - done[r], done[r] = now;
+      total = total_done;
+    }
+    if (progress && std::this_thread::get_id() == caller) progress(std::min(1.0, total / static_cast<double>(T)));
   };
 
   struct Scratch {
@@ -122,40 +132,46 @@ Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, con
   tbb::enumerable_thread_specific<Scratch> scratch;
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, R, 1), [&](const tbb::blocked_range<std::uint32_t>& range) {
     for (std::uint32_t r = range.begin(); r < range.end(); ++r) {
-      Scratch& sc = scratch.local();
-      if (sc.seen.empty()) sc.seen.assign(mesh.vertex_count(), 0), sc.local.resize(mesh.vertex_count());
-      const Mesh sub = region_mesh(mesh, members[r], r + 1, sc.seen, sc.local);
-      const ClusterTables tables = ClusterTables::build(sub, /*edge_lengths=*/false);
-      const ProgressFn region_progress = [&, r](double f) { report(r, f); };
-      auto run_with = [&](auto& objective) {
-        if (config.method == ClusterMethod::Growth) {
-          GrowthOptions o;
-          o.start = config.start;
-          return grow_clusters(tables, objective, o, region_progress);
+      if (tbb::is_current_task_group_canceling()) return;  // another region threw
+      // Isolated: while this region waits in a nested parallel loop (the Morton sort of its
+      // start rule), its thread takes no other region, so a thread holds one region's state.
+      tbb::this_task_arena::isolate([&] {
+        Scratch& sc = scratch.local();
+        if (sc.seen.empty()) sc.seen.assign(mesh.vertex_count(), 0), sc.local.resize(mesh.vertex_count());
+        const Mesh sub = region_mesh(mesh, members[r], r + 1, sc.seen, sc.local);
+        const ClusterTables tables = ClusterTables::build(sub, /*edge_lengths=*/false);
+        const ProgressFn region_progress = [&, r](double f) { report(r, f); };
+        auto run_with = [&](auto& objective) {
+          if (config.method == ClusterMethod::Growth) {
+            GrowthOptions o;
+            o.start = config.start;
+            return grow_clusters(tables, objective, o, region_progress);
+          }
+          ContractionOptions o;
+          o.target_clusters = config.target_clusters;
+          return contract_clusters(tables, objective, o, region_progress);
+        };
+        ClusterRun run;
+        if (config.objective == ObjectiveKind::Acc) {
+          ClusterParams params;
+          params.max_count = config.max_count;
+          params.max_size = config.max_size;
+          params.avg_sa = avg_sa;
+          params.size_bound_mode = config.size_bound_mode;
+          params.sphere = config.sphere;
+          AccObjective objective(tables, params,
+                                 config.method == ClusterMethod::Growth ? AccTuning::for_growth()
+                                                                        : AccTuning::for_contraction());
+          run = run_with(objective);
+        } else {
+          NaiveObjective objective(tables, config.max_count);
+          run = run_with(objective);
         }
-        ContractionOptions o;
-        o.target_clusters = config.target_clusters;
-        return contract_clusters(tables, objective, o, region_progress);
-      };
-      ClusterRun run;
-      if (config.objective == ObjectiveKind::Acc) {
-        ClusterParams params;
-        params.max_count = config.max_count;
-        params.max_size = config.max_size;
-        params.avg_sa = avg_sa;
-        params.size_bound_mode = config.size_bound_mode;
-        params.sphere = config.sphere;
-        AccObjective objective(tables, params,
-                               config.method == ClusterMethod::Growth ? AccTuning::for_growth()
-                                                                      : AccTuning::for_contraction());
-        run = run_with(objective);
-      } else {
-        NaiveObjective objective(tables, config.max_count);
-        run = run_with(objective);
-      }
-      labels[r] = std::move(run.labels);
+        labels[r] = std::move(run.labels);
+      });
     }
   });
+  if (progress) progress(1.0);
 
   // Region by region, each region's clusters after the ones before (unique labels; the
   // clustering renames them densely by their smallest triangle).
@@ -169,7 +185,6 @@ Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, con
     }
     offset += count;
   }
-  if (progress) progress(1.0);
   return clustering_from_labels(global, mesh.triangles());
 }
 

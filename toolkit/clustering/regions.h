@@ -16,7 +16,9 @@
 // 1, 2 or N threads (tested). Within a region the sub-mesh keeps the relative order of triangle
 // and vertex ids, so the tie rules (lower id first) decide as they would on the mesh.
 // Objectives: Acc and Naive (GWH01 needs the whole mesh's mean edge length). Memory: the
-// tables and the algorithm's state of one region per thread at a time, not of the whole mesh.
+// tables and the algorithm's state of one region per thread at a time (each region's work is
+// isolated, so a thread waiting in a nested parallel loop takes no other region), not of the
+// whole mesh, plus two scratch arrays of the mesh's vertex count (8 bytes a vertex) per thread.
 #pragma once
 
 #include <cstdint>
@@ -34,7 +36,8 @@ namespace ptc {
 /// Growth or contraction (config.method), objective Acc or Naive, in config.regions regions,
 /// the regions in parallel (oneTBB, under the caller's concurrency limit). Throws
 /// std::invalid_argument for another method or objective. Progress: the regions' fractions
-/// weighted by their triangles, monotonic; called under a lock (never concurrently).
+/// weighted by their triangles, monotonic, called on the caller's thread only. Every region
+/// polls throw_if_cancelled() (toolkit/core/cancel.h) when it reports: ptc::Interrupted.
 [[nodiscard]] Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config,
                                             const ProgressFn& progress = {});
 
