@@ -281,7 +281,19 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
   StackEntry* sp = stack;
   std::uint32_t ref = d.root, cnt = 0;  // the entry being visited (the root: entered at -inf)
   std::uint32_t visited = 0, tris = 0;
-  for (;;) {
+  // The next entry into (ref, cnt); false when the stack is empty. Closest hit skips the entries
+  // whose box starts beyond the best hit found since they were pushed.
+  auto pop = [&] {
+    while (sp != stack) {
+      --sp;
+      if (AnyHit || !(sp->t > tmax)) {
+        ref = sp->ref, cnt = sp->count;
+        return true;
+      }
+    }
+    return false;
+  };
+  do {
     bool miss = false;
     while (cnt == 0) {
       const float* b = &nodes[ref].bounds[0][0];
@@ -345,15 +357,7 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
       if (intersect_leaf<AnyHit>(d, ref, cnt, r, tmax, res, tris)) break;  // any hit: done
       if (tmax != before) tmax4 = _mm_set1_ps(tmax);
     }
-    // Next entry; closest hit skips those whose box starts beyond the best hit found since.
-    for (;;) {
-      if (sp == stack) goto done;
-      --sp;
-      if (AnyHit || !(sp->t > tmax)) break;
-    }
-    ref = sp->ref, cnt = sp->count;
-  }
-done:
+  } while (pop());
   res.nodes = visited, res.tris = tris;
 }
 

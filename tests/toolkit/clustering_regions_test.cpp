@@ -68,7 +68,7 @@ TEST(Regions, PartitionCutsTheMortonOrderIntoEqualRuns) {
   const Mesh m = jittered(grid(40, 30), 0.2, 7);
   const std::vector<std::uint32_t> order = morton_order(m.positions(), m.triangles());
   for (std::uint32_t n : {1u, 2u, 3u, 7u, 64u}) {
-    const std::vector<std::uint32_t> region = growth_regions(m, n);
+    const std::vector<std::uint32_t> region = cluster_regions(m, n);
     ASSERT_EQ(region.size(), m.triangle_count());
     std::vector<std::size_t> size(n, 0);
     for (std::size_t rank = 0; rank < order.size(); ++rank) {
@@ -85,9 +85,9 @@ TEST(Regions, PartitionCutsTheMortonOrderIntoEqualRuns) {
   }
   // More regions than triangles: one triangle a region.
   const Mesh tiny = icosahedron();
-  const std::vector<std::uint32_t> r = growth_regions(tiny, 1000);
+  const std::vector<std::uint32_t> r = cluster_regions(tiny, 1000);
   EXPECT_EQ(std::set<std::uint32_t>(r.begin(), r.end()).size(), tiny.triangle_count());
-  EXPECT_EQ(growth_regions(Mesh{}, 4).size(), 0u);
+  EXPECT_EQ(cluster_regions(Mesh{}, 4).size(), 0u);
 }
 
 TEST(Regions, SeparateBlobsGiveTheOneRunClusters) {
@@ -100,7 +100,7 @@ TEST(Regions, SeparateBlobsGiveTheOneRunClusters) {
     for (Vec3& v : p) v += Vec3(k % 2 ? 100.0 : 0.0, k / 2 ? 100.0 : 0.0, 0.0);
     m = concat(m, blob.with_positions(std::move(p)));
   }
-  const std::vector<std::uint32_t> region = growth_regions(m, 4);
+  const std::vector<std::uint32_t> region = cluster_regions(m, 4);
   const std::size_t per = blob.triangle_count();
   for (std::size_t t = 0; t < m.triangle_count(); ++t) {
     // each blob is one region (which one depends on the Morton order of the corners)
@@ -151,7 +151,7 @@ TEST(Regions, ClustersAreConnectedAndStayInTheirRegion) {
       const EdgeMap edges = EdgeMap::build(m.triangles(), m.vertex_count());
       const std::vector<std::string> issues = validate(cl, m.triangles(), edges, limits_of(c));
       EXPECT_TRUE(issues.empty()) << issues.front();
-      const std::vector<std::uint32_t> region = growth_regions(m, n);
+      const std::vector<std::uint32_t> region = cluster_regions(m, n);
       for (std::size_t k = 0; k < cl.cluster_count(); ++k) {
         const auto tris = cl.triangles_of(k);
         for (std::uint32_t t : tris) EXPECT_EQ(region[t], region[tris[0]]) << "cluster " << k << " crosses a border";
@@ -174,12 +174,12 @@ TEST(Regions, HardCasesAndRefusals) {
   // Regions are a mode of growth and contraction with Acc or Naive, without a target count.
   ClusterConfig c = growth(ObjectiveKind::Acc, 4);
   c.method = ClusterMethod::SahSplit;
-  EXPECT_THROW((void)cluster_in_regions(m, c), std::invalid_argument);
+  EXPECT_THROW((void)cluster_in_regions(m, c, 1.0), std::invalid_argument);
   c = growth(ObjectiveKind::Gwh01, 4);
-  EXPECT_THROW((void)cluster_in_regions(m, c), std::invalid_argument);
+  EXPECT_THROW((void)cluster_in_regions(m, c, 1.0), std::invalid_argument);
   c = growth(ObjectiveKind::Naive, 4, StartRule::SpatialOrder, ClusterMethod::Contraction);
   c.target_clusters = 10;
-  EXPECT_THROW((void)cluster_in_regions(m, c), std::invalid_argument);
+  EXPECT_THROW((void)cluster_in_regions(m, c, 1.0), std::invalid_argument);
   ASSERT_TRUE(check(c).has_value());
   EXPECT_EQ(check(c)->parameter, "regions");
   for (ClusterConfig bad : {growth(ObjectiveKind::Gwh01, 4), growth(ObjectiveKind::Acc, 4, StartRule::SpatialOrder,

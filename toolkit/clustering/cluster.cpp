@@ -49,22 +49,49 @@ Clustering one_per_triangle(const Mesh& mesh) {
 }
 
 template <ClusterObjective O>
-Clustering run_greedy(const Mesh& mesh, const ClusterTables& tables, O& objective, const ClusterConfig& config,
+ClusterRun run_method(const ClusterTables& tables, O& objective, const ClusterConfig& config,
                       const ProgressFn& progress) {
-  ClusterRun run;
   if (config.method == ClusterMethod::Growth) {
     GrowthOptions o;
     o.start = config.start;
-    run = grow_clusters(tables, objective, o, progress);
-  } else {
-    ContractionOptions o;
-    o.target_clusters = config.target_clusters;
-    run = contract_clusters(tables, objective, o, progress);
+    return grow_clusters(tables, objective, o, progress);
   }
-  return clustering_from_labels(run.labels, mesh.triangles());
+  ContractionOptions o;
+  o.target_clusters = config.target_clusters;
+  return contract_clusters(tables, objective, o, progress);
 }
 
 }  // namespace
+
+namespace detail {
+
+ClusterRun run_objective(const ClusterTables& tables, const ClusterConfig& config, double avg_sa,
+                         const ProgressFn& progress) {
+  switch (config.objective) {
+    case ObjectiveKind::Acc: {
+      ClusterParams params;
+      params.max_count = config.max_count;
+      params.max_size = config.max_size;
+      params.avg_sa = avg_sa;
+      params.size_bound_mode = config.size_bound_mode;
+      params.sphere = config.sphere;
+      AccObjective objective(tables, params,
+                            config.method == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction());
+      return run_method(tables, objective, config, progress);
+    }
+    case ObjectiveKind::Naive: {
+      NaiveObjective objective(tables, config.max_count);
+      return run_method(tables, objective, config, progress);
+    }
+    case ObjectiveKind::Gwh01: {
+      Gwh01Objective objective(tables, config.max_count, config.gwh);
+      return run_method(tables, objective, config, progress);
+    }
+  }
+  throw std::invalid_argument("cluster_mesh: unknown objective");
+}
+
+}  // namespace detail
 
 std::string_view to_string(ClusterMethod m) {
   switch (m) {
@@ -201,44 +228,31 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
     case ClusterMethod::Contraction: break;
   }
 
-  // Growth and contraction: the enum -> objective type dispatch, done once here.
+  // Growth and contraction: the objective's own checks, then the one dispatch (detail::run_objective).
+  double avg_sa = 0.0;
   switch (config.objective) {
-    case ObjectiveKind::Acc: {
+    case ObjectiveKind::Acc:
       if (config.max_count == 0 || config.max_size == 0.0)
         throw std::invalid_argument("cluster_mesh: Acc needs max_count > 0 and max_size > 0 (both 0 = one triangle "
                                     "per cluster); got max_count " + std::to_string(config.max_count) +
                                     ", max_size " + std::to_string(config.max_size));
       if (mesh.empty()) return Clustering{};
-      if (config.regions > 1) return cluster_in_regions(mesh, config, progress);
-      const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/false);
-      ClusterParams params;
-      params.max_count = config.max_count;
-      params.max_size = config.max_size;
-      params.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
-      params.size_bound_mode = config.size_bound_mode;
-      params.sphere = config.sphere;
-      if (!(params.avg_sa > 0.0)) return one_per_triangle(mesh);  // see the file comment
-      AccObjective objective(tables, params,
-                            config.method == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction());
-      return run_greedy(mesh, tables, objective, config, progress);
-    }
-    case ObjectiveKind::Naive: {
+      avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+      if (!(avg_sa > 0.0)) return one_per_triangle(mesh);  // see the file comment
+      break;
+    case ObjectiveKind::Naive:
       if (config.max_count == 0)
         throw std::invalid_argument("cluster_mesh: Naive needs max_count >= 3 (its only limit)");
-      if (config.regions > 1) return cluster_in_regions(mesh, config, progress);
-      const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/false);
-      NaiveObjective objective(tables, config.max_count);
-      return run_greedy(mesh, tables, objective, config, progress);
-    }
-    case ObjectiveKind::Gwh01: {
+      break;
+    case ObjectiveKind::Gwh01:
       if (config.max_count == 0)
         throw std::invalid_argument("cluster_mesh: GWH01 needs max_count >= 3 (its vertex limit)");
-      const ClusterTables tables = ClusterTables::build(mesh);
-      Gwh01Objective objective(tables, config.max_count, config.gwh);
-      return run_greedy(mesh, tables, objective, config, progress);
-    }
+      break;
   }
-  throw std::invalid_argument("cluster_mesh: unknown objective");
+  if (config.regions > 1) return cluster_in_regions(mesh, config, avg_sa, progress);
+  // Edge lengths only for GWH01 (its boundary term and length scale).
+  const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/config.objective == ObjectiveKind::Gwh01);
+  return clustering_from_labels(detail::run_objective(tables, config, avg_sa, progress).labels, mesh.triangles());
 }
 
 }  // namespace ptc

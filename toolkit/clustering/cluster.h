@@ -105,4 +105,13 @@ using ProgressFn = std::function<void(double)>;
 /// max_size > 0).
 [[nodiscard]] Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress = {});
 
+struct ClusterTables;
+struct ClusterRun;
+namespace detail {
+/// Internal (cluster_mesh and regions.h): config's objective over `tables` (avg_sa: Acc's AvgSA),
+/// then growth or contraction by config.method.
+[[nodiscard]] ClusterRun run_objective(const ClusterTables& tables, const ClusterConfig& config, double avg_sa,
+                                       const ProgressFn& progress);
+}  // namespace detail
+
 }  // namespace ptc

@@ -7,20 +7,18 @@
 
 #include <algorithm>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
 
-#include "toolkit/clustering/contraction.h"
-#include "toolkit/clustering/growth.h"
 #include "toolkit/clustering/objectives.h"
 #include "toolkit/core/cancel.h"
 #include "toolkit/geometry/morton.h"
-#include "toolkit/geometry/sphere.h"
 
 namespace ptc {
 
-std::vector<std::uint32_t> growth_regions(const Mesh& mesh, std::uint32_t regions) {
+std::vector<std::uint32_t> cluster_regions(const Mesh& mesh, std::uint32_t regions) {
   const std::size_t T = mesh.triangle_count();
   std::vector<std::uint32_t> region(T, 0);
   const std::uint64_t n = std::min<std::uint64_t>(std::max<std::uint32_t>(regions, 1), std::max<std::size_t>(T, 1));
@@ -56,53 +54,22 @@ Mesh region_mesh(const Mesh& mesh, const std::vector<std::uint32_t>& tris, std::
   return Mesh(std::move(sub), std::move(pos));
 }
 
-// AvgSA (sphere.h average_triangle_sphere_area) summed in fixed chunks of 65,536 triangles, in
-// parallel, and the chunks' sums added in order: the same value at any thread count (it may
-// differ from the one-pass sum in the last bits).
-double chunked_average_sphere_area(const Mesh& mesh) {
-  const auto tris = mesh.triangles();
-  const auto pos = mesh.positions();
-  constexpr std::size_t kChunk = 65536;
-  const std::size_t chunks = (tris.size() + kChunk - 1) / kChunk;
-  std::vector<double> sums(chunks, 0.0);
-  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-    double s = 0.0;
-    for (std::size_t t = c * kChunk; t < std::min(tris.size(), (c + 1) * kChunk); ++t)
-      s += triangle_min_sphere(pos[tris[t][0]], pos[tris[t][1]], pos[tris[t][2]]).surface_area();
-    sums[c] = s;
-  });
-  double sum = 0.0;
-  for (double s : sums) sum += s;
-  return tris.empty() ? 0.0 : sum / static_cast<double>(tris.size());
-}
-
 }  // namespace
 
-Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress) {
-  if (config.method != ClusterMethod::Growth && config.method != ClusterMethod::Contraction)
-    throw std::invalid_argument("cluster_in_regions: regions are a mode of growth and contraction, not of " +
-                                std::string(to_string(config.method)));
-  if (config.objective != ObjectiveKind::Acc && config.objective != ObjectiveKind::Naive)
-    throw std::invalid_argument("cluster_in_regions: regions work with the acc and naive objectives, not " +
-                                std::string(to_string(config.objective)));
-  if (config.method == ClusterMethod::Contraction && config.target_clusters > 0)
-    throw std::invalid_argument("cluster_in_regions: a target cluster count is for the whole mesh, not for regions");
+Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, double avg_sa,
+                              const ProgressFn& progress) {
+  ClusterConfig as_regions = config;  // check()'s rules of regions, also for regions <= 1
+  as_regions.regions = std::max<std::uint32_t>(config.regions, 2);
+  if (const std::optional<ConfigProblem> p = check(as_regions))
+    throw std::invalid_argument("cluster_in_regions: " + p->reason);
   const std::size_t T = mesh.triangle_count();
   if (T == 0) {
     if (progress) progress(1.0);
     return Clustering{};
   }
-  // The objective's one whole-mesh quantity (Acc's size unit), the same in every region.
-  const double avg_sa = config.objective == ObjectiveKind::Acc ? chunked_average_sphere_area(mesh) : 0.0;
-  if (config.objective == ObjectiveKind::Acc && !(avg_sa > 0.0)) {  // every triangle a point: as cluster_mesh
-    std::vector<std::uint32_t> one(T);
-    for (std::uint32_t t = 0; t < T; ++t) one[t] = t;
-    if (progress) progress(1.0);
-    return clustering_from_labels(one, mesh.triangles());
-  }
 
-  const std::vector<std::uint32_t> region = growth_regions(mesh, config.regions);
-  const std::uint32_t R = T ? *std::max_element(region.begin(), region.end()) + 1 : 0;
+  const std::vector<std::uint32_t> region = cluster_regions(mesh, config.regions);
+  const std::uint32_t R = *std::max_element(region.begin(), region.end()) + 1;
   std::vector<std::vector<std::uint32_t>> members(R);
   for (std::uint32_t t = 0; t < T; ++t) members[region[t]].push_back(t);
 
@@ -141,33 +108,7 @@ Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, con
         const Mesh sub = region_mesh(mesh, members[r], r + 1, sc.seen, sc.local);
         const ClusterTables tables = ClusterTables::build(sub, /*edge_lengths=*/false);
         const ProgressFn region_progress = [&, r](double f) { report(r, f); };
-        auto run_with = [&](auto& objective) {
-          if (config.method == ClusterMethod::Growth) {
-            GrowthOptions o;
-            o.start = config.start;
-            return grow_clusters(tables, objective, o, region_progress);
-          }
-          ContractionOptions o;
-          o.target_clusters = config.target_clusters;
-          return contract_clusters(tables, objective, o, region_progress);
-        };
-        ClusterRun run;
-        if (config.objective == ObjectiveKind::Acc) {
-          ClusterParams params;
-          params.max_count = config.max_count;
-          params.max_size = config.max_size;
-          params.avg_sa = avg_sa;
-          params.size_bound_mode = config.size_bound_mode;
-          params.sphere = config.sphere;
-          AccObjective objective(tables, params,
-                                 config.method == ClusterMethod::Growth ? AccTuning::for_growth()
-                                                                        : AccTuning::for_contraction());
-          run = run_with(objective);
-        } else {
-          NaiveObjective objective(tables, config.max_count);
-          run = run_with(objective);
-        }
-        labels[r] = std::move(run.labels);
+        labels[r] = detail::run_objective(tables, config, avg_sa, region_progress).labels;
       });
     }
   });

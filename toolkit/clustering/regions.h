@@ -5,8 +5,8 @@
 //   region r = the triangles of ranks [r T / N, (r + 1) T / N) of that order, ascending by id
 //   for every region, on any thread:                  // independent: nothing is shared but the input
 //     sub-mesh = the region's triangles (ids ascending) and the vertices they use (ids ascending)
-//     grow_clusters or contract_clusters over the sub-mesh, with the whole mesh's AvgSA (Acc)
-//     and the config's rules
+//     the one run's objective and method over the sub-mesh (cluster.h detail::run_objective),
+//     with the whole mesh's AvgSA (Acc)
 //   labels = every region's clusters, region by region (clustering_from_labels renames them)
 //
 // A cluster never crosses a region border: clusters at the borders are cut there (the quality
@@ -31,14 +31,16 @@ namespace ptc {
 
 /// The region (0 .. regions - 1) of every triangle: Morton-order ranks cut into `regions` runs
 /// of equal size (+-1). regions is capped at the triangle count; 0 and 1 give one region.
-[[nodiscard]] std::vector<std::uint32_t> growth_regions(const Mesh& mesh, std::uint32_t regions);
+[[nodiscard]] std::vector<std::uint32_t> cluster_regions(const Mesh& mesh, std::uint32_t regions);
 
 /// Growth or contraction (config.method), objective Acc or Naive, in config.regions regions,
-/// the regions in parallel (oneTBB, under the caller's concurrency limit). Throws
-/// std::invalid_argument for another method or objective. Progress: the regions' fractions
-/// weighted by their triangles, monotonic, called on the caller's thread only. Every region
-/// polls throw_if_cancelled() (toolkit/core/cancel.h) when it reports: ptc::Interrupted.
-[[nodiscard]] Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config,
+/// the regions in parallel (oneTBB, under the caller's concurrency limit). avg_sa: the whole
+/// mesh's AvgSA (Acc's size unit, > 0; cluster_mesh computes it; ignored by Naive). Throws
+/// std::invalid_argument for a configuration check() refuses with regions. Progress: the
+/// regions' fractions weighted by their triangles, monotonic, called on the caller's thread
+/// only. Every region polls throw_if_cancelled() (toolkit/core/cancel.h) when it reports:
+/// ptc::Interrupted.
+[[nodiscard]] Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, double avg_sa,
                                             const ProgressFn& progress = {});
 
 }  // namespace ptc

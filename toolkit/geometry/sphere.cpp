@@ -2,6 +2,8 @@
 // the small helpers. The CGAL paths (min_sphere, min_sphere_exact) live in min_sphere_cgal.cpp.
 #include "toolkit/geometry/sphere.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cassert>
 #include <cfloat>
@@ -10,6 +12,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace ptc {
 
@@ -339,11 +342,22 @@ Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<const Tri> triangles) {
   if (triangles.empty()) return 0.0;
+  // Fixed chunks summed in parallel, then the chunks' sums in order: one value at any thread
+  // count (and the one-pass sum for meshes of one chunk).
+  constexpr std::size_t kChunk = 65536;
+  const std::size_t chunks = (triangles.size() + kChunk - 1) / kChunk;
+  std::vector<double> sums(chunks, 0.0);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    double s = 0.0;
+    for (std::size_t i = c * kChunk; i < std::min(triangles.size(), (c + 1) * kChunk); ++i) {
+      const Tri& t = triangles[i];
+      assert(t[0] < positions.size() && t[1] < positions.size() && t[2] < positions.size());
+      s += triangle_min_sphere(positions[t[0]], positions[t[1]], positions[t[2]]).surface_area();
+    }
+    sums[c] = s;
+  });
   double sum = 0.0;
-  for (const Tri& t : triangles) {
-    assert(t[0] < positions.size() && t[1] < positions.size() && t[2] < positions.size());
-    sum += triangle_min_sphere(positions[t[0]], positions[t[1]], positions[t[2]]).surface_area();
-  }
+  for (const double s : sums) sum += s;
   return sum / static_cast<double>(triangles.size());
 }
 

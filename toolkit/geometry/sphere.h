@@ -107,7 +107,8 @@ inline constexpr SphereMethod kAllSphereMethods[] = {SphereMethod::Exact,  Spher
 
 /// AvgSA of method.md: the mean surface area 4 pi R^2 of the minimal spheres of the single
 /// triangles (triangle_min_sphere); 0 for no triangles. Indices must be < positions.size()
-/// (asserted).
+/// (asserted). Summed in parallel in fixed chunks of 65,536 triangles, added in order: the same
+/// value at any thread count.
 [[nodiscard]] double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<const Tri> triangles);
 
 namespace detail {
