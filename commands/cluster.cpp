@@ -93,8 +93,7 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
 
   throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
-  const EdgeMap edges = EdgeMap::build(lm.mesh.triangles(), lm.mesh.vertex_count());
-  const auto issues = validate(clustering, lm.mesh.triangles(), edges, limits_of(c));
+  const auto issues = validate(clustering, lm.mesh.triangles(), limits_of(c));
   if (!issues.empty())  // a failed run: the algorithm broke its own invariants
     throw std::runtime_error("clustering failed validation: " + issues.front());
   manifest.add_timing_ms("validate", t0.ms());

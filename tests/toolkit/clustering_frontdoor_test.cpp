@@ -119,8 +119,7 @@ TEST(ClusterFrontDoor, HardCasesValidDeterministicForEveryMethod) {
       for (const auto& [name, m] : meshes) {
         const std::string msg = what(c, size, name);
         const Clustering a = cluster_mesh(m, config_of(c, size));
-        const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
-        const auto issues = validate(a, m.triangles(), em, limits_of(c, size));
+        const auto issues = validate(a, m.triangles(), limits_of(c, size));
         EXPECT_TRUE(issues.empty()) << msg << ": " << joined(issues);
         EXPECT_EQ(a.triangle_order.size(), m.triangle_count()) << msg;
         if (m.empty()) {
@@ -140,10 +139,9 @@ TEST(ClusterFrontDoor, ZeroLimitsMeanOneTrianglePerClusterForEveryMethod) {
         ASSERT_EQ(a.triangles_of(k).size(), 1u);
         EXPECT_EQ(a.triangles_of(k)[0], k) << what(c, 0, name);  // in input order
       }
-      const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
       ClusterLimits lim;
       lim.max_triangles = 1;
-      EXPECT_TRUE(validate(a, m.triangles(), em, lim).empty()) << what(c, 0, name);
+      EXPECT_TRUE(validate(a, m.triangles(), lim).empty()) << what(c, 0, name);
     }
 }
 
@@ -174,7 +172,6 @@ TEST(ClusterFrontDoor, RigidMotionInvarianceWhereClaimed) {
 
 TEST(ClusterFrontDoor, BaselinesInvariantUnderPowerOfTwoScalingValidWhenRotated) {
   const Mesh m = load("elephant.off");
-  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
   const Eigen::Matrix3d r = Eigen::Quaterniond(0.3, -0.5, 0.7, 0.2).normalized().toRotationMatrix();
   for (ClusterMethod method : {ClusterMethod::SahSplit, ClusterMethod::Meshopt})
     for (std::uint32_t size : {10u, 64u}) {
@@ -185,7 +182,7 @@ TEST(ClusterFrontDoor, BaselinesInvariantUnderPowerOfTwoScalingValidWhenRotated)
         expect_same(a, cluster_mesh(moved(m, Eigen::Matrix3d::Identity(), Vec3::Zero(), s), cfg),
                     what(c, size, "elephant scaled by " + std::to_string(s)));
       const Clustering b = cluster_mesh(moved(m, r, Vec3(-2.5, 4.0, 1.25)), cfg);  // not invariant: only valid
-      EXPECT_TRUE(validate(b, m.triangles(), em, limits_of(c, size)).empty()) << what(c, size, "rotated elephant");
+      EXPECT_TRUE(validate(b, m.triangles(), limits_of(c, size)).empty()) << what(c, size, "rotated elephant");
     }
 }
 

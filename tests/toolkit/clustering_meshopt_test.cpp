@@ -40,8 +40,7 @@ void expect_contract(const Mesh& m, const ClusterConfig& cfg) {
   expect_partition_within_limits(meshlets, m, lim);
   const Clustering c = meshopt_clusters(m, cfg);
   expect_partition_within_limits(c, m, lim);
-  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
-  const auto issues = validate(c, m.triangles(), em, lim);
+  const auto issues = validate(c, m.triangles(), lim);
   EXPECT_TRUE(issues.empty()) << joined(issues);
   const Ids meshlet_of = meshlets.cluster_of_triangle();
   for (std::size_t k = 0; k < c.cluster_count(); ++k)

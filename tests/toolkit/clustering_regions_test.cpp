@@ -148,8 +148,7 @@ TEST(Regions, ClustersAreConnectedAndStayInTheirRegion) {
     for (std::uint32_t n : {2u, 5u, 16u}) {
       const ClusterConfig c = growth(ObjectiveKind::Acc, n, StartRule::SpatialOrder, method);
       const Clustering cl = cluster_mesh(m, c);
-      const EdgeMap edges = EdgeMap::build(m.triangles(), m.vertex_count());
-      const std::vector<std::string> issues = validate(cl, m.triangles(), edges, limits_of(c));
+      const std::vector<std::string> issues = validate(cl, m.triangles(), limits_of(c));
       EXPECT_TRUE(issues.empty()) << issues.front();
       const std::vector<std::uint32_t> region = cluster_regions(m, n);
       for (std::size_t k = 0; k < cl.cluster_count(); ++k) {

@@ -6,6 +6,7 @@
 #include "toolkit/mesh/mesh.h"
 
 #include <gtest/gtest.h>
+#include <oneapi/tbb/global_control.h>
 
 #include <algorithm>
 #include <deque>
@@ -35,12 +36,6 @@ std::vector<Tri> grid(std::uint32_t nx, std::uint32_t ny) {
       t.push_back({a, d, c});
     }
   return t;
-}
-
-std::uint32_t vertex_count_of(const std::vector<Tri>& tris) {
-  std::uint32_t v = 0;
-  for (const Tri& f : tris) v = std::max({v, f[0] + 1, f[1] + 1, f[2] + 1});
-  return v;
 }
 
 // A grid plus the hard cases of docs/mesh_policy.md: a collapsed triangle (a, a, a), triangles
@@ -180,8 +175,7 @@ TEST(ClusteringFromLabels, EmptyInputGivesNoClusters) {
   EXPECT_EQ(c.vertex_offsets, Ids{0});
   EXPECT_TRUE(c.triangle_order.empty());
   EXPECT_TRUE(c.cluster_of_triangle().empty());
-  const EdgeMap em = EdgeMap::build({}, 0);
-  EXPECT_TRUE(validate(c, {}, em).empty());
+  EXPECT_TRUE(validate(c, {}).empty());
 }
 
 TEST(ClusteringFromLabels, SizeMismatchThrows) {
@@ -256,12 +250,11 @@ struct ValidateFixture : ::testing::Test {
   // grid(3, 2) = 12 triangles; edge neighbours: 0-1 0-3 1-6 2-3 2-5 3-8 4-5 5-10 6-7 6-9 8-9
   // 8-11 10-11. Four connected clusters of three triangles and five vertices each.
   std::vector<Tri> tris = grid(3, 2);
-  EdgeMap edges = EdgeMap::build(tris, vertex_count_of(tris));
   std::vector<Ids> groups{{0, 1, 3}, {2, 4, 5}, {6, 7, 9}, {8, 10, 11}};
   Clustering good = from_groups(groups, tris);
 
   std::vector<std::string> check(const Clustering& c, ClusterLimits lim = {}) {
-    auto issues = validate(c, tris, edges, lim, 100);
+    auto issues = validate(c, tris, lim, 100);
     EXPECT_EQ(issues.empty(), brute_valid(c, tris, lim)) << joined(issues);
     return issues;
   }
@@ -298,6 +291,40 @@ TEST_F(ValidateFixture, TriangleTwiceInOneCluster) {
   EXPECT_TRUE(has_issue(issues, "triangle 3 is in no cluster")) << joined(issues);
 }
 
+// Many clusters (validate checks them in parallel chunks of 4096): the messages are those of a
+// pass in cluster order, at 1 and 2 threads, cut to max_issues from the front. 13,200 triangles;
+// a few clusters of two triangles among singletons break max_triangles = 1, some of them also
+// connectivity (two triangles of neighbouring quads that share one vertex), at chunk borders.
+TEST(ValidateChunks, MessagesInClusterOrderAtAnyThreadCount) {
+  const std::vector<Tri> tris = grid(110, 60);
+  const std::set<std::uint32_t> pair_quads{3, 2047, 2048, 2050, 4095, 4097, 5000, 6598};
+  const std::set<std::uint32_t> split_quads{2048, 4095, 5000};  // {2q, 2q + 2}: one shared vertex
+  std::vector<Ids> groups;
+  std::vector<std::string> expected;
+  std::vector<bool> used(tris.size(), false);
+  for (std::uint32_t t = 0; t < tris.size(); ++t) {
+    if (used[t]) continue;
+    const std::uint32_t q = t / 2;
+    Ids g{t};
+    if (t % 2 == 0 && pair_quads.count(q)) g.push_back(split_quads.count(q) ? t + 2 : t + 1);
+    for (const std::uint32_t u : g) used[u] = true;
+    const auto k = groups.size();
+    if (g.size() == 2 && split_quads.count(q)) expected.push_back("cluster " + std::to_string(k) + ": not edge-connected (2 pieces)");
+    if (g.size() == 2) expected.push_back("cluster " + std::to_string(k) + ": 2 triangles > limit 1");
+    groups.push_back(g);
+  }
+  ASSERT_GT(groups.size(), 3u * 4096u);
+  ASSERT_EQ(expected.size(), pair_quads.size() + split_quads.size());
+  const Clustering c = from_groups(groups, tris);
+  for (const int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    EXPECT_EQ(validate(c, tris, {1, 0}, 100), expected) << threads << " threads";
+    EXPECT_EQ(validate(c, tris, {1, 0}, 4), std::vector<std::string>(expected.begin(), expected.begin() + 4))
+        << threads << " threads";
+    EXPECT_TRUE(validate(c, tris, {2, 0}, 100).size() == split_quads.size()) << threads << " threads";
+  }
+}
+
 TEST_F(ValidateFixture, DisconnectedCluster) {
   // 0, 2 and 11 share no edge (0 and 2 share a vertex, as do 2 and 11).
   Clustering c = from_groups({{0, 2, 11}, {1, 6, 7, 9}, {3, 8}, {4, 5, 10}}, tris);
@@ -308,18 +335,16 @@ TEST_F(ValidateFixture, DisconnectedCluster) {
 
 TEST_F(ValidateFixture, SharedVertexIsNotConnection) {
   const std::vector<Tri> bowtie{{0, 1, 2}, {0, 3, 4}};
-  const EdgeMap em = EdgeMap::build(bowtie, 5);
-  const auto issues = validate(from_groups({{0, 1}}, bowtie), bowtie, em);
+  const auto issues = validate(from_groups({{0, 1}}, bowtie), bowtie);
   EXPECT_EQ(issues, std::vector<std::string>{"cluster 0: not edge-connected (2 pieces)"});
 }
 
 TEST_F(ValidateFixture, CollapsedTriangleIsOnlyValidAlone) {
   const std::vector<Tri> t{{0, 1, 2}, {1, 1, 1}, {0, 0, 2}};
-  const EdgeMap em = EdgeMap::build(t, 3);
   // (0, 0, 2) shares edge 0-2 with (0, 1, 2); (1, 1, 1) has no edge at all.
-  EXPECT_TRUE(validate(from_groups({{0, 2}, {1}}, t), t, em).empty());
+  EXPECT_TRUE(validate(from_groups({{0, 2}, {1}}, t), t).empty());
   EXPECT_TRUE(brute_valid(from_groups({{0, 2}, {1}}, t), t, {}));
-  const auto issues = validate(from_groups({{0, 1, 2}}, t), t, em);
+  const auto issues = validate(from_groups({{0, 1, 2}}, t), t);
   EXPECT_TRUE(has_issue(issues, "cluster 0: not edge-connected (2 pieces)")) << joined(issues);
 }
 
@@ -436,18 +461,17 @@ TEST_F(ValidateFixture, OutOfRangeTriangleIds) {
 }
 
 TEST_F(ValidateFixture, MeshWithoutTrianglesAndClusteringOfAnother) {
-  const EdgeMap em = EdgeMap::build({}, 0);
-  const auto issues = validate(good, {}, em, {}, 100);
+  const auto issues = validate(good, {}, {}, 100);
   EXPECT_TRUE(has_issue(issues, "cluster 0: triangle id 0 out of range (the mesh has 0 triangles)")) << joined(issues);
 }
 
 TEST_F(ValidateFixture, AtMostMaxIssues) {
   Clustering c = good;
   for (auto& t : c.triangle_order) t += 100;
-  EXPECT_EQ(validate(c, tris, edges, {}, 5).size(), 5u);
-  EXPECT_EQ(validate(c, tris, edges, {}, 0).size(), 0u);
+  EXPECT_EQ(validate(c, tris, {}, 5).size(), 5u);
+  EXPECT_EQ(validate(c, tris, {}, 0).size(), 0u);
   // 12 ids out of range, 12 triangles in no cluster, 4 vertex lists naming vertices of no triangle.
-  EXPECT_EQ(validate(c, tris, edges, {}, 1000).size(), 28u);
+  EXPECT_EQ(validate(c, tris, {}, 1000).size(), 28u);
 }
 
 // Random corruption of valid clusterings: validate() never crashes, stays within max_issues,
@@ -455,7 +479,6 @@ TEST_F(ValidateFixture, AtMostMaxIssues) {
 TEST(ValidateFuzz, AgreesWithBruteForceOnCorruptedClusterings) {
   std::mt19937 rng(777);
   const std::vector<Tri> tris = hard_mesh();
-  const EdgeMap em = EdgeMap::build(tris, vertex_count_of(tris));
   int valid_seen = 0, invalid_seen = 0, disconnected_only = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     // Start from random labels: half of the time as they are (mostly disconnected classes), half
@@ -494,7 +517,7 @@ TEST(ValidateFuzz, AgreesWithBruteForceOnCorruptedClusterings) {
         case 5: c.vertex_offsets.push_back(value()); break;
       }
     }
-    const auto issues = validate(c, tris, em, {}, 7);
+    const auto issues = validate(c, tris, {}, 7);
     EXPECT_LE(issues.size(), 7u);
     const bool ok = brute_valid(c, tris, {});
     EXPECT_EQ(issues.empty(), ok) << "trial " << trial << "\n" << joined(issues);
@@ -510,12 +533,10 @@ TEST(ValidateFuzz, AgreesWithBruteForceOnCorruptedClusterings) {
 // split_disconnected
 
 TEST(SplitDisconnected, EmptyAndConnectedInputs) {
-  const EdgeMap em0 = EdgeMap::build({}, 0);
-  EXPECT_EQ(split_disconnected(Clustering{}, {}, em0).cluster_count(), 0u);
+  EXPECT_EQ(split_disconnected(Clustering{}, {}).cluster_count(), 0u);
   const std::vector<Tri> tris = grid(2, 2);
-  const EdgeMap em = EdgeMap::build(tris, 9);
   const Clustering one = from_groups({{0, 1, 2, 3, 4, 5, 6, 7}}, tris);
-  const Clustering s = split_disconnected(one, tris, em);
+  const Clustering s = split_disconnected(one, tris);
   EXPECT_EQ(s.triangle_order, one.triangle_order);
   EXPECT_EQ(s.triangle_offsets, one.triangle_offsets);
   EXPECT_EQ(s.vertices, one.vertices);
@@ -523,36 +544,34 @@ TEST(SplitDisconnected, EmptyAndConnectedInputs) {
 
 TEST(SplitDisconnected, NotAPartitionThrows) {
   const std::vector<Tri> tris = grid(1, 2);
-  const EdgeMap em = EdgeMap::build(tris, 6);
   Clustering c = from_groups({{0, 1}, {2, 3}}, tris);
   c.triangle_order[3] = 0;
-  EXPECT_THROW((void)split_disconnected(c, tris, em), std::invalid_argument);
+  EXPECT_THROW((void)split_disconnected(c, tris), std::invalid_argument);
   c = from_groups({{0, 1}, {2}}, tris);
-  EXPECT_THROW((void)split_disconnected(c, tris, em), std::invalid_argument);
+  EXPECT_THROW((void)split_disconnected(c, tris), std::invalid_argument);
   c = from_groups({{0, 1}, {2, 3}}, tris);
   c.triangle_offsets[1] = 9;
-  EXPECT_THROW((void)split_disconnected(c, tris, em), std::invalid_argument);
+  EXPECT_THROW((void)split_disconnected(c, tris), std::invalid_argument);
 }
 
 TEST(SplitDisconnected, MatchesBruteForceComponentsOnRandomLabelings) {
   std::mt19937 rng(4242);
   const std::vector<std::vector<Tri>> meshes{hard_mesh(), grid(5, 4), grid(1, 9)};
   for (const auto& tris : meshes) {
-    const EdgeMap em = EdgeMap::build(tris, vertex_count_of(tris));
     for (int trial = 0; trial < 300; ++trial) {
       Ids labels(tris.size());
       const std::uint32_t range = std::uniform_int_distribution<std::uint32_t>(1, 8)(rng);
       for (auto& l : labels) l = std::uniform_int_distribution<std::uint32_t>(0, range - 1)(rng);
       // Input: the label classes as clusters, most of them disconnected.
       const std::vector<Ids> groups = brute_groups(labels);
-      const Clustering split = split_disconnected(from_groups(groups, tris), tris, em);
+      const Clustering split = split_disconnected(from_groups(groups, tris), tris);
       // Expected: the brute-force components of every class, ordered by smallest triangle id.
       std::vector<Ids> expected;
       for (const Ids& g : groups)
         for (const Ids& comp : brute_components(g, tris)) expected.push_back(comp);
       std::sort(expected.begin(), expected.end(), [](const Ids& a, const Ids& b) { return a.front() < b.front(); });
       expect_equals_groups(split, expected, tris);
-      EXPECT_TRUE(validate(split, tris, em).empty());
+      EXPECT_TRUE(validate(split, tris).empty());
       // Every piece lies inside one input cluster, and pieces of a cluster are its union.
       const Ids of = split.cluster_of_triangle();
       for (const Ids& g : groups) {
@@ -602,7 +621,7 @@ TEST(Renumbering, MeshAndClusteringFollowThePermutation) {
     std::sort(want.begin(), want.end());
     EXPECT_EQ(Ids(rc.vertices_of(k).begin(), rc.vertices_of(k).end()), want) << k;
   }
-  EXPECT_TRUE(validate(rc, r.triangles(), EdgeMap::build(r.triangles(), r.vertex_count())).empty());
+  EXPECT_TRUE(validate(rc, r.triangles()).empty());
   EXPECT_THROW((void)renumber_vertices(c, Ids{0, 1}), std::invalid_argument);
   Clustering broken = c;
   broken.vertex_offsets.back() += 5;

@@ -39,8 +39,7 @@ void expect_contract(const Mesh& m, const ClusterConfig& cfg, const SahSplitOpti
   expect_partition_within_limits(leaves, m, lim);
   const Clustering c = sah_split_clusters(m, cfg, opt);
   expect_partition_within_limits(c, m, lim);
-  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
-  const auto issues = validate(c, m.triangles(), em, lim);
+  const auto issues = validate(c, m.triangles(), lim);
   EXPECT_TRUE(issues.empty()) << joined(issues);
   // Every cluster lies inside one leaf, and there are at least as many clusters as leaves.
   const Ids leaf_of = leaves.cluster_of_triangle();

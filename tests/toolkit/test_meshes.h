@@ -350,10 +350,9 @@ inline void expect_same_partition(const Mesh& m, std::span<const std::uint32_t> 
 
 /// validate() finds nothing (max_vertices = 0: no vertex bound).
 inline void expect_valid(const Mesh& m, const Clustering& c, std::uint32_t max_vertices, const std::string& what) {
-  const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
   ClusterLimits lim;
   lim.max_vertices = max_vertices;
-  const auto issues = validate(c, m.triangles(), em, lim);
+  const auto issues = validate(c, m.triangles(), lim);
   EXPECT_TRUE(issues.empty()) << what << ": " << (issues.empty() ? "" : issues.front());
 }
 

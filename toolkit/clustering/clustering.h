@@ -60,15 +60,15 @@ struct ClusterLimits {
 /// - every cluster is connected through shared edges (the dual graph restricted to the cluster);
 ///   a triangle without edges (all three indices equal) is therefore only valid alone;
 /// - the limits hold (vertices counted as the distinct vertices of the cluster's triangles).
-/// `triangles` is the mesh's triangle array (its size is the triangle count) and `edges` must be
-/// EdgeMap::build of it. The clustering itself may be garbage (ids out of range, offsets that
+/// `triangles` is the mesh's triangle array (its size is the triangle count); two triangles
+/// share an edge when they have a side with the same two distinct vertex ids (topology.h). The clustering itself may be garbage (ids out of range, offsets that
 /// decrease or run past the end, mismatched sizes): every such defect gives a message naming the
 /// cluster or triangle, never a crash. When the triangle offsets are unusable the per-cluster
 /// checks are skipped (their ranges mean nothing) and only the structural messages are returned.
-/// Cost O(T log T).
+/// Cost O(T log T) and O(T) memory (no edge map); the clusters are checked in parallel, with the
+/// same messages at any thread count.
 [[nodiscard]] std::vector<std::string> validate(const Clustering& c, std::span<const Tri> triangles,
-                                                const EdgeMap& edges, const ClusterLimits& limits = {},
-                                                std::size_t max_issues = 20);
+                                                const ClusterLimits& limits = {}, std::size_t max_issues = 20);
 
 /// Splits every cluster that is not connected through shared edges into its edge-connected
 /// pieces (used after baselines that do not guarantee connectivity, such as meshoptimizer's
@@ -76,8 +76,8 @@ struct ClusterLimits {
 /// Restores the connectivity invariant of validate() and keeps all others (a piece of a cluster
 /// within the limits is within them too). Precondition: every triangle of `triangles` is in
 /// exactly one cluster of `c` with consistent offsets (std::invalid_argument otherwise); the
-/// vertex lists of `c` are not read. `edges` = EdgeMap::build(triangles, ...). O(T log T).
-[[nodiscard]] Clustering split_disconnected(const Clustering& c, std::span<const Tri> triangles, const EdgeMap& edges);
+/// vertex lists of `c` are not read. O(T log T).
+[[nodiscard]] Clustering split_disconnected(const Clustering& c, std::span<const Tri> triangles);
 
 /// The clustering of a mesh whose vertices were renumbered (to_new[old] = new, e.g.
 /// inverse_permutation of the renumbering): vertex lists renamed and sorted ascending again;

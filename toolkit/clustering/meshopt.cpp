@@ -121,8 +121,7 @@ Clustering meshopt_meshlets(const Mesh& mesh, const ClusterConfig& config) {
 
 Clustering meshopt_clusters(const Mesh& mesh, const ClusterConfig& config) {
   const Clustering meshlets = meshopt_meshlets(mesh, config);
-  const EdgeMap edges = EdgeMap::build(mesh.triangles(), mesh.vertex_count());
-  return split_disconnected(meshlets, mesh.triangles(), edges);
+  return split_disconnected(meshlets, mesh.triangles());
 }
 
 }  // namespace ptc

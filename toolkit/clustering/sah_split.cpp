@@ -240,8 +240,7 @@ Clustering sah_split_leaves(const Mesh& mesh, const ClusterConfig& config, const
 
 Clustering sah_split_clusters(const Mesh& mesh, const ClusterConfig& config, const SahSplitOptions& options) {
   Clustering leaves = sah_split_leaves(mesh, config, options);
-  const EdgeMap edges = EdgeMap::build(mesh.triangles(), mesh.vertex_count());
-  return split_disconnected(leaves, mesh.triangles(), edges);
+  return split_disconnected(leaves, mesh.triangles());
 }
 
 }  // namespace ptc

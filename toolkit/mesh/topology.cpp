@@ -34,14 +34,24 @@ EdgeMap EdgeMap::build(std::span<const Tri> triangles, std::size_t vertex_count)
   }
 
   // 2. Within each bucket sort by (other vertex, triangle); equal "other" values form one edge.
+  // Every list is at most one entry per side: reserved once (untouched capacity costs no memory).
   m.vertex_first_.assign(vertex_count + 1, 0);
+  m.edges_.reserve(sides.size());
+  m.edge_tris_.reserve(sides.size());
+  m.offsets_.reserve(sides.size() + 1);
   m.offsets_.push_back(0);
+  const auto before = [](const Side& x, const Side& y) {
+    return x.other != y.other ? x.other < y.other : x.tri < y.tri;
+  };
   for (std::size_t v = 0; v < vertex_count; ++v) {
     m.vertex_first_[v] = static_cast<std::uint32_t>(m.edges_.size());
     auto first = sides.begin() + count[v], last = sides.begin() + count[v + 1];
-    std::sort(first, last, [](const Side& x, const Side& y) {
-      return x.other != y.other ? x.other < y.other : x.tri < y.tri;
-    });
+    if (last - first <= 16) {  // a vertex has a handful of sides: insertion sort
+      for (auto it = first + (first != last); it < last; ++it)
+        for (auto j = it; j != first && before(*j, *(j - 1)); --j) std::iter_swap(j, j - 1);
+    } else {
+      std::sort(first, last, before);
+    }
     for (auto it = first; it != last;) {
       const std::uint32_t other = it->other;
       const auto e = static_cast<std::uint32_t>(m.edges_.size());
