@@ -111,7 +111,7 @@ Result cluster_once(const Mesh& mesh, const Job& job) {
     cfg.max_size = job.size;
     r.clustering = cluster_mesh(mesh, cfg);
   } else {
-    const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/job.objective == ObjectiveKind::Gwh01);
+    const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/job.objective == ObjectiveKind::Gwh01);
     switch (job.objective) {
       case ObjectiveKind::Acc: {
         ClusterParams p;

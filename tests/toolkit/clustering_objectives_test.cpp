@@ -188,14 +188,60 @@ double acc_error(double acc_value, const ClusterMetrics& cm, const ClusterParams
 
 // ---- ClusterTables -----------------------------------------------------------------------
 
+/// A book of 24 pages on one edge (beyond kMaxCliqueValence: the dual graph links them as a path,
+/// but every pair of pages shares the edge), two duplicated pages and a page (a, b, a) on it.
+Mesh big_book() {
+  std::vector<Vec3> p{{0, 0, 0}, {0, 0, 1}};
+  std::vector<Tri> t;
+  for (std::uint32_t k = 0; k < 24; ++k) {
+    const double a = 0.26 * k;
+    p.push_back({std::cos(a), std::sin(a), 0.5});
+    t.push_back({k % 2 ? 1u : 0u, k % 2 ? 0u : 1u, k + 2});
+  }
+  t.push_back(t[3]);
+  t.push_back(t[7]);
+  t.push_back({0, 1, 0});
+  t.push_back({2, 3, 4});  // shares the edge (2, 3) with nothing, (3, 4) with nothing
+  return Mesh(std::move(t), std::move(p));
+}
+
+/// Triangles that share two distinct vertex ids of a side, by brute force over all pairs.
+Ids brute_neighbours(const Mesh& m, std::uint32_t t) {
+  auto sides = [&](std::uint32_t u) {
+    std::set<std::pair<std::uint32_t, std::uint32_t>> s;
+    const Tri& f = m.triangle(u);
+    for (int k = 0; k < 3; ++k)
+      if (f[k] != f[(k + 1) % 3]) s.insert({std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])});
+    return s;
+  };
+  const auto mine = sides(t);
+  Ids out;
+  for (std::uint32_t u = 0; u < m.triangle_count(); ++u) {
+    if (u == t) continue;
+    const auto theirs = sides(u);
+    if (std::any_of(mine.begin(), mine.end(), [&](const auto& e) { return theirs.count(e) > 0; })) out.push_back(u);
+  }
+  return out;
+}
+
+// The neighbour lists, built with and without the edge map, against brute force and (where no
+// edge has more than kMaxCliqueValence triangles) against Boost's dual graph.
 TEST(ClusterTables, NeighboursAreTheBoostDualGraphsAdjacency) {
-  for (const Mesh& m : {grid(5, 4, 0.1), book(), degenerate_mix(), load("elephant.off")}) {
-    const ClusterTables tb = ClusterTables::build(m);
-    const DualGraph g = build_dual_graph(tb.edges, m.triangle_count());
+  for (const Mesh& m : {grid(5, 4, 0.1), book(), degenerate_mix(), big_book(), load("elephant.off")}) {
+    const ClusterTables with = ClusterTables::build(m), without = ClusterTables::build(m, /*with_edges=*/false);
+    EXPECT_EQ(without.edges.edge_count(), 0u);
+    EXPECT_EQ(with.neighbour_offsets, without.neighbour_offsets);
+    EXPECT_EQ(with.neighbours, without.neighbours);
+    bool path_edges = false;
+    for (std::size_t e = 0; e < with.edges.edge_count(); ++e) path_edges |= with.edges.valence(e) > kMaxCliqueValence;
+    const DualGraph g = build_dual_graph(with.edges, m.triangle_count());
+    const bool small = m.triangle_count() < 2000;
     for (std::uint32_t t = 0; t < m.triangle_count(); ++t) {
+      const auto nb = without.neighbours_of(t);
+      if (small) EXPECT_EQ(Ids(nb.begin(), nb.end()), brute_neighbours(m, t)) << "triangle " << t;
+      if (path_edges) continue;
       std::set<std::uint32_t> expected;
       for (auto [it, end] = boost::adjacent_vertices(t, g); it != end; ++it) expected.insert(static_cast<std::uint32_t>(*it));
-      const auto nb = tb.neighbours_of(t);
       EXPECT_EQ(Ids(nb.begin(), nb.end()), Ids(expected.begin(), expected.end())) << "triangle " << t;
     }
   }

@@ -251,7 +251,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
   }
   if (config.regions > 1) return cluster_in_regions(mesh, config, avg_sa, progress);
   // Edge lengths only for GWH01 (its boundary term and length scale).
-  const ClusterTables tables = ClusterTables::build(mesh, /*edge_lengths=*/config.objective == ObjectiveKind::Gwh01);
+  const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/config.objective == ObjectiveKind::Gwh01);
   return clustering_from_labels(detail::run_objective(tables, config, avg_sa, progress).labels, mesh.triangles());
 }
 

@@ -189,7 +189,7 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
         fstamp[u] = cluster;
         Candidate c{u, 0, 0, {}, {}, 0, objective.single(u)};
         c.nv = tb.distinct_vertices(u, c.v);
-        c.ne = tb.distinct_edges(u, c.e);
+        if constexpr (O::kUsesBoundary) c.ne = tb.distinct_edges(u, c.e);  // the edge map exists only then
         for (int i = 0; i < c.nv; ++i)
           if (vstamp[c.v[i]] == cluster) c.in_k = static_cast<std::uint8_t>(c.in_k | (1u << i));
         frontier.push_back(std::move(c));

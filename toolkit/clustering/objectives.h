@@ -46,8 +46,8 @@ struct ClusterTables {
   std::span<const Tri> triangles;
   std::vector<double> area;    ///< Area_i (one side, L^2) per triangle; 0 for degenerate ones (triangle.h rule)
   std::vector<Vec3> normal;    ///< unit normal per triangle; the zero vector for degenerate ones
-  EdgeMap edges;               ///< topology.h's edge map (collapsed sides are no edges)
-  std::vector<double> edge_length;  ///< |p(v1) - p(v0)| per mesh edge (L); empty unless built with edge lengths
+  EdgeMap edges;               ///< topology.h's edge map (collapsed sides are no edges); empty unless built with edges
+  std::vector<double> edge_length;  ///< |p(v1) - p(v0)| per mesh edge (L); empty unless built with edges
   /// Distinct edge-neighbours of triangle t (triangles sharing a mesh edge with t, t excluded),
   /// ascending: neighbours[neighbour_offsets[t] .. neighbour_offsets[t + 1]). The dual graph's
   /// adjacency without parallel edges.
@@ -55,9 +55,11 @@ struct ClusterTables {
   std::vector<std::uint32_t> neighbours;
   double mean_edge_length = 0;  ///< mean of edge_length over all mesh edges (L); 0 without edges (or lengths)
 
-  /// edge_lengths: fill edge_length and mean_edge_length (only objectives with kUsesBoundary or
-  /// a length scale need them: GWH01; the perimeter helpers below require them).
-  [[nodiscard]] static ClusterTables build(const Mesh& mesh, bool edge_lengths = true);
+  /// with_edges: build the edge map, edge_length and mean_edge_length (only objectives with
+  /// kUsesBoundary or a length scale need them: GWH01; distinct_edges and the perimeter helpers
+  /// below require them). Without, only the neighbour lists describe the topology (at 13M
+  /// triangles the edge map costs 0.6 GB and a third of the tables' time).
+  [[nodiscard]] static ClusterTables build(const Mesh& mesh, bool with_edges = true);
 
   [[nodiscard]] std::uint32_t triangle_count() const { return static_cast<std::uint32_t>(triangles.size()); }
   [[nodiscard]] std::span<const std::uint32_t> neighbours_of(std::uint32_t t) const {
@@ -65,7 +67,8 @@ struct ClusterTables {
   }
   /// The distinct vertex ids of triangle t, ascending (1 to 3 of them); returns the count.
   int distinct_vertices(std::uint32_t t, std::uint32_t out[3]) const;
-  /// The distinct mesh edges of triangle t (0 to 3; a triangle (a, b, a) has one); returns the count.
+  /// The distinct mesh edges of triangle t (0 to 3; a triangle (a, b, a) has one); returns the
+  /// count. Requires the edge map (built with edges).
   int distinct_edges(std::uint32_t t, std::uint32_t out[3]) const;
   /// Sum of the lengths of t's distinct edges: the perimeter of the one-triangle cluster {t}
   /// (gwh01.h's boundary rule). Requires edge lengths.
