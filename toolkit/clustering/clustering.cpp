@@ -132,19 +132,36 @@ Clustering clustering_from_labels(std::span<const std::uint32_t> labels, std::sp
   const std::size_t T = labels.size();
   if (T > 0xffffffffu) throw std::invalid_argument("clustering_from_labels: more than 2^32 - 1 triangles");
 
-  // Sort (label, triangle) keys: each label's run starts with its smallest triangle id.
-  std::vector<std::uint64_t> key(T);
-  for (std::size_t t = 0; t < T; ++t) key[t] = (std::uint64_t{labels[t]} << 32) | t;
-  tbb::parallel_sort(key.begin(), key.end());  // distinct keys: one sorted order, whatever the threads
+  // The triangles ordered by (label, triangle): each label's run starts with its smallest
+  // triangle id. Labels of the algorithms are dense (0 .. clusters - 1): a counting sort, O(T);
+  // arbitrary ones: a sort of (label, triangle) keys. Both give the one sorted order.
   struct Run {
-    std::uint32_t first_triangle, begin, end;  // [begin, end) in key
+    std::uint32_t first_triangle, begin, end;  // [begin, end) in order
   };
+  std::vector<std::uint32_t> order(T);
   std::vector<Run> runs;
-  for (std::size_t i = 0; i < T;) {
-    std::size_t j = i + 1;
-    while (j < T && (key[j] >> 32) == (key[i] >> 32)) ++j;
-    runs.push_back({static_cast<std::uint32_t>(key[i]), static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
-    i = j;
+  const std::uint32_t max_label = T ? *std::max_element(labels.begin(), labels.end()) : 0;
+  if (std::uint64_t{max_label} < 2 * std::uint64_t{T} + 1024) {
+    std::vector<std::uint32_t> start(std::size_t{max_label} + 2, 0);
+    for (const std::uint32_t l : labels) ++start[l + 1];
+    for (std::size_t l = 0; l <= max_label; ++l) start[l + 1] += start[l];
+    {
+      std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+      for (std::size_t t = 0; t < T; ++t) order[fill[labels[t]]++] = static_cast<std::uint32_t>(t);
+    }
+    for (std::size_t l = 0; l <= max_label; ++l)
+      if (start[l + 1] > start[l]) runs.push_back({order[start[l]], start[l], start[l + 1]});
+  } else {
+    std::vector<std::uint64_t> key(T);
+    for (std::size_t t = 0; t < T; ++t) key[t] = (std::uint64_t{labels[t]} << 32) | t;
+    tbb::parallel_sort(key.begin(), key.end());  // distinct keys: one sorted order, whatever the threads
+    for (std::size_t i = 0; i < T; ++i) order[i] = static_cast<std::uint32_t>(key[i]);
+    for (std::size_t i = 0; i < T;) {
+      std::size_t j = i + 1;
+      while (j < T && (key[j] >> 32) == (key[i] >> 32)) ++j;
+      runs.push_back({order[i], static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+      i = j;
+    }
   }
   std::sort(runs.begin(), runs.end(), [](const Run& a, const Run& b) { return a.first_triangle < b.first_triangle; });
 
@@ -154,7 +171,7 @@ Clustering clustering_from_labels(std::span<const std::uint32_t> labels, std::sp
   c.vertex_offsets.reserve(runs.size() + 1);
   for (const Run& r : runs) {
     const std::size_t first = c.triangle_order.size();
-    for (std::uint32_t i = r.begin; i < r.end; ++i) c.triangle_order.push_back(static_cast<std::uint32_t>(key[i]));
+    c.triangle_order.insert(c.triangle_order.end(), order.begin() + r.begin, order.begin() + r.end);
     c.triangle_offsets.push_back(static_cast<std::uint32_t>(c.triangle_order.size()));
     append_distinct_vertices(std::span<const std::uint32_t>(c.triangle_order).subspan(first), triangles, c.vertices);
     c.vertex_offsets.push_back(static_cast<std::uint32_t>(c.vertices.size()));
