@@ -85,9 +85,14 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   OutputDir dir(opt.out_dir);  // a refused target fails before the clustering
   t0.restart();
   Clustering clustering;
+  // AvgSA once, for the clustering (Acc) and for the metrics' Acc columns.
+  const std::optional<double> avg_sa =
+      c.max_count > 0 && c.max_size > 0
+          ? std::optional<double>(average_triangle_sphere_area(lm.mesh.positions(), lm.mesh.triangles()))
+          : std::nullopt;
   {
     ProgressBar bar("clustering");
-    clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); });
+    clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); }, avg_sa);
   }
   manifest.add_timing_ms("cluster", t0.ms());
 
@@ -100,7 +105,7 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
 
   throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
-  const auto rows = cluster_rows(lm.mesh, clustering, c);
+  const auto rows = cluster_rows(lm.mesh, clustering, c, avg_sa);
   manifest.add_timing_ms("metrics", t0.ms());
   const nlohmann::json dist = cluster_distributions(rows);
 

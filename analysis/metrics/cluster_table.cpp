@@ -10,7 +10,8 @@
 
 namespace ptc {
 
-std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg) {
+std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg,
+                                     std::optional<double> avg_sa) {
   std::vector<ClusterRow> rows(c.cluster_count());
   const bool has_objective = cfg.max_count > 0 && cfg.max_size > 0;
   ClusterParams params;
@@ -18,12 +19,12 @@ std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, cons
     params.max_count = cfg.max_count;
     params.max_size = cfg.max_size;
     params.size_bound_mode = cfg.size_bound_mode;
-    params.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+    params.avg_sa = avg_sa ? *avg_sa : average_triangle_sphere_area(mesh.positions(), mesh.triangles());
   }
   const bool usable = has_objective && params.avg_sa > 0;
   oneapi::tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
     ClusterRow& r = rows[k];
-    r.m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Cgal);
+    r.m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Cgal, c.vertices_of(k));
     if (usable) {
       r.reg_bound = reg_bound(r.m.vertices, params.max_count);
       r.size_bound = size_bound(r.m.sphere.surface_area(), params.max_size, params.avg_sa, params.size_bound_mode);

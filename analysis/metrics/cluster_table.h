@@ -3,6 +3,7 @@
 // with a new schema version.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -21,8 +22,12 @@ struct ClusterRow {
   double acc = 0, reg_bound = 0, size_bound = 0;
 };
 
-/// Metrics of every cluster (parallel over clusters; the sphere is the CGAL working path).
-[[nodiscard]] std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg);
+/// Metrics of every cluster (parallel over clusters; the sphere is the CGAL working path). The
+/// vertex lists of `c` are read as the clusters' distinct vertices (as clustering_from_labels
+/// makes them; validate() checks them). avg_sa: the mesh's AvgSA when the caller has it (see
+/// cluster_mesh); computed here otherwise.
+[[nodiscard]] std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg,
+                                                   std::optional<double> avg_sa = std::nullopt);
 
 /// triangles.csv (schema ptc-cluster-triangles/1): triangle_id,cluster_id in input triangle order.
 [[nodiscard]] Table triangles_table(const Clustering& c);

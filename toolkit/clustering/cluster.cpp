@@ -213,7 +213,8 @@ std::optional<ConfigProblem> check(const ClusterConfig& c) {
   return std::nullopt;
 }
 
-Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress) {
+Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress,
+                        std::optional<double> known_avg_sa) {
   if (!(config.max_size >= 0.0) || !std::isfinite(config.max_size))
     throw std::invalid_argument("cluster_mesh: max_size must be finite and >= 0, got " +
                                 std::to_string(config.max_size));
@@ -237,7 +238,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
                                     "per cluster); got max_count " + std::to_string(config.max_count) +
                                     ", max_size " + std::to_string(config.max_size));
       if (mesh.empty()) return Clustering{};
-      avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+      avg_sa = known_avg_sa ? *known_avg_sa : average_triangle_sphere_area(mesh.positions(), mesh.triangles());
       if (!(avg_sa > 0.0)) return one_per_triangle(mesh);  // see the file comment
       break;
     case ObjectiveKind::Naive:

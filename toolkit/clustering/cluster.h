@@ -102,8 +102,11 @@ using ProgressFn = std::function<void(double)>;
 ///   scaling by a power of two (exact in floating point), and a rotated input is still clustered
 ///   validly. Translation changes only rounding for them.
 /// Throws std::invalid_argument on an inconsistent configuration (e.g. max_count = 0 with
-/// max_size > 0).
-[[nodiscard]] Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress = {});
+/// max_size > 0). avg_sa: the mesh's AvgSA, average_triangle_sphere_area(mesh), when the caller
+/// has it already (ptc cluster computes it once for the clustering and for the metrics; at 13M
+/// triangles it takes 0.6 s); computed here otherwise. Read by the Acc objective only.
+[[nodiscard]] Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress = {},
+                                      std::optional<double> avg_sa = std::nullopt);
 
 struct ClusterTables;
 struct ClusterRun;

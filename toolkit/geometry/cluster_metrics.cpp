@@ -78,14 +78,21 @@ NormalAverage average_normal(std::span<const Vec3> unit_normals, std::span<const
 }
 
 ClusterMetrics cluster_metrics(const Mesh& mesh, std::span<const std::uint32_t> triangle_ids,
-                               SphereMethod sphere_method) {
+                               SphereMethod sphere_method, std::span<const std::uint32_t> vertices) {
   ClusterMetrics m;
   if (triangle_ids.empty()) return m;
 
   const std::size_t tcount = mesh.triangle_count();
   {
-    std::vector<std::uint32_t> ids(triangle_ids.begin(), triangle_ids.end());
-    std::sort(ids.begin(), ids.end());
+    // A set of ids < tcount: checked on the ids as given when they ascend (as a Clustering's do),
+    // else on a sorted copy.
+    std::vector<std::uint32_t> copy;
+    std::span<const std::uint32_t> ids = triangle_ids;
+    if (!std::is_sorted(ids.begin(), ids.end())) {
+      copy.assign(ids.begin(), ids.end());
+      std::sort(copy.begin(), copy.end());
+      ids = copy;
+    }
     if (ids.back() >= tcount)
       throw std::invalid_argument("cluster_metrics: triangle id " + std::to_string(ids.back()) + " of " +
                                   std::to_string(tcount));
@@ -96,18 +103,21 @@ ClusterMetrics cluster_metrics(const Mesh& mesh, std::span<const std::uint32_t> 
   const std::size_t k = triangle_ids.size();
   std::vector<Vec3> normals(k);
   std::vector<double> areas(k);
-  std::vector<std::uint32_t> verts;
-  verts.reserve(3 * k);
+  std::vector<std::uint32_t> own;
+  if (vertices.empty()) own.reserve(3 * k);
   for (std::size_t i = 0; i < k; ++i) {
     const Tri& f = mesh.triangle(triangle_ids[i]);
     const TriangleGeometry g = triangle_geometry(mesh.position(f[0]), mesh.position(f[1]), mesh.position(f[2]));
     normals[i] = g.normal;
     areas[i] = g.area;
     m.area += g.area;
-    verts.insert(verts.end(), f.begin(), f.end());
+    if (vertices.empty()) own.insert(own.end(), f.begin(), f.end());
   }
-  std::sort(verts.begin(), verts.end());
-  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  if (vertices.empty()) {
+    std::sort(own.begin(), own.end());
+    own.erase(std::unique(own.begin(), own.end()), own.end());
+  }
+  const std::span<const std::uint32_t> verts = vertices.empty() ? std::span<const std::uint32_t>(own) : vertices;
 
   for (std::uint32_t v : verts) m.box.extend(mesh.position(v));
   // The sphere is computed on coordinates relative to a local origin o: per axis 0 when the box

@@ -128,8 +128,11 @@ struct ClusterMetrics {
 /// in the far-away case, correctly rounded ones otherwise). Cost O(k log k) plus the sphere.
 /// Triangles need not be connected; degenerate and repeated-index triangles are allowed (they
 /// count in N_T, their distinct vertices in N_V, and contribute zero area and no normal).
+/// `vertices`: the triangles' distinct vertex ids, ascending, when the caller has them
+/// (Clustering::vertices_of); empty: computed here (the same list).
 [[nodiscard]] ClusterMetrics cluster_metrics(const Mesh& mesh, std::span<const std::uint32_t> triangle_ids,
-                                             SphereMethod sphere_method = SphereMethod::Cgal);
+                                             SphereMethod sphere_method = SphereMethod::Cgal,
+                                             std::span<const std::uint32_t> vertices = {});
 
 /// Acc(k) = reg - regBound(N_V, MaxCount) * sizeBound(SA(S), MaxSize, AvgSA, mode) of already
 /// computed metrics (params.sphere is not used: the sphere is in `m`). Empty cluster: 0.

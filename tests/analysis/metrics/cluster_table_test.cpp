@@ -41,9 +41,20 @@ TEST(ClusterReport, RowsMatchMetricsRecomputedPerCluster) {
     EXPECT_EQ(rows[k].m.triangles, tris.size());
     EXPECT_EQ(rows[k].m.vertices, c.vertices_of(k).size());
     EXPECT_EQ(rows[k].m.reg, ref.reg);
+    // The rows read the clustering's vertex lists: the same values as the lists made from scratch.
+    EXPECT_EQ(rows[k].m.sphere.radius, ref.sphere.radius) << k;
+    EXPECT_EQ(rows[k].m.sphere.center, ref.sphere.center) << k;
+    EXPECT_EQ(rows[k].m.box.lo, ref.box.lo) << k;
+    EXPECT_EQ(rows[k].m.box.hi, ref.box.hi) << k;
+    EXPECT_EQ(rows[k].m.area_p, ref.area_p) << k;
+    EXPECT_EQ(rows[k].m.connectivity, ref.connectivity) << k;
     EXPECT_EQ(rows[k].acc, cluster_acc(ref, p)) << k;
     EXPECT_GT(rows[k].acc, 0.0) << "growth closes a cluster only while Acc stays positive";
   }
+  // The AvgSA given by the caller (ptc cluster computes it once) gives the same rows.
+  const auto given = cluster_rows(m, c, cfg, p.avg_sa);
+  ASSERT_EQ(given.size(), rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) EXPECT_EQ(given[k].acc, rows[k].acc) << k;
   // clusters.csv: one row per cluster, values as computed (shortest round-trip text).
   const auto csv = parse_csv(clusters_table(rows).csv.str());
   ASSERT_EQ(csv.size(), rows.size() + 1);
