@@ -7,12 +7,25 @@
 
 namespace ptc {
 
+namespace {
+/// format_double's text, appended.
+void append_double(std::string& out, double x) {
+  if (std::isnan(x)) {
+    out += "nan";
+  } else if (std::isinf(x)) {
+    out += x > 0 ? "inf" : "-inf";
+  } else {
+    char buf[64];
+    const auto res = std::to_chars(buf, buf + sizeof buf, x);
+    out.append(buf, res.ptr);
+  }
+}
+}  // namespace
+
 std::string format_double(double x) {
-  if (std::isnan(x)) return "nan";
-  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-  char buf[64];
-  auto res = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, res.ptr);
+  std::string s;
+  append_double(s, x);
+  return s;
 }
 
 namespace {
@@ -52,7 +65,7 @@ void CsvTable::add_row(std::span<const CsvValue> row) {
           if constexpr (std::is_same_v<T, std::string>) {
             append_field(text_, v);
           } else if constexpr (std::is_same_v<T, double>) {
-            text_ += format_double(v);
+            append_double(text_, v);
           } else {
             char buf[24];
             const auto res = std::to_chars(buf, buf + sizeof buf, v);

@@ -61,11 +61,14 @@ class Columns {
   void operator()(std::string_view name, const std::string& v) { (*this)(name, CsvValue(v)); }
 
   [[nodiscard]] std::vector<std::string> take_names() { return std::move(names_); }
-  [[nodiscard]] std::vector<CsvValue> take_values() {
+  /// The row's values (complete: as many as the header has columns); clear() starts the next
+  /// row in the same storage.
+  [[nodiscard]] std::span<const CsvValue> values() const {
     if (header_ && values_.size() != header_->size())
       throw std::logic_error("table row visitor: a row has fewer columns than the header");
-    return std::move(values_);
+    return values_;
   }
+  void clear() { values_.clear(); }
 
  private:
   const std::vector<std::string>* header_ = nullptr;
@@ -92,10 +95,11 @@ template <class Row, class RowAt, class Visit>
 [[nodiscard]] Table tabulate_each(Schema schema, std::size_t n, RowAt&& row_at, Visit&& visit) {
   const std::vector<std::string> header = columns_of<Row>(visit);
   Table t{std::move(schema), CsvTable(header)};
+  Columns c(header);  // one row's storage for all rows
   for (std::size_t i = 0; i < n; ++i) {
-    Columns c(header);
+    c.clear();
     visit(static_cast<const Row&>(row_at(i)), c);
-    t.csv.add_row(c.take_values());
+    t.csv.add_row(c.values());
   }
   return t;
 }
