@@ -41,12 +41,19 @@ Table triangles_table(const Clustering& c) {
     std::uint64_t triangle = 0, cluster = 0;
   };
   const auto label = c.cluster_of_triangle();
+  auto digits = [](std::size_t v) {
+    std::size_t d = 1;
+    for (; v >= 10; v /= 10) ++d;
+    return d;
+  };
+  const std::size_t n = label.size(), most = n ? digits(n - 1) + digits(c.cluster_count()) + 2 : 0;
   return tabulate_each<Row>(
-      Schema{"ptc-cluster-triangles", 1}, label.size(), [&](std::size_t i) { return Row{i, label[i]}; },
+      Schema{"ptc-cluster-triangles", 1}, n, [&](std::size_t i) { return Row{i, label[i]}; },
       [](const Row& r, Columns& col) {
         col("triangle_id", r.triangle);
         col("cluster_id", r.cluster);
-      });
+      },
+      64 + n * most);  // a bound on the text: the header and the longest row n times
 }
 
 namespace {

@@ -25,6 +25,8 @@ class CsvTable {
   void add_row(std::span<const CsvValue> values);
   [[nodiscard]] const std::vector<std::string>& columns() const { return columns_; }
   [[nodiscard]] std::size_t rows() const { return rows_; }
+  /// Room for `bytes` of text in all (a table of millions of rows then grows without copies).
+  void reserve(std::size_t bytes) { text_.reserve(bytes); }
   /// RFC 4180 text: fields with commas, quotes or newlines are quoted; "\n" line ends;
   /// non-finite doubles are written as nan / inf / -inf.
   [[nodiscard]] const std::string& str() const { return text_; }

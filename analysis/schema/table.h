@@ -90,11 +90,14 @@ template <class Row, class Visit>
 }
 
 /// `n` rows made one at a time by `row_at(i)` (a table of millions of rows needs no vector of
-/// them), columns from `visit` (see the file comment).
+/// them), columns from `visit` (see the file comment). `reserve_bytes`: room for the text, when
+/// the caller can bound it.
 template <class Row, class RowAt, class Visit>
-[[nodiscard]] Table tabulate_each(Schema schema, std::size_t n, RowAt&& row_at, Visit&& visit) {
+[[nodiscard]] Table tabulate_each(Schema schema, std::size_t n, RowAt&& row_at, Visit&& visit,
+                                  std::size_t reserve_bytes = 0) {
   const std::vector<std::string> header = columns_of<Row>(visit);
   Table t{std::move(schema), CsvTable(header)};
+  t.csv.reserve(reserve_bytes);
   Columns c(header);  // one row's storage for all rows
   for (std::size_t i = 0; i < n; ++i) {
     c.clear();

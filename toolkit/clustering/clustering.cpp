@@ -262,14 +262,21 @@ std::vector<std::string> validate(const Clustering& c, std::span<const Tri> tria
       bool same = ascending;
       if (same) {
         used.assign(listed.size(), 0);
+        same = !listed.empty();
         for (std::size_t i = 0; i < ids.size() && same; ++i)
           for (const std::uint32_t v : triangles[ids[i]]) {
-            const auto it = std::lower_bound(listed.begin(), listed.end(), v);
-            if (it == listed.end() || *it != v) {
+            // Branch-free lower bound in the (short) list: the position of v, if v is there.
+            const std::uint32_t* at = listed.data();
+            for (std::size_t n = listed.size(); n > 1;) {
+              const std::size_t half = n / 2;
+              at = at[half] <= v ? at + half : at;
+              n -= half;
+            }
+            if (*at != v) {
               same = false;
               break;
             }
-            used[static_cast<std::size_t>(it - listed.begin())] = 1;
+            used[static_cast<std::size_t>(at - listed.data())] = 1;
           }
         same = same && std::find(used.begin(), used.end(), 0) == used.end();
       }

@@ -52,7 +52,8 @@ struct TriangleGeometry {
   int e = 0;
   if (big > 0 && std::isfinite(big)) {
     e = std::ilogb(big);
-    ab = ab * std::ldexp(1.0, -e), bc = bc * std::ldexp(1.0, -e), ca = ca * std::ldexp(1.0, -e);
+    const double scale = std::ldexp(1.0, -e);
+    ab = ab * scale, bc = bc * scale, ca = ca * scale;
   }
   const double lab = safe_norm(ab), lbc = safe_norm(bc), lca = safe_norm(ca);
   Vec3 cr;
