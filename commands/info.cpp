@@ -1,7 +1,10 @@
 // `ptc info`: the mesh report as JSON (stable keys, schema "ptc-info/1") and as text.
 #include "commands/commands.h"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <thread>
 #include <ostream>
 
 #include "analysis/schema/json.h"
@@ -15,34 +18,58 @@ namespace ptc {
 
 namespace {
 
-// Peak memory of the commands a mesh is given to, as measured by bench/scale/scale.py on the
-// armadillo subdivided to 52k .. 13.3M triangles (about half as many vertices as triangles;
-// docs/scale.md): a fixed part (the program and its libraries) and bytes per triangle, within
-// 15% of the measurements from 208k triangles on. Keys are the `ptc` commands as run there.
+// Peak memory of the commands a mesh is given to, as measured on the armadillo subdivided to
+// 208k .. 13.3M triangles (about half as many vertices as triangles; docs/scale.md, "Memory per
+// triangle"): a fixed part (the program and its libraries) and bytes per triangle, within 15% of
+// the measurements from 208k triangles on. Keys are the `ptc` commands as run there. MiB.
 struct MemoryModel {
   const char* command;
   double base_mb, bytes_per_triangle;
 };
 constexpr MemoryModel kMemoryModels[] = {
-    {"cluster_growth", 30, 150},       // ptc cluster --method growth: 1938 MB at 13.3M
-    {"cluster_contraction", 40, 580},  // ptc cluster --method contraction: 157 MB at 208k, 502 MB at 832k
-    {"trace", 40, 215},                // ptc trace MESH --clusters DIR --frame 0: 703 MB at 3.3M
-    {"bench", 40, 730},                // ptc bench MESH --frames 0:2 (Embree beside): 2397 MB at 3.3M
+    {"cluster_growth", 32, 102},       // ptc cluster --method growth: 52 MiB at 208k, 1329 MiB at 13.3M
+    {"cluster_contraction", 40, 535},  // ptc cluster --method contraction: 146 MiB at 208k, 6827 MiB at 13.3M
+    {"trace", 40, 215},                // ptc trace MESH --clusters DIR --frame 0: 703 MiB at 3.3M
+    {"bench", 40, 730},                // ptc bench MESH --frames 0:2 (Embree beside): 2397 MiB at 3.3M
 };
+
+// Clustering in N regions on k = min(threads, N) threads (docs/clustering.md): the whole mesh's
+// arrays, a vertex scratch per thread, and k regions at once, each at the one run's rate; never
+// below the output stages' floor. bytes per triangle = max(floor, whole + k x per_thread +
+// k / N x one_run). Fitted at 3.3M triangles (N = 8, 32; k = 1, 2); docs/scale.md.
+constexpr double kRegionsWhole = 35, kRegionsPerThread = 4, kRegionsFloor = 60;
+
+double regions_bytes_per_triangle(double one_run, double regions, double threads) {
+  const double k = std::min(threads, regions);
+  return std::max(kRegionsFloor, kRegionsWhole + k * kRegionsPerThread + k / regions * one_run);
+}
 
 nlohmann::json memory_estimate_json(std::size_t triangles) {
   nlohmann::json est, largest;
   const double machine = machine_memory_mb();
+  auto add = [&](const std::string& command, double base_mb, double bytes_per_triangle) {
+    est[command] = std::round(base_mb + double(triangles) * bytes_per_triangle / 1048576.0);
+    if (machine > base_mb)
+      largest[command] = static_cast<std::uint64_t>((machine - base_mb) * 1048576.0 / bytes_per_triangle);
+  };
+  for (const MemoryModel& m : kMemoryModels) add(m.command, m.base_mb, m.bytes_per_triangle);
+  // With --regions 8 and 32 at this machine's default thread count (all cores).
+  const double threads = std::max(1u, std::thread::hardware_concurrency());
   for (const MemoryModel& m : kMemoryModels) {
-    est[m.command] = std::round(m.base_mb + double(triangles) * m.bytes_per_triangle / 1048576.0);
-    if (machine > m.base_mb)
-      largest[m.command] = static_cast<std::uint64_t>((machine - m.base_mb) * 1048576.0 / m.bytes_per_triangle);
+    const std::string c = m.command;
+    if (c != "cluster_growth" && c != "cluster_contraction") continue;
+    for (const int n : {8, 32})
+      add(c + "_regions_" + std::to_string(n), m.base_mb, regions_bytes_per_triangle(m.bytes_per_triangle, n, threads));
   }
   nlohmann::json j;
   j["peak_mb"] = est;
   j["machine_memory_mb"] = std::round(machine);
+  j["threads"] = threads;
   j["largest_triangles_for_machine"] = largest;
-  j["model"] = "peak MB = base + triangles x bytes per triangle, measured by bench/scale/scale.py (docs/scale.md)";
+  j["model"] =
+      "peak MiB = base + triangles x bytes per triangle, measured on the armadillo subdivided (docs/scale.md); "
+      "with --regions N on k = min(threads, N) threads: bytes per triangle = max(60, 35 + 4 k + k / N x the one "
+      "run's)";
   return j;
 }
 

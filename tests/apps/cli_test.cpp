@@ -401,7 +401,8 @@ namespace {
 
 // `ptc info --json`'s memory estimate against the peak the commands themselves record (their
 // manifests' max_rss_mb, VmHWM) on the armadillo midpoint-subdivided once (208k triangles):
-// within 25% for both clusterings, and what fits into the machine follows from the same model.
+// within 25% for both clusterings, in one run and in 8 regions, and what fits into the machine
+// follows from the same model.
 TEST_F(Cli, InfoMemoryEstimateAgreesWithTheMeasuredPeak) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "the model is of the release build; AddressSanitizer's shadow memory and quarantine "
@@ -420,6 +421,14 @@ TEST_F(Cli, InfoMemoryEstimateAgreesWithTheMeasuredPeak) {
     const double measured = nlohmann::json::parse(slurp(out / "manifest.json"))["max_rss_mb"];
     const double estimated = est["peak_mb"][std::string("cluster_") + method];
     EXPECT_NEAR(estimated / measured, 1.0, 0.25) << "estimated " << estimated << " MB, measured " << measured << " MB";
+    // In 8 regions on the default threads (all cores, as the estimate assumes).
+    const auto rout = dir_ / (std::string("r_") + method);
+    r = ptc({"cluster", mesh, "--method", method, "--regions", "8", "--out", rout.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const double rmeasured = nlohmann::json::parse(slurp(rout / "manifest.json"))["max_rss_mb"];
+    const double restimated = est["peak_mb"][std::string("cluster_") + method + "_regions_8"];
+    EXPECT_NEAR(restimated / rmeasured, 1.0, 0.25) << "regions: estimated " << restimated << " MB, measured " << rmeasured
+                                                  << " MB";
   }
   const double machine = est["machine_memory_mb"];
   ASSERT_GT(machine, 0.0);
