@@ -3,9 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <string>
-#include <thread>
 #include <ostream>
+#include <string>
+
+#include <oneapi/tbb/info.h>
 
 #include "analysis/schema/json.h"
 #include "toolkit/core/memory.h"
@@ -54,12 +55,13 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
   };
   for (const MemoryModel& m : kMemoryModels) add(m.command, m.base_mb, m.bytes_per_triangle);
   // With --regions 8 and 32 at this machine's default thread count (all cores).
-  const double threads = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads = std::max(1, tbb::info::default_concurrency());  // ptc's default --threads
   for (const MemoryModel& m : kMemoryModels) {
     const std::string c = m.command;
     if (c != "cluster_growth" && c != "cluster_contraction") continue;
     for (const int n : {8, 32})
-      add(c + "_regions_" + std::to_string(n), m.base_mb, regions_bytes_per_triangle(m.bytes_per_triangle, n, threads));
+      add(c + "_regions_" + std::to_string(n), m.base_mb,
+          regions_bytes_per_triangle(m.bytes_per_triangle, n, static_cast<double>(threads)));
   }
   nlohmann::json j;
   j["peak_mb"] = est;

@@ -1,5 +1,6 @@
 #include "analysis/metrics/cluster_table.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -22,9 +23,15 @@ std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, cons
     params.avg_sa = avg_sa ? *avg_sa : average_triangle_sphere_area(mesh.positions(), mesh.triangles());
   }
   const bool usable = has_objective && params.avg_sa > 0;
+  // The clustering's vertex lists, when it has them (offsets per cluster, ending at the list's
+  // end); else each cluster's are made from its triangles.
+  const bool lists = c.vertex_offsets.size() == c.triangle_offsets.size() && !c.vertex_offsets.empty() &&
+                     c.vertex_offsets.back() == c.vertices.size() &&
+                     std::is_sorted(c.vertex_offsets.begin(), c.vertex_offsets.end());
   oneapi::tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
     ClusterRow& r = rows[k];
-    r.m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Cgal, c.vertices_of(k));
+    r.m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Cgal,
+                          lists ? c.vertices_of(k) : std::span<const std::uint32_t>());
     if (usable) {
       r.reg_bound = reg_bound(r.m.vertices, params.max_count);
       r.size_bound = size_bound(r.m.sphere.surface_area(), params.max_size, params.avg_sa, params.size_bound_mode);

@@ -24,7 +24,8 @@ struct ClusterRow {
 
 /// Metrics of every cluster (parallel over clusters; the sphere is the CGAL working path). The
 /// vertex lists of `c` are read as the clusters' distinct vertices (as clustering_from_labels
-/// makes them; validate() checks them). avg_sa: the mesh's AvgSA when the caller has it (see
+/// makes them; validate() checks them); a clustering without usable vertex offsets gets them
+/// made from its triangles. avg_sa: the mesh's AvgSA when the caller has it (see
 /// cluster_mesh); computed here otherwise.
 [[nodiscard]] std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg,
                                                    std::optional<double> avg_sa = std::nullopt);

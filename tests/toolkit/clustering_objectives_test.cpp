@@ -224,8 +224,9 @@ Ids brute_neighbours(const Mesh& m, std::uint32_t t) {
   return out;
 }
 
-// The neighbour lists, built with and without the edge map, against brute force and (where no
-// edge has more than kMaxCliqueValence triangles) against Boost's dual graph.
+// The neighbour lists (built from the sides alone, with or without the edge map beside them)
+// against brute force over all pairs and, where no edge has more than kMaxCliqueValence
+// triangles, against Boost's dual graph of the edge map.
 TEST(ClusterTables, NeighboursAreTheBoostDualGraphsAdjacency) {
   for (const Mesh& m : {grid(5, 4, 0.1), book(), degenerate_mix(), big_book(), load("elephant.off")}) {
     const ClusterTables with = ClusterTables::build(m), without = ClusterTables::build(m, /*with_edges=*/false);
@@ -496,6 +497,10 @@ TEST(Gwh01Objective, RejectsBadParameters) {
   GwhParams p;
   p.a1 = -1;
   EXPECT_THROW(Gwh01Objective(tb, 10, p), std::invalid_argument);
+  // Tables without the edge map (what growth with Acc or Naive builds) cannot serve GWH01.
+  const ClusterTables bare = ClusterTables::build(m, /*with_edges=*/false);
+  EXPECT_FALSE(bare.with_edges);
+  EXPECT_THROW(Gwh01Objective(bare, 10, GwhParams{}), std::logic_error);
 }
 
 // Scaling a mesh by a power of two scales every length exactly, so every scale-free score must be

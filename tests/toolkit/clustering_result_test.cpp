@@ -325,6 +325,18 @@ TEST(ValidateChunks, MessagesInClusterOrderAtAnyThreadCount) {
   }
 }
 
+// A cluster of out-of-range ids only, with an empty vertex list: its triangles have no corners
+// to list, so the empty list is right; only the ids are reported.
+TEST_F(ValidateFixture, OutOfRangeIdsWithAnEmptyVertexListGiveNoVertexMessage) {
+  Clustering c = from_groups({{0, 1, 3}, {2, 4, 5}, {6, 7, 9}, {8, 10, 11}}, tris);
+  c.triangle_order.push_back(99);
+  c.triangle_offsets.push_back(static_cast<std::uint32_t>(c.triangle_order.size()));
+  c.vertex_offsets.push_back(c.vertex_offsets.back());
+  const auto issues = validate(c, tris, {}, 100);
+  EXPECT_TRUE(has_issue(issues, "triangle id 99 out of range")) << joined(issues);
+  EXPECT_FALSE(has_issue(issues, "vertex list")) << joined(issues);
+}
+
 TEST_F(ValidateFixture, DisconnectedCluster) {
   // 0, 2 and 11 share no edge (0 and 2 share a vertex, as do 2 and 11).
   Clustering c = from_groups({{0, 2, 11}, {1, 6, 7, 9}, {3, 8}, {4, 5, 10}}, tris);

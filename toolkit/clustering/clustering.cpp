@@ -30,7 +30,7 @@ class PieceFinder {
   std::uint32_t find(std::span<const std::uint32_t> ids, std::vector<std::uint32_t>& piece) {
     const auto n = static_cast<std::uint32_t>(ids.size());
     int bits = 4;
-    while ((std::size_t{1} << bits) < 6 * std::size_t{n}) ++bits;  // load <= 1/2
+    while ((std::size_t{1} << bits) < 4 * std::size_t{n}) ++bits;  // at most 3n pairs: load <= 3/4
     const std::size_t mask = (std::size_t{1} << bits) - 1;
     keys_.assign(mask + 1, kEmpty);  // no pair is kEmpty: its smaller vertex is below 2^32 - 1
     at_.resize(mask + 1);
@@ -149,7 +149,7 @@ Clustering clustering_from_labels(std::span<const std::uint32_t> labels, std::sp
   const std::uint32_t max_label = T ? *std::max_element(labels.begin(), labels.end()) : 0;
   if (std::uint64_t{max_label} < 2 * std::uint64_t{T} + 1024) {
     std::vector<std::uint32_t> start(std::size_t{max_label} + 2, 0);
-    for (const std::uint32_t l : labels) ++start[l + 1];
+    for (const std::uint32_t l : labels) ++start[std::size_t{l} + 1];
     for (std::size_t l = 0; l <= max_label; ++l) start[l + 1] += start[l];
     {
       std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
@@ -260,9 +260,10 @@ std::vector<std::string> validate(const Clustering& c, std::span<const Tri> tria
       const bool ascending =
           vert_ok && std::adjacent_find(listed.begin(), listed.end(), std::greater_equal<>()) == listed.end();
       bool same = ascending;
-      if (same) {
+      if (same && listed.empty()) {
+        same = ids.empty();  // no corners: only the empty list is theirs
+      } else if (same) {
         used.assign(listed.size(), 0);
-        same = !listed.empty();
         for (std::size_t i = 0; i < ids.size() && same; ++i)
           for (const std::uint32_t v : triangles[ids[i]]) {
             // Branch-free lower bound in the (short) list: the position of v, if v is there.

@@ -114,6 +114,7 @@ ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges) {
     t.area[i] = g.area;
     t.normal[i] = g.normal;
   }
+  t.with_edges = with_edges;
   if (with_edges) {
     t.edges = EdgeMap::build(t.triangles, mesh.vertex_count());
     const std::size_t E = t.edges.edge_count();

@@ -54,6 +54,7 @@ struct ClusterTables {
   std::vector<std::uint32_t> neighbour_offsets;
   std::vector<std::uint32_t> neighbours;
   double mean_edge_length = 0;  ///< mean of edge_length over all mesh edges (L); 0 without edges (or lengths)
+  bool with_edges = false;      ///< built with the edge map and edge lengths (see build)
 
   /// with_edges: build the edge map, edge_length and mean_edge_length (only objectives with
   /// kUsesBoundary or a length scale need them: GWH01; distinct_edges and the perimeter helpers

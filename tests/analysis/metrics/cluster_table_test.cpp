@@ -51,10 +51,28 @@ TEST(ClusterReport, RowsMatchMetricsRecomputedPerCluster) {
     EXPECT_EQ(rows[k].acc, cluster_acc(ref, p)) << k;
     EXPECT_GT(rows[k].acc, 0.0) << "growth closes a cluster only while Acc stays positive";
   }
-  // The AvgSA given by the caller (ptc cluster computes it once) gives the same rows.
+  // The AvgSA given by the caller (ptc cluster computes it once) gives the same rows, and is
+  // the one used: a hundredth of the value changes Acc (sizeBound leaves its clamp at 1).
   const auto given = cluster_rows(m, c, cfg, p.avg_sa);
+  const auto scaled = cluster_rows(m, c, cfg, 0.01 * p.avg_sa);
   ASSERT_EQ(given.size(), rows.size());
-  for (std::size_t k = 0; k < rows.size(); ++k) EXPECT_EQ(given[k].acc, rows[k].acc) << k;
+  std::size_t changed = 0;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    EXPECT_EQ(given[k].acc, rows[k].acc) << k;
+    changed += scaled[k].acc != rows[k].acc;
+  }
+  EXPECT_GT(changed, rows.size() / 2);
+  // Without vertex lists (offsets dropped) the rows make them from the triangles: the same values.
+  Clustering bare = c;
+  bare.vertex_offsets.clear();
+  bare.vertices.clear();
+  const auto remade = cluster_rows(m, bare, cfg);
+  ASSERT_EQ(remade.size(), rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    EXPECT_EQ(remade[k].m.vertices, rows[k].m.vertices) << k;
+    EXPECT_EQ(remade[k].m.sphere.radius, rows[k].m.sphere.radius) << k;
+    EXPECT_EQ(remade[k].acc, rows[k].acc) << k;
+  }
   // clusters.csv: one row per cluster, values as computed (shortest round-trip text).
   const auto csv = parse_csv(clusters_table(rows).csv.str());
   ASSERT_EQ(csv.size(), rows.size() + 1);

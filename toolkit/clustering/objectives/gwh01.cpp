@@ -14,8 +14,8 @@ Gwh01Objective::Gwh01Objective(const ClusterTables& tables, std::uint32_t max_co
     throw std::invalid_argument("Gwh01Objective: max_count must be >= 3, got " + std::to_string(max_count));
   if (!(params.a1 >= 0.0) || !(params.a2 >= 0.0) || !std::isfinite(params.a1) || !std::isfinite(params.a2))
     throw std::invalid_argument("Gwh01Objective: a1 and a2 must be finite and >= 0");
-  if (tables.edge_length.size() != tables.edges.edge_count())
-    throw std::logic_error("Gwh01Objective: the tables were built without edge lengths");
+  if (!tables.with_edges || tables.edge_length.size() != tables.edges.edge_count())
+    throw std::logic_error("Gwh01Objective: the tables were built without edges (ClusterTables::build with_edges)");
   const double l = tables.mean_edge_length;
   fit_scale_ = l > 0.0 && std::isfinite(1.0 / (l * l)) ? 1.0 / (l * l) : 1.0;
 }
