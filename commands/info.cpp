@@ -26,12 +26,13 @@ namespace {
 struct MemoryModel {
   const char* command;
   double base_mb, bytes_per_triangle;
+  bool regions;  ///< a clustering that --regions N applies to (estimated for N = 8 and 32 too)
 };
 constexpr MemoryModel kMemoryModels[] = {
-    {"cluster_growth", 32, 102},       // ptc cluster --method growth: 52 MiB at 208k, 1329 MiB at 13.3M
-    {"cluster_contraction", 40, 535},  // ptc cluster --method contraction: 146 MiB at 208k, 6827 MiB at 13.3M
-    {"trace", 40, 215},                // ptc trace MESH --clusters DIR --frame 0: 703 MiB at 3.3M
-    {"bench", 40, 730},                // ptc bench MESH --frames 0:2 (Embree beside): 2397 MiB at 3.3M
+    {"cluster_growth", 32, 102, true},       // ptc cluster --method growth: 52 MiB at 208k, 1329 MiB at 13.3M
+    {"cluster_contraction", 40, 535, true},  // ptc cluster --method contraction: 146 MiB at 208k, 6827 MiB at 13.3M
+    {"trace", 40, 215, false},               // ptc trace MESH --clusters DIR --frame 0: 703 MiB at 3.3M
+    {"bench", 40, 730, false},               // ptc bench MESH --frames 0:2 (Embree beside): 2397 MiB at 3.3M
 };
 
 // Clustering in N regions on k = min(threads, N) threads (docs/clustering.md): the whole mesh's
@@ -56,13 +57,11 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
   for (const MemoryModel& m : kMemoryModels) add(m.command, m.base_mb, m.bytes_per_triangle);
   // With --regions 8 and 32 at this machine's default thread count (all cores).
   const unsigned threads = std::max(1, tbb::info::default_concurrency());  // ptc's default --threads
-  for (const MemoryModel& m : kMemoryModels) {
-    const std::string c = m.command;
-    if (c != "cluster_growth" && c != "cluster_contraction") continue;
-    for (const int n : {8, 32})
-      add(c + "_regions_" + std::to_string(n), m.base_mb,
-          regions_bytes_per_triangle(m.bytes_per_triangle, n, static_cast<double>(threads)));
-  }
+  for (const MemoryModel& m : kMemoryModels)
+    if (m.regions)
+      for (const int n : {8, 32})
+        add(std::string(m.command) + "_regions_" + std::to_string(n), m.base_mb,
+            regions_bytes_per_triangle(m.bytes_per_triangle, n, static_cast<double>(threads)));
   nlohmann::json j;
   j["peak_mb"] = est;
   j["machine_memory_mb"] = std::round(machine);

@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <tuple>
 
 namespace ptc {
 namespace {
@@ -93,6 +94,39 @@ TEST(Topology, NonManifoldFanOfThreeAndDegenerates) {
   EXPECT_TRUE(boost::edge(0, 2, g).second);
   EXPECT_TRUE(boost::edge(1, 2, g).second);
   EXPECT_EQ(g[boost::edge(1, 2, g).first].mesh_edge, e01);
+}
+
+// SortedSides against brute force: every non-collapsed side once, in the bucket of its smaller
+// vertex, ordered by (larger vertex, slot); on degenerate triangles, a fan, a book of 20 pages
+// (beyond insertion sort's 16 in a bucket) and random triangles.
+TEST(Topology, SortedSidesAreEverySideInOrder) {
+  std::vector<Tri> t{{0, 1, 2}, {1, 0, 3}, {0, 1, 4}, {0, 0, 2}, {1, 2, 1}, {5, 5, 5}};
+  for (std::uint32_t k = 0; k < 20; ++k) t.push_back({k % 2 ? 7u : 6u, k % 2 ? 6u : 7u, 8 + k});
+  std::mt19937 rng(5);
+  for (int k = 0; k < 200; ++k) {
+    std::uniform_int_distribution<std::uint32_t> v(0, 40);
+    t.push_back({v(rng), v(rng), v(rng)});
+  }
+  const std::size_t V = 41;
+  const SortedSides ss = SortedSides::build(t, V);
+  std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint32_t>> want;  // (smaller, larger, slot)
+  for (std::uint32_t i = 0; i < t.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = t[i][k], b = t[i][(k + 1) % 3];
+      if (a != b) want.emplace_back(std::min(a, b), std::max(a, b), 3 * i + static_cast<std::uint32_t>(k));
+    }
+  std::sort(want.begin(), want.end());
+  ASSERT_EQ(ss.first.size(), V + 1);
+  ASSERT_EQ(ss.sides.size(), want.size());
+  std::size_t i = 0;
+  for (std::uint32_t v = 0; v < V; ++v)
+    for (std::uint32_t j = ss.first[v]; j < ss.first[v + 1]; ++j, ++i) {
+      EXPECT_EQ(std::get<0>(want[i]), v) << "side " << i;
+      EXPECT_EQ(std::get<1>(want[i]), ss.sides[j].other) << "side " << i;
+      EXPECT_EQ(std::get<2>(want[i]), ss.sides[j].slot) << "side " << i;
+    }
+  EXPECT_EQ(i, want.size());
+  expect_matches_brute_force(t, V);
 }
 
 TEST(Topology, HugeBookIsLinearInTheDualGraph) {

@@ -10,65 +10,35 @@ namespace ptc {
 namespace {
 
 /// The distinct edge-neighbours of every triangle, ascending (ClusterTables::neighbours), without
-/// an edge map: the sides are bucketed by their smaller vertex (counting sort, in triangle order)
-/// and sorted by the larger one within a bucket; a run of equal pairs is one mesh edge, and its
+/// an edge map: a run of equal pairs in topology.h's SortedSides is one mesh edge, and its
 /// distinct triangles are pairwise neighbours (every pair, at any valence: the dual graph without
 /// parallel edges). 8 bytes a side and the lists themselves, against the edge map's ~45 bytes a
-/// triangle and a 12-byte side table.
+/// triangle. Two passes over the edges: count each triangle's entries, then write them.
 void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, std::vector<std::uint32_t>& offsets,
                       std::vector<std::uint32_t>& out) {
   const std::size_t T = triangles.size();
-  std::vector<std::uint32_t> first(vertex_count + 1, 0);
-  for (const Tri& f : triangles)
-    for (int k = 0; k < 3; ++k)
-      if (f[k] != f[(k + 1) % 3]) ++first[std::min(f[k], f[(k + 1) % 3]) + 1];
-  for (std::size_t v = 0; v < vertex_count; ++v) first[v + 1] += first[v];
-  struct Side {
-    std::uint32_t other, tri;
-  };
-  std::vector<Side> sides(first.back());
-  {
-    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::size_t t = 0; t < T; ++t)
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t a = triangles[t][k], b = triangles[t][(k + 1) % 3];
-        if (a != b) sides[fill[std::min(a, b)]++] = {std::max(a, b), static_cast<std::uint32_t>(t)};
-      }
-  }
-  const auto before = [](const Side& x, const Side& y) { return x.other != y.other ? x.other < y.other : x.tri < y.tri; };
-  // Pass 1: sort each bucket, and count each triangle's entries (one per other triangle of each
-  // of its edges); pass 2 writes them.
+  using Side = SortedSides::Side;
+  const SortedSides ss = SortedSides::build(triangles, vertex_count);
   offsets.assign(T + 1, 0);
   auto for_each_edge = [&](auto&& on_edge) {
     for (std::size_t v = 0; v < vertex_count; ++v) {
-      Side* lo = sides.data() + first[v];
-      Side* const hi = sides.data() + first[v + 1];
-      for (Side* e = lo; lo != hi; lo = e) {
+      const Side* lo = ss.sides.data() + ss.first[v];
+      const Side* const hi = ss.sides.data() + ss.first[v + 1];
+      for (const Side* e = lo; lo != hi; lo = e) {
         while (e != hi && e->other == lo->other) ++e;
         on_edge(lo, e);
       }
     }
   };
-  for (std::size_t v = 0; v < vertex_count; ++v) {
-    Side* lo = sides.data() + first[v];
-    Side* const hi = sides.data() + first[v + 1];
-    if (hi - lo <= 16) {  // a vertex has a handful of sides: insertion sort
-      for (Side* it = lo + (lo != hi); it < hi; ++it)
-        for (Side* j = it; j != lo && before(*j, *(j - 1)); --j) std::swap(*j, *(j - 1));
-    } else {
-      std::sort(lo, hi, before);
-    }
-  }
-  // A triangle (a, b, a) lists one edge twice in a run: count distinct triangles per run.
-  auto distinct = [](const Side* lo, const Side* hi) {
-    std::size_t m = 0;
-    for (const Side* s = lo; s != hi; ++s) m += s == lo || s->tri != (s - 1)->tri;
-    return m;
-  };
+  // A side's triangle, and whether it is the first side of its triangle in the run (a triangle
+  // (a, b, a) lists one edge twice).
+  auto tri = [](const Side* s) { return s->slot / 3; };
+  auto first_of_its_triangle = [&](const Side* lo, const Side* s) { return s == lo || tri(s) != tri(s - 1); };
   for_each_edge([&](const Side* lo, const Side* hi) {
-    const std::size_t m = distinct(lo, hi);
+    std::size_t m = 0;  // distinct triangles on the edge
+    for (const Side* s = lo; s != hi; ++s) m += first_of_its_triangle(lo, s);
     for (const Side* s = lo; s != hi; ++s)
-      if (s == lo || s->tri != (s - 1)->tri) offsets[s->tri + 1] += static_cast<std::uint32_t>(m - 1);
+      if (first_of_its_triangle(lo, s)) offsets[tri(s) + 1] += static_cast<std::uint32_t>(m - 1);
   });
   for (std::size_t t = 0; t < T; ++t) offsets[t + 1] += offsets[t];
   out.resize(offsets[T]);
@@ -76,9 +46,9 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
     std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
     for_each_edge([&](const Side* lo, const Side* hi) {
       for (const Side* s = lo; s != hi; ++s) {
-        if (s != lo && s->tri == (s - 1)->tri) continue;
+        if (!first_of_its_triangle(lo, s)) continue;
         for (const Side* u = lo; u != hi; ++u)
-          if (u->tri != s->tri && (u == lo || u->tri != (u - 1)->tri)) out[fill[s->tri]++] = u->tri;
+          if (tri(u) != tri(s) && first_of_its_triangle(lo, u)) out[fill[tri(s)]++] = tri(u);
       }
     });
   }

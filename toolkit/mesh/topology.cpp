@@ -5,62 +5,66 @@
 
 namespace ptc {
 
-EdgeMap EdgeMap::build(std::span<const Tri> triangles, std::size_t vertex_count) {
-  EdgeMap m;
+SortedSides SortedSides::build(std::span<const Tri> triangles, std::size_t vertex_count) {
+  SortedSides r;
   const std::size_t T = triangles.size();
-  m.side_edges_.assign(3 * T, kNoEdge);
-
-  // 1. Bucket every non-collapsed side by its smaller vertex (counting sort).
-  std::vector<std::uint32_t> count(vertex_count + 1, 0);
+  // Counting sort by the smaller vertex, in slot order.
+  r.first.assign(vertex_count + 1, 0);
   for (const Tri& f : triangles)
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = f[k], b = f[(k + 1) % 3];
-      if (a != b) ++count[std::min(a, b) + 1];
+      if (a != b) ++r.first[std::min(a, b) + 1];
     }
-  std::partial_sum(count.begin(), count.end(), count.begin());
-  struct Side {
-    std::uint32_t other, tri, slot;
-  };
-  std::vector<Side> sides(count.back());
+  std::partial_sum(r.first.begin(), r.first.end(), r.first.begin());
+  r.sides.resize(r.first.back());
   {
-    std::vector<std::uint32_t> fill(count.begin(), count.end() - 1);
+    std::vector<std::uint32_t> fill(r.first.begin(), r.first.end() - 1);
     for (std::size_t t = 0; t < T; ++t)
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t a = triangles[t][k], b = triangles[t][(k + 1) % 3];
-        if (a == b) continue;
-        sides[fill[std::min(a, b)]++] = {std::max(a, b), static_cast<std::uint32_t>(t),
-                                         static_cast<std::uint32_t>(3 * t + k)};
+        if (a != b) r.sides[fill[std::min(a, b)]++] = {std::max(a, b), static_cast<std::uint32_t>(3 * t + k)};
       }
   }
+  // Within a bucket by (other, slot); a vertex has a handful of sides: insertion sort.
+  const auto before = [](const Side& x, const Side& y) { return x.other != y.other ? x.other < y.other : x.slot < y.slot; };
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    Side* lo = r.sides.data() + r.first[v];
+    Side* const hi = r.sides.data() + r.first[v + 1];
+    if (hi - lo <= 16) {
+      for (Side* it = lo + (lo != hi); it < hi; ++it)
+        for (Side* j = it; j != lo && before(*j, *(j - 1)); --j) std::swap(*j, *(j - 1));
+    } else {
+      std::sort(lo, hi, before);
+    }
+  }
+  return r;
+}
 
-  // 2. Within each bucket sort by (other vertex, triangle); equal "other" values form one edge.
-  // Every list is at most one entry per side: reserved once (untouched capacity costs no memory).
+EdgeMap EdgeMap::build(std::span<const Tri> triangles, std::size_t vertex_count) {
+  EdgeMap m;
+  m.side_edges_.assign(3 * triangles.size(), kNoEdge);
+  const SortedSides ss = SortedSides::build(triangles, vertex_count);
+  // Equal "other" values in a bucket form one edge. Every list is at most one entry per side:
+  // reserved once (untouched capacity costs no memory).
   m.vertex_first_.assign(vertex_count + 1, 0);
-  m.edges_.reserve(sides.size());
-  m.edge_tris_.reserve(sides.size());
-  m.offsets_.reserve(sides.size() + 1);
+  m.edges_.reserve(ss.sides.size());
+  m.edge_tris_.reserve(ss.sides.size());
+  m.offsets_.reserve(ss.sides.size() + 1);
   m.offsets_.push_back(0);
-  const auto before = [](const Side& x, const Side& y) {
-    return x.other != y.other ? x.other < y.other : x.tri < y.tri;
-  };
   for (std::size_t v = 0; v < vertex_count; ++v) {
     m.vertex_first_[v] = static_cast<std::uint32_t>(m.edges_.size());
-    auto first = sides.begin() + count[v], last = sides.begin() + count[v + 1];
-    if (last - first <= 16) {  // a vertex has a handful of sides: insertion sort
-      for (auto it = first + (first != last); it < last; ++it)
-        for (auto j = it; j != first && before(*j, *(j - 1)); --j) std::iter_swap(j, j - 1);
-    } else {
-      std::sort(first, last, before);
-    }
-    for (auto it = first; it != last;) {
+    auto it = ss.sides.begin() + ss.first[v];
+    const auto last = ss.sides.begin() + ss.first[v + 1];
+    while (it != last) {
       const std::uint32_t other = it->other;
       const auto e = static_cast<std::uint32_t>(m.edges_.size());
       m.edges_.push_back({static_cast<std::uint32_t>(v), other});
       std::uint32_t last_tri = kNoEdge;
       for (; it != last && it->other == other; ++it) {
         m.side_edges_[it->slot] = e;
-        if (it->tri != last_tri) m.edge_tris_.push_back(it->tri);  // a, b, a lists its edge once
-        last_tri = it->tri;
+        const std::uint32_t tri = it->slot / 3;
+        if (tri != last_tri) m.edge_tris_.push_back(tri);  // a, b, a lists its edge once
+        last_tri = tri;
       }
       m.offsets_.push_back(static_cast<std::uint32_t>(m.edge_tris_.size()));
     }

@@ -33,6 +33,20 @@ inline constexpr std::uint32_t kNoEdge = 0xffffffffu;
 /// Non-manifold edges with up to this many triangles make a clique in the dual graph; more, a path.
 inline constexpr std::size_t kMaxCliqueValence = 16;
 
+/// Every non-collapsed triangle side, bucketed by its smaller vertex and sorted within the
+/// bucket by (larger vertex, slot), slot = 3 t + k for side k of triangle t (so by triangle too).
+/// A run of equal `other` in a bucket is one mesh edge; its slots ascend. O(T + V); 8 bytes a
+/// side. The one grouping of sides into edges that EdgeMap and ClusterTables' neighbour lists
+/// share.
+struct SortedSides {
+  struct Side {
+    std::uint32_t other, slot;
+  };
+  std::vector<std::uint32_t> first;  ///< vertex_count + 1: bucket of vertex v = sides[first[v] .. first[v + 1])
+  std::vector<Side> sides;
+  [[nodiscard]] static SortedSides build(std::span<const Tri> triangles, std::size_t vertex_count);
+};
+
 class EdgeMap {
  public:
   /// Builds the map in O(T + V) time (bucketed by the smaller vertex index).
