@@ -156,6 +156,28 @@ TEST(MortonOrder, RandomMeshesMatchBruteForce) {
   }
 }
 
+TEST(MortonOrder, LargeInputWithManyEqualCodesMatchesBruteForce) {
+  // 120k triangles: most in 40 tiny clumps (equal codes, so the order among them is by id), a few
+  // far away (codes that differ in the top bytes only), the radix sort's every pass and skip.
+  std::mt19937_64 rng(73);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<Vec3> p;
+  for (int c = 0; c < 40; ++c) {
+    const Vec3 base(u(rng), u(rng), u(rng));
+    for (int i = 0; i < 30; ++i) p.push_back(base + 1e-12 * Vec3(u(rng), u(rng), u(rng)));
+  }
+  p.push_back(Vec3(1e3, 0, 0));
+  p.push_back(Vec3(-1e3, 5e2, 0));
+  std::uniform_int_distribution<std::uint32_t> ui(0, static_cast<std::uint32_t>(p.size() - 1));
+  std::vector<Tri> t;
+  for (int i = 0; i < 120000; ++i) {
+    const std::uint32_t a = ui(rng);
+    const std::uint32_t clump = a < 1200 ? a / 30 * 30 : a;  // corners from one clump, or a far point
+    t.push_back({a, clump, a < 1200 ? clump + 29 : a});
+  }
+  for (MortonGrid g : {MortonGrid::Cube, MortonGrid::PerAxis}) ASSERT_EQ(morton_order(p, t, g), brute_force_order(p, t, g));
+}
+
 TEST(MortonOrder, CubeGridKeepsRunsCompactOnThinMeshes) {
   // Points on a long thin grid 256 x 4 (x by y), one degenerate triangle each. With cubic cells a
   // run of 16 consecutive triangles is a compact block (ideal: 4 x 4, x-extent 3); stretching
