@@ -27,7 +27,9 @@ void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> t
 
 /// Every block b from its corner vertex indices corners[12 b + 4 c + l] (corner c of lane l;
 /// the sentinel's index for padding lanes), gathered from frame_pos. boxes: null, or one entry
-/// per block receiving the block's exact float box (padding lanes ignored).
+/// per block receiving the block's exact float box (padding lanes ignored). Runs in chunks on
+/// the caller's threads (oneTBB), each fencing its own streaming stores; the same bytes at any
+/// thread count.
 void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* frame_pos, std::span<TriBlock> blocks,
                               Box3f* boxes);
 

@@ -86,7 +86,8 @@ struct GroupRuns {
 /// is not finite in the trace frame throws std::invalid_argument (check_finite's message), after
 /// the pass.
 /// The own ranges are converted four vertices at a time with AVX2 when the CPU has it and
-/// allow_avx2 is true (the SSE2 path gives the same bits; tests compare them).
+/// allow_avx2 is true (the SSE2 path gives the same bits; tests compare them). Chunks of groups
+/// run on the caller's threads (oneTBB): the same outputs at any thread count.
 void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& origin, const GroupRuns& runs,
                                std::span<Vec3f> out_pos, std::vector<Box3f>& boxes, std::vector<Vec3f>& centers,
                                bool allow_avx2 = true);

@@ -4,6 +4,7 @@
 #include "bvh/leaf_blocks.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <random>
@@ -97,6 +98,42 @@ TEST(LeafBlocks, CornerFillGivesExactBlockBoxes) {
         if (v != V) want.extend(fp[v]);
       }
     EXPECT_EQ(boxes[b], want) << b;
+  }
+}
+
+// The fill runs in chunks of blocks on the caller's threads: with several chunks, at 1, 2 and 4
+// threads, every block and box equals the one-block-at-a-time answer (corners read back).
+TEST(LeafBlocks, CornerFillIsTheSameAtAnyThreadCount) {
+  const std::uint32_t V = 5000;
+  std::vector<Vec3f> fp = random_frame_positions(V, 11);
+  add_sentinel(fp);
+  std::mt19937 g(13);
+  const std::size_t nb = 8192 * 5 + 77;  // several chunks and a short last one
+  std::vector<std::uint32_t> corners(12 * nb);
+  for (std::size_t b = 0; b < nb; ++b)
+    for (int l = 0; l < 4; ++l) {
+      const bool pad = b % 7 == 0 && l == 3;
+      for (int c = 0; c < 3; ++c) corners[12 * b + 4 * c + l] = pad ? V : static_cast<std::uint32_t>(g() % V);
+    }
+  for (int threads : {1, 2, 4}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    AlignedVector<TriBlock> blocks(nb);
+    std::vector<Box3f> boxes(nb);
+    fill_blocks_from_corners(corners, fp[0].data(), blocks, boxes.data());
+    for (std::size_t b = 0; b < nb; ++b) {
+      Box3f want;
+      for (int l = 0; l < 4; ++l)
+        for (int c = 0; c < 3; ++c) {
+          const std::uint32_t v = corners[12 * b + 4 * c + l];
+          for (int a = 0; a < 3; ++a) {
+            const float x = blocks[b].v[c][a][l];
+            if (v == V) ASSERT_TRUE(std::isnan(x)) << b;
+            else ASSERT_EQ(x, fp[v][a]) << "threads " << threads << " block " << b;
+          }
+          if (v != V) want.extend(fp[v]);
+        }
+      ASSERT_EQ(boxes[b], want) << "threads " << threads << " block " << b;
+    }
   }
 }
 

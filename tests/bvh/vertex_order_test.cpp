@@ -5,6 +5,7 @@
 #include "bvh/vertex_order.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
@@ -225,6 +226,46 @@ TEST(VertexOrder, FusedPassOnRenumberedVerticesEqualsBruteForce) {
                  std::invalid_argument);
     EXPECT_THROW(frame_positions_and_boxes(pos_new, origin, *runs, std::span<Vec3f>(fp2).first(V - 1), b2, c2),
                  std::invalid_argument);
+  }
+}
+
+// The fused pass runs chunks of groups on the caller's threads: with many chunks, at 1, 2 and 4
+// threads, the positions and every box equal the brute force, and a position that is not finite
+// in a late chunk is refused at every count.
+TEST(VertexOrder, FusedPassIsTheSameAtAnyThreadCount) {
+  const std::uint32_t groups = 2048 * 6 + 5;
+  std::vector<std::uint32_t> offsets{0}, idx;
+  for (std::uint32_t k = 0; k < groups; ++k) {  // 12 vertices, the first two shared with group k - 1
+    for (std::uint32_t i = 0; i < 12; ++i) idx.push_back(10 * k + i);
+    offsets.push_back(static_cast<std::uint32_t>(idx.size()));
+  }
+  const std::uint32_t V = 10 * groups + 2;
+  std::mt19937 g32(79);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const Vec3 origin(1e3, -2e3, 5e2);
+  std::vector<Vec3> pos(V);
+  for (Vec3& p : pos) p = origin + 40.0 * Vec3(U(g32), U(g32), U(g32));
+  const auto runs = group_runs(first_touch_order(V, offsets, idx));
+  ASSERT_TRUE(runs.has_value());
+  std::vector<Vec3f> plain;
+  frame_positions(pos, origin, plain);
+  for (int threads : {1, 2, 4}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    std::vector<Vec3f> fp(V + 2);
+    std::vector<Box3f> boxes;
+    std::vector<Vec3f> centers;
+    frame_positions_and_boxes(pos, origin, *runs, fp, boxes, centers);
+    for (std::uint32_t v = 0; v < V; ++v) ASSERT_EQ(fp[v], plain[v]) << "threads " << threads << " vertex " << v;
+    ASSERT_EQ(boxes.size(), groups);
+    for (std::uint32_t k = 0; k < groups; ++k) {
+      const Box3f want =
+          brute_group_box(plain, std::span<const std::uint32_t>(idx.data() + offsets[k], offsets[k + 1] - offsets[k]));
+      ASSERT_EQ(boxes[k], want) << "threads " << threads << " group " << k;
+      ASSERT_EQ(centers[k], want.center()) << k;
+    }
+    std::vector<Vec3> bad = pos;
+    bad[V - 40] = Vec3(0, std::nan(""), 0);
+    EXPECT_THROW(frame_positions_and_boxes(bad, origin, *runs, fp, boxes, centers), std::invalid_argument) << threads;
   }
 }
 
