@@ -33,7 +33,7 @@ enum class MortonGrid { Cube, PerAxis };
                                                       MortonGrid grid = MortonGrid::Cube);
 
 /// Triangle ids 0..T-1 sorted by (morton code, id): ties keep index order, so the order is
-/// deterministic. Same preconditions as morton_codes. O(T) (a radix sort).
+/// deterministic. Same preconditions as morton_codes. O(T log T).
 [[nodiscard]] std::vector<std::uint32_t> morton_order(std::span<const Vec3> positions, std::span<const Tri> triangles,
                                                       MortonGrid grid = MortonGrid::Cube);
 
