@@ -62,6 +62,24 @@ TEST(LeafBlocks, LeafLanesHoldTheTrianglesCorners) {
   }
 }
 
+// Block b's lanes against its corners read back from fp (index V, the sentinel: NaN lanes);
+// `box` receives the box of its real corners.
+::testing::AssertionResult block_matches(const std::vector<std::uint32_t>& corners, const std::vector<Vec3f>& fp,
+                                         std::uint32_t V, const TriBlock& block, std::size_t b, Box3f& box) {
+  box = Box3f{};
+  for (int l = 0; l < 4; ++l)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t v = corners[12 * b + 4 * c + l];
+      for (int a = 0; a < 3; ++a) {
+        const float x = block.v[c][a][l];
+        if (v == V ? !std::isnan(x) : x != fp[v][a])
+          return ::testing::AssertionFailure() << "block " << b << " lane " << l << " corner " << c << " axis " << a;
+      }
+      if (v != V) box.extend(fp[v]);
+    }
+  return ::testing::AssertionSuccess();
+}
+
 TEST(LeafBlocks, CornerFillGivesExactBlockBoxes) {
   const std::uint32_t V = 64;
   std::vector<Vec3f> fp = random_frame_positions(V, 4);
@@ -81,22 +99,9 @@ TEST(LeafBlocks, CornerFillGivesExactBlockBoxes) {
   fill_blocks_from_corners(corners, fp[0].data(), again, nullptr);  // no boxes: the same blocks
   fence_blocks();
   for (std::size_t b = 0; b < nb; ++b) {
-    Box3f want;
-    for (int l = 0; l < 4; ++l)
-      for (int c = 0; c < 3; ++c) {
-        const std::uint32_t v = corners[12 * b + 4 * c + l];
-        for (int a = 0; a < 3; ++a) {
-          const float x = blocks[b].v[c][a][l];
-          const float y = again[b].v[c][a][l];
-          if (v == V) {
-            EXPECT_TRUE(std::isnan(x) && std::isnan(y));
-          } else {
-            EXPECT_EQ(x, fp[v][a]);
-            EXPECT_EQ(y, x);
-          }
-        }
-        if (v != V) want.extend(fp[v]);
-      }
+    Box3f want, want_again;
+    ASSERT_TRUE(block_matches(corners, fp, V, blocks[b], b, want));
+    ASSERT_TRUE(block_matches(corners, fp, V, again[b], b, want_again));
     EXPECT_EQ(boxes[b], want) << b;
   }
 }
@@ -122,16 +127,7 @@ TEST(LeafBlocks, CornerFillIsTheSameAtAnyThreadCount) {
     fill_blocks_from_corners(corners, fp[0].data(), blocks, boxes.data());
     for (std::size_t b = 0; b < nb; ++b) {
       Box3f want;
-      for (int l = 0; l < 4; ++l)
-        for (int c = 0; c < 3; ++c) {
-          const std::uint32_t v = corners[12 * b + 4 * c + l];
-          for (int a = 0; a < 3; ++a) {
-            const float x = blocks[b].v[c][a][l];
-            if (v == V) ASSERT_TRUE(std::isnan(x)) << b;
-            else ASSERT_EQ(x, fp[v][a]) << "threads " << threads << " block " << b;
-          }
-          if (v != V) want.extend(fp[v]);
-        }
+      ASSERT_TRUE(block_matches(corners, fp, V, blocks[b], b, want)) << "threads " << threads;
       ASSERT_EQ(boxes[b], want) << "threads " << threads << " block " << b;
     }
   }
