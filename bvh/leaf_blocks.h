@@ -1,7 +1,8 @@
 // Filling the SIMD triangle blocks of a scene's leaves (TriBlock, trace_data.h) from the frame
 // positions, every frame. Internal to bvh/ (the two scenes). Padding lanes read a sentinel
 // vertex of NaN corners (add_sentinel), which every comparison of the kernel rejects. Blocks are
-// written with streaming stores: fence_blocks() after the fills, before the blocks are traced.
+// written with streaming stores: fence_blocks() after fill_leaf_blocks, before the blocks are
+// traced (fill_blocks_from_corners fences its own).
 #pragma once
 
 #include <cstdint>

@@ -97,7 +97,6 @@ TEST(LeafBlocks, CornerFillGivesExactBlockBoxes) {
   fill_blocks_from_corners(corners, fp[0].data(), blocks, boxes.data());
   AlignedVector<TriBlock> again(nb);
   fill_blocks_from_corners(corners, fp[0].data(), again, nullptr);  // no boxes: the same blocks
-  fence_blocks();
   for (std::size_t b = 0; b < nb; ++b) {
     Box3f want, want_again;
     ASSERT_TRUE(block_matches(corners, fp, V, blocks[b], b, want));

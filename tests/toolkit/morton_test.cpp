@@ -158,7 +158,7 @@ TEST(MortonOrder, RandomMeshesMatchBruteForce) {
 
 TEST(MortonOrder, LargeInputWithManyEqualCodesMatchesBruteForce) {
   // 120k triangles: most in 40 tiny clumps (equal codes, so the order among them is by id), a few
-  // far away (codes that differ in the top bytes only), the radix sort's every pass and skip.
+  // far away (codes that differ in the top bytes only).
   std::mt19937_64 rng(73);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<Vec3> p;
