@@ -276,7 +276,7 @@ std::vector<double> series(const std::vector<Row>& rows, std::size_t config, F f
 int run_build_loop(const ClusterScene& cs, const Mesh& mesh, const ClusterView& v0, const Vec3& origin,
                    const Options& o) {
   const StageClock clock = o.clock;
-  const std::vector<Box3f>& boxes = cs.boxes();
+  const std::span<const Box3f> boxes = cs.boxes();
   const std::vector<Vec3f> centers = box_centers(boxes);
   const std::string label = "build loop " + std::to_string(boxes.size()) + " clusters";
   Bvh b;
@@ -289,9 +289,9 @@ int run_build_loop(const ClusterScene& cs, const Mesh& mesh, const ClusterView& 
   }
   row(label, "3 SAH build", ms);
   // The box stage alone on the same clustering (rest pose).
-  std::vector<Vec3f> fp;
-  std::vector<Box3f> bx;
-  std::vector<Vec3f> cx;
+  AlignedVector<Vec3f> fp;
+  AlignedVector<Box3f> bx;
+  AlignedVector<Vec3f> cx;
   ms.clear();
   for (int i = 0; i < o.build_loop; ++i) {
     frame_positions(mesh.positions(), origin, fp);  // as in the scene: fresh positions first
@@ -323,7 +323,7 @@ int run_build_loop(const ClusterScene& cs, const Mesh& mesh, const ClusterView& 
     std::fprintf(stderr, "bvh_bench: renumbered mesh has no runs\n");
     return 1;
   }
-  std::vector<Vec3f> fpr(rm.vertex_count() + 2);
+  AlignedVector<Vec3f> fpr(rm.vertex_count() + 2);
   ms.clear();
   for (int i = 0; i < o.build_loop; ++i) {
     const double t0 = clock_ms(clock);
@@ -525,7 +525,7 @@ int main(int argc, char** argv) {
   opt.isa = o.isa;
   std::vector<Row> rows;
   HitBatch ref, hits;
-  std::vector<Vec3> pos(mesh.vertex_count());
+  AlignedVector<Vec3> pos(mesh.vertex_count());
   loop::LoopOptions lo;
   lo.frames = scene.frames();
   loop::run_frame_loop(scene, pos, order, lo, [&](const loop::FrameRecord& fr, loop::Accel& a, std::span<const Vec3>) {

@@ -1,5 +1,12 @@
 // A std::allocator with cache-line (or larger) alignment: SoA arrays that threads write in
 // 16-element tiles never share a cache line, and SIMD blocks can use aligned loads.
+//
+// Large arrays (256 KiB or more: leaf blocks, nodes, boxes, rays, hits) are also placed on whole
+// 2 MiB pages and advised as transparent huge pages (madvise MADV_HUGEPAGE; a no-op where the
+// kernel's THP setting is "never"). A scene rewrites them every frame, and at 4 KiB pages a
+// virtual machine that drops its guest mappings (this project's development machine does, after
+// other large frees) makes every rewrite fault page by page on the host: 33 MB of leaf blocks
+// took 28-44 ms instead of 3 ms (docs/tracing.md, "Huge pages").
 #pragma once
 
 #include <cstddef>
@@ -7,6 +14,15 @@
 #include <vector>
 
 namespace ptc::bvh {
+
+/// A transparent huge page, and the array size from which AlignedAllocator asks for them.
+inline constexpr std::size_t kHugePageBytes = std::size_t(2) << 20;
+inline constexpr std::size_t kHugePageFrom = std::size_t(256) << 10;
+
+/// Memory of `bytes` aligned to `align`; from kHugePageFrom bytes on, whole 2 MiB pages aligned
+/// to 2 MiB and advised as huge pages. Free it with free_aligned(p, bytes, align).
+void* allocate_aligned(std::size_t bytes, std::size_t align);
+void free_aligned(void* p, std::size_t bytes, std::size_t align) noexcept;
 
 template <class T, std::size_t Align = 64>
 struct AlignedAllocator {
@@ -18,8 +34,11 @@ struct AlignedAllocator {
   AlignedAllocator() = default;
   template <class U>
   AlignedAllocator(const AlignedAllocator<U, Align>&) noexcept {}
-  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{Align})); }
-  void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, std::align_val_t{Align}); }
+  T* allocate(std::size_t n) {
+    if (n > std::size_t(-1) / sizeof(T)) throw std::bad_array_new_length();
+    return static_cast<T*>(allocate_aligned(n * sizeof(T), Align));
+  }
+  void deallocate(T* p, std::size_t n) noexcept { free_aligned(p, n * sizeof(T), Align); }
   template <class U>
   bool operator==(const AlignedAllocator<U, Align>&) const noexcept {
     return true;

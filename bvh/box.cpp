@@ -63,7 +63,7 @@ std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span
   return c;
 }
 
-void frame_positions(std::span<const Vec3> positions, const Vec3& origin, std::vector<Vec3f>& out) {
+void frame_positions(std::span<const Vec3> positions, const Vec3& origin, AlignedVector<Vec3f>& out) {
   out.resize(positions.size());
   for (std::size_t v = 0; v < positions.size(); ++v) out[v] = to_frame(positions[v], origin);
 }
@@ -81,17 +81,21 @@ inline void store_box(Box3f& box, __m128 lo, __m128 hi) {
 
 }  // namespace
 
-std::vector<Box3f> triangle_boxes(std::span<const Vec3f> fp, std::span<const Tri> triangles) {
-  std::vector<Box3f> boxes(triangles.size());
+void triangle_boxes(std::span<const Vec3f> fp, std::span<const Tri> triangles, std::span<Box3f> boxes) {
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const __m128 a = load3(fp[triangles[t][0]]), b = load3(fp[triangles[t][1]]), c = load3(fp[triangles[t][2]]);
     store_box(boxes[t], _mm_min_ps(_mm_min_ps(a, b), c), _mm_max_ps(_mm_max_ps(a, b), c));
   }
+}
+
+std::vector<Box3f> triangle_boxes(std::span<const Vec3f> fp, std::span<const Tri> triangles) {
+  std::vector<Box3f> boxes(triangles.size());
+  triangle_boxes(fp, triangles, boxes);
   return boxes;
 }
 
 void point_group_boxes(std::span<const Vec3f> fp, std::span<const std::uint32_t> offsets,
-                       std::span<const std::uint32_t> indices, std::vector<Box3f>& out) {
+                       std::span<const std::uint32_t> indices, AlignedVector<Box3f>& out) {
   const std::size_t groups = offsets.empty() ? 0 : offsets.size() - 1;
   out.assign(groups, Box3f{});
   for (std::size_t g = 0; g < groups; ++g) {
@@ -106,7 +110,7 @@ void point_group_boxes(std::span<const Vec3f> fp, std::span<const std::uint32_t>
 }
 
 void point_group_boxes(std::span<const Vec3f> fp, std::span<const std::uint32_t> offsets,
-                       std::span<const std::uint32_t> indices, std::vector<Box3f>& out, std::vector<Vec3f>& centers) {
+                       std::span<const std::uint32_t> indices, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers) {
   const std::size_t groups = offsets.empty() ? 0 : offsets.size() - 1;
   out.resize(groups);
   centers.resize(groups);
@@ -152,14 +156,18 @@ void throw_not_finite(std::span<const Vec3> positions, const Vec3& origin) {
   throw std::invalid_argument("a position is not finite in single precision");
 }
 
-std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangles) {
-  std::vector<Vec3f> c(triangles.size());
+void triangle_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangles, std::span<Vec3f> c) {
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const Vec3f& a = fp[triangles[t][0]];
     const Vec3f& b = fp[triangles[t][1]];
     const Vec3f& d = fp[triangles[t][2]];
     for (int k = 0; k < 3; ++k) c[t][k] = (a[k] + b[k] + d[k]) * (1.0f / 3.0f);
   }
+}
+
+std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangles) {
+  std::vector<Vec3f> c(triangles.size());
+  triangle_centroids(fp, triangles, c);
   return c;
 }
 

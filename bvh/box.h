@@ -17,6 +17,7 @@
 #include <span>
 #include <vector>
 
+#include "bvh/aligned.h"
 #include "toolkit/core/types.h"
 
 namespace ptc::bvh {
@@ -129,19 +130,21 @@ struct Box3f {
 
 /// The positions in the trace frame, rounded to nearest (the tracer's vertices): out[v] =
 /// to_frame(positions[v], origin). One pass, done once per frame; everything else gathers from it.
-void frame_positions(std::span<const Vec3> positions, const Vec3& origin, std::vector<Vec3f>& out);
+void frame_positions(std::span<const Vec3> positions, const Vec3& origin, AlignedVector<Vec3f>& out);
 
 /// Boxes from frame positions (floats rounded to nearest), widened by one unit in the last
 /// place on every side. Since a double p lies within half a unit of its float, the box contains
 /// the double triangle (or point group) as well as the float one: rounded outward like the
 /// double versions above, at most one unit looser, and about twice as fast (half the memory).
 [[nodiscard]] std::vector<Box3f> triangle_boxes(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);
+/// The same into out[0 .. triangles.size()) (sized by the caller: a scene's kept storage).
+void triangle_boxes(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles, std::span<Box3f> out);
 void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::uint32_t> offsets,
-                       std::span<const std::uint32_t> indices, std::vector<Box3f>& out);
+                       std::span<const std::uint32_t> indices, AlignedVector<Box3f>& out);
 /// The same boxes, and their centres (Box3f::center(), bit for bit) in one pass, reusing the
 /// storage of `out` and `centers` (the per-frame cluster box update).
 void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::uint32_t> offsets,
-                       std::span<const std::uint32_t> indices, std::vector<Box3f>& out, std::vector<Vec3f>& centers);
+                       std::span<const std::uint32_t> indices, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers);
 
 /// Throws std::invalid_argument naming the first vertex whose position is not finite in the
 /// trace frame (NaN, infinite, or a float overflow of p - origin) when frame_pos (the converted
@@ -152,6 +155,8 @@ void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_
 
 /// Centroids of float triangles (v0 + v1 + v2) / 3, inside the boxes above.
 [[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);
+/// The same into out[0 .. triangles.size()) (sized by the caller).
+void triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles, std::span<Vec3f> out);
 
 /// Centroids (v0 + v1 + v2) / 3 of the triangles in the frame at `origin`.
 [[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span<const Tri> triangles,

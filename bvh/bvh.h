@@ -43,8 +43,8 @@ struct SahCostModel {
 /// The tree: nodes, the primitive order the leaves refer to, and the SAH cost the builder
 /// computed for it (see sah_cost() for the formula; 0 for an empty tree).
 struct Bvh {
-  std::vector<BvhNode> nodes;             ///< empty iff there are no primitives; root = nodes[0]
-  std::vector<std::uint32_t> prim_order;  ///< a permutation of the primitive ids 0 .. n-1
+  AlignedVector<BvhNode> nodes;             ///< empty iff there are no primitives; root = nodes[0]
+  AlignedVector<std::uint32_t> prim_order;  ///< a permutation of the primitive ids 0 .. n-1
   double cost = 0.0;                      ///< SAH cost as reported by the builder
 
   [[nodiscard]] bool empty() const { return nodes.empty(); }

@@ -154,7 +154,8 @@ void sort_clusters_by_morton(std::span<const Vec3> pos, std::span<const Tri> tri
 
 std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg) {
   check_view(mesh, clusters);
-  return rest_tree(mesh, clusters, cfg, trace_frame_origin(mesh, cfg)).prim_order;
+  const Bvh rest = rest_tree(mesh, clusters, cfg, trace_frame_origin(mesh, cfg));
+  return {rest.prim_order.begin(), rest.prim_order.end()};
 }
 
 std::vector<std::uint32_t> cluster_vertex_order(const Mesh& mesh, const ClusterView& clusters,
@@ -182,7 +183,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
     if (cfg_.builder == SahBuilder::Sweep && cfg_.cluster_group_size > 1)
       throw std::invalid_argument("the sweep builder has no two-level build: cluster_group_size must be 0 with it");
     const Bvh rest = rest_tree(mesh, cv, cfg_, data.origin);
-    cluster_ids_ = rest.prim_order;
+    cluster_ids_.assign(rest.prim_order.begin(), rest.prim_order.end());
     if (cfg_.cluster_group_size > 1 && !rest.nodes.empty()) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
     if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
   }

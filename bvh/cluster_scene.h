@@ -66,7 +66,7 @@ class ClusterScene {
   /// Per-cluster data (boxes, weights, the BVH's primitive ids) is in the scene's own cluster
   /// order: scene cluster i is the clustering's cluster cluster_ids()[i] (cluster_visit_order).
   [[nodiscard]] const std::vector<std::uint32_t>& cluster_ids() const { return cluster_ids_; }
-  [[nodiscard]] const std::vector<Box3f>& boxes() const { return f_.boxes; }
+  [[nodiscard]] std::span<const Box3f> boxes() const { return f_.boxes; }
   [[nodiscard]] const std::vector<std::uint32_t>& weights() const { return weights_; }
   /// The two-level build's groups (BuildInput::groups, in scene cluster order); empty: plain build.
   [[nodiscard]] const std::vector<std::uint32_t>& group_offsets() const { return group_offsets_; }

@@ -57,7 +57,7 @@ inline void fill_block(const std::uint32_t* ids, std::span<const Tri> tris, cons
 
 }  // namespace
 
-void add_sentinel(std::vector<Vec3f>& fp) {
+void add_sentinel(AlignedVector<Vec3f>& fp) {
   constexpr float nan = std::numeric_limits<float>::quiet_NaN();
   fp.push_back({nan, nan, nan});
   fp.push_back({0.0f, 0.0f, 0.0f});

@@ -18,7 +18,7 @@ namespace ptc::bvh {
 
 /// Appends the sentinel vertex (NaN, at index V = frame_pos.size() before the call, for padding
 /// lanes) and one more element, so that a 16-byte load at any vertex stays inside the array.
-void add_sentinel(std::vector<Vec3f>& frame_pos);
+void add_sentinel(AlignedVector<Vec3f>& frame_pos);
 
 /// The blocks of one leaf of triangles `ids` (mesh triangle ids): lane_ids[0 .. 4 *
 /// blocks_for(n)) receives the ids padded with kNoTriangle, blocks[0 .. blocks_for(n)) their

@@ -24,7 +24,7 @@ class SweepBuilder {
     std::uint32_t k = 0;                                    // split after position k of the sorted order
   };
 
-  SweepBuilder(const BuildInput& in, const BuildConfig& cfg, std::vector<std::uint32_t>& prim_order)
+  SweepBuilder(const BuildInput& in, const BuildConfig& cfg, AlignedVector<std::uint32_t>& prim_order)
       : in_(in), cfg_(cfg), prims_(prim_order), order_(prim_order.size()), suffix_area_(prim_order.size() + 1),
         suffix_weight_(prim_order.size() + 1) {}
 
@@ -91,7 +91,7 @@ class SweepBuilder {
 
   const BuildInput& in_;
   const BuildConfig& cfg_;
-  std::vector<std::uint32_t>& prims_;
+  AlignedVector<std::uint32_t>& prims_;
   std::vector<std::uint32_t> order_;
   std::vector<double> suffix_area_, suffix_weight_;
 };

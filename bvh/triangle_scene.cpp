@@ -24,8 +24,10 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   times.vertices_ms = clock_ms(cfg_.clock) - t0;
 
   t0 = clock_ms(cfg_.clock);
-  f_.boxes = triangle_boxes(fp, tris);
-  f_.centroids = triangle_centroids(fp, tris);
+  f_.boxes.resize(tris.size());  // (kept from frame to frame)
+  f_.centroids.resize(tris.size());
+  triangle_boxes(fp, tris, f_.boxes);
+  triangle_centroids(fp, tris, f_.centroids);
   times.boxes_ms = clock_ms(cfg_.clock) - t0;
 
   t0 = clock_ms(cfg_.clock);

@@ -22,7 +22,7 @@ class TriangleScene {
 
   [[nodiscard]] const TraceData& data() const { return f_.data; }
   [[nodiscard]] const Bvh& bvh() const { return f_.bvh; }
-  [[nodiscard]] const std::vector<Box3f>& boxes() const { return f_.boxes; }
+  [[nodiscard]] std::span<const Box3f> boxes() const { return f_.boxes; }
   [[nodiscard]] const StageTimes& times() const { return f_.times; }
 
  private:

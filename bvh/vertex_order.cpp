@@ -83,7 +83,7 @@ GroupVertexOrder first_touch_order(std::size_t vertex_count, std::span<const std
 }
 
 void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const Vec3& origin,
-                     std::vector<Vec3f>& out) {
+                     AlignedVector<Vec3f>& out) {
   out.resize(to_old.size());
   const std::size_t n = to_old.size();
   constexpr std::size_t ahead = 16;  // a gather: the positions are fetched ahead (24 bytes, <= 2 lines)
@@ -96,8 +96,8 @@ void frame_positions(std::span<const Vec3> positions, std::span<const std::uint3
   }
 }
 
-void point_group_boxes(std::span<const Vec3f> fp, const GroupVertexOrder& order, std::vector<Box3f>& out,
-                       std::vector<Vec3f>& centers) {
+void point_group_boxes(std::span<const Vec3f> fp, const GroupVertexOrder& order, AlignedVector<Box3f>& out,
+                       AlignedVector<Vec3f>& centers) {
   const std::size_t groups = order.own_offsets.empty() ? 0 : order.own_offsets.size() - 1;
   out.resize(groups);
   centers.resize(groups);
@@ -286,7 +286,7 @@ OwnRangeFn pick_own_range() {
 }  // namespace
 
 void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& origin, const GroupRuns& runs,
-                               std::span<Vec3f> out_pos, std::vector<Box3f>& out, std::vector<Vec3f>& centers,
+                               std::span<Vec3f> out_pos, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers,
                                bool allow_avx2) {
   static const OwnRangeFn best = pick_own_range();
   const OwnRangeFn own_range = allow_avx2 ? best : &own_range_sse2;

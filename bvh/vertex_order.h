@@ -43,14 +43,14 @@ struct GroupVertexOrder {
 
 /// frame_positions in a new order: out[i] = to_frame(positions[to_old[i]], origin).
 void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const Vec3& origin,
-                     std::vector<Vec3f>& out);
+                     AlignedVector<Vec3f>& out);
 
 /// point_group_boxes(frame_pos_old, offsets, indices, out, centers), bit for bit (NaN-free
 /// positions), from the positions in the order of `order` (frame_pos[new]): min/max over each
 /// group's own contiguous range, then over its shared vertices. frame_pos may hold more entries
 /// than vertices (sentinels): they are not read.
-void point_group_boxes(std::span<const Vec3f> frame_pos, const GroupVertexOrder& order, std::vector<Box3f>& out,
-                       std::vector<Vec3f>& centers);
+void point_group_boxes(std::span<const Vec3f> frame_pos, const GroupVertexOrder& order, AlignedVector<Box3f>& out,
+                       AlignedVector<Vec3f>& centers);
 
 /// The fused per-frame pass (no gather): possible when, in first-touch order over the groups,
 /// every group's own vertices are consecutive INPUT indices (a mesh renumbered once by
@@ -89,7 +89,7 @@ struct GroupRuns {
 /// allow_avx2 is true (the SSE2 path gives the same bits; tests compare them). Chunks of groups
 /// run on the caller's threads (oneTBB): the same outputs at any thread count.
 void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& origin, const GroupRuns& runs,
-                               std::span<Vec3f> out_pos, std::vector<Box3f>& boxes, std::vector<Vec3f>& centers,
+                               std::span<Vec3f> out_pos, AlignedVector<Box3f>& boxes, AlignedVector<Vec3f>& centers,
                                bool allow_avx2 = true);
 
 }  // namespace ptc::bvh

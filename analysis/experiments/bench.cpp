@@ -134,7 +134,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   bvh::TraceOptions opt;
   opt.threads = cfg.threads;
   opt.counters = false;
-  std::vector<Vec3> pos(mesh.positions().begin(), mesh.positions().end());
+  bvh::AlignedVector<Vec3> pos(mesh.positions().begin(), mesh.positions().end());
   bvh::HitBatch ref, hits, counted;
   // The shadow pass: one batch per frame, made from ours_triangles' primary hits on the frame's
   // positions (the first configuration of the loop), traced by every configuration.

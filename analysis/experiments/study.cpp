@@ -148,7 +148,7 @@ void run_study(Scene& scene, std::vector<Prepared>& configs, const StudySetup& s
   wrapped.reserve(configs.size());
   std::vector<loop::Accel*> accels;
   for (Prepared& p : configs) accels.push_back(&wrapped.emplace_back(p));
-  std::vector<Vec3> pos(scene.rest().positions().begin(), scene.rest().positions().end());
+  bvh::AlignedVector<Vec3> pos(scene.rest().positions().begin(), scene.rest().positions().end());
   const std::size_t frames = static_cast<std::size_t>(setup.frames.count());
   const std::size_t steps = frames * std::max<std::size_t>(configs.size(), 1);
   loop::LoopOptions lo;

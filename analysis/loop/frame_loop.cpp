@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "bvh/aligned.h"
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/stopwatch.h"
 
@@ -13,7 +14,7 @@ void run_frame_loop(Scene& scene, std::span<Vec3> positions, std::span<Accel* co
   if (positions.size() != scene.rest().vertex_count())
     throw std::invalid_argument("run_frame_loop: the position buffer does not match the scene");
   if (opt.frames.count() < 1) throw std::invalid_argument("run_frame_loop: no frames");
-  std::vector<Vec3> fresh(opt.fresh_positions ? positions.size() : 0);
+  bvh::AlignedVector<Vec3> fresh(opt.fresh_positions ? positions.size() : 0);
   for (std::int64_t f = opt.frames.first; f <= opt.frames.last; ++f) {
     // Ctrl-C stops here (toolkit/core/cancel.h), between steps, outside every timed region.
     throw_if_cancelled();

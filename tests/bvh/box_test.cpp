@@ -52,13 +52,13 @@ TEST(Box, BoxesContainDoubleAndFloatTriangles) {
       tris.push_back({6000, 6001, 6002});
       for (const Vec3& origin : {Vec3(0, 0, 0), offset}) {
         const auto exact = triangle_boxes(pos, tris, origin);
-        std::vector<Vec3f> fp;
+        AlignedVector<Vec3f> fp;
         frame_positions(pos, origin, fp);
         const auto widened = triangle_boxes(fp, tris);
         const auto cent = triangle_centroids(fp, tris);
         std::vector<std::uint32_t> offsets{0}, idx;
         for (const Tri& t : tris) idx.insert(idx.end(), t.begin(), t.end()), offsets.push_back(std::uint32_t(idx.size()));
-        std::vector<Box3f> groups;
+        AlignedVector<Box3f> groups;
         point_group_boxes(fp, offsets, idx, groups);
         for (std::size_t t = 0; t < tris.size(); ++t) {
           ASSERT_TRUE(widened[t].contains(exact[t])) << t;
@@ -93,7 +93,7 @@ TEST(Box, EmptyAndDegenerate) {
   EXPECT_EQ(p.surface_area(), 0.0);
   EXPECT_TRUE(p.contains(e));
   EXPECT_TRUE(union_of({}).empty());
-  std::vector<Box3f> g;
+  AlignedVector<Box3f> g;
   const std::vector<std::uint32_t> offs{0, 0};
   point_group_boxes(std::span<const Vec3f>(), offs, {}, g);
   ASSERT_EQ(g.size(), 1u);
@@ -113,8 +113,8 @@ TEST(Box, FusedGroupBoxesEqualThePlainOnes) {
   const auto last = static_cast<std::uint32_t>(fp.size() - 1);
   const std::vector<std::uint32_t> offsets{0, 0, 1, 4, 4, 9, 11, 12};
   const std::vector<std::uint32_t> indices{last, 7, 3, last, 1, 2, 3, 4, 5, 50, last, last};
-  std::vector<Box3f> plain, fused(3);
-  std::vector<Vec3f> centers(1);
+  AlignedVector<Box3f> plain, fused(3);
+  AlignedVector<Vec3f> centers(1);
   point_group_boxes(fp, offsets, indices, plain);
   point_group_boxes(fp, offsets, indices, fused, centers);
   ASSERT_EQ(fused.size(), offsets.size() - 1);

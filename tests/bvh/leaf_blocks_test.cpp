@@ -13,16 +13,16 @@
 namespace ptc::bvh {
 namespace {
 
-std::vector<Vec3f> random_frame_positions(std::size_t n, std::uint32_t seed) {
+AlignedVector<Vec3f> random_frame_positions(std::size_t n, std::uint32_t seed) {
   std::mt19937 g(seed);
   std::uniform_real_distribution<float> U(-10.0f, 10.0f);
-  std::vector<Vec3f> fp(n);
+  AlignedVector<Vec3f> fp(n);
   for (Vec3f& p : fp) p = {U(g), U(g), U(g)};
   return fp;
 }
 
 TEST(LeafBlocks, SentinelIsNanAndPadded) {
-  std::vector<Vec3f> fp = random_frame_positions(5, 1);
+  AlignedVector<Vec3f> fp = random_frame_positions(5, 1);
   add_sentinel(fp);
   ASSERT_EQ(fp.size(), 7u);
   for (int a = 0; a < 3; ++a) EXPECT_TRUE(std::isnan(fp[5][a]));
@@ -34,7 +34,7 @@ TEST(LeafBlocks, SentinelIsNanAndPadded) {
 
 TEST(LeafBlocks, LeafLanesHoldTheTrianglesCorners) {
   const std::uint32_t V = 40;
-  std::vector<Vec3f> fp = random_frame_positions(V, 2);
+  AlignedVector<Vec3f> fp = random_frame_positions(V, 2);
   add_sentinel(fp);
   std::mt19937 g(3);
   std::vector<Tri> tris(30);
@@ -64,7 +64,7 @@ TEST(LeafBlocks, LeafLanesHoldTheTrianglesCorners) {
 
 // Block b's lanes against its corners read back from fp (index V, the sentinel: NaN lanes);
 // `box` receives the box of its real corners.
-::testing::AssertionResult block_matches(const std::vector<std::uint32_t>& corners, const std::vector<Vec3f>& fp,
+::testing::AssertionResult block_matches(const std::vector<std::uint32_t>& corners, const AlignedVector<Vec3f>& fp,
                                          std::uint32_t V, const TriBlock& block, std::size_t b, Box3f& box) {
   box = Box3f{};
   for (int l = 0; l < 4; ++l)
@@ -82,7 +82,7 @@ TEST(LeafBlocks, LeafLanesHoldTheTrianglesCorners) {
 
 TEST(LeafBlocks, CornerFillGivesExactBlockBoxes) {
   const std::uint32_t V = 64;
-  std::vector<Vec3f> fp = random_frame_positions(V, 4);
+  AlignedVector<Vec3f> fp = random_frame_positions(V, 4);
   add_sentinel(fp);
   std::mt19937 g(5);
   const std::size_t nb = 9;
@@ -93,7 +93,7 @@ TEST(LeafBlocks, CornerFillGivesExactBlockBoxes) {
       for (int c = 0; c < 3; ++c) corners[12 * b + 4 * c + l] = pad ? V : static_cast<std::uint32_t>(g() % V);
     }
   AlignedVector<TriBlock> blocks(nb);
-  std::vector<Box3f> boxes(nb);
+  AlignedVector<Box3f> boxes(nb);
   fill_blocks_from_corners(corners, fp[0].data(), blocks, boxes.data());
   AlignedVector<TriBlock> again(nb);
   fill_blocks_from_corners(corners, fp[0].data(), again, nullptr);  // no boxes: the same blocks
@@ -109,7 +109,7 @@ TEST(LeafBlocks, CornerFillGivesExactBlockBoxes) {
 // threads, every block and box equals the one-block-at-a-time answer (corners read back).
 TEST(LeafBlocks, CornerFillIsTheSameAtAnyThreadCount) {
   const std::uint32_t V = 5000;
-  std::vector<Vec3f> fp = random_frame_positions(V, 11);
+  AlignedVector<Vec3f> fp = random_frame_positions(V, 11);
   add_sentinel(fp);
   std::mt19937 g(13);
   const std::size_t nb = 8192 * 5 + 77;  // several chunks and a short last one
@@ -122,7 +122,7 @@ TEST(LeafBlocks, CornerFillIsTheSameAtAnyThreadCount) {
   for (int threads : {1, 2, 4}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     AlignedVector<TriBlock> blocks(nb);
-    std::vector<Box3f> boxes(nb);
+    AlignedVector<Box3f> boxes(nb);
     fill_blocks_from_corners(corners, fp[0].data(), blocks, boxes.data());
     for (std::size_t b = 0; b < nb; ++b) {
       Box3f want;

@@ -47,7 +47,7 @@ TEST(VertexOrder, FirstTouchOrderBoxesEqualBruteForce) {
     const std::uint32_t V = 1 + g() % 400;
     std::uniform_real_distribution<float> U(trial % 3 == 0 ? -1e-30f : -5.0f, trial % 3 == 0 ? 1e-30f : 5.0f);
     const auto u = [&] { return U(g32); };
-    std::vector<Vec3f> fp_old(V);
+    AlignedVector<Vec3f> fp_old(V);
     for (Vec3f& p : fp_old) p = {u(), u(), u()};
     fp_old[g() % V] = {0.0f, -0.0f, 0.0f};
     fp_old[g() % V] = {-0.0f, -0.0f, -0.0f};
@@ -101,11 +101,11 @@ TEST(VertexOrder, FirstTouchOrderBoxesEqualBruteForce) {
     // Boxes: positions converted in the new order (as ClusterScene::update does).
     std::vector<Vec3> pos(V);
     for (std::uint32_t v = 0; v < V; ++v) pos[v] = Vec3(fp_old[v][0], fp_old[v][1], fp_old[v][2]);
-    std::vector<Vec3f> fp_new;
+    AlignedVector<Vec3f> fp_new;
     frame_positions(pos, o.to_old, Vec3::Zero(), fp_new);
     for (std::uint32_t i = 0; i < V; ++i) ASSERT_EQ(fp_new[i], fp_old[o.to_old[i]]);
-    std::vector<Box3f> boxes(7), plain;
-    std::vector<Vec3f> centers, plain_centers(2);
+    AlignedVector<Box3f> boxes(7), plain;
+    AlignedVector<Vec3f> centers, plain_centers(2);
     point_group_boxes(fp_new, o, boxes, centers);
     point_group_boxes(fp_old, offsets, idx, plain, plain_centers);
     ASSERT_EQ(boxes.size(), groups);
@@ -191,12 +191,12 @@ TEST(VertexOrder, FusedPassOnRenumberedVerticesEqualsBruteForce) {
     for (std::size_t i = 0; i < idx.size(); ++i) idx_new[i] = to_new[idx[i]];
     const auto runs = group_runs(first_touch_order(V, offsets, idx_new));
     ASSERT_TRUE(runs.has_value()) << "trial " << trial;
-    std::vector<Vec3f> plain;
+    AlignedVector<Vec3f> plain;
     frame_positions(pos_new, origin, plain);
     for (const bool avx2 : {true, false}) {
-      std::vector<Vec3f> fp(V + 2, Vec3f{7.0f, 7.0f, 7.0f});
-      std::vector<Box3f> boxes(3);
-      std::vector<Vec3f> centers;
+      AlignedVector<Vec3f> fp(V + 2, Vec3f{7.0f, 7.0f, 7.0f});
+      AlignedVector<Box3f> boxes(3);
+      AlignedVector<Vec3f> centers;
       frame_positions_and_boxes(pos_new, origin, *runs, fp, boxes, centers, avx2);
       for (std::uint32_t v = 0; v < V; ++v) ASSERT_EQ(fp[v], plain[v]) << "trial " << trial << " vertex " << v;
       EXPECT_EQ(fp[V], (Vec3f{7.0f, 7.0f, 7.0f})) << "wrote past the vertices";
@@ -211,8 +211,8 @@ TEST(VertexOrder, FusedPassOnRenumberedVerticesEqualsBruteForce) {
         }
       }
     }
-    std::vector<Vec3f> fp2(V + 2), c2;
-    std::vector<Box3f> b2;
+    AlignedVector<Vec3f> fp2(V + 2), c2;
+    AlignedVector<Box3f> b2;
     // A position that is not finite in the frame (any vertex, grouped or not): refused on both paths.
     for (const bool avx2 : {true, false}) {
       std::vector<Vec3> bad = pos_new;
@@ -247,13 +247,13 @@ TEST(VertexOrder, FusedPassIsTheSameAtAnyThreadCount) {
   for (Vec3& p : pos) p = origin + 40.0 * Vec3(U(g32), U(g32), U(g32));
   const auto runs = group_runs(first_touch_order(V, offsets, idx));
   ASSERT_TRUE(runs.has_value());
-  std::vector<Vec3f> plain;
+  AlignedVector<Vec3f> plain;
   frame_positions(pos, origin, plain);
   for (int threads : {1, 2, 4}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    std::vector<Vec3f> fp(V + 2);
-    std::vector<Box3f> boxes;
-    std::vector<Vec3f> centers;
+    AlignedVector<Vec3f> fp(V + 2);
+    AlignedVector<Box3f> boxes;
+    AlignedVector<Vec3f> centers;
     frame_positions_and_boxes(pos, origin, *runs, fp, boxes, centers);
     for (std::uint32_t v = 0; v < V; ++v) ASSERT_EQ(fp[v], plain[v]) << "threads " << threads << " vertex " << v;
     ASSERT_EQ(boxes.size(), groups);
