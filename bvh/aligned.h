@@ -3,10 +3,10 @@
 //
 // Large arrays (256 KiB or more: leaf blocks, nodes, boxes, rays, hits) are also placed on whole
 // 2 MiB pages and advised as transparent huge pages (madvise MADV_HUGEPAGE; a no-op where the
-// kernel's THP setting is "never"). A scene rewrites them every frame, and at 4 KiB pages a
-// virtual machine that drops its guest mappings (this project's development machine does, after
-// other large frees) makes every rewrite fault page by page on the host: 33 MB of leaf blocks
-// took 28-44 ms instead of 3 ms (docs/tracing.md, "Huge pages").
+// kernel's THP setting is "never"). A scene rewrites them every frame; at 4 KiB pages, on this
+// project's development machine (a virtual machine), the cluster scene's 33 MB of leaf blocks
+// took 28-44 ms to rewrite instead of 3 ms whenever another scene was updated in the same loop,
+// with no page fault in the guest (docs/tracing.md, "Huge pages").
 #pragma once
 
 #include <cstddef>
