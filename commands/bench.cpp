@@ -60,7 +60,10 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("height", c.height);
   manifest.set_parameter("threads", c.threads);
   manifest.set_parameter("clustering", r.clustering);
-  if (opt.clusters.empty()) manifest.set_parameter("max_count", c.max_count);
+  if (opt.clusters.empty()) {
+    manifest.set_parameter("max_count", c.max_count);
+    manifest.set_parameter("adjacency", to_string(c.adjacency));
+  }
   manifest.set_parameter("cluster_leaf", bvh::to_string(c.cluster_leaf));
   manifest.set_parameter("cluster_group_size", c.cluster_group_size);
   manifest.set_parameter("vertex_order", r.vertex_order);

@@ -1,12 +1,15 @@
 #include "commands/cluster_files.h"
 
+#include <algorithm>
 #include <charconv>
+#include <span>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "toolkit/clustering/cluster.h"
 #include "toolkit/core/error.h"
 #include "toolkit/mesh/topology.h"
 
@@ -89,22 +92,35 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
   }
 
   Clustering c = clustering_from_labels(label, mesh.triangles());
-  // Connectivity through shared edges, cluster by cluster (breadth-first from its first triangle).
-  const EdgeMap edges = EdgeMap::build(mesh.triangles(), mesh.vertex_count());
+  // Connectivity through shared sides, cluster by cluster (breadth-first from its first
+  // triangle): by the mesh's edges, or else by sides whose corner positions coincide (a
+  // clustering made with --adjacency positions, cluster.h). The first cluster connected by
+  // neither, or 0xffffffff.
   std::vector<std::uint8_t> seen(T, 0);
   std::vector<std::uint32_t> queue;
-  for (std::size_t k = 0; k < c.cluster_count(); ++k) {
-    const auto tris = c.triangles_of(k);
-    queue.assign(1, tris[0]);
-    seen[tris[0]] = 1;
-    for (std::size_t q = 0; q < queue.size(); ++q)
-      for (int side = 0; side < 3; ++side) {
-        const std::uint32_t e = edges.side_edge(queue[q], side);
-        if (e == kNoEdge) continue;
-        for (std::uint32_t n : edges.triangles_of(e))
-          if (!seen[n] && label[n] == label[tris[0]]) seen[n] = 1, queue.push_back(n);
-      }
-    if (queue.size() != tris.size()) {
+  auto first_unconnected = [&](std::span<const Tri> tris_of_mesh) -> std::uint32_t {
+    const EdgeMap edges = EdgeMap::build(tris_of_mesh, mesh.vertex_count());
+    std::fill(seen.begin(), seen.end(), 0);
+    for (std::size_t k = 0; k < c.cluster_count(); ++k) {
+      const auto tris = c.triangles_of(k);
+      queue.assign(1, tris[0]);
+      seen[tris[0]] = 1;
+      for (std::size_t q = 0; q < queue.size(); ++q)
+        for (int side = 0; side < 3; ++side) {
+          const std::uint32_t e = edges.side_edge(queue[q], side);
+          if (e == kNoEdge) continue;
+          for (std::uint32_t n : edges.triangles_of(e))
+            if (!seen[n] && label[n] == label[tris[0]]) seen[n] = 1, queue.push_back(n);
+        }
+      if (queue.size() != tris.size()) return static_cast<std::uint32_t>(k);
+    }
+    return 0xffffffffu;
+  };
+  if (first_unconnected(mesh.triangles()) != 0xffffffffu) {
+    const std::vector<Tri> welded = adjacency_triangles(mesh, ClusterAdjacency::Positions);
+    const std::uint32_t k = first_unconnected(welded);
+    if (k != 0xffffffffu) {
+      const auto tris = c.triangles_of(k);
       std::uint32_t bad = tris[0];
       for (std::uint32_t t : tris)
         if (!seen[t]) {
@@ -112,7 +128,8 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
           break;
         }
       throw InputError(name, line_loc(line_of[bad]), "triangle " + std::to_string(bad),
-                       "cluster " + std::to_string(label[bad]) + " is not connected through shared edges (triangle " +
+                       "cluster " + std::to_string(label[bad]) +
+                           " is not connected through shared sides, not even by coincident corners (triangle " +
                            std::to_string(tris[0]) + " of the same cluster cannot be reached; clusters of another mesh?)");
     }
   }

@@ -78,11 +78,19 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     cc.objective = ObjectiveKind::Acc;
     cc.max_count = cfg.max_count;
     cc.max_size = cfg.max_count;
+    cc.adjacency = cfg.adjacency;
     Stopwatch sw;
     own = cluster_mesh(scene.rest(), cc);
     res.cluster_ms = sw.ms();
-    res.clustering = cfg.max_count == 0 ? std::string("one triangle per cluster (MaxCount = MaxSize = 0)")
-                                        : fmt::format("growth/acc MaxCount={} MaxSize={}", cfg.max_count, cfg.max_count);
+    const ClusterAdjacency used = resolve_adjacency(scene.rest(), cfg.adjacency);
+    res.clustering =
+        cfg.max_count == 0
+            ? std::string("one triangle per cluster (MaxCount = MaxSize = 0)")
+            : fmt::format("growth/acc MaxCount={} MaxSize={} adjacency={}{}", cfg.max_count, cfg.max_count,
+                          to_string(used),
+                          cfg.adjacency == ClusterAdjacency::Auto && used == ClusterAdjacency::Positions
+                              ? " (auto: the rest pose is a triangle soup)"
+                              : "");
     clusters = &own;
   } else {
     res.clustering = "given";

@@ -29,6 +29,7 @@
 #include "analysis/schema/table.h"
 #include "bvh/vertex_order.h"
 #include "render/camera.h"
+#include "toolkit/clustering/cluster.h"
 #include "toolkit/anim/scene.h"
 #include "toolkit/clustering/clustering.h"
 
@@ -40,6 +41,7 @@ struct PeerBenchConfig {
   CameraSpec camera;                      ///< the camera (unset fields: framing the rest pose)
   unsigned threads = 1;                   ///< oneTBB and Embree threads (>= 1; 1 = one-thread figures)
   std::uint32_t max_count = 50;           ///< clustering when none is given: growth / Acc, MaxCount = MaxSize = this
+  ClusterAdjacency adjacency = ClusterAdjacency::Auto;  ///< and its adjacency (cluster.h)
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   /// Two-level build of the cluster BVH over groups of at most this many clusters; 0: plain.
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;

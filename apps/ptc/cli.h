@@ -87,7 +87,7 @@ struct CameraArgs {
 /// user set (names of kClusterParameters) in `given`.
 struct ClusterFlags {
   std::string method = "contraction", objective = "acc", size_bound = "max", sphere = "cgal", start = "spatial",
-              gwh_weight = "area";
+              gwh_weight = "area", adjacency = "auto";
   CLI::App* app = nullptr;
   /// with_method: --method and --objective (sweep and cluster; compare and drift name their
   /// clusterings instead).

@@ -1,4 +1,4 @@
-// `ptc bench SCENE [--clusters DIR | --max-count N] [--frames A:B] [--data-dir DIR] [--width W --height H]
+// `ptc bench SCENE [--clusters DIR | --max-count N --adjacency A] [--frames A:B] [--data-dir DIR] [--width W --height H]
 // [--threads T] [--deform KIND|none] [--vertex-order clusters|input] [--json] --out DIR` (commands/bench.h).
 #include <iostream>
 
@@ -12,7 +12,7 @@ struct BenchArgs {
   BenchCommandOptions opt;
   SceneArg scene;
   CameraArgs camera;
-  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters";
+  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters", adjacency = "auto";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -29,6 +29,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                           *bvh::parse_cluster_leaf(a->cluster_leaf);
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
+                      o.config.adjacency = *parse_cluster_adjacency(a->adjacency);
                       if (a->app->count("--frames")) o.frames = a->frames;
                       o.input = a->scene.input;
                       a->scene.apply(o.scene_options);
@@ -47,6 +48,12 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "otherwise: growth/Acc clustering with MaxCount = MaxSize = N (0: one triangle per cluster, the "
                 "paper's standard)")
       ->check(CLI::Range(0u, 1u << 20))
+      ->excludes(cl)
+      ->capture_default_str();
+  c->add_option("--adjacency", a->adjacency,
+                "otherwise: neighbouring triangles of that clustering: edges (shared vertex ids), positions (sides "
+                "whose corner positions coincide at rest) or auto (positions for a triangle soup, else edges)")
+      ->check(enum_validator("adjacency", parse_cluster_adjacency))
       ->excludes(cl)
       ->capture_default_str();
   c->add_option("--frames", a->frames,

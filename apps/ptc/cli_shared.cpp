@@ -101,6 +101,11 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
                 "(clusters stop at region borders; the same clusters at any thread count); 0 or 1 = one region")
       ->check(CLI::Range(0u, 1u << 24))
       ->capture_default_str();
+  c->add_option("--adjacency", adjacency,
+                "neighbouring triangles: edges (shared vertex ids, the paper's), positions (sides whose corner "
+                "positions coincide) or auto (positions for a triangle soup, else edges)")
+      ->check(enum_validator("adjacency", parse_cluster_adjacency))
+      ->capture_default_str();
 }
 
 void ClusterFlags::apply(ClusterConfig& cf, std::vector<std::string>& given) const {
@@ -110,6 +115,7 @@ void ClusterFlags::apply(ClusterConfig& cf, std::vector<std::string>& given) con
   cf.sphere = *parse_sphere_method(sphere);
   cf.start = *parse_start_rule(start);
   cf.gwh.weight = *parse_gwh_weight(gwh_weight);
+  cf.adjacency = *parse_cluster_adjacency(adjacency);
   for (std::string_view p : kClusterParameters) {
     const std::string flag = flag_of(p);
     if (app->get_option_no_throw(flag) && app->count(flag)) given.emplace_back(p);

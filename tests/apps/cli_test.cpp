@@ -351,6 +351,43 @@ TEST_F(Cli, ClusterWritesTheFourFilesConsistently) {
   }
 }
 
+TEST_F(Cli, ClusterATriangleSoupByCoincidentCorners) {
+  // The cube as a soup (every corner its own vertex). auto: clusters over sides whose corners
+  // coincide, said on stdout and in the manifest; edges: one triangle per cluster (no shared
+  // vertex ids). The clustering reads back for `ptc trace --clusters`.
+  std::string off = "OFF\n36 12 0\n";
+  const double c[8][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
+  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& t : f)
+    for (int k : t) off += std::to_string(c[k][0]) + " " + std::to_string(c[k][1]) + " " + std::to_string(c[k][2]) + "\n";
+  for (int t = 0; t < 12; ++t)
+    off += "3 " + std::to_string(3 * t) + " " + std::to_string(3 * t + 1) + " " + std::to_string(3 * t + 2) + "\n";
+  const fs::path soup = write("soup.off", off);
+  auto r = ptc({"cluster", soup.string(), "--method", "growth", "--max-count", "8", "--out", (dir_ / "a").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("adjacency: positions (sides whose corners coincide; auto: the mesh is a triangle soup)"),
+            std::string::npos) << r.out;
+  auto manifest = nlohmann::json::parse(slurp(dir_ / "a" / "manifest.json"));
+  EXPECT_EQ(manifest["parameters"]["adjacency"], "auto");
+  EXPECT_EQ(manifest["results"]["adjacency"], "positions");
+  EXPECT_LT(manifest["results"]["clusters"].get<std::size_t>(), 12u);
+  r = ptc({"trace", soup.string(), "--clusters", (dir_ / "a").string(), "--width", "16", "--height", "16", "--out",
+           (dir_ / "t").string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = ptc({"cluster", soup.string(), "--method", "growth", "--max-count", "8", "--adjacency", "edges", "--out",
+           (dir_ / "e").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  manifest = nlohmann::json::parse(slurp(dir_ / "e" / "manifest.json"));
+  EXPECT_EQ(manifest["results"]["adjacency"], "edges");
+  EXPECT_EQ(manifest["results"]["clusters"], 12);
+  r = ptc({"cluster", soup.string(), "--adjacency", "vertices", "--out", (dir_ / "x").string()});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("--adjacency"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "x"));
+}
+
 TEST_F(Cli, ClusterRejectsBadArguments) {
   const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
   EXPECT_EQ(ptc({"cluster", mesh}).code, 2);  // --out is required

@@ -123,3 +123,28 @@ TEST_F(TraceClusters, ClustersOfAnotherMeshWithTheSameTriangleCountAreRefused) {
   EXPECT_NO_THROW((void)ptc::read_clusters(dir_, m));
   EXPECT_NE(error(csv, other).find("is not connected"), std::string::npos);
 }
+
+TEST_F(TraceClusters, ASoupReadsBackConnectedByCoincidentCorners) {
+  // The strip as a triangle soup (every corner its own vertex): pairs of neighbours share sides by
+  // position only. A clustering made with adjacency by positions reads back, cluster for cluster;
+  // one whose cluster is connected not even by positions is refused, naming the triangle.
+  const Mesh m = strip(4);
+  std::vector<Vec3> p;
+  std::vector<ptc::Tri> t;
+  for (const ptc::Tri& f : m.triangles()) {
+    const auto b = static_cast<std::uint32_t>(p.size());
+    for (std::uint32_t v : f) p.push_back(m.positions()[v]);
+    t.push_back({b, b + 1, b + 2});
+  }
+  const Mesh soup(std::move(t), std::move(p));
+  const std::string csv = "triangle_id,cluster_id\n0,0\n1,0\n2,1\n3,1\n4,1\n5,2\n6,2\n7,2\n";
+  write(csv);
+  const ptc::Clustering c = ptc::read_clusters(dir_, soup);
+  ASSERT_EQ(c.cluster_count(), 3u);
+  EXPECT_EQ(std::vector<std::uint32_t>(c.triangles_of(1).begin(), c.triangles_of(1).end()),
+            (std::vector<std::uint32_t>{2, 3, 4}));
+  EXPECT_EQ(c.vertices_of(1).size(), 9u);  // the soup's own vertices
+  EXPECT_NE(error("triangle_id,cluster_id\n0,0\n1,1\n2,1\n3,0\n4,2\n5,2\n6,2\n7,2\n", soup)
+                .find("line 5: triangle 3: cluster 0 is not connected through shared sides, not even by coincident"),
+            std::string::npos);
+}

@@ -23,6 +23,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "toolkit/anim/weld.h"
 #include "toolkit/clustering/contraction.h"
 #include "toolkit/clustering/growth.h"
 #include "toolkit/clustering/meshopt.h"
@@ -121,6 +122,56 @@ std::string_view to_string(StartRule s) {
   return "?";
 }
 
+std::string_view to_string(ClusterAdjacency a) {
+  switch (a) {
+    case ClusterAdjacency::Auto: return "auto";
+    case ClusterAdjacency::Edges: return "edges";
+    case ClusterAdjacency::Positions: return "positions";
+  }
+  return "?";
+}
+
+std::optional<ClusterAdjacency> parse_cluster_adjacency(std::string_view s) {
+  for (ClusterAdjacency a : {ClusterAdjacency::Auto, ClusterAdjacency::Edges, ClusterAdjacency::Positions})
+    if (iequals(s, to_string(a))) return a;
+  return std::nullopt;
+}
+
+bool is_triangle_soup(const Mesh& mesh) {
+  const auto tris = mesh.triangles();
+  if (tris.size() < 2) return false;
+  // The triangle that first used each vertex; a second triangle using it ends the check.
+  std::vector<std::uint32_t> owner(mesh.vertex_count(), 0xffffffffu);
+  for (std::uint32_t t = 0; t < tris.size(); ++t)
+    for (const std::uint32_t v : tris[t]) {
+      if (v >= owner.size()) continue;  // not a valid mesh: let the algorithms report it
+      if (owner[v] == 0xffffffffu) owner[v] = t;
+      else if (owner[v] != t) return false;
+    }
+  return true;
+}
+
+ClusterAdjacency resolve_adjacency(const Mesh& mesh, ClusterAdjacency a) {
+  if (a != ClusterAdjacency::Auto) return a;
+  return is_triangle_soup(mesh) ? ClusterAdjacency::Positions : ClusterAdjacency::Edges;
+}
+
+namespace {
+// The rest-pose weld of `mesh` (one frame: vertices at exactly the same position merge).
+WeldMap weld_positions(const Mesh& mesh) {
+  VertexWelder w(mesh.vertex_count());
+  w.add_frame(mesh.positions());
+  return w.finish();
+}
+}  // namespace
+
+std::vector<Tri> adjacency_triangles(const Mesh& mesh, ClusterAdjacency a) {
+  const auto tris = mesh.triangles();
+  if (resolve_adjacency(mesh, a) == ClusterAdjacency::Edges || mesh.vertex_count() == 0)
+    return {tris.begin(), tris.end()};
+  return weld_positions(mesh).apply(tris);
+}
+
 std::optional<ClusterMethod> parse_cluster_method(std::string_view s) {
   for (ClusterMethod m : {ClusterMethod::Growth, ClusterMethod::Contraction, ClusterMethod::SahSplit,
                           ClusterMethod::Meshopt})
@@ -145,7 +196,7 @@ std::vector<std::string_view> used_parameters(const ClusterConfig& c) {
   if (c.max_count == 0 && c.max_size == 0.0) return u;  // one triangle per cluster
   switch (c.method) {
     case ClusterMethod::SahSplit:
-    case ClusterMethod::Meshopt: return {"max_count", "max_triangles"};
+    case ClusterMethod::Meshopt: return {"max_count", "max_triangles", "adjacency"};
     case ClusterMethod::Growth:
     case ClusterMethod::Contraction: break;
   }
@@ -155,6 +206,7 @@ std::vector<std::string_view> used_parameters(const ClusterConfig& c) {
   if (c.method == ClusterMethod::Growth) u.push_back("start");
   if (c.objective != ObjectiveKind::Gwh01) u.push_back("regions");  // growth and contraction
   if (c.method == ClusterMethod::Contraction) u.push_back("target_clusters");
+  u.push_back("adjacency");
   return u;
 }
 
@@ -221,6 +273,18 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
   if (config.max_count == 0 && config.max_size == 0.0) {  // the Standard baseline
     if (progress) progress(1.0);
     return one_per_triangle(mesh);
+  }
+  // Adjacency by positions: the same method over the welded mesh (same triangles, same order, the
+  // same positions per corner), its clusters relabelled onto this mesh's vertex ids.
+  if (resolve_adjacency(mesh, config.adjacency) == ClusterAdjacency::Positions && mesh.vertex_count() > 0) {
+    const WeldMap w = weld_positions(mesh);
+    if (!w.identity()) {
+      const Mesh welded(w.apply(mesh.triangles()), w.gather(mesh.positions()));
+      ClusterConfig on_welded = config;
+      on_welded.adjacency = ClusterAdjacency::Edges;
+      const Clustering c = cluster_mesh(welded, on_welded, progress, known_avg_sa);
+      return clustering_from_labels(c.cluster_of_triangle(), mesh.triangles());
+    }
   }
   switch (config.method) {
     case ClusterMethod::SahSplit: return sah_split_clusters(mesh, config);

@@ -33,7 +33,21 @@ enum class StartRule {
   FewestFree,     ///< untaken triangle with the fewest untaken edge neighbours (ties: Morton order)
 };
 
+/// Which triangles count as neighbours while clusters grow or merge (docs/clustering.md,
+/// "Adjacency"). Edges: triangles sharing a side by vertex ids (the paper's mesh edges).
+/// Positions: triangles sharing a side whose corner positions coincide exactly in the mesh given
+/// (the rest pose): a triangle soup, as the explode deformer or an STL-like pipeline hands it
+/// over, clusters like the connected mesh it came from. Auto: Positions for a triangle soup (no
+/// vertex used by two triangles, at least two triangles), Edges otherwise.
+enum class ClusterAdjacency {
+  Auto,
+  Edges,
+  Positions,
+};
+
 [[nodiscard]] std::string_view to_string(ClusterMethod m);
+[[nodiscard]] std::string_view to_string(ClusterAdjacency a);
+[[nodiscard]] std::optional<ClusterAdjacency> parse_cluster_adjacency(std::string_view s);  ///< auto|edges|positions
 [[nodiscard]] std::string_view to_string(ObjectiveKind o);
 [[nodiscard]] std::string_view to_string(StartRule s);
 [[nodiscard]] std::optional<ClusterMethod> parse_cluster_method(std::string_view s);   ///< growth|contraction|sah-split|meshopt
@@ -59,7 +73,19 @@ struct ClusterConfig {
   /// cluster N spatial regions at once (regions.h: clusters stop at region borders; the same
   /// clusters at any thread count).
   std::uint32_t regions = 0;
+  ClusterAdjacency adjacency = ClusterAdjacency::Auto;  ///< every method (not one triangle per cluster)
 };
+
+/// Whether no vertex is used by two triangles and there are at least two: a triangle soup.
+[[nodiscard]] bool is_triangle_soup(const Mesh& mesh);
+/// Auto resolved for this mesh (Edges and Positions stay as they are).
+[[nodiscard]] ClusterAdjacency resolve_adjacency(const Mesh& mesh, ClusterAdjacency a);
+/// The triangles whose shared sides are the adjacency `a` (resolved here if Auto): Edges, the
+/// mesh's own; Positions, the mesh's triangles with every vertex replaced by the first vertex at
+/// exactly its position (==, so -0.0 equals +0.0; a NaN equals nothing). Same count and order as
+/// the mesh's: validate(clustering, mesh.triangles(), limits, n, adjacency_triangles(...))
+/// checks a clustering made with `a`.
+[[nodiscard]] std::vector<Tri> adjacency_triangles(const Mesh& mesh, ClusterAdjacency a);
 
 /// What a configuration uses, asked of the clustering layer (not decided by a command): the
 /// parameters of ClusterConfig that cluster_mesh reads for this method and objective, by name:
@@ -73,7 +99,8 @@ struct ClusterConfig {
 /// Every name used_parameters() can return.
 inline constexpr std::string_view kClusterParameters[] = {"objective", "max_count",       "max_size",     "size_bound",
                                                           "sphere",    "start",           "gwh_a1",       "gwh_a2",
-                                                          "gwh_weight", "target_clusters", "max_triangles", "regions"};
+                                                          "gwh_weight", "target_clusters", "max_triangles", "regions",
+                                                          "adjacency"};
 
 /// The hard limits every cluster of cluster_mesh(mesh, config) keeps (for validate()):
 /// sah-split and meshopt their vertex and triangle limits, Naive and GWH01 MaxCount vertices,

@@ -186,13 +186,20 @@ Clustering clustering_from_labels(std::span<const std::uint32_t> labels, std::sp
 }
 
 std::vector<std::string> validate(const Clustering& c, std::span<const Tri> triangles, const ClusterLimits& limits,
-                                  std::size_t max_issues) {
+                                  std::size_t max_issues, std::span<const Tri> adjacency) {
   std::vector<std::string> issues;
   auto full = [&] { return issues.size() >= max_issues; };
   auto report = [&](std::string s) {
     if (!full()) issues.push_back(std::move(s));
   };
   const std::size_t T = triangles.size();
+  const bool own_adjacency = adjacency.empty();
+  if (own_adjacency) {
+    adjacency = triangles;
+  } else if (adjacency.size() != T) {
+    report(fmt::format("the adjacency has {} triangles, the mesh {}", adjacency.size(), T));
+    return issues;
+  }
 
   // 1. Structure of the offset arrays.
   const bool tri_ok = check_offsets(c.triangle_offsets, c.triangle_order.size(), "triangle_offsets",
@@ -240,8 +247,8 @@ std::vector<std::string> validate(const Clustering& c, std::span<const Tri> tria
     auto note = [&](std::string s) {
       if (mine.size() < max_issues) mine.push_back(std::move(s));
     };
-    PieceFinder pieces(triangles);
-    std::vector<std::uint32_t> ids, expected, piece;
+    PieceFinder pieces(adjacency);
+    std::vector<std::uint32_t> ids, expected, piece, welded;
     std::vector<std::uint8_t> used;
     for (std::size_t k = chunk * kChunk; k < std::min(K, (chunk + 1) * kChunk) && mine.size() < max_issues; ++k) {
       const auto tris = c.triangles_of(k);
@@ -304,10 +311,15 @@ std::vector<std::string> validate(const Clustering& c, std::span<const Tri> tria
       }
       if (!ids.empty()) {
         const std::uint32_t n = pieces.find(ids, piece);
-        if (n > 1) note(fmt::format("cluster {}: not edge-connected ({} pieces)", k, n));
+        if (n > 1) note(fmt::format("cluster {}: not {}-connected ({} pieces)", k, own_adjacency ? "edge" : "side", n));
       }
       if (limits.max_triangles > 0 && tris.size() > limits.max_triangles)
         note(fmt::format("cluster {}: {} triangles > limit {}", k, tris.size(), limits.max_triangles));
+      if (limits.max_vertices > 0 && !own_adjacency) {  // the vertices the clustering counted
+        welded.clear();
+        append_distinct_vertices(ids, adjacency, welded);
+        vertex_count = welded.size();
+      }
       if (limits.max_vertices > 0 && vertex_count > limits.max_vertices)
         note(fmt::format("cluster {}: {} vertices > limit {}", k, vertex_count, limits.max_vertices));
     }

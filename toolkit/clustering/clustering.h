@@ -67,8 +67,13 @@ struct ClusterLimits {
 /// checks are skipped (their ranges mean nothing) and only the structural messages are returned.
 /// Cost O(T log T) and O(T) memory (no edge map); the clusters are checked in parallel, with the
 /// same messages at any thread count.
+/// `adjacency`: when not empty, the triangles whose shared sides define connectivity and whose
+/// distinct vertices the vertex limit counts (cluster.h adjacency_triangles: a clustering made
+/// with adjacency by positions); the vertex lists are still those of `triangles`. Its size must
+/// be the triangle count (a message otherwise).
 [[nodiscard]] std::vector<std::string> validate(const Clustering& c, std::span<const Tri> triangles,
-                                                const ClusterLimits& limits = {}, std::size_t max_issues = 20);
+                                                const ClusterLimits& limits = {}, std::size_t max_issues = 20,
+                                                std::span<const Tri> adjacency = {});
 
 /// Splits every cluster that is not connected through shared edges into its edge-connected
 /// pieces (used after baselines that do not guarantee connectivity, such as meshoptimizer's
