@@ -95,7 +95,8 @@ nlohmann::json cluster_parameters(const ClusterConfig& c) {
           {"start", to_string(c.start)},         {"gwh_a1", c.gwh.a1},
           {"gwh_a2", c.gwh.a2},                  {"gwh_weight", to_string(c.gwh.weight)},
           {"target_clusters", c.target_clusters}, {"max_triangles", c.max_triangles},
-          {"method", to_string(c.method)},       {"objective", to_string(c.objective)}};
+          {"method", to_string(c.method)},       {"objective", to_string(c.objective)},
+          {"adjacency", to_string(c.adjacency)}};
 }
 
 nlohmann::json item_rows_json(const std::vector<FileRows>& files) {
