@@ -101,17 +101,16 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   t0.restart();
   // Connectivity and the vertex limit by the adjacency the clustering grew over.
   const ClusterAdjacency adjacency = resolve_adjacency(lm.mesh, c.adjacency);
-  const auto issues =
-      adjacency == ClusterAdjacency::Edges
-          ? validate(clustering, lm.mesh.triangles(), limits_of(c))
-          : validate(clustering, lm.mesh.triangles(), limits_of(c), 20, adjacency_triangles(lm.mesh, adjacency));
+  const std::vector<Tri> adjacency_tris =
+      adjacency == ClusterAdjacency::Edges ? std::vector<Tri>() : adjacency_triangles(lm.mesh, adjacency);
+  const auto issues = validate(clustering, lm.mesh.triangles(), limits_of(c), 20, adjacency_tris);
   if (!issues.empty())  // a failed run: the algorithm broke its own invariants
     throw std::runtime_error("clustering failed validation: " + issues.front());
   manifest.add_timing_ms("validate", t0.ms());
 
   throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
-  const auto rows = cluster_rows(lm.mesh, clustering, c, avg_sa);
+  const auto rows = cluster_rows(lm.mesh, clustering, c, avg_sa, adjacency_tris);
   manifest.add_timing_ms("metrics", t0.ms());
   const nlohmann::json dist = cluster_distributions(rows);
 

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
 
 #include <oneapi/tbb/parallel_for.h>
 
@@ -11,8 +14,18 @@
 
 namespace ptc {
 
-std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg,
-                                     std::optional<double> avg_sa) {
+std::vector<ClusterRow> cluster_rows(const Mesh& mesh_in, const Clustering& c, const ClusterConfig& cfg,
+                                     std::optional<double> avg_sa, std::span<const Tri> adjacency) {
+  // With an adjacency: the same positions on the adjacency's triangles (vertex ids merged).
+  std::optional<Mesh> welded;
+  if (!adjacency.empty()) {
+    if (adjacency.size() != mesh_in.triangle_count())
+      throw std::invalid_argument("cluster_rows: the adjacency has " + std::to_string(adjacency.size()) +
+                                  " triangles, the mesh " + std::to_string(mesh_in.triangle_count()));
+    welded.emplace(std::vector<Tri>(adjacency.begin(), adjacency.end()),
+                   std::vector<Vec3>(mesh_in.positions().begin(), mesh_in.positions().end()));
+  }
+  const Mesh& mesh = welded ? *welded : mesh_in;
   std::vector<ClusterRow> rows(c.cluster_count());
   const bool has_objective = cfg.max_count > 0 && cfg.max_size > 0;
   ClusterParams params;
@@ -25,7 +38,7 @@ std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, cons
   const bool usable = has_objective && params.avg_sa > 0;
   // The clustering's vertex lists, when it has them (offsets per cluster, ending at the list's
   // end); else each cluster's are made from its triangles.
-  const bool lists = c.vertex_offsets.size() == c.triangle_offsets.size() && !c.vertex_offsets.empty() &&
+  const bool lists = !welded && c.vertex_offsets.size() == c.triangle_offsets.size() && !c.vertex_offsets.empty() &&
                      c.vertex_offsets.back() == c.vertices.size() &&
                      std::is_sorted(c.vertex_offsets.begin(), c.vertex_offsets.end());
   oneapi::tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <optional>
+#include <span>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -27,8 +28,13 @@ struct ClusterRow {
 /// makes them; validate() checks them); a clustering without usable vertex offsets gets them
 /// made from its triangles. avg_sa: the mesh's AvgSA when the caller has it (see
 /// cluster_mesh); computed here otherwise.
+/// `adjacency`: when not empty, the triangles of a clustering made with adjacency by positions
+/// (cluster.h adjacency_triangles of the rest pose): the vertices, connectivity, regBound and Acc
+/// columns then count distinct positions, as the objective did, and the clustering's own vertex
+/// lists are not read.
 [[nodiscard]] std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg,
-                                                   std::optional<double> avg_sa = std::nullopt);
+                                                   std::optional<double> avg_sa = std::nullopt,
+                                                   std::span<const Tri> adjacency = {});
 
 /// triangles.csv (schema ptc-cluster-triangles/1): triangle_id,cluster_id in input triangle order.
 [[nodiscard]] Table triangles_table(const Clustering& c);

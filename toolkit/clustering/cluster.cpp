@@ -169,7 +169,13 @@ std::vector<Tri> adjacency_triangles(const Mesh& mesh, ClusterAdjacency a) {
   const auto tris = mesh.triangles();
   if (resolve_adjacency(mesh, a) == ClusterAdjacency::Edges || mesh.vertex_count() == 0)
     return {tris.begin(), tris.end()};
-  return weld_positions(mesh).apply(tris);
+  // Each corner replaced by the first vertex at its position (ids of this mesh, so the
+  // triangles index its own positions).
+  const WeldMap w = weld_positions(mesh);
+  std::vector<Tri> out(tris.begin(), tris.end());
+  for (Tri& t : out)
+    for (std::uint32_t& v : t) v = w.representative[w.remap[v]];
+  return out;
 }
 
 std::optional<ClusterMethod> parse_cluster_method(std::string_view s) {

@@ -100,6 +100,47 @@ TEST(ClusterReport, RowsMatchMetricsRecomputedPerCluster) {
   EXPECT_EQ(dist["reg"]["count"].get<std::size_t>(), rows.size());
 }
 
+TEST(ClusterReport, ASoupWithItsAdjacencyScoresLikeItsConnectedMesh) {
+  // The elephant as a triangle soup (every corner its own vertex), clustered by coincident
+  // corners: with the adjacency's triangles its rows equal, column for column, those of the
+  // connected mesh clustered by edges (the same partition; the connected mesh is numbered by
+  // first use, as the weld numbers it). Without, the vertices are the soup's own (3 a triangle).
+  const Mesh e = read_mesh(std::string(PTC_TEST_DATA) + "/meshes/elephant.off").mesh;
+  std::vector<std::uint32_t> id(e.vertex_count(), 0xffffffffu);
+  std::vector<Vec3> rp, sp;
+  std::vector<Tri> rt, st;
+  for (Tri f : e.triangles()) {
+    const auto b = static_cast<std::uint32_t>(sp.size());
+    for (std::uint32_t& v : f) {
+      sp.push_back(e.positions()[v]);
+      if (id[v] == 0xffffffffu) id[v] = static_cast<std::uint32_t>(rp.size()), rp.push_back(e.positions()[v]);
+      v = id[v];
+    }
+    rt.push_back(f), st.push_back({b, b + 1, b + 2});
+  }
+  const Mesh ref(std::move(rt), std::move(rp)), soup(std::move(st), std::move(sp));
+  ClusterConfig cfg;
+  cfg.method = ClusterMethod::Growth;
+  const Clustering cr = cluster_mesh(ref, cfg), cs = cluster_mesh(soup, cfg);
+  ASSERT_EQ(cr.triangle_order, cs.triangle_order);
+  const std::vector<Tri> adj = adjacency_triangles(soup, ClusterAdjacency::Auto);
+  const auto want = cluster_rows(ref, cr, cfg), got = cluster_rows(soup, cs, cfg, std::nullopt, adj),
+             own = cluster_rows(soup, cs, cfg);
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t k = 0; k < want.size(); ++k) {
+    EXPECT_EQ(got[k].m.vertices, want[k].m.vertices) << k;
+    EXPECT_EQ(got[k].m.triangles, want[k].m.triangles) << k;
+    EXPECT_DOUBLE_EQ(got[k].m.connectivity, want[k].m.connectivity) << k;
+    EXPECT_DOUBLE_EQ(got[k].m.reg, want[k].m.reg) << k;
+    EXPECT_DOUBLE_EQ(got[k].m.sphere.radius, want[k].m.sphere.radius) << k;
+    EXPECT_DOUBLE_EQ(got[k].acc, want[k].acc) << k;
+    EXPECT_DOUBLE_EQ(got[k].reg_bound, want[k].reg_bound) << k;
+    EXPECT_EQ(own[k].m.vertices, 3 * own[k].m.triangles) << k;
+  }
+  EXPECT_THROW((void)cluster_rows(soup, cs, cfg, std::nullopt, std::span<const Tri>(adj).subspan(1)),
+               std::invalid_argument);
+}
+
 TEST(ClusterReport, NoObjectiveGivesNanAccAndNullDistribution) {
   const Mesh m({{0, 1, 2}, {0, 2, 3}}, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
   ClusterConfig cfg;
