@@ -231,11 +231,16 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   // The reference frame's rows (drift "since frame 0": the scene's first frame) and positions.
   std::vector<ClusterRow> ref_rows;
   std::vector<Vec3> ref_positions;
+  // The rest pose's adjacency of a clustering made by coincident corners (cluster.h): the
+  // metrics count distinct rest positions in every frame, as the objective did.
+  std::vector<Tri> adjacency;
+  if (needs_metrics && resolve_adjacency(scene.rest(), ci.cfg.adjacency) == ClusterAdjacency::Positions)
+    adjacency = adjacency_triangles(scene.rest(), ClusterAdjacency::Positions);
   if (needs_metrics) {
     Mesh ref = scene.rest();
     scene.positions(double(reference_frame), ref.positions(), true);
     ref_positions.assign(ref.positions().begin(), ref.positions().end());
-    ref_rows = cluster_frame_metrics(ref, clusters, ci.cfg, {}, {}).rows;
+    ref_rows = cluster_frame_metrics(ref, clusters, ci.cfg, {}, {}, adjacency).rows;
   }
 
   // The `_prev` metrics of the first frame shown compare with the frame before it (none before
@@ -244,7 +249,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   if (needs_metrics && range.first > reference_frame) {
     Mesh pm = scene.rest();
     scene.positions(double(range.first - 1), pm.positions(), true);
-    first_prev = cluster_rows(pm, clusters, ci.cfg);
+    first_prev = cluster_rows(pm, clusters, ci.cfg, std::nullopt, adjacency);
   }
   // One frame's metric values: per cluster (cluster metrics) or per pixel (the tracer's counters).
   std::vector<ClusterRow> prev_rows = first_prev;
@@ -268,7 +273,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     if (known) {
       d.values = *known;
     } else if (needs_metrics) {
-      d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows);
+      d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows, adjacency);
       prev_rows = d.metrics->rows;
       if (cmetric) d.values = d.metrics->of(metric);
     }

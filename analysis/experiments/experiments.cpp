@@ -457,7 +457,7 @@ void drift_clusters(const ExperimentParams& p, const study::StudyFrame& sf, stud
   d.epo = end_point_overlap(cs->bvh(), m.triangles(), m.positions(), offsets, ids, cost).epo;
   d.sah_overhead = sah_overhead(m, pr.clustering).overhead;
   const ClusterConfig mc = pr.spec.cluster.value_or(p.cluster);
-  const std::vector<ClusterRow> rows = cluster_rows(m, pr.clustering, mc);
+  const std::vector<ClusterRow> rows = cluster_rows(m, pr.clustering, mc, std::nullopt, pr.adjacency);
   if (tr.first.empty()) {
     tr.first = rows, tr.prev = rows;
     tr.drift_sum.assign(rows.size(), 0.0), tr.radius_sum.assign(rows.size(), 0.0);

@@ -53,6 +53,10 @@ Prepared prepare(const Mesh& rest, const ConfigSpec& spec, const StudySetup& set
     p.clustering = renumber_vertices(p.clustering, inverse_permutation(p.to_old));
     p.mesh = renumber_vertices(rest, p.to_old);
   }
+  if (p.has_clusters &&
+      resolve_adjacency(p.mesh, spec.cluster ? spec.cluster->adjacency : ClusterAdjacency::Auto) ==
+          ClusterAdjacency::Positions)
+    p.adjacency = adjacency_triangles(p.mesh, ClusterAdjacency::Positions);
   if (p.has_clusters) as.clusters = &p.clustering;
   p.accel = loop::make_accel(spec.kind, p.mesh, as);
   p.setup_ms = sw.ms();

@@ -89,6 +89,10 @@ struct Prepared {
   /// The scene's topology in this configuration's vertex order, at the positions of the frame
   /// the study loop is at (the rest pose after prepare()).
   Mesh mesh;
+  /// With clusters made by coincident corners (cluster.h ClusterAdjacency): the rest pose's
+  /// adjacency triangles in `mesh`'s vertex order (the metrics count distinct rest positions);
+  /// empty otherwise.
+  std::vector<Tri> adjacency;
   std::unique_ptr<loop::Accel> accel;
   double cluster_ms = 0;               ///< making the clustering (0 when given)
   double setup_ms = 0;                 ///< renumbering and building the structure, once

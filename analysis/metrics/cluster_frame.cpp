@@ -56,9 +56,10 @@ const std::vector<double>& ClusterFrameMetrics::of(std::string_view name) const 
 }
 
 ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& clustering, const ClusterConfig& cfg,
-                                          const std::vector<ClusterRow>& reference, const std::vector<ClusterRow>& previous) {
+                                          const std::vector<ClusterRow>& reference, const std::vector<ClusterRow>& previous,
+                                          std::span<const Tri> adjacency) {
   ClusterFrameMetrics out;
-  out.rows = cluster_rows(mesh, clustering, cfg);
+  out.rows = cluster_rows(mesh, clustering, cfg, std::nullopt, adjacency);
   const std::size_t n = out.rows.size();
   const std::vector<ClusterDrift> dr = cluster_drift(reference.empty() ? out.rows : reference, out.rows);
   const std::vector<ClusterDrift> dp = cluster_drift(previous.empty() ? out.rows : previous, out.rows);

@@ -45,9 +45,11 @@ struct ClusterFrameMetrics {
 /// frame (the scene's first frame) and `previous` those of the frame before; either empty means
 /// "this frame" (ratios 1, deltas 0). `max_vertices` for meshlet_shapes: the largest cluster's
 /// vertex count when 0. Throws std::invalid_argument when reference / previous are of another
-/// clustering (cluster_drift).
+/// clustering (cluster_drift). `adjacency`: the rest pose's adjacency triangles of a clustering
+/// made by coincident corners (cluster_rows).
 [[nodiscard]] ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& clustering, const ClusterConfig& cfg,
                                                         const std::vector<ClusterRow>& reference,
-                                                        const std::vector<ClusterRow>& previous);
+                                                        const std::vector<ClusterRow>& previous,
+                                                        std::span<const Tri> adjacency = {});
 
 }  // namespace ptc

@@ -92,3 +92,46 @@ TEST(ClusterFrame, AnotherClusteringAsReferenceIsRefused) {
 
 }  // namespace
 }  // namespace ptc
+
+namespace ptc {
+namespace {
+
+TEST(ClusterFrame, ASoupWithItsRestAdjacencyCountsRestPositions) {
+  // The bunny as a soup whose triangles then fly apart (each moved by its own offset): with the
+  // rest pose's adjacency, every frame's vertices / connectivity / Acc count the rest positions
+  // (equal to the connected mesh's at rest, and the same in every frame: topology does not move),
+  // while the positions of the frame give the boxes.
+  const Mesh b = read_mesh(std::string(PTC_TEST_DATA) + "/meshes/bunny00.off").mesh;
+  std::vector<Vec3> sp;
+  std::vector<Tri> st;
+  for (const Tri& f : b.triangles()) {
+    const auto base = static_cast<std::uint32_t>(sp.size());
+    for (std::uint32_t v : f) sp.push_back(b.positions()[v]);
+    st.push_back({base, base + 1, base + 2});
+  }
+  const Mesh soup(st, sp);
+  ClusterConfig cfg;
+  cfg.method = ClusterMethod::Growth;
+  const Clustering c = cluster_mesh(soup, cfg);
+  const std::vector<Tri> adj = adjacency_triangles(soup, ClusterAdjacency::Auto);
+  ASSERT_FALSE(adj.empty());
+  const ClusterFrameMetrics rest = cluster_frame_metrics(soup, c, cfg, {}, {}, adj);
+  std::vector<Vec3> flown = sp;
+  for (std::size_t i = 0; i < flown.size(); ++i) flown[i] += Vec3(0.01 * double(i / 3 % 7), 0, 0);
+  Mesh moved = soup;
+  moved.set_positions(flown);
+  const ClusterFrameMetrics later = cluster_frame_metrics(moved, c, cfg, rest.rows, rest.rows, adj);
+  const ClusterFrameMetrics by_ids = cluster_frame_metrics(moved, c, cfg, {}, {});
+  ASSERT_EQ(rest.rows.size(), c.cluster_count());
+  std::size_t welded_total = 0;
+  for (std::size_t k = 0; k < c.cluster_count(); ++k) {
+    EXPECT_EQ(later.rows[k].m.vertices, rest.rows[k].m.vertices) << k;
+    EXPECT_LT(rest.rows[k].m.vertices, 3 * rest.rows[k].m.triangles + (rest.rows[k].m.triangles == 1 ? 1 : 0)) << k;
+    EXPECT_EQ(by_ids.rows[k].m.vertices, 3 * by_ids.rows[k].m.triangles) << k;
+    welded_total += rest.rows[k].m.vertices;
+  }
+  EXPECT_LT(welded_total, soup.vertex_count());
+}
+
+}  // namespace
+}  // namespace ptc
