@@ -2,6 +2,8 @@
 #include "commands/process.h"
 
 #include <malloc.h>
+#include <cstdlib>
+#include <fstream>
 #include <signal.h>
 #include <unistd.h>
 
@@ -70,6 +72,31 @@ void install_stop_handlers() {
     if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
     sigaction(sig, &sa, nullptr);
   }
+}
+
+void use_huge_page_malloc(char** argv) {
+  // The one exec happened (even if the C library dropped the variable: never a second exec).
+  if (std::getenv("PTC_HUGEPAGES_EXECUTED")) {
+    ::unsetenv("PTC_HUGEPAGES_EXECUTED");
+    return;
+  }
+  if (const char* off = std::getenv("PTC_HUGEPAGES"); off && std::string(off) == "0") return;
+  const char* t = std::getenv("GLIBC_TUNABLES");
+  const std::string current = t ? t : "";
+  if (current.find("glibc.malloc.hugetlb") != std::string::npos) return;  // set: by us, or the user's choice
+  {
+    std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string mode;
+    std::getline(thp, mode);
+    if (!thp || mode.find("[never]") != std::string::npos) return;
+  }
+  const std::string value = current.empty() ? "glibc.malloc.hugetlb=1" : current + ":glibc.malloc.hugetlb=1";
+  if (::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0 || ::setenv("PTC_HUGEPAGES_EXECUTED", "1", 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+  ::unsetenv("PTC_HUGEPAGES_EXECUTED");
+  // Still here: the exec failed; carry on as we were.
+  if (t) ::setenv("GLIBC_TUNABLES", current.c_str(), 1);
+  else ::unsetenv("GLIBC_TUNABLES");
 }
 
 void set_memory_policy() {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <ctime>
+#include <cstdlib>
 #include <fstream>
 
 #include "analysis/schema/json.h"
@@ -76,6 +77,20 @@ nlohmann::json machine_info() {
   if (const double mb = machine_memory_mb(); mb > 0) j["memory_kib"] = static_cast<std::uint64_t>(mb * 1024.0);
   struct utsname u {};
   if (::uname(&u) == 0) j["kernel"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
+  // Transparent huge pages: the kernel's mode, and whether this process's malloc asks for them
+  // (GLIBC_TUNABLES glibc.malloc.hugetlb; `ptc` sets it, commands/process.h).
+  {
+    std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string mode;
+    if (std::getline(thp, mode)) {
+      const auto a = mode.find('['), b = mode.find(']');
+      if (a != std::string::npos && b != std::string::npos && b > a) j["transparent_hugepages"] = mode.substr(a + 1, b - a - 1);
+    }
+    const char* t = std::getenv("GLIBC_TUNABLES");
+    const std::string tun = t ? t : "";
+    j["malloc_hugepages"] = tun.find("glibc.malloc.hugetlb=1") != std::string::npos ||
+                            tun.find("glibc.malloc.hugetlb=2") != std::string::npos;
+  }
   return j;
 }
 

@@ -23,6 +23,7 @@ std::string out_of(const CLI::App& cmd) {
 
 int main(int argc, char** argv) {
   using namespace ptc;
+  use_huge_page_malloc(argv);  // before anything else: it may execute ptc again (process.h)
   install_stop_handlers();  // first: a Ctrl-C during the start-up is a request like any other
   set_memory_policy();
   cli::Context ctx;

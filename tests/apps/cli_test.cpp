@@ -388,6 +388,31 @@ TEST_F(Cli, ClusterATriangleSoupByCoincidentCorners) {
   EXPECT_FALSE(fs::exists(dir_ / "x"));
 }
 
+TEST_F(Cli, MallocOnHugePagesIsRecordedAndCanBeTurnedOff) {
+  // ptc sets GLIBC_TUNABLES glibc.malloc.hugetlb=1 and executes itself once (commands/process.h),
+  // unless PTC_HUGEPAGES=0, the user named the tunable, or the kernel has THP off; the manifest
+  // says which. The outputs are the same either way.
+  std::string mode;
+  std::getline(std::ifstream("/sys/kernel/mm/transparent_hugepage/enabled"), mode);
+  const bool thp = !mode.empty() && mode.find("[never]") == std::string::npos;
+  const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  auto run = [&](const char* var, const char* value, const std::string& out) {
+    if (var) ::setenv(var, value, 1);
+    const RunResult r = ptc({"cluster", mesh, "--max-count", "30", "--out", (dir_ / out).string()});
+    if (var) ::unsetenv(var);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return nlohmann::json::parse(slurp(dir_ / out / "manifest.json"))["machine"];
+  };
+  ASSERT_EQ(std::getenv("GLIBC_TUNABLES"), nullptr) << "the test expects no GLIBC_TUNABLES of its own";
+  const auto on = run(nullptr, nullptr, "on");
+  EXPECT_EQ(on["malloc_hugepages"], thp);
+  if (thp) EXPECT_TRUE(on["transparent_hugepages"] == "madvise" || on["transparent_hugepages"] == "always");
+  EXPECT_EQ(run("PTC_HUGEPAGES", "0", "off")["malloc_hugepages"], false);
+  EXPECT_EQ(run("GLIBC_TUNABLES", "glibc.malloc.hugetlb=0", "user")["malloc_hugepages"], false);
+  EXPECT_EQ(slurp(dir_ / "on" / "triangles.csv"), slurp(dir_ / "off" / "triangles.csv"));
+  EXPECT_EQ(slurp(dir_ / "on" / "clusters.csv"), slurp(dir_ / "user" / "clusters.csv"));
+}
+
 TEST_F(Cli, ClusterRejectsBadArguments) {
   const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
   EXPECT_EQ(ptc({"cluster", mesh}).code, 2);  // --out is required
