@@ -1,5 +1,6 @@
 // `ptc info`: the mesh report as JSON (stable keys, schema "ptc-info/1") and as text.
 #include "commands/commands.h"
+#include "toolkit/clustering/cluster.h"
 
 #include <algorithm>
 #include <cmath>
@@ -74,7 +75,7 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
   return j;
 }
 
-nlohmann::json mesh_info_json(const std::filesystem::path& file, const ReadReport& read, const MeshReport& r) {
+nlohmann::json mesh_info_json(const std::filesystem::path& file, const ReadReport& read, const MeshReport& r, bool soup) {
   nlohmann::json j;
   j["schema"] = "ptc-info/1";
   j["file"] = file.string();
@@ -109,13 +110,14 @@ nlohmann::json mesh_info_json(const std::filesystem::path& file, const ReadRepor
   j["duplicate_triangles"] = r.duplicate_triangles;
   j["components"] = r.components;
   j["edge_components"] = r.edge_components;
+  j["triangle_soup"] = soup;
   j["closed_manifold"] = r.closed_manifold();
   j["euler_characteristic"] = r.euler_characteristic();
   j["memory_estimate"] = memory_estimate_json(r.triangles);
   return j;
 }
 
-std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& read, const MeshReport& r) {
+std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& read, const MeshReport& r, bool soup) {
   std::string s;
   auto line = [&](std::string_view key, const std::string& value) { s += fmt::format("{:<26}{}\n", key, value); };
   auto summary = [](const Summary& x) {
@@ -141,6 +143,8 @@ std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& 
                    r.zero_area_triangles, r.near_degenerate_triangles));
   line("duplicates", fmt::format("{} vertices, {} triangles", r.duplicate_vertices, r.duplicate_triangles));
   line("components", fmt::format("{} (by vertex), {} (by edge)", r.components, r.edge_components));
+  line("triangle soup", soup ? "yes (no vertex shared by two triangles: clustering joins coincident corners, --adjacency auto)"
+                             : "no");
   line("closed manifold", r.closed_manifold() ? "yes" : "no");
   line("euler characteristic", std::to_string(r.euler_characteristic()));
   return s;
@@ -151,10 +155,11 @@ std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& 
 void cmd_info(const InfoOptions& opt, std::ostream& out) {
   const LoadedMesh lm = read_mesh(opt.input);
   const MeshReport rep = analyze_mesh(lm.mesh);
+  const bool soup = is_triangle_soup(lm.mesh);
   if (opt.json)
-    out << dump_json(mesh_info_json(opt.input, lm.report, rep));
+    out << dump_json(mesh_info_json(opt.input, lm.report, rep, soup));
   else
-    out << mesh_info_text(opt.input, lm.report, rep);
+    out << mesh_info_text(opt.input, lm.report, rep, soup);
 }
 
 }  // namespace ptc

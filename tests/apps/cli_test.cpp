@@ -364,6 +364,13 @@ TEST_F(Cli, ClusterATriangleSoupByCoincidentCorners) {
   for (int t = 0; t < 12; ++t)
     off += "3 " + std::to_string(3 * t) + " " + std::to_string(3 * t + 1) + " " + std::to_string(3 * t + 2) + "\n";
   const fs::path soup = write("soup.off", off);
+  auto info = ptc({"info", soup.string(), "--json"});
+  ASSERT_EQ(info.code, 0) << info.err;
+  EXPECT_EQ(nlohmann::json::parse(info.out)["triangle_soup"], true);
+  info = ptc({"info", soup.string()});
+  EXPECT_NE(info.out.find("yes (no vertex shared by two triangles"), std::string::npos) << info.out;
+  EXPECT_EQ(nlohmann::json::parse(ptc({"info", std::string(PTC_TEST_DATA) + "/meshes/elephant.off", "--json"}).out)["triangle_soup"],
+            false);
   auto r = ptc({"cluster", soup.string(), "--method", "growth", "--max-count", "8", "--out", (dir_ / "a").string()});
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("adjacency: positions (sides whose corners coincide; auto: the mesh is a triangle soup)"),
