@@ -3,6 +3,7 @@
 
 #include <malloc.h>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <signal.h>
 #include <unistd.h>
@@ -12,6 +13,7 @@
 #include <string>
 
 #include "toolkit/core/cancel.h"
+#include "toolkit/core/memory.h"
 #include "toolkit/io/mesh_io.h"
 
 namespace ptc {
@@ -74,16 +76,38 @@ void install_stop_handlers() {
   }
 }
 
+namespace {
+bool names_huge_pages(const std::string& tunables) {
+  return tunables.find("glibc.malloc.hugetlb=1") != std::string::npos ||
+         tunables.find("glibc.malloc.hugetlb=2") != std::string::npos;
+}
+}  // namespace
+
 void use_huge_page_malloc(char** argv) {
-  // The one exec happened (even if the C library dropped the variable: never a second exec).
-  if (std::getenv("PTC_HUGEPAGES_EXECUTED")) {
+  // The one exec happened: give the user's GLIBC_TUNABLES back (child programs such as ffmpeg,
+  // Xvfb and jupyter see the environment ptc was started with), and never exec again. The
+  // marker holds "-" for "was unset", else "=" and the user's value.
+  if (const char* marker = std::getenv("PTC_HUGEPAGES_EXECUTED")) {
+    const std::string was = marker;
+    if (was.size() > 1 && was[0] == '=') ::setenv("GLIBC_TUNABLES", was.c_str() + 1, 1);
+    else ::unsetenv("GLIBC_TUNABLES");
     ::unsetenv("PTC_HUGEPAGES_EXECUTED");
+    set_malloc_huge_pages(true);
     return;
   }
-  if (const char* off = std::getenv("PTC_HUGEPAGES"); off && std::string(off) == "0") return;
   const char* t = std::getenv("GLIBC_TUNABLES");
   const std::string current = t ? t : "";
-  if (current.find("glibc.malloc.hugetlb") != std::string::npos) return;  // set: by us, or the user's choice
+  set_malloc_huge_pages(names_huge_pages(current));
+  if (const char* off = std::getenv("PTC_HUGEPAGES"); off && std::string(off) == "0") return;
+  if (current.find("glibc.malloc.hugetlb") != std::string::npos) return;  // the user's choice stands
+  // Not under valgrind (the new image would run outside it) or an explicit loader invocation
+  // (/proc/self/exe is then ld.so itself).
+  if (const char* pre = std::getenv("LD_PRELOAD"); pre && std::string(pre).find("vgpreload") != std::string::npos) return;
+  {
+    std::error_code ec;
+    const std::string exe = std::filesystem::read_symlink("/proc/self/exe", ec).filename().string();
+    if (ec || exe.rfind("ld-", 0) == 0 || exe.rfind("ld.so", 0) == 0) return;
+  }
   {
     std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
     std::string mode;
@@ -91,10 +115,15 @@ void use_huge_page_malloc(char** argv) {
     if (!thp || mode.find("[never]") != std::string::npos) return;
   }
   const std::string value = current.empty() ? "glibc.malloc.hugetlb=1" : current + ":glibc.malloc.hugetlb=1";
-  if (::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0 || ::setenv("PTC_HUGEPAGES_EXECUTED", "1", 1) != 0) return;
+  const std::string marker = t ? "=" + current : std::string("-");
+  if (::setenv("PTC_HUGEPAGES_EXECUTED", marker.c_str(), 1) != 0 || ::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) {
+    ::unsetenv("PTC_HUGEPAGES_EXECUTED");
+    if (t) ::setenv("GLIBC_TUNABLES", current.c_str(), 1);
+    return;
+  }
   ::execv("/proc/self/exe", argv);
-  ::unsetenv("PTC_HUGEPAGES_EXECUTED");
   // Still here: the exec failed; carry on as we were.
+  ::unsetenv("PTC_HUGEPAGES_EXECUTED");
   if (t) ::setenv("GLIBC_TUNABLES", current.c_str(), 1);
   else ::unsetenv("GLIBC_TUNABLES");
 }

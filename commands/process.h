@@ -11,9 +11,12 @@ void install_stop_handlers();
 
 /// Large blocks of glibc's malloc on transparent huge pages: glibc does it when the environment
 /// variable GLIBC_TUNABLES holds glibc.malloc.hugetlb=1 at start-up, so the process sets it and
-/// executes itself again, once (argv unchanged, the same process id). Nothing happens when the
-/// variable already names glibc.malloc.hugetlb (the user's choice), when PTC_HUGEPAGES=0, when
-/// the kernel has transparent huge pages off, or when the exec fails (the run goes on without).
+/// executes itself again, once (argv unchanged, the same process id); the new image gives the
+/// user's GLIBC_TUNABLES back at once (child programs see the environment ptc was started with)
+/// and records the choice (toolkit/core/memory.h malloc_huge_pages, for the manifests). Nothing
+/// happens when the variable already names glibc.malloc.hugetlb (the user's choice), when
+/// PTC_HUGEPAGES=0, under valgrind or an explicit ld.so invocation, when the kernel has
+/// transparent huge pages off, or when the exec fails (the run goes on without).
 /// Why (docs/scale.md, "Huge pages for malloc"): on the development machine 4 KiB page faults
 /// cost up to 3.7 s a GiB, and `ptc cluster` at 3.3M triangles ran 23% faster with it.
 /// Call first in main, before any thread or handler exists.

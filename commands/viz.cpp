@@ -89,6 +89,11 @@ ClusteringInfo clustering_info(const std::filesystem::path& clusters) {
   if (const auto s = parse_sphere_method(str("sphere"))) ci.cfg.sphere = *s;
   if (const auto s = parse_cluster_method(str("method"))) ci.cfg.method = *s;
   if (const auto s = parse_objective(str("objective"))) ci.cfg.objective = *s;
+  // The adjacency the clustering used: as resolved by that run, else as it was asked for.
+  if (const auto s = parse_cluster_adjacency(str("adjacency"))) ci.cfg.adjacency = *s;
+  if (m.contains("results") && m["results"].is_object() && m["results"].contains("adjacency") &&
+      m["results"]["adjacency"].is_string())
+    if (const auto s = parse_cluster_adjacency(m["results"]["adjacency"].get<std::string>())) ci.cfg.adjacency = *s;
   ci.from = mpath.string();
   const std::string method = str("method"), objective = str("objective");
   ci.title = fmt::format("{}{}{}, MaxCount {}, MaxSize {:g}", method.empty() ? "clusters" : method,
@@ -208,7 +213,15 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   std::uint32_t colours_used = 0;
   std::vector<std::array<std::uint32_t, 2>> borders;
   if (use_clusters) {
-    viz::PartitionTopology topo = viz::partition_topology(scene.rest(), clusters);
+    // Clusters made by coincident corners (a soup) meet at sides whose corners coincide at rest:
+    // the colouring and the borders follow that adjacency (border corners are the first vertex
+    // at each rest position).
+    const Mesh& rest = scene.rest();
+    std::optional<Mesh> welded;
+    if (resolve_adjacency(rest, ci.cfg.adjacency) == ClusterAdjacency::Positions)
+      welded.emplace(adjacency_triangles(rest, ClusterAdjacency::Positions),
+                     std::vector<Vec3>(rest.positions().begin(), rest.positions().end()));
+    viz::PartitionTopology topo = viz::partition_topology(welded ? *welded : rest, clusters);
     colour = viz::dsatur_colouring(topo.graph);
     for (std::uint32_t c : colour) colours_used = std::max(colours_used, c + 1);
     if (opt.borders) borders = std::move(topo.borders);

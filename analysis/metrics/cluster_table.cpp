@@ -16,16 +16,10 @@ namespace ptc {
 
 std::vector<ClusterRow> cluster_rows(const Mesh& mesh_in, const Clustering& c, const ClusterConfig& cfg,
                                      std::optional<double> avg_sa, std::span<const Tri> adjacency) {
-  // With an adjacency: the same positions on the adjacency's triangles (vertex ids merged).
-  std::optional<Mesh> welded;
-  if (!adjacency.empty()) {
-    if (adjacency.size() != mesh_in.triangle_count())
-      throw std::invalid_argument("cluster_rows: the adjacency has " + std::to_string(adjacency.size()) +
-                                  " triangles, the mesh " + std::to_string(mesh_in.triangle_count()));
-    welded.emplace(std::vector<Tri>(adjacency.begin(), adjacency.end()),
-                   std::vector<Vec3>(mesh_in.positions().begin(), mesh_in.positions().end()));
-  }
-  const Mesh& mesh = welded ? *welded : mesh_in;
+  if (!adjacency.empty() && adjacency.size() != mesh_in.triangle_count())
+    throw std::invalid_argument("cluster_rows: the adjacency has " + std::to_string(adjacency.size()) +
+                                " triangles, the mesh " + std::to_string(mesh_in.triangle_count()));
+  const Mesh& mesh = mesh_in;
   std::vector<ClusterRow> rows(c.cluster_count());
   const bool has_objective = cfg.max_count > 0 && cfg.max_size > 0;
   ClusterParams params;
@@ -38,13 +32,24 @@ std::vector<ClusterRow> cluster_rows(const Mesh& mesh_in, const Clustering& c, c
   const bool usable = has_objective && params.avg_sa > 0;
   // The clustering's vertex lists, when it has them (offsets per cluster, ending at the list's
   // end); else each cluster's are made from its triangles.
-  const bool lists = !welded && c.vertex_offsets.size() == c.triangle_offsets.size() && !c.vertex_offsets.empty() &&
+  const bool lists = c.vertex_offsets.size() == c.triangle_offsets.size() && !c.vertex_offsets.empty() &&
                      c.vertex_offsets.back() == c.vertices.size() &&
                      std::is_sorted(c.vertex_offsets.begin(), c.vertex_offsets.end());
   oneapi::tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
     ClusterRow& r = rows[k];
+    // The geometry always from the mesh's own triangles at this frame's positions.
     r.m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Cgal,
                           lists ? c.vertices_of(k) : std::span<const std::uint32_t>());
+    if (!adjacency.empty() && r.m.triangles > 0) {
+      // The vertex count of the adjacency (distinct rest positions), as the objective counted.
+      std::vector<std::uint32_t> ids;
+      ids.reserve(3 * r.m.triangles);
+      for (const std::uint32_t t : c.triangles_of(k))
+        if (t < adjacency.size()) ids.insert(ids.end(), adjacency[t].begin(), adjacency[t].end());
+      std::sort(ids.begin(), ids.end());
+      r.m.vertices = static_cast<std::size_t>(std::unique(ids.begin(), ids.end()) - ids.begin());
+      r.m.connectivity = static_cast<double>(r.m.triangles) / static_cast<double>(r.m.vertices);
+    }
     if (usable) {
       r.reg_bound = reg_bound(r.m.vertices, params.max_count);
       r.size_bound = size_bound(r.m.sphere.surface_area(), params.max_size, params.avg_sa, params.size_bound_mode);

@@ -29,9 +29,10 @@ struct ClusterRow {
 /// made from its triangles. avg_sa: the mesh's AvgSA when the caller has it (see
 /// cluster_mesh); computed here otherwise.
 /// `adjacency`: when not empty, the triangles of a clustering made with adjacency by positions
-/// (cluster.h adjacency_triangles of the rest pose): the vertices, connectivity, regBound and Acc
-/// columns then count distinct positions, as the objective did, and the clustering's own vertex
-/// lists are not read.
+/// (cluster.h adjacency_triangles of the rest pose): the vertices column then counts the
+/// adjacency's distinct vertices (distinct rest positions), as the objective did, and so do
+/// connectivity, regBound and Acc; every other column (areas, normals, sphere, box) comes from
+/// the mesh's own triangles at `mesh`'s positions, as without.
 [[nodiscard]] std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg,
                                                    std::optional<double> avg_sa = std::nullopt,
                                                    std::span<const Tri> adjacency = {});

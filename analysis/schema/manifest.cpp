@@ -77,8 +77,8 @@ nlohmann::json machine_info() {
   if (const double mb = machine_memory_mb(); mb > 0) j["memory_kib"] = static_cast<std::uint64_t>(mb * 1024.0);
   struct utsname u {};
   if (::uname(&u) == 0) j["kernel"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
-  // Transparent huge pages: the kernel's mode, and whether this process's malloc asks for them
-  // (GLIBC_TUNABLES glibc.malloc.hugetlb; `ptc` sets it, commands/process.h).
+  // Transparent huge pages: the kernel's mode, and whether this process's malloc was started with
+  // them (`ptc` arranges it, commands/process.h; toolkit/core/memory.h).
   {
     std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
     std::string mode;
@@ -86,10 +86,7 @@ nlohmann::json machine_info() {
       const auto a = mode.find('['), b = mode.find(']');
       if (a != std::string::npos && b != std::string::npos && b > a) j["transparent_hugepages"] = mode.substr(a + 1, b - a - 1);
     }
-    const char* t = std::getenv("GLIBC_TUNABLES");
-    const std::string tun = t ? t : "";
-    j["malloc_hugepages"] = tun.find("glibc.malloc.hugetlb=1") != std::string::npos ||
-                            tun.find("glibc.malloc.hugetlb=2") != std::string::npos;
+    j["malloc_hugepages"] = malloc_huge_pages();
   }
   return j;
 }

@@ -39,4 +39,11 @@ double machine_memory_mb() {
   return mb[0];
 }
 
+namespace {
+bool g_malloc_huge_pages = false;
+}  // namespace
+
+void set_malloc_huge_pages(bool on) { g_malloc_huge_pages = on; }
+bool malloc_huge_pages() { return g_malloc_huge_pages; }
+
 }  // namespace ptc

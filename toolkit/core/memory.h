@@ -15,4 +15,10 @@ struct RssSample {
 /// The machine's memory (/proc/meminfo MemTotal) in MB; 0 when unknown.
 [[nodiscard]] double machine_memory_mb();
 
+/// Whether this process's malloc was started with transparent huge pages (glibc's
+/// glibc.malloc.hugetlb=1 or 2): said once at start-up by the program that arranged it (the ptc
+/// command, commands/process.h); false in a program that says nothing. For the manifests.
+void set_malloc_huge_pages(bool on);
+[[nodiscard]] bool malloc_huge_pages();
+
 }  // namespace ptc

@@ -123,14 +123,22 @@ TEST(ClusterFrame, ASoupWithItsRestAdjacencyCountsRestPositions) {
   const ClusterFrameMetrics later = cluster_frame_metrics(moved, c, cfg, rest.rows, rest.rows, adj);
   const ClusterFrameMetrics by_ids = cluster_frame_metrics(moved, c, cfg, {}, {});
   ASSERT_EQ(rest.rows.size(), c.cluster_count());
-  std::size_t welded_total = 0;
+  std::size_t welded_total = 0, boxes_moved = 0;
   for (std::size_t k = 0; k < c.cluster_count(); ++k) {
     EXPECT_EQ(later.rows[k].m.vertices, rest.rows[k].m.vertices) << k;
     EXPECT_LT(rest.rows[k].m.vertices, 3 * rest.rows[k].m.triangles + (rest.rows[k].m.triangles == 1 ? 1 : 0)) << k;
     EXPECT_EQ(by_ids.rows[k].m.vertices, 3 * by_ids.rows[k].m.triangles) << k;
+    // The geometry is the frame's own: box, sphere, areas as without the adjacency.
+    EXPECT_EQ(later.rows[k].m.box.lo, by_ids.rows[k].m.box.lo) << k;
+    EXPECT_EQ(later.rows[k].m.box.hi, by_ids.rows[k].m.box.hi) << k;
+    EXPECT_EQ(later.rows[k].m.sphere.radius, by_ids.rows[k].m.sphere.radius) << k;
+    EXPECT_EQ(later.rows[k].m.area_p, by_ids.rows[k].m.area_p) << k;
+    EXPECT_EQ(later.rows[k].m.reg, by_ids.rows[k].m.reg) << k;
+    boxes_moved += later.rows[k].m.box.hi != rest.rows[k].m.box.hi;
     welded_total += rest.rows[k].m.vertices;
   }
   EXPECT_LT(welded_total, soup.vertex_count());
+  EXPECT_GT(boxes_moved, c.cluster_count() / 2);  // the triangles did move apart
 }
 
 }  // namespace

@@ -133,7 +133,9 @@ TEST(ClusterReport, ASoupWithItsAdjacencyScoresLikeItsConnectedMesh) {
     EXPECT_DOUBLE_EQ(got[k].m.connectivity, want[k].m.connectivity) << k;
     EXPECT_DOUBLE_EQ(got[k].m.reg, want[k].m.reg) << k;
     EXPECT_DOUBLE_EQ(got[k].m.sphere.radius, want[k].m.sphere.radius) << k;
-    EXPECT_DOUBLE_EQ(got[k].acc, want[k].acc) << k;
+    // The soup's sphere comes from its corners, each rest position three to six times: CGAL may
+    // differ in the last bit, and Acc, a difference, shows it at ~1e-16 absolute.
+    EXPECT_NEAR(got[k].acc, want[k].acc, 1e-12) << k;
     EXPECT_DOUBLE_EQ(got[k].reg_bound, want[k].reg_bound) << k;
     EXPECT_EQ(own[k].m.vertices, 3 * own[k].m.triangles) << k;
   }
