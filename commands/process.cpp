@@ -4,7 +4,6 @@
 #include <malloc.h>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <signal.h>
 #include <unistd.h>
 
@@ -108,12 +107,7 @@ void use_huge_page_malloc(char** argv) {
     const std::string exe = std::filesystem::read_symlink("/proc/self/exe", ec).filename().string();
     if (ec || exe.rfind("ld-", 0) == 0 || exe.rfind("ld.so", 0) == 0) return;
   }
-  {
-    std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
-    std::string mode;
-    std::getline(thp, mode);
-    if (!thp || mode.find("[never]") != std::string::npos) return;
-  }
+  if (const std::string mode = transparent_huge_page_mode(); mode.empty() || mode == "never") return;
   const std::string value = current.empty() ? "glibc.malloc.hugetlb=1" : current + ":glibc.malloc.hugetlb=1";
   const std::string marker = t ? "=" + current : std::string("-");
   if (::setenv("PTC_HUGEPAGES_EXECUTED", marker.c_str(), 1) != 0 || ::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) {

@@ -212,15 +212,18 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   std::vector<std::uint32_t> colour;
   std::uint32_t colours_used = 0;
   std::vector<std::array<std::uint32_t, 2>> borders;
+  // A clustering made by coincident corners (cluster.h): the rest pose's adjacency triangles,
+  // once, for the partition and the metrics; empty for one made by edges.
+  std::vector<Tri> adjacency;
+  if (use_clusters && resolve_adjacency(scene.rest(), ci.cfg.adjacency) == ClusterAdjacency::Positions)
+    adjacency = adjacency_triangles(scene.rest(), ClusterAdjacency::Positions);
   if (use_clusters) {
-    // Clusters made by coincident corners (a soup) meet at sides whose corners coincide at rest:
-    // the colouring and the borders follow that adjacency (border corners are the first vertex
-    // at each rest position).
+    // A soup's clusters meet at sides whose corners coincide at rest: the colouring and the
+    // borders follow that adjacency (border corners are the first vertex at each rest position).
     const Mesh& rest = scene.rest();
     std::optional<Mesh> welded;
-    if (resolve_adjacency(rest, ci.cfg.adjacency) == ClusterAdjacency::Positions)
-      welded.emplace(adjacency_triangles(rest, ClusterAdjacency::Positions),
-                     std::vector<Vec3>(rest.positions().begin(), rest.positions().end()));
+    if (!adjacency.empty())
+      welded.emplace(adjacency, std::vector<Vec3>(rest.positions().begin(), rest.positions().end()));
     viz::PartitionTopology topo = viz::partition_topology(welded ? *welded : rest, clusters);
     colour = viz::dsatur_colouring(topo.graph);
     for (std::uint32_t c : colour) colours_used = std::max(colours_used, c + 1);
@@ -244,11 +247,6 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   // The reference frame's rows (drift "since frame 0": the scene's first frame) and positions.
   std::vector<ClusterRow> ref_rows;
   std::vector<Vec3> ref_positions;
-  // The rest pose's adjacency of a clustering made by coincident corners (cluster.h): the
-  // metrics count distinct rest positions in every frame, as the objective did.
-  std::vector<Tri> adjacency;
-  if (needs_metrics && resolve_adjacency(scene.rest(), ci.cfg.adjacency) == ClusterAdjacency::Positions)
-    adjacency = adjacency_triangles(scene.rest(), ClusterAdjacency::Positions);
   if (needs_metrics) {
     Mesh ref = scene.rest();
     scene.positions(double(reference_frame), ref.positions(), true);

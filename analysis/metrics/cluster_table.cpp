@@ -14,12 +14,11 @@
 
 namespace ptc {
 
-std::vector<ClusterRow> cluster_rows(const Mesh& mesh_in, const Clustering& c, const ClusterConfig& cfg,
+std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, const ClusterConfig& cfg,
                                      std::optional<double> avg_sa, std::span<const Tri> adjacency) {
-  if (!adjacency.empty() && adjacency.size() != mesh_in.triangle_count())
+  if (!adjacency.empty() && adjacency.size() != mesh.triangle_count())
     throw std::invalid_argument("cluster_rows: the adjacency has " + std::to_string(adjacency.size()) +
-                                " triangles, the mesh " + std::to_string(mesh_in.triangle_count()));
-  const Mesh& mesh = mesh_in;
+                                " triangles, the mesh " + std::to_string(mesh.triangle_count()));
   std::vector<ClusterRow> rows(c.cluster_count());
   const bool has_objective = cfg.max_count > 0 && cfg.max_size > 0;
   ClusterParams params;
@@ -37,7 +36,6 @@ std::vector<ClusterRow> cluster_rows(const Mesh& mesh_in, const Clustering& c, c
                      std::is_sorted(c.vertex_offsets.begin(), c.vertex_offsets.end());
   oneapi::tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
     ClusterRow& r = rows[k];
-    // The geometry always from the mesh's own triangles at this frame's positions.
     r.m = cluster_metrics(mesh, c.triangles_of(k), SphereMethod::Cgal,
                           lists ? c.vertices_of(k) : std::span<const std::uint32_t>());
     if (!adjacency.empty() && r.m.triangles > 0) {

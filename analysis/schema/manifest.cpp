@@ -6,7 +6,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <ctime>
-#include <cstdlib>
 #include <fstream>
 
 #include "analysis/schema/json.h"
@@ -79,15 +78,8 @@ nlohmann::json machine_info() {
   if (::uname(&u) == 0) j["kernel"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
   // Transparent huge pages: the kernel's mode, and whether this process's malloc was started with
   // them (`ptc` arranges it, commands/process.h; toolkit/core/memory.h).
-  {
-    std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
-    std::string mode;
-    if (std::getline(thp, mode)) {
-      const auto a = mode.find('['), b = mode.find(']');
-      if (a != std::string::npos && b != std::string::npos && b > a) j["transparent_hugepages"] = mode.substr(a + 1, b - a - 1);
-    }
-    j["malloc_hugepages"] = malloc_huge_pages();
-  }
+  if (const std::string mode = transparent_huge_page_mode(); !mode.empty()) j["transparent_hugepages"] = mode;
+  j["malloc_hugepages"] = malloc_huge_pages();
   return j;
 }
 

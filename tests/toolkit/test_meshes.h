@@ -225,6 +225,35 @@ inline Mesh concat(const Mesh& a, const Mesh& b) {
   return Mesh(std::move(t), std::move(p));
 }
 
+/// The mesh as a triangle soup: every corner its own vertex, at the same position (the explode
+/// deformer's rest pose).
+inline Mesh soup_of(const Mesh& m) {
+  std::vector<Vec3> p;
+  std::vector<Tri> t;
+  for (const Tri& f : m.triangles()) {
+    const auto b = static_cast<std::uint32_t>(p.size());
+    for (std::uint32_t v : f) p.push_back(m.positions()[v]);
+    t.push_back({b, b + 1, b + 2});
+  }
+  return Mesh(std::move(t), std::move(p));
+}
+
+/// The mesh with its vertices renumbered by first use in triangle order (unused ones dropped):
+/// the numbering the weld of soup_of(m) gives, so both are the same mesh.
+inline Mesh by_first_use(const Mesh& m) {
+  std::vector<std::uint32_t> id(m.vertex_count(), 0xffffffffu);
+  std::vector<Vec3> p;
+  std::vector<Tri> t;
+  for (Tri f : m.triangles()) {
+    for (std::uint32_t& v : f) {
+      if (id[v] == 0xffffffffu) id[v] = static_cast<std::uint32_t>(p.size()), p.push_back(m.positions()[v]);
+      v = id[v];
+    }
+    t.push_back(f);
+  }
+  return Mesh(std::move(t), std::move(p));
+}
+
 inline Mesh load(const char* name) { return read_mesh(std::string(PTC_TEST_DATA) + "/meshes/" + name).mesh; }
 
 struct Named {

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 
 namespace ptc {
 namespace {
@@ -42,6 +43,14 @@ double machine_memory_mb() {
 namespace {
 bool g_malloc_huge_pages = false;
 }  // namespace
+
+std::string transparent_huge_page_mode() {
+  std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string line;
+  if (!std::getline(in, line)) return "";
+  const auto a = line.find('['), b = line.find(']');
+  return a != std::string::npos && b != std::string::npos && b > a ? line.substr(a + 1, b - a - 1) : "";
+}
 
 void set_malloc_huge_pages(bool on) { g_malloc_huge_pages = on; }
 bool malloc_huge_pages() { return g_malloc_huge_pages; }

@@ -3,6 +3,8 @@
 // trace.csv, and the memory estimate of `ptc info`.
 #pragma once
 
+#include <string>
+
 namespace ptc {
 
 /// Resident and peak resident memory (VmRSS, VmHWM) in MB (2^20 bytes), read together: the kernel
@@ -14,6 +16,10 @@ struct RssSample {
 [[nodiscard]] RssSample rss_sample();
 /// The machine's memory (/proc/meminfo MemTotal) in MB; 0 when unknown.
 [[nodiscard]] double machine_memory_mb();
+
+/// The kernel's transparent huge page mode ("always", "madvise", "never"), the bracketed entry
+/// of /sys/kernel/mm/transparent_hugepage/enabled; "" when unknown.
+[[nodiscard]] std::string transparent_huge_page_mode();
 
 /// Whether this process's malloc was started with transparent huge pages (glibc's
 /// glibc.malloc.hugetlb=1 or 2): said once at start-up by the program that arranged it (the ptc

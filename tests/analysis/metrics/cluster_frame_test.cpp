@@ -11,6 +11,7 @@
 #include "analysis/metrics/cluster_frame.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/io/mesh_io.h"
+#include "toolkit/test_meshes.h"
 
 namespace ptc {
 namespace {
@@ -101,22 +102,14 @@ TEST(ClusterFrame, ASoupWithItsRestAdjacencyCountsRestPositions) {
   // rest pose's adjacency, every frame's vertices / connectivity / Acc count the rest positions
   // (equal to the connected mesh's at rest, and the same in every frame: topology does not move),
   // while the positions of the frame give the boxes.
-  const Mesh b = read_mesh(std::string(PTC_TEST_DATA) + "/meshes/bunny00.off").mesh;
-  std::vector<Vec3> sp;
-  std::vector<Tri> st;
-  for (const Tri& f : b.triangles()) {
-    const auto base = static_cast<std::uint32_t>(sp.size());
-    for (std::uint32_t v : f) sp.push_back(b.positions()[v]);
-    st.push_back({base, base + 1, base + 2});
-  }
-  const Mesh soup(st, sp);
+  const Mesh soup = test_meshes::soup_of(test_meshes::load("bunny00.off"));
   ClusterConfig cfg;
   cfg.method = ClusterMethod::Growth;
   const Clustering c = cluster_mesh(soup, cfg);
   const std::vector<Tri> adj = adjacency_triangles(soup, ClusterAdjacency::Auto);
   ASSERT_FALSE(adj.empty());
   const ClusterFrameMetrics rest = cluster_frame_metrics(soup, c, cfg, {}, {}, adj);
-  std::vector<Vec3> flown = sp;
+  std::vector<Vec3> flown(soup.positions().begin(), soup.positions().end());
   for (std::size_t i = 0; i < flown.size(); ++i) flown[i] += Vec3(0.01 * double(i / 3 % 7), 0, 0);
   Mesh moved = soup;
   moved.set_positions(flown);

@@ -8,6 +8,7 @@
 
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/mesh_report.h"
+#include "toolkit/test_meshes.h"
 
 namespace ptc {
 namespace {
@@ -105,20 +106,8 @@ TEST(ClusterReport, ASoupWithItsAdjacencyScoresLikeItsConnectedMesh) {
   // corners: with the adjacency's triangles its rows equal, column for column, those of the
   // connected mesh clustered by edges (the same partition; the connected mesh is numbered by
   // first use, as the weld numbers it). Without, the vertices are the soup's own (3 a triangle).
-  const Mesh e = read_mesh(std::string(PTC_TEST_DATA) + "/meshes/elephant.off").mesh;
-  std::vector<std::uint32_t> id(e.vertex_count(), 0xffffffffu);
-  std::vector<Vec3> rp, sp;
-  std::vector<Tri> rt, st;
-  for (Tri f : e.triangles()) {
-    const auto b = static_cast<std::uint32_t>(sp.size());
-    for (std::uint32_t& v : f) {
-      sp.push_back(e.positions()[v]);
-      if (id[v] == 0xffffffffu) id[v] = static_cast<std::uint32_t>(rp.size()), rp.push_back(e.positions()[v]);
-      v = id[v];
-    }
-    rt.push_back(f), st.push_back({b, b + 1, b + 2});
-  }
-  const Mesh ref(std::move(rt), std::move(rp)), soup(std::move(st), std::move(sp));
+  const Mesh e = test_meshes::load("elephant.off");
+  const Mesh ref = test_meshes::by_first_use(e), soup = test_meshes::soup_of(e);
   ClusterConfig cfg;
   cfg.method = ClusterMethod::Growth;
   const Clustering cr = cluster_mesh(ref, cfg), cs = cluster_mesh(soup, cfg);
