@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 #include <stdexcept>
@@ -135,6 +136,89 @@ TraceTotals EmbreeScene::trace(const RayBatch& rays, HitBatch& hits, HitMode mod
   } else {
     tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : static_cast<int>(threads));
     arena.execute([&] { tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), body); });
+  }
+  TraceTotals sum;
+  for (const TraceTotals& t : totals) sum.rays += t.rays, sum.hits += t.hits;
+  return sum;
+}
+
+namespace {
+
+template <int N, typename RayHitN, typename RayN, typename IntersectFn, typename OccludedFn>
+void trace_packets_of(RTCScene scene, const Vec3& origin, const RayBatch& rays, HitBatch& hits, HitMode mode,
+                      std::size_t begin, std::size_t end, TraceTotals& tot, IntersectFn intersect, OccludedFn occluded) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  for (std::size_t first = begin; first < end; first += N) {
+    const int n = static_cast<int>(std::min<std::size_t>(N, end - first));
+    alignas(64) int valid[N];
+    alignas(64) RayHitN rh;
+    for (int l = 0; l < N; ++l) {
+      const std::size_t i = first + std::size_t(l < n ? l : 0);
+      valid[l] = l < n ? -1 : 0;
+      const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), origin);
+      rh.ray.org_x[l] = o[0], rh.ray.org_y[l] = o[1], rh.ray.org_z[l] = o[2];
+      rh.ray.dir_x[l] = rays.dx[i], rh.ray.dir_y[l] = rays.dy[i], rh.ray.dir_z[l] = rays.dz[i];
+      rh.ray.tnear[l] = rays.tmin[i];
+      rh.ray.tfar[l] = rays.tmax[i];
+      rh.ray.time[l] = 0.0f;
+      rh.ray.mask[l] = 0xffffffffu;
+      rh.ray.id[l] = 0;
+      rh.ray.flags[l] = 0;
+      rh.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
+    }
+    if (mode == HitMode::Closest)
+      intersect(valid, scene, &ctx, &rh);
+    else
+      occluded(valid, scene, &ctx, static_cast<RayN*>(&rh.ray));
+    for (int l = 0; l < n; ++l) {
+      const std::size_t i = first + l;
+      std::uint32_t tri = kNoTriangle;
+      float t = 0, u = 0, v = 0;
+      if (mode == HitMode::Closest) {
+        if (rh.hit.geomID[l] != RTC_INVALID_GEOMETRY_ID)
+          tri = rh.hit.primID[l], t = rh.ray.tfar[l], u = rh.hit.u[l], v = rh.hit.v[l];
+      } else if (rh.ray.tfar[l] < 0.0f) {
+        tri = kUnknownTriangle, t = rays.tmax[i];
+      }
+      hits.t[i] = t, hits.u[i] = u, hits.v[i] = v, hits.triangle[i] = tri;
+      hits.nodes_visited[i] = 0, hits.triangles_tested[i] = 0;
+      tot.rays += 1;
+      tot.hits += tri != kNoTriangle;
+    }
+  }
+}
+
+}  // namespace
+
+TraceTotals EmbreeScene::trace_packets(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads,
+                                       int width) const {
+  if (width == 1) return trace(rays, hits, mode, threads);
+  if (width != 4 && width != 8 && width != 16)
+    throw std::invalid_argument("Embree packets: width " + std::to_string(width) + " is not 1, 4, 8 or 16");
+  const Impl& im = *impl_;
+  const std::size_t n = rays.size();
+  hits.resize(n);
+  tbb::enumerable_thread_specific<TraceTotals> totals;
+  auto body = [&](const tbb::blocked_range<std::size_t>& range) {
+    TraceTotals& tot = totals.local();
+    const std::size_t b = range.begin() * 64, e = std::min(n, range.end() * 64);
+    if (width == 4)
+      trace_packets_of<4, RTCRayHit4, RTCRay4>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect4, rtcOccluded4);
+    else if (width == 8)
+      trace_packets_of<8, RTCRayHit8, RTCRay8>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect8, rtcOccluded8);
+    else
+      trace_packets_of<16, RTCRayHit16, RTCRay16>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect16,
+                                                  rtcOccluded16);
+  };
+  const std::size_t tiles = (n + 63) / 64;  // 64 rays per task, as the tracer
+  if (threads == 1) {
+    body(tbb::blocked_range<std::size_t>(0, tiles));
+  } else {
+    tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : static_cast<int>(threads));
+    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles, 1), body); });
   }
   TraceTotals sum;
   for (const TraceTotals& t : totals) sum.rays += t.rays, sum.hits += t.hits;

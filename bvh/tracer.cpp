@@ -39,8 +39,9 @@ TraceIsa resolve(TraceIsa isa) {
 }
 
 namespace {
-detail::RangeFn range_fn(TraceIsa isa) {
-  return resolve(isa) == TraceIsa::Avx2 ? &detail::trace_range_avx2 : &detail::trace_range_sse2;
+detail::RangeFn range_fn(TraceIsa isa, bool packets) {
+  if (resolve(isa) != TraceIsa::Avx2) return &detail::trace_range_sse2;
+  return packets ? &detail::trace_range_packet_avx2 : &detail::trace_range_avx2;
 }
 }  // namespace
 
@@ -48,7 +49,7 @@ TraceTotals trace(const TraceData& scene, const RayBatch& rays, HitBatch& hits, 
   const std::size_t n = rays.size();
   hits.resize(n);
   if (!opt.counters) hits.nodes_visited.clear(), hits.triangles_tested.clear();
-  const detail::RangeFn fn = range_fn(opt.isa);
+  const detail::RangeFn fn = range_fn(opt.isa, opt.packets);
   constexpr std::size_t kTile = 64;  // rays per task: 64 * 4 bytes = 4 cache lines per array
   const std::size_t tiles = (n + kTile - 1) / kTile;
   tbb::enumerable_thread_specific<TraceTotals> totals;

@@ -20,3 +20,4 @@
 #define PTC_TRACE_AVX2 1
 #define PTC_TRACE_NS avx2
 #include "bvh/tracer_kernel.h"
+#include "bvh/tracer_packet.h"

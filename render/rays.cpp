@@ -46,10 +46,11 @@ constexpr std::size_t kChunkRays = std::size_t(1) << 20;
 // parallel); take(hits, first_slot, point) reads its results back.
 template <class Make, class Take>
 void any_hit_pass(const TraceTarget& scene, const std::vector<std::uint32_t>& points, std::size_t per_point,
-                  unsigned threads, PassStats& stats, Make&& make, Take&& take) {
+                  unsigned threads, PassStats& stats, Make&& make, Take&& take, bool packets = false) {
   bvh::TraceOptions opt;
   opt.mode = bvh::HitMode::Any;
   opt.threads = threads;
+  opt.packets = packets;
   bvh::RayBatch rays;
   bvh::HitBatch hits;
   const std::size_t points_per_chunk = std::max<std::size_t>(1, kChunkRays / per_point);
@@ -133,7 +134,7 @@ AoResult trace_ao(const bvh::TraceData& scene, const SurfaceHits& s, const AoCon
 }
 
 ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const Vec3& light, const RayFrame& frame,
-                           unsigned threads) {
+                           unsigned threads, bool packets) {
   ShadowResult r;
   r.lit.assign(s.size(), 0);
   // Points that face the light get a ray; the others stay unlit.
@@ -151,7 +152,8 @@ ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const
       },
       [&](const bvh::HitBatch& hits, std::size_t slot, std::uint32_t i) {
         r.lit[i] = hits.triangle[slot] == bvh::kNoTriangle;
-      });
+      },
+      packets);
   return r;
 }
 

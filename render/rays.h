@@ -97,8 +97,10 @@ struct ShadowResult {
   std::vector<std::uint8_t> lit;
   PassStats stats;
 };
+/// packets: trace them in packets (bvh::TraceOptions::packets; the points are taken in pixel order,
+/// so neighbouring rays leave neighbouring points).
 [[nodiscard]] ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const Vec3& light,
-                                         const RayFrame& frame, unsigned threads = 0);
+                                         const RayFrame& frame, unsigned threads = 0, bool packets = false);
 [[nodiscard]] ShadowResult trace_shadows(const bvh::TraceData& scene, const SurfaceHits& s, const Vec3& light,
                                          const RayFrame& frame, unsigned threads = 0);
 

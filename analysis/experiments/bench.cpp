@@ -142,11 +142,13 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   bvh::TraceOptions opt;
   opt.threads = cfg.threads;
   opt.counters = false;
+  opt.packets = cfg.packets;
   bvh::AlignedVector<Vec3> pos(mesh.positions().begin(), mesh.positions().end());
   bvh::HitBatch ref, hits, counted;
   // The shadow pass: one batch per frame, made from ours_triangles' primary hits on the frame's
   // positions (the first configuration of the loop), traced by every configuration.
   res.shadows = cfg.light.has_value();
+  res.packets = cfg.packets;
   std::optional<Mesh> frame_mesh;  // only with a light: the frame's positions on the mesh's triangles
   SurfaceHits surface;
   Box3 frame_bounds;
@@ -178,7 +180,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
         frame_bounds = frame_mesh->bounds();
       }
       const ShadowResult sr = trace_shadows(target_of(a), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
-                                            cfg.threads);
+                                            cfg.threads, cfg.packets);
       row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
       if (fr.accel == 0) ref_lit = sr.lit;
       else
@@ -290,8 +292,10 @@ std::string bench_text(const PeerBenchResult& r) {
                               frames - 1, frames - r.median_first_frame, r.rays,
                               r.shadows ? " and shadow rays to the light" : " (no shadow rays)");
   // The whole frame first: what the method is for.
-  s += fmt::format("whole frame = update + build + primary{} (> 1: the row is faster; Embree's frame / the row's)\n",
-                   r.shadows ? " + shadow rays" : "");
+  s += fmt::format("whole frame = update + build + primary{} (> 1: the row is faster; Embree's frame / the row's){}\n",
+                   r.shadows ? " + shadow rays" : "",
+                   r.packets ? "; rays in packets of 8 (ours: AVX2 lanes; Embree: rtcIntersect8/rtcOccluded8, coherent)"
+                             : "");
   s += fmt::format("{:<16} {:>10}", "config", "frame_ms");
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>15}", "vs " + std::string(to_string(e)));
   s += "\n";

@@ -55,6 +55,10 @@ struct PeerBenchConfig {
   /// Point light (world) of the shadow pass; nullopt: primary rays only (the whole frame is then
   /// update + build + primary trace).
   std::optional<Vec3> light;
+  /// Trace primary and shadow rays in packets: ours with bvh::TraceOptions::packets (8 rays, one
+  /// per AVX2 lane), Embree with rtcIntersect8 / rtcOccluded8 and the coherent flag. Off: single
+  /// rays on both sides (rtcIntersect1 / rtcOccluded1).
+  bool packets = false;
 };
 
 struct BenchRow {
@@ -101,6 +105,7 @@ struct PeerBenchResult {
   std::uint32_t cluster_group_size = 0;  ///< the cluster BVH's two-level build (0: plain)
   double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once
   bool shadows = false;                ///< a shadow pass was traced (cfg.light)
+  bool packets = false;                ///< rays were traced in packets (cfg.packets)
 };
 
 /// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()

@@ -43,6 +43,9 @@ void register_bench(CLI::App& app, Context& ctx) {
   a->camera.add_to(c, /*with_light=*/true);
   c->add_flag("--no-shadows", [a](std::int64_t) { a->opt.shadows = false; },
               "primary rays only (default: the whole frame includes shadow rays to the light)");
+  c->add_flag("--packets", cfg.packets,
+              "trace primary and shadow rays in packets of 8 (ours: one ray per AVX2 lane; Embree: rtcIntersect8 / "
+              "rtcOccluded8, coherent); default: single rays on both sides");
   auto* cl = c->add_option("--clusters", a->opt.clusters, "use the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--max-count", cfg.max_count,
                 "otherwise: growth/Acc clustering with MaxCount = MaxSize = N (0: one triangle per cluster, the "

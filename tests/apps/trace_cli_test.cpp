@@ -156,6 +156,22 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
     EXPECT_EQ(row.at("shadow_ms"), "0");
   }
   EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "none" / "manifest.json"))["parameters"]["shadows"], false);
+  EXPECT_EQ(m["parameters"]["packets"], false);
+  // --packets: both sides trace in packets of 8, the same hits and shadows as single rays.
+  const CmdResult packed = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--packets",
+                                "--out", (dir_ / "packed").string()});
+  ASSERT_EQ(packed.code, 0) << packed.err;
+  EXPECT_NE(packed.out.find("rays in packets of 8"), std::string::npos) << packed.out;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "packed" / "manifest.json"))["parameters"]["packets"], true);
+  const auto rows = csv_rows(slurp(dir_ / "packed" / "bench.csv"));
+  ASSERT_EQ(rows.size(), with.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i].at("config"), with[i].at("config"));
+    EXPECT_EQ(rows[i].at("hits"), with[i].at("hits")) << rows[i].at("config");
+    EXPECT_EQ(rows[i].at("mismatches"), "0") << rows[i].at("config");
+    EXPECT_EQ(rows[i].at("shadow_rays"), with[i].at("shadow_rays")) << rows[i].at("config");
+    EXPECT_EQ(rows[i].at("shadow_occluded"), with[i].at("shadow_occluded")) << rows[i].at("config");
+  }
 }
 
 namespace {

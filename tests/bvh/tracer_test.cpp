@@ -11,6 +11,7 @@
 #include <variant>
 
 #include "toolkit/clustering/morton_runs.h"
+#include "bvh/camera.h"
 #include "bvh/sah_builder.h"
 #include "bvh/trace_scene.h"
 #include "test_util.h"
@@ -234,6 +235,76 @@ TEST_P(TracerKinds, BatchEqualsSingleRaysForAnyThreadCount) {
       nodes += h1.nodes_visited[i];
     }
     EXPECT_EQ(nodes, t1.nodes_visited);
+  }
+}
+
+// The packet path (TraceOptions::packets) against single rays, ray by ray: closest hits bit for
+// bit, any hit on the same rays (and a real hit of that ray). The batch mixes a camera's rows
+// (coherent: one lane group per packet), random rays (mixed octants and dominant axes: several
+// groups per packet), rays exactly through vertices (edge functions of 0), degenerate rays (zero,
+// NaN, empty interval) and bounded rays, in a count that is not a multiple of eight.
+TEST_P(TracerKinds, PacketsEqualSingleRays) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  const AnyScene s = make_scene(m, GetParam());
+  const RayBatch cam = primary_rays(frame_box(m.bounds(), Vec3(0.3, -0.2, -1.0)), 48, 40);
+  const RaySet rnd = random_rays(m, 1500, 21);
+  RayBatch rays;
+  std::vector<Vec3> org;
+  std::vector<Vec3f> dir;
+  std::vector<float> t0, t1;
+  auto add = [&](const Vec3& o, const Vec3f& d, float a = 0.0f, float b = kInf) {
+    org.push_back(o), dir.push_back(d), t0.push_back(a), t1.push_back(b);
+  };
+  for (std::size_t i = 0; i < cam.size(); ++i)
+    add(Vec3(cam.ox[i], cam.oy[i], cam.oz[i]), {cam.dx[i], cam.dy[i], cam.dz[i]});
+  for (std::size_t i = 0; i < rnd.org.size(); ++i) add(rnd.org[i], rnd.dir[i]);
+  const Vec3 c = m.bounds().center();
+  for (std::size_t v = 0; v < m.vertex_count(); v += 37) {
+    const Vec3 d = m.position(v) - c;
+    add(c, {float(d.x()), float(d.y()), float(d.z())});
+    if (v % 5 == 0) add(c, {float(d.x()), float(d.y()), float(d.z())}, 0.0f, 0.5f);  // ends before the vertex
+  }
+  add(c, {0, 0, 0});
+  add(c, {std::nanf(""), 1, 0});
+  add(c, {1, 0, 0}, 3.0f, 2.0f);
+  add(Vec3(std::nan(""), 0, 0), {1, 0, 0});
+  add(c, {0, 0, 1});  // axis-aligned, from inside
+  rays.resize(org.size());
+  for (std::size_t i = 0; i < org.size(); ++i) rays.set(i, org[i], dir[i], t0[i], t1[i]);
+  ASSERT_NE(rays.size() % 8, 0u);
+  for (HitMode mode : {HitMode::Closest, HitMode::Any}) {
+    for (unsigned threads : {1u, 2u}) {
+      HitBatch single, packed;
+      TraceOptions opt;
+      opt.mode = mode;
+      opt.threads = threads;
+      const TraceTotals ts = trace(s.data(), rays, single, opt);
+      opt.packets = true;
+      const TraceTotals tp = trace(s.data(), rays, packed, opt);
+      EXPECT_EQ(tp.rays, ts.rays);
+      EXPECT_EQ(tp.hits, ts.hits);
+      std::uint64_t nodes = 0;
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        const std::string what = std::string(name(GetParam())) + " ray " + std::to_string(i);
+        nodes += packed.nodes_visited[i];
+        if (mode == HitMode::Closest) {
+          ASSERT_EQ(packed.triangle[i], single.triangle[i]) << what;
+          ASSERT_EQ(packed.t[i], single.t[i]) << what;
+          ASSERT_EQ(packed.u[i], single.u[i]) << what;
+          ASSERT_EQ(packed.v[i], single.v[i]) << what;
+          if (single.triangle[i] != kNoTriangle) ASSERT_GT(packed.triangles_tested[i], 0u) << what;
+          continue;
+        }
+        ASSERT_EQ(packed.triangle[i] != kNoTriangle, single.triangle[i] != kNoTriangle) << what;
+        if (packed.triangle[i] == kNoTriangle) continue;
+        const auto k = m.corners(packed.triangle[i]);
+        const Vec3& f = s.data().origin;
+        const auto h = intersect_triangle(make_watertight_ray(to_frame(org[i], f), dir[i]), to_frame(k[0], f),
+                                          to_frame(k[1], f), to_frame(k[2], f), t0[i], t1[i]);
+        ASSERT_TRUE(h && h->t == packed.t[i]) << what;
+      }
+      EXPECT_EQ(nodes, tp.nodes_visited);
+    }
   }
 }
 

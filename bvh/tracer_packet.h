@@ -1,0 +1,278 @@
+// Internal: the tracer's packet path (TraceOptions::packets, tracer.h), included by
+// tracer_avx2.cpp after tracer_kernel.h (it reuses that kernel's ray set-up and leaf tests), so
+// it exists only in the AVX2 variant; elsewhere packets fall back to single rays.
+//
+// Eight consecutive rays of the batch make a packet, one ray per AVX2 lane. The rays are split
+// into groups of one direction octant (so the same near and far box rows); a camera's rows make
+// one group almost always. A group walks the tree once:
+//   - at an inner node, each child's box is tested against every active lane with exactly the
+//     float operations of the single-ray slab test, so a lane enters exactly the boxes its own
+//     ray would; a child is visited when any lane enters it, with those lanes active; children
+//     are visited nearest first (the smallest entry distance among their lanes), the others
+//     pushed with their lanes and per-lane entry distances;
+//   - a popped entry keeps the lanes whose entry distance is not beyond their best hit (closest)
+//     or that have no hit yet (any hit);
+//   - a leaf is tested ray by ray, for each active lane, by the single-ray leaf test (eight
+//     triangles per AVX2 test): for leaves of clusters, triangles in parallel cost fewer tests
+//     than rays in parallel unless all eight lanes are active.
+// So the node chain of a packet is walked once for up to eight rays, and the closest hit of
+// every ray is its smallest (t, id), bit-identical to the single-ray path (a test checks it on
+// every scene). Any hit reports some hit of the ray (not necessarily the one the single-ray path
+// finds first); the same rays are occluded. Counters: per ray, the wide nodes tested with the ray
+// active and the triangles of the leaves tested for it.
+#pragma once
+
+#if !defined(PTC_TRACE_AVX2)
+#error "bvh/tracer_packet.h belongs to the AVX2 variant (tracer_avx2.cpp)"
+#endif
+
+namespace ptc::bvh::detail::PTC_TRACE_NS {
+namespace {
+
+constexpr int kLanes = 8;
+
+struct alignas(32) PacketEntry {
+  __m256 tn;            // per-lane entry distance of the box (+inf outside `mask`)
+  std::uint32_t ref;    // as StackEntry
+  std::uint32_t count;
+  std::uint32_t mask;   // lanes that entered the box
+};
+
+// The slab-test constants of one octant group, one ray per lane.
+struct PacketGroup {
+  __m256 ox, oy, oz, inx, iny, inz, ifx, ify, ifz, tmin;
+  std::ptrdiff_t nx, ny, nz, fx, fy, fz;
+};
+
+inline __m256 lane_mask(std::uint32_t m) {
+  const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  return _mm256_castsi256_ps(
+      _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(static_cast<int>(m)), bits), bits));
+}
+
+inline float hmin8(__m256 x) {
+  __m128 m = _mm_min_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps(x, 1));
+  m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+  m = _mm_min_ss(m, _mm_shuffle_ps(m, m, 1));
+  return _mm_cvtss_f32(m);
+}
+
+struct alignas(32) Packet {
+  RayState ray[kLanes];            // the single-ray state of a lane, made when it reaches its first leaf
+  Result res[kLanes];
+  alignas(32) float tmax[kLanes];  // per lane: best hit so far (closest) or the ray's end
+  std::uint32_t done = 0;          // any hit: lanes with a hit
+  std::uint32_t ready = 0;         // lanes whose `ray` is set up
+  __m256i nodes;                   // per lane: wide nodes tested with the lane active
+  const RayBatch* rays = nullptr;
+  std::size_t first = 0;           // the packet's first ray in the batch
+  Vec3 origin;                     // the trace frame
+
+  RayState& leaf_state(int l) {
+    if (!(ready >> l & 1)) {
+      const std::size_t i = first + l;
+      setup(ray[l], to_frame(Vec3(rays->ox[i], rays->oy[i], rays->oz[i]), origin),
+            {rays->dx[i], rays->dy[i], rays->dz[i]}, rays->tmin[i], rays->tmax[i]);
+      ready |= 1u << l;
+    }
+    return ray[l];
+  }
+};
+
+template <bool AnyHit>
+void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, Packet& p, PacketEntry* stack) {
+  if (d.empty) return;
+  const WideNode* const nodes = d.nodes;
+  const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const __m256i one = _mm256_set1_epi32(1);
+  __m256 tmax = _mm256_load_ps(p.tmax);
+  PacketEntry* sp = stack;
+  std::uint32_t ref = d.root, cnt = 0, m = group;
+  auto pop = [&] {
+    while (sp != stack) {
+      --sp;
+      std::uint32_t mm = sp->mask;
+      if constexpr (AnyHit)
+        mm &= ~p.done;
+      else
+        mm &= static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(sp->tn, tmax, _CMP_LE_OQ)));
+      if (mm) {
+        ref = sp->ref, cnt = sp->count, m = mm;
+        return true;
+      }
+    }
+    return false;
+  };
+  do {
+    bool miss = false;
+    while (cnt == 0) {
+      const float* b = &nodes[ref].bounds[0][0];
+      p.nodes = _mm256_add_epi32(p.nodes, _mm256_and_si256(_mm256_castps_si256(lane_mask(m)), one));
+      __m256 tn[4];
+      std::uint32_t lanes[4];
+      unsigned any = 0;
+      for (int c = 0; c < 4; ++c) {
+        // The single-ray kernel's operations and operand order (its comment explains the NaN rule).
+        const __m256 tnx = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.nx + c), g.ox), g.inx);
+        const __m256 tny = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.ny + c), g.oy), g.iny);
+        const __m256 tnz = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.nz + c), g.oz), g.inz);
+        const __m256 tfx = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.fx + c), g.ox), g.ifx);
+        const __m256 tfy = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.fy + c), g.oy), g.ify);
+        const __m256 tfz = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.fz + c), g.oz), g.ifz);
+        tn[c] = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, g.tmin));
+        const __m256 tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, tmax));
+        lanes[c] = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(tn[c], tf, _CMP_LE_OQ))) & m;
+        any |= lanes[c] ? 1u << c : 0u;
+      }
+      if (!any) {
+        miss = true;
+        break;
+      }
+      const WideNode& n = nodes[ref];
+      if ((any & (any - 1)) == 0) {  // one child
+        const int c = ctz(any);
+        ref = n.child[c], cnt = n.count[c], m = lanes[c];
+        continue;
+      }
+      int order[4], k = 0;
+      float dist[4];
+      for (unsigned a = any; a; a &= a - 1) {
+        const int c = ctz(a);
+        tn[c] = _mm256_blendv_ps(inf, tn[c], lane_mask(lanes[c]));
+        dist[c] = hmin8(tn[c]);
+        order[k++] = c;
+      }
+      if constexpr (!AnyHit) {
+        for (int i = 1; i < k; ++i)  // insertion sort, descending distance
+          for (int j = i; j > 0 && dist[order[j - 1]] < dist[order[j]]; --j) std::swap(order[j - 1], order[j]);
+      }
+      for (int i = 0; i < k - 1; ++i) {
+        const int c = order[i];
+        sp->tn = tn[c], sp->ref = n.child[c], sp->count = n.count[c], sp->mask = lanes[c];
+        ++sp;
+      }
+      const int c = order[k - 1];
+      ref = n.child[c], cnt = n.count[c], m = lanes[c];
+    }
+    if (!miss) {
+      for (std::uint32_t mm = m; mm; mm &= mm - 1) {
+        const int l = ctz(mm);
+        if (intersect_leaf<AnyHit>(d, ref, cnt, p.leaf_state(l), p.tmax[l], p.res[l], p.res[l].tris) && AnyHit)
+          p.done |= 1u << l;
+      }
+      if constexpr (AnyHit) {
+        if ((group & ~p.done) == 0) return;  // every ray of the group is occluded
+      } else {
+        tmax = _mm256_load_ps(p.tmax);
+      }
+    }
+  } while (pop());
+}
+
+// Eight floats of the batch from `first` (fewer at the end: the rest 0).
+inline __m256 load_lanes(const float* a, std::size_t first, int n) {
+  if (n == kLanes) return _mm256_loadu_ps(a + first);
+  alignas(32) float v[kLanes] = {};
+  for (int l = 0; l < n; ++l) v[l] = a[first + l];
+  return _mm256_load_ps(v);
+}
+// Eight doubles of the batch minus `o`, rounded to float (to_frame's operations).
+inline __m256 load_frame(const double* a, std::size_t first, int n, double o) {
+  alignas(32) double v[kLanes] = {};
+  const double* src = a + first;
+  if (n < kLanes) {
+    for (int l = 0; l < n; ++l) v[l] = a[first + l];
+    src = v;
+  }
+  const __m256d od = _mm256_set1_pd(o);
+  const __m128 lo = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(src), od));
+  const __m128 hi = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(src + 4), od));
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+}
+
+template <bool AnyHit>
+void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBatch& hits, std::size_t first, int n,
+                  bool counters, TraceTotals& tot, PacketEntry* stack) {
+  // The single-ray set-up (tracer_kernel.h, setup), eight lanes at once: the same operations.
+  const __m256 ox = load_frame(rays.ox.data(), first, n, s.origin.x());
+  const __m256 oy = load_frame(rays.oy.data(), first, n, s.origin.y());
+  const __m256 oz = load_frame(rays.oz.data(), first, n, s.origin.z());
+  const __m256 dx = load_lanes(rays.dx.data(), first, n), dy = load_lanes(rays.dy.data(), first, n),
+               dz = load_lanes(rays.dz.data(), first, n);
+  const __m256 t0 = load_lanes(rays.tmin.data(), first, n), t1 = load_lanes(rays.tmax.data(), first, n);
+  const __m256 big = _mm256_set1_ps(kBig), zero = _mm256_setzero_ps();
+  auto finite = [&](__m256 x) {  // |x| <= max float (false for inf and NaN)
+    const __m256 abs = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), x);
+    return _mm256_cmp_ps(abs, big, _CMP_LE_OQ);
+  };
+  const __m256 tmax = _mm256_blendv_ps(big, t1, _mm256_cmp_ps(t1, big, _CMP_LT_OQ));  // tmax < big ? tmax : big
+  __m256 ok = _mm256_and_ps(_mm256_and_ps(finite(dx), finite(dy)), finite(dz));
+  ok = _mm256_and_ps(ok, _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(dx, zero, _CMP_NEQ_UQ), _mm256_cmp_ps(dy, zero, _CMP_NEQ_UQ)),
+                                      _mm256_cmp_ps(dz, zero, _CMP_NEQ_UQ)));
+  ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_and_ps(finite(ox), finite(oy)), finite(oz)));
+  ok = _mm256_and_ps(ok, _mm256_and_ps(_mm256_cmp_ps(t0, tmax, _CMP_LT_OQ), _mm256_cmp_ps(t0, zero, _CMP_GE_OQ)));
+  const std::uint32_t valid = static_cast<std::uint32_t>(_mm256_movemask_ps(ok)) & ((1u << n) - 1u);
+  const __m256 one = _mm256_set1_ps(1.0f);
+  const __m256 ix = _mm256_div_ps(one, dx), iy = _mm256_div_ps(one, dy), iz = _mm256_div_ps(one, dz);
+  const std::uint32_t sx = static_cast<std::uint32_t>(_mm256_movemask_ps(ix));  // sign bits: the octant
+  const std::uint32_t sy = static_cast<std::uint32_t>(_mm256_movemask_ps(iy));
+  const std::uint32_t sz = static_cast<std::uint32_t>(_mm256_movemask_ps(iz));
+  const __m256 ns = _mm256_set1_ps(kNearScale), fs = _mm256_set1_ps(kFarScale);
+  PacketGroup g;
+  g.ox = ox, g.oy = oy, g.oz = oz, g.tmin = t0;
+  g.inx = _mm256_mul_ps(ix, ns), g.iny = _mm256_mul_ps(iy, ns), g.inz = _mm256_mul_ps(iz, ns);
+  g.ifx = _mm256_mul_ps(ix, fs), g.ify = _mm256_mul_ps(iy, fs), g.ifz = _mm256_mul_ps(iz, fs);
+
+  Packet p;
+  p.nodes = _mm256_setzero_si256();
+  _mm256_store_ps(p.tmax, _mm256_and_ps(tmax, ok));
+  p.first = first;
+  p.ready = 0;
+  p.rays = &rays;
+  p.origin = s.origin;
+  for (std::uint32_t todo = valid; todo;) {
+    const int rep = ctz(todo);
+    const int ax = sx >> rep & 1, ay = sy >> rep & 1, az = sz >> rep & 1;
+    const std::uint32_t group = todo & (ax ? sx : ~sx) & (ay ? sy : ~sy) & (az ? sz : ~sz);
+    todo &= ~group;
+    g.nx = 4 * (0 + ax), g.ny = 4 * (2 + ay), g.nz = 4 * (4 + az);
+    g.fx = 4 * (1 - ax), g.fy = 4 * (3 - ay), g.fz = 4 * (5 - az);
+    traverse_packet<AnyHit>(f, g, group, p, stack);
+  }
+  alignas(32) std::uint32_t nodes[kLanes];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(nodes), p.nodes);
+  for (int l = 0; l < n; ++l) {
+    const std::size_t i = first + l;
+    Result& res = p.res[l];
+    if (res.tri == kNoTriangle) res.t = 0.0f;
+    hits.t[i] = res.t, hits.u[i] = res.u, hits.v[i] = res.v, hits.triangle[i] = res.tri;
+    if (counters) hits.nodes_visited[i] = nodes[l], hits.triangles_tested[i] = res.tris;
+    tot.rays += 1;
+    tot.hits += res.tri != kNoTriangle;
+    tot.nodes_visited += nodes[l];
+    tot.triangles_tested += res.tris;
+  }
+}
+
+void trace_range_packet_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hits, std::size_t begin,
+                             std::size_t end, HitMode mode, bool counters, TraceTotals& tot) {
+  const Flat f = flat_of(scene);
+  std::vector<PacketEntry> stack(stack_size(scene));
+  for (std::size_t i = begin; i < end; i += kLanes) {
+    const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - i));
+    if (mode == HitMode::Closest)
+      trace_packet<false>(scene, f, rays, hits, i, n, counters, tot, stack.data());
+    else
+      trace_packet<true>(scene, f, rays, hits, i, n, counters, tot, stack.data());
+  }
+}
+
+}  // namespace
+}  // namespace ptc::bvh::detail::PTC_TRACE_NS
+
+namespace ptc::bvh::detail {
+void trace_range_packet_avx2(const TraceData& s, const RayBatch& r, HitBatch& h, std::size_t b, std::size_t e,
+                             HitMode m, bool c, TraceTotals& t) {
+  PTC_TRACE_NS::trace_range_packet_impl(s, r, h, b, e, m, c, t);
+}
+}  // namespace ptc::bvh::detail
