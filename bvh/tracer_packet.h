@@ -135,14 +135,14 @@ void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, P
         continue;
       }
       int order[4], k = 0;
-      float dist[4];
-      for (unsigned a = any; a; a &= a - 1) {
-        const int c = ctz(a);
-        tn[c] = _mm256_blendv_ps(inf, tn[c], lane_mask(lanes[c]));
-        dist[c] = hmin8(tn[c]);
-        order[k++] = c;
-      }
-      if constexpr (!AnyHit) {
+      for (unsigned a = any; a; a &= a - 1) order[k++] = ctz(a);
+      if constexpr (!AnyHit) {  // (any hit pops by lanes alone, in slot order)
+        float dist[4];
+        for (int i = 0; i < k; ++i) {
+          const int c = order[i];
+          tn[c] = _mm256_blendv_ps(inf, tn[c], lane_mask(lanes[c]));
+          dist[c] = hmin8(tn[c]);
+        }
         for (int i = 1; i < k; ++i)  // insertion sort, descending distance
           for (int j = i; j > 0 && dist[order[j - 1]] < dist[order[j]]; --j) std::swap(order[j - 1], order[j]);
       }

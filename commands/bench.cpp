@@ -71,6 +71,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("embree_set_affinity", false);
   manifest.set_parameter("shadows", opt.shadows);
   manifest.set_parameter("packets", opt.config.packets);
+  if (opt.config.packets) manifest.set_parameter("embree_packet_width", opt.config.embree_packet_width);
   if (opt.shadows) manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
   manifest.set_result("triangles", r.triangles);
   manifest.set_result("clusters", r.clusters);

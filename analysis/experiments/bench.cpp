@@ -105,6 +105,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   setup.cluster_leaf = cfg.cluster_leaf;
   setup.cluster_group_size = cfg.cluster_group_size;
   setup.threads = cfg.threads;
+  setup.embree_packet_width = cfg.embree_packet_width;
 
   // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
   // are consecutive; the scene renumbers its sources (or gathers, which it then says).
@@ -149,6 +150,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   // positions (the first configuration of the loop), traced by every configuration.
   res.shadows = cfg.light.has_value();
   res.packets = cfg.packets;
+  res.embree_packet_width = cfg.embree_packet_width;
   std::optional<Mesh> frame_mesh;  // only with a light: the frame's positions on the mesh's triangles
   SurfaceHits surface;
   Box3 frame_bounds;
@@ -294,8 +296,10 @@ std::string bench_text(const PeerBenchResult& r) {
   // The whole frame first: what the method is for.
   s += fmt::format("whole frame = update + build + primary{} (> 1: the row is faster; Embree's frame / the row's){}\n",
                    r.shadows ? " + shadow rays" : "",
-                   r.packets ? "; rays in packets of 8 (ours: AVX2 lanes; Embree: rtcIntersect8/rtcOccluded8, coherent)"
-                             : "");
+                   r.packets ? fmt::format("; rays in packets (ours: 8, one per AVX2 lane; Embree: {0}, "
+                                           "rtcIntersect{0}/rtcOccluded{0}, coherent)",
+                                           r.embree_packet_width)
+                             : std::string());
   s += fmt::format("{:<16} {:>10}", "config", "frame_ms");
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>15}", "vs " + std::string(to_string(e)));
   s += "\n";

@@ -59,6 +59,7 @@ struct PeerBenchConfig {
   /// per AVX2 lane), Embree with rtcIntersect8 / rtcOccluded8 and the coherent flag. Off: single
   /// rays on both sides (rtcIntersect1 / rtcOccluded1).
   bool packets = false;
+  int embree_packet_width = 8;  ///< Embree's packets with `packets`: 4, 8 or 16 rays (rtcIntersect4/8/16)
 };
 
 struct BenchRow {
@@ -106,6 +107,7 @@ struct PeerBenchResult {
   double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once
   bool shadows = false;                ///< a shadow pass was traced (cfg.light)
   bool packets = false;                ///< rays were traced in packets (cfg.packets)
+  int embree_packet_width = 8;         ///< and Embree's packet width
 };
 
 /// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()

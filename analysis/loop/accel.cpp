@@ -57,8 +57,9 @@ class OursAccel final : public Accel {
 
 class EmbreeAccel final : public Accel {
  public:
-  EmbreeAccel(AccelKind kind, const Mesh& mesh, const Vec3& origin, unsigned threads, bvh::StageClock clock)
-      : kind_(kind), origin_(origin), threads_(threads),
+  EmbreeAccel(AccelKind kind, const Mesh& mesh, const Vec3& origin, unsigned threads, bvh::StageClock clock,
+              int packet_width)
+      : kind_(kind), origin_(origin), threads_(threads), packet_width_(packet_width),
         scene_(mesh, origin,
                bvh::EmbreeConfig{kind == AccelKind::EmbreeMedium ? bvh::EmbreeMode::StaticMedium
                                  : kind == AccelKind::EmbreeLow  ? bvh::EmbreeMode::DynamicLow
@@ -70,8 +71,8 @@ class EmbreeAccel final : public Accel {
     return {scene_.last_vertex_ms(), scene_.last_commit_ms(), {}};
   }
   bvh::TraceTotals trace(const bvh::RayBatch& rays, bvh::HitBatch& hits, const bvh::TraceOptions& opt) const override {
-    // Packets: Embree's 8-ray packets with the coherent flag, the peer of our 8-lane packets.
-    return scene_.trace_packets(rays, hits, opt.mode, threads_, opt.packets ? 8 : 1);
+    // Packets: Embree's packets (rtcIntersect4/8/16) with the coherent flag, the peer of ours.
+    return scene_.trace_packets(rays, hits, opt.mode, threads_, opt.packets ? packet_width_ : 1);
   }
   [[nodiscard]] Vec3 origin() const override { return origin_; }
 
@@ -79,6 +80,7 @@ class EmbreeAccel final : public Accel {
   AccelKind kind_;
   Vec3 origin_;
   unsigned threads_;
+  int packet_width_;
   bvh::EmbreeScene scene_;
 };
 
@@ -112,7 +114,7 @@ std::unique_ptr<Accel> make_accel(AccelKind kind, const Mesh& mesh, const AccelS
     }
     case AccelKind::EmbreeMedium:
     case AccelKind::EmbreeLow:
-    case AccelKind::EmbreeRefit: return std::make_unique<EmbreeAccel>(kind, mesh, s.origin, s.threads, s.clock);
+    case AccelKind::EmbreeRefit: return std::make_unique<EmbreeAccel>(kind, mesh, s.origin, s.threads, s.clock, s.embree_packet_width);
   }
   throw std::invalid_argument("unknown acceleration configuration");
 }

@@ -66,6 +66,8 @@ struct AccelSetup {
   /// ours_clusters: two-level build over groups of at most this many clusters (0: plain build).
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
   unsigned threads = 1;                  ///< Embree's device threads (ours: the caller's oneTBB limit)
+  /// Embree's packet width when a trace asks for packets (TraceOptions::packets): 4, 8 or 16.
+  int embree_packet_width = 8;
   bvh::StageClock clock = bvh::StageClock::Wall;   ///< clock of every configuration's stage times
   std::optional<bvh::BuildConfig> triangle_build;  ///< ours_triangles' builder (default: triangle_scene_defaults())
   std::optional<bvh::BuildConfig> cluster_build;   ///< ours_clusters' builder (default: cluster_scene_defaults())
