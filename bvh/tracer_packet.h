@@ -58,21 +58,64 @@ inline float hmin8(__m256 x) {
 }
 
 struct alignas(32) Packet {
-  RayState ray[kLanes];            // the single-ray state of a lane, made when it reaches its first leaf
+  RayState ray[kLanes];            // the single-ray leaf state of a lane, made at its first leaf
   Result res[kLanes];
   alignas(32) float tmax[kLanes];  // per lane: best hit so far (closest) or the ray's end
   std::uint32_t done = 0;          // any hit: lanes with a hit
-  std::uint32_t ready = 0;         // lanes whose `ray` is set up
+  std::uint32_t ready = 0;         // lanes whose `ray` is made
+  bool watertight = false;         // the eight lanes' watertight constants below are made
   __m256i nodes;                   // per lane: wide nodes tested with the lane active
-  const RayBatch* rays = nullptr;
-  std::size_t first = 0;           // the packet's first ray in the batch
-  Vec3 origin;                     // the trace frame
+  __m256 ox, oy, oz, dx, dy, dz;   // the rays in the trace frame
+  alignas(32) float tmin[kLanes];
+  // make_watertight_ray's constants per lane (the same float operations, eight lanes at once)
+  alignas(32) float okx[kLanes], oky[kLanes], okz[kLanes], sx[kLanes], sy[kLanes], sz[kLanes];
+  int kx[kLanes], ky[kLanes], kz[kLanes];
 
+  void make_watertight() {
+    const __m256 sign = _mm256_set1_ps(-0.0f);
+    const __m256 ax = _mm256_andnot_ps(sign, dx), ay = _mm256_andnot_ps(sign, dy), az = _mm256_andnot_ps(sign, dz);
+    // kz: the dominant axis, the first of equals (abs(d[1]) > abs(d[kz]), then abs(d[2]) > abs(d[kz]))
+    const __m256 y_wins = _mm256_cmp_ps(ay, ax, _CMP_GT_OQ);
+    const __m256 z_wins = _mm256_cmp_ps(az, _mm256_blendv_ps(ax, ay, y_wins), _CMP_GT_OQ);
+    const __m256 dkz = _mm256_blendv_ps(_mm256_blendv_ps(dx, dy, y_wins), dz, z_wins);
+    const auto ym = static_cast<std::uint32_t>(_mm256_movemask_ps(y_wins));
+    const auto zm = static_cast<std::uint32_t>(_mm256_movemask_ps(z_wins));
+    const auto neg = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(dkz, _mm256_setzero_ps(), _CMP_LT_OQ)));
+    alignas(32) std::int32_t kxv[kLanes], kyv[kLanes];
+    for (int l = 0; l < kLanes; ++l) {
+      kz[l] = zm >> l & 1 ? 2 : ym >> l & 1 ? 1 : 0;
+      int x = kz[l] == 2 ? 0 : kz[l] + 1;
+      int y = x == 2 ? 0 : x + 1;
+      if (neg >> l & 1) std::swap(x, y);  // keep the winding of the sheared triangle
+      kx[l] = kxv[l] = x, ky[l] = kyv[l] = y;
+    }
+    auto pick = [](const std::int32_t* k, __m256 v0, __m256 v1, __m256 v2) {
+      const __m256i kk = _mm256_load_si256(reinterpret_cast<const __m256i*>(k));
+      const __m256 is1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kk, _mm256_set1_epi32(1)));
+      const __m256 is2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kk, _mm256_set1_epi32(2)));
+      return _mm256_blendv_ps(_mm256_blendv_ps(v0, v1, is1), v2, is2);
+    };
+    _mm256_store_ps(sx, _mm256_div_ps(pick(kxv, dx, dy, dz), dkz));
+    _mm256_store_ps(sy, _mm256_div_ps(pick(kyv, dx, dy, dz), dkz));
+    _mm256_store_ps(sz, _mm256_div_ps(_mm256_set1_ps(1.0f), dkz));
+    _mm256_store_ps(okx, pick(kxv, ox, oy, oz));
+    _mm256_store_ps(oky, pick(kyv, ox, oy, oz));
+    _mm256_store_ps(okz, _mm256_blendv_ps(_mm256_blendv_ps(ox, oy, y_wins), oz, z_wins));
+    watertight = true;
+  }
+
+  // The state intersect_leaf reads (tracer_kernel.h: prepare_watertight's fields and tmin).
   RayState& leaf_state(int l) {
     if (!(ready >> l & 1)) {
-      const std::size_t i = first + l;
-      setup(ray[l], to_frame(Vec3(rays->ox[i], rays->oy[i], rays->oz[i]), origin),
-            {rays->dx[i], rays->dy[i], rays->dz[i]}, rays->tmin[i], rays->tmax[i]);
+      if (!watertight) make_watertight();
+      RayState& r = ray[l];
+      r.kx4 = 4 * kx[l], r.ky4 = 4 * ky[l], r.kz4 = 4 * kz[l];
+      r.okx = _mm_set1_ps(okx[l]), r.oky = _mm_set1_ps(oky[l]), r.okz = _mm_set1_ps(okz[l]);
+      r.sx = _mm_set1_ps(sx[l]), r.sy = _mm_set1_ps(sy[l]), r.sz = _mm_set1_ps(sz[l]);
+      r.okx8 = _mm256_set1_ps(okx[l]), r.oky8 = _mm256_set1_ps(oky[l]), r.okz8 = _mm256_set1_ps(okz[l]);
+      r.sx8 = _mm256_set1_ps(sx[l]), r.sy8 = _mm256_set1_ps(sy[l]), r.sz8 = _mm256_set1_ps(sz[l]);
+      r.tmin = tmin[l];
+      r.watertight_ready = true;
       ready |= 1u << l;
     }
     return ray[l];
@@ -226,10 +269,8 @@ void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBa
   Packet p;
   p.nodes = _mm256_setzero_si256();
   _mm256_store_ps(p.tmax, _mm256_and_ps(tmax, ok));
-  p.first = first;
-  p.ready = 0;
-  p.rays = &rays;
-  p.origin = s.origin;
+  _mm256_store_ps(p.tmin, t0);
+  p.ox = ox, p.oy = oy, p.oz = oz, p.dx = dx, p.dy = dy, p.dz = dz;
   for (std::uint32_t todo = valid; todo;) {
     const int rep = ctz(todo);
     const int ax = sx >> rep & 1, ay = sy >> rep & 1, az = sz >> rep & 1;
