@@ -94,57 +94,50 @@ void EmbreeScene::update(std::span<const Vec3> positions) {
   check(im.device, "commit");
 }
 
-TraceTotals EmbreeScene::trace(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads) const {
-  const Impl& im = *impl_;
-  const std::size_t n = rays.size();
-  hits.resize(n);
-  tbb::enumerable_thread_specific<TraceTotals> totals;
-  auto body = [&](const tbb::blocked_range<std::size_t>& range) {
-    TraceTotals& tot = totals.local();
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      RTCRayHit rh;
-      const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), im.origin);
-      rh.ray.org_x = o[0], rh.ray.org_y = o[1], rh.ray.org_z = o[2];
-      rh.ray.dir_x = rays.dx[i], rh.ray.dir_y = rays.dy[i], rh.ray.dir_z = rays.dz[i];
-      rh.ray.tnear = rays.tmin[i];
-      rh.ray.tfar = rays.tmax[i];
-      rh.ray.time = 0.0f;
-      rh.ray.mask = 0xffffffffu;
-      rh.ray.id = 0;
-      rh.ray.flags = 0;
-      std::uint32_t tri = kNoTriangle;
-      float t = 0, u = 0, v = 0;
-      if (mode == HitMode::Closest) {
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(im.scene, &ctx, &rh);
-        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) tri = rh.hit.primID, t = rh.ray.tfar, u = rh.hit.u, v = rh.hit.v;
-      } else {
-        rtcOccluded1(im.scene, &ctx, &rh.ray);
-        if (rh.ray.tfar < 0.0f) tri = kUnknownTriangle, t = rays.tmax[i];  // occluded (rtcOccluded1 sets tfar = -inf)
-      }
-      hits.t[i] = t, hits.u[i] = u, hits.v[i] = v, hits.triangle[i] = tri;
-      hits.nodes_visited[i] = 0, hits.triangles_tested[i] = 0;
-      tot.rays += 1;
-      tot.hits += tri != kNoTriangle;
-    }
-  };
-  if (threads == 1) {
-    body(tbb::blocked_range<std::size_t>(0, n));
-  } else {
-    tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : static_cast<int>(threads));
-    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), body); });
-  }
-  TraceTotals sum;
-  for (const TraceTotals& t : totals) sum.rays += t.rays, sum.hits += t.hits;
-  return sum;
-}
-
 namespace {
 
-template <int N, typename RayHitN, typename RayN, typename IntersectFn, typename OccludedFn>
+// One ray's answer into the batch (misses: triangle kNoTriangle, t = u = v = 0).
+inline void record(HitBatch& hits, std::size_t i, std::uint32_t tri, float t, float u, float v, TraceTotals& tot) {
+  hits.t[i] = t, hits.u[i] = u, hits.v[i] = v, hits.triangle[i] = tri;
+  hits.nodes_visited[i] = 0, hits.triangles_tested[i] = 0;
+  tot.rays += 1;
+  tot.hits += tri != kNoTriangle;
+}
+
+// Rays [begin, end) with rtcIntersect1 / rtcOccluded1.
+void trace_singles(RTCScene scene, const Vec3& origin, const RayBatch& rays, HitBatch& hits, HitMode mode,
+                   std::size_t begin, std::size_t end, TraceTotals& tot) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  for (std::size_t i = begin; i != end; ++i) {
+    RTCRayHit rh;
+    const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), origin);
+    rh.ray.org_x = o[0], rh.ray.org_y = o[1], rh.ray.org_z = o[2];
+    rh.ray.dir_x = rays.dx[i], rh.ray.dir_y = rays.dy[i], rh.ray.dir_z = rays.dz[i];
+    rh.ray.tnear = rays.tmin[i];
+    rh.ray.tfar = rays.tmax[i];
+    rh.ray.time = 0.0f;
+    rh.ray.mask = 0xffffffffu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    std::uint32_t tri = kNoTriangle;
+    float t = 0, u = 0, v = 0;
+    if (mode == HitMode::Closest) {
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(scene, &ctx, &rh);
+      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) tri = rh.hit.primID, t = rh.ray.tfar, u = rh.hit.u, v = rh.hit.v;
+    } else {
+      rtcOccluded1(scene, &ctx, &rh.ray);
+      if (rh.ray.tfar < 0.0f) tri = kUnknownTriangle, t = rays.tmax[i];  // occluded (rtcOccluded1 sets tfar = -inf)
+    }
+    record(hits, i, tri, t, u, v, tot);
+  }
+}
+
+// Rays [begin, end) in packets of N consecutive rays (rtcIntersectN / rtcOccludedN, coherent);
+// the lanes past `end` of the last packet are invalid.
+template <int N, typename RayHitN, typename IntersectFn, typename OccludedFn>
 void trace_packets_of(RTCScene scene, const Vec3& origin, const RayBatch& rays, HitBatch& hits, HitMode mode,
                       std::size_t begin, std::size_t end, TraceTotals& tot, IntersectFn intersect, OccludedFn occluded) {
   RTCIntersectContext ctx;
@@ -172,7 +165,7 @@ void trace_packets_of(RTCScene scene, const Vec3& origin, const RayBatch& rays, 
     if (mode == HitMode::Closest)
       intersect(valid, scene, &ctx, &rh);
     else
-      occluded(valid, scene, &ctx, static_cast<RayN*>(&rh.ray));
+      occluded(valid, scene, &ctx, &rh.ray);
     for (int l = 0; l < n; ++l) {
       const std::size_t i = first + l;
       std::uint32_t tri = kNoTriangle;
@@ -183,37 +176,38 @@ void trace_packets_of(RTCScene scene, const Vec3& origin, const RayBatch& rays, 
       } else if (rh.ray.tfar[l] < 0.0f) {
         tri = kUnknownTriangle, t = rays.tmax[i];
       }
-      hits.t[i] = t, hits.u[i] = u, hits.v[i] = v, hits.triangle[i] = tri;
-      hits.nodes_visited[i] = 0, hits.triangles_tested[i] = 0;
-      tot.rays += 1;
-      tot.hits += tri != kNoTriangle;
+      record(hits, i, tri, t, u, v, tot);
     }
   }
 }
 
 }  // namespace
 
+TraceTotals EmbreeScene::trace(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads) const {
+  return trace_packets(rays, hits, mode, threads, 1);
+}
+
 TraceTotals EmbreeScene::trace_packets(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads,
                                        int width) const {
-  if (width == 1) return trace(rays, hits, mode, threads);
-  if (width != 4 && width != 8 && width != 16)
+  if (width != 1 && width != 4 && width != 8 && width != 16)
     throw std::invalid_argument("Embree packets: width " + std::to_string(width) + " is not 1, 4, 8 or 16");
   const Impl& im = *impl_;
   const std::size_t n = rays.size();
   hits.resize(n);
   tbb::enumerable_thread_specific<TraceTotals> totals;
+  constexpr std::size_t kTile = 64;  // rays per task, as the tracer
   auto body = [&](const tbb::blocked_range<std::size_t>& range) {
     TraceTotals& tot = totals.local();
-    const std::size_t b = range.begin() * 64, e = std::min(n, range.end() * 64);
-    if (width == 4)
-      trace_packets_of<4, RTCRayHit4, RTCRay4>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect4, rtcOccluded4);
-    else if (width == 8)
-      trace_packets_of<8, RTCRayHit8, RTCRay8>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect8, rtcOccluded8);
-    else
-      trace_packets_of<16, RTCRayHit16, RTCRay16>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect16,
-                                                  rtcOccluded16);
+    const std::size_t b = range.begin() * kTile, e = std::min(n, range.end() * kTile);
+    switch (width) {
+      case 1: trace_singles(im.scene, im.origin, rays, hits, mode, b, e, tot); break;
+      case 4: trace_packets_of<4, RTCRayHit4>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect4, rtcOccluded4); break;
+      case 8: trace_packets_of<8, RTCRayHit8>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect8, rtcOccluded8); break;
+      default:
+        trace_packets_of<16, RTCRayHit16>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect16, rtcOccluded16);
+    }
   };
-  const std::size_t tiles = (n + 63) / 64;  // 64 rays per task, as the tracer
+  const std::size_t tiles = (n + kTile - 1) / kTile;
   if (threads == 1) {
     body(tbb::blocked_range<std::size_t>(0, tiles));
   } else {

@@ -377,8 +377,18 @@ Result trace_single(const TraceData& s, const Flat& f, const Vec3& org, const Ve
     traverse<false>(f, r, res, stack);
   else
     traverse<true>(f, r, res, stack);
-  if (res.tri == kNoTriangle) res.t = 0.0f;
   return res;
+}
+
+// One ray's result into the batch (a miss: t = 0, as u and v) and the totals.
+inline void store_result(HitBatch& hits, std::size_t i, const Result& res, bool counters, TraceTotals& tot) {
+  const bool hit = res.tri != kNoTriangle;
+  hits.t[i] = hit ? res.t : 0.0f, hits.u[i] = res.u, hits.v[i] = res.v, hits.triangle[i] = res.tri;
+  if (counters) hits.nodes_visited[i] = res.nodes, hits.triangles_tested[i] = res.tris;
+  tot.rays += 1;
+  tot.hits += hit;
+  tot.nodes_visited += res.nodes;
+  tot.triangles_tested += res.tris;
 }
 
 
@@ -399,21 +409,17 @@ void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hi
   Stack st;
   StackEntry* stack = st.get(stack_size(scene));
   for (std::size_t i = begin; i < end; ++i) {
-    const Result res = trace_single(scene, f, Vec3(rays.ox[i], rays.oy[i], rays.oz[i]),
-                                    {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tmin[i], rays.tmax[i], mode, stack);
-    hits.t[i] = res.t, hits.u[i] = res.u, hits.v[i] = res.v, hits.triangle[i] = res.tri;
-    if (counters) hits.nodes_visited[i] = res.nodes, hits.triangles_tested[i] = res.tris;
-    tot.rays += 1;
-    tot.hits += res.tri != kNoTriangle;
-    tot.nodes_visited += res.nodes;
-    tot.triangles_tested += res.tris;
+    store_result(hits, i,
+                 trace_single(scene, f, Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), {rays.dx[i], rays.dy[i], rays.dz[i]},
+                              rays.tmin[i], rays.tmax[i], mode, stack),
+                 counters, tot);
   }
 }
 
 Hit trace_one_impl(const TraceData& scene, const Vec3& org, const Vec3f& dir, HitMode mode, float tmin, float tmax) {
   Stack st;
   const Result r = trace_single(scene, flat_of(scene), org, dir, tmin, tmax, mode, st.get(stack_size(scene)));
-  return {r.t, r.u, r.v, r.tri, r.nodes, r.tris};
+  return {r.tri == kNoTriangle ? 0.0f : r.t, r.u, r.v, r.tri, r.nodes, r.tris};
 }
 
 }  // namespace

@@ -1,12 +1,16 @@
 // Internal: the tracer's packet path (TraceOptions::packets, tracer.h), included by
-// tracer_avx2.cpp after tracer_kernel.h (it reuses that kernel's ray set-up and leaf tests), so
+// tracer_avx2.cpp after tracer_kernel.h (it reuses that kernel's leaf tests and result store), so
 // it exists only in the AVX2 variant; elsewhere packets fall back to single rays.
 //
-// Eight consecutive rays of the batch make a packet, one ray per AVX2 lane. The rays are split
+// Eight consecutive rays of the batch make a packet, one ray per AVX2 lane. The single-ray
+// set-up (validity, trace frame, reciprocals) runs for the eight at once, and so do the
+// watertight test's constants (make_watertight_ray), at the packet's first leaf; both with the
+// same float operations as for one ray. The rays are split
 // into groups of one direction octant (so the same near and far box rows); a camera's rows make
 // one group almost always. A group walks the tree once:
 //   - at an inner node, each child's box is tested against every active lane with exactly the
-//     float operations of the single-ray slab test, so a lane enters exactly the boxes its own
+//     float operations of the single-ray slab test (rewritten here for one box broadcast against
+//     eight rays; the single-ray test is four boxes against one ray), so a lane enters exactly the boxes its own
 //     ray would; a child is visited when any lane enters it, with those lanes active; children
 //     are visited nearest first (the smallest entry distance among their lanes), the others
 //     pushed with their lanes and per-lane entry distances;
@@ -57,6 +61,14 @@ inline float hmin8(__m256 x) {
   return _mm_cvtss_f32(m);
 }
 
+// Per lane, v0, v1 or v2 as the lane's axis k[l] is 0, 1 or 2.
+inline __m256 pick_axis(const std::int32_t* k, __m256 v0, __m256 v1, __m256 v2) {
+  const __m256i kk = _mm256_load_si256(reinterpret_cast<const __m256i*>(k));
+  const __m256 is1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kk, _mm256_set1_epi32(1)));
+  const __m256 is2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kk, _mm256_set1_epi32(2)));
+  return _mm256_blendv_ps(_mm256_blendv_ps(v0, v1, is1), v2, is2);
+}
+
 struct alignas(32) Packet {
   RayState ray[kLanes];            // the single-ray leaf state of a lane, made at its first leaf
   Result res[kLanes];
@@ -89,17 +101,11 @@ struct alignas(32) Packet {
       if (neg >> l & 1) std::swap(x, y);  // keep the winding of the sheared triangle
       kx[l] = kxv[l] = x, ky[l] = kyv[l] = y;
     }
-    auto pick = [](const std::int32_t* k, __m256 v0, __m256 v1, __m256 v2) {
-      const __m256i kk = _mm256_load_si256(reinterpret_cast<const __m256i*>(k));
-      const __m256 is1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kk, _mm256_set1_epi32(1)));
-      const __m256 is2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kk, _mm256_set1_epi32(2)));
-      return _mm256_blendv_ps(_mm256_blendv_ps(v0, v1, is1), v2, is2);
-    };
-    _mm256_store_ps(sx, _mm256_div_ps(pick(kxv, dx, dy, dz), dkz));
-    _mm256_store_ps(sy, _mm256_div_ps(pick(kyv, dx, dy, dz), dkz));
+    _mm256_store_ps(sx, _mm256_div_ps(pick_axis(kxv, dx, dy, dz), dkz));
+    _mm256_store_ps(sy, _mm256_div_ps(pick_axis(kyv, dx, dy, dz), dkz));
     _mm256_store_ps(sz, _mm256_div_ps(_mm256_set1_ps(1.0f), dkz));
-    _mm256_store_ps(okx, pick(kxv, ox, oy, oz));
-    _mm256_store_ps(oky, pick(kyv, ox, oy, oz));
+    _mm256_store_ps(okx, pick_axis(kxv, ox, oy, oz));
+    _mm256_store_ps(oky, pick_axis(kyv, ox, oy, oz));
     _mm256_store_ps(okz, _mm256_blendv_ps(_mm256_blendv_ps(ox, oy, y_wins), oz, z_wins));
     watertight = true;
   }
@@ -283,15 +289,8 @@ void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBa
   alignas(32) std::uint32_t nodes[kLanes];
   _mm256_store_si256(reinterpret_cast<__m256i*>(nodes), p.nodes);
   for (int l = 0; l < n; ++l) {
-    const std::size_t i = first + l;
-    Result& res = p.res[l];
-    if (res.tri == kNoTriangle) res.t = 0.0f;
-    hits.t[i] = res.t, hits.u[i] = res.u, hits.v[i] = res.v, hits.triangle[i] = res.tri;
-    if (counters) hits.nodes_visited[i] = nodes[l], hits.triangles_tested[i] = res.tris;
-    tot.rays += 1;
-    tot.hits += res.tri != kNoTriangle;
-    tot.nodes_visited += nodes[l];
-    tot.triangles_tested += res.tris;
+    p.res[l].nodes = nodes[l];
+    store_result(hits, first + l, p.res[l], counters, tot);
   }
 }
 

@@ -56,8 +56,8 @@ struct PeerBenchConfig {
   /// update + build + primary trace).
   std::optional<Vec3> light;
   /// Trace primary and shadow rays in packets: ours with bvh::TraceOptions::packets (8 rays, one
-  /// per AVX2 lane), Embree with rtcIntersect8 / rtcOccluded8 and the coherent flag. Off: single
-  /// rays on both sides (rtcIntersect1 / rtcOccluded1).
+  /// per AVX2 lane), Embree with rtcIntersectN / rtcOccludedN (N = embree_packet_width) and the
+  /// coherent flag. Off: single rays on both sides (rtcIntersect1 / rtcOccluded1).
   bool packets = false;
   int embree_packet_width = 8;  ///< Embree's packets with `packets`: 4, 8 or 16 rays (rtcIntersect4/8/16)
 };

@@ -43,12 +43,14 @@ void register_bench(CLI::App& app, Context& ctx) {
   a->camera.add_to(c, /*with_light=*/true);
   c->add_flag("--no-shadows", [a](std::int64_t) { a->opt.shadows = false; },
               "primary rays only (default: the whole frame includes shadow rays to the light)");
-  c->add_flag("--packets", cfg.packets,
-              "trace primary and shadow rays in packets of 8 (ours: one ray per AVX2 lane; Embree: rtcIntersect8 / "
-              "rtcOccluded8, coherent); default: single rays on both sides");
+  auto* packets = c->add_flag("--packets", cfg.packets,
+                              "trace primary and shadow rays in packets (ours: 8, one ray per AVX2 lane; Embree: "
+                              "rtcIntersectN / rtcOccludedN, coherent, N = --embree-packet-width); default: single "
+                              "rays on both sides");
   c->add_option("--embree-packet-width", cfg.embree_packet_width,
                 "with --packets: Embree's packet width, 4, 8 or 16 (rtcIntersect4/8/16)")
       ->check(CLI::IsMember({4, 8, 16}))
+      ->needs(packets)
       ->capture_default_str();
   auto* cl = c->add_option("--clusters", a->opt.clusters, "use the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--max-count", cfg.max_count,

@@ -163,6 +163,11 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
   ASSERT_EQ(packed.code, 0) << packed.err;
   EXPECT_NE(packed.out.find("rays in packets (ours: 8, one per AVX2 lane; Embree: 8,"), std::string::npos) << packed.out;
   EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "packed" / "manifest.json"))["parameters"]["packets"], true);
+  // Embree's packet width means nothing without packets: a usage error, nothing written.
+  const CmdResult width = ptc({"bench", cube_.string(), "--embree-packet-width", "16", "--out", (dir_ / "width").string()});
+  EXPECT_EQ(width.code, 2) << width.err;
+  EXPECT_NE(width.err.find("--embree-packet-width"), std::string::npos) << width.err;
+  EXPECT_FALSE(fs::exists(dir_ / "width"));
   const auto rows = csv_rows(slurp(dir_ / "packed" / "bench.csv"));
   ASSERT_EQ(rows.size(), with.size());
   for (std::size_t i = 0; i < rows.size(); ++i) {
