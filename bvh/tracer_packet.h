@@ -16,9 +16,10 @@
 //     pushed with their lanes and per-lane entry distances;
 //   - a popped entry keeps the lanes whose entry distance is not beyond their best hit (closest)
 //     or that have no hit yet (any hit);
-//   - a leaf is tested ray by ray, for each active lane, by the single-ray leaf test (eight
-//     triangles per AVX2 test): for leaves of clusters, triangles in parallel cost fewer tests
-//     than rays in parallel unless all eight lanes are active.
+//   - a leaf is tested ray-parallel (each triangle against all lanes of one watertight axis
+//     permutation, intersect_leaf_rays) when at least kRayParallel lanes of one permutation are
+//     in it; the other lanes run the single-ray leaf test (eight triangles per AVX2 test). Both
+//     do the single-ray test's float operations per (ray, triangle).
 // So the node chain of a packet is walked once for up to eight rays, and the closest hit of
 // every ray is its smallest (t, id), bit-identical to the single-ray path (a test checks it on
 // every scene). Any hit reports some hit of the ray (not necessarily the one the single-ray path
@@ -82,6 +83,7 @@ struct alignas(32) Packet {
   // make_watertight_ray's constants per lane (the same float operations, eight lanes at once)
   alignas(32) float okx[kLanes], oky[kLanes], okz[kLanes], sx[kLanes], sy[kLanes], sz[kLanes];
   int kx[kLanes], ky[kLanes], kz[kLanes];
+  std::uint32_t perm[6] = {};      // lanes per watertight axis permutation (kz, sign of d[kz])
 
   void make_watertight() {
     const __m256 sign = _mm256_set1_ps(-0.0f);
@@ -100,6 +102,7 @@ struct alignas(32) Packet {
       int y = x == 2 ? 0 : x + 1;
       if (neg >> l & 1) std::swap(x, y);  // keep the winding of the sheared triangle
       kx[l] = kxv[l] = x, ky[l] = kyv[l] = y;
+      perm[2 * kz[l] + (neg >> l & 1)] |= 1u << l;
     }
     _mm256_store_ps(sx, _mm256_div_ps(pick_axis(kxv, dx, dy, dz), dkz));
     _mm256_store_ps(sy, _mm256_div_ps(pick_axis(kyv, dx, dy, dz), dkz));
@@ -127,6 +130,104 @@ struct alignas(32) Packet {
     return ray[l];
   }
 };
+
+
+// A leaf is tested ray-parallel (one triangle against the lanes) for the lanes of one watertight
+// axis permutation when there are at least this many of them, else ray by ray. Measured on the
+// cloth's and the twist's camera rays (2026-12-03, docs/tracing.md): 4 beat 2, 3, 5, 6 and 8,
+// for leaves of one block (triangle BVH) and of 30-50 triangles (clusters) alike.
+constexpr int kRayParallel = 4;
+
+// One leaf against the lanes `lanes` (all of one axis permutation kx, ky, kz), one triangle
+// against all lanes at a time: the single-ray test's float operations per (ray, triangle), so the
+// same hits. Returns the lanes that found a hit (any hit: they are done).
+template <bool AnyHit>
+std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_t count, Packet& p,
+                                  std::uint32_t lanes, int kx4, int ky4, int kz4) {
+  LeafRange one{ref, (count + 3) / 4, count};
+  const LeafRange* ranges = &one;
+  std::uint32_t nr = 1;
+  if (count & kIndirectLeaf) ranges = d.ranges + ref, nr = count & ~kIndirectLeaf;
+  const __m256 okx = _mm256_load_ps(p.okx), oky = _mm256_load_ps(p.oky), okz = _mm256_load_ps(p.okz);
+  const __m256 sx = _mm256_load_ps(p.sx), sy = _mm256_load_ps(p.sy), sz = _mm256_load_ps(p.sz);
+  const __m256 tmin = _mm256_load_ps(p.tmin);
+  __m256 tmax = _mm256_load_ps(p.tmax);
+  const __m256 zero = _mm256_setzero_ps();
+  std::uint32_t found = 0;
+  for (std::uint32_t i = 0; i < nr; ++i) {
+    const LeafRange lr = ranges[i];
+    for (std::uint32_t mm = lanes; mm; mm &= mm - 1) p.res[ctz(mm)].tris += lr.triangle_count;
+    const std::uint32_t end = lr.first_block + lr.block_count;
+    for (std::uint32_t bk = lr.first_block; bk < end; ++bk) {
+      const float* blk = &d.blocks[bk].v[0][0][0];
+      const std::uint32_t* ids = d.ids + 4 * std::size_t(bk);
+      for (int j = 0; j < 4; ++j) {
+        const std::uint32_t id = ids[j];
+        if (id == kNoTriangle) continue;
+        const float* v = blk + j;
+        const __m256 a_x = _mm256_sub_ps(_mm256_broadcast_ss(v + kx4), okx);
+        const __m256 a_y = _mm256_sub_ps(_mm256_broadcast_ss(v + ky4), oky);
+        const __m256 a_z = _mm256_sub_ps(_mm256_broadcast_ss(v + kz4), okz);
+        const __m256 b_x = _mm256_sub_ps(_mm256_broadcast_ss(v + 12 + kx4), okx);
+        const __m256 b_y = _mm256_sub_ps(_mm256_broadcast_ss(v + 12 + ky4), oky);
+        const __m256 b_z = _mm256_sub_ps(_mm256_broadcast_ss(v + 12 + kz4), okz);
+        const __m256 c_x = _mm256_sub_ps(_mm256_broadcast_ss(v + 24 + kx4), okx);
+        const __m256 c_y = _mm256_sub_ps(_mm256_broadcast_ss(v + 24 + ky4), oky);
+        const __m256 c_z = _mm256_sub_ps(_mm256_broadcast_ss(v + 24 + kz4), okz);
+        const __m256 ax = _mm256_sub_ps(a_x, _mm256_mul_ps(sx, a_z)), ay = _mm256_sub_ps(a_y, _mm256_mul_ps(sy, a_z));
+        const __m256 bx = _mm256_sub_ps(b_x, _mm256_mul_ps(sx, b_z)), by = _mm256_sub_ps(b_y, _mm256_mul_ps(sy, b_z));
+        const __m256 cx = _mm256_sub_ps(c_x, _mm256_mul_ps(sx, c_z)), cy = _mm256_sub_ps(c_y, _mm256_mul_ps(sy, c_z));
+        __m256 U = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+        __m256 V = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+        __m256 W = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+        const int on_edge = _mm256_movemask_ps(_mm256_or_ps(
+            _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)),
+            _mm256_cmp_ps(W, zero, _CMP_EQ_OQ))) & static_cast<int>(lanes);
+        if (on_edge) [[unlikely]] {
+          alignas(32) float fax[8], fay[8], fbx[8], fby[8], fcx[8], fcy[8], fu[8], fv[8], fw[8];
+          _mm256_store_ps(fax, ax), _mm256_store_ps(fay, ay), _mm256_store_ps(fbx, bx), _mm256_store_ps(fby, by);
+          _mm256_store_ps(fcx, cx), _mm256_store_ps(fcy, cy), _mm256_store_ps(fu, U), _mm256_store_ps(fv, V);
+          _mm256_store_ps(fw, W);
+          redo_edges_in_double(on_edge, fax, fay, fbx, fby, fcx, fcy, fu, fv, fw);
+          U = _mm256_load_ps(fu), V = _mm256_load_ps(fv), W = _mm256_load_ps(fw);
+        }
+        const __m256 neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_LT_OQ), _mm256_cmp_ps(V, zero, _CMP_LT_OQ)),
+                                        _mm256_cmp_ps(W, zero, _CMP_LT_OQ));
+        const __m256 pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_GT_OQ), _mm256_cmp_ps(V, zero, _CMP_GT_OQ)),
+                                        _mm256_cmp_ps(W, zero, _CMP_GT_OQ));
+        const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
+        const __m256 det_ok = _mm256_or_ps(_mm256_cmp_ps(det, zero, _CMP_LT_OQ), _mm256_cmp_ps(det, zero, _CMP_GT_OQ));
+        const __m256 valid = _mm256_andnot_ps(_mm256_and_ps(neg, pos), det_ok);
+        if (!(_mm256_movemask_ps(valid) & static_cast<int>(lanes))) continue;
+        const __m256 az = _mm256_mul_ps(sz, a_z), bz = _mm256_mul_ps(sz, b_z), cz = _mm256_mul_ps(sz, c_z);
+        const __m256 T = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(U, az), _mm256_mul_ps(V, bz)), _mm256_mul_ps(W, cz));
+        const __m256 t = _mm256_div_ps(T, det);
+        const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(t, tmin, _CMP_GT_OQ), _mm256_cmp_ps(t, tmax, _CMP_LE_OQ));
+        std::uint32_t m = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(valid, in_range))) & lanes;
+        if (!m) continue;
+        alignas(32) float ft[8], fv[8], fw[8], fd[8];
+        _mm256_store_ps(ft, t), _mm256_store_ps(fv, V), _mm256_store_ps(fw, W), _mm256_store_ps(fd, det);
+        for (; m; m &= m - 1) {
+          const int l = ctz(m);
+          Result& res = p.res[l];
+          if constexpr (!AnyHit) {
+            if (!(ft[l] < p.tmax[l] || (ft[l] == p.tmax[l] && id < res.tri))) continue;
+          }
+          res.t = ft[l], res.tri = id, res.u = fv[l] / fd[l], res.v = fw[l] / fd[l];
+          p.tmax[l] = ft[l];
+          found |= 1u << l;
+        }
+        if constexpr (AnyHit) {
+          lanes &= ~found;
+          if (!lanes) return found;
+        } else {
+          tmax = _mm256_load_ps(p.tmax);
+        }
+      }
+    }
+  }
+  return found;
+}
 
 template <bool AnyHit>
 void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, Packet& p, PacketEntry* stack) {
@@ -204,6 +305,17 @@ void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, P
       ref = n.child[c], cnt = n.count[c], m = lanes[c];
     }
     if (!miss) {
+      if (__builtin_popcount(m) >= kRayParallel) {
+        if (!p.watertight) p.make_watertight();
+        for (int c = 0; c < 6; ++c) {
+          const std::uint32_t cl = m & p.perm[c];
+          if (__builtin_popcount(cl) < kRayParallel) continue;
+          const int l0 = ctz(cl);
+          const std::uint32_t f = intersect_leaf_rays<AnyHit>(d, ref, cnt, p, cl, 4 * p.kx[l0], 4 * p.ky[l0], 4 * p.kz[l0]);
+          if constexpr (AnyHit) p.done |= f;
+          m &= ~cl;
+        }
+      }
       for (std::uint32_t mm = m; mm; mm &= mm - 1) {
         const int l = ctz(mm);
         if (intersect_leaf<AnyHit>(d, ref, cnt, p.leaf_state(l), p.tmax[l], p.res[l], p.res[l].tris) && AnyHit)

@@ -255,10 +255,17 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
   auto add = [&](const Vec3& o, const Vec3f& d, float a = 0.0f, float b = kInf) {
     org.push_back(o), dir.push_back(d), t0.push_back(a), t1.push_back(b);
   };
+  const Vec3 c = m.bounds().center();
+  // Whole packets of one ray exactly through a vertex (ties between the triangles around it),
+  // from outside the mesh: every leaf on the way has all eight lanes (the ray-parallel leaf test).
+  const Vec3 far = c + 3.0 * (m.bounds().hi - c);
+  for (std::size_t v = 0; v < m.vertex_count(); v += 97) {
+    const Vec3 d = m.position(v) - far;
+    for (int k = 0; k < 8; ++k) add(far, {float(d.x()), float(d.y()), float(d.z())});
+  }
   for (std::size_t i = 0; i < cam.size(); ++i)
     add(Vec3(cam.ox[i], cam.oy[i], cam.oz[i]), {cam.dx[i], cam.dy[i], cam.dz[i]});
   for (std::size_t i = 0; i < rnd.org.size(); ++i) add(rnd.org[i], rnd.dir[i]);
-  const Vec3 c = m.bounds().center();
   for (std::size_t v = 0; v < m.vertex_count(); v += 37) {
     const Vec3 d = m.position(v) - c;
     add(c, {float(d.x()), float(d.y()), float(d.z())});
