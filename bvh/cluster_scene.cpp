@@ -370,7 +370,8 @@ void ClusterScene::update(std::span<const Vec3> positions) {
 void ClusterScene::link_top_tree() {
   TraceData& data = f_.data;
   const Bvh& bvh = f_.bvh;
-  const WideBvh top = collapse_to_wide(bvh);
+  collapse_to_wide(bvh, top_);
+  const WideBvh& top = top_;
   const auto S = static_cast<std::uint32_t>(sub_nodes_.size());
   if (data.wide.nodes.size() < S) data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());
   data.wide.nodes.resize(S + top.nodes.size());

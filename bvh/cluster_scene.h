@@ -96,6 +96,7 @@ class ClusterScene {
   AlignedVector<WideNode> sub_nodes_;
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
   std::uint32_t sub_depth_ = 0;
+  WideBvh top_;  // the collapsed top tree of the last update (kept: its nodes' memory is reused)
   std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill
   GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)
   std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): f_.fpos in input order

@@ -36,7 +36,7 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   times.build_ms = clock_ms(cfg_.clock) - t0;
 
   t0 = clock_ms(cfg_.clock);
-  data.wide = collapse_to_wide(f_.bvh);
+  collapse_to_wide(f_.bvh, data.wide);
   times.collapse_ms = clock_ms(cfg_.clock) - t0;
 
   // Leaf data: blocks in the order the leaves appear in the wide nodes; leaves become direct.

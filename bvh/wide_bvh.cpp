@@ -23,7 +23,14 @@ WideNode empty_node() {
 
 WideBvh collapse_to_wide(const Bvh& bvh) {
   WideBvh w;
-  if (bvh.nodes.empty()) return w;
+  collapse_to_wide(bvh, w);
+  return w;
+}
+
+void collapse_to_wide(const Bvh& bvh, WideBvh& w) {
+  w.nodes.clear();
+  w.root = 0, w.bounds = Box3f{}, w.depth = 0, w.leaves = 0;
+  if (bvh.nodes.empty()) return;
   w.bounds = bvh.nodes[0].bounds;
   w.nodes.reserve(bvh.nodes.size() / 2 + 1);
   // Work list of (binary node to expand, wide node to fill, depth); children after parents
@@ -38,7 +45,7 @@ WideBvh collapse_to_wide(const Bvh& bvh) {
     w.nodes[0].child[0] = bvh.nodes[0].index;
     w.nodes[0].count[0] = bvh.nodes[0].count;
     w.depth = 1, w.leaves = 1;
-    return w;
+    return;
   }
   stack.push_back({0, 0, 1});
   while (!stack.empty()) {
@@ -76,7 +83,6 @@ WideBvh collapse_to_wide(const Bvh& bvh) {
       }
     }
   }
-  return w;
 }
 
 std::vector<std::string> validate_wide(const WideBvh& wide, const Bvh& bvh) {

@@ -53,6 +53,9 @@ struct WideBvh {
 /// Collapses a binary tree (validate()d) into a 4-wide one with the same leaves. A binary tree
 /// that is a single leaf becomes one wide node with one leaf child. O(nodes).
 [[nodiscard]] WideBvh collapse_to_wide(const Bvh& bvh);
+/// The same into `out`, whose node array keeps its capacity (a per-frame rebuild then allocates
+/// nothing: fresh pages cost more than the collapse itself).
+void collapse_to_wide(const Bvh& bvh, WideBvh& out);
 
 /// Checks of a collapsed tree against its binary source before rebinding: every binary leaf
 /// appears exactly once as a wide leaf child with the same range and box; every inner child's
