@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "toolkit/clustering/morton_runs.h"
 #include "bvh/sah_builder.h"
 #include "bvh/trace_scene.h"
@@ -44,6 +46,32 @@ TEST(WideBvh, TinyTrees) {
   const WideBvh w3 = collapse_to_wide(b3);
   EXPECT_EQ(w3.nodes.size(), 1u);  // three leaves pulled into the root
   EXPECT_TRUE(validate_wide(w3, b3).empty());
+}
+
+// A per-frame collapse reuses one output: after a large tree, a smaller one, a single leaf and
+// an empty tree, each result equals a fresh collapse field by field (no stale nodes or counts).
+TEST(WideBvh, CollapseIntoAKeptOutputEqualsAFreshOne) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  const auto boxes = triangle_boxes(m.positions(), m.triangles());
+  const auto cent = triangle_centroids(m.positions(), m.triangles());
+  const std::vector<Box3f> few(boxes.begin(), boxes.begin() + 37), one(boxes.begin(), boxes.begin() + 1);
+  std::vector<Bvh> trees{build_binned_sah({boxes, cent, {}}, {}),
+                         build_binned_sah({few, box_centers(few), {}}, {}),
+                         build_binned_sah({one, box_centers(one), {}}, {}), Bvh{},
+                         build_binned_sah({few, box_centers(few), {}}, {})};
+  WideBvh kept;
+  for (std::size_t t = 0; t < trees.size(); ++t) {
+    collapse_to_wide(trees[t], kept);
+    const WideBvh fresh = collapse_to_wide(trees[t]);
+    ASSERT_EQ(kept.nodes.size(), fresh.nodes.size()) << "tree " << t;
+    for (std::size_t i = 0; i < fresh.nodes.size(); ++i)
+      ASSERT_EQ(std::memcmp(&kept.nodes[i], &fresh.nodes[i], sizeof(WideNode)), 0) << "tree " << t << " node " << i;
+    EXPECT_EQ(kept.root, fresh.root);
+    EXPECT_EQ(kept.bounds, fresh.bounds) << "tree " << t;
+    EXPECT_EQ(kept.depth, fresh.depth);
+    EXPECT_EQ(kept.leaves, fresh.leaves);
+    if (!trees[t].nodes.empty()) EXPECT_TRUE(validate_wide(kept, trees[t]).empty());
+  }
 }
 
 TEST(WideBvh, ValidatorsRejectCorruption) {
