@@ -51,7 +51,7 @@
 // (median, and the tree's SAH cost), then the box passes alone, and exit; a target for perf (use
 // with --embree none). It stays outside the frame loop: it times the builder and the box passes
 // in isolation, with no frames, update() or trace, which whole per-frame updates cannot give.
-// --out DIR writes DIR/bvh_bench.csv (schema ptc-bvh-bench/1, columns in visit_row: one row per
+// --out DIR writes DIR/bvh_bench.csv (schema ptc-bvh-bench/2, columns in visit_row: one row per
 // frame and configuration) and DIR/manifest.json (analysis/schema/manifest.h).
 #include <tbb/global_control.h>
 
@@ -245,6 +245,7 @@ void visit_row(const Row& r, Columns& col) {
   col("collapse_ms", s.collapse_ms);
   col("leaf_data_ms", s.leaf_data_ms);
   col("refit_ms", s.refit_ms);
+  col("overlap_ms", s.overlap_ms);
   col("commit_ms", r.embree ? r.times.build_ms : 0.0);
   col("box_build_ms", r.box_build_ms());
   col("total_ms", r.total_ms());
@@ -542,7 +543,7 @@ int main(int argc, char** argv) {
 
   if (!o.out_dir.empty()) {
     try {
-      const Table table = tabulate(Schema{"ptc-bvh-bench", 1}, rows, visit_row);
+      const Table table = tabulate(Schema{"ptc-bvh-bench", 2}, rows, visit_row);
       std::vector<std::string> leaf_names;
       for (ClusterLeaf l : o.leaves) leaf_names.push_back(to_string(l));
       const nlohmann::json params = {

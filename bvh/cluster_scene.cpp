@@ -7,6 +7,10 @@
 #include <string>
 #include <utility>
 
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
+
 #include "bvh/leaf_blocks.h"
 #include "bvh/stage_clock.h"
 #include "bvh/sweep_sah_builder.h"
@@ -344,20 +348,42 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     times.boxes_ms = clock_ms(cfg_.clock) - t0;
   }
 
-  t0 = clock_ms(cfg_.clock);
-  if (cfg_.builder == SahBuilder::Sweep) f_.bvh = build_sweep_sah({f_.boxes, f_.centroids, weights_}, cfg_.build);
-  else build_binned_sah({f_.boxes, f_.centroids, weights_, group_offsets_}, cfg_.build, f_.bvh, f_.ws);
-  times.build_ms = clock_ms(cfg_.clock) - t0;
-
-  t0 = clock_ms(cfg_.clock);
-  link_top_tree();
-  times.collapse_ms = clock_ms(cfg_.clock) - t0;
-
-  t0 = clock_ms(cfg_.clock);
+  // The leaf data depends on the positions only (the blocks' layout is fixed per clustering), so
+  // with more than one thread it is written while the tree is built and linked: the fill's
+  // chunks run on the other threads. Each stage keeps its own time; overlap_ms is what they
+  // shared, so total_ms() stays the update's wall time.
   const std::size_t S = sub_nodes_.size();
-  block_boxes_.resize(S ? data.blocks.size() : 0);
-  fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, S ? block_boxes_.data() : nullptr);  // fenced
-  times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
+  auto leaf_data = [&] {
+    const double tl = clock_ms(cfg_.clock);
+    block_boxes_.resize(S ? data.blocks.size() : 0);
+    fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, S ? block_boxes_.data() : nullptr);  // fenced
+    times.leaf_data_ms = clock_ms(cfg_.clock) - tl;
+  };
+  auto tree = [&] {
+    double tb = clock_ms(cfg_.clock);
+    if (cfg_.builder == SahBuilder::Sweep) f_.bvh = build_sweep_sah({f_.boxes, f_.centroids, weights_}, cfg_.build);
+    else build_binned_sah({f_.boxes, f_.centroids, weights_, group_offsets_}, cfg_.build, f_.bvh, f_.ws);
+    times.build_ms = clock_ms(cfg_.clock) - tb;
+    tb = clock_ms(cfg_.clock);
+    link_top_tree();
+    times.collapse_ms = clock_ms(cfg_.clock) - tb;
+  };
+  times.overlap_ms = 0.0;
+  const bool overlap = cfg_.clock == StageClock::Wall &&
+                       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1 &&
+                       tbb::this_task_arena::max_concurrency() > 1;
+  if (overlap) {
+    t0 = clock_ms(cfg_.clock);
+    tbb::task_group tg;
+    tg.run(leaf_data);
+    tree();
+    tg.wait();
+    const double wall = clock_ms(cfg_.clock) - t0;
+    times.overlap_ms = std::max(0.0, times.build_ms + times.collapse_ms + times.leaf_data_ms - wall);
+  } else {
+    tree();
+    leaf_data();
+  }
 
   t0 = clock_ms(cfg_.clock);
   if (S) refit_subtrees();

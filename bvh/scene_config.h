@@ -20,8 +20,12 @@ struct StageTimes {
   double collapse_ms = 0;   ///< binary -> 4-wide, and (clusters) linking
   double leaf_data_ms = 0;  ///< SoA triangle blocks
   double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees
+  /// Time during which two of the stages above ran at once (a ClusterScene on more than one
+  /// thread writes the leaf data while it builds and links the tree); 0 otherwise.
+  double overlap_ms = 0;
+  /// The update's wall time: the stages, less what they shared.
   [[nodiscard]] double total_ms() const {
-    return vertices_ms + boxes_ms + build_ms + collapse_ms + leaf_data_ms + refit_ms;
+    return vertices_ms + boxes_ms + build_ms + collapse_ms + leaf_data_ms + refit_ms - overlap_ms;
   }
 };
 

@@ -23,7 +23,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   c.threads = resolve_threads(c.threads);
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
-  RunManifest manifest("bench", opt.argv, "ptc-bench/4");
+  RunManifest manifest("bench", opt.argv, "ptc-bench/5");
   const std::string arg = opt.input.string();
   MovingScene ms = open_moving_scene(opt.input, opt.scene_options, opt.deform, opt.frames, opt.extend_frames, manifest);
   Scene& scene = ms.scene;

@@ -89,7 +89,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
 
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
-  RunManifest manifest("trace", opt.argv, "ptc-trace/4");
+  RunManifest manifest("trace", opt.argv, "ptc-trace/5");
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
   const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};

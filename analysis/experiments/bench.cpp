@@ -208,7 +208,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
 }
 
 Table bench_table(const PeerBenchResult& r) {
-  return tabulate(Schema{"ptc-bench", 4}, r.rows, [](const BenchRow& x, Columns& col) {
+  return tabulate(Schema{"ptc-bench", 5}, r.rows, [](const BenchRow& x, Columns& col) {
     col("frame", x.frame);
     col("config", x.config);
     col("update_ms", x.times.update_ms);
@@ -231,6 +231,7 @@ Table bench_table(const PeerBenchResult& r) {
     col("collapse_ms", x.times.stages.collapse_ms);
     col("leaf_data_ms", x.times.stages.leaf_data_ms);
     col("refit_ms", x.times.stages.refit_ms);
+    col("overlap_ms", x.times.stages.overlap_ms);
     col("sah_cost", x.sah_cost);
     col("nodes_per_ray", x.nodes_per_ray);
     col("triangles_per_ray", x.triangles_per_ray);

@@ -3,7 +3,7 @@
 namespace ptc {
 
 Table trace_table(const std::vector<TraceRow>& rows) {
-  return tabulate(Schema{"ptc-trace", 4}, rows, [](const TraceRow& r, Columns& col) {
+  return tabulate(Schema{"ptc-trace", 5}, rows, [](const TraceRow& r, Columns& col) {
     const auto per_ray = [&](std::uint64_t total) { return r.stats.rays ? double(total) / double(r.stats.rays) : 0.0; };
     col("mesh", r.mesh);
     col("bvh", r.bvh);
@@ -33,6 +33,7 @@ Table trace_table(const std::vector<TraceRow>& rows) {
     col("collapse_ms", r.stages.collapse_ms);
     col("leaf_data_ms", r.stages.leaf_data_ms);
     col("refit_ms", r.stages.refit_ms);
+    col("overlap_ms", r.stages.overlap_ms);
     col("static_triangles", r.static_triangles);
     col("moving_triangles", r.moving_triangles);
     col("rss_mb", r.rss_mb);

@@ -1,4 +1,4 @@
-// The rows of `ptc trace`'s trace.csv (schema ptc-trace/4, docs/tracing.md): one row per frame
+// The rows of `ptc trace`'s trace.csv (schema ptc-trace/5, docs/tracing.md): one row per frame
 // and pass (primary, shadow, ao), the frame's BVH figures repeated on each of its rows (tidy:
 // one observation per row). The frame loop and the renderer produce them; commands/trace.cpp
 // writes them.
@@ -32,7 +32,7 @@ struct TraceRow {
   double rss_mb = 0, peak_rss_mb = 0;  ///< resident and peak resident memory after the frame (toolkit/core/memory.h)
 };
 
-/// trace.csv (schema ptc-trace/4).
+/// trace.csv (schema ptc-trace/5).
 [[nodiscard]] Table trace_table(const std::vector<TraceRow>& rows);
 
 }  // namespace ptc

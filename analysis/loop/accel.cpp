@@ -28,7 +28,7 @@ bool is_embree(AccelKind k) {
 }
 
 UpdateTimes update_times_of(const bvh::StageTimes& t) {
-  return {t.vertices_ms + t.boxes_ms, t.build_ms + t.collapse_ms + t.leaf_data_ms + t.refit_ms, t};
+  return {t.vertices_ms + t.boxes_ms, t.build_ms + t.collapse_ms + t.leaf_data_ms + t.refit_ms - t.overlap_ms, t};
 }
 
 UpdateTimes SceneAccel::last_update() const { return update_times_of(tracer_.moving_times()); }

@@ -77,8 +77,8 @@ TEST_F(TraceCli, TraceWritesImagesCsvAndManifest) {
   EXPECT_GT(std::stod(rows[0].at("static_build_ms")), 0.0);
   EXPECT_EQ(std::stod(rows[0].at("update_ms")), 0.0);
   const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
-  EXPECT_EQ(m["schema"], "ptc-trace/4");
-  EXPECT_EQ(m["output_schemas"]["trace.csv"], "ptc-trace/4");
+  EXPECT_EQ(m["schema"], "ptc-trace/5");
+  EXPECT_EQ(m["output_schemas"]["trace.csv"], "ptc-trace/5");
   EXPECT_EQ(m["parameters"]["camera"]["from_scene"], false);
   EXPECT_EQ(m["results"]["rays"], 24 * 16);
   EXPECT_EQ(m["results"]["images"]["cost_nodes.png"]["quantity"], "nodes_visited");

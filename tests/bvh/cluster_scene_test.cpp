@@ -5,6 +5,10 @@
 #include "bvh/cluster_scene.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cstring>
 
 #include <algorithm>
 #include <limits>
@@ -70,6 +74,57 @@ TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
         const std::vector<std::uint32_t> got(d.triangle_ids.begin() + 4 * std::size_t(r.first_block),
                                              d.triangle_ids.begin() + 4 * std::size_t(r.first_block) + members.size());
         EXPECT_EQ(got, expected_cluster_order(m, members)) << "run " << run << " cluster " << c;
+      }
+    }
+  }
+}
+
+// With more than one thread the leaf data is written while the tree is built and linked: the
+// flat data must be the same bytes at 1, 2 and 4 threads, frame after frame, and the stage times
+// must add up to no more than the update's wall time (overlap_ms = what two stages shared; 0 on
+// one thread).
+TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
+  const Mesh m = test::load_mesh("armadillo.off");  // 13k blocks: more than one fill chunk
+  const Clustering runs = ptc::morton_runs(m, 37);
+  const std::vector<Mesh> frames{test::deformed(m, 0.02), test::deformed(m, 0.06)};
+  for (ClusterLeaf leaf : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
+    std::vector<TraceData> want;
+    for (int threads : {1, 2, 4}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+      SceneConfig cfg = cluster_scene_defaults();
+      cfg.cluster_leaf = leaf;
+      ClusterScene s(m, view_of(runs), cfg);
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        const auto t0 = std::chrono::steady_clock::now();
+        s.update(frames[f].positions());
+        const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        const std::string what = std::string(to_string(leaf)) + " threads " + std::to_string(threads) + " frame " +
+                                 std::to_string(f);
+        const StageTimes& t = s.times();
+        EXPECT_GE(t.overlap_ms, 0.0) << what;
+        if (threads == 1) EXPECT_EQ(t.overlap_ms, 0.0) << what;
+        EXPECT_LE(t.overlap_ms, std::min(t.leaf_data_ms, t.build_ms + t.collapse_ms) + 1e-9) << what;
+        EXPECT_LE(t.total_ms(), wall + 1e-6) << what;
+        const TraceData& d = s.data();
+        ASSERT_TRUE(validate(d, m.triangle_count(), false).empty()) << what << test::joined(validate(d, m.triangle_count(), false));
+        if (threads == 1) {
+          want.push_back(d);
+          continue;
+        }
+        const TraceData& w = want[f];
+        ASSERT_EQ(d.wide.nodes.size(), w.wide.nodes.size()) << what;
+        EXPECT_EQ(std::memcmp(d.wide.nodes.data(), w.wide.nodes.data(), w.wide.nodes.size() * sizeof(WideNode)), 0) << what;
+        ASSERT_EQ(d.blocks.size(), w.blocks.size()) << what;
+        EXPECT_EQ(std::memcmp(d.blocks.data(), w.blocks.data(), w.blocks.size() * sizeof(TriBlock)), 0) << what;
+        EXPECT_TRUE(std::equal(d.triangle_ids.begin(), d.triangle_ids.end(), w.triangle_ids.begin(), w.triangle_ids.end()))
+            << what;
+        ASSERT_EQ(d.ranges.size(), w.ranges.size()) << what;
+        for (std::size_t i = 0; i < w.ranges.size(); ++i)
+          ASSERT_TRUE(d.ranges[i].first_block == w.ranges[i].first_block &&
+                      d.ranges[i].block_count == w.ranges[i].block_count &&
+                      d.ranges[i].triangle_count == w.ranges[i].triangle_count)
+              << what << " range " << i;
+        EXPECT_EQ(d.wide.root, w.wide.root) << what;
       }
     }
   }
