@@ -39,7 +39,7 @@ inline constexpr AccelKind kAllAccelKinds[] = {AccelKind::OursTriangles, AccelKi
 /// The last update of a configuration, milliseconds.
 struct UpdateTimes {
   double update_ms = 0;    ///< ours: positions into the trace frame + primitive boxes; Embree: vertex buffer
-  double build_ms = 0;     ///< ours: SAH build + collapse + leaf data (+ block-tree refit); Embree: rtcCommitScene
+  double build_ms = 0;     ///< ours: SAH build + collapse + leaf data (+ block-tree refit) - overlap (wall time); Embree: rtcCommitScene
   bvh::StageTimes stages;  ///< ours: each stage; Embree: zero (its commit is one call)
 };
 
