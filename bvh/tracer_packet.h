@@ -131,11 +131,10 @@ struct alignas(32) Packet {
   }
 };
 
-
 // A leaf is tested ray-parallel (one triangle against the lanes) for the lanes of one watertight
 // axis permutation when there are at least this many of them, else ray by ray. Measured on the
-// cloth's and the twist's camera rays (2026-12-03, docs/tracing.md): 4 beat 2, 3, 5, 6 and 8,
-// for leaves of one block (triangle BVH) and of 30-50 triangles (clusters) alike.
+// cloth's and the twist's camera rays (2026-12-03, docs/tracing.md): 4 beat 2, 3, 5 and 8 on the
+// cluster BVH (leaves of 30-50 triangles), and helps the triangle BVH's one-block leaves too.
 constexpr int kRayParallel = 4;
 
 // One leaf against the lanes `lanes` (all of one axis permutation kx, ky, kz), one triangle
