@@ -1,0 +1,161 @@
+#!/usr/bin/python3
+"""Whole frames against Embree over every built-in animated scene of a given size (issue 14): one
+table of ours_clusters' whole frame (update + build + primary rays + shadow rays) against Embree
+REFIT and LOW, per scene and thread count, from `ptc bench` runs made here.
+
+    /usr/bin/python3 bench/frames/frames.py [--build build] [--threads 1,2] [--frames 0:5]
+        [--min-triangles 500000] [--scenes A,B] [--repeat 1] [--single] [--width 1024 --height 1024]
+        --out DIR
+
+Each (repeat, threads, scene) is one `ptc bench SCENE --threads T --frames A:B [--packets] --out
+DIR/runs/...` (packets on both sides unless --single). Repeats run one after the other over the
+whole list, so a slow phase of the machine touches every scene a little rather than one scene a
+lot; the table gives, per scene and thread count, the median over the repeats of each
+configuration's whole frame (each run's own median over frames 1..B) and the ratios of those
+medians, plus the smallest and largest ratio of single runs. Writes DIR/runs.csv (one row per run
+and configuration), DIR/frames.csv (the table) and DIR/manifest.json; every run's own bench.csv,
+summary.csv and manifest.json stay under DIR/runs/. DIR must not exist (nothing is overwritten).
+Exit 1 when a run fails, 2 for bad usage.
+"""
+import argparse
+import csv
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CONFIGS = ("ours_clusters", "embree_refit", "embree_low")
+
+
+def usage(msg):
+    print(f"frames.py: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def read_summary(path):
+    """config -> row of summary.csv (ptc-bench-summary)."""
+    with open(path, newline="") as f:
+        return {r["config"]: r for r in csv.DictReader(f)}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--threads", default="1,2", help="thread counts, comma-separated")
+    ap.add_argument("--frames", default="0:5", help="ptc bench --frames A:B (frame A is left out of the medians)")
+    ap.add_argument("--min-triangles", type=int, default=500000)
+    ap.add_argument("--scenes", default="", help="only these built-in scenes, comma-separated (default: all of the size)")
+    ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--single", action="store_true", help="single rays on both sides (default: packets on both)")
+    ap.add_argument("--width", type=int, default=1024)
+    ap.add_argument("--height", type=int, default=1024)
+    ap.add_argument("--out", required=True)
+    a = ap.parse_args()
+    try:
+        threads = [int(t) for t in a.threads.split(",")]
+    except ValueError:
+        usage(f"--threads: not a comma-separated list of integers: '{a.threads}'")
+    if not threads or any(t < 1 for t in threads):
+        usage("--threads: every count must be >= 1")
+    if a.repeat < 1:
+        usage("--repeat must be >= 1")
+    if os.path.exists(a.out):
+        usage(f"--out: '{a.out}' exists; give a new directory (nothing is overwritten)")
+    ptc = os.path.join(a.build, "bin", "ptc")
+    if not os.access(ptc, os.X_OK):
+        usage(f"--build: no ptc at '{ptc}'")
+    data = os.path.join(a.build, "data")
+
+    listed = subprocess.run([ptc, "scenes", "--json", "--data-dir", data], capture_output=True, text=True)
+    if listed.returncode != 0:
+        print(f"frames.py: ptc scenes failed: {listed.stderr.strip()}", file=sys.stderr)
+        sys.exit(1)
+    known = {s["name"]: s for s in json.loads(listed.stdout)["scenes"]}
+    if a.scenes:
+        scenes = a.scenes.split(",")
+        for s in scenes:
+            if s not in known:
+                usage(f"--scenes: '{s}' is not a built-in scene (ptc scenes)")
+    else:
+        scenes = [n for n, s in known.items()
+                  if s["available"] and s["animated_parts"] > 0 and s["triangles"] >= a.min_triangles]
+    if not scenes:
+        usage(f"no built-in animated scene has {a.min_triangles} triangles or more")
+
+    tmp = a.out + ".tmp"
+    shutil.rmtree(tmp, ignore_errors=True)
+    os.makedirs(os.path.join(tmp, "runs"))
+    commands, rows = [], []
+    for rep in range(a.repeat):
+        for t in threads:
+            for s in scenes:
+                d = os.path.join(tmp, "runs", f"r{rep}_t{t}_{s}")
+                cmd = [ptc, "bench", s, "--data-dir", data, "--threads", str(t), "--frames", a.frames,
+                       "--width", str(a.width), "--height", str(a.height), "--out", d]
+                if not a.single:
+                    cmd.append("--packets")
+                commands.append(cmd)
+                print(f"== {' '.join(cmd)}", file=sys.stderr, flush=True)
+                run = subprocess.run(cmd, capture_output=True, text=True)
+                if run.returncode != 0:
+                    print(f"frames.py: ptc bench {s} --threads {t} failed (exit {run.returncode}): "
+                          f"{run.stderr.strip().splitlines()[-1] if run.stderr.strip() else ''}; outputs so far in {tmp}",
+                          file=sys.stderr)
+                    sys.exit(1)
+                summary = read_summary(os.path.join(d, "summary.csv"))
+                for c in CONFIGS:
+                    r = summary[c]
+                    rows.append({"repeat": rep, "threads": t, "scene": s, "config": c,
+                                 "whole_frame_ms": float(r["whole_frame_ms"]),
+                                 "update_build_ms": float(r["update_build_ms"]), "trace_ms": float(r["trace_ms"]),
+                                 "shadow_ms": float(r["shadow_ms"]), "mismatches": int(r["mismatches"]),
+                                 "shadow_mismatches": int(r["shadow_mismatches"])})
+    with open(os.path.join(tmp, "runs.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+
+    table = []
+    for t in threads:
+        for s in scenes:
+            by = {c: [r for r in rows if r["threads"] == t and r["scene"] == s and r["config"] == c] for c in CONFIGS}
+            med = {c: statistics.median(r["whole_frame_ms"] for r in by[c]) for c in CONFIGS}
+            per_run = {p: [by[p][i]["whole_frame_ms"] / by["ours_clusters"][i]["whole_frame_ms"] for i in range(a.repeat)]
+                       for p in ("embree_refit", "embree_low")}
+            table.append({
+                "threads": t, "scene": s, "triangles": known[s]["triangles"], "repeats": a.repeat,
+                "ours_ms": med["ours_clusters"], "refit_ms": med["embree_refit"], "low_ms": med["embree_low"],
+                "ours_update_build_ms": statistics.median(r["update_build_ms"] for r in by["ours_clusters"]),
+                "vs_refit": med["embree_refit"] / med["ours_clusters"], "vs_low": med["embree_low"] / med["ours_clusters"],
+                "vs_refit_min": min(per_run["embree_refit"]), "vs_refit_max": max(per_run["embree_refit"]),
+                "vs_low_min": min(per_run["embree_low"]), "vs_low_max": max(per_run["embree_low"]),
+                "ours_mismatches": sum(r["mismatches"] + r["shadow_mismatches"] for r in by["ours_clusters"]),
+            })
+    with open(os.path.join(tmp, "frames.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(table[0].keys()), lineterminator="\n")
+        w.writeheader()
+        w.writerows(table)
+    git = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    json.dump({"schema": "ptc-frames/1", "argv": sys.argv, "commands": commands, "ptc_commit": git,
+               "parameters": {"threads": threads, "frames": a.frames, "scenes": scenes, "repeat": a.repeat,
+                              "packets": not a.single, "width": a.width, "height": a.height},
+               "outputs": ["runs.csv", "frames.csv"]},
+              open(os.path.join(tmp, "manifest.json"), "w"), indent=2)
+    os.rename(tmp, a.out)
+
+    print(f"ours_clusters' whole frame against Embree's, medians of {a.repeat} run(s) "
+          f"({'packets' if not a.single else 'single rays'} on both sides; ratio > 1: ours is faster)")
+    print("| T | scene | ours / REFIT / LOW ms | vs REFIT (runs) | vs LOW (runs) | ours mismatches |")
+    print("|---|---|---|---|---|---|")
+    for r in table:
+        print(f"| {r['threads']} | {r['scene']} | {r['ours_ms']:.1f} / {r['refit_ms']:.1f} / {r['low_ms']:.1f} | "
+              f"{r['vs_refit']:.2f}x ({r['vs_refit_min']:.2f}-{r['vs_refit_max']:.2f}) | "
+              f"{r['vs_low']:.2f}x ({r['vs_low_min']:.2f}-{r['vs_low_max']:.2f}) | {r['ours_mismatches']} |")
+    print(f"wrote {a.out}/frames.csv, {a.out}/runs.csv, {a.out}/manifest.json")
+
+
+if __name__ == "__main__":
+    main()

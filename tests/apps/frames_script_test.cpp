@@ -1,0 +1,113 @@
+// bench/frames/frames.py (the whole-frame table over the built-in scenes) as a user runs it: the
+// table's medians and ratios recomputed here from the per-run rows and from every run's own
+// summary.csv, and its usage errors.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "cli_harness.h"
+#include "common/csv_rows.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using ptc::test::csv_rows;
+using ptc::test::lines;
+using ptc::test::quote;
+using ptc::test::slurp;
+
+class FramesScript : public ptc::test::CliTest {
+ protected:
+  ptc::test::RunResult run(const std::vector<std::string>& args) const {
+    const fs::path build = fs::path(PTC_BIN).parent_path().parent_path();
+    std::string cmd = "/usr/bin/python3 " + quote(std::string(PTC_SOURCE_DIR) + "/bench/frames/frames.py") + " --build " +
+                      quote(build.string());
+    for (const auto& a : args) cmd.append(" ").append(quote(a));
+    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
+    cmd.append(" >").append(quote(o.string())).append(" 2>").append(quote(e.string()));
+    const int status = std::system(cmd.c_str());
+    ptc::test::RunResult r;
+    if (WIFEXITED(status)) r.code = WEXITSTATUS(status);
+    r.out = slurp(o);
+    r.err = slurp(e);
+    return r;
+  }
+  static double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  }
+};
+
+TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
+  const fs::path out = dir_ / "out";
+  const auto r = run({"--threads", "1,2", "--frames", "0:1", "--width", "16", "--height", "12", "--repeat", "3", "--scenes",
+                      "armadillo-twist,cloth-sphere-32", "--out", out.string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto runs = csv_rows(slurp(out / "runs.csv"));
+  const auto table = csv_rows(slurp(out / "frames.csv"));
+  ASSERT_EQ(runs.size(), 3u * 2u * 2u * 3u);  // repeats x threads x scenes x configurations
+  ASSERT_EQ(table.size(), 2u * 2u);
+  // Every run row is its run's own summary.csv.
+  for (const auto& row : runs) {
+    const fs::path summary = out / "runs" / ("r" + row.at("repeat") + "_t" + row.at("threads") + "_" + row.at("scene")) /
+                             "summary.csv";
+    bool found = false;
+    for (const auto& s : csv_rows(slurp(summary)))
+      if (s.at("config") == row.at("config")) {
+        found = true;
+        EXPECT_DOUBLE_EQ(std::stod(s.at("whole_frame_ms")), std::stod(row.at("whole_frame_ms"))) << summary;
+        EXPECT_DOUBLE_EQ(std::stod(s.at("update_build_ms")), std::stod(row.at("update_build_ms"))) << summary;
+      }
+    EXPECT_TRUE(found) << summary << " " << row.at("config");
+  }
+  for (const auto& t : table) {
+    std::map<std::string, std::vector<double>> whole;  // config -> per repeat, in repeat order
+    for (int rep = 0; rep < 3; ++rep)
+      for (const auto& row : runs)
+        if (row.at("threads") == t.at("threads") && row.at("scene") == t.at("scene") && row.at("repeat") == std::to_string(rep))
+          whole[row.at("config")].push_back(std::stod(row.at("whole_frame_ms")));
+    ASSERT_EQ(whole["ours_clusters"].size(), 3u);
+    const double ours = median(whole["ours_clusters"]), refit = median(whole["embree_refit"]), low = median(whole["embree_low"]);
+    const std::string what = t.at("scene") + " T=" + t.at("threads");
+    EXPECT_NEAR(std::stod(t.at("ours_ms")), ours, 1e-9 * ours) << what;
+    EXPECT_NEAR(std::stod(t.at("vs_refit")), refit / ours, 1e-9) << what;
+    EXPECT_NEAR(std::stod(t.at("vs_low")), low / ours, 1e-9) << what;
+    double lo = 1e300, hi = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double q = whole["embree_refit"][i] / whole["ours_clusters"][i];
+      lo = std::min(lo, q), hi = std::max(hi, q);
+    }
+    EXPECT_NEAR(std::stod(t.at("vs_refit_min")), lo, 1e-9) << what;
+    EXPECT_NEAR(std::stod(t.at("vs_refit_max")), hi, 1e-9) << what;
+    EXPECT_EQ(t.at("ours_mismatches"), "0") << what;
+  }
+  EXPECT_NE(r.out.find("| 2 | cloth-sphere-32 |"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(out / "manifest.json"));
+  EXPECT_FALSE(fs::exists(dir_ / "out.tmp"));
+
+  // Usage errors: one line, exit 2, nothing written; an existing output is never touched.
+  const auto again = run({"--scenes", "armadillo-twist", "--out", out.string()});
+  EXPECT_EQ(again.code, 2);
+  EXPECT_EQ(lines(again.err), 1u) << again.err;
+  EXPECT_TRUE(fs::exists(out / "runs.csv"));
+  for (const std::vector<std::string>& bad : {std::vector<std::string>{"--threads", "0"}, {"--threads", "a,b"},
+                                              {"--repeat", "0"}, {"--scenes", "no-such-scene"}}) {
+    std::vector<std::string> args = bad;
+    args.insert(args.end(), {"--out", (dir_ / "new").string()});
+    const auto e = run(args);
+    EXPECT_EQ(e.code, 2) << bad[0] << ": " << e.err;
+    EXPECT_EQ(lines(e.err), 1u) << e.err;
+    EXPECT_FALSE(fs::exists(dir_ / "new"));
+  }
+}
+
+}  // namespace
