@@ -69,13 +69,18 @@ def main():
         usage(f"--build: no ptc at '{ptc}'")
     data = os.path.join(a.build, "data")
 
-    listed = subprocess.run([ptc, "scenes", "--json", "--data-dir", data], capture_output=True, text=True)
+    # Only the scenes asked for are listed (building the large ones takes seconds each).
+    names = a.scenes.split(",") if a.scenes else []
+    listed = subprocess.run([ptc, "scenes", "--json", "--data-dir", data, *names], capture_output=True, text=True)
     if listed.returncode != 0:
+        if names:
+            why = listed.stderr.strip().splitlines()[-1] if listed.stderr.strip() else "refused by ptc scenes"
+            usage(f"--scenes: {why.removeprefix('ptc: error: ')}")
         print(f"frames.py: ptc scenes failed: {listed.stderr.strip()}", file=sys.stderr)
         sys.exit(1)
     known = {s["name"]: s for s in json.loads(listed.stdout)["scenes"]}
     if a.scenes:
-        scenes = a.scenes.split(",")
+        scenes = names
         for s in scenes:
             if s not in known:
                 usage(f"--scenes: '{s}' is not a built-in scene (ptc scenes)")
