@@ -71,7 +71,7 @@ struct TraceOptions {
   unsigned threads = 0;   ///< worker threads; 0 = all cores (oneTBB's default)
   bool counters = true;   ///< fill nodes_visited / triangles_tested (false: those arrays are emptied)
   TraceIsa isa = TraceIsa::Auto;  ///< traversal variant (results do not depend on it)
-  /// Packets of eight consecutive rays of the batch, one ray per AVX2 lane (tracer_packet_avx2.cpp),
+  /// Packets of eight consecutive rays of the batch, one ray per AVX2 lane (bvh/tracer_packet.h),
   /// for coherent rays (a camera's rows, shadow rays from neighbouring pixels). Closest hits are
   /// bit-identical to single rays; an any-hit query reports some hit of each occluded ray (the
   /// same rays are occluded). Needs AVX2 (isa Auto or Avx2 on a CPU with it); else single rays.

@@ -25,7 +25,7 @@ Hit trace_one_sse2(const TraceData&, const Vec3&, const Vec3f&, HitMode, float, 
 void trace_range_avx2(const TraceData&, const RayBatch&, HitBatch&, std::size_t, std::size_t, HitMode, bool,
                       TraceTotals&);
 Hit trace_one_avx2(const TraceData&, const Vec3&, const Vec3f&, HitMode, float, float);
-/// The packet path (tracer_packet_avx2.cpp): eight consecutive rays per packet; AVX2 only.
+/// The packet path (tracer_packet.h, compiled into tracer_avx2.cpp): eight consecutive rays per packet; AVX2 only.
 void trace_range_packet_avx2(const TraceData&, const RayBatch&, HitBatch&, std::size_t, std::size_t, HitMode, bool,
                              TraceTotals&);
 

@@ -173,36 +173,30 @@ inline bool intersect_block(const TriBlock& blk, const std::uint32_t* ids, const
 }
 
 #if defined(PTC_TRACE_AVX2)
-// Two consecutive blocks (8 triangles, ids[0..8)) in one 256-bit test: lane l < 4 is block 0's
-// lane l, lane l >= 4 block 1's lane l - 4. The same float operations per lane as
-// intersect_block, and lanes are taken in the same order (block 0 first), so hits and any-hit
-// choices are identical to two calls of intersect_block.
-template <bool AnyHit>
-inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
-                                 Result& res) {
-  const float* v0 = &blk[0].v[0][0][0];
-  const float* v1 = &blk[1].v[0][0][0];
-  auto ld = [&](int off) {
-    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(v0 + off)), _mm_load_ps(v1 + off), 1);
-  };
-  const __m256 a_x = _mm256_sub_ps(ld(r.kx4), r.okx8);
-  const __m256 a_y = _mm256_sub_ps(ld(r.ky4), r.oky8);
-  const __m256 a_z = _mm256_sub_ps(ld(r.kz4), r.okz8);
-  const __m256 b_x = _mm256_sub_ps(ld(12 + r.kx4), r.okx8);
-  const __m256 b_y = _mm256_sub_ps(ld(12 + r.ky4), r.oky8);
-  const __m256 b_z = _mm256_sub_ps(ld(12 + r.kz4), r.okz8);
-  const __m256 c_x = _mm256_sub_ps(ld(24 + r.kx4), r.okx8);
-  const __m256 c_y = _mm256_sub_ps(ld(24 + r.ky4), r.oky8);
-  const __m256 c_z = _mm256_sub_ps(ld(24 + r.kz4), r.okz8);
-  const __m256 ax = _mm256_sub_ps(a_x, _mm256_mul_ps(r.sx8, a_z)), ay = _mm256_sub_ps(a_y, _mm256_mul_ps(r.sy8, a_z));
-  const __m256 bx = _mm256_sub_ps(b_x, _mm256_mul_ps(r.sx8, b_z)), by = _mm256_sub_ps(b_y, _mm256_mul_ps(r.sy8, b_z));
-  const __m256 cx = _mm256_sub_ps(c_x, _mm256_mul_ps(r.sx8, c_z)), cy = _mm256_sub_ps(c_y, _mm256_mul_ps(r.sy8, c_z));
+// The watertight test (intersect_triangle's float operations, in its order) on eight (ray,
+// triangle) pairs at once, from the corners relative to the ray origin in the ray's permuted
+// axes (a_x .. c_z) and its shear constants. Eight triangles against one ray (a block pair) and
+// one triangle against eight rays (the packet path's ray-parallel leaves) both call it, so both
+// give the single-ray bits. `live`: the lanes that are real pairs (only they get their zero edge
+// functions redone in double). Returns the lanes with a hit inside the triangle (valid), and for
+// those t = T / det with V, W and det for the barycentrics; t is computed only when some live
+// lane is valid.
+struct Pairs8 {
+  __m256 valid, t, V, W, det;
+  int valid_bits;  // movemask(valid) & live
+};
+inline Pairs8 watertight8(__m256 a_x, __m256 a_y, __m256 a_z, __m256 b_x, __m256 b_y, __m256 b_z, __m256 c_x, __m256 c_y,
+                          __m256 c_z, __m256 sx, __m256 sy, __m256 sz, int live) {
+  const __m256 ax = _mm256_sub_ps(a_x, _mm256_mul_ps(sx, a_z)), ay = _mm256_sub_ps(a_y, _mm256_mul_ps(sy, a_z));
+  const __m256 bx = _mm256_sub_ps(b_x, _mm256_mul_ps(sx, b_z)), by = _mm256_sub_ps(b_y, _mm256_mul_ps(sy, b_z));
+  const __m256 cx = _mm256_sub_ps(c_x, _mm256_mul_ps(sx, c_z)), cy = _mm256_sub_ps(c_y, _mm256_mul_ps(sy, c_z));
   __m256 U = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
   __m256 V = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
   __m256 W = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
   const __m256 zero = _mm256_setzero_ps();
   const int on_edge = _mm256_movemask_ps(_mm256_or_ps(
-      _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)), _mm256_cmp_ps(W, zero, _CMP_EQ_OQ)));
+      _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)), _mm256_cmp_ps(W, zero, _CMP_EQ_OQ))) &
+      live;
   if (on_edge) [[unlikely]] {
     alignas(32) float fax[8], fay[8], fbx[8], fby[8], fcx[8], fcy[8], fu[8], fv[8], fw[8];
     _mm256_store_ps(fax, ax), _mm256_store_ps(fay, ay), _mm256_store_ps(fbx, bx), _mm256_store_ps(fby, by);
@@ -215,19 +209,43 @@ inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, 
                                   _mm256_cmp_ps(W, zero, _CMP_LT_OQ));
   const __m256 pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_GT_OQ), _mm256_cmp_ps(V, zero, _CMP_GT_OQ)),
                                   _mm256_cmp_ps(W, zero, _CMP_GT_OQ));
-  const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
-  const __m256 det_ok = _mm256_or_ps(_mm256_cmp_ps(det, zero, _CMP_LT_OQ), _mm256_cmp_ps(det, zero, _CMP_GT_OQ));
-  const __m256 valid = _mm256_andnot_ps(_mm256_and_ps(neg, pos), det_ok);
-  if (!_mm256_movemask_ps(valid)) return false;
-  const __m256 az = _mm256_mul_ps(r.sz8, a_z), bz = _mm256_mul_ps(r.sz8, b_z), cz = _mm256_mul_ps(r.sz8, c_z);
+  Pairs8 p;
+  p.det = _mm256_add_ps(_mm256_add_ps(U, V), W);
+  const __m256 det_ok = _mm256_or_ps(_mm256_cmp_ps(p.det, zero, _CMP_LT_OQ), _mm256_cmp_ps(p.det, zero, _CMP_GT_OQ));
+  p.valid = _mm256_andnot_ps(_mm256_and_ps(neg, pos), det_ok);
+  p.valid_bits = _mm256_movemask_ps(p.valid) & live;
+  p.V = V, p.W = W;
+  if (!p.valid_bits) return p;
+  const __m256 az = _mm256_mul_ps(sz, a_z), bz = _mm256_mul_ps(sz, b_z), cz = _mm256_mul_ps(sz, c_z);
   const __m256 T = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(U, az), _mm256_mul_ps(V, bz)), _mm256_mul_ps(W, cz));
-  const __m256 t = _mm256_div_ps(T, det);
-  const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(t, _mm256_set1_ps(r.tmin), _CMP_GT_OQ),
-                                        _mm256_cmp_ps(t, _mm256_set1_ps(tmax), _CMP_LE_OQ));
-  int m = _mm256_movemask_ps(_mm256_and_ps(valid, in_range));
+  p.t = _mm256_div_ps(T, p.det);
+  return p;
+}
+
+// Two consecutive blocks (8 triangles, ids[0..8)) in one 256-bit test: lane l < 4 is block 0's
+// lane l, lane l >= 4 block 1's lane l - 4. The same float operations per lane as
+// intersect_block, and lanes are taken in the same order (block 0 first), so hits and any-hit
+// choices are identical to two calls of intersect_block.
+template <bool AnyHit>
+inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
+                                 Result& res) {
+  const float* v0 = &blk[0].v[0][0][0];
+  const float* v1 = &blk[1].v[0][0][0];
+  auto ld = [&](int off) {
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(v0 + off)), _mm_load_ps(v1 + off), 1);
+  };
+  const Pairs8 h = watertight8(
+      _mm256_sub_ps(ld(r.kx4), r.okx8), _mm256_sub_ps(ld(r.ky4), r.oky8), _mm256_sub_ps(ld(r.kz4), r.okz8),
+      _mm256_sub_ps(ld(12 + r.kx4), r.okx8), _mm256_sub_ps(ld(12 + r.ky4), r.oky8), _mm256_sub_ps(ld(12 + r.kz4), r.okz8),
+      _mm256_sub_ps(ld(24 + r.kx4), r.okx8), _mm256_sub_ps(ld(24 + r.ky4), r.oky8), _mm256_sub_ps(ld(24 + r.kz4), r.okz8),
+      r.sx8, r.sy8, r.sz8, 0xff);
+  if (!h.valid_bits) return false;
+  const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, _mm256_set1_ps(r.tmin), _CMP_GT_OQ),
+                                        _mm256_cmp_ps(h.t, _mm256_set1_ps(tmax), _CMP_LE_OQ));
+  int m = _mm256_movemask_ps(_mm256_and_ps(h.valid, in_range));
   if (!m) return false;
   alignas(32) float ft[8], fv[8], fw[8], fd[8];
-  _mm256_store_ps(ft, t), _mm256_store_ps(fv, V), _mm256_store_ps(fw, W), _mm256_store_ps(fd, det);
+  _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
   return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
 }
 #endif
@@ -390,7 +408,6 @@ inline void store_result(HitBatch& hits, std::size_t i, const Result& res, bool 
   tot.nodes_visited += res.nodes;
   tot.triangles_tested += res.tris;
 }
-
 
 // A stack on the C++ stack for the usual depths, on the heap for degenerate trees.
 struct Stack {

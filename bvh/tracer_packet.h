@@ -151,7 +151,6 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
   const __m256 sx = _mm256_load_ps(p.sx), sy = _mm256_load_ps(p.sy), sz = _mm256_load_ps(p.sz);
   const __m256 tmin = _mm256_load_ps(p.tmin);
   __m256 tmax = _mm256_load_ps(p.tmax);
-  const __m256 zero = _mm256_setzero_ps();
   std::uint32_t found = 0;
   for (std::uint32_t i = 0; i < nr; ++i) {
     const LeafRange lr = ranges[i];
@@ -164,48 +163,16 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
         const std::uint32_t id = ids[j];
         if (id == kNoTriangle) continue;
         const float* v = blk + j;
-        const __m256 a_x = _mm256_sub_ps(_mm256_broadcast_ss(v + kx4), okx);
-        const __m256 a_y = _mm256_sub_ps(_mm256_broadcast_ss(v + ky4), oky);
-        const __m256 a_z = _mm256_sub_ps(_mm256_broadcast_ss(v + kz4), okz);
-        const __m256 b_x = _mm256_sub_ps(_mm256_broadcast_ss(v + 12 + kx4), okx);
-        const __m256 b_y = _mm256_sub_ps(_mm256_broadcast_ss(v + 12 + ky4), oky);
-        const __m256 b_z = _mm256_sub_ps(_mm256_broadcast_ss(v + 12 + kz4), okz);
-        const __m256 c_x = _mm256_sub_ps(_mm256_broadcast_ss(v + 24 + kx4), okx);
-        const __m256 c_y = _mm256_sub_ps(_mm256_broadcast_ss(v + 24 + ky4), oky);
-        const __m256 c_z = _mm256_sub_ps(_mm256_broadcast_ss(v + 24 + kz4), okz);
-        const __m256 ax = _mm256_sub_ps(a_x, _mm256_mul_ps(sx, a_z)), ay = _mm256_sub_ps(a_y, _mm256_mul_ps(sy, a_z));
-        const __m256 bx = _mm256_sub_ps(b_x, _mm256_mul_ps(sx, b_z)), by = _mm256_sub_ps(b_y, _mm256_mul_ps(sy, b_z));
-        const __m256 cx = _mm256_sub_ps(c_x, _mm256_mul_ps(sx, c_z)), cy = _mm256_sub_ps(c_y, _mm256_mul_ps(sy, c_z));
-        __m256 U = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
-        __m256 V = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
-        __m256 W = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
-        const int on_edge = _mm256_movemask_ps(_mm256_or_ps(
-            _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)),
-            _mm256_cmp_ps(W, zero, _CMP_EQ_OQ))) & static_cast<int>(lanes);
-        if (on_edge) [[unlikely]] {
-          alignas(32) float fax[8], fay[8], fbx[8], fby[8], fcx[8], fcy[8], fu[8], fv[8], fw[8];
-          _mm256_store_ps(fax, ax), _mm256_store_ps(fay, ay), _mm256_store_ps(fbx, bx), _mm256_store_ps(fby, by);
-          _mm256_store_ps(fcx, cx), _mm256_store_ps(fcy, cy), _mm256_store_ps(fu, U), _mm256_store_ps(fv, V);
-          _mm256_store_ps(fw, W);
-          redo_edges_in_double(on_edge, fax, fay, fbx, fby, fcx, fcy, fu, fv, fw);
-          U = _mm256_load_ps(fu), V = _mm256_load_ps(fv), W = _mm256_load_ps(fw);
-        }
-        const __m256 neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_LT_OQ), _mm256_cmp_ps(V, zero, _CMP_LT_OQ)),
-                                        _mm256_cmp_ps(W, zero, _CMP_LT_OQ));
-        const __m256 pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_GT_OQ), _mm256_cmp_ps(V, zero, _CMP_GT_OQ)),
-                                        _mm256_cmp_ps(W, zero, _CMP_GT_OQ));
-        const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), W);
-        const __m256 det_ok = _mm256_or_ps(_mm256_cmp_ps(det, zero, _CMP_LT_OQ), _mm256_cmp_ps(det, zero, _CMP_GT_OQ));
-        const __m256 valid = _mm256_andnot_ps(_mm256_and_ps(neg, pos), det_ok);
-        if (!(_mm256_movemask_ps(valid) & static_cast<int>(lanes))) continue;
-        const __m256 az = _mm256_mul_ps(sz, a_z), bz = _mm256_mul_ps(sz, b_z), cz = _mm256_mul_ps(sz, c_z);
-        const __m256 T = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(U, az), _mm256_mul_ps(V, bz)), _mm256_mul_ps(W, cz));
-        const __m256 t = _mm256_div_ps(T, det);
-        const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(t, tmin, _CMP_GT_OQ), _mm256_cmp_ps(t, tmax, _CMP_LE_OQ));
-        std::uint32_t m = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(valid, in_range))) & lanes;
+        auto at = [&](int off, __m256 o) { return _mm256_sub_ps(_mm256_broadcast_ss(v + off), o); };
+        const Pairs8 h = watertight8(at(kx4, okx), at(ky4, oky), at(kz4, okz), at(12 + kx4, okx), at(12 + ky4, oky),
+                                     at(12 + kz4, okz), at(24 + kx4, okx), at(24 + ky4, oky), at(24 + kz4, okz), sx, sy, sz,
+                                     static_cast<int>(lanes));
+        if (!h.valid_bits) continue;
+        const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, tmin, _CMP_GT_OQ), _mm256_cmp_ps(h.t, tmax, _CMP_LE_OQ));
+        std::uint32_t m = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(h.valid, in_range))) & lanes;
         if (!m) continue;
         alignas(32) float ft[8], fv[8], fw[8], fd[8];
-        _mm256_store_ps(ft, t), _mm256_store_ps(fv, V), _mm256_store_ps(fw, W), _mm256_store_ps(fd, det);
+        _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
         for (; m; m &= m - 1) {
           const int l = ctz(m);
           Result& res = p.res[l];

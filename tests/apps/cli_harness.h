@@ -43,8 +43,12 @@ inline const char* const kCube =
 /// Base fixture: dir_ is a fresh directory named after the test, removed afterwards.
 class CliTest : public TempDirTest {
  protected:
-  RunResult ptc(const std::vector<std::string>& args) const {
-    std::string cmd = quote(PTC_BIN);
+  RunResult ptc(const std::vector<std::string>& args) const { return run({PTC_BIN}, args); }
+  /// Any program: `program` (words, quoted) followed by `args`, through the shell, with stdout
+  /// and stderr captured in the test's directory.
+  RunResult run(const std::vector<std::string>& program, const std::vector<std::string>& args) const {
+    std::string cmd;
+    for (const auto& w : program) cmd.append(cmd.empty() ? "" : " ").append(quote(w));
     for (const auto& a : args) cmd.append(" ").append(quote(a));
     const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
     cmd.append(" >").append(quote(o.string())).append(" 2>").append(quote(e.string()));

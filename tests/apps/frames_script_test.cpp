@@ -2,11 +2,9 @@
 // table's medians and ratios recomputed here from the per-run rows and from every run's own
 // summary.csv, and its usage errors.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -21,24 +19,15 @@ namespace {
 
 using ptc::test::csv_rows;
 using ptc::test::lines;
-using ptc::test::quote;
 using ptc::test::slurp;
 
 class FramesScript : public ptc::test::CliTest {
  protected:
-  ptc::test::RunResult run(const std::vector<std::string>& args) const {
+  ptc::test::RunResult frames(const std::vector<std::string>& args) const {
     const fs::path build = fs::path(PTC_BIN).parent_path().parent_path();
-    std::string cmd = "/usr/bin/python3 " + quote(std::string(PTC_SOURCE_DIR) + "/bench/frames/frames.py") + " --build " +
-                      quote(build.string());
-    for (const auto& a : args) cmd.append(" ").append(quote(a));
-    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
-    cmd.append(" >").append(quote(o.string())).append(" 2>").append(quote(e.string()));
-    const int status = std::system(cmd.c_str());
-    ptc::test::RunResult r;
-    if (WIFEXITED(status)) r.code = WEXITSTATUS(status);
-    r.out = slurp(o);
-    r.err = slurp(e);
-    return r;
+    std::vector<std::string> all{"--build", build.string()};
+    all.insert(all.end(), args.begin(), args.end());
+    return run({"/usr/bin/python3", std::string(PTC_SOURCE_DIR) + "/bench/frames/frames.py"}, all);
   }
   static double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -49,8 +38,8 @@ class FramesScript : public ptc::test::CliTest {
 
 TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
   const fs::path out = dir_ / "out";
-  const auto r = run({"--threads", "1,2", "--frames", "0:1", "--width", "16", "--height", "12", "--repeat", "3", "--scenes",
-                      "armadillo-twist,cloth-sphere-32", "--out", out.string()});
+  const auto r = frames({"--threads", "1,2", "--frames", "0:1", "--width", "16", "--height", "12", "--repeat", "3", "--scenes",
+                         "armadillo-twist,cloth-sphere-32", "--out", out.string()});
   ASSERT_EQ(r.code, 0) << r.err;
   const auto runs = csv_rows(slurp(out / "runs.csv"));
   const auto table = csv_rows(slurp(out / "frames.csv"));
@@ -95,7 +84,7 @@ TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
   EXPECT_FALSE(fs::exists(dir_ / "out.tmp"));
 
   // Usage errors: one line, exit 2, nothing written; an existing output is never touched.
-  const auto again = run({"--scenes", "armadillo-twist", "--out", out.string()});
+  const auto again = frames({"--scenes", "armadillo-twist", "--out", out.string()});
   EXPECT_EQ(again.code, 2);
   EXPECT_EQ(lines(again.err), 1u) << again.err;
   EXPECT_TRUE(fs::exists(out / "runs.csv"));
@@ -103,7 +92,7 @@ TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
                                               {"--repeat", "0"}, {"--scenes", "no-such-scene"}}) {
     std::vector<std::string> args = bad;
     args.insert(args.end(), {"--out", (dir_ / "new").string()});
-    const auto e = run(args);
+    const auto e = frames(args);
     EXPECT_EQ(e.code, 2) << bad[0] << ": " << e.err;
     EXPECT_EQ(lines(e.err), 1u) << e.err;
     EXPECT_FALSE(fs::exists(dir_ / "new"));
