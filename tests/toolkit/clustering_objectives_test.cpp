@@ -425,6 +425,48 @@ TEST(AccObjective, VertexMemoIsExact) {
   EXPECT_GT(exact_early, 100);  // the cheap exact paths (inside the sphere, memo, three points) ran
 }
 
+// The 26-DOP bound (stored as floats rounded inwards, acc.h) where it is the binding one: two
+// triangles whose merged minimal sphere has the diameter P Q along one of the DOP's 10 extra
+// directions, so half that direction's width is R itself. The bound must stay at or above the exact
+// score (a float rounded outwards, or to nearest, lifts R_lb above R by up to 1e-7 and fails here),
+// and near the origin at unit scale it must be tight (the DOP is what the bound used). Far from the
+// origin (1e6), beyond the float range (1e39) and in its subnormals (1e-40) the floats are coarse,
+// infinite or zero and the bound weaker, never wrong.
+TEST(AccObjective, DopBoundIsABoundWhereItIsTight) {
+  const Vec3 dirs[10] = {{1, 1, 1}, {1, 1, -1}, {1, -1, 1}, {-1, 1, 1}, {1, 1, 0},
+                         {1, -1, 0}, {1, 0, 1}, {1, 0, -1}, {0, 1, 1}, {0, 1, -1}};
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int tight = 0;
+  for (const auto [offset, scale] : {std::pair{0.0, 1.0}, {1e6, 1.0}, {0.0, 1e39}, {0.0, 1e-40}}) {
+    for (int trial = 0; trial < 40; ++trial) {
+      const Vec3 u = dirs[trial % 10].normalized();
+      const Vec3 w1 = u.unitOrthogonal(), w2 = u.cross(w1);
+      const double d = scale * (0.1 + 0.05 * unit(rng));
+      const Vec3 c = offset * Vec3(1, 1, 1) + scale * Vec3(unit(rng), unit(rng), unit(rng));
+      // P, Q: the diameter; X, Y: well inside its sphere, off the axis.
+      std::vector<Vec3> p{c - d * u, c + d * u, c + 0.1 * d * w1 + 0.05 * d * u, c + 0.1 * d * w2 - 0.05 * d * u};
+      const Mesh m(std::vector<Tri>{{0, 2, 3}, {1, 3, 2}}, std::move(p));
+      const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
+      const ClusterTables tb = ClusterTables::build(m);
+      AccObjective o(tb, acc_params(m, 50, 50), AccTuning::for_contraction());
+      Candidate cand;
+      make_candidate(m, em, {0}, {1}, cand);
+      const auto exact = o.evaluate(o.single(0), o.single(1), cand.ctx, Precision::Exact);
+      ASSERT_TRUE(exact.exact);
+      ASSERT_NEAR(exact.sphere.radius, d, 1e-12 * (d + offset)) << "offset " << offset << ", scale " << scale;
+      const auto bound = o.evaluate(o.single(0), o.single(1), cand.ctx, Precision::UpperBoundAllowed);
+      EXPECT_GE(bound.score, exact.score) << "offset " << offset << ", scale " << scale << ", trial " << trial;
+      if (offset == 0.0 && scale == 1.0 && !bound.exact) {
+        // Floats of coordinates near 1 are good to ~1e-7; the bound without the DOP is ~20% off.
+        EXPECT_LE(bound.score - exact.score, 1e-5 * std::abs(exact.score)) << "trial " << trial;
+        ++tight;
+      }
+    }
+  }
+  EXPECT_GE(tight, 30);  // the bound path ran (not a cheaper exact answer)
+}
+
 // ---- Naive ---------------------------------------------------------------------------------
 
 TEST(NaiveObjective, ScoreEqualsClusterMetricsAndLimitIsMaxCount) {

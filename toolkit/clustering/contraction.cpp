@@ -1,6 +1,7 @@
 #include "toolkit/clustering/contraction.h"
 
 #include <algorithm>
+#include <memory>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -120,6 +121,25 @@ class EntryHeap {
   std::vector<Stamps> stamps_;
 };
 
+/// The summaries of the merged clusters, in chunks of 4096 slots: no copy of the whole store
+/// when it grows (a vector of 384-byte summaries doubled to 1.5x its live size at every step:
+/// 178 bytes a triangle at the peak of a 208k contraction) and no slack beyond one chunk.
+template <class S>
+class SlotStore {
+ public:
+  static constexpr std::uint32_t kShift = 12;
+  [[nodiscard]] std::uint32_t size() const { return size_; }
+  S& operator[](std::uint32_t i) { return chunks_[i >> kShift][i & ((1u << kShift) - 1)]; }
+  std::uint32_t add() {
+    if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<S[]>(std::size_t{1} << kShift));
+    return size_++;
+  }
+
+ private:
+  std::vector<std::unique_ptr<S[]>> chunks_;
+  std::uint32_t size_ = 0;
+};
+
 /// Edge property of the cluster graph for objectives that measure the boundary: 2 x the length
 /// of the manifold mesh edges the two clusters share (kept equal on both arcs of a pair).
 struct SharedLength {
@@ -150,10 +170,12 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   }
 
   // ---- Clusters: one per triangle. A singleton's member and vertex lists are implicit (no
-  // allocation for the T initial clusters); a merged cluster owns vectors.
+  // allocation for the T initial clusters); a merged cluster owns one block [member count,
+  // vertex count, members..., vertices...] (8 bytes a triangle for the handles, where two vectors
+  // each were 48, and one allocation per merge instead of two or three).
   std::vector<std::uint32_t> single_verts(3 * std::size_t{T});
   std::vector<std::uint8_t> single_nv(T);
-  std::vector<std::vector<std::uint32_t>> members_vec(T), verts_vec(T);
+  std::vector<std::unique_ptr<std::uint32_t[]>> lists(T);
   std::vector<std::uint32_t> version(T, 0);
   std::vector<char> alive(T, 1);
   std::uint32_t alive_count = T;
@@ -165,7 +187,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   // pair), so two scratch summaries serve the singletons.
   constexpr std::uint32_t kNoSlot = 0xffffffffu;
   std::vector<std::uint32_t> summary_slot(T, kNoSlot), free_slots;
-  std::vector<Summary> merged;
+  SlotStore<Summary> merged;
   Summary scratch[2];
   auto summary_of = [&](std::uint32_t c, int k) -> const Summary& {
     if (summary_slot[c] != kNoSlot) return merged[summary_slot[c]];
@@ -175,11 +197,13 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   std::vector<std::uint32_t> iota(T);
   for (std::uint32_t t = 0; t < T; ++t) iota[t] = t;
   auto members = [&](std::uint32_t c) -> std::span<const std::uint32_t> {
-    return members_vec[c].empty() ? std::span<const std::uint32_t>(&iota[c], 1) : std::span<const std::uint32_t>(members_vec[c]);
+    const std::uint32_t* l = lists[c].get();
+    return l ? std::span<const std::uint32_t>(l + 2, l[0]) : std::span<const std::uint32_t>(&iota[c], 1);
   };
   auto verts = [&](std::uint32_t c) -> std::span<const std::uint32_t> {
-    return verts_vec[c].empty() ? std::span<const std::uint32_t>(&single_verts[3 * std::size_t{c}], single_nv[c])
-                                : std::span<const std::uint32_t>(verts_vec[c]);
+    const std::uint32_t* l = lists[c].get();
+    return l ? std::span<const std::uint32_t>(l + 2 + l[0], l[1])
+             : std::span<const std::uint32_t>(&single_verts[3 * std::size_t{c}], single_nv[c]);
   };
 
   // ---- Adjacency: the dual graph (ClusterTables' CSR; the same pairs as build_dual_graph,
@@ -189,6 +213,9 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   Graph g(T);
   std::size_t adj_total = 0;  // arcs in g = 2 x live pairs
   for (std::uint32_t t = 0; t < T; ++t) {
+    // Exactly the room for t's arcs (vector growth would leave a quarter of the out-edge memory
+    // unused: 82 bytes a triangle for the lists at 208k, 32 with this).
+    g.out_edge_list(t).reserve(tb.neighbours_of(t).size());
     for (std::uint32_t u : tb.neighbours_of(t)) boost::add_edge(t, u, g);  // symmetric: both arcs
     adj_total += tb.neighbours_of(t).size();
     if constexpr (O::kUsesBoundary) {
@@ -292,7 +319,11 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
 
   // ---- The queue.
   EntryHeap heap;
-  heap.reserve(adj_total / 2 + 16);
+  // Live pairs = adj_total / 2, and a live pair has at most one current entry; stale entries are
+  // purged once the heap holds 1.5x the live pairs (below), so this capacity is never exceeded
+  // (live pairs only decrease) and the heap is never copied to grow.
+  auto purge_above = [&] { return adj_total / 2 + adj_total / 4 + 1024; };
+  heap.reserve(purge_above() + 65536);  // + the pushes of the merges before a purge
   auto make_entry = [&](std::uint32_t x, std::uint32_t y, double score, bool exact) {
     const std::uint32_t lo = std::min(x, y), hi = std::max(x, y);
     return Entry{score, (std::uint64_t{lo} << 32) | hi, version[lo], version[hi] | (exact ? kExactBit : 0u)};
@@ -334,7 +365,6 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   // ---- Contract.
   const std::uint64_t report_every = std::max<std::uint64_t>(1, T / 256);
   std::uint64_t merges = 0;
-  std::vector<std::uint32_t> union_verts;
   std::vector<std::uint32_t> mark(T, 0);  // mark[x] == merges + 1: x is a neighbour of lo (this merge)
   while (!heap.empty()) {
     if (options.target_clusters > 0 && alive_count <= options.target_clusters) break;
@@ -375,8 +405,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
       if (slot_gone != kNoSlot) free_slots.push_back(std::exchange(slot_gone, kNoSlot));
       if (slot_keep == kNoSlot) {
         if (free_slots.empty()) {
-          slot_keep = static_cast<std::uint32_t>(merged.size());
-          merged.emplace_back();
+          slot_keep = merged.add();
         } else {
           slot_keep = free_slots.back();
           free_slots.pop_back();
@@ -384,20 +413,22 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
       }
       merged[slot_keep] = std::move(m);
     }
-    union_verts.clear();
-    const auto va = verts(a);
-    std::merge(va.begin(), va.end(), added.begin(), added.end(), std::back_inserter(union_verts));
-    for (std::uint32_t v : added) vstamp[v] = stamp;  // the stamps now mark the union
-    verts_vec[keep].swap(union_verts);
-    std::vector<std::uint32_t>().swap(verts_vec[gone]);
     {
-      auto& mk = members_vec[keep];
-      auto& mg = members_vec[gone];
-      if (mk.empty()) mk.push_back(keep);  // was a singleton
-      if (mg.empty()) mg.push_back(gone);
-      if (mk.size() < mg.size()) mk.swap(mg);  // append the smaller list
-      mk.insert(mk.end(), mg.begin(), mg.end());
-      std::vector<std::uint32_t>().swap(mg);
+      // Members: the longer list first, then the shorter (keep's first on a tie); vertices:
+      // V(a) u added, ascending.
+      auto mk = members(keep), mg = members(gone);
+      if (mk.size() < mg.size()) std::swap(mk, mg);
+      const auto va = verts(a);
+      const std::size_t nm_total = mk.size() + mg.size(), nv_total = va.size() + added.size();
+      auto block = std::make_unique_for_overwrite<std::uint32_t[]>(2 + nm_total + nv_total);
+      block[0] = static_cast<std::uint32_t>(nm_total);
+      block[1] = static_cast<std::uint32_t>(nv_total);
+      std::uint32_t* out = std::copy(mk.begin(), mk.end(), block.get() + 2);
+      out = std::copy(mg.begin(), mg.end(), out);
+      std::merge(va.begin(), va.end(), added.begin(), added.end(), out);
+      for (std::uint32_t v : added) vstamp[v] = stamp;  // the stamps now mark the union
+      lists[keep] = std::move(block);
+      lists[gone].reset();
     }
     if (any_nm) {
       if (!nm[gone].empty()) {
@@ -440,6 +471,8 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     }
     adj_total -= boost::out_degree(hi, g);
     boost::clear_out_edges(hi, g);
+    decltype(g.out_edge_list(hi)) gone_arcs = g.out_edge_list(hi);
+    std::remove_reference_t<decltype(gone_arcs)>().swap(gone_arcs);  // a dead cluster keeps no storage
     alive[gone] = 0;
     ++version[keep];
     stamped = keep;  // the stamps mark V(keep) (see above)
@@ -452,8 +485,10 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
       Entry e;
       if (entry_of(keep, static_cast<std::uint32_t>(boost::target(arc, g)), e)) heap.push(e);
     }
-    // Purge stale entries once they outnumber the live pairs (memory O(live pairs)).
-    if (heap.size() > adj_total + 1024) heap.purge([&](const Entry& e) { return !current(e); });
+    // Purge stale entries once the heap holds 1.5x the live pairs (memory O(live pairs)). After a
+    // purge at most the live pairs are left, so at least half as many pushes come before the next
+    // one: O(1) amortised per push.
+    if (heap.size() > purge_above()) heap.purge([&](const Entry& e) { return !current(e); });
   }
 
   run.labels.assign(T, 0);

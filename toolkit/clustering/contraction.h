@@ -27,7 +27,7 @@
 // Priority queue: a max-heap of entries (score, exact?, pair (lo, hi), version stamps of
 // lo and hi) with LAZY DELETION: merging a cluster increments its version and kills the other,
 // which makes every entry that mentions either STALE; stale entries are dropped when popped and
-// purged in one O(n) pass whenever they outnumber the live pairs (memory stays O(live pairs)).
+// purged in one O(n) pass whenever the heap holds 1.5x the live pairs (memory stays O(live pairs)).
 // A live pair has at most one current entry. Entries may carry an UPPER BOUND instead of the
 // exact score (objectives.h, "Lazy evaluation"); such an entry is evaluated exactly when it
 // reaches the top and re-inserted (its evaluation kept in a small direct-mapped cache, so that it

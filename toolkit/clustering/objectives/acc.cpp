@@ -1,6 +1,7 @@
 #include "toolkit/clustering/objectives/acc.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -61,6 +62,22 @@ double cos_of_sum(double c1, double c2) {
 
 double sin_of(double c) { return std::sqrt(std::max(0.0, (1.0 - c) * (1.0 + c))); }
 
+/// The float nearest x from above / below (inward rounding of the DOP, acc.h); a double beyond
+/// the float range becomes the infinity on its side (from above: +inf for x > FLT_MAX, which makes
+/// a lower end useless and the width -inf: no bound, never a wrong one).
+/// The next float above f (f not NaN, not +inf): one step of the bit pattern, no libm call
+/// (std::nextafter was 1.5% of a contraction, through single()).
+float next_float_up(float f) {
+  if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
+  const auto bits = std::bit_cast<std::uint32_t>(f);
+  return std::bit_cast<float>(f > 0.0f ? bits + 1 : bits - 1);
+}
+float float_up(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? next_float_up(f) : f;
+}
+float float_down(double x) { return -float_up(-x); }
+
 /// True when every normal of the part has a non-negative dot product with n (proved by its cone):
 /// cos(angle(axis, n) + half-angle) >= kConeMargin.
 bool certified(const AccObjective::Summary& part, const Vec3& n) {
@@ -70,16 +87,18 @@ bool certified(const AccObjective::Summary& part, const Vec3& n) {
   if (c2 >= 1.0) return c1 >= AccObjective::kConeMargin;
   // c1 c2 - s1 s2 >= margin, s1 = sqrt(1 - c1^2), without the square root: both sides squared.
   const double lhs = c1 * c2 - AccObjective::kConeMargin;
-  return lhs >= 0.0 && lhs * lhs >= std::max(0.0, (1.0 - c1) * (1.0 + c1)) * (part.cone_sin * part.cone_sin);
+  const double s2 = sin_of(c2);  // the same bits every time: a function of the stored cosine
+  return lhs >= 0.0 && lhs * lhs >= std::max(0.0, (1.0 - c1) * (1.0 + c1)) * (s2 * s2);
 }
 
 void set_cone(AccObjective::Summary& s, const Vec3& axis, double c) {
   s.cone_axis = axis;
   s.cone_cos = std::clamp(c, -1.0, 1.0);
-  s.cone_sin = sin_of(s.cone_cos);
 }
 
 }  // namespace
+
+static_assert(sizeof(AccObjective::Summary) == 256, "acc.h: Summary is meant to stay at 256 bytes");
 
 AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& params, const AccTuning& tuning)
     : tables_(&tables), params_(params), tuning_(tuning) {
@@ -105,14 +124,13 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
     s.normal_sum = n;
     s.area_normal_sum = tb.area[t] * n;
     s.nonzero = 1;
-    // average_normal would give n / |n|, the same up to an ulp; N_avg of a merged cluster is
-    // always recomputed from the sums, so a singleton's n_avg only serves as its cone's axis.
-    s.n_avg = n;
-    s.fallback = false;
-    set_cone(s, n, 1.0);
+    set_cone(s, n, 1.0);  // N_avg of any merge is recomputed from the sums (evaluate)
   }
-  s.dop_lo.fill(std::numeric_limits<double>::infinity());
-  s.dop_hi.fill(-std::numeric_limits<double>::infinity());
+  s.dop_lo.fill(std::numeric_limits<float>::infinity());
+  s.dop_hi.fill(-std::numeric_limits<float>::infinity());
+  double lo[10], hi[10];
+  std::fill(lo, lo + 10, std::numeric_limits<double>::infinity());
+  std::fill(hi, hi + 10, -std::numeric_limits<double>::infinity());
   for (std::uint32_t v : tb.triangles[t]) {
     const Vec3& p = tb.positions[v];
     s.box.extend(p);
@@ -121,10 +139,15 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
                              -p.x() + p.y() + p.z(), p.x() + p.y(), p.x() - p.y(), p.x() + p.z(), p.x() - p.z(),
                              p.y() + p.z(), p.y() - p.z()};
     for (int k = 0; k < 10; ++k) {
-      s.dop_lo[k] = std::min(s.dop_lo[k], proj[k]);
-      s.dop_hi[k] = std::max(s.dop_hi[k], proj[k]);
+      lo[k] = std::min(lo[k], proj[k]);
+      hi[k] = std::max(hi[k], proj[k]);
     }
   }
+  if (tuning_.dop_bound)
+    for (int k = 0; k < 10; ++k) {
+      s.dop_lo[k] = float_up(lo[k]);
+      s.dop_hi[k] = float_down(hi[k]);
+    }
   s.pending = t;  // the sphere is computed when first needed (growth rarely needs a candidate's)
   return s;
 }
@@ -411,7 +434,9 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
       // least that far apart; the unnormalised directions have lengths sqrt(3) and sqrt(2)).
       double half_width = 0.5 * ev.box.extent().maxCoeff();
       if (tuning_.dop_bound) {
-        auto width = [&](int k) { return std::max(a.dop_hi[k], b.dop_hi[k]) - std::min(a.dop_lo[k], b.dop_lo[k]); };
+        auto width = [&](int k) {  // the stored widths are at most the true ones (acc.h)
+          return double{std::max(a.dop_hi[k], b.dop_hi[k])} - double{std::min(a.dop_lo[k], b.dop_lo[k])};
+        };
         for (int k = 0; k < 4; ++k) half_width = std::max(half_width, width(k) * (0.5 / std::numbers::sqrt3));
         for (int k = 4; k < 10; ++k) half_width = std::max(half_width, width(k) * (0.5 / std::numbers::sqrt2));
       }
@@ -494,8 +519,6 @@ AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, co
   s.normal_sum = ev.normal_sum;
   s.area_normal_sum = a.area_normal_sum + b.area_normal_sum;
   s.nonzero = a.nonzero + b.nonzero;
-  s.fallback = ev.fallback;
-  s.n_avg = ev.n_avg;
   s.sphere = ev.sphere;
   s.box = ev.box;
   for (int k = 0; k < 10; ++k) {
@@ -509,12 +532,12 @@ AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, co
   } else {  // a cone around a's axis containing b's cone; widened a little against rounding
     set_cone(s, a.cone_axis, std::min(a.cone_cos, cos_of_sum(a.cone_axis.dot(b.cone_axis), b.cone_cos) - 1e-12));
   }
-  if (s.nonzero > 0 && !certified(s, s.n_avg)) {  // rebuild the cone around N_avg (O(k), exact dots)
+  if (s.nonzero > 0 && !certified(s, ev.n_avg)) {  // rebuild the cone around N_avg (O(k), exact dots)
     double c = 1.0;
     for (auto members : {ctx.a_triangles, ctx.b_triangles})
       for (std::uint32_t t : members)
-        if (!tables_->normal[t].isZero(0.0)) c = std::min(c, s.n_avg.dot(tables_->normal[t]));
-    set_cone(s, s.n_avg, c - 1e-15);
+        if (!tables_->normal[t].isZero(0.0)) c = std::min(c, ev.n_avg.dot(tables_->normal[t]));
+    set_cone(s, ev.n_avg, c - 1e-15);
   }
   return s;
 }

@@ -109,26 +109,29 @@ class AccObjective {
   /// ascending triangle order (see the file comment).
   static constexpr double kRecomputeNormalSum = 0.05;
 
+  /// 256 bytes: contraction keeps one per merged cluster alive (docs/scale.md, "Contraction in one
+  /// run"), so nothing is stored that a function of the rest gives to the bit (N_avg and its
+  /// fallback flag are recomputed from the sums by evaluate(), the cone's sine from its cosine).
   struct Summary {
     Vec3 normal_sum = Vec3::Zero();       ///< sum of the unit normals n_i (zero normals add nothing)
     Vec3 area_normal_sum = Vec3::Zero();  ///< sum Area_i n_i (L^2)
     std::uint32_t nonzero = 0;            ///< number of non-zero normals
-    bool fallback = true;                 ///< N_avg came from average_normal's fallback rule
-    Vec3 n_avg = Vec3::UnitZ();           ///< N_avg(k)
+    /// Singleton whose sphere is not computed yet: its triangle id (see `sphere`).
+    mutable std::uint32_t pending = 0xffffffffu;
     Vec3 cone_axis = Vec3::UnitZ();       ///< unit axis of a cone containing every non-zero n_i
     double cone_cos = 1;                  ///< cos of that cone's half-angle (any value when nonzero = 0)
-    double cone_sin = 0;                  ///< sin of that half-angle
     /// S(k), see the file comment; for a singleton made by single() computed on first use (see
     /// `pending`) and kept here, read it via sphere_of(). Mutable: a cache, not a value (no
     /// per-triangle table of spheres: 32 bytes a triangle at 13M triangles).
     mutable Sphere sphere;
-    mutable std::uint32_t pending = 0xffffffffu;  ///< singleton whose sphere is not computed yet: its triangle id
     Box3 box;                             ///< box of the distinct vertices (the sphere's local origin)
     /// Extent of the vertices along the 4 cube diagonals (x+y+z, x+y-z, x-y+z, -x+y+z) and the 6
     /// cube edge directions (x+y, x-y, x+z, x-z, y+z, y-z), unnormalised: with the box a 26-DOP
     /// (EPOS-26's directions), merged by min/max; its widths bound the sphere's radius from
-    /// below. Empty (+inf, -inf) without AccTuning::dop_bound.
-    std::array<double, 10> dop_lo{}, dop_hi{};
+    /// below. Floats rounded INWARDS (lo up, hi down; rounding is monotone, so the min/max of
+    /// merges commute with it): a stored width is never above the true one, so the bound stays a
+    /// bound. Empty (+inf, -inf) without AccTuning::dop_bound.
+    std::array<float, 10> dop_lo{}, dop_hi{};
     /// Keys the memo: t + 1 for the singleton {t} (every summary single(t) makes describes the
     /// same cluster), unique for a merged one (T + 1 on).
     std::uint64_t serial = 0;
