@@ -60,8 +60,6 @@ double cos_of_sum(double c1, double c2) {
   return c1 * c2 - s1 * s2;
 }
 
-double sin_of(double c) { return std::sqrt(std::max(0.0, (1.0 - c) * (1.0 + c))); }
-
 /// The float nearest x from above / below (inward rounding of the DOP, acc.h); a double beyond
 /// the float range becomes the infinity on its side (from above: +inf for x > FLT_MAX, which makes
 /// a lower end useless and the width -inf: no bound, never a wrong one).
@@ -85,10 +83,10 @@ bool certified(const AccObjective::Summary& part, const Vec3& n) {
   const double c1 = part.cone_axis.dot(n), c2 = part.cone_cos;
   if (!(c1 > 0.0) || !(c2 > 0.0)) return false;
   if (c2 >= 1.0) return c1 >= AccObjective::kConeMargin;
-  // c1 c2 - s1 s2 >= margin, s1 = sqrt(1 - c1^2), without the square root: both sides squared.
+  // c1 c2 - s1 s2 >= margin, s_i = sqrt(1 - c_i^2), without square roots: both sides squared.
+  // (Rounding moves either side by ~1e-16, far below the margin.)
   const double lhs = c1 * c2 - AccObjective::kConeMargin;
-  const double s2 = sin_of(c2);  // the same bits every time: a function of the stored cosine
-  return lhs >= 0.0 && lhs * lhs >= std::max(0.0, (1.0 - c1) * (1.0 + c1)) * (s2 * s2);
+  return lhs >= 0.0 && lhs * lhs >= std::max(0.0, (1.0 - c1) * (1.0 + c1)) * std::max(0.0, (1.0 - c2) * (1.0 + c2));
 }
 
 void set_cone(AccObjective::Summary& s, const Vec3& axis, double c) {
