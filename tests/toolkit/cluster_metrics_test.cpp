@@ -8,6 +8,8 @@
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -196,6 +198,29 @@ TEST(ClusterMetricsTriangle, AreaMatchesExactKernelAtOffsetsAndScales) {
 
 // ---------------------------------------------------------------------------------------------
 // average_normal
+
+// exponent_of and times_pow2 stand in for std::ilogb and std::ldexp inside triangle_geometry;
+// they must give the same values bit for bit everywhere: normal and subnormal x, both signs,
+// the ends of the exponent range, results that overflow or become subnormal, and random ones.
+TEST(ClusterMetricsTriangle, ExponentHelpersEqualIlogbAndLdexpBitForBit) {
+  std::vector<double> xs{1.0, -1.0, 0.75, 3.0, std::numeric_limits<double>::max(), std::numeric_limits<double>::min(),
+                         std::numeric_limits<double>::denorm_min(), -std::numeric_limits<double>::denorm_min(),
+                         std::numeric_limits<double>::min() / 3.0, 1e-310, -2.5e-320, 1e300, -1e-300, 0.1, 1.0 / 3.0};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> mant(0.5, 1.0);
+  std::uniform_int_distribution<int> ex(-1080, 1030);
+  for (int i = 0; i < 2000; ++i) xs.push_back((i % 2 ? -1.0 : 1.0) * std::ldexp(mant(rng), ex(rng)));
+  std::vector<int> ks{-2200, -1075, -1074, -1023, -1022, -1021, -1, 0, 1, 1022, 1023, 1024, 2200};
+  for (int i = 0; i < 200; ++i) ks.push_back(ex(rng));
+  for (double x : xs) {
+    if (x == 0.0) continue;
+    if (std::isfinite(x)) ASSERT_EQ(exponent_of(x), std::ilogb(x)) << x;  // its contract: finite x != 0
+    for (int k : ks) {
+      const double want = std::ldexp(x, k), got = times_pow2(x, k);
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(got), std::bit_cast<std::uint64_t>(want)) << x << " * 2^" << k;
+    }
+  }
+}
 
 TEST(ClusterMetricsNormal, EmptyAndAllZeroGiveUnitZFallback) {
   const NormalAverage e = average_normal({}, {});

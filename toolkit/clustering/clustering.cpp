@@ -175,11 +175,26 @@ Clustering clustering_from_labels(std::span<const std::uint32_t> labels, std::sp
   c.triangle_order.reserve(T);
   c.triangle_offsets.reserve(runs.size() + 1);
   c.vertex_offsets.reserve(runs.size() + 1);
-  for (const Run& r : runs) {
-    const std::size_t first = c.triangle_order.size();
+  c.vertices.reserve(T);  // about 0.7 T for closed meshes; untouched capacity costs no memory
+  // Each cluster's distinct vertices: a corner is listed the first time the cluster meets it
+  // (seen[v] = the cluster), then the list is sorted -- the same ascending list as sorting all
+  // corners and dropping repeats (append_distinct_vertices), with a third of the sorting
+  // (13.3M triangles: 1.36 s for this function before).
+  std::uint32_t max_vertex = 0;
+  for (const Tri& f : triangles) max_vertex = std::max({max_vertex, f[0], f[1], f[2]});
+  std::vector<std::uint32_t> seen(T ? std::size_t{max_vertex} + 1 : 0, kNoCluster);
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const Run& r = runs[k];
+    const std::size_t first = c.triangle_order.size(), first_vertex = c.vertices.size();
     c.triangle_order.insert(c.triangle_order.end(), order.begin() + r.begin, order.begin() + r.end);
     c.triangle_offsets.push_back(static_cast<std::uint32_t>(c.triangle_order.size()));
-    append_distinct_vertices(std::span<const std::uint32_t>(c.triangle_order).subspan(first), triangles, c.vertices);
+    for (std::size_t i = first; i < c.triangle_order.size(); ++i)
+      for (const std::uint32_t v : triangles[c.triangle_order[i]])
+        if (seen[v] != k) {
+          seen[v] = static_cast<std::uint32_t>(k);
+          c.vertices.push_back(v);
+        }
+    std::sort(c.vertices.begin() + static_cast<std::ptrdiff_t>(first_vertex), c.vertices.end());
     c.vertex_offsets.push_back(static_cast<std::uint32_t>(c.vertices.size()));
   }
   return c;
