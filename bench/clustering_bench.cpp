@@ -1,5 +1,6 @@
-// Clustering benchmark (issue 4's figures; not a unit test). Three sections, each a table on
-// stdout and, with --out DIR, a CSV in DIR (written atomically with a JSON manifest):
+// Clustering benchmark (issue 4's figures; not a unit test). Four sections (the last only when
+// asked for), each a table on stdout and, with --out DIR, a CSV in DIR (written atomically with
+// a JSON manifest):
 //
 //   speed.csv        time per method (growth, contraction, sah-split, meshopt) and objective (acc,
 //                    naive, gwh01 where it applies) at MaxCount = MaxSize in --sizes, one thread;
@@ -7,11 +8,14 @@
 //                    the final clusters' mean reg / mean Acc recomputed with the EXACT sphere;
 //   start_rules.csv  growth's start rule (index, spatial, fewest-free): clusters, mean reg / Acc,
 //                    time;
+//   stages.csv       growth and contraction (Acc, MaxCount = MaxSize = --sphere-size) stage by
+//                    stage: AvgSA, the tables, the algorithm, the clusters from the labels (CPU
+//                    time, median of --repeats; the stages of one `ptc cluster` cluster stage);
 //   manifest.json    argv, the input mesh and its hash, parameters, versions, machine, timings.
 //
 //   clustering_bench [--mesh FILE] [--levels N] [--skip-large] [--quick] [--out DIR]
 //                    [--methods growth,contraction,sah-split,meshopt] [--objectives acc,naive,gwh01]
-//                    [--sizes 10,50,100] [--repeats N] [--sections speed,spheres,start]
+//                    [--sizes 10,50,100] [--repeats N] [--sections speed,spheres,start,stages]
 //                    [--sphere-size N] [--no-exact]
 //
 // Meshes: armadillo (52k triangles; --mesh, default ${PTC_DATA_DIR}/meshes/armadillo.off) and
@@ -273,6 +277,63 @@ void visit_start(const StartRow& r, Columns& col) {
   visit_quality(r.q, col);
 }
 
+struct StageRow {
+  std::string mesh;
+  std::uint64_t triangles = 0;
+  std::string method;
+  std::uint64_t size = 0;
+  double avg_sa_s = 0, tables_s = 0, algorithm_s = 0, from_labels_s = 0, total_s = 0;
+  std::uint64_t clusters = 0;
+};
+void visit_stage(const StageRow& r, Columns& col) {
+  col("mesh", r.mesh);
+  col("triangles", r.triangles);
+  col("method", r.method);
+  col("size", r.size);
+  col("avg_sa_cpu_s", r.avg_sa_s);
+  col("tables_cpu_s", r.tables_s);
+  col("algorithm_cpu_s", r.algorithm_s);
+  col("from_labels_cpu_s", r.from_labels_s);
+  col("total_cpu_s", r.total_s);
+  col("clusters", r.clusters);
+}
+
+/// The stages of cluster_mesh's growth / contraction with Acc (cgal sphere), each timed in CPU
+/// seconds, medians of `repeats`; every repeat must give the same clustering.
+StageRow stages_timed(const std::string& name, const Mesh& mesh, ClusterMethod method, std::uint32_t size, int repeats) {
+  std::vector<double> avg, tab, alg, lab, tot;
+  Clustering first;
+  for (int i = 0; i < repeats; ++i) {
+    double c = cpu_seconds();
+    auto lap = [&] {
+      const double now = cpu_seconds(), d = now - c;
+      c = now;
+      return d;
+    };
+    ClusterParams p;
+    p.max_count = size;
+    p.max_size = size;
+    p.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+    avg.push_back(lap());
+    const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/false);
+    tab.push_back(lap());
+    AccObjective o(tables, p, method == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction());
+    const ClusterRun run =
+        method == ClusterMethod::Growth ? grow_clusters(tables, o, GrowthOptions{}) : contract_clusters(tables, o, ContractionOptions{});
+    alg.push_back(lap());
+    Clustering cl = clustering_from_labels(run.labels, mesh.triangles());
+    lab.push_back(lap());
+    tot.push_back(avg.back() + tab.back() + alg.back() + lab.back());
+    if (i > 0 && (cl.triangle_order != first.triangle_order || cl.triangle_offsets != first.triangle_offsets)) {
+      std::fprintf(stderr, "NON-DETERMINISTIC clustering (%s)\n", std::string(to_string(method)).c_str());
+      std::exit(3);
+    }
+    if (i == 0) first = std::move(cl);
+  }
+  return {name, mesh.triangle_count(), std::string(to_string(method)), size, median(avg), median(tab), median(alg),
+          median(lab), median(tot), first.cluster_count()};
+}
+
 [[noreturn]] void usage_error(const std::string& msg) {
   std::fprintf(stderr, "clustering_bench: %s\n", msg.c_str());
   std::exit(2);
@@ -350,7 +411,7 @@ int main(int argc, char** argv) {
       sphere_size = static_cast<std::uint32_t>(number(value()));
     } else if (a == "--sections") {
       sections = parse_each(value(), named([](const std::string& s) {
-        return s == "speed" || s == "spheres" || s == "start" ? std::optional(s) : std::nullopt;
+        return s == "speed" || s == "spheres" || s == "start" || s == "stages" ? std::optional(s) : std::nullopt;
       }, "section"));
     } else if (a == "--methods" || a == "--only") {
       methods = parse_each(value(), named([](const std::string& s) { return parse_cluster_method(s); }, "method"));
@@ -384,20 +445,21 @@ int main(int argc, char** argv) {
   std::vector<std::pair<std::string, Mesh>> meshes;
   const Stopwatch t_load;
   try {
-    meshes.emplace_back("armadillo", read_mesh(mesh_path).mesh);
+    meshes.emplace_back(std::filesystem::path(mesh_path).stem().string(), read_mesh(mesh_path).mesh);  // its file's name
     record_input(manifest, mesh_path);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "clustering_bench: %s\n", e.what());
     return 1;
   }
   if (!skip_large)
-    meshes.emplace_back("armadillo/mid" + std::to_string(levels),
+    meshes.emplace_back(meshes.front().first + "/mid" + std::to_string(levels),
                         subdivide(meshes.front().second, SubdivisionScheme::Midpoint, levels));
   manifest.add_timing_ms("load_and_subdivide", t_load.ms());
 
   std::vector<SpeedRow> speed_rows;
   std::vector<SphereRow> sphere_rows;
   std::vector<StartRow> start_rows;
+  std::vector<StageRow> stage_rows;
 
   if (has_section("speed")) {
     std::printf("# clustering time, one thread, median of %d (growth: spatial start rule; sphere: cgal)\n", repeats);
@@ -506,6 +568,24 @@ int main(int argc, char** argv) {
         }
   }
 
+  if (has_section("stages")) {
+    const std::uint32_t size = sphere_size;
+    std::printf("\n# stages of growth / contraction (acc, cgal sphere, MaxCount = MaxSize = %u), CPU s, median of %d\n",
+                size, repeats);
+    std::printf("%-15s %9s %-11s %8s %8s %9s %11s %8s %8s\n", "mesh", "tris", "method", "avg_sa", "tables", "algorithm",
+                "from_labels", "total", "clusters");
+    for (const auto& [name, mesh] : meshes)
+      for (ClusterMethod m : methods) {
+        if (!uses_objective(m)) continue;
+        const StageRow r = stages_timed(name, mesh, m, size, repeats);
+        std::printf("%-15s %9llu %-11s %8.3f %8.3f %9.3f %11.3f %8.3f %8llu\n", name.c_str(),
+                    static_cast<unsigned long long>(r.triangles), r.method.c_str(), r.avg_sa_s, r.tables_s,
+                    r.algorithm_s, r.from_labels_s, r.total_s, static_cast<unsigned long long>(r.clusters));
+        std::fflush(stdout);
+        stage_rows.push_back(r);
+      }
+  }
+
   if (!out_dir.empty()) {
     OutputDir dir{std::filesystem::path(out_dir)};
     std::vector<std::string> written;
@@ -518,13 +598,14 @@ int main(int argc, char** argv) {
     write("speed", "speed.csv", tabulate(Schema{"ptc-clustering-speed", 1}, speed_rows, visit_speed));
     write("spheres", "spheres.csv", tabulate(Schema{"ptc-clustering-spheres", 1}, sphere_rows, visit_sphere));
     write("start", "start_rules.csv", tabulate(Schema{"ptc-clustering-start-rules", 1}, start_rows, visit_start));
+    write("stages", "stages.csv", tabulate(Schema{"ptc-clustering-stages", 1}, stage_rows, visit_stage));
     manifest.add_output("manifest.json");
     nlohmann::json meshes_json = nlohmann::json::array();
     for (const auto& [name, mesh] : meshes)
       meshes_json.push_back({{"name", name}, {"triangles", mesh.triangle_count()}, {"vertices", mesh.vertex_count()}});
     manifest.set_result("meshes", meshes_json);
     manifest.set_result("rows", {{"speed", speed_rows.size()}, {"spheres", sphere_rows.size()},
-                                 {"start_rules", start_rows.size()}});
+                                 {"start_rules", start_rows.size()}, {"stages", stage_rows.size()}});
     dir.write("manifest.json", dump_json(manifest.to_json()));
     dir.commit();
     std::printf("\nwrote %s/{%s manifest.json}\n", out_dir.c_str(), [&] {
