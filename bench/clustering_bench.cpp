@@ -91,6 +91,31 @@ struct Job {
 
 bool uses_objective(ClusterMethod m) { return m == ClusterMethod::Growth || m == ClusterMethod::Contraction; }
 
+/// Acc's parameters at MaxCount = MaxSize = size, with the mesh's AvgSA.
+ClusterParams acc_params(const Mesh& mesh, std::uint32_t size, SphereMethod sphere) {
+  ClusterParams p;
+  p.max_count = size;
+  p.max_size = size;
+  p.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+  p.sphere = sphere;
+  return p;
+}
+
+/// The Acc accelerations cluster_mesh picks for the method.
+AccTuning acc_tuning(ClusterMethod m) {
+  return m == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction();
+}
+
+/// The same clusters in the same order (the determinism check of the repeats).
+bool same_clustering(const Clustering& a, const Clustering& b) {
+  return a.triangle_order == b.triangle_order && a.triangle_offsets == b.triangle_offsets;
+}
+
+[[noreturn]] void non_deterministic(ClusterMethod m) {
+  std::fprintf(stderr, "NON-DETERMINISTIC clustering (%s)\n", std::string(to_string(m)).c_str());
+  std::exit(3);
+}
+
 template <class O>
 void run_algorithm(const Mesh& mesh, const ClusterTables& tables, O& objective, const Job& job, Result& r) {
   if (job.method == ClusterMethod::Growth) {
@@ -118,13 +143,7 @@ Result cluster_once(const Mesh& mesh, const Job& job) {
     const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/job.objective == ObjectiveKind::Gwh01);
     switch (job.objective) {
       case ObjectiveKind::Acc: {
-        ClusterParams p;
-        p.max_count = job.size;
-        p.max_size = job.size;
-        p.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
-        p.sphere = job.sphere;
-        AccObjective o(tables, p,
-                       job.method == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction());
+        AccObjective o(tables, acc_params(mesh, job.size, job.sphere), acc_tuning(job.method));
         run_algorithm(mesh, tables, o, job, r);
         r.spheres = o.sphere_computations();
         break;
@@ -155,11 +174,7 @@ Result cluster_timed(const Mesh& mesh, const Job& job, int repeats) {
   Result r;
   for (int i = 0; i < repeats; ++i) {
     Result again = cluster_once(mesh, job);
-    if (i > 0 && (again.clustering.triangle_order != r.clustering.triangle_order ||
-                  again.clustering.triangle_offsets != r.clustering.triangle_offsets)) {
-      std::fprintf(stderr, "NON-DETERMINISTIC clustering (%s)\n", std::string(to_string(job.method)).c_str());
-      std::exit(3);
-    }
+    if (i > 0 && !same_clustering(again.clustering, r.clustering)) non_deterministic(job.method);
     wall.push_back(again.seconds);
     cpu.push_back(again.cpu);
     r = std::move(again);
@@ -175,10 +190,7 @@ struct Quality {
 
 /// Mean reg and Acc (MaxCount = MaxSize = size) of the clusters with sphere `sm` (parallel).
 Quality quality(const Mesh& mesh, const Clustering& c, std::uint32_t size, SphereMethod sm) {
-  ClusterParams p;
-  p.max_count = size;
-  p.max_size = size;
-  p.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+  const ClusterParams p = acc_params(mesh, size, sm);
   const std::size_t n = c.cluster_count();
   if (n == 0) return {};
   std::vector<double> reg(n), acc(n);
@@ -310,24 +322,18 @@ StageRow stages_timed(const std::string& name, const Mesh& mesh, ClusterMethod m
       c = now;
       return d;
     };
-    ClusterParams p;
-    p.max_count = size;
-    p.max_size = size;
-    p.avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+    const ClusterParams p = acc_params(mesh, size, SphereMethod::Cgal);  // AvgSA
     avg.push_back(lap());
     const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/false);
     tab.push_back(lap());
-    AccObjective o(tables, p, method == ClusterMethod::Growth ? AccTuning::for_growth() : AccTuning::for_contraction());
+    AccObjective o(tables, p, acc_tuning(method));
     const ClusterRun run =
         method == ClusterMethod::Growth ? grow_clusters(tables, o, GrowthOptions{}) : contract_clusters(tables, o, ContractionOptions{});
     alg.push_back(lap());
     Clustering cl = clustering_from_labels(run.labels, mesh.triangles());
     lab.push_back(lap());
     tot.push_back(avg.back() + tab.back() + alg.back() + lab.back());
-    if (i > 0 && (cl.triangle_order != first.triangle_order || cl.triangle_offsets != first.triangle_offsets)) {
-      std::fprintf(stderr, "NON-DETERMINISTIC clustering (%s)\n", std::string(to_string(method)).c_str());
-      std::exit(3);
-    }
+    if (i > 0 && !same_clustering(cl, first)) non_deterministic(method);
     if (i == 0) first = std::move(cl);
   }
   return {name, mesh.triangle_count(), std::string(to_string(method)), size, median(avg), median(tab), median(alg),

@@ -122,13 +122,12 @@ class EntryHeap {
 };
 
 /// The summaries of the merged clusters, in chunks of 4096 slots: no copy of the whole store
-/// when it grows (a vector of 384-byte summaries doubled to 1.5x its live size at every step:
-/// 178 bytes a triangle at the peak of a 208k contraction) and no slack beyond one chunk.
+/// when it grows (a vector of them held 1.5x its live size while it doubled) and no slack beyond
+/// one chunk (heaptrack figures in docs/scale.md).
 template <class S>
 class SlotStore {
  public:
   static constexpr std::uint32_t kShift = 12;
-  [[nodiscard]] std::uint32_t size() const { return size_; }
   S& operator[](std::uint32_t i) { return chunks_[i >> kShift][i & ((1u << kShift) - 1)]; }
   std::uint32_t add() {
     if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<S[]>(std::size_t{1} << kShift));
@@ -213,8 +212,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   Graph g(T);
   std::size_t adj_total = 0;  // arcs in g = 2 x live pairs
   for (std::uint32_t t = 0; t < T; ++t) {
-    // Exactly the room for t's arcs (vector growth would leave a quarter of the out-edge memory
-    // unused: 82 bytes a triangle for the lists at 208k, 32 with this).
+    // Exactly the room for t's arcs (growth by doubling left room for four: heaptrack, docs/scale.md).
     g.out_edge_list(t).reserve(tb.neighbours_of(t).size());
     for (std::uint32_t u : tb.neighbours_of(t)) boost::add_edge(t, u, g);  // symmetric: both arcs
     adj_total += tb.neighbours_of(t).size();
@@ -471,8 +469,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     }
     adj_total -= boost::out_degree(hi, g);
     boost::clear_out_edges(hi, g);
-    decltype(g.out_edge_list(hi)) gone_arcs = g.out_edge_list(hi);
-    std::remove_reference_t<decltype(gone_arcs)>().swap(gone_arcs);  // a dead cluster keeps no storage
+    g.out_edge_list(hi).shrink_to_fit();  // a dead cluster keeps no storage
     alive[gone] = 0;
     ++version[keep];
     stamped = keep;  // the stamps mark V(keep) (see above)

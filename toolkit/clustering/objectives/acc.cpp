@@ -60,16 +60,16 @@ double cos_of_sum(double c1, double c2) {
   return c1 * c2 - s1 * s2;
 }
 
-/// The float nearest x from above / below (inward rounding of the DOP, acc.h); a double beyond
-/// the float range becomes the infinity on its side (from above: +inf for x > FLT_MAX, which makes
-/// a lower end useless and the width -inf: no bound, never a wrong one).
-/// The next float above f (f not NaN, not +inf): one step of the bit pattern, no libm call
-/// (std::nextafter was 1.5% of a contraction, through single()).
+/// The next float above f (f not NaN, not +inf): one step of the bit pattern (std::nextafter is
+/// a libm call, and single() runs for every singleton a contraction evaluates).
 float next_float_up(float f) {
   if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
   const auto bits = std::bit_cast<std::uint32_t>(f);
   return std::bit_cast<float>(f > 0.0f ? bits + 1 : bits - 1);
 }
+/// The float nearest x from above / below (inward rounding of the DOP, acc.h); a double beyond
+/// the float range becomes the infinity on its side (from above: +inf for x > FLT_MAX, which makes
+/// a lower end useless and the width -inf: no bound, never a wrong one).
 float float_up(double x) {
   const auto f = static_cast<float>(x);
   return static_cast<double>(f) < x ? next_float_up(f) : f;
