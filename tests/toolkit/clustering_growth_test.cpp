@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -328,6 +329,45 @@ TEST(Growth, DeterministicBitForBit) {
       ASSERT_EQ(r1.merges.size(), r2.merges.size());
       for (std::size_t i = 0; i < r1.merges.size(); ++i) EXPECT_EQ(r1.merges[i].score, r2.merges[i].score);
     }
+}
+
+// Acc's O(1) level through growth_prepare / growth_key gives the keys evaluate() gives, with the
+// same side effects: the same labels, the same merge scores and the same evaluation counts as
+// the run that sends every candidate through evaluate(). On the hard meshes (degenerate, fans,
+// open and closed), a real mesh at two sizes, far from the origin and tiny.
+TEST(Growth, AccFastLevelEqualsEvaluateBitForBit) {
+  std::vector<Named> meshes = generic_meshes();
+  const Mesh elephant = load("elephant.off");
+  meshes.push_back({"elephant", elephant});
+  meshes.push_back({"elephant far away", moved(elephant, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))});
+  meshes.push_back({"elephant tiny", moved(elephant, 1e-30 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
+  std::uint64_t fast_keys = 0;
+  for (const auto& [name, m] : meshes)
+    for (std::uint32_t k : {10u, 50u}) {
+      const ClusterTables tb = ClusterTables::build(m);
+      const Scenario s{ObjectiveKind::Acc, static_cast<double>(k), static_cast<double>(k)};
+      ClusterRun runs[2];
+      for (int fast = 0; fast < 2; ++fast) {
+        GrowthOptions o;
+        o.record_merges = true;
+        o.objective_fast_level = fast == 1;
+        AccObjective obj(tb, acc_params(m, s), AccTuning::for_growth());
+        ASSERT_TRUE(obj.growth_bound_applies());
+        runs[fast] = grow_clusters(tb, obj, o);
+      }
+      const std::string what = std::string(name) + ", MaxCount " + std::to_string(k);
+      EXPECT_EQ(runs[0].labels, runs[1].labels) << what;
+      EXPECT_EQ(runs[0].exact_evaluations, runs[1].exact_evaluations) << what;
+      EXPECT_EQ(runs[0].bound_evaluations, runs[1].bound_evaluations) << what;
+      ASSERT_EQ(runs[0].merges.size(), runs[1].merges.size()) << what;
+      for (std::size_t i = 0; i < runs[0].merges.size(); ++i) {
+        EXPECT_EQ(runs[0].merges[i].from, runs[1].merges[i].from) << what;
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(runs[0].merges[i].score), std::bit_cast<std::uint64_t>(runs[1].merges[i].score))
+            << what << ", merge " << i;
+      }
+      fast_keys += runs[1].bound_evaluations;
+    }
+  EXPECT_GT(fast_keys, 100000u);  // the fast level did run
 }
 
 // Index order is rotation invariant; the Morton-based rules are not (the grid is axis-aligned),

@@ -1,7 +1,9 @@
 #include "toolkit/clustering/growth.h"
 
 #include <algorithm>
+#include <bit>
 #include <functional>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -129,6 +131,8 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
     return run;
   }
 
+  // Acc's O(1) level in two passes (acc.h, growth_prepare / growth_key).
+  constexpr bool kFast = requires { objective.growth_bound_applies(); };
   std::vector<std::uint32_t> vstamp(tb.positions.size(), kNone);  // vertex in cluster c <=> vstamp == c
   std::vector<std::uint32_t> fstamp(T, kNone);                    // triangle in c's frontier <=> fstamp == c
   struct Candidate {  // a frontier triangle with what does not change while it waits
@@ -137,9 +141,16 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
     std::uint32_t v[3];  // distinct vertices
     std::uint32_t e[3];  // distinct edges
     std::uint8_t in_k;   // bit i: v[i] is a vertex of the cluster (kept up to date: no stamp lookups)
-    Summary single;
+    // Acc (kFast): the box of t's vertices, single(t).box, and single(t) itself is made when
+    // evaluate() or merge() needs it (most candidates only ever get the O(1) level); other
+    // objectives: single(t).
+    std::conditional_t<kFast, Box3, Summary> single;
   };
   std::vector<Candidate> frontier;
+  auto summary_of = [&](const Candidate& c) -> decltype(auto) {
+    if constexpr (kFast) return objective.single(c.t);
+    else return (c.single);  // a reference
+  };
   std::vector<std::uint32_t> members, verts;
   // The refinement queue: (key, triangle, frontier slot, precision level of the key).
   struct Keyed {
@@ -156,6 +167,13 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
   std::vector<Keyed> queue;
   std::vector<Evaluation> evals;
   StartPicker picker(tb, options.start);
+  bool fast_bound = false;
+  using Query = std::conditional_t<kFast, AccObjective::GrowthQuery, int>;
+  using Prepared = std::conditional_t<kFast, AccObjective::GrowthPrepared, int>;
+  std::vector<Query> queries;
+  std::vector<Prepared> prepared;
+  std::vector<std::uint32_t> prep_at;  // frontier slot -> its query, or kNone
+  if constexpr (kFast) fast_bound = options.objective_fast_level && objective.growth_bound_applies();
   const std::uint64_t report_every = std::max<std::uint64_t>(1, T / 256);
   std::uint64_t taken = 0;
 
@@ -187,7 +205,12 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
     for (std::uint32_t u : tb.neighbours_of(t))
       if (label[u] == kNone && fstamp[u] != cluster) {
         fstamp[u] = cluster;
-        Candidate c{u, 0, 0, {}, {}, 0, objective.single(u)};
+        Candidate c{u, 0, 0, {}, {}, 0, {}};
+        if constexpr (kFast) {
+          for (std::uint32_t w : tb.triangles[u]) c.single.extend(tb.positions[w]);  // as single() makes its box
+        } else {
+          c.single = objective.single(u);
+        }
         c.nv = tb.distinct_vertices(u, c.v);
         if constexpr (O::kUsesBoundary) c.ne = tb.distinct_edges(u, c.e);  // the edge map exists only then
         for (int i = 0; i < c.nv; ++i)
@@ -215,12 +238,41 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
       // the queue is refined one precision level at a time until the top is exact -- then no
       // other candidate can beat it (each key bounds its exact score from above; ties by id).
       queue.clear();
+      if constexpr (kFast)
+        if (fast_bound) {
+          queries.clear();
+          prep_at.assign(frontier.size(), kNone);
+          for (std::size_t i = 0; i < frontier.size(); ++i) {
+            const Candidate& c = frontier[i];
+            if (c.nv - std::popcount(unsigned{c.in_k}) != 1) continue;
+            int j = 0;
+            while ((c.in_k >> j) & 1) ++j;
+            prep_at[i] = static_cast<std::uint32_t>(queries.size());
+            queries.push_back({c.t, c.v[j], &c.single});
+          }
+          prepared.resize(std::max(prepared.size(), queries.size()));
+          if (!queries.empty()) objective.growth_prepare(cur, queries, prepared.data());
+        }
       for (std::size_t i = 0; i < frontier.size(); ++i) {
+        if constexpr (kFast) {
+          // Acc's O(1) level without evaluate()'s generality, for a candidate that adds one vertex
+          // (the common case): the same key, or false for evaluate() to take over. Acc's legal()
+          // is always true.
+          if (fast_bound && prep_at[i] != kNone) {
+            double key;
+            if (objective.growth_key(prepared[prep_at[i]], queries[prep_at[i]].v,
+                                     static_cast<std::uint32_t>(verts.size() + 1), key)) {
+              ++run.bound_evaluations;
+              queue.push_back({key, frontier[i].t, static_cast<std::uint32_t>(i), std::uint8_t{0}});
+              continue;
+            }
+          }
+        }
         std::uint32_t added[3], shared[3];
         MergeContext ctx;
         make_ctx(frontier[i], added, shared, ctx);
         if (!objective.legal(ctx)) continue;
-        const Evaluation ev = objective.evaluate(cur, frontier[i].single, ctx, kLevels[0]);
+        const Evaluation ev = objective.evaluate(cur, summary_of(frontier[i]), ctx, kLevels[0]);
         ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
         if (ev.exact) evals[i] = ev;  // only an exact evaluation can be the answer (merge() reuses it)
         queue.push_back({ev.score, frontier[i].t, static_cast<std::uint32_t>(i),
@@ -243,7 +295,7 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
         std::uint32_t added[3], shared[3];
         MergeContext ctx;
         make_ctx(frontier[top.slot], added, shared, ctx);
-        const Evaluation ev = objective.evaluate(cur, frontier[top.slot].single, ctx, kLevels[top.level + 1]);
+        const Evaluation ev = objective.evaluate(cur, summary_of(frontier[top.slot]), ctx, kLevels[top.level + 1]);
         ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
         if (ev.exact || top.level + 1 == kExactLevel) evals[top.slot] = ev;
         top.score = ev.score;
@@ -260,7 +312,7 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
       std::uint32_t added[3], shared[3];
       MergeContext ctx;
       make_ctx(frontier[best_i], added, shared, ctx);
-      cur = objective.merge(cur, frontier[best_i].single, ctx, best_ev);
+      cur = objective.merge(cur, summary_of(frontier[best_i]), ctx, best_ev);
       for (std::uint32_t v : ctx.added) {
         vstamp[v] = cluster;
         verts.insert(std::upper_bound(verts.begin(), verts.end(), v), v);

@@ -52,6 +52,10 @@ namespace ptc {
 struct GrowthOptions {
   StartRule start = StartRule::SpatialOrder;  ///< how the next cluster's first triangle is picked
   bool record_merges = false;                 ///< fill ClusterRun::merges (T records at most)
+  /// Acc: the O(1) level of the candidates that add one vertex through AccObjective's
+  /// growth_prepare / growth_key (the same keys as evaluate(), faster). False sends every
+  /// candidate through evaluate(): for the test that both give the same run, bit for bit.
+  bool objective_fast_level = true;
 };
 
 /// Grows clusters over the whole mesh. `objective` is a per-run workspace (not shared between

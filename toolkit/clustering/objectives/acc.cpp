@@ -29,15 +29,15 @@ Vec3 local_origin(const Box3& box) {
   return o;
 }
 
-double max_abs(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
+[[gnu::always_inline]] inline double max_abs(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
 
 /// Absolute slack for tests on sphere centers stored in absolute coordinates: the center is
 /// rounded to ulp(|c|) when translated back from the local frame (cluster_metrics does the same),
 /// so geometric predicates on it are only decided beyond a few ulps of the coordinates.
-double center_slack(const Vec3& c, const Vec3& p) { return 8.0 * kEps * std::max(max_abs(c), max_abs(p)); }
+[[gnu::always_inline]] inline double center_slack(const Vec3& c, const Vec3& p) { return 8.0 * kEps * std::max(max_abs(c), max_abs(p)); }
 
 /// True when the point is inside the sphere by more than the rounding of the test.
-bool surely_inside(const Sphere& s, const Vec3& p) {
+[[gnu::always_inline]] inline bool surely_inside(const Sphere& s, const Vec3& p) {
   const double r = s.radius - center_slack(s.center, p);
   return r > 0.0 && (p - s.center).squaredNorm() * (1.0 + 8.0 * kEps) <= r * r;
 }
@@ -78,7 +78,7 @@ float float_down(double x) { return -float_up(-x); }
 
 /// True when every normal of the part has a non-negative dot product with n (proved by its cone):
 /// cos(angle(axis, n) + half-angle) >= kConeMargin.
-bool certified(const AccObjective::Summary& part, const Vec3& n) {
+[[gnu::always_inline]] inline bool certified(const AccObjective::Summary& part, const Vec3& n) {
   if (part.nonzero == 0) return true;
   const double c1 = part.cone_axis.dot(n), c2 = part.cone_cos;
   if (!(c1 > 0.0) || !(c2 > 0.0)) return false;
@@ -500,6 +500,54 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
   ev.exact = true;
   ev.score = score_of(ev.area_p, ev.sphere.radius * ev.sphere.radius, ctx.vertex_count, &ev.reg);
   return ev;
+}
+
+void AccObjective::growth_prepare(const Summary& a, std::span<const GrowthQuery> queries, GrowthPrepared* out) {
+  // evaluate()'s path for ctx.added = {v} at Precision::UpperBoundAllowed, up to the memo.
+  const ClusterTables& tb = *tables_;
+  enter_lineage(a);
+  const Sphere sa = sphere_of(a);
+  const double ra = sa.radius;
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    const GrowthQuery& q = queries[i];
+    GrowthPrepared& p = out[i];
+    p.general = true;
+    const Vec3& n = tb.normal[q.t];
+    const bool b_nonzero = !n.isZero(0.0);
+    const std::uint32_t m = a.nonzero + (b_nonzero ? 1u : 0u);
+    const Vec3 ns = a.normal_sum + (b_nonzero ? n : Vec3(Vec3::Zero()));
+    const double len = ns.norm();
+    if (!(m > 0 && len > kNormalSumZeroTol * static_cast<double>(m))) continue;  // the fallback rule
+    if (len < kRecomputeNormalSum * static_cast<double>(m)) continue;           // recomputed in order
+    const Vec3 n_avg = ns * (1.0 / len);
+    // certified(single(t), n_avg): no normal, or the cone of one normal (cos 1).
+    if (!certified(a, n_avg) || (b_nonzero && !(n.dot(n_avg) >= kConeMargin))) continue;
+    const Vec3 b_area_normal = b_nonzero ? Vec3(tb.area[q.t] * n) : Vec3(Vec3::Zero());
+    p.area_p = std::max(0.0, n_avg.dot(a.area_normal_sum + b_area_normal));
+    const Vec3& cb = tb.positions[q.v];
+    if (surely_inside(sa, cb)) continue;
+    const double d2 = (cb - sa.center).squaredNorm();
+    const double r2 = d2 > ra * ra ? (d2 + ra * ra) * (d2 + ra * ra) / (4.0 * d2) : ra * ra;
+    Box3 box = a.box;
+    box.extend(*q.triangle_box);
+    const double half_width = 0.5 * box.extent().maxCoeff();
+    p.r2 = std::max(r2, half_width * half_width);
+    const double slack = center_slack(sa.center, cb);
+    p.shrink = 1.0 - 1e-12 - (ra > 0.0 ? slack / ra : 1.0);
+    p.general = false;
+  }
+}
+
+bool AccObjective::growth_key(const GrowthPrepared& p, std::uint32_t v, std::uint32_t vertex_count, double& key) {
+  if (p.general) return false;
+  for (const MemoEntry& e : memo_)
+    if (e.vertex == v) return false;
+  const double r2 = std::max(p.r2, known_r2(v));
+  learn_r2(v, r2);
+  const double r2_lb = r2 * p.shrink * p.shrink;
+  if (!(p.shrink > 0.0 && r2_lb > 0.0)) return false;  // evaluate() computes it exactly (learn_r2 is idempotent)
+  key = score_of(p.area_p, r2_lb, vertex_count, nullptr);
+  return true;
 }
 
 AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, const MergeContext& ctx,

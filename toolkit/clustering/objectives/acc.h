@@ -69,6 +69,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "toolkit/clustering/objectives.h"
@@ -154,6 +155,31 @@ class AccObjective {
   [[nodiscard]] bool legal(const MergeContext&) const { return true; }
   [[nodiscard]] Evaluation evaluate(const Summary& a, const Summary& b, const MergeContext& ctx, Precision p);
   [[nodiscard]] Summary merge(const Summary& a, const Summary& b, const MergeContext& ctx, const Evaluation& ev);
+
+  /// Growth's cheapest level without evaluate()'s generality (docs/scale.md, "Growth's O(1)
+  /// level"), in two passes over the candidates of one step so that their chains of square roots
+  /// and divisions overlap: for a candidate triangle t that adds exactly one vertex v to A = a,
+  /// the key that evaluate(a, single(t), ctx, Precision::UpperBoundAllowed) returns, with the
+  /// same side effects, when that evaluation returns a bound -- the same operations in the same
+  /// order, so the same bits.
+  ///   growth_prepare(a, q, out): what depends on A and t only (no side effects);
+  ///   growth_key(p, v, vertex_count, key), in the candidates' order, interleaved with the
+  ///   evaluate() calls of the other candidates: the memo and the learnt bounds, then the key.
+  /// False (in `GrowthPrepared::general` or from growth_key) when that evaluation would be exact
+  /// or take one of its rare paths (normals that cancel, cones that do not certify AreaP, v inside
+  /// S(A) or in the memo): the caller then calls evaluate(), which repeats nothing this did in a
+  /// way that could change it. vertex_count = |V(A)| + 1. Only when growth_bound_applies().
+  struct GrowthQuery {
+    std::uint32_t t, v;
+    const Box3* triangle_box;  ///< single(t).box
+  };
+  struct GrowthPrepared {
+    double r2, shrink, area_p;
+    bool general;
+  };
+  [[nodiscard]] bool growth_bound_applies() const { return minimal_ && tuning_.vertex_memo && !tuning_.dop_bound; }
+  void growth_prepare(const Summary& a, std::span<const GrowthQuery> queries, GrowthPrepared* out);
+  [[nodiscard]] bool growth_key(const GrowthPrepared& p, std::uint32_t v, std::uint32_t vertex_count, double& key);
 
   /// S(k) of a summary (computes a singleton's sphere on first use and keeps it in the summary).
   [[nodiscard]] const Sphere& sphere_of(const Summary& s);
