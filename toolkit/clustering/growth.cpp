@@ -1,7 +1,6 @@
 #include "toolkit/clustering/growth.h"
 
 #include <algorithm>
-#include <bit>
 #include <functional>
 #include <type_traits>
 #include <utility>
@@ -244,7 +243,8 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
           prep_at.assign(frontier.size(), kNone);
           for (std::size_t i = 0; i < frontier.size(); ++i) {
             const Candidate& c = frontier[i];
-            if (c.nv - std::popcount(unsigned{c.in_k}) != 1) continue;
+            // |added| = nv - |in_k| (a 3-bit mask; std::popcount is a libgcc call without POPCNT)
+            if (c.nv - ((c.in_k & 1) + ((c.in_k >> 1) & 1) + ((c.in_k >> 2) & 1)) != 1) continue;
             int j = 0;
             while ((c.in_k >> j) & 1) ++j;
             prep_at[i] = static_cast<std::uint32_t>(queries.size());

@@ -126,13 +126,17 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
   }
   s.dop_lo.fill(std::numeric_limits<float>::infinity());
   s.dop_hi.fill(-std::numeric_limits<float>::infinity());
+  if (!tuning_.dop_bound) {  // growth: the box only
+    for (std::uint32_t v : tb.triangles[t]) s.box.extend(tb.positions[v]);
+    s.pending = t;
+    return s;
+  }
   double lo[10], hi[10];
   std::fill(lo, lo + 10, std::numeric_limits<double>::infinity());
   std::fill(hi, hi + 10, -std::numeric_limits<double>::infinity());
   for (std::uint32_t v : tb.triangles[t]) {
     const Vec3& p = tb.positions[v];
     s.box.extend(p);
-    if (!tuning_.dop_bound) continue;
     const double proj[10] = {p.x() + p.y() + p.z(), p.x() + p.y() - p.z(), p.x() - p.y() + p.z(),
                              -p.x() + p.y() + p.z(), p.x() + p.y(), p.x() - p.y(), p.x() + p.z(), p.x() - p.z(),
                              p.y() + p.z(), p.y() - p.z()};
@@ -141,11 +145,10 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
       hi[k] = std::max(hi[k], proj[k]);
     }
   }
-  if (tuning_.dop_bound)
-    for (int k = 0; k < 10; ++k) {
-      s.dop_lo[k] = float_up(lo[k]);
-      s.dop_hi[k] = float_down(hi[k]);
-    }
+  for (int k = 0; k < 10; ++k) {
+    s.dop_lo[k] = float_up(lo[k]);
+    s.dop_hi[k] = float_down(hi[k]);
+  }
   s.pending = t;  // the sphere is computed when first needed (growth rarely needs a candidate's)
   return s;
 }
