@@ -253,6 +253,14 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
           prepared.resize(std::max(prepared.size(), queries.size()));
           if (!queries.empty()) objective.growth_prepare(cur, queries, prepared.data());
         }
+      // evaluate(cur, single(t), ctx, p) of the candidate in frontier slot i; Acc's candidates
+      // that growth_prepare kept (one added vertex, no rare path) through growth_refine.
+      auto evaluate_candidate = [&](std::size_t i, const MergeContext& ctx, Precision p) -> Evaluation {
+        if constexpr (kFast)
+          if (fast_bound && prep_at[i] != kNone && !prepared[prep_at[i]].general)
+            return objective.growth_refine(cur, prepared[prep_at[i]], ctx, p);
+        return objective.evaluate(cur, summary_of(frontier[i]), ctx, p);
+      };
       for (std::size_t i = 0; i < frontier.size(); ++i) {
         if constexpr (kFast) {
           // Acc's O(1) level without evaluate()'s generality, for a candidate that adds one vertex
@@ -272,7 +280,7 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
         MergeContext ctx;
         make_ctx(frontier[i], added, shared, ctx);
         if (!objective.legal(ctx)) continue;
-        const Evaluation ev = objective.evaluate(cur, summary_of(frontier[i]), ctx, kLevels[0]);
+        const Evaluation ev = evaluate_candidate(i, ctx, kLevels[0]);
         ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
         if (ev.exact) evals[i] = ev;  // only an exact evaluation can be the answer (merge() reuses it)
         queue.push_back({ev.score, frontier[i].t, static_cast<std::uint32_t>(i),
@@ -295,7 +303,7 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
         std::uint32_t added[3], shared[3];
         MergeContext ctx;
         make_ctx(frontier[top.slot], added, shared, ctx);
-        const Evaluation ev = objective.evaluate(cur, summary_of(frontier[top.slot]), ctx, kLevels[top.level + 1]);
+        const Evaluation ev = evaluate_candidate(top.slot, ctx, kLevels[top.level + 1]);
         ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
         if (ev.exact || top.level + 1 == kExactLevel) evals[top.slot] = ev;
         top.score = ev.score;

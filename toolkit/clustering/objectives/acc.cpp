@@ -377,6 +377,13 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
   else
     ev.area_p = area_p_of(a, ctx.a_triangles, ev.n_avg) + area_p_of(b, ctx.b_triangles, ev.n_avg);
 
+  union_sphere_and_score(a, &b, ctx, precision, memo, ev);
+  return ev;
+}
+
+void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr, const MergeContext& ctx,
+                                          Precision precision, bool memo, Evaluation& ev) {
+  const ClusterTables& tb = *tables_;
   // The sphere of the union.
   bool have = false;
   PointFilter filter;
@@ -399,7 +406,7 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
           }
       if (have && ev.sphere.is_empty()) ev.sphere = sa;
     } else {
-      const Sphere& sb = sphere_of(b);
+      const Sphere& sb = sphere_of(*b_ptr);
       filter.cb = sb.center;
       rb = sb.radius;
       if (surely_contains(sa, sb)) {
@@ -436,7 +443,7 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
       double half_width = 0.5 * ev.box.extent().maxCoeff();
       if (tuning_.dop_bound) {
         auto width = [&](int k) {  // the stored widths are at most the true ones (acc.h)
-          return double{std::max(a.dop_hi[k], b.dop_hi[k])} - double{std::min(a.dop_lo[k], b.dop_lo[k])};
+          return double{std::max(a.dop_hi[k], b_ptr->dop_hi[k])} - double{std::min(a.dop_lo[k], b_ptr->dop_lo[k])};
         };
         for (int k = 0; k < 4; ++k) half_width = std::max(half_width, width(k) * (0.5 / std::numbers::sqrt3));
         for (int k = 4; k < 10; ++k) half_width = std::max(half_width, width(k) * (0.5 / std::numbers::sqrt2));
@@ -467,7 +474,7 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
         remember(ctx, ev.sphere);
         ev.exact = true;
         ev.score = score_of(ev.area_p, ev.sphere.radius * ev.sphere.radius, ctx.vertex_count, &ev.reg);
-        return ev;
+        return;
       }
       if (memo) {  // a lower bound learnt for A' u {v}, A' a subset of A, holds for A u {v}
         r2 = std::max(r2, known_r2(ctx.added[0]));
@@ -482,7 +489,7 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
       if (shrink > 0.0 && r2_lb > 0.0 && precision != Precision::Exact) {
         ev.exact = false;
         ev.score = score_of(ev.area_p, r2_lb, ctx.vertex_count, nullptr);
-        return ev;
+        return;
       }
       // Points that are surely inside S(A u B) cannot support it: leave them out of the exact
       // computation (same sphere, fewer points). The center c of S(A u B) satisfies
@@ -502,7 +509,6 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
   }
   ev.exact = true;
   ev.score = score_of(ev.area_p, ev.sphere.radius * ev.sphere.radius, ctx.vertex_count, &ev.reg);
-  return ev;
 }
 
 void AccObjective::growth_prepare(const Summary& a, std::span<const GrowthQuery> queries, GrowthPrepared* out) {
@@ -511,6 +517,7 @@ void AccObjective::growth_prepare(const Summary& a, std::span<const GrowthQuery>
   enter_lineage(a);
   const Sphere sa = sphere_of(a);
   const double ra = sa.radius;
+  const double sa_center_abs = max_abs(sa.center);
   for (std::size_t i = 0; i < queries.size(); ++i) {
     const GrowthQuery& q = queries[i];
     GrowthPrepared& p = out[i];
@@ -527,18 +534,37 @@ void AccObjective::growth_prepare(const Summary& a, std::span<const GrowthQuery>
     if (!certified(a, n_avg) || (b_nonzero && !(n.dot(n_avg) >= kConeMargin))) continue;
     const Vec3 b_area_normal = b_nonzero ? Vec3(tb.area[q.t] * n) : Vec3(Vec3::Zero());
     p.area_p = std::max(0.0, n_avg.dot(a.area_normal_sum + b_area_normal));
+    p.normal_sum = ns;
+    p.n_avg = n_avg;
     const Vec3& cb = tb.positions[q.v];
-    if (surely_inside(sa, cb)) continue;
+    // surely_inside(sa, cb) and center_slack(sa.center, cb) with their common terms computed once
+    const double slack = 8.0 * kEps * std::max(sa_center_abs, max_abs(cb));
     const double d2 = (cb - sa.center).squaredNorm();
+    if (const double r = ra - slack; r > 0.0 && d2 * (1.0 + 8.0 * kEps) <= r * r) continue;
     const double r2 = d2 > ra * ra ? (d2 + ra * ra) * (d2 + ra * ra) / (4.0 * d2) : ra * ra;
-    Box3 box = a.box;
+    Box3& box = p.box;
+    box = a.box;
     box.extend(*q.triangle_box);
     const double half_width = 0.5 * box.extent().maxCoeff();
     p.r2 = std::max(r2, half_width * half_width);
-    const double slack = center_slack(sa.center, cb);
     p.shrink = 1.0 - 1e-12 - (ra > 0.0 ? slack / ra : 1.0);
     p.general = false;
   }
+}
+
+AccObjective::Evaluation AccObjective::growth_refine(const Summary& a, const GrowthPrepared& p,
+                                                     const MergeContext& ctx, Precision precision) {
+  // evaluate(a, single(t), ctx, precision) with what growth_prepare computed of it (the same
+  // values: there is one code path from the sphere on, union_sphere_and_score).
+  enter_lineage(a);
+  Evaluation ev;
+  ev.box = p.box;
+  ev.normal_sum = p.normal_sum;
+  ev.n_avg = p.n_avg;
+  ev.fallback = false;
+  ev.area_p = p.area_p;
+  union_sphere_and_score(a, nullptr, ctx, precision, true, ev);  // B = single(t) is not read: one added vertex, no DOP
+  return ev;
 }
 
 bool AccObjective::growth_key(const GrowthPrepared& p, std::uint32_t v, std::uint32_t vertex_count, double& key) {

@@ -176,10 +176,17 @@ class AccObjective {
   struct GrowthPrepared {
     double r2, shrink, area_p;
     bool general;
+    Vec3 normal_sum, n_avg;  // of A u {t}: evaluate()'s values
+    Box3 box;
   };
   [[nodiscard]] bool growth_bound_applies() const { return minimal_ && tuning_.vertex_memo && !tuning_.dop_bound; }
   void growth_prepare(const Summary& a, std::span<const GrowthQuery> queries, GrowthPrepared* out);
   [[nodiscard]] bool growth_key(const GrowthPrepared& p, std::uint32_t v, std::uint32_t vertex_count, double& key);
+  /// evaluate(a, single(t), ctx, precision) for a candidate growth_prepare did not mark general,
+  /// at any level (growth's refinements): the same Evaluation and side effects, without
+  /// recomputing what growth_prepare kept, and without single(t).
+  [[nodiscard]] Evaluation growth_refine(const Summary& a, const GrowthPrepared& p, const MergeContext& ctx,
+                                         Precision precision);
 
   /// S(k) of a summary (computes a singleton's sphere on first use and keeps it in the summary).
   [[nodiscard]] const Sphere& sphere_of(const Summary& s);
@@ -193,6 +200,10 @@ class AccObjective {
 
  private:
   [[nodiscard]] double score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg) const;
+  /// evaluate() from the sphere of A u B on (ev holds the box, N_avg, sums and AreaP); b may be
+  /// null when ctx adds one vertex and the tuning has no DOP (it is not read then).
+  void union_sphere_and_score(const Summary& a, const Summary* b, const MergeContext& ctx, Precision precision,
+                              bool memo, Evaluation& ev);
   /// Which points may support S(A u B) (minimal spheres only; see evaluate()).
   struct PointFilter {
     Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
