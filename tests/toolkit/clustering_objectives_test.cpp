@@ -239,7 +239,9 @@ TEST(ClusterTables, NeighboursAreTheBoostDualGraphsAdjacency) {
     const bool small = m.triangle_count() < 2000;
     for (std::uint32_t t = 0; t < m.triangle_count(); ++t) {
       const auto nb = without.neighbours_of(t);
-      if (small) EXPECT_EQ(Ids(nb.begin(), nb.end()), brute_neighbours(m, t)) << "triangle " << t;
+      if (small) {
+        EXPECT_EQ(Ids(nb.begin(), nb.end()), brute_neighbours(m, t)) << "triangle " << t;
+      }
       if (path_edges) continue;
       std::set<std::uint32_t> expected;
       for (auto [it, end] = boost::adjacent_vertices(t, g); it != end; ++it) expected.insert(static_cast<std::uint32_t>(*it));
@@ -438,7 +440,7 @@ TEST(AccObjective, DopBoundIsABoundWhereItIsTight) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   int tight = 0;
-  for (const auto [offset, scale] : {std::pair{0.0, 1.0}, {1e6, 1.0}, {0.0, 1e39}, {0.0, 1e-40}}) {
+  for (const auto& [offset, scale] : {std::pair{0.0, 1.0}, {1e6, 1.0}, {0.0, 1e39}, {0.0, 1e-40}}) {
     for (int trial = 0; trial < 40; ++trial) {
       const Vec3 u = dirs[trial % 10].normalized();
       const Vec3 w1 = u.unitOrthogonal(), w2 = u.cross(w1);
