@@ -180,18 +180,37 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   std::uint32_t alive_count = T;
   for (std::uint32_t t = 0; t < T; ++t)
     single_nv[t] = static_cast<std::uint8_t>(tb.distinct_vertices(t, &single_verts[3 * std::size_t{t}]));
-  // Summaries: a singleton's is made when it is needed (objective.single is cheap and gives the
-  // same values every time), a merged cluster's is kept in a slot. An Acc summary is 384 bytes:
-  // one per triangle was 5 GB at 13M triangles. At most two summaries are in use at once (the
-  // pair), so two scratch summaries serve the singletons.
+  // Summaries: a merged cluster's is kept in a slot; a singleton's is made when it is needed
+  // (objective.single gives the same values every time), and the last ones made are kept in a
+  // small direct-mapped cache: half of the singletons a contraction evaluates were evaluated a
+  // few merges before (their neighbours merge one after the other), and an Acc singleton's
+  // summary (its 26-DOP rounded to floats, its box) costs more than a copy. One per triangle
+  // would be 3.4 GB at 13M triangles (256 bytes each). The pair in use never shares a cache entry
+  // (pair_summaries); the other of two colliding singletons goes to the scratch summary.
   constexpr std::uint32_t kNoSlot = 0xffffffffu;
   std::vector<std::uint32_t> summary_slot(T, kNoSlot), free_slots;
   SlotStore<Summary> merged;
-  Summary scratch[2];
-  auto summary_of = [&](std::uint32_t c, int k) -> const Summary& {
-    if (summary_slot[c] != kNoSlot) return merged[summary_slot[c]];
-    scratch[k] = objective.single(c);
-    return scratch[k];
+  constexpr int kSingleCacheBits = 10;  // 1024 summaries (256 KiB for Acc)
+  std::vector<Summary> single_cache(std::size_t{1} << kSingleCacheBits);
+  std::vector<std::uint32_t> single_tag(single_cache.size(), kNoSlot);
+  Summary scratch;
+  // The summary of cluster c; `pinned` is a cache entry that must not be overwritten (in use).
+  auto summary_ptr = [&](std::uint32_t c, std::size_t pinned) -> std::pair<const Summary*, std::size_t> {
+    if (summary_slot[c] != kNoSlot) return {&merged[summary_slot[c]], ~std::size_t{0}};
+    const std::size_t h = (c * 2654435761u) >> (32 - kSingleCacheBits);
+    if (single_tag[h] == c) return {&single_cache[h], h};
+    if (h == pinned) {
+      scratch = objective.single(c);
+      return {&scratch, ~std::size_t{0}};
+    }
+    single_cache[h] = objective.single(c);
+    single_tag[h] = c;
+    return {&single_cache[h], h};
+  };
+  auto pair_summaries = [&](std::uint32_t a, std::uint32_t b) -> std::pair<const Summary&, const Summary&> {
+    const auto [sa, ha] = summary_ptr(a, ~std::size_t{0});
+    const Summary* sb = summary_ptr(b, ha).first;
+    return {*sa, *sb};
   };
   std::vector<std::uint32_t> iota(T);
   for (std::uint32_t t = 0; t < T; ++t) iota[t] = t;
@@ -332,7 +351,8 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     MergeContext ctx;
     make_ctx(a, b, ctx);
     if (!objective.legal(ctx)) return false;
-    const Evaluation ev = objective.evaluate(summary_of(a, 0), summary_of(b, 1), ctx, Precision::UpperBoundAllowed);
+    const auto [sa, sb] = pair_summaries(a, b);
+    const Evaluation ev = objective.evaluate(sa, sb, ctx, Precision::UpperBoundAllowed);
     ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
     if (O::kMergeOnlyPositive && !(ev.score > 0.0)) return false;
     out = make_entry(a, b, ev.score, ev.exact);
@@ -380,7 +400,8 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     if (exact_key && slot.pair == top.pair && slot.ver_lo == top.ver_lo && slot.ver_hi == top.ver_hi) {
       ev = slot.ev;  // evaluated when it was re-inserted (the same value evaluate() gives again)
     } else {
-      ev = objective.evaluate(summary_of(a, 0), summary_of(b, 1), ctx, Precision::Exact);
+      const auto [sa, sb] = pair_summaries(a, b);
+      ev = objective.evaluate(sa, sb, ctx, Precision::Exact);
       ++run.exact_evaluations;
     }
     if (!exact_key) {  // the key was an upper bound
@@ -396,7 +417,8 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     // Merge hi into lo (the smaller id survives).
     const std::uint32_t keep = lo, gone = hi;
     {
-      Summary m = objective.merge(summary_of(a, 0), summary_of(b, 1), ctx, ev);
+      const auto [sa, sb] = pair_summaries(a, b);
+      Summary m = objective.merge(sa, sb, ctx, ev);
       std::uint32_t& slot_keep = summary_slot[keep];
       std::uint32_t& slot_gone = summary_slot[gone];
       if (slot_keep == kNoSlot) std::swap(slot_keep, slot_gone);  // reuse gone's slot, if it had one
