@@ -1,5 +1,7 @@
 #include "toolkit/clustering/objectives/acc.h"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -60,19 +62,16 @@ double cos_of_sum(double c1, double c2) {
   return c1 * c2 - s1 * s2;
 }
 
-/// The next float above f (f not NaN, not +inf): one step of the bit pattern (std::nextafter is
-/// a libm call, and single() runs for every singleton a contraction evaluates).
-float next_float_up(float f) {
-  if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
-  const auto bits = std::bit_cast<std::uint32_t>(f);
-  return std::bit_cast<float>(f > 0.0f ? bits + 1 : bits - 1);
-}
 /// The float nearest x from above / below (inward rounding of the DOP, acc.h); a double beyond
 /// the float range becomes the infinity on its side (from above: +inf for x > FLT_MAX, which makes
 /// a lower end useless and the width -inf: no bound, never a wrong one).
 float float_up(double x) {
+  // next_float_up(f) when the conversion rounded down, selected without a branch (half of the
+  // conversions round down, and single() runs for every singleton a contraction evaluates).
   const auto f = static_cast<float>(x);
-  return static_cast<double>(f) < x ? next_float_up(f) : f;
+  const auto bits = std::bit_cast<std::uint32_t>(f);
+  const std::uint32_t up_bits = f == 0.0f ? 1u : (static_cast<std::int32_t>(bits) >= 0 ? bits + 1 : bits - 1);
+  return std::bit_cast<float>(static_cast<double>(f) < x ? up_bits : bits);
 }
 float float_down(double x) { return -float_up(-x); }
 
@@ -131,23 +130,26 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
     s.pending = t;
     return s;
   }
-  double lo[10], hi[10];
-  std::fill(lo, lo + 10, std::numeric_limits<double>::infinity());
-  std::fill(hi, hi + 10, -std::numeric_limits<double>::infinity());
+  // The extents in pairs of directions: _mm_min_pd(p, lo) is std::min(lo, p) and _mm_max_pd(p, hi)
+  // is std::max(hi, p), to the bit (NaN and signed zeros included).
+  __m128d lo[5], hi[5];
+  for (int k = 0; k < 5; ++k) lo[k] = _mm_set1_pd(std::numeric_limits<double>::infinity()), hi[k] = -lo[k];
   for (std::uint32_t v : tb.triangles[t]) {
     const Vec3& p = tb.positions[v];
     s.box.extend(p);
-    const double proj[10] = {p.x() + p.y() + p.z(), p.x() + p.y() - p.z(), p.x() - p.y() + p.z(),
-                             -p.x() + p.y() + p.z(), p.x() + p.y(), p.x() - p.y(), p.x() + p.z(), p.x() - p.z(),
-                             p.y() + p.z(), p.y() - p.z()};
-    for (int k = 0; k < 10; ++k) {
-      lo[k] = std::min(lo[k], proj[k]);
-      hi[k] = std::max(hi[k], proj[k]);
+    const double x = p.x(), y = p.y(), z = p.z();
+    const __m128d proj[5] = {_mm_set_pd(x + y - z, x + y + z), _mm_set_pd(-x + y + z, x - y + z),
+                             _mm_set_pd(x - y, x + y), _mm_set_pd(x - z, x + z), _mm_set_pd(y - z, y + z)};
+    for (int k = 0; k < 5; ++k) {
+      lo[k] = _mm_min_pd(proj[k], lo[k]);
+      hi[k] = _mm_max_pd(proj[k], hi[k]);
     }
   }
+  alignas(16) double lo_d[10], hi_d[10];
+  for (int k = 0; k < 5; ++k) _mm_store_pd(lo_d + 2 * k, lo[k]), _mm_store_pd(hi_d + 2 * k, hi[k]);
   for (int k = 0; k < 10; ++k) {
-    s.dop_lo[k] = float_up(lo[k]);
-    s.dop_hi[k] = float_down(hi[k]);
+    s.dop_lo[k] = float_up(lo_d[k]);
+    s.dop_hi[k] = float_down(hi_d[k]);
   }
   s.pending = t;  // the sphere is computed when first needed (growth rarely needs a candidate's)
   return s;
