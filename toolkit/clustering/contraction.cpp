@@ -145,14 +145,48 @@ struct SharedLength {
   double shared2 = 0;
 };
 
+/// Edge property of the cluster graph for the other objectives: nothing. A type of this file's
+/// own, so that the specialization below concerns the cluster graph alone.
+struct NoEdgeData {};
+
+}  // namespace
+}  // namespace ptc
+
+namespace boost::detail {
+/// Boost 1.74 stores an arc of a directedS adjacency_list with vecS out-edge lists as its target
+/// and a std::unique_ptr to its edge property, which add_edge allocates with new even for an
+/// empty property: a pointer and a heap block per arc (at 208k triangles, 1.57M allocations in
+/// one contraction, most of its malloc time). Without a property the arc is its target alone.
+/// Every arc then reports the same property address, so edge descriptors of this graph must not
+/// be compared or removed by descriptor (the contraction removes arcs by target only).
+template <class Vertex>
+class stored_edge_property<Vertex, ptc::NoEdgeData> : public stored_edge<Vertex> {
+ public:
+  using property_type = ptc::NoEdgeData;
+  stored_edge_property() = default;
+  stored_edge_property(Vertex target, const ptc::NoEdgeData& = {}) : stored_edge<Vertex>(target) {}
+  ptc::NoEdgeData& get_property() { return none_; }
+  const ptc::NoEdgeData& get_property() const { return none_; }
+
+ private:
+  static inline ptc::NoEdgeData none_{};
+};
+}  // namespace boost::detail
+
+namespace ptc {
+namespace {
+
 /// The cluster graph (contraction.h, "Graph"): a Boost.Graph adjacency_list whose vertices are the
 /// clusters (vertex c = the cluster whose id is c; a dead cluster is an isolated vertex) and whose
 /// arcs come in pairs (c -> x and x -> c for every adjacent pair). directedS with vecS out-edge
 /// lists: no global edge list (undirectedS keeps one in a std::list, a node allocation per edge),
-/// and without an edge property (Acc, Naive) an arc is one stored vertex index.
+/// and without an edge property (Acc, Naive) an arc is one stored vertex index (NoEdgeData).
 template <bool kBoundary>
 using ClusterGraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::directedS, boost::no_property,
-                                           std::conditional_t<kBoundary, SharedLength, boost::no_property>>;
+                                           std::conditional_t<kBoundary, SharedLength, NoEdgeData>>;
+static_assert(sizeof(typename decltype(std::declval<ClusterGraph<false>::stored_vertex&>().m_out_edges)::value_type) ==
+                  sizeof(std::size_t),
+              "an arc of the cluster graph without a boundary term is its target alone (NoEdgeData)");
 
 }  // namespace
 
