@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
@@ -374,6 +375,50 @@ TEST(AccObjective, ExactScoreEqualsClusterAccFromScratch) {
       EXPECT_GT(bounded, 0) << "the bound path was not exercised";
     }
   }
+}
+
+// The contraction's cache keeps the sphere of an exact evaluation (known_of) and makes the rest
+// again (evaluate_with): the same Evaluation, field by field and bit for bit, for every sphere
+// method, pairs of every size (singletons included), on the elephant and far from the origin.
+TEST(AccObjective, EvaluateWithTheKnownSphereIsTheExactEvaluation) {
+  const Mesh elephant = load("elephant.off");
+  std::vector<Vec3> far(elephant.positions().begin(), elephant.positions().end());
+  for (Vec3& v : far) v = 1e-3 * v + Vec3(4e6, -2e6, 1e6);
+  const Mesh moved_far = elephant.with_positions(std::move(far));
+  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  int checked = 0;
+  for (const Mesh* m : {&elephant, &moved_far}) {
+    const EdgeMap em = EdgeMap::build(m->triangles(), m->vertex_count());
+    const ClusterTables tb = ClusterTables::build(*m);
+    for (SphereMethod sm : {SphereMethod::Cgal, SphereMethod::Ritter, SphereMethod::Epos26}) {
+      AccObjective o(tb, acc_params(*m, 40, 20, sm), AccTuning::for_contraction());
+      std::mt19937_64 rng(7);
+      for (int i = 0; i < 30; ++i) {
+        const auto [a, b] = random_pair(tb, rng, 1 + rng() % 50, 1 + rng() % 30);
+        const auto sa = summary_of(o, *m, em, a), sb = summary_of(o, *m, em, b);
+        Candidate c;
+        make_candidate(*m, em, a, b, c);
+        const auto ev = o.evaluate(sa, sb, c.ctx, Precision::Exact);
+        const auto again = o.evaluate_with(sa, sb, c.ctx, AccObjective::known_of(ev));
+        const std::string what = std::string(to_string(sm)) + ", trial " + std::to_string(i);
+        EXPECT_TRUE(again.exact) << what;
+        EXPECT_EQ(bits(again.score), bits(ev.score)) << what;
+        EXPECT_EQ(bits(again.reg), bits(ev.reg)) << what;
+        EXPECT_EQ(bits(again.area_p), bits(ev.area_p)) << what;
+        EXPECT_EQ(again.fallback, ev.fallback) << what;
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_EQ(bits(again.n_avg[k]), bits(ev.n_avg[k])) << what;
+          EXPECT_EQ(bits(again.normal_sum[k]), bits(ev.normal_sum[k])) << what;
+          EXPECT_EQ(bits(again.box.lo[k]), bits(ev.box.lo[k])) << what;
+          EXPECT_EQ(bits(again.box.hi[k]), bits(ev.box.hi[k])) << what;
+          EXPECT_EQ(bits(again.sphere.center[k]), bits(ev.sphere.center[k])) << what;
+        }
+        EXPECT_EQ(bits(again.sphere.radius), bits(ev.sphere.radius)) << what;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 180);
 }
 
 // Growth's case: B is one triangle adding at most one vertex; with the vertex memo on, every

@@ -328,10 +328,26 @@ bool AccObjective::small_support_sphere(const MergeContext& ctx, const Box3& box
 
 AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary& b, const MergeContext& ctx,
                                                 Precision precision) {
-  const ClusterTables& tb = *tables_;
   const bool memo = tuning_.vertex_memo && minimal_ && ctx.added.size() == 1;
   if (memo) enter_lineage(a);
   Evaluation ev;
+  sums_and_area(a, b, ctx, ev);
+  union_sphere_and_score(a, &b, ctx, precision, memo, ev);
+  return ev;
+}
+
+AccObjective::Evaluation AccObjective::evaluate_with(const Summary& a, const Summary& b, const MergeContext& ctx,
+                                                     const Known& sphere) {
+  Evaluation ev;
+  sums_and_area(a, b, ctx, ev);
+  ev.sphere = sphere;
+  ev.exact = true;  // as evaluate() ends every exact evaluation
+  ev.score = score_of(ev.area_p, ev.sphere.radius * ev.sphere.radius, ctx.vertex_count, &ev.reg);
+  return ev;
+}
+
+void AccObjective::sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev) {
+  const ClusterTables& tb = *tables_;
   ev.box = a.box;
   ev.box.extend(b.box);
 
@@ -378,9 +394,6 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
     ev.area_p = std::max(0.0, ev.n_avg.dot(a.area_normal_sum + b.area_normal_sum));
   else
     ev.area_p = area_p_of(a, ctx.a_triangles, ev.n_avg) + area_p_of(b, ctx.b_triangles, ev.n_avg);
-
-  union_sphere_and_score(a, &b, ctx, precision, memo, ev);
-  return ev;
 }
 
 void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr, const MergeContext& ctx,

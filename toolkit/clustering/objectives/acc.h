@@ -155,6 +155,13 @@ class AccObjective {
   [[nodiscard]] bool legal(const MergeContext&) const { return true; }
   [[nodiscard]] Evaluation evaluate(const Summary& a, const Summary& b, const MergeContext& ctx, Precision p);
   [[nodiscard]] Summary merge(const Summary& a, const Summary& b, const MergeContext& ctx, const Evaluation& ev);
+  /// What of an exact evaluation is dear to make again: the sphere of A u B. The contraction
+  /// keeps it for pairs that wait in its queue; evaluate_with(a, b, ctx, known_of(ev)) for ev =
+  /// evaluate(a, b, ctx, Precision::Exact) is ev again, to the bit (the same code makes the rest),
+  /// without the sphere's computation. No memo side effects (AccTuning::vertex_memo: growth's).
+  using Known = Sphere;
+  [[nodiscard]] static Known known_of(const Evaluation& ev) { return ev.sphere; }
+  [[nodiscard]] Evaluation evaluate_with(const Summary& a, const Summary& b, const MergeContext& ctx, const Known& sphere);
 
   /// Growth's cheapest level without evaluate()'s generality (docs/scale.md, "Growth's O(1)
   /// level"), in two passes over the candidates of one step so that their chains of square roots
@@ -200,6 +207,8 @@ class AccObjective {
 
  private:
   [[nodiscard]] double score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg) const;
+  /// evaluate() up to the sphere: the box, N_avg with its fallback, the normal sum and AreaP.
+  void sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev);
   /// evaluate() from the sphere of A u B on (ev holds the box, N_avg, sums and AreaP); b may be
   /// null when ctx adds one vertex and the tuning has no DOP (it is not read then).
   void union_sphere_and_score(const Summary& a, const Summary* b, const MergeContext& ctx, Precision precision,
