@@ -102,7 +102,9 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
                                  std::to_string(f);
         const StageTimes& t = s.times();
         EXPECT_GE(t.overlap_ms, 0.0) << what;
-        if (threads == 1) EXPECT_EQ(t.overlap_ms, 0.0) << what;
+        if (threads == 1) {
+          EXPECT_EQ(t.overlap_ms, 0.0) << what;
+        }
         EXPECT_LE(t.overlap_ms, std::min(t.leaf_data_ms, t.build_ms + t.collapse_ms) + 1e-9) << what;
         EXPECT_LE(t.total_ms(), wall + 1e-6) << what;
         const TraceData& d = s.data();

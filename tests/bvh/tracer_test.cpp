@@ -99,7 +99,9 @@ AnyScene make_scene(const Mesh& m, Kind k, std::optional<Vec3> origin = std::nul
                                                                 : std::span<const std::uint32_t>(std::get<2>(s.scene).weights())},
                                         cfg.build);
     // On a few hundred primitives the binned builder's bins resolve every split the sweep finds.
-    if (boxes.size() > 500) EXPECT_NE(b.cost, binned.cost) << name(k) << ": the binned tree, not the sweep's";
+    if (boxes.size() > 500) {
+      EXPECT_NE(b.cost, binned.cost) << name(k) << ": the binned tree, not the sweep's";
+    }
   }
   // (a cluster's box comes from its vertex list and contains, not equals, its tree's boxes)
   const auto issues = validate(s.data(), m.triangle_count(), s.scene.index() == 1);
@@ -299,7 +301,9 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
           ASSERT_EQ(packed.t[i], single.t[i]) << what;
           ASSERT_EQ(packed.u[i], single.u[i]) << what;
           ASSERT_EQ(packed.v[i], single.v[i]) << what;
-          if (single.triangle[i] != kNoTriangle) ASSERT_GT(packed.triangles_tested[i], 0u) << what;
+          if (single.triangle[i] != kNoTriangle) {
+            ASSERT_GT(packed.triangles_tested[i], 0u) << what;
+          }
           continue;
         }
         ASSERT_EQ(packed.triangle[i] != kNoTriangle, single.triangle[i] != kNoTriangle) << what;

@@ -70,7 +70,9 @@ TEST(WideBvh, CollapseIntoAKeptOutputEqualsAFreshOne) {
     EXPECT_EQ(kept.bounds, fresh.bounds) << "tree " << t;
     EXPECT_EQ(kept.depth, fresh.depth);
     EXPECT_EQ(kept.leaves, fresh.leaves);
-    if (!trees[t].nodes.empty()) EXPECT_TRUE(validate_wide(kept, trees[t]).empty());
+    if (!trees[t].nodes.empty()) {
+      EXPECT_TRUE(validate_wide(kept, trees[t]).empty());
+    }
   }
 }
 

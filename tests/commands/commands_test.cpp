@@ -238,10 +238,10 @@ TEST_F(Commands, TraceHitsEqualBruteForce) {
   o.out_dir = dir_ / "tr";
   cmd_trace(o, out);
   {
-    const nlohmann::json m = nlohmann::json::parse(slurp(dir_ / "tr" / "manifest.json"));
-    EXPECT_EQ(m["parameters"]["cost_range"], nlohmann::json::array({0.0, 2.0}));
-    EXPECT_EQ(m["results"]["images"]["cost_nodes.png"]["max"], 2.0);
-    EXPECT_NE(m["results"]["images"]["cost_nodes.png"]["note"].get<std::string>().find("above the range"), std::string::npos);
+    const nlohmann::json man = nlohmann::json::parse(slurp(dir_ / "tr" / "manifest.json"));
+    EXPECT_EQ(man["parameters"]["cost_range"], nlohmann::json::array({0.0, 2.0}));
+    EXPECT_EQ(man["results"]["images"]["cost_nodes.png"]["max"], 2.0);
+    EXPECT_NE(man["results"]["images"]["cost_nodes.png"]["note"].get<std::string>().find("above the range"), std::string::npos);
     const RgbImage img = viz::read_png(dir_ / "tr" / "cost_nodes.png");
     for (std::size_t i = 0; i < img.pixel_count(); ++i) {
       const Rgb8 p{img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2]};

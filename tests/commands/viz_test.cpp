@@ -335,7 +335,9 @@ TEST_F(Viz, PanelIsPartitionShadedAndHeatmapUnderATitle) {
   const auto ids = pixel_triangles(manifest("panel"), 160, 120);
   for (int y = 0; y < 120; ++y)
     for (int x = 0; x < 160; ++x)
-      if (ids[static_cast<std::size_t>(y) * 160 + x] == kMiss) EXPECT_EQ(panel.at(ll.width + 4 + x, 28 + y), viz::kBackground);
+      if (ids[static_cast<std::size_t>(y) * 160 + x] == kMiss) {
+        EXPECT_EQ(panel.at(ll.width + 4 + x, 28 + y), viz::kBackground);
+      }
 }
 
 TEST_F(Viz, ExportReadsBackWithVtkCellByCell) {
