@@ -140,15 +140,16 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
     std::uint32_t v[3];  // distinct vertices
     std::uint32_t e[3];  // distinct edges
     std::uint8_t in_k;   // bit i: v[i] is a vertex of the cluster (kept up to date: no stamp lookups)
-    // Acc (kFast): the box of t's vertices, single(t).box, and single(t) itself is made when
-    // evaluate() or merge() needs it (most candidates only ever get the O(1) level); other
-    // objectives: single(t).
-    std::conditional_t<kFast, Box3, Summary> single;
+    // What the candidate keeps of single(t). Acc (kFast): the box of t's vertices,
+    // single(t).box; single(t) itself is made when evaluate() or merge() needs it (most
+    // candidates only ever get the O(1) level; with an approximate sphere, whose evaluations are
+    // all exact and dearer, a summary made per evaluation costs little). Other objectives: single(t).
+    std::conditional_t<kFast, Box3, Summary> kept;
   };
   std::vector<Candidate> frontier;
   auto summary_of = [&](const Candidate& c) -> decltype(auto) {
     if constexpr (kFast) return objective.single(c.t);
-    else return (c.single);  // a reference
+    else return (c.kept);  // a reference
   };
   std::vector<std::uint32_t> members, verts;
   // The refinement queue: (key, triangle, frontier slot, precision level of the key).
@@ -206,9 +207,9 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
         fstamp[u] = cluster;
         Candidate c{u, 0, 0, {}, {}, 0, {}};
         if constexpr (kFast) {
-          for (std::uint32_t w : tb.triangles[u]) c.single.extend(tb.positions[w]);  // as single() makes its box
+          for (std::uint32_t w : tb.triangles[u]) c.kept.extend(tb.positions[w]);  // as single() makes its box
         } else {
-          c.single = objective.single(u);
+          c.kept = objective.single(u);
         }
         c.nv = tb.distinct_vertices(u, c.v);
         if constexpr (O::kUsesBoundary) c.ne = tb.distinct_edges(u, c.e);  // the edge map exists only then
@@ -248,7 +249,7 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
             int j = 0;
             while ((c.in_k >> j) & 1) ++j;
             prep_at[i] = static_cast<std::uint32_t>(queries.size());
-            queries.push_back({c.t, c.v[j], &c.single});
+            queries.push_back({c.t, c.v[j], &c.kept});
           }
           prepared.resize(std::max(prepared.size(), queries.size()));
           if (!queries.empty()) objective.growth_prepare(cur, queries, prepared.data());

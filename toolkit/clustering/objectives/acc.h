@@ -163,8 +163,8 @@ class AccObjective {
   [[nodiscard]] static Known known_of(const Evaluation& ev) { return ev.sphere; }
   [[nodiscard]] Evaluation evaluate_with(const Summary& a, const Summary& b, const MergeContext& ctx, const Known& sphere);
 
-  /// Growth's cheapest level without evaluate()'s generality (docs/scale.md, "Growth's O(1)
-  /// level"), in two passes over the candidates of one step so that their chains of square roots
+  /// Growth's cheapest level without evaluate()'s generality (docs/scale.md, "Open (issue 15)",
+  /// growth), in two passes over the candidates of one step so that their chains of square roots
   /// and divisions overlap: for a candidate triangle t that adds exactly one vertex v to A = a,
   /// the key that evaluate(a, single(t), ctx, Precision::UpperBoundAllowed) returns, with the
   /// same side effects, when that evaluation returns a bound -- the same operations in the same
