@@ -322,13 +322,15 @@ StageRow stages_timed(const std::string& name, const Mesh& mesh, ClusterMethod m
       c = now;
       return d;
     };
-    const ClusterParams p = acc_params(mesh, size, SphereMethod::Cgal);  // AvgSA
+    const double avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
     avg.push_back(lap());
     const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/false);
     tab.push_back(lap());
-    AccObjective o(tables, p, acc_tuning(method));
-    const ClusterRun run =
-        method == ClusterMethod::Growth ? grow_clusters(tables, o, GrowthOptions{}) : contract_clusters(tables, o, ContractionOptions{});
+    ClusterConfig cfg;  // Acc, cgal sphere: cluster_mesh's own objective and loop
+    cfg.method = method;
+    cfg.max_count = size;
+    cfg.max_size = size;
+    const ClusterRun run = detail::run_objective(tables, cfg, avg_sa, {});
     alg.push_back(lap());
     Clustering cl = clustering_from_labels(run.labels, mesh.triangles());
     lab.push_back(lap());
@@ -614,9 +616,9 @@ int main(int argc, char** argv) {
                                  {"start_rules", start_rows.size()}, {"stages", stage_rows.size()}});
     dir.write("manifest.json", dump_json(manifest.to_json()));
     dir.commit();
-    std::printf("\nwrote %s/{%s manifest.json}\n", out_dir.c_str(), [&] {
+    std::printf("\nwrote %s/{%smanifest.json}\n", out_dir.c_str(), [&] {
       std::string s;
-      for (const auto& f : written) s += f + " ";
+      for (const auto& f : written) s += f + ",";
       return s;
     }().c_str());
   }

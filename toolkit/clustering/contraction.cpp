@@ -166,8 +166,8 @@ struct NoEdgeData {};
 namespace boost::detail {
 /// Boost 1.74 stores an arc of a directedS adjacency_list with vecS out-edge lists as its target
 /// and a std::unique_ptr to its edge property, which add_edge allocates with new even for an
-/// empty property: a pointer and a heap block per arc (at 208k triangles, 1.57M allocations in
-/// one contraction, most of its malloc time). Without a property the arc is its target alone.
+/// empty property: a pointer and a heap block per arc (docs/scale.md, "Boost's empty edge
+/// properties"). Without a property the arc is its target alone.
 /// Every arc then reports the same property address, so edge descriptors of this graph must not
 /// be compared or removed by descriptor (the contraction removes arcs by target only).
 template <class Vertex>
@@ -419,9 +419,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   // that waited does not pay for its evaluation twice when it comes back to the top. An
   // objective that says which part of an evaluation is dear (Acc: the sphere, O::Known) has
   // only that kept, and the rest made again (evaluate_with): 48-byte entries, so many more of
-  // them, one per eight triangles up to 2^20. At 832k triangles (a throwaway count) 2^14 full
-  // evaluations kept 20% of the waiting pairs' exact evaluations, 2^16 spheres 35%, 2^18 56%;
-  // the contraction's exact evaluations fell from 1.90M to 1.74M with 2^17.
+  // them, one per eight triangles up to 2^20 (docs/scale.md, "Contraction time on one thread").
   constexpr bool kKnown = requires(const Evaluation& e) { O::known_of(e); };
   using CacheValue = typename CacheValueOf<O, kKnown>::type;
   struct CacheSlot {

@@ -38,10 +38,28 @@ Vec3 local_origin(const Box3& box) {
 /// so geometric predicates on it are only decided beyond a few ulps of the coordinates.
 [[gnu::always_inline]] inline double center_slack(const Vec3& c, const Vec3& p) { return 8.0 * kEps * std::max(max_abs(c), max_abs(p)); }
 
+/// surely_inside from its terms: the radius, center_slack(center, p) and |p - center|^2.
+[[gnu::always_inline]] inline bool surely_inside_by(double radius, double slack, double d2) {
+  const double r = radius - slack;
+  return r > 0.0 && d2 * (1.0 + 8.0 * kEps) <= r * r;
+}
+
 /// True when the point is inside the sphere by more than the rounding of the test.
 [[gnu::always_inline]] inline bool surely_inside(const Sphere& s, const Vec3& p) {
-  const double r = s.radius - center_slack(s.center, p);
-  return r > 0.0 && (p - s.center).squaredNorm() * (1.0 + 8.0 * kEps) <= r * r;
+  return surely_inside_by(s.radius, center_slack(s.center, p), (p - s.center).squaredNorm());
+}
+
+/// Growth's radius bound for A u {v} (acc.h): R^2 >= ((d^2 + r_A^2) / (2 d))^2 when d > r_A,
+/// d^2 = |v - c_A|^2; else r_A^2.
+[[gnu::always_inline]] inline double point_r2_bound(double d2, double ra) {
+  return d2 > ra * ra ? (d2 + ra * ra) * (d2 + ra * ra) / (4.0 * d2) : ra * ra;
+}
+
+/// The factor a radius bound is shrunk by: 1e-12 relative and the absolute rounding of the
+/// centers (`slack`, at most slack / r_A relative since R >= r_A), so that rounding cannot lift
+/// the bound above the computed exact radius.
+[[gnu::always_inline]] inline double bound_shrink(double slack, double ra) {
+  return 1.0 - 1e-12 - (ra > 0.0 ? slack / ra : 1.0);
 }
 
 /// True when sphere `in` lies inside sphere `out` by more than rounding.
@@ -268,6 +286,12 @@ void AccObjective::enter_lineage(const Summary& a) {
 
 double AccObjective::known_r2(std::uint32_t v) const { return lb_owner_[v] == lineage_ ? lb_r2_[v] : 0.0; }
 
+const Sphere* AccObjective::memo_find(std::uint32_t v) const {
+  for (const MemoEntry& e : memo_)
+    if (e.vertex == v) return &e.sphere;
+  return nullptr;
+}
+
 void AccObjective::learn_r2(std::uint32_t v, double r2) {
   if (lb_owner_[v] != lineage_) {
     lb_owner_[v] = lineage_;
@@ -413,12 +437,10 @@ void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr
       filter.cb = tb.positions[ctx.added[0]];
       have = surely_inside(sa, filter.cb);
       if (!have && memo)
-        for (const MemoEntry& e : memo_)
-          if (e.vertex == ctx.added[0]) {
-            ev.sphere = e.sphere;
-            have = true;
-            break;
-          }
+        if (const Sphere* known = memo_find(ctx.added[0])) {
+          ev.sphere = *known;
+          have = true;
+        }
       if (have && ev.sphere.is_empty()) ev.sphere = sa;
     } else {
       const Sphere& sb = sphere_of(*b_ptr);
@@ -445,7 +467,7 @@ void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr
       const double d2 = (filter.cb - filter.ca).squaredNorm();
       double r2;
       if (rb == 0.0) {  // a point: R >= (d^2 + r_A^2) / (2 d) when d > r_A
-        r2 = d2 > ra * ra ? (d2 + ra * ra) * (d2 + ra * ra) / (4.0 * d2) : ra * ra;
+        r2 = point_r2_bound(d2, ra);
       } else if (d2 > 0.0) {
         const double d = std::sqrt(d2);
         const double x = std::clamp((d2 + rb * rb - ra * ra) / (2.0 * d), 0.0, d);
@@ -495,11 +517,8 @@ void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr
         r2 = std::max(r2, known_r2(ctx.added[0]));
         learn_r2(ctx.added[0], r2);
       }
-      // Shrink R by 1e-12 relative and by the absolute rounding of the centers (`slack`, at most
-      // slack / r_A relative since R >= r_A), so that rounding cannot lift the bound's R above
-      // the computed exact one.
       const double slack = center_slack(filter.ca, filter.cb);
-      const double shrink = 1.0 - 1e-12 - (ra > 0.0 ? slack / ra : 1.0);
+      const double shrink = bound_shrink(slack, ra);
       const double r2_lb = r2 * shrink * shrink;
       if (shrink > 0.0 && r2_lb > 0.0 && precision != Precision::Exact) {
         ev.exact = false;
@@ -555,14 +574,14 @@ void AccObjective::growth_prepare(const Summary& a, std::span<const GrowthQuery>
     // surely_inside(sa, cb) and center_slack(sa.center, cb) with their common terms computed once
     const double slack = 8.0 * kEps * std::max(sa_center_abs, max_abs(cb));
     const double d2 = (cb - sa.center).squaredNorm();
-    if (const double r = ra - slack; r > 0.0 && d2 * (1.0 + 8.0 * kEps) <= r * r) continue;
-    const double r2 = d2 > ra * ra ? (d2 + ra * ra) * (d2 + ra * ra) / (4.0 * d2) : ra * ra;
+    if (surely_inside_by(ra, slack, d2)) continue;
+    const double r2 = point_r2_bound(d2, ra);
     Box3& box = p.box;
     box = a.box;
     box.extend(*q.triangle_box);
     const double half_width = 0.5 * box.extent().maxCoeff();
     p.r2 = std::max(r2, half_width * half_width);
-    p.shrink = 1.0 - 1e-12 - (ra > 0.0 ? slack / ra : 1.0);
+    p.shrink = bound_shrink(slack, ra);
     p.general = false;
   }
 }
@@ -583,9 +602,7 @@ AccObjective::Evaluation AccObjective::growth_refine(const Summary& a, const Gro
 }
 
 bool AccObjective::growth_key(const GrowthPrepared& p, std::uint32_t v, std::uint32_t vertex_count, double& key) {
-  if (p.general) return false;
-  for (const MemoEntry& e : memo_)
-    if (e.vertex == v) return false;
+  if (p.general || memo_find(v)) return false;
   const double r2 = std::max(p.r2, known_r2(v));
   learn_r2(v, r2);
   const double r2_lb = r2 * p.shrink * p.shrink;

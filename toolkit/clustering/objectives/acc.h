@@ -228,6 +228,8 @@ class AccObjective {
   void remember(const MergeContext& ctx, const Sphere& s);
   void enter_lineage(const Summary& a);
   [[nodiscard]] double known_r2(std::uint32_t v) const;
+  /// The memo's S(A u {v}), or null.
+  [[nodiscard]] const Sphere* memo_find(std::uint32_t v) const;
   void learn_r2(std::uint32_t v, double r2);
   [[nodiscard]] double area_p_of(const Summary& part, std::span<const std::uint32_t> members, const Vec3& n) const;
 
