@@ -251,6 +251,41 @@ TEST(ClusterTables, NeighboursAreTheBoostDualGraphsAdjacency) {
   }
 }
 
+// Meshes whose every edge has at most two triangles take the neighbour build's one-pass path
+// (three slots a triangle): a pillow (two triangles sharing all three edges: each lists the
+// other once), a triangle (a, a, b) and one (a, b, a) on border edges, a one-vertex triangle, an
+// isolated triangle, and two pillows sharing a vertex only. Brute force, triangle by triangle.
+TEST(ClusterTables, NeighboursOnMeshesWithoutNonManifoldEdges) {
+  Mesh g = grid(4, 3, 0.05, 11);
+  std::vector<Tri> t(g.triangles().begin(), g.triangles().end());
+  std::vector<Vec3> p(g.positions().begin(), g.positions().end());
+  t.push_back({0, 0, 1});  // grid border edge (0, 1)
+  t.push_back({4, 9, 4});  // grid border edge (4, 9)
+  t.push_back({2, 2, 2});
+  const auto n = static_cast<std::uint32_t>(p.size());
+  for (int k = 0; k < 5; ++k) p.push_back(Vec3(5.0 + k, 0.3 * k, 0.1 * k * k));
+  t.push_back({n, n + 1, n + 2});  // pillow
+  t.push_back({n, n + 2, n + 1});
+  t.push_back({n, n + 3, n + 4});  // second pillow on vertex n
+  t.push_back({n + 4, n + 3, n});
+  p.push_back(Vec3(-3, -3, 1));
+  p.push_back(Vec3(-2, -3, 1));
+  p.push_back(Vec3(-3, -2, 1));
+  t.push_back({n + 5, n + 6, n + 7});  // isolated
+  const Mesh m(std::move(t), std::move(p));
+  const ClusterTables with = ClusterTables::build(m), without = ClusterTables::build(m, /*with_edges=*/false);
+  for (std::size_t e = 0; e < with.edges.edge_count(); ++e) ASSERT_LE(with.edges.valence(e), 2u) << "edge " << e;
+  EXPECT_EQ(with.neighbour_offsets, without.neighbour_offsets);
+  EXPECT_EQ(with.neighbours, without.neighbours);
+  for (std::uint32_t f = 0; f < m.triangle_count(); ++f) {
+    const auto nb = without.neighbours_of(f);
+    EXPECT_EQ(Ids(nb.begin(), nb.end()), brute_neighbours(m, f)) << "triangle " << f;
+  }
+  const std::uint32_t T = m.triangle_count();
+  EXPECT_EQ(Ids(without.neighbours_of(T - 5).begin(), without.neighbours_of(T - 5).end()), Ids{T - 4});  // pillow
+  EXPECT_TRUE(without.neighbours_of(T - 1).empty());
+}
+
 TEST(ClusterTables, DegenerateTriangles) {
   const Mesh m = degenerate_mix();
   const ClusterTables tb = ClusterTables::build(m);

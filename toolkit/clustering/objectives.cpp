@@ -13,13 +13,13 @@ namespace {
 /// an edge map: a run of equal pairs in topology.h's SortedSides is one mesh edge, and its
 /// distinct triangles are pairwise neighbours (every pair, at any valence: the dual graph without
 /// parallel edges). 8 bytes a side and the lists themselves, against the edge map's ~45 bytes a
-/// triangle. Two passes over the edges: count each triangle's entries, then write them.
+/// triangle. When every edge has at most two triangles, one pass over the edges into three slots
+/// a triangle; otherwise two: count each triangle's entries, then write them.
 void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, std::vector<std::uint32_t>& offsets,
                       std::vector<std::uint32_t>& out) {
   const std::size_t T = triangles.size();
   using Side = SortedSides::Side;
   const SortedSides ss = SortedSides::build(triangles, vertex_count);
-  offsets.assign(T + 1, 0);
   auto for_each_edge = [&](auto&& on_edge) {
     for (std::size_t v = 0; v < vertex_count; ++v) {
       const Side* lo = ss.sides.data() + ss.first[v];
@@ -34,6 +34,47 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
   // (a, b, a) lists one edge twice).
   auto tri = [](const Side* s) { return s->slot / 3; };
   auto first_of_its_triangle = [&](const Side* lo, const Side* s) { return s == lo || tri(s) != tri(s - 1); };
+  // Every edge with at most two triangles (a manifold mesh, with or without border): a triangle
+  // has at most one neighbour per side, so its list is written into three slots of its own, in
+  // one pass over the edges, and compacted below. An edge with three or more triangles: the
+  // general count-and-fill below instead.
+  {
+    out.assign(3 * T, 0);
+    std::vector<std::uint8_t> count(T, 0);
+    bool manifold = true;
+    for_each_edge([&](const Side* lo, const Side* hi) {
+      const Side* second = nullptr;  // the run's second distinct triangle, if any
+      for (const Side* s = lo + 1; s != hi; ++s)
+        if (first_of_its_triangle(lo, s)) {
+          if (second) manifold = false;
+          second = s;
+        }
+      if (!second || !manifold) return;
+      const std::uint32_t a = tri(lo), b = tri(second);
+      out[3 * std::size_t{a} + count[a]++] = b;  // one side of a and of b per run: at most 3 each
+      out[3 * std::size_t{b} + count[b]++] = a;
+    });
+    if (manifold) {
+      offsets.resize(T + 1);
+      std::size_t w = 0;
+      for (std::size_t t = 0; t < T; ++t) {
+        std::uint32_t b[3] = {out[3 * t], out[3 * t + 1], out[3 * t + 2]};
+        const int n = count[t];
+        if (n > 1 && b[1] < b[0]) std::swap(b[0], b[1]);
+        if (n > 2) {
+          if (b[2] < b[1]) std::swap(b[1], b[2]);
+          if (b[1] < b[0]) std::swap(b[0], b[1]);
+        }
+        offsets[t] = static_cast<std::uint32_t>(w);
+        for (int k = 0; k < n; ++k)  // two triangles sharing two edges meet twice: once in the list
+          if (k == 0 || b[k] != b[k - 1]) out[w++] = b[k];
+      }
+      offsets[T] = static_cast<std::uint32_t>(w);
+      out.resize(w);
+      return;
+    }
+  }
+  offsets.assign(T + 1, 0);
   for_each_edge([&](const Side* lo, const Side* hi) {
     std::size_t m = 0;  // distinct triangles on the edge
     for (const Side* s = lo; s != hi; ++s) m += first_of_its_triangle(lo, s);
