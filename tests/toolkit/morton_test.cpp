@@ -3,6 +3,7 @@
 #include "toolkit/geometry/morton.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -175,7 +176,14 @@ TEST(MortonOrder, LargeInputWithManyEqualCodesMatchesBruteForce) {
     const std::uint32_t clump = a < 1200 ? a / 30 * 30 : a;  // corners from one clump, or a far point
     t.push_back({a, clump, a < 1200 ? clump + 29 : a});
   }
-  for (MortonGrid g : {MortonGrid::Cube, MortonGrid::PerAxis}) ASSERT_EQ(morton_order(p, t, g), brute_force_order(p, t, g));
+  for (MortonGrid g : {MortonGrid::Cube, MortonGrid::PerAxis}) {
+    const std::vector<std::uint32_t> expected = brute_force_order(p, t, g);
+    for (int threads : {1, 2, 4}) {  // the buckets are sorted on the caller's threads
+      std::vector<std::uint32_t> order;
+      tbb::task_arena(threads).execute([&] { order = morton_order(p, t, g); });
+      ASSERT_EQ(order, expected) << threads << " threads";
+    }
+  }
 }
 
 TEST(MortonOrder, CubeGridKeepsRunsCompactOnThinMeshes) {

@@ -78,11 +78,11 @@ std::vector<std::uint32_t> morton_order(std::span<const Vec3> positions, std::sp
   const std::size_t n = codes.size();
   std::vector<std::uint32_t> order(n);
   if (n == 0) return order;
-  // (code, id) order in two steps, both sequential and cache-friendly (at 13M triangles this
-  // replaced a comparison sort that looked each code up through its id; docs/scale.md, "Growth"):
+  // (code, id) order in two cache-friendly steps (at 13M triangles they replaced a comparison
+  // sort that looked each code up through its id; docs/scale.md, "Open (issue 15)"):
   // 1. ids scattered by the code's top 11 bits, in ascending id order (a counting sort);
-  // 2. each bucket sorted by (code, id) as pairs, in a buffer of the bucket's size. A bucket's ids
-  //    ascend, so its codes are read front to back.
+  // 2. each bucket sorted by (code, id) as pairs, in a buffer of the bucket's size (per task). A
+  //    bucket's ids ascend, so its codes are read front to back.
   constexpr int kTopBits = 11, kShift = 3 * kMortonBits - kTopBits;
   constexpr std::size_t kBuckets = std::size_t{1} << kTopBits;
   std::vector<std::size_t> start(kBuckets + 1, 0);
@@ -92,15 +92,18 @@ std::vector<std::uint32_t> morton_order(std::span<const Vec3> positions, std::sp
     std::vector<std::size_t> fill(start.begin(), start.end() - 1);
     for (std::size_t i = 0; i < n; ++i) order[fill[codes[i] >> kShift]++] = static_cast<std::uint32_t>(i);
   }
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
-  for (std::size_t b = 0; b < kBuckets; ++b) {
-    const std::size_t lo = start[b], hi = start[b + 1];
-    if (hi - lo < 2) continue;
-    pairs.clear();
-    for (std::size_t i = lo; i < hi; ++i) pairs.emplace_back(codes[order[i]], order[i]);
-    std::sort(pairs.begin(), pairs.end());
-    for (std::size_t i = lo; i < hi; ++i) order[i] = pairs[i - lo].second;
-  }
+  // The buckets are independent: sorted on the caller's threads, the same order at any count.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kBuckets, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
+    for (std::size_t b = r.begin(); b < r.end(); ++b) {
+      const std::size_t lo = start[b], hi = start[b + 1];
+      if (hi - lo < 2) continue;
+      pairs.clear();
+      for (std::size_t i = lo; i < hi; ++i) pairs.emplace_back(codes[order[i]], order[i]);
+      std::sort(pairs.begin(), pairs.end());
+      for (std::size_t i = lo; i < hi; ++i) order[i] = pairs[i - lo].second;
+    }
+  });
   return order;
 }
 
