@@ -9,7 +9,7 @@
 //   start_rules.csv  growth's start rule (index, spatial, fewest-free): clusters, mean reg / Acc,
 //                    time;
 //   stages.csv       growth and contraction (Acc, MaxCount = MaxSize = --sphere-size) stage by
-//                    stage: AvgSA, the tables, the algorithm, the clusters from the labels (CPU
+//                    stage: the tables with AvgSA, the algorithm, the clusters from the labels (CPU
 //                    time, median of --repeats; the stages of one `ptc cluster` cluster stage);
 //   manifest.json    argv, the input mesh and its hash, parameters, versions, machine, timings.
 //
@@ -294,7 +294,7 @@ struct StageRow {
   std::uint64_t triangles = 0;
   std::string method;
   std::uint64_t size = 0;
-  double avg_sa_s = 0, tables_s = 0, algorithm_s = 0, from_labels_s = 0, total_s = 0;
+  double tables_s = 0, algorithm_s = 0, from_labels_s = 0, total_s = 0;
   std::uint64_t clusters = 0;
 };
 void visit_stage(const StageRow& r, Columns& col) {
@@ -302,7 +302,6 @@ void visit_stage(const StageRow& r, Columns& col) {
   col("triangles", r.triangles);
   col("method", r.method);
   col("size", r.size);
-  col("avg_sa_cpu_s", r.avg_sa_s);
   col("tables_cpu_s", r.tables_s);
   col("algorithm_cpu_s", r.algorithm_s);
   col("from_labels_cpu_s", r.from_labels_s);
@@ -313,7 +312,7 @@ void visit_stage(const StageRow& r, Columns& col) {
 /// The stages of cluster_mesh's growth / contraction with Acc (cgal sphere), each timed in CPU
 /// seconds, medians of `repeats`; every repeat must give the same clustering.
 StageRow stages_timed(const std::string& name, const Mesh& mesh, ClusterMethod method, std::uint32_t size, int repeats) {
-  std::vector<double> avg, tab, alg, lab, tot;
+  std::vector<double> tab, alg, lab, tot;
   Clustering first;
   for (int i = 0; i < repeats; ++i) {
     double c = cpu_seconds();
@@ -322,9 +321,9 @@ StageRow stages_timed(const std::string& name, const Mesh& mesh, ClusterMethod m
       c = now;
       return d;
     };
-    const double avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
-    avg.push_back(lap());
-    const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/false);
+    // cluster_mesh's one pass: the tables with AvgSA and the centroids' box (with_sums)
+    const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/false, /*with_sums=*/true);
+    const double avg_sa = tables.avg_sphere_area;
     tab.push_back(lap());
     ClusterConfig cfg;  // Acc, cgal sphere: cluster_mesh's own objective and loop
     cfg.method = method;
@@ -334,12 +333,12 @@ StageRow stages_timed(const std::string& name, const Mesh& mesh, ClusterMethod m
     alg.push_back(lap());
     Clustering cl = clustering_from_labels(run.labels, mesh.triangles());
     lab.push_back(lap());
-    tot.push_back(avg.back() + tab.back() + alg.back() + lab.back());
+    tot.push_back(tab.back() + alg.back() + lab.back());
     if (i > 0 && !same_clustering(cl, first)) non_deterministic(method);
     if (i == 0) first = std::move(cl);
   }
-  return {name, mesh.triangle_count(), std::string(to_string(method)), size, median(avg), median(tab), median(alg),
-          median(lab), median(tot), first.cluster_count()};
+  return {name, mesh.triangle_count(), std::string(to_string(method)), size, median(tab), median(alg), median(lab),
+          median(tot), first.cluster_count()};
 }
 
 [[noreturn]] void usage_error(const std::string& msg) {
@@ -580,15 +579,15 @@ int main(int argc, char** argv) {
     const std::uint32_t size = sphere_size;
     std::printf("\n# stages of growth / contraction (acc, cgal sphere, MaxCount = MaxSize = %u), CPU s, median of %d\n",
                 size, repeats);
-    std::printf("%-15s %9s %-11s %8s %8s %9s %11s %8s %8s\n", "mesh", "tris", "method", "avg_sa", "tables", "algorithm",
-                "from_labels", "total", "clusters");
+    std::printf("%-15s %9s %-11s %8s %9s %11s %8s %8s\n", "mesh", "tris", "method", "tables", "algorithm", "from_labels",
+                "total", "clusters");
     for (const auto& [name, mesh] : meshes)
       for (ClusterMethod m : methods) {
         if (!uses_objective(m)) continue;
         const StageRow r = stages_timed(name, mesh, m, size, repeats);
-        std::printf("%-15s %9llu %-11s %8.3f %8.3f %9.3f %11.3f %8.3f %8llu\n", name.c_str(),
-                    static_cast<unsigned long long>(r.triangles), r.method.c_str(), r.avg_sa_s, r.tables_s,
-                    r.algorithm_s, r.from_labels_s, r.total_s, static_cast<unsigned long long>(r.clusters));
+        std::printf("%-15s %9llu %-11s %8.3f %9.3f %11.3f %8.3f %8llu\n", name.c_str(),
+                    static_cast<unsigned long long>(r.triangles), r.method.c_str(), r.tables_s, r.algorithm_s,
+                    r.from_labels_s, r.total_s, static_cast<unsigned long long>(r.clusters));
         std::fflush(stdout);
         stage_rows.push_back(r);
       }
@@ -606,7 +605,7 @@ int main(int argc, char** argv) {
     write("speed", "speed.csv", tabulate(Schema{"ptc-clustering-speed", 1}, speed_rows, visit_speed));
     write("spheres", "spheres.csv", tabulate(Schema{"ptc-clustering-spheres", 1}, sphere_rows, visit_sphere));
     write("start", "start_rules.csv", tabulate(Schema{"ptc-clustering-start-rules", 1}, start_rows, visit_start));
-    write("stages", "stages.csv", tabulate(Schema{"ptc-clustering-stages", 1}, stage_rows, visit_stage));
+    write("stages", "stages.csv", tabulate(Schema{"ptc-clustering-stages", 2}, stage_rows, visit_stage));
     manifest.add_output("manifest.json");
     nlohmann::json meshes_json = nlohmann::json::array();
     for (const auto& [name, mesh] : meshes)

@@ -3,6 +3,7 @@
 // geometry/cluster_metrics.h and geometry/gwh01.h on the merged triangle set, on random adjacent
 // cluster pairs of real and hand-made meshes (degenerate and non-manifold ones first).
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <bit>
@@ -21,6 +22,8 @@
 #include "toolkit/clustering/objectives/naive.h"
 #include "toolkit/geometry/cluster_metrics.h"
 #include "toolkit/geometry/gwh01.h"
+#include "toolkit/geometry/morton.h"
+#include "toolkit/geometry/sphere.h"
 #include "toolkit/geometry/triangle.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/topology.h"
@@ -284,6 +287,40 @@ TEST(ClusterTables, NeighboursOnMeshesWithoutNonManifoldEdges) {
   const std::uint32_t T = m.triangle_count();
   EXPECT_EQ(Ids(without.neighbours_of(T - 5).begin(), without.neighbours_of(T - 5).end()), Ids{T - 4});  // pillow
   EXPECT_TRUE(without.neighbours_of(T - 1).empty());
+}
+
+// ClusterTables::build with_sums: AvgSA bit for bit average_triangle_sphere_area's (a mesh of
+// three chunks and one of less than one; 1, 2 and 4 threads), the centroids' box as a plain
+// pass builds it, and the Morton order from that box equal to morton_order's own.
+TEST(ClusterTables, SumsInTheTablesPassEqualTheSeparatePasses) {
+  Mesh far = grid(230, 160, 0.3, 5);  // 73,600 triangles: two chunks of AvgSA's sum
+  {
+    std::vector<Vec3> p(far.positions().begin(), far.positions().end());
+    for (Vec3& q : p) q = 1e-3 * q + Vec3(3e6, -2e5, 7.0);  // far from the origin, small triangles
+    far = far.with_positions(std::move(p));
+  }
+  for (const Mesh& m : {grid(400, 170, 0.2, 3), far, degenerate_mix(), load("elephant.off")}) {
+    const double expected = average_triangle_sphere_area(m.positions(), m.triangles());
+    Box3 box;
+    for (const Tri& f : m.triangles()) box.extend(triangle_centroid(m.position(f[0]), m.position(f[1]), m.position(f[2])));
+    const std::vector<std::uint32_t> order = morton_order(m.positions(), m.triangles());
+    for (int threads : {1, 2, 4}) {
+      tbb::task_arena(threads).execute([&] {
+        const ClusterTables with = ClusterTables::build(m, /*with_edges=*/false, /*with_sums=*/true);
+        EXPECT_TRUE(with.with_sums);
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(with.avg_sphere_area), std::bit_cast<std::uint64_t>(expected))
+            << m.triangle_count() << " triangles, " << threads << " threads";
+        EXPECT_EQ(with.centroid_bounds.lo, box.lo);
+        EXPECT_EQ(with.centroid_bounds.hi, box.hi);
+        EXPECT_EQ(morton_order(m.positions(), m.triangles(), MortonGrid::Cube, &with.centroid_bounds), order);
+        const ClusterTables without = ClusterTables::build(m, /*with_edges=*/false);
+        EXPECT_FALSE(without.with_sums);
+        EXPECT_EQ(without.avg_sphere_area, 0.0);
+        EXPECT_EQ(with.area, without.area);
+        EXPECT_EQ(with.normal, without.normal);
+      });
+    }
+  }
 }
 
 TEST(ClusterTables, DegenerateTriangles) {

@@ -20,6 +20,7 @@
 #include <cctype>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -300,6 +301,15 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
   }
 
   // Growth and contraction: the objective's own checks, then the one dispatch (detail::run_objective).
+  // Acc on the whole mesh takes AvgSA (and the centroids' box of the start rule) from the pass
+  // over the triangles that builds the tables (ClusterTables::build with_sums); in regions each
+  // region builds its own tables, so AvgSA is computed alone.
+  const bool whole = config.regions <= 1;
+  std::optional<ClusterTables> tables;
+  auto build_tables = [&](bool with_sums) {
+    // Edge lengths only for GWH01 (its boundary term and length scale).
+    tables.emplace(ClusterTables::build(mesh, /*with_edges=*/config.objective == ObjectiveKind::Gwh01, with_sums));
+  };
   double avg_sa = 0.0;
   switch (config.objective) {
     case ObjectiveKind::Acc:
@@ -308,7 +318,14 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
                                     "per cluster); got max_count " + std::to_string(config.max_count) +
                                     ", max_size " + std::to_string(config.max_size));
       if (mesh.empty()) return Clustering{};
-      avg_sa = known_avg_sa ? *known_avg_sa : average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+      if (known_avg_sa) {
+        avg_sa = *known_avg_sa;
+      } else if (whole) {
+        build_tables(/*with_sums=*/true);
+        avg_sa = tables->avg_sphere_area;
+      } else {
+        avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
+      }
       if (!(avg_sa > 0.0)) return one_per_triangle(mesh);  // see the file comment
       break;
     case ObjectiveKind::Naive:
@@ -320,10 +337,9 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
         throw std::invalid_argument("cluster_mesh: GWH01 needs max_count >= 3 (its vertex limit)");
       break;
   }
-  if (config.regions > 1) return cluster_in_regions(mesh, config, avg_sa, progress);
-  // Edge lengths only for GWH01 (its boundary term and length scale).
-  const ClusterTables tables = ClusterTables::build(mesh, /*with_edges=*/config.objective == ObjectiveKind::Gwh01);
-  return clustering_from_labels(detail::run_objective(tables, config, avg_sa, progress).labels, mesh.triangles());
+  if (!whole) return cluster_in_regions(mesh, config, avg_sa, progress);
+  if (!tables) build_tables(/*with_sums=*/false);
+  return clustering_from_labels(detail::run_objective(*tables, config, avg_sa, progress).labels, mesh.triangles());
 }
 
 }  // namespace ptc

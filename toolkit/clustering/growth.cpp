@@ -24,7 +24,7 @@ class StartPicker {
   StartPicker(const ClusterTables& tb, StartRule rule) : tb_(&tb), rule_(rule) {
     const std::uint32_t T = tb.triangle_count();
     if (rule == StartRule::IndexOrder) return;
-    order_ = morton_order(tb.positions, tb.triangles);
+    order_ = morton_order(tb.positions, tb.triangles, MortonGrid::Cube, tb.with_sums ? &tb.centroid_bounds : nullptr);
     if (rule != StartRule::FewestFree) return;
     rank_.resize(T);
     free_.resize(T);

@@ -1,8 +1,11 @@
 #include "toolkit/clustering/objectives.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <span>
 
+#include "toolkit/geometry/sphere.h"
 #include "toolkit/geometry/triangle.h"
 
 namespace ptc {
@@ -111,7 +114,7 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
 
 }  // namespace
 
-ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges) {
+ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges, bool with_sums) {
   ClusterTables t;
   t.mesh = &mesh;
   t.positions = mesh.positions();
@@ -119,12 +122,36 @@ ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges) {
   const std::size_t T = t.triangles.size();
   t.area.resize(T);
   t.normal.resize(T);
-  for (std::size_t i = 0; i < T; ++i) {
-    const Tri& f = t.triangles[i];
-    const TriangleGeometry g = triangle_geometry(t.positions[f[0]], t.positions[f[1]], t.positions[f[2]]);
-    t.area[i] = g.area;
-    t.normal[i] = g.normal;
+  // Per triangle: area and normal, and with the sums its minimal sphere's area and its centroid.
+  // In average_triangle_sphere_area's fixed chunks (each summed in order, then the chunks' sums in
+  // order), so AvgSA is its value bit for bit; chunks run on the caller's threads.
+  constexpr std::size_t chunk = kAvgSaChunk;
+  const std::size_t chunks = (T + chunk - 1) / chunk;
+  std::vector<double> sums(with_sums ? chunks : 0);
+  std::vector<Box3> boxes(with_sums ? chunks : 0);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    double sum = 0.0;
+    Box3 box;
+    for (std::size_t i = c * chunk; i < std::min(T, (c + 1) * chunk); ++i) {
+      const Tri& f = t.triangles[i];
+      const Vec3 &p0 = t.positions[f[0]], &p1 = t.positions[f[1]], &p2 = t.positions[f[2]];
+      const TriangleGeometry g = triangle_geometry(p0, p1, p2);
+      t.area[i] = g.area;
+      t.normal[i] = g.normal;
+      if (with_sums) {
+        sum += triangle_min_sphere(p0, p1, p2).surface_area();
+        box.extend(triangle_centroid(p0, p1, p2));
+      }
+    }
+    if (with_sums) sums[c] = sum, boxes[c] = box;
+  });
+  if (with_sums && T > 0) {
+    double sum = 0.0;
+    for (const double s : sums) sum += s;
+    t.avg_sphere_area = sum / static_cast<double>(T);
+    for (const Box3& b : boxes) t.centroid_bounds.extend(b);
   }
+  t.with_sums = with_sums;
   t.with_edges = with_edges;
   if (with_edges) {
     t.edges = EdgeMap::build(t.triangles, mesh.vertex_count());

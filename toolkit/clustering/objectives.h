@@ -55,12 +55,21 @@ struct ClusterTables {
   std::vector<std::uint32_t> neighbours;
   double mean_edge_length = 0;  ///< mean of edge_length over all mesh edges (L); 0 without edges (or lengths)
   bool with_edges = false;      ///< built with the edge map and edge lengths (see build)
+  /// Built with the mesh sums (see build): AvgSA, the mean surface area of the triangles' minimal
+  /// spheres (L^2; average_triangle_sphere_area's value, bit for bit), and the box of the
+  /// triangles' centroids (morton_codes' grid box). 0 and an empty box otherwise.
+  bool with_sums = false;
+  double avg_sphere_area = 0;
+  Box3 centroid_bounds;
 
   /// with_edges: build the edge map, edge_length and mean_edge_length (only objectives with
   /// kUsesBoundary or a length scale need them: GWH01; distinct_edges and the perimeter helpers
   /// below require them). Without, only the neighbour lists describe the topology (at 13M
   /// triangles the edge map costs 0.6 GB and a third of the tables' time).
-  [[nodiscard]] static ClusterTables build(const Mesh& mesh, bool with_edges = true);
+  /// with_sums: AvgSA and the centroids' box too, in the same pass over the triangles as their
+  /// areas and normals (each reads a triangle's three corners, which on a large mesh whose vertex
+  /// numbers are far from its triangle order are cache misses; docs/scale.md, "Open (issue 15)").
+  [[nodiscard]] static ClusterTables build(const Mesh& mesh, bool with_edges = true, bool with_sums = false);
 
   [[nodiscard]] std::uint32_t triangle_count() const { return static_cast<std::uint32_t>(triangles.size()); }
   [[nodiscard]] std::span<const std::uint32_t> neighbours_of(std::uint32_t t) const {

@@ -29,12 +29,17 @@ enum class MortonGrid { Cube, PerAxis };
 ///   cell_a = min(2^21 - 1, floor((c_a - lo_a) * s_a)),  code = morton_encode(cell_x, cell_y, cell_z),
 /// with lo, s as described at MortonGrid. Positions must be finite. Throws std::invalid_argument
 /// when a triangle refers to a position out of range. Empty input: empty result.
+/// centroid_bounds: the box of the centroids when the caller has it already (ClusterTables'
+/// with_sums; it must be that box, and every index in range): one pass over the triangles
+/// instead of two.
 [[nodiscard]] std::vector<std::uint64_t> morton_codes(std::span<const Vec3> positions, std::span<const Tri> triangles,
-                                                      MortonGrid grid = MortonGrid::Cube);
+                                                      MortonGrid grid = MortonGrid::Cube,
+                                                      const Box3* centroid_bounds = nullptr);
 
 /// Triangle ids 0..T-1 sorted by (morton code, id): ties keep index order, so the order is
 /// deterministic. Same preconditions as morton_codes. O(T log T).
 [[nodiscard]] std::vector<std::uint32_t> morton_order(std::span<const Vec3> positions, std::span<const Tri> triangles,
-                                                      MortonGrid grid = MortonGrid::Cube);
+                                                      MortonGrid grid = MortonGrid::Cube,
+                                                      const Box3* centroid_bounds = nullptr);
 
 }  // namespace ptc

@@ -344,7 +344,7 @@ double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<c
   if (triangles.empty()) return 0.0;
   // Fixed chunks summed in parallel, then the chunks' sums in order: one value at any thread
   // count (and the one-pass sum for meshes of one chunk).
-  constexpr std::size_t kChunk = 65536;
+  constexpr std::size_t kChunk = kAvgSaChunk;
   const std::size_t chunks = (triangles.size() + kChunk - 1) / kChunk;
   std::vector<double> sums(chunks, 0.0);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {

@@ -9,6 +9,7 @@
 //   (eps = DBL_EPSILON); `contains_all` checks this and tests call it.
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <span>
 #include <string_view>
@@ -105,9 +106,12 @@ inline constexpr SphereMethod kAllSphereMethods[] = {SphereMethod::Exact,  Spher
 /// is finally raised to the largest center-corner distance (containment, as above).
 [[nodiscard]] Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c);
 
+/// The chunk of average_triangle_sphere_area's sums (ClusterTables' one-pass AvgSA uses it too).
+inline constexpr std::size_t kAvgSaChunk = 65536;
+
 /// AvgSA of method.md: the mean surface area 4 pi R^2 of the minimal spheres of the single
 /// triangles (triangle_min_sphere); 0 for no triangles. Indices must be < positions.size()
-/// (asserted). Summed in parallel in fixed chunks of 65,536 triangles, added in order: the same
+/// (asserted). Summed in parallel in fixed chunks of kAvgSaChunk triangles, added in order: the same
 /// value at any thread count.
 [[nodiscard]] double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<const Tri> triangles);
 
