@@ -132,7 +132,9 @@ ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges, bool with_
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     double sum = 0.0;
     Box3 box;
-    for (std::size_t i = c * chunk; i < std::min(T, (c + 1) * chunk); ++i) {
+    const std::size_t end = std::min(T, (c + 1) * chunk);
+    for (std::size_t i = c * chunk; i < end; ++i) {
+      if (i + kCornerPrefetchAhead < end) prefetch_corners(t.positions.data(), t.triangles[i + kCornerPrefetchAhead]);
       const Tri& f = t.triangles[i];
       const Vec3 &p0 = t.positions[f[0]], &p1 = t.positions[f[1]], &p2 = t.positions[f[2]];
       const TriangleGeometry g = triangle_geometry(p0, p1, p2);

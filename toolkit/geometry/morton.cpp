@@ -64,6 +64,7 @@ std::vector<std::uint64_t> morton_codes(std::span<const Vec3> positions, std::sp
   // Per triangle, independent: in parallel (the caller's concurrency), the same codes.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t t = r.begin(); t < r.end(); ++t) {
+      if (t + kCornerPrefetchAhead < r.end()) prefetch_corners(positions.data(), triangles[t + kCornerPrefetchAhead]);
       const Tri& f = triangles[t];
       const Vec3 c = triangle_centroid(positions[f[0]], positions[f[1]], positions[f[2]]);
       std::uint32_t cell[3];

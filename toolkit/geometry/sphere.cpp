@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "toolkit/geometry/triangle.h"
+
 namespace ptc {
 
 namespace {
@@ -349,7 +351,9 @@ double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<c
   std::vector<double> sums(chunks, 0.0);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     double s = 0.0;
-    for (std::size_t i = c * kChunk; i < std::min(triangles.size(), (c + 1) * kChunk); ++i) {
+    const std::size_t end = std::min(triangles.size(), (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      if (i + kCornerPrefetchAhead < end) prefetch_corners(positions.data(), triangles[i + kCornerPrefetchAhead]);
       const Tri& t = triangles[i];
       assert(t[0] < positions.size() && t[1] < positions.size() && t[2] < positions.size());
       s += triangle_min_sphere(positions[t[0]], positions[t[1]], positions[t[2]]).surface_area();

@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "toolkit/core/types.h"
@@ -107,5 +108,14 @@ struct TriangleGeometry {
 
 /// Arithmetic mean of the corners, computed as (a + b + c) / 3.
 [[nodiscard]] inline Vec3 triangle_centroid(const Vec3& a, const Vec3& b, const Vec3& c) { return (a + b + c) / 3.0; }
+
+/// A pass over a large mesh's triangles reads each triangle's three corners; when the vertex
+/// numbers are far from the triangle order (a subdivided mesh numbers its new vertices by edge),
+/// those reads miss the cache one after the other. Such a pass asks for the corners of the
+/// triangle kCornerPrefetchAhead places ahead (docs/scale.md, "Open (issue 15)").
+inline constexpr std::size_t kCornerPrefetchAhead = 8;
+inline void prefetch_corners(const Vec3* positions, const Tri& f) {
+  for (const std::uint32_t v : f) __builtin_prefetch(positions + v);
+}
 
 }  // namespace ptc
