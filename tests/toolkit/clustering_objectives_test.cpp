@@ -284,7 +284,7 @@ TEST(ClusterTables, NeighboursOnMeshesWithoutNonManifoldEdges) {
     const auto nb = without.neighbours_of(f);
     EXPECT_EQ(Ids(nb.begin(), nb.end()), brute_neighbours(m, f)) << "triangle " << f;
   }
-  const std::uint32_t T = m.triangle_count();
+  const auto T = static_cast<std::uint32_t>(m.triangle_count());
   EXPECT_EQ(Ids(without.neighbours_of(T - 5).begin(), without.neighbours_of(T - 5).end()), Ids{T - 4});  // pillow
   EXPECT_TRUE(without.neighbours_of(T - 1).empty());
 }

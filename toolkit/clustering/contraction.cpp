@@ -140,16 +140,6 @@ class SlotStore {
   std::uint32_t size_ = 0;
 };
 
-/// What the contraction's cache keeps of an exact evaluation: the objective's Known, or all of it.
-template <class O, bool kKnown>
-struct CacheValueOf {
-  using type = typename O::Evaluation;
-};
-template <class O>
-struct CacheValueOf<O, true> {
-  using type = typename O::Known;
-};
-
 /// Edge property of the cluster graph for objectives that measure the boundary: 2 x the length
 /// of the manifold mesh edges the two clusters share (kept equal on both arcs of a pair).
 struct SharedLength {
@@ -421,7 +411,11 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   // only that kept, and the rest made again (evaluate_with): 48-byte entries, so many more of
   // them, one per eight triangles up to 2^20 (docs/scale.md, "Contraction time on one thread").
   constexpr bool kKnown = requires(const Evaluation& e) { O::known_of(e); };
-  using CacheValue = typename CacheValueOf<O, kKnown>::type;
+  auto cache_value = [](const Evaluation& ev) {  // what the cache keeps: the objective's Known, or all of it
+    if constexpr (kKnown) return O::known_of(ev);
+    else return ev;
+  };
+  using CacheValue = decltype(cache_value(std::declval<const Evaluation&>()));
   struct CacheSlot {
     std::uint64_t pair = ~std::uint64_t{0};
     std::uint32_t ver_lo = 0, ver_hi = 0;
@@ -465,8 +459,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
       const Entry exact = make_entry(a, b, ev.score, true);
       if (!heap.empty() && ranks_below(exact.score, exact.pair, heap.top().score, heap.top().pair)) {
         heap.push(exact);  // another entry ranks higher: wait
-        if constexpr (kKnown) slot = {exact.pair, exact.ver_lo, exact.ver_hi, O::known_of(ev)};
-        else slot = {exact.pair, exact.ver_lo, exact.ver_hi, ev};
+        slot = {exact.pair, exact.ver_lo, exact.ver_hi, cache_value(ev)};
         continue;
       }
     }

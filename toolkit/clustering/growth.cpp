@@ -207,7 +207,7 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
         fstamp[u] = cluster;
         Candidate c{u, 0, 0, {}, {}, 0, {}};
         if constexpr (kFast) {
-          for (std::uint32_t w : tb.triangles[u]) c.kept.extend(tb.positions[w]);  // as single() makes its box
+          c.kept = objective.triangle_box(u);
         } else {
           c.kept = objective.single(u);
         }

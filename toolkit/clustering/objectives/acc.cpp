@@ -36,7 +36,10 @@ Vec3 local_origin(const Box3& box) {
 /// Absolute slack for tests on sphere centers stored in absolute coordinates: the center is
 /// rounded to ulp(|c|) when translated back from the local frame (cluster_metrics does the same),
 /// so geometric predicates on it are only decided beyond a few ulps of the coordinates.
-[[gnu::always_inline]] inline double center_slack(const Vec3& c, const Vec3& p) { return 8.0 * kEps * std::max(max_abs(c), max_abs(p)); }
+[[gnu::always_inline]] inline double center_slack_by(double c_abs, const Vec3& p) {
+  return 8.0 * kEps * std::max(c_abs, max_abs(p));
+}
+[[gnu::always_inline]] inline double center_slack(const Vec3& c, const Vec3& p) { return center_slack_by(max_abs(c), p); }
 
 /// surely_inside from its terms: the radius, center_slack(center, p) and |p - center|^2.
 [[gnu::always_inline]] inline bool surely_inside_by(double radius, double slack, double d2) {
@@ -143,8 +146,8 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
   }
   s.dop_lo.fill(std::numeric_limits<float>::infinity());
   s.dop_hi.fill(-std::numeric_limits<float>::infinity());
+  s.box = triangle_box(t);
   if (!tuning_.dop_bound) {  // growth: the box only
-    for (std::uint32_t v : tb.triangles[t]) s.box.extend(tb.positions[v]);
     s.pending = t;
     return s;
   }
@@ -154,7 +157,6 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
   for (int k = 0; k < 5; ++k) lo[k] = _mm_set1_pd(std::numeric_limits<double>::infinity()), hi[k] = -lo[k];
   for (std::uint32_t v : tb.triangles[t]) {
     const Vec3& p = tb.positions[v];
-    s.box.extend(p);
     const double x = p.x(), y = p.y(), z = p.z();
     const __m128d proj[5] = {_mm_set_pd(x + y - z, x + y + z), _mm_set_pd(-x + y + z, x - y + z),
                              _mm_set_pd(x - y, x + y), _mm_set_pd(x - z, x + z), _mm_set_pd(y - z, y + z)};
@@ -572,7 +574,7 @@ void AccObjective::growth_prepare(const Summary& a, std::span<const GrowthQuery>
     p.n_avg = n_avg;
     const Vec3& cb = tb.positions[q.v];
     // surely_inside(sa, cb) and center_slack(sa.center, cb) with their common terms computed once
-    const double slack = 8.0 * kEps * std::max(sa_center_abs, max_abs(cb));
+    const double slack = center_slack_by(sa_center_abs, cb);
     const double d2 = (cb - sa.center).squaredNorm();
     if (surely_inside_by(ra, slack, d2)) continue;
     const double r2 = point_r2_bound(d2, ra);

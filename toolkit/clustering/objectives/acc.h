@@ -195,6 +195,13 @@ class AccObjective {
   [[nodiscard]] Evaluation growth_refine(const Summary& a, const GrowthPrepared& p, const MergeContext& ctx,
                                          Precision precision);
 
+  /// single(t).box: the box of triangle t's corners (growth's candidates keep it instead of the summary).
+  [[nodiscard]] Box3 triangle_box(std::uint32_t t) const {
+    Box3 b;
+    for (std::uint32_t v : tables_->triangles[t]) b.extend(tables_->positions[v]);
+    return b;
+  }
+
   /// S(k) of a summary (computes a singleton's sphere on first use and keeps it in the summary).
   [[nodiscard]] const Sphere& sphere_of(const Summary& s);
 
