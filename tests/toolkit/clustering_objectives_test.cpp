@@ -586,6 +586,55 @@ TEST(AccObjective, DopBoundIsABoundWhereItIsTight) {
   EXPECT_GE(tight, 30);  // the bound path ran (not a cheaper exact answer)
 }
 
+// Precision::SupportBound (the contraction's middle level): an upper bound on the exact score,
+// never above the O(1) bound, usually much tighter; when it is exact, the exact evaluation itself.
+// Its R^2 keeps the 1e-12 margin below the exact sphere's, also where the three points span the
+// exact sphere (then it is within that margin of it). Near the origin, far from it and tiny.
+TEST(AccObjective, SupportBoundBoundsTheExactScoreWithItsMargin) {
+  const Mesh elephant = load("elephant.off");
+  auto scaled = [&](double s, const Vec3& t) {
+    std::vector<Vec3> p(elephant.positions().begin(), elephant.positions().end());
+    for (Vec3& v : p) v = s * v + t;
+    return elephant.with_positions(std::move(p));
+  };
+  const Mesh far = scaled(1e-3, Vec3(4e6, -2e6, 1e6)), tiny = scaled(1e-30, Vec3(0, 0, 0));
+  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  int bounds = 0, tighter = 0, spanned = 0;
+  for (const Mesh* m : {&elephant, &far, &tiny}) {
+    const EdgeMap em = EdgeMap::build(m->triangles(), m->vertex_count());
+    const ClusterTables tb = ClusterTables::build(*m);
+    AccObjective o(tb, acc_params(*m, 40, 20), AccTuning::for_contraction());
+    std::mt19937_64 rng(17);
+    for (int i = 0; i < 60; ++i) {
+      const auto [a, b] = random_pair(tb, rng, 1 + rng() % 50, 1 + rng() % 30);
+      const auto sa = summary_of(o, *m, em, a), sb = summary_of(o, *m, em, b);
+      Candidate c;
+      make_candidate(*m, em, a, b, c);
+      const auto exact = o.evaluate(sa, sb, c.ctx, Precision::Exact);
+      const auto support = o.evaluate(sa, sb, c.ctx, Precision::SupportBound);
+      const auto cheap = o.evaluate(sa, sb, c.ctx, Precision::UpperBoundAllowed);
+      const std::string what = "trial " + std::to_string(i) + ", scale " + std::to_string(m->position(0).norm());
+      if (support.exact) {
+        EXPECT_EQ(bits(support.score), bits(exact.score)) << what;
+        EXPECT_EQ(bits(support.sphere.radius), bits(exact.sphere.radius)) << what;
+        continue;
+      }
+      ++bounds;
+      EXPECT_GE(support.score, exact.score) << what;
+      ASSERT_FALSE(cheap.exact) << what;
+      EXPECT_LE(support.score, cheap.score) << what;
+      tighter += support.score < cheap.score;
+      const double r2 = exact.sphere.radius * exact.sphere.radius;
+      const double s2 = o.support_r2(c.ctx, exact.box);
+      EXPECT_LE(s2, r2 * (1.0 - 0.5e-12)) << what;
+      spanned += s2 >= r2 * (1.0 - 3e-12);
+    }
+  }
+  EXPECT_GE(bounds, 120);
+  EXPECT_GE(tighter, bounds / 2);
+  EXPECT_GE(spanned, 20);  // the margin check met spheres the three points span
+}
+
 // ---- Naive ---------------------------------------------------------------------------------
 
 TEST(NaiveObjective, ScoreEqualsClusterMetricsAndLimitIsMaxCount) {

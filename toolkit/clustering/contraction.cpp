@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <bit>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -13,10 +15,15 @@ namespace ptc {
 
 namespace {
 
+/// What an entry's key is (in ver_hi's two top bits): the exact score, or an upper bound from
+/// Precision::SupportBound; neither: from Precision::UpperBoundAllowed. Versions stay below 2^30
+/// (a version counts its cluster's merges, and the contraction takes fewer than 2^30 triangles).
 constexpr std::uint32_t kExactBit = 0x80000000u;
+constexpr std::uint32_t kSupportBit = 0x40000000u;
+constexpr std::uint32_t kKeyBits = kExactBit | kSupportBit;
 
 /// A queue entry: the key (score, pair (lo << 32) | hi, lo < hi) and the version stamps of lo and
-/// hi when it was pushed (ver_hi carries the exact flag in its top bit).
+/// hi when it was pushed (ver_hi carries the key's kind, kKeyBits).
 struct Entry {
   double score;
   std::uint64_t pair;
@@ -202,6 +209,8 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     if (progress) progress(1.0);
     return run;
   }
+  if (T >= (1u << 30))
+    throw std::invalid_argument("contraction: at most 2^30 - 1 triangles (" + std::to_string(T) + " given)");
 
   // ---- Clusters: one per triangle. A singleton's member and vertex lists are implicit (no
   // allocation for the T initial clusters); a merged cluster owns one block [member count,
@@ -376,9 +385,9 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   // (live pairs only decrease) and the heap is never copied to grow.
   auto purge_above = [&] { return adj_total / 2 + adj_total / 4 + 1024; };
   heap.reserve(purge_above() + 65536);  // + the pushes of the merges before a purge
-  auto make_entry = [&](std::uint32_t x, std::uint32_t y, double score, bool exact) {
+  auto make_entry = [&](std::uint32_t x, std::uint32_t y, double score, std::uint32_t key_kind) {
     const std::uint32_t lo = std::min(x, y), hi = std::max(x, y);
-    return Entry{score, (std::uint64_t{lo} << 32) | hi, version[lo], version[hi] | (exact ? kExactBit : 0u)};
+    return Entry{score, (std::uint64_t{lo} << 32) | hi, version[lo], version[hi] | key_kind};
   };
   // Evaluates the pair (x, y) cheaply; false when it deserves no entry (illegal, or never positive).
   auto entry_of = [&](std::uint32_t x, std::uint32_t y, Entry& out) {
@@ -390,7 +399,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     const Evaluation ev = objective.evaluate(sa, sb, ctx, Precision::UpperBoundAllowed);
     ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
     if (O::kMergeOnlyPositive && !(ev.score > 0.0)) return false;
-    out = make_entry(a, b, ev.score, ev.exact);
+    out = make_entry(a, b, ev.score, ev.exact ? kExactBit : 0u);
     return true;
   };
   for (std::uint32_t t = 0; t < T; ++t)
@@ -402,7 +411,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
   heap.heapify();
   auto current = [&](const Entry& e) {
     const auto lo = static_cast<std::uint32_t>(e.pair >> 32), hi = static_cast<std::uint32_t>(e.pair);
-    return alive[lo] && alive[hi] && version[lo] == e.ver_lo && version[hi] == (e.ver_hi & ~kExactBit);
+    return alive[lo] && alive[hi] && version[lo] == e.ver_lo && version[hi] == (e.ver_hi & ~kKeyBits);
   };
 
   // ---- A direct-mapped cache of the exact evaluations of re-inserted entries, so that an entry
@@ -441,6 +450,7 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
     const bool exact_key = (top.ver_hi & kExactBit) != 0;
     CacheSlot& slot = cache[(top.pair * 0x9E3779B97F4A7C15ull) >> (64 - cache_bits)];
     Evaluation ev;
+    bool have = false;
     if (exact_key && slot.pair == top.pair && slot.ver_lo == top.ver_lo && slot.ver_hi == top.ver_hi) {
       // evaluated when it was re-inserted (the same value evaluate() gives again)
       if constexpr (kKnown) {
@@ -449,14 +459,33 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
       } else {
         ev = slot.value;
       }
-    } else {
+      have = true;
+    } else if (options.support_level && (top.ver_hi & kKeyBits) == 0) {
+      // The key is the O(1) bound: first the bound from three points of the union
+      // (Precision::SupportBound). Most such pairs rank below the next entry with it and wait
+      // without their exact sphere (docs/scale.md, "Contraction time on one thread"). Which pair
+      // merges does not depend on the bounds: it is the one whose exact score ranks first.
+      const auto [sa, sb] = pair_summaries(a, b);
+      ev = objective.evaluate(sa, sb, ctx, Precision::SupportBound);
+      ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
+      have = ev.exact;
+      if (!ev.exact) {
+        if (O::kMergeOnlyPositive && !(ev.score > 0.0)) continue;
+        const Entry bound = make_entry(a, b, ev.score, kSupportBit);
+        if (!heap.empty() && ranks_below(bound.score, bound.pair, heap.top().score, heap.top().pair)) {
+          heap.push(bound);
+          continue;
+        }
+      }
+    }
+    if (!have) {
       const auto [sa, sb] = pair_summaries(a, b);
       ev = objective.evaluate(sa, sb, ctx, Precision::Exact);
       ++run.exact_evaluations;
     }
     if (!exact_key) {  // the key was an upper bound
       if (O::kMergeOnlyPositive && !(ev.score > 0.0)) continue;
-      const Entry exact = make_entry(a, b, ev.score, true);
+      const Entry exact = make_entry(a, b, ev.score, kExactBit);
       if (!heap.empty() && ranks_below(exact.score, exact.pair, heap.top().score, heap.top().pair)) {
         heap.push(exact);  // another entry ranks higher: wait
         slot = {exact.pair, exact.ver_lo, exact.ver_hi, cache_value(ev)};

@@ -79,6 +79,10 @@ namespace ptc {
 struct ContractionOptions {
   std::uint32_t target_clusters = 0;  ///< stop when this many clusters remain (0 = no target)
   bool record_merges = false;         ///< fill ClusterRun::merges
+  /// A pair popped with the O(1) bound as its key gets Precision::SupportBound before its exact
+  /// evaluation (docs/scale.md, "Contraction time on one thread"). The same merges either way;
+  /// false: the exact evaluation at once (the reference in the tests).
+  bool support_level = true;
 };
 
 /// Contracts the dual graph. Labels are the clusters' smallest triangle ids. Deterministic.

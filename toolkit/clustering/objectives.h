@@ -110,6 +110,10 @@ enum class Precision {
   RefinedBound,       ///< a tighter upper bound, one O(|V(A)|) pass (still far below the exact cost)
   TightBound,         ///< a tighter one still, a few O(|V(A)|) passes
   Exact,              ///< the exact score
+  /// Outside growth's ladder: an upper bound for any pair from three passes over V(A u B), never
+  /// computing the exact score where that needs more than UpperBoundAllowed's shortcuts (the
+  /// contraction's middle level; objectives without it evaluate exactly).
+  SupportBound,
 };
 
 /// What an objective's evaluate() returns at least (each objective adds what its merge() reuses,

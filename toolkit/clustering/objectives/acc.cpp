@@ -352,6 +352,40 @@ bool AccObjective::small_support_sphere(const MergeContext& ctx, const Box3& box
   return false;
 }
 
+double AccObjective::support_r2(const MergeContext& ctx, const Box3& box) const {
+  // On cluster-local coordinates, the points sphere_of_union gives the exact computation. The
+  // minimal sphere of a subset is never larger than the union's. Its computed radius is the
+  // largest distance from a computed center (triangle_min_sphere: the circumcenter from the
+  // corner of the largest angle, well conditioned), within a few ulps of the subset's minimal
+  // radius; the exact sphere contains every point up to ~1e-14 relative. The 1e-12 shrink covers
+  // both.
+  const auto& pos = tables_->positions;
+  const Vec3 o = local_origin(box);
+  auto farthest = [&](const Vec3& c, double& d2max) {
+    Vec3 best = Vec3::Zero();
+    d2max = -1.0;
+    for (const std::span<const std::uint32_t> list : {ctx.a_vertices, ctx.added})
+      for (const std::uint32_t u : list) {
+        const Vec3 p = pos[u] - o;
+        if (const double d2 = (p - c).squaredNorm(); d2 > d2max) {
+          d2max = d2;
+          best = p;
+        }
+      }
+    return best;
+  };
+  double d2;
+  const Vec3 p1 = farthest(0.5 * (box.lo + box.hi) - o, d2);
+  const Vec3 p2 = farthest(p1, d2);
+  const Sphere diametral{0.5 * (p1 + p2), 0.5 * std::sqrt(d2)};
+  const Vec3 p3 = farthest(diametral.center, d2);
+  double r = diametral.radius;
+  if (d2 > r * r) r = std::max(r, triangle_min_sphere(p1, p2, p3).radius);
+  constexpr double kShrink = 1.0 - 1e-12;
+  const double r2 = r * r * (kShrink * kShrink);
+  return std::isfinite(r2) ? r2 : 0.0;
+}
+
 AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary& b, const MergeContext& ctx,
                                                 Precision precision) {
   const bool memo = tuning_.vertex_memo && minimal_ && ctx.added.size() == 1;
@@ -522,9 +556,14 @@ void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr
       const double slack = center_slack(filter.ca, filter.cb);
       const double shrink = bound_shrink(slack, ra);
       const double r2_lb = r2 * shrink * shrink;
-      if (shrink > 0.0 && r2_lb > 0.0 && precision != Precision::Exact) {
+      // The key's R^2: r2_lb when the shrink leaves a bound, and SupportBound's three points (a
+      // bound of its own, made from the points, not from the spheres). r2_lb alone still sets
+      // the filter of the exact computation below, as for Precision::Exact.
+      double key_r2 = shrink > 0.0 ? r2_lb : 0.0;
+      if (precision == Precision::SupportBound) key_r2 = std::max(key_r2, support_r2(ctx, ev.box));
+      if (key_r2 > 0.0 && precision != Precision::Exact) {
         ev.exact = false;
-        ev.score = score_of(ev.area_p, r2_lb, ctx.vertex_count, nullptr);
+        ev.score = score_of(ev.area_p, key_r2, ctx.vertex_count, nullptr);
         return;
       }
       // Points that are surely inside S(A u B) cannot support it: leave them out of the exact

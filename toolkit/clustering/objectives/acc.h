@@ -55,9 +55,12 @@
 //   superset's minimal sphere is never smaller). For a single added vertex v (growth),
 //   Precision::RefinedBound adds R >= max over p in A of |v - p| / 2 (one pass over V(A)), and
 //   Precision::TightBound the radius of the minimal sphere of three points of A u {v} (three
-//   passes; that sphere often contains every point and is then the exact answer). Every R_lb is
-//   shrunk by 1e-12 relative and by the absolute rounding of the sphere centers, so that rounding
-//   of the computed spheres (~1e-15) cannot put the bound below the computed exact value.
+//   passes; that sphere often contains every point and is then the exact answer). For any
+//   pair, Precision::SupportBound adds the radius of the minimal sphere of three points of
+//   A u B (support_r2; three passes over V(A u B); never the exact answer: the contraction keeps
+//   CGAL's sphere as its exact value). Every R_lb is shrunk by 1e-12 relative and (from the
+//   spheres of A and B) by the absolute rounding of their centers, so that rounding of the
+//   computed spheres (~1e-15) cannot put the bound below the computed exact value.
 // - Point filter for the exact computation: the center c of S(A u B) satisfies
 //   |c - c_A| <= sqrt(R_ub^2 - r_A^2) (from R^2 >= r_A^2 + |c - c_A|^2 and R <= R_ub =
 //   (d + r_A + r_B) / 2), so a point p of A with |p - c_A| + that < R_lb lies strictly inside
@@ -202,6 +205,12 @@ class AccObjective {
     return b;
   }
 
+  /// Precision::SupportBound's R^2: that of the minimal sphere of three points of V(A) u added
+  /// (the point farthest from the center of `box`, the box of A u B; the point farthest from it;
+  /// the point farthest from their sphere), shrunk by 1e-12 relative. A lower bound on R^2 of
+  /// S(A u B) as evaluate() computes it; 0 when not finite.
+  [[nodiscard]] double support_r2(const MergeContext& ctx, const Box3& box) const;
+
   /// S(k) of a summary (computes a singleton's sphere on first use and keeps it in the summary).
   [[nodiscard]] const Sphere& sphere_of(const Summary& s);
 
@@ -232,6 +241,7 @@ class AccObjective {
   /// its points when that suffices (true, exact to rounding), else a sphere whose radius is a
   /// lower bound (false). O(|V(A)|).
   [[nodiscard]] bool small_support_sphere(const MergeContext& ctx, const Box3& box, Sphere& out) const;
+
   void remember(const MergeContext& ctx, const Sphere& s);
   void enter_lineage(const Summary& a);
   [[nodiscard]] double known_r2(std::uint32_t v) const;
