@@ -586,6 +586,68 @@ TEST(AccObjective, DopBoundIsABoundWhereItIsTight) {
   EXPECT_GE(tight, 30);  // the bound path ran (not a cheaper exact answer)
 }
 
+// single()'s 26-DOP in floats, rounded inwards four at a time: every end equals the float nearest
+// the double extent from inside (nextafter from the nearest conversion), bit for bit, on
+// coordinates around every edge of the float range: zeros of both signs, below the smallest
+// subnormal, subnormals, exactly representable values, halfway cases, FLT_MAX and beyond, and
+// values that overflow to infinity.
+TEST(AccObjective, DopEndsAreTheNearestFloatsInside) {
+  auto up = [](double x) {  // the smallest float >= x (x finite or infinite)
+    float f = static_cast<float>(x);
+    if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+  };
+  auto down = [&](double x) { return -up(-x); };
+  const double fmax = std::numeric_limits<float>::max();
+  const std::vector<double> special{0.0, -0.0, 1e-46, -1e-46, 1.4e-45, -2.9e-45, 3e-45, 1e-39, -1e-39,
+                                    1.0, -1.0, 1.0 + 0x1p-24, 1.0 + 0x1p-23, 1.0 + 3 * 0x1p-25, -(1.0 + 0x1p-24),
+                                    fmax, -fmax, fmax * (1 + 0x1p-25), fmax * (1 + 0x1p-23), -fmax * (1 + 0x1p-23),
+                                    1e39, -1e39, 1e300, -1e300, 0.1, -0.1, 1e-7, 123456.789};
+  std::mt19937_64 rng(5);
+  std::vector<Vec3> p;
+  std::vector<Tri> tris;
+  for (int t = 0; t < 3000; ++t) {
+    for (int c = 0; c < 3; ++c) {
+      Vec3 v;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint64_t r = rng();
+        v[k] = r % 3 == 0 ? special[(r >> 8) % special.size()]
+                          : std::ldexp(static_cast<double>(static_cast<std::int64_t>(r >> 11) - (1ll << 52)),
+                                       static_cast<int>((r >> 3) % 40) - 60);
+      }
+      p.push_back(v);
+    }
+    const auto b = static_cast<std::uint32_t>(3 * t);
+    tris.push_back({b, b + 1, b + 2});
+  }
+  const Mesh m(std::move(tris), std::move(p));
+  const ClusterTables tb = ClusterTables::build(m);
+  ClusterParams params;
+  params.max_count = 50;
+  params.max_size = 50;
+  params.avg_sa = 1.0;
+  AccObjective o(tb, params, AccTuning::for_contraction());
+  auto bits = [](float f) { return std::bit_cast<std::uint32_t>(f); };
+  int stepped = 0;
+  for (std::uint32_t t = 0; t < m.triangle_count(); ++t) {
+    const AccObjective::Summary s = o.single(t);
+    double lo[10], hi[10];
+    std::fill(lo, lo + 10, std::numeric_limits<double>::infinity());
+    std::fill(hi, hi + 10, -std::numeric_limits<double>::infinity());
+    for (std::uint32_t v : m.triangle(t)) {
+      const double x = m.position(v).x(), y = m.position(v).y(), z = m.position(v).z();
+      const double proj[10] = {x + y + z, x + y - z, x - y + z, -x + y + z, x + y, x - y, x + z, x - z, y + z, y - z};
+      for (int k = 0; k < 10; ++k) lo[k] = std::min(lo[k], proj[k]), hi[k] = std::max(hi[k], proj[k]);
+    }
+    for (int k = 0; k < 10; ++k) {
+      ASSERT_EQ(bits(s.dop_lo[k]), bits(up(lo[k]))) << "triangle " << t << ", direction " << k << ", lo " << lo[k];
+      ASSERT_EQ(bits(s.dop_hi[k]), bits(down(hi[k]))) << "triangle " << t << ", direction " << k << ", hi " << hi[k];
+      stepped += static_cast<double>(s.dop_lo[k]) != lo[k];
+    }
+  }
+  EXPECT_GT(stepped, 10000);  // most ends did round
+}
+
 // Precision::SupportBound (the contraction's middle level): an upper bound on the exact score,
 // never above the O(1) bound, usually much tighter; when it is exact, the exact evaluation itself.
 // Its R^2 keeps the 1e-12 margin below the exact sphere's, also where the three points span the

@@ -83,18 +83,26 @@ double cos_of_sum(double c1, double c2) {
   return c1 * c2 - s1 * s2;
 }
 
-/// The float nearest x from above / below (inward rounding of the DOP, acc.h); a double beyond
-/// the float range becomes the infinity on its side (from above: +inf for x > FLT_MAX, which makes
-/// a lower end useless and the width -inf: no bound, never a wrong one).
-float float_up(double x) {
-  // next_float_up(f) when the conversion rounded down, selected without a branch (half of the
-  // conversions round down, and single() runs for every singleton a contraction evaluates).
-  const auto f = static_cast<float>(x);
-  const auto bits = std::bit_cast<std::uint32_t>(f);
-  const std::uint32_t up_bits = f == 0.0f ? 1u : (static_cast<std::int32_t>(bits) >= 0 ? bits + 1 : bits - 1);
-  return std::bit_cast<float>(static_cast<double>(f) < x ? up_bits : bits);
+/// The float nearest x from above, for four doubles at once (SSE2; lanes 0-1 from x01, 2-3 from
+/// x23): the inward rounding of the DOP's lower ends (acc.h; the upper ends take -float_up4(-x)).
+/// A double beyond the float range becomes the infinity on its side (from above: +inf for
+/// x > FLT_MAX, which makes a lower end useless and the width -inf: no bound, never a wrong one).
+/// The conversion rounds to nearest (MXCSR's default, as static_cast<float>); a lane that rounded
+/// down steps one float up: +1 on the bits of a positive float, -1 on a negative one, the
+/// smallest positive subnormal from either zero. Without branches: half of the conversions round
+/// down, and single() runs for every singleton a contraction evaluates.
+[[gnu::always_inline]] inline __m128 float_up4(__m128d x01, __m128d x23) {
+  const __m128 f = _mm_movelh_ps(_mm_cvtpd_ps(x01), _mm_cvtpd_ps(x23));
+  const __m128d back01 = _mm_cvtps_pd(f), back23 = _mm_cvtps_pd(_mm_movehl_ps(f, f));
+  const __m128i below = _mm_castps_si128(_mm_shuffle_ps(_mm_castpd_ps(_mm_cmplt_pd(back01, x01)),
+                                                        _mm_castpd_ps(_mm_cmplt_pd(back23, x23)), _MM_SHUFFLE(2, 0, 2, 0)));
+  const __m128i bits = _mm_castps_si128(f);
+  const __m128i one = _mm_set1_epi32(1);
+  const __m128i zero = _mm_castps_si128(_mm_cmpeq_ps(f, _mm_setzero_ps()));
+  const __m128i stepped = _mm_add_epi32(bits, _mm_or_si128(_mm_srai_epi32(bits, 31), one));  // +1 or -1
+  const __m128i up = _mm_or_si128(_mm_and_si128(zero, one), _mm_andnot_si128(zero, stepped));
+  return _mm_castsi128_ps(_mm_or_si128(_mm_and_si128(below, up), _mm_andnot_si128(below, bits)));
 }
-float float_down(double x) { return -float_up(-x); }
 
 /// True when every normal of the part has a non-negative dot product with n (proved by its cone):
 /// cos(angle(axis, n) + half-angle) >= kConeMargin.
@@ -165,12 +173,18 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
       hi[k] = _mm_max_pd(proj[k], hi[k]);
     }
   }
-  alignas(16) double lo_d[10], hi_d[10];
-  for (int k = 0; k < 5; ++k) _mm_store_pd(lo_d + 2 * k, lo[k]), _mm_store_pd(hi_d + 2 * k, hi[k]);
-  for (int k = 0; k < 10; ++k) {
-    s.dop_lo[k] = float_up(lo_d[k]);
-    s.dop_hi[k] = float_down(hi_d[k]);
-  }
+  // Rounded inwards four at a time: lower ends up (float_up4), upper ends down (-float_up4(-x)).
+  const __m128d sign_d = _mm_set1_pd(-0.0);
+  const __m128 sign_f = _mm_set1_ps(-0.0f);
+  auto down4 = [&](__m128d x01, __m128d x23) {
+    return _mm_xor_ps(float_up4(_mm_xor_pd(x01, sign_d), _mm_xor_pd(x23, sign_d)), sign_f);
+  };
+  _mm_storeu_ps(&s.dop_lo[0], float_up4(lo[0], lo[1]));
+  _mm_storeu_ps(&s.dop_lo[4], float_up4(lo[2], lo[3]));
+  _mm_storel_pi(reinterpret_cast<__m64*>(&s.dop_lo[8]), float_up4(lo[4], lo[4]));
+  _mm_storeu_ps(&s.dop_hi[0], down4(hi[0], hi[1]));
+  _mm_storeu_ps(&s.dop_hi[4], down4(hi[2], hi[3]));
+  _mm_storel_pi(reinterpret_cast<__m64*>(&s.dop_hi[8]), down4(hi[4], hi[4]));
   s.pending = t;  // the sphere is computed when first needed (growth rarely needs a candidate's)
   return s;
 }
