@@ -303,6 +303,8 @@ TEST(Contraction, SupportLevelGivesTheSameMergesBitForBit) {
   meshes.push_back({"elephant", elephant});
   meshes.push_back({"elephant far away", moved(elephant, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))});
   meshes.push_back({"elephant tiny", moved(elephant, 1e-30 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
+  meshes.push_back({"elephant at 1e-100", moved(elephant, 1e-100 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
+  meshes.push_back({"grid at 1e-80", moved(grid(5, 4), 1e-80 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
   std::uint64_t exact[2] = {0, 0};
   for (const auto& [name, m] : meshes)
     for (double k : {10.0, 50.0}) {
@@ -358,7 +360,7 @@ TEST(Contraction, InvariantUnderRigidMotion) {
 
 TEST(Contraction, InvariantUnderScalingByPowersOfTwo) {
   const Mesh m = load("elephant.off");
-  for (double f : {1024.0, 1.0 / 4096.0}) {
+  for (double f : {1024.0, 1.0 / 4096.0, 0x1p-300, 0x1p+300}) {
     const Mesh ms = moved(m, f * Eigen::Matrix3d::Identity(), Vec3::Zero());
     for (ObjectiveKind o : {ObjectiveKind::Acc, ObjectiveKind::Naive, ObjectiveKind::Gwh01}) {
       const Clustering a = cluster(m, o, 30), b = cluster(ms, o, 30);

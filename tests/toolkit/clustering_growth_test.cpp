@@ -390,6 +390,23 @@ TEST(Growth, InvariantUnderRigidMotion) {
     }
 }
 
+// Every step of every objective commutes with scaling by a power of two, down to 2^-300 and up to
+// 2^300 (coordinates ~1e-88 and ~1e92): the same clusters. Before the closed-form triangle sphere
+// and Acc's point bound were computed on scaled values, their fifth and fourth powers under- and
+// overflowed there and the clusters changed.
+TEST(Growth, InvariantUnderScalingByPowersOfTwo) {
+  const Mesh m = load("elephant.off");
+  for (double f : {1024.0, 1.0 / 4096.0, 0x1p-300, 0x1p+300}) {
+    const Mesh ms = moved(m, f * Eigen::Matrix3d::Identity(), Vec3::Zero());
+    for (ObjectiveKind o : {ObjectiveKind::Acc, ObjectiveKind::Naive, ObjectiveKind::Gwh01})
+      for (StartRule rule : kRules) {
+        const Clustering a = grow(m, o, 30, rule), b = grow(ms, o, 30, rule);
+        EXPECT_EQ(a.triangle_order, b.triangle_order) << to_string(o) << " x" << f;
+        EXPECT_EQ(a.triangle_offsets, b.triangle_offsets) << to_string(o) << " x" << f;
+      }
+  }
+}
+
 TEST(Growth, EmptySingleZeroLimitsAndComponents) {
   for (ObjectiveKind o : {ObjectiveKind::Acc, ObjectiveKind::Naive, ObjectiveKind::Gwh01})
     for (StartRule rule : kRules) {

@@ -659,10 +659,11 @@ TEST(AccObjective, SupportBoundBoundsTheExactScoreWithItsMargin) {
     for (Vec3& v : p) v = s * v + t;
     return elephant.with_positions(std::move(p));
   };
-  const Mesh far = scaled(1e-3, Vec3(4e6, -2e6, 1e6)), tiny = scaled(1e-30, Vec3(0, 0, 0));
+  const Mesh far = scaled(1e-3, Vec3(4e6, -2e6, 1e6)), tiny = scaled(1e-30, Vec3(0, 0, 0)),
+             tinier = scaled(1e-100, Vec3(0, 0, 0));
   auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
   int bounds = 0, tighter = 0, spanned = 0;
-  for (const Mesh* m : {&elephant, &far, &tiny}) {
+  for (const Mesh* m : {&elephant, &far, &tiny, &tinier}) {
     const EdgeMap em = EdgeMap::build(m->triangles(), m->vertex_count());
     const ClusterTables tb = ClusterTables::build(*m);
     AccObjective o(tb, acc_params(*m, 40, 20), AccTuning::for_contraction());
@@ -692,7 +693,7 @@ TEST(AccObjective, SupportBoundBoundsTheExactScoreWithItsMargin) {
       spanned += s2 >= r2 * (1.0 - 3e-12);
     }
   }
-  EXPECT_GE(bounds, 120);
+  EXPECT_GE(bounds, 160);
   EXPECT_GE(tighter, bounds / 2);
   EXPECT_GE(spanned, 20);  // the margin check met spheres the three points span
 }

@@ -12,6 +12,7 @@
 #include <CGAL/Simple_cartesian.h>
 #include <mpfr.h>
 
+#include <bit>
 #include <cfloat>
 #include <cstring>
 #include <cmath>
@@ -424,6 +425,36 @@ TEST(SphereTriangle, EquilateralGivesSideOverSqrt3) {
     EXPECT_NEAR(triangle_min_sphere(a, b, c).radius, side / std::sqrt(3.0), 1e-14 * side);
     check_triangle(a, b, c, "equilateral");
   }
+}
+
+// Scaled by 2^k, the sphere scales by 2^k bit for bit, from 2^-900 to 2^900: the closed form's
+// fifth-degree products neither under- nor overflow (unscaled, the circumcenter of a triangle of
+// 1e-65 was off and its radius 1.7x too large). Acute, right, obtuse, thin and degenerate shapes,
+// at the origin and moved off it by a multiple of their size.
+TEST(SphereTriangle, ScaledByAPowerOfTwoBitForBit) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  int acute = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    Vec3 p[3];
+    for (Vec3& q : p) q = Vec3(u(rng), u(rng), u(rng));
+    if (trial % 5 == 1) p[2] = 0.5 * (p[0] + p[1]);                    // collinear
+    if (trial % 5 == 2) p[2] = p[0];                                   // repeated corner
+    if (trial % 5 == 3) p[2] = p[0] + 1e-6 * (p[1] - p[0]).cross(Vec3(u(rng), u(rng), u(rng)));  // thin
+    const Vec3 shift = trial % 2 == 0 ? Vec3::Zero() : Vec3(3, -5, 7);
+    const Sphere ref = triangle_min_sphere(p[0] + shift, p[1] + shift, p[2] + shift);
+    ASSERT_TRUE(std::isfinite(ref.radius));
+    acute += (p[1] - p[0]).dot(p[2] - p[0]) > 0 && (p[0] - p[1]).dot(p[2] - p[1]) > 0 && (p[0] - p[2]).dot(p[1] - p[2]) > 0;
+    for (int k = -900; k <= 900; k += 25) {
+      auto scale = [k](const Vec3& v) { return Vec3(std::ldexp(v.x(), k), std::ldexp(v.y(), k), std::ldexp(v.z(), k)); };
+      const Sphere s = triangle_min_sphere(scale(p[0] + shift), scale(p[1] + shift), scale(p[2] + shift));
+      const std::string what = "trial " + std::to_string(trial) + ", 2^" + std::to_string(k);
+      ASSERT_EQ(bits(s.radius), bits(std::ldexp(ref.radius, k))) << what;
+      for (int d = 0; d < 3; ++d) ASSERT_EQ(bits(s.center[d]), bits(std::ldexp(ref.center[d], k))) << what;
+    }
+  }
+  EXPECT_GT(acute, 50);  // the circumcenter branch ran
 }
 
 TEST(SphereTriangle, RandomTrianglesOfEveryShapeMatchExact) {

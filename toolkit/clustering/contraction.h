@@ -87,6 +87,7 @@ struct ContractionOptions {
 
 /// Contracts the dual graph. Labels are the clusters' smallest triangle ids. Deterministic.
 /// Empty mesh: empty labels. Progress: merges done / triangles (the final count is not known).
+/// At most 2^30 - 1 triangles (the queue's version stamps), else std::invalid_argument.
 template <ClusterObjective O>
 [[nodiscard]] ClusterRun contract_clusters(const ClusterTables& tables, O& objective,
                                            const ContractionOptions& options = {}, const ProgressFn& progress = {});

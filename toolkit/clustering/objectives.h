@@ -103,8 +103,9 @@ struct MergeContext {
 };
 
 /// How exact evaluate() must be (see the file comment).
-/// Levels, cheapest first; each may return the exact score instead of a bound when that is as
-/// cheap. An objective without a bound at some level returns what the next level returns.
+/// Growth's levels, cheapest first, then the contraction's middle level; each may return the
+/// exact score instead of a bound when that is as cheap. An objective without a bound at some
+/// level returns what the next level returns (without any bound: the exact score).
 enum class Precision {
   UpperBoundAllowed,  ///< an upper bound, O(1)
   RefinedBound,       ///< a tighter upper bound, one O(|V(A)|) pass (still far below the exact cost)

@@ -312,9 +312,19 @@ Sphere epos_sphere(std::span<const Vec3> points, int directions) {
 Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 corners[3] = {a, b, c};
   if (!a.allFinite() || !b.allFinite() || !c.allFinite()) return nan_sphere();
-  // Edge i is opposite corner i; its squared length and the dot product of the two edges at
-  // corner i (> 0 iff the angle there is acute).
-  const Vec3 e[3] = {c - b, a - c, b - a};  // e[i] runs between the two corners other than i
+  // Edge i is opposite corner i (e[i] runs between the two corners other than i), scaled by the
+  // power of two 2^-k that brings the longest coordinate of the edges to [1, 2): the products
+  // below are of fifth degree in the edges, so unscaled they under- or overflow for triangles
+  // smaller than ~1e-62 or larger than ~1e61. Scaling by a power of two is exact, and every
+  // operation here commutes with it, so in between the bits are those of the unscaled formulas.
+  const Vec3 raw[3] = {c - b, a - c, b - a};
+  double extent = 0.0;
+  for (const Vec3& r : raw) extent = std::max(extent, r.cwiseAbs().maxCoeff());
+  const int k = extent > 0.0 && std::isfinite(extent) ? exponent_of(extent) : 0;
+  auto down = [k](const Vec3& v) { return Vec3(times_pow2(v.x(), -k), times_pow2(v.y(), -k), times_pow2(v.z(), -k)); };
+  const Vec3 e[3] = {down(raw[0]), down(raw[1]), down(raw[2])};
+  // Squared edge lengths and the dot product of the two edges at corner i (> 0 iff the angle there
+  // is acute), in the scaled frame.
   const double len2[3] = {e[0].squaredNorm(), e[1].squaredNorm(), e[2].squaredNorm()};
   const double dots[3] = {-e[2].dot(e[1]), -e[0].dot(e[2]), -e[1].dot(e[0])};
   int longest = 0;
@@ -324,22 +334,27 @@ Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
   if (dots[0] > 0.0 && dots[1] > 0.0 && dots[2] > 0.0) {
     // Acute: the circumcenter, relative to the corner of the largest angle (opposite the
     // longest edge, >= 60 degrees), so the cross product of the two shorter edges is well
-    // conditioned: center = o + ((|u|^2 v - |v|^2 u) x n) / (2 |n|^2), n = u x v.
+    // conditioned: center = o + ((|u|^2 v - |v|^2 u) x n) / (2 |n|^2), n = u x v, with
+    // u = corner(l+1) - o and v = corner(l+2) - o the scaled edges (e[l+2] and -e[l+1]).
     const Vec3& o = corners[longest];
-    const Vec3 u = corners[(longest + 1) % 3] - o, v = corners[(longest + 2) % 3] - o;
+    const Vec3 u = e[(longest + 2) % 3], v = -e[(longest + 1) % 3];
     const Vec3 n = u.cross(v);
     const double n2 = n.squaredNorm();
-    center = n2 > 0.0 ? Vec3(o + (u.squaredNorm() * v - v.squaredNorm() * u).cross(n) / (2.0 * n2))
-                      : Vec3(0.5 * corners[(longest + 1) % 3] + 0.5 * corners[(longest + 2) % 3]);
+    if (n2 > 0.0) {
+      const Vec3 off = (u.squaredNorm() * v - v.squaredNorm() * u).cross(n) / (2.0 * n2);
+      center = o + Vec3(times_pow2(off.x(), k), times_pow2(off.y(), k), times_pow2(off.z(), k));
+    } else {
+      center = 0.5 * corners[(longest + 1) % 3] + 0.5 * corners[(longest + 2) % 3];
+    }
   } else {
     // Right, obtuse or degenerate: the sphere over the longest edge (for collinear corners the
     // longest edge joins the two farthest ones; repeated corners give a 0 dot product).
     center = 0.5 * corners[(longest + 1) % 3] + 0.5 * corners[(longest + 2) % 3];
   }
-  double m2 = 0.0;
-  for (const Vec3& p : corners) m2 = std::max(m2, (p - center).squaredNorm());
+  double m2 = 0.0;  // scaled
+  for (const Vec3& p : corners) m2 = std::max(m2, down(p - center).squaredNorm());
   if (!std::isfinite(m2)) return nan_sphere();
-  return {center, std::sqrt(m2)};
+  return {center, times_pow2(std::sqrt(m2), k)};
 }
 
 double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<const Tri> triangles) {

@@ -103,7 +103,10 @@ inline constexpr SphereMethod kAllSphereMethods[] = {SphereMethod::Exact,  Spher
 /// (collinear or repeated corners) give the sphere over the two farthest corners.
 /// The acute case is computed relative to the corner with the largest angle (the cross
 /// product is then well conditioned), the others from the longest edge's midpoint; the radius
-/// is finally raised to the largest center-corner distance (containment, as above).
+/// is finally raised to the largest center-corner distance (containment, as above). On edges
+/// scaled by a power of two to unit size: scaling the corners by 2^k scales the result by 2^k
+/// bit for bit over the whole double range (the unscaled fifth powers under- or overflow beyond
+/// ~1e+-62).
 [[nodiscard]] Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c);
 
 /// The chunk of average_triangle_sphere_area's sums (ClusterTables' one-pass AvgSA uses it too).

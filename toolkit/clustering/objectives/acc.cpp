@@ -54,8 +54,16 @@ Vec3 local_origin(const Box3& box) {
 
 /// Growth's radius bound for A u {v} (acc.h): R^2 >= ((d^2 + r_A^2) / (2 d))^2 when d > r_A,
 /// d^2 = |v - c_A|^2; else r_A^2.
+/// Squaring d^2 + r_A^2 overflows beyond extents of ~1e77 and loses its bits to subnormals below
+/// ~1e-77; there the bound is squared from (d^2 + r_A^2) / (2 d) instead (a few ulps apart, within
+/// bound_shrink's margin), and in between it keeps the bits of the direct formula.
 [[gnu::always_inline]] inline double point_r2_bound(double d2, double ra) {
-  return d2 > ra * ra ? (d2 + ra * ra) * (d2 + ra * ra) / (4.0 * d2) : ra * ra;
+  if (!(d2 > ra * ra)) return ra * ra;
+  const double s = d2 + ra * ra;
+  const double r2 = s * s / (4.0 * d2);
+  if (s >= 0x1p-500 && r2 <= std::numeric_limits<double>::max()) return r2;
+  const double h = s / (2.0 * std::sqrt(d2));
+  return h * h;
 }
 
 /// The factor a radius bound is shrunk by: 1e-12 relative and the absolute rounding of the
@@ -370,9 +378,9 @@ double AccObjective::support_r2(const MergeContext& ctx, const Box3& box) const 
   // On cluster-local coordinates, the points sphere_of_union gives the exact computation. The
   // minimal sphere of a subset is never larger than the union's. Its computed radius is the
   // largest distance from a computed center (triangle_min_sphere: the circumcenter from the
-  // corner of the largest angle, well conditioned), within a few ulps of the subset's minimal
-  // radius; the exact sphere contains every point up to ~1e-14 relative. The 1e-12 shrink covers
-  // both.
+  // corner of the largest angle, well conditioned, on edges scaled to unit size, so at any
+  // scale), within a few ulps of the subset's minimal radius; the exact sphere contains every
+  // point up to ~1e-14 relative. The 1e-12 shrink covers both.
   const auto& pos = tables_->positions;
   const Vec3 o = local_origin(box);
   auto farthest = [&](const Vec3& c, double& d2max) {
