@@ -214,7 +214,9 @@ TEST(ClusterMetricsTriangle, ExponentHelpersEqualIlogbAndLdexpBitForBit) {
   for (int i = 0; i < 200; ++i) ks.push_back(ex(rng));
   for (double x : xs) {
     if (x == 0.0) continue;
-    if (std::isfinite(x)) ASSERT_EQ(exponent_of(x), std::ilogb(x)) << x;  // its contract: finite x != 0
+    if (std::isfinite(x)) {
+      ASSERT_EQ(exponent_of(x), std::ilogb(x)) << x;  // its contract: finite x != 0
+    }
     for (int k : ks) {
       const double want = std::ldexp(x, k), got = times_pow2(x, k);
       ASSERT_EQ(std::bit_cast<std::uint64_t>(got), std::bit_cast<std::uint64_t>(want)) << x << " * 2^" << k;

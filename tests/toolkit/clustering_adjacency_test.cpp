@@ -159,10 +159,14 @@ TEST(ClusterAdjacency, HardCases) {
   // Triangle 0's first corner (+0.0) and every soup corner at (-0.0, 0, 0) are one vertex.
   for (std::size_t t = 0; t < w.size(); ++t)
     for (int k = 0; k < 3; ++k)
-      if (p[3 * t + k] == Vec3(0, 0, 0)) EXPECT_EQ(w[t][k], 0u) << "triangle " << t;
+      if (p[3 * t + k] == Vec3(0, 0, 0)) {
+        EXPECT_EQ(w[t][k], 0u) << "triangle " << t;
+      }
   for (std::size_t t = 0; t < w.size(); ++t)
     for (int k = 0; k < 3; ++k)
-      if (t * 3 + k != 4) EXPECT_NE(w[t][k], w[1][1]) << "NaN corner welded to triangle " << t;
+      if (t * 3 + k != 4) {
+        EXPECT_NE(w[t][k], w[1][1]) << "NaN corner welded to triangle " << t;
+      }
   const Clustering c = cluster_mesh(s, config(ClusterMethod::Growth, ObjectiveKind::Acc, 20, ClusterAdjacency::Auto));
   EXPECT_TRUE(validate(c, s.triangles(), {}, 20, w).empty());
   // A soup of two identical triangles: one cluster by positions.

@@ -23,7 +23,7 @@ std::set<std::pair<std::uint32_t, std::uint32_t>> brute_adjacency(const Mesh& m,
       if (label[s] == label[t]) continue;
       int shared = 0;
       std::set<std::uint32_t> a(m.triangle(s).begin(), m.triangle(s).end());
-      for (std::uint32_t v : std::set<std::uint32_t>(m.triangle(t).begin(), m.triangle(t).end())) shared += a.count(v);
+      for (std::uint32_t v : std::set<std::uint32_t>(m.triangle(t).begin(), m.triangle(t).end())) shared += static_cast<int>(a.count(v));
       if (shared >= 2) adj.insert({std::min(label[s], label[t]), std::max(label[s], label[t])});
     }
   return adj;
@@ -80,7 +80,7 @@ TEST(PartitionColours, GraphMatchesBruteForceOnAGridWithRandomLabels) {
   const Mesh m = strip_grid(7);
   std::mt19937 rng(5);
   std::vector<std::uint32_t> label(m.triangle_count());
-  for (auto& l : label) l = rng() % 9;  // clusters need not be connected for the graph
+  for (auto& l : label) l = static_cast<std::uint32_t>(rng() % 9);  // clusters need not be connected for the graph
   const Clustering c = clustering_from_labels(label, m.triangles());
   // clustering_from_labels renumbers; map the brute force through the same numbering.
   const std::vector<std::uint32_t> of = c.cluster_of_triangle();
@@ -122,7 +122,7 @@ TEST(PartitionColours, DSaturIsOptimalWhereTheOptimumIsKnown) {
   }
   std::mt19937 rng(11);
   for (int trial = 0; trial < 20; ++trial) {
-    const std::uint32_t l = 1 + rng() % 15, r = 1 + rng() % 15;
+    const auto l = static_cast<std::uint32_t>(1 + rng() % 15), r = static_cast<std::uint32_t>(1 + rng() % 15);
     std::vector<std::pair<std::uint32_t, std::uint32_t>> e;
     for (std::uint32_t a = 0; a < l; ++a)
       for (std::uint32_t b = 0; b < r; ++b)
@@ -144,7 +144,7 @@ TEST(PartitionColours, DSaturIsOptimalWhereTheOptimumIsKnown) {
 TEST(PartitionColours, RandomGraphsAreColouredProperly) {
   std::mt19937 rng(3);
   for (int trial = 0; trial < 30; ++trial) {
-    const std::uint32_t n = 1 + rng() % 60;
+    const auto n = static_cast<std::uint32_t>(1 + rng() % 60);
     std::vector<std::pair<std::uint32_t, std::uint32_t>> e;
     for (std::uint32_t a = 0; a < n; ++a)
       for (std::uint32_t b = a + 1; b < n; ++b)
