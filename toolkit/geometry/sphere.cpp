@@ -312,20 +312,30 @@ Sphere epos_sphere(std::span<const Vec3> points, int directions) {
 Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 corners[3] = {a, b, c};
   if (!a.allFinite() || !b.allFinite() || !c.allFinite()) return nan_sphere();
-  // Edge i is opposite corner i (e[i] runs between the two corners other than i), scaled by the
-  // power of two 2^-k that brings the longest coordinate of the edges to [1, 2): the products
-  // below are of fifth degree in the edges, so unscaled they under- or overflow for triangles
-  // smaller than ~1e-62 or larger than ~1e61. Scaling by a power of two is exact, and every
-  // operation here commutes with it, so in between the bits are those of the unscaled formulas.
-  const Vec3 raw[3] = {c - b, a - c, b - a};
-  double extent = 0.0;
-  for (const Vec3& r : raw) extent = std::max(extent, r.cwiseAbs().maxCoeff());
-  const int k = extent > 0.0 && std::isfinite(extent) ? exponent_of(extent) : 0;
-  auto down = [k](const Vec3& v) { return Vec3(times_pow2(v.x(), -k), times_pow2(v.y(), -k), times_pow2(v.z(), -k)); };
-  const Vec3 e[3] = {down(raw[0]), down(raw[1]), down(raw[2])};
-  // Squared edge lengths and the dot product of the two edges at corner i (> 0 iff the angle there
-  // is acute), in the scaled frame.
-  const double len2[3] = {e[0].squaredNorm(), e[1].squaredNorm(), e[2].squaredNorm()};
+  // Edge i is opposite corner i (e[i] runs between the two corners other than i); len2[i] its
+  // squared length. The products below are of fifth degree in the edges, so unscaled they under-
+  // or overflow for triangles smaller than ~1e-62 or larger than ~1e61: outside squared lengths of
+  // 2^-240 .. 2^240 the edges are scaled by the power of two 2^-k that brings their longest
+  // coordinate to [1, 2). Scaling by a power of two is exact and every operation here commutes
+  // with it, so the bits are those of the unscaled formulas wherever those neither under- nor
+  // overflow (k = 0 in range: the common case costs two comparisons).
+  Vec3 e[3] = {c - b, a - c, b - a};
+  double len2[3] = {e[0].squaredNorm(), e[1].squaredNorm(), e[2].squaredNorm()};
+  int k = 0;
+  if (const double l2 = std::max({len2[0], len2[1], len2[2]}); !(l2 >= 0x1p-240 && l2 <= 0x1p+240)) {
+    const double extent = std::max({e[0].cwiseAbs().maxCoeff(), e[1].cwiseAbs().maxCoeff(), e[2].cwiseAbs().maxCoeff()});
+    if (extent > 0.0 && std::isfinite(extent)) {
+      k = exponent_of(extent);
+      for (int i = 0; i < 3; ++i) {
+        e[i] = Vec3(times_pow2(e[i].x(), -k), times_pow2(e[i].y(), -k), times_pow2(e[i].z(), -k));
+        len2[i] = e[i].squaredNorm();
+      }
+    }
+  }
+  auto down = [k](const Vec3& v) {
+    return k == 0 ? v : Vec3(times_pow2(v.x(), -k), times_pow2(v.y(), -k), times_pow2(v.z(), -k));
+  };
+  // The dot product of the two edges at corner i (> 0 iff the angle there is acute).
   const double dots[3] = {-e[2].dot(e[1]), -e[0].dot(e[2]), -e[1].dot(e[0])};
   int longest = 0;
   if (len2[1] > len2[longest]) longest = 1;
@@ -342,7 +352,7 @@ Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
     const double n2 = n.squaredNorm();
     if (n2 > 0.0) {
       const Vec3 off = (u.squaredNorm() * v - v.squaredNorm() * u).cross(n) / (2.0 * n2);
-      center = o + Vec3(times_pow2(off.x(), k), times_pow2(off.y(), k), times_pow2(off.z(), k));
+      center = k == 0 ? Vec3(o + off) : Vec3(o + Vec3(times_pow2(off.x(), k), times_pow2(off.y(), k), times_pow2(off.z(), k)));
     } else {
       center = 0.5 * corners[(longest + 1) % 3] + 0.5 * corners[(longest + 2) % 3];
     }
@@ -354,7 +364,7 @@ Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
   double m2 = 0.0;  // scaled
   for (const Vec3& p : corners) m2 = std::max(m2, down(p - center).squaredNorm());
   if (!std::isfinite(m2)) return nan_sphere();
-  return {center, times_pow2(std::sqrt(m2), k)};
+  return {center, k == 0 ? std::sqrt(m2) : times_pow2(std::sqrt(m2), k)};
 }
 
 double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<const Tri> triangles) {
