@@ -429,7 +429,7 @@ TEST(SphereTriangle, EquilateralGivesSideOverSqrt3) {
 
 // Scaled by 2^k, the sphere scales by 2^k bit for bit, from 2^-900 to 2^900: the closed form's
 // fifth-degree products neither under- nor overflow (unscaled, the circumcenter of a triangle of
-// 1e-65 was off and its radius 1.7x too large). Acute, right, obtuse, thin and degenerate shapes,
+// 1e-65 was off and its radius too large). Acute, right, obtuse, thin and degenerate shapes,
 // at the origin and moved off it by a multiple of their size.
 TEST(SphereTriangle, ScaledByAPowerOfTwoBitForBit) {
   std::mt19937_64 rng(23);

@@ -327,14 +327,11 @@ Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
     if (extent > 0.0 && std::isfinite(extent)) {
       k = exponent_of(extent);
       for (int i = 0; i < 3; ++i) {
-        e[i] = Vec3(times_pow2(e[i].x(), -k), times_pow2(e[i].y(), -k), times_pow2(e[i].z(), -k));
+        e[i] = times_pow2(e[i], -k);
         len2[i] = e[i].squaredNorm();
       }
     }
   }
-  auto down = [k](const Vec3& v) {
-    return k == 0 ? v : Vec3(times_pow2(v.x(), -k), times_pow2(v.y(), -k), times_pow2(v.z(), -k));
-  };
   // The dot product of the two edges at corner i (> 0 iff the angle there is acute).
   const double dots[3] = {-e[2].dot(e[1]), -e[0].dot(e[2]), -e[1].dot(e[0])};
   int longest = 0;
@@ -352,7 +349,7 @@ Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
     const double n2 = n.squaredNorm();
     if (n2 > 0.0) {
       const Vec3 off = (u.squaredNorm() * v - v.squaredNorm() * u).cross(n) / (2.0 * n2);
-      center = k == 0 ? Vec3(o + off) : Vec3(o + Vec3(times_pow2(off.x(), k), times_pow2(off.y(), k), times_pow2(off.z(), k)));
+      center = o + (k == 0 ? off : times_pow2(off, k));
     } else {
       center = 0.5 * corners[(longest + 1) % 3] + 0.5 * corners[(longest + 2) % 3];
     }
@@ -361,8 +358,8 @@ Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
     // longest edge joins the two farthest ones; repeated corners give a 0 dot product).
     center = 0.5 * corners[(longest + 1) % 3] + 0.5 * corners[(longest + 2) % 3];
   }
-  double m2 = 0.0;  // scaled
-  for (const Vec3& p : corners) m2 = std::max(m2, down(p - center).squaredNorm());
+  double m2 = 0.0;  // of the scaled distances
+  for (const Vec3& p : corners) m2 = std::max(m2, (k == 0 ? Vec3(p - center) : times_pow2(p - center, -k)).squaredNorm());
   if (!std::isfinite(m2)) return nan_sphere();
   return {center, k == 0 ? std::sqrt(m2) : times_pow2(std::sqrt(m2), k)};
 }

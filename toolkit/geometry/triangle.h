@@ -49,6 +49,10 @@ inline constexpr double kDegenerateSine = 1e-12;
   if (k < -1022 || k > 1023) return std::ldexp(x, k);
   return x * std::bit_cast<double>(static_cast<std::uint64_t>(k + 1023) << 52);
 }
+/// times_pow2 of every coordinate.
+[[nodiscard]] inline Vec3 times_pow2(const Vec3& v, int k) {
+  return {times_pow2(v.x(), k), times_pow2(v.y(), k), times_pow2(v.z(), k)};
+}
 
 /// Area (one side, unit length^2) and unit normal (right-handed in corner order a, b, c) of a
 /// triangle; degenerate triangles (see the file comment) give area 0 and normal (0, 0, 0).

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -29,6 +30,21 @@ Vec3 local_origin(const Box3& box) {
   Vec3 o;
   for (int k = 0; k < 3; ++k) o[k] = (box.lo[k] <= 0.0 && box.hi[k] >= 0.0) ? 0.0 : box.lo[k];
   return o;
+}
+
+/// The vertex of `lists` (the first non-empty) farthest from c on cluster-local coordinates
+/// (p - o), and its squared distance in d2max; the first one on ties.
+std::uint32_t farthest_vertex(std::span<const Vec3> pos, std::initializer_list<std::span<const std::uint32_t>> lists,
+                              const Vec3& o, const Vec3& c, double& d2max) {
+  std::uint32_t best = lists.begin()->front();
+  d2max = -1.0;
+  for (const std::span<const std::uint32_t> list : lists)
+    for (const std::uint32_t u : list)
+      if (const double d2 = (pos[u] - o - c).squaredNorm(); d2 > d2max) {
+        d2max = d2;
+        best = u;
+      }
+  return best;
 }
 
 [[gnu::always_inline]] inline double max_abs(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
@@ -343,16 +359,7 @@ bool AccObjective::small_support_sphere(const MergeContext& ctx, const Box3& box
   const auto& pos = tables_->positions;
   const Vec3 o = local_origin(box);
   const Vec3 v = pos[ctx.added[0]] - o;
-  auto farthest = [&](const Vec3& c, double& d2max) {
-    std::uint32_t best = ctx.a_vertices[0];
-    d2max = -1.0;
-    for (std::uint32_t u : ctx.a_vertices)
-      if (const double d2 = (pos[u] - o - c).squaredNorm(); d2 > d2max) {
-        d2max = d2;
-        best = u;
-      }
-    return best;
-  };
+  auto farthest = [&](const Vec3& c, double& d2max) { return farthest_vertex(pos, {ctx.a_vertices}, o, c, d2max); };
   auto accept = [&](Sphere s, double far2) {
     const double r = s.radius * (1.0 + 1e-14);
     if (!(far2 <= r * r)) return false;
@@ -384,17 +391,7 @@ double AccObjective::support_r2(const MergeContext& ctx, const Box3& box) const 
   const auto& pos = tables_->positions;
   const Vec3 o = local_origin(box);
   auto farthest = [&](const Vec3& c, double& d2max) {
-    Vec3 best = Vec3::Zero();
-    d2max = -1.0;
-    for (const std::span<const std::uint32_t> list : {ctx.a_vertices, ctx.added})
-      for (const std::uint32_t u : list) {
-        const Vec3 p = pos[u] - o;
-        if (const double d2 = (p - c).squaredNorm(); d2 > d2max) {
-          d2max = d2;
-          best = p;
-        }
-      }
-    return best;
+    return Vec3(pos[farthest_vertex(pos, {ctx.a_vertices, ctx.added}, o, c, d2max)] - o);
   };
   double d2;
   const Vec3 p1 = farthest(0.5 * (box.lo + box.hi) - o, d2);
