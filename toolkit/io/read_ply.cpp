@@ -260,18 +260,22 @@ class PlyParser {
       element_error(loc, e, item, "index " + std::to_string(v) + " out of range [0, " + std::to_string(nv) + ")");
     return static_cast<std::uint32_t>(v);
   }
-  void add_face(const std::string& loc, const Element& e, std::uint64_t item) {
+  // `loc` makes the element's location; it is called only for an error or a skipped face (the
+  // string costs more than the element itself in a binary file).
+  template <class Loc>
+  void add_face(const Loc& loc, const Element& e, std::uint64_t item) {
     if (corners_.size() < 3) {  // skipped and counted (docs/mesh_policy.md)
-      sink_.skip_face([&] { return loc; });
+      sink_.skip_face(loc);
       return;
     }
     // Counts were checked against the 32-bit limit, but polygons can give more triangles.
-    if (sink_.full(corners_.size())) element_error(loc, e, item, "more triangles than 32-bit ids can number");
+    if (sink_.full(corners_.size())) element_error(loc(), e, item, "more triangles than 32-bit ids can number");
     sink_.add_face(corners_);
   }
-  void add_vertex(const Vec3& p, const std::string& loc, const Element& e, std::uint64_t item) {
+  template <class Loc>
+  void add_vertex(const Vec3& p, const Loc& loc, const Element& e, std::uint64_t item) {
     for (int k = 0; k < 3; ++k)
-      if (const char* why = non_finite(p[k])) element_error(loc, e, item, std::string(1, "xyz"[k]) + " " + why);
+      if (const char* why = non_finite(p[k])) element_error(loc(), e, item, std::string(1, "xyz"[k]) + " " + why);
     pos_.push_back(p);
   }
 
@@ -363,8 +367,9 @@ class PlyParser {
             corners_.push_back(static_cast<std::uint32_t>(v));
           }
         }
-        if (is_vertex) add_vertex(p, byte_loc(item_at), e, i);
-        if (is_face) add_face(byte_loc(item_at), e, i);
+        const auto loc = [&] { return byte_loc(item_at); };
+        if (is_vertex) add_vertex(p, loc, e, i);
+        if (is_face) add_face(loc, e, i);
       }
     }
     // Bytes after the last element are ignored.
@@ -466,8 +471,9 @@ class PlyParser {
         if (const std::size_t extra = tr.end_element(); extra > 0 && report_.surplus_lines++ == 0)
           report_.first_surplus = e.name + " " + std::to_string(i) + " (" + line_loc(tr.line()) + "): " +
                                   std::to_string(extra) + (extra == 1 ? " extra value" : " extra values");
-        if (is_vertex) add_vertex(p, line_loc(first_line), e, i);
-        if (is_face) add_face(line_loc(first_line), e, i);
+        const auto loc = [&] { return line_loc(first_line); };
+        if (is_vertex) add_vertex(p, loc, e, i);
+        if (is_face) add_face(loc, e, i);
       }
     }
   }
