@@ -86,15 +86,19 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   OutputDir dir(opt.out_dir);  // a refused target fails before the clustering
   t0.restart();
   Clustering clustering;
-  // AvgSA once, for the clustering (Acc) and for the metrics' Acc columns.
-  const std::optional<double> avg_sa =
-      c.max_count > 0 && c.max_size > 0
-          ? std::optional<double>(average_triangle_sphere_area(lm.mesh.positions(), lm.mesh.triangles()))
-          : std::nullopt;
+  // AvgSA once, for the clustering (Acc) and for the metrics' Acc columns: the clustering's own
+  // when an Acc objective ran (on the whole mesh it comes out of the tables' pass), else computed
+  // here (the metrics score every method by the paper's objective).
+  double acc_avg_sa = 0.0;
   {
     ProgressBar bar("clustering");
-    clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); }, avg_sa);
+    clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); }, std::nullopt, &acc_avg_sa);
   }
+  const std::optional<double> avg_sa =
+      c.max_count > 0 && c.max_size > 0
+          ? std::optional<double>(acc_avg_sa > 0.0 ? acc_avg_sa
+                                                   : average_triangle_sphere_area(lm.mesh.positions(), lm.mesh.triangles()))
+          : std::nullopt;
   manifest.add_timing_ms("cluster", t0.ms());
 
   throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)

@@ -10,6 +10,7 @@
 
 #include <Eigen/Geometry>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -17,6 +18,7 @@
 
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/clustering.h"
+#include "toolkit/geometry/sphere.h"
 #include "toolkit/mesh/topology.h"
 #include "test_meshes.h"
 
@@ -184,6 +186,42 @@ TEST(ClusterFrontDoor, BaselinesInvariantUnderPowerOfTwoScalingValidWhenRotated)
       const Clustering b = cluster_mesh(moved(m, r, Vec3(-2.5, 4.0, 1.25)), cfg);  // not invariant: only valid
       EXPECT_TRUE(validate(b, m.triangles(), limits_of(c, size)).empty()) << what(c, size, "rotated elephant");
     }
+}
+
+// cluster_mesh's avg_sa_used (ptc cluster's AvgSA for the metrics) is the separate pass's value
+// bit for bit on every path that runs Acc: the whole mesh (the tables' pass), regions (the
+// separate pass), a soup clustered over its weld, and a given value; it is left alone by the
+// methods without Acc. Meshes with degenerate triangles, an offset far from the origin, a tiny
+// scale.
+TEST(ClusterFrontDoor, AvgSaUsedIsTheSeparatePassBitForBit) {
+  const Mesh e = load("elephant.off");
+  const std::vector<Named> meshes{{"elephant", e},
+                                  {"elephant moved by 3e6", moved(e, Eigen::Matrix3d::Identity(), Vec3(3e6, -3e6, 1e6))},
+                                  {"elephant scaled by 1e-30", moved(e, Eigen::Matrix3d::Identity(), Vec3::Zero(), 1e-30)},
+                                  {"degenerate mix", degenerate_mix()},
+                                  {"elephant as a soup", soup_of(e)}};
+  for (const Named& nm : meshes) {
+    const double expected = average_triangle_sphere_area(nm.mesh.positions(), nm.mesh.triangles());
+    for (ClusterMethod method : {ClusterMethod::Growth, ClusterMethod::Contraction})
+      for (std::uint32_t regions : {0u, 4u}) {
+        ClusterConfig cfg = config_of({method, ObjectiveKind::Acc}, 20);
+        cfg.regions = regions;
+        double used = -1.0;
+        (void)cluster_mesh(nm.mesh, cfg, {}, std::nullopt, &used);
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(used), std::bit_cast<std::uint64_t>(expected))
+            << what({method, ObjectiveKind::Acc}, 20, nm.name) << " regions " << regions << ": " << used << " vs "
+            << expected;
+        double given = -1.0;
+        (void)cluster_mesh(nm.mesh, cfg, {}, 0.75 * expected, &given);
+        EXPECT_EQ(given, 0.75 * expected) << nm.name << ": a given AvgSA is the one used";
+      }
+    for (const Case& c : {Case{ClusterMethod::Growth, ObjectiveKind::Naive}, Case{ClusterMethod::SahSplit, ObjectiveKind::Acc},
+                          Case{ClusterMethod::Meshopt, ObjectiveKind::Acc}}) {
+      double used = -1.0;
+      (void)cluster_mesh(nm.mesh, config_of(c, 20), {}, std::nullopt, &used);
+      EXPECT_EQ(used, -1.0) << what(c, 20, nm.name) << ": no Acc objective ran";
+    }
+  }
 }
 
 }  // namespace

@@ -273,7 +273,7 @@ std::optional<ConfigProblem> check(const ClusterConfig& c) {
 }
 
 Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress,
-                        std::optional<double> known_avg_sa) {
+                        std::optional<double> known_avg_sa, double* avg_sa_used) {
   if (!(config.max_size >= 0.0) || !std::isfinite(config.max_size))
     throw std::invalid_argument("cluster_mesh: max_size must be finite and >= 0, got " +
                                 std::to_string(config.max_size));
@@ -289,7 +289,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
       const Mesh welded(w.apply(mesh.triangles()), w.gather(mesh.positions()));
       ClusterConfig on_welded = config;
       on_welded.adjacency = ClusterAdjacency::Edges;
-      const Clustering c = cluster_mesh(welded, on_welded, progress, known_avg_sa);
+      const Clustering c = cluster_mesh(welded, on_welded, progress, known_avg_sa, avg_sa_used);
       return clustering_from_labels(c.cluster_of_triangle(), mesh.triangles());
     }
   }
@@ -326,6 +326,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
       } else {
         avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
       }
+      if (avg_sa_used) *avg_sa_used = avg_sa;
       if (!(avg_sa > 0.0)) return one_per_triangle(mesh);  // see the file comment
       break;
     case ObjectiveKind::Naive:

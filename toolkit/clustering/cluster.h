@@ -130,10 +130,14 @@ using ProgressFn = std::function<void(double)>;
 ///   validly. Translation changes only rounding for them.
 /// Throws std::invalid_argument on an inconsistent configuration (e.g. max_count = 0 with
 /// max_size > 0). avg_sa: the mesh's AvgSA, average_triangle_sphere_area(mesh), when the caller
-/// has it already (ptc cluster computes it once for the clustering and for the metrics; at 13M
-/// triangles it takes 0.6 s); computed here otherwise. Read by the Acc objective only.
+/// has it already; computed here otherwise. Read by the Acc objective only. avg_sa_used, when
+/// not null, receives the AvgSA the Acc objective ran with (the given one or the one computed
+/// here, average_triangle_sphere_area's value bit for bit), and is left alone when no Acc
+/// objective ran. ptc cluster takes it from there for the metrics: on the whole mesh the value
+/// comes out of the pass that builds the clustering's tables, which a separate pass would
+/// repeat (0.6 s at 13M triangles).
 [[nodiscard]] Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress = {},
-                                      std::optional<double> avg_sa = std::nullopt);
+                                      std::optional<double> avg_sa = std::nullopt, double* avg_sa_used = nullptr);
 
 struct ClusterTables;
 struct ClusterRun;
