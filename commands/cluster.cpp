@@ -2,6 +2,8 @@
 #include "commands/commands.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <ostream>
 
 #include <fmt/format.h>
@@ -89,15 +91,15 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   // AvgSA once, for the clustering (Acc) and for the metrics' Acc columns: the clustering's own
   // when an Acc objective ran (on the whole mesh it comes out of the tables' pass), else computed
   // here (the metrics score every method by the paper's objective).
-  double acc_avg_sa = 0.0;
+  double acc_avg_sa = std::numeric_limits<double>::quiet_NaN();  // left alone when no Acc objective ran
   {
     ProgressBar bar("clustering");
     clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); }, std::nullopt, &acc_avg_sa);
   }
   const std::optional<double> avg_sa =
       c.max_count > 0 && c.max_size > 0
-          ? std::optional<double>(acc_avg_sa > 0.0 ? acc_avg_sa
-                                                   : average_triangle_sphere_area(lm.mesh.positions(), lm.mesh.triangles()))
+          ? std::optional<double>(!std::isnan(acc_avg_sa) ? acc_avg_sa
+                                                          : average_triangle_sphere_area(lm.mesh.positions(), lm.mesh.triangles()))
           : std::nullopt;
   manifest.add_timing_ms("cluster", t0.ms());
 

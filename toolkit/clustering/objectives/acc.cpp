@@ -32,8 +32,8 @@ Vec3 local_origin(const Box3& box) {
   return o;
 }
 
-/// The vertex of `lists` (the first non-empty) farthest from c on cluster-local coordinates
-/// (p - o), and its squared distance in d2max; the first one on ties.
+/// The vertex of `lists` farthest from c on cluster-local coordinates (p - o), and its squared
+/// distance in d2max; the first one on ties. The first list must not be empty.
 std::uint32_t farthest_vertex(std::span<const Vec3> pos, std::initializer_list<std::span<const std::uint32_t>> lists,
                               const Vec3& o, const Vec3& c, double& d2max) {
   std::uint32_t best = lists.begin()->front();
