@@ -11,6 +11,8 @@
 
 #include <boost/graph/adjacency_list.hpp>
 
+#include "toolkit/core/isa.h"
+
 namespace ptc {
 
 namespace {
@@ -198,9 +200,11 @@ static_assert(sizeof(typename decltype(std::declval<ClusterGraph<false>::stored_
 
 }  // namespace
 
+// The whole run, inlined into contract_clusters, or for Acc into each of contract_clusters_acc's
+// instruction-set clones (toolkit/core/isa.h).
 template <ClusterObjective O>
-ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const ContractionOptions& options,
-                             const ProgressFn& progress) {
+[[gnu::always_inline]] inline ClusterRun contract_impl(const ClusterTables& tb, O& objective,
+                                                       const ContractionOptions& options, const ProgressFn& progress) {
   using Summary = typename O::Summary;
   using Evaluation = typename O::Evaluation;
   const std::uint32_t T = tb.triangle_count();
@@ -595,6 +599,22 @@ ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const Contra
       for (std::uint32_t t : members(c)) run.labels[t] = c;
   if (progress) progress(1.0);
   return run;
+}
+
+namespace detail {
+[[gnu::flatten]] PTC_ISA_CLONES ClusterRun contract_clusters_acc(const ClusterTables& tb, AccObjective& objective,
+                                               const ContractionOptions& options, const ProgressFn& progress) {
+  return contract_impl(tb, objective, options, progress);
+}
+}  // namespace detail
+
+template <ClusterObjective O>
+ClusterRun contract_clusters(const ClusterTables& tb, O& objective, const ContractionOptions& options,
+                             const ProgressFn& progress) {
+  if constexpr (std::is_same_v<O, AccObjective>)
+    return detail::contract_clusters_acc(tb, objective, options, progress);
+  else
+    return contract_impl(tb, objective, options, progress);
 }
 
 template ClusterRun contract_clusters<AccObjective>(const ClusterTables&, AccObjective&, const ContractionOptions&,

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "toolkit/core/isa.h"
 #include "toolkit/geometry/morton.h"
 
 namespace ptc {
@@ -116,9 +117,11 @@ class StartPicker {
 
 }  // namespace
 
+// The whole run, inlined into grow_clusters, or for Acc into each of grow_clusters_acc's
+// instruction-set clones (toolkit/core/isa.h).
 template <ClusterObjective O>
-ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOptions& options,
-                         const ProgressFn& progress) {
+[[gnu::always_inline]] inline ClusterRun grow_impl(const ClusterTables& tb, O& objective, const GrowthOptions& options,
+                                                   const ProgressFn& progress) {
   using Summary = typename O::Summary;
   using Evaluation = typename O::Evaluation;
   const std::uint32_t T = tb.triangle_count();
@@ -199,7 +202,8 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
     ctx.vertex_count = static_cast<std::uint32_t>(verts.size() + static_cast<std::size_t>(na));
     ctx.boundary_removed = removed;
   };
-  auto take = [&](std::uint32_t t) {
+  // Inlined, so that it is compiled for the instruction set of the grow_clusters clone it is in.
+  auto take = [&](std::uint32_t t) __attribute__((always_inline)) {
     label[t] = cluster;
     picker.taken(t, label);
     for (std::uint32_t u : tb.neighbours_of(t))
@@ -339,6 +343,22 @@ ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOpti
   }
   if (progress) progress(1.0);
   return run;
+}
+
+namespace detail {
+PTC_ISA_CLONES ClusterRun grow_clusters_acc(const ClusterTables& tb, AccObjective& objective, const GrowthOptions& options,
+                                           const ProgressFn& progress) {
+  return grow_impl(tb, objective, options, progress);
+}
+}  // namespace detail
+
+template <ClusterObjective O>
+ClusterRun grow_clusters(const ClusterTables& tb, O& objective, const GrowthOptions& options,
+                         const ProgressFn& progress) {
+  if constexpr (std::is_same_v<O, AccObjective>)
+    return detail::grow_clusters_acc(tb, objective, options, progress);
+  else
+    return grow_impl(tb, objective, options, progress);
 }
 
 template ClusterRun grow_clusters<AccObjective>(const ClusterTables&, AccObjective&, const GrowthOptions&,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <span>
 
+#include "toolkit/core/isa.h"
 #include "toolkit/geometry/sphere.h"
 #include "toolkit/geometry/triangle.h"
 
@@ -112,6 +113,28 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
   out.resize(w);
 }
 
+// Triangles [begin, end) of the tables' pass: area and normal, and with the sums the sum of their
+// minimal spheres' areas (in order) and their centroids' box. A function of its own so that it has
+// instruction-set clones (toolkit/core/isa.h).
+PTC_ISA_CLONES void tables_chunk(ClusterTables& t, std::size_t begin, std::size_t end, bool with_sums, double* sum_out,
+                                 Box3* box_out) {
+  double sum = 0.0;
+  Box3 box;
+  for (std::size_t i = begin; i < end; ++i) {
+    if (i + kCornerPrefetchAhead < end) prefetch_corners(t.positions.data(), t.triangles[i + kCornerPrefetchAhead]);
+    const Tri& f = t.triangles[i];
+    const Vec3 &p0 = t.positions[f[0]], &p1 = t.positions[f[1]], &p2 = t.positions[f[2]];
+    const TriangleGeometry g = triangle_geometry(p0, p1, p2);
+    t.area[i] = g.area;
+    t.normal[i] = g.normal;
+    if (with_sums) {
+      sum += triangle_min_sphere(p0, p1, p2).surface_area();
+      box.extend(triangle_centroid(p0, p1, p2));
+    }
+  }
+  if (with_sums) *sum_out = sum, *box_out = box;
+}
+
 }  // namespace
 
 ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges, bool with_sums) {
@@ -130,22 +153,8 @@ ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges, bool with_
   std::vector<double> sums(with_sums ? chunks : 0);
   std::vector<Box3> boxes(with_sums ? chunks : 0);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-    double sum = 0.0;
-    Box3 box;
-    const std::size_t end = std::min(T, (c + 1) * chunk);
-    for (std::size_t i = c * chunk; i < end; ++i) {
-      if (i + kCornerPrefetchAhead < end) prefetch_corners(t.positions.data(), t.triangles[i + kCornerPrefetchAhead]);
-      const Tri& f = t.triangles[i];
-      const Vec3 &p0 = t.positions[f[0]], &p1 = t.positions[f[1]], &p2 = t.positions[f[2]];
-      const TriangleGeometry g = triangle_geometry(p0, p1, p2);
-      t.area[i] = g.area;
-      t.normal[i] = g.normal;
-      if (with_sums) {
-        sum += triangle_min_sphere(p0, p1, p2).surface_area();
-        box.extend(triangle_centroid(p0, p1, p2));
-      }
-    }
-    if (with_sums) sums[c] = sum, boxes[c] = box;
+    tables_chunk(t, c * chunk, std::min(T, (c + 1) * chunk), with_sums, with_sums ? &sums[c] : nullptr,
+                 with_sums ? &boxes[c] : nullptr);
   });
   if (with_sums && T > 0) {
     double sum = 0.0;

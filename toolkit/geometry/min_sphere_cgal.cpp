@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "toolkit/geometry/sphere.h"
+#include "toolkit/core/isa.h"
 
 namespace ptc {
 
@@ -133,7 +134,8 @@ bool all_finite(std::span<const Vec3> points) {
 
 }  // namespace
 
-Sphere min_sphere(std::span<const Vec3> points) {
+// Flattened: CGAL's solver is inlined, so that each instruction-set clone has its own copy.
+[[gnu::flatten]] PTC_ISA_CLONES Sphere min_sphere(std::span<const Vec3> points) {
   if (points.empty()) return Sphere::empty();
   Box3 box;
   for (const Vec3& p : points) box.extend(p);

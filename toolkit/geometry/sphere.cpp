@@ -1,6 +1,7 @@
 // Bounding spheres without CGAL: the approximations (Ritter, EPOS), the triangle closed form and
 // the small helpers. The CGAL paths (min_sphere, min_sphere_exact) live in min_sphere_cgal.cpp.
 #include "toolkit/geometry/sphere.h"
+#include "toolkit/core/isa.h"
 
 #include <tbb/parallel_for.h>
 
@@ -309,7 +310,7 @@ Sphere epos_sphere(std::span<const Vec3> points, int directions) {
   }
 }
 
-Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
+PTC_ISA_CLONES Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 corners[3] = {a, b, c};
   if (!a.allFinite() || !b.allFinite() || !c.allFinite()) return nan_sphere();
   // Edge i is opposite corner i (e[i] runs between the two corners other than i); len2[i] its

@@ -1,0 +1,18 @@
+// Run-time dispatch of the clustering's hot functions by instruction set.
+#pragma once
+
+/// PTC_ISA_CLONES before a function definition compiles it twice, for x86-64-v3 (AVX2, BMI1/2,
+/// LZCNT, MOVBE: CPUs since about 2013-2015) and for the baseline x86-64 every Debian amd64 machine
+/// has; the dynamic loader picks one when the program starts (GCC's target_clones, an ifunc).
+/// The results are the same bits either way: the project compiles in ISO C++ mode, where GCC
+/// contracts no a * b + c into a fused multiply-add (-ffp-contract=off, also set explicitly on
+/// the toolkit), and Eigen chooses its vector code by the translation unit's macros (__AVX__),
+/// which a function's target does not change, so only the encoding and the scalar instructions
+/// differ. Measured on the growth at 13.3M triangles: docs/scale.md, "Open (issue 15)".
+/// Clang builds (the fuzzing build) and other architectures get the one baseline version, as does
+/// a build with -DPTC_NO_ISA_CLONES.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PTC_NO_ISA_CLONES)
+#define PTC_ISA_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define PTC_ISA_CLONES
+#endif
