@@ -602,8 +602,9 @@ template <ClusterObjective O>
 }
 
 namespace detail {
-[[gnu::flatten]] PTC_ISA_CLONES ClusterRun contract_clusters_acc(const ClusterTables& tb, AccObjective& objective,
-                                               const ContractionOptions& options, const ProgressFn& progress) {
+[[gnu::flatten]] PTC_ISA_CLONES
+ClusterRun contract_clusters_acc(const ClusterTables& tb, AccObjective& objective, const ContractionOptions& options,
+                                 const ProgressFn& progress) {
   return contract_impl(tb, objective, options, progress);
 }
 }  // namespace detail

@@ -164,8 +164,9 @@ template <ClusterObjective O>
   constexpr Precision kLevels[] = {Precision::UpperBoundAllowed, Precision::RefinedBound, Precision::TightBound,
                                    Precision::Exact};
   constexpr std::uint8_t kExactLevel = 3;
-  auto ranks_below = [](const Keyed& x, const Keyed& y) {  // queue order: higher key, then lower id
-    return x.score < y.score || (x.score == y.score && x.t > y.t);
+  // Queue order: higher key, then lower id. x (its key and id) ranks below y.
+  auto ranks_below = [](double x_score, std::uint32_t x_t, const Keyed& y) {
+    return x_score < y.score || (x_score == y.score && x_t > y.t);
   };
   std::vector<Keyed> queue;
   std::vector<Evaluation> evals;
@@ -181,8 +182,10 @@ template <ClusterObjective O>
   std::uint64_t taken = 0;
 
   std::uint32_t cluster = 0;
-  // The MergeContext of k + {c.t}; `added` and `shared` are the caller's buffers.
-  auto make_ctx = [&](const Candidate& c, std::uint32_t* added, std::uint32_t* shared, MergeContext& ctx) {
+  // The MergeContext of k + {c.t}; `added` and `shared` are the caller's buffers. Returned as one
+  // aggregate with every field given: a default-constructed context filled in afterwards was
+  // zeroed first (a `rep stos` of 96 bytes on every refinement; docs/scale.md).
+  auto make_ctx = [&](const Candidate& c, std::uint32_t* added, std::uint32_t* shared) -> MergeContext {
     int na = 0, ns = 0;
     for (int i = 0; i < c.nv; ++i) ((c.in_k >> i) & 1 ? shared[ns++] : added[na++]) = c.v[i];
     double removed = 0;
@@ -194,13 +197,13 @@ template <ClusterObjective O>
         if (n > 0) removed += tb.edge_length[c.e[i]] * ((n == 1 ? 1.0 : 0.0) + 1.0);  // [n_k == 1] + [n_d == 1]
       }
     }
-    ctx.a_triangles = members;
-    ctx.b_triangles = {&c.t, 1};
-    ctx.a_vertices = verts;
-    ctx.added = {added, static_cast<std::size_t>(na)};
-    ctx.shared = {shared, static_cast<std::size_t>(ns)};
-    ctx.vertex_count = static_cast<std::uint32_t>(verts.size() + static_cast<std::size_t>(na));
-    ctx.boundary_removed = removed;
+    return MergeContext{members,
+                        {&c.t, 1},
+                        verts,
+                        {added, static_cast<std::size_t>(na)},
+                        {shared, static_cast<std::size_t>(ns)},
+                        static_cast<std::uint32_t>(verts.size() + static_cast<std::size_t>(na)),
+                        removed};
   };
   // Inlined, so that it is compiled for the instruction set of the grow_clusters clone it is in.
   auto take = [&](std::uint32_t t) __attribute__((always_inline)) {
@@ -282,8 +285,7 @@ template <ClusterObjective O>
           }
         }
         std::uint32_t added[3], shared[3];
-        MergeContext ctx;
-        make_ctx(frontier[i], added, shared, ctx);
+        const MergeContext ctx = make_ctx(frontier[i], added, shared);
         if (!objective.legal(ctx)) continue;
         const Evaluation ev = evaluate_candidate(i, ctx, kLevels[0]);
         ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
@@ -296,9 +298,15 @@ template <ClusterObjective O>
       bool has = false;
       std::size_t top_at = 0;
       while (!queue.empty()) {
+        // The top's key and id in locals: read back from the queue on every step, they went
+        // through a stack slot.
         top_at = 0;
-        for (std::size_t q = 1; q < queue.size(); ++q)
-          if (ranks_below(queue[top_at], queue[q])) top_at = q;
+        double top_score = queue[0].score;
+        std::uint32_t top_t = queue[0].t;
+        for (std::size_t q = 1; q < queue.size(); ++q) {
+          const Keyed& k = queue[q];
+          if (ranks_below(top_score, top_t, k)) top_at = q, top_score = k.score, top_t = k.t;
+        }
         Keyed& top = queue[top_at];
         if (O::kMergeOnlyPositive && !(top.score > 0.0)) break;  // every key, so every score, is <= 0
         if (top.level == kExactLevel) {
@@ -306,8 +314,7 @@ template <ClusterObjective O>
           break;
         }
         std::uint32_t added[3], shared[3];
-        MergeContext ctx;
-        make_ctx(frontier[top.slot], added, shared, ctx);
+        const MergeContext ctx = make_ctx(frontier[top.slot], added, shared);
         const Evaluation ev = evaluate_candidate(top.slot, ctx, kLevels[top.level + 1]);
         ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
         if (ev.exact || top.level + 1 == kExactLevel) evals[top.slot] = ev;
@@ -323,8 +330,7 @@ template <ClusterObjective O>
       // Add best_t to the cluster.
       const std::uint32_t d = best_t;
       std::uint32_t added[3], shared[3];
-      MergeContext ctx;
-      make_ctx(frontier[best_i], added, shared, ctx);
+      const MergeContext ctx = make_ctx(frontier[best_i], added, shared);
       cur = objective.merge(cur, summary_of(frontier[best_i]), ctx, best_ev);
       for (std::uint32_t v : ctx.added) {
         vstamp[v] = cluster;

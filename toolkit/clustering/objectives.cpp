@@ -116,8 +116,9 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
 // Triangles [begin, end) of the tables' pass: area and normal, and with the sums the sum of their
 // minimal spheres' areas (in order) and their centroids' box. A function of its own so that it has
 // instruction-set clones (toolkit/core/isa.h).
-PTC_ISA_CLONES void tables_chunk(ClusterTables& t, std::size_t begin, std::size_t end, bool with_sums, double* sum_out,
-                                 Box3* box_out) {
+PTC_ISA_CLONES
+void tables_chunk(ClusterTables& t, std::size_t begin, std::size_t end, bool with_sums, double* sum_out,
+                  Box3* box_out) {
   double sum = 0.0;
   Box3 box;
   for (std::size_t i = begin; i < end; ++i) {

@@ -135,7 +135,8 @@ bool all_finite(std::span<const Vec3> points) {
 }  // namespace
 
 // Flattened: CGAL's solver is inlined, so that each instruction-set clone has its own copy.
-[[gnu::flatten]] PTC_ISA_CLONES Sphere min_sphere(std::span<const Vec3> points) {
+[[gnu::flatten]] PTC_ISA_CLONES
+Sphere min_sphere(std::span<const Vec3> points) {
   if (points.empty()) return Sphere::empty();
   Box3 box;
   for (const Vec3& p : points) box.extend(p);

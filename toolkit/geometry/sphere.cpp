@@ -310,7 +310,8 @@ Sphere epos_sphere(std::span<const Vec3> points, int directions) {
   }
 }
 
-PTC_ISA_CLONES Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
+PTC_ISA_CLONES
+Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 corners[3] = {a, b, c};
   if (!a.allFinite() || !b.allFinite() || !c.allFinite()) return nan_sphere();
   // Edge i is opposite corner i (e[i] runs between the two corners other than i); len2[i] its

@@ -62,7 +62,8 @@ struct TriangleGeometry {
 };
 
 // Always inlined: the tables' pass calls it from an instruction-set clone (toolkit/core/isa.h).
-[[nodiscard]] [[gnu::always_inline]] inline TriangleGeometry triangle_geometry(const Vec3& a, const Vec3& b, const Vec3& c) {
+[[nodiscard]] [[gnu::always_inline]] inline
+TriangleGeometry triangle_geometry(const Vec3& a, const Vec3& b, const Vec3& c) {
   // Sides opposite each corner; the corner between the two shortest sides is the one opposite
   // the longest side. (b-a) x (c-a) = (c-b) x (a-b) = (a-c) x (b-c): same orientation.
   // Scale the sides by a power of two (exact) so that the cross product neither overflows

@@ -166,7 +166,8 @@ AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& par
   }
 }
 
-PTC_ISA_CLONES AccObjective::Summary AccObjective::single(std::uint32_t t) {
+PTC_ISA_CLONES
+AccObjective::Summary AccObjective::single(std::uint32_t t) {
   const ClusterTables& tb = *tables_;
   Summary s;
   s.serial = std::uint64_t{t} + 1;  // the same for every summary of {t}: they describe one cluster
@@ -235,7 +236,9 @@ const Sphere& AccObjective::sphere_of(const Summary& s) {
   return out;
 }
 
-PTC_ISA_CLONES double AccObjective::score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg_out) const {
+// Inlined into its callers (all in this file), their instruction-set clones included.
+[[gnu::always_inline]] inline
+double AccObjective::score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg_out) const {
   // The expressions of cluster_metrics / cluster_acc, from R^2 (bounds come as R^2: no root).
   const double area_c = std::numbers::pi * r2;
   const double reg = area_c > 0.0 ? area_p / area_c : 0.0;
@@ -248,7 +251,8 @@ PTC_ISA_CLONES double AccObjective::score_of(double area_p, double r2, std::uint
   return std::isnan(acc) ? -std::numeric_limits<double>::infinity() : acc;
 }
 
-PTC_ISA_CLONES Sphere AccObjective::sphere_of_union(const MergeContext& ctx, const Box3& box, const PointFilter* filter) {
+PTC_ISA_CLONES
+Sphere AccObjective::sphere_of_union(const MergeContext& ctx, const Box3& box, const PointFilter* filter) {
   const Vec3 o = local_origin(box);
   const auto& pos = tables_->positions;
   // A point p of A is dropped when |p - c_A| + d_A < keep_from, i.e. |p - c_A|^2 < (keep_from - d_A)^2.
@@ -282,7 +286,8 @@ PTC_ISA_CLONES Sphere AccObjective::sphere_of_union(const MergeContext& ctx, con
   return s;
 }
 
-PTC_ISA_CLONES Sphere AccObjective::warm_min_sphere() {
+PTC_ISA_CLONES
+Sphere AccObjective::warm_min_sphere() {
   // Minimal sphere of scratch_points_ from a few of them (the seeds): min_sphere of the seeds;
   // if a point lies outside, add the farthest one and repeat. When every point is inside, the
   // seeds' minimal sphere is the minimal sphere of all (a subset's is never larger), so this is
@@ -311,7 +316,8 @@ PTC_ISA_CLONES Sphere AccObjective::warm_min_sphere() {
   return min_sphere(pts);
 }
 
-PTC_ISA_CLONES double AccObjective::area_p_of(const Summary& part, std::span<const std::uint32_t> members, const Vec3& n) const {
+PTC_ISA_CLONES
+double AccObjective::area_p_of(const Summary& part, std::span<const std::uint32_t> members, const Vec3& n) const {
   if (part.nonzero == 0) return 0.0;
   double s = 0;
   for (std::uint32_t t : members) s += tables_->area[t] * std::abs(n.dot(tables_->normal[t]));
@@ -348,7 +354,8 @@ void AccObjective::remember(const MergeContext& ctx, const Sphere& s) {
   learn_r2(ctx.added[0], s.radius * s.radius);
 }
 
-PTC_ISA_CLONES bool AccObjective::small_support_sphere(const MergeContext& ctx, const Box3& box, Sphere& out) const {
+PTC_ISA_CLONES
+bool AccObjective::small_support_sphere(const MergeContext& ctx, const Box3& box, Sphere& out) const {
   // On cluster-local coordinates, as every sphere here. Three scans of V(A):
   //   p  = the point farthest from v; D = the sphere with diameter v p;
   //   q  = the point farthest from D's center: inside D -> D is minimal (a subset's minimal
@@ -382,7 +389,8 @@ PTC_ISA_CLONES bool AccObjective::small_support_sphere(const MergeContext& ctx, 
   return false;
 }
 
-PTC_ISA_CLONES double AccObjective::support_r2(const MergeContext& ctx, const Box3& box) const {
+PTC_ISA_CLONES
+double AccObjective::support_r2(const MergeContext& ctx, const Box3& box) const {
   // On cluster-local coordinates, the points sphere_of_union gives the exact computation. The
   // minimal sphere of a subset is never larger than the union's. Its computed radius is the
   // largest distance from a computed center (triangle_min_sphere: the circumcenter from the
@@ -406,7 +414,8 @@ PTC_ISA_CLONES double AccObjective::support_r2(const MergeContext& ctx, const Bo
   return std::isfinite(r2) ? r2 : 0.0;
 }
 
-PTC_ISA_CLONES AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary& b, const MergeContext& ctx,
+PTC_ISA_CLONES
+AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary& b, const MergeContext& ctx,
                                                 Precision precision) {
   const bool memo = tuning_.vertex_memo && minimal_ && ctx.added.size() == 1;
   if (memo) enter_lineage(a);
@@ -416,7 +425,8 @@ PTC_ISA_CLONES AccObjective::Evaluation AccObjective::evaluate(const Summary& a,
   return ev;
 }
 
-PTC_ISA_CLONES AccObjective::Evaluation AccObjective::evaluate_with(const Summary& a, const Summary& b, const MergeContext& ctx,
+PTC_ISA_CLONES
+AccObjective::Evaluation AccObjective::evaluate_with(const Summary& a, const Summary& b, const MergeContext& ctx,
                                                      const Known& sphere) {
   Evaluation ev;
   sums_and_area(a, b, ctx, ev);
@@ -426,7 +436,8 @@ PTC_ISA_CLONES AccObjective::Evaluation AccObjective::evaluate_with(const Summar
   return ev;
 }
 
-PTC_ISA_CLONES void AccObjective::sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev) {
+PTC_ISA_CLONES
+void AccObjective::sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev) {
   const ClusterTables& tb = *tables_;
   ev.box = a.box;
   ev.box.extend(b.box);
@@ -476,7 +487,8 @@ PTC_ISA_CLONES void AccObjective::sums_and_area(const Summary& a, const Summary&
     ev.area_p = area_p_of(a, ctx.a_triangles, ev.n_avg) + area_p_of(b, ctx.b_triangles, ev.n_avg);
 }
 
-PTC_ISA_CLONES void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr, const MergeContext& ctx,
+PTC_ISA_CLONES
+void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr, const MergeContext& ctx,
                                           Precision precision, bool memo, Evaluation& ev) {
   const ClusterTables& tb = *tables_;
   // The sphere of the union.
@@ -606,7 +618,8 @@ PTC_ISA_CLONES void AccObjective::union_sphere_and_score(const Summary& a, const
   ev.score = score_of(ev.area_p, ev.sphere.radius * ev.sphere.radius, ctx.vertex_count, &ev.reg);
 }
 
-PTC_ISA_CLONES void AccObjective::growth_prepare(const Summary& a, std::span<const GrowthQuery> queries, GrowthPrepared* out) {
+PTC_ISA_CLONES
+void AccObjective::growth_prepare(const Summary& a, std::span<const GrowthQuery> queries, GrowthPrepared* out) {
   // evaluate()'s path for ctx.added = {v} at Precision::UpperBoundAllowed, up to the memo.
   const ClusterTables& tb = *tables_;
   enter_lineage(a);
@@ -647,7 +660,8 @@ PTC_ISA_CLONES void AccObjective::growth_prepare(const Summary& a, std::span<con
   }
 }
 
-PTC_ISA_CLONES AccObjective::Evaluation AccObjective::growth_refine(const Summary& a, const GrowthPrepared& p,
+PTC_ISA_CLONES
+AccObjective::Evaluation AccObjective::growth_refine(const Summary& a, const GrowthPrepared& p,
                                                      const MergeContext& ctx, Precision precision) {
   // evaluate(a, single(t), ctx, precision) with what growth_prepare computed of it (the same
   // values: there is one code path from the sphere on, union_sphere_and_score).
@@ -662,7 +676,8 @@ PTC_ISA_CLONES AccObjective::Evaluation AccObjective::growth_refine(const Summar
   return ev;
 }
 
-PTC_ISA_CLONES bool AccObjective::growth_key(const GrowthPrepared& p, std::uint32_t v, std::uint32_t vertex_count, double& key) {
+PTC_ISA_CLONES
+bool AccObjective::growth_key(const GrowthPrepared& p, std::uint32_t v, std::uint32_t vertex_count, double& key) {
   if (p.general || memo_find(v)) return false;
   const double r2 = std::max(p.r2, known_r2(v));
   learn_r2(v, r2);
@@ -672,7 +687,8 @@ PTC_ISA_CLONES bool AccObjective::growth_key(const GrowthPrepared& p, std::uint3
   return true;
 }
 
-PTC_ISA_CLONES AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, const MergeContext& ctx,
+PTC_ISA_CLONES
+AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, const MergeContext& ctx,
                                           const Evaluation& ev) {
   Summary s;
   s.serial = next_serial_++;
