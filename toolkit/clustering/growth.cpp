@@ -352,8 +352,9 @@ template <ClusterObjective O>
 }
 
 namespace detail {
-PTC_ISA_CLONES ClusterRun grow_clusters_acc(const ClusterTables& tb, AccObjective& objective, const GrowthOptions& options,
-                                           const ProgressFn& progress) {
+PTC_ISA_CLONES
+ClusterRun grow_clusters_acc(const ClusterTables& tb, AccObjective& objective, const GrowthOptions& options,
+                             const ProgressFn& progress) {
   return grow_impl(tb, objective, options, progress);
 }
 }  // namespace detail
