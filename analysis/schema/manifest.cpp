@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "analysis/schema/json.h"
+#include "toolkit/core/isa.h"
 #include "toolkit/core/memory.h"
 #include <thread>
 
@@ -80,6 +81,7 @@ nlohmann::json machine_info() {
   // them (`ptc` arranges it, commands/process.h; toolkit/core/memory.h).
   if (const std::string mode = transparent_huge_page_mode(); !mode.empty()) j["transparent_hugepages"] = mode;
   j["malloc_hugepages"] = malloc_huge_pages();
+  j["clustering_isa"] = clustering_isa();  // which clones of the clustering's hot code run (toolkit/core/isa.h)
   return j;
 }
 

@@ -1,5 +1,6 @@
 // The `ptc` command as a user runs it: exit codes, one-line errors naming file and element,
 // atomic outputs, and every sample mesh of libcgal-demo giving a result or a clear error.
+#include <cpuid.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -395,6 +396,32 @@ TEST_F(Cli, ClusterATriangleSoupByCoincidentCorners) {
   EXPECT_FALSE(fs::exists(dir_ / "x"));
 }
 
+TEST_F(Cli, ClusteringInstructionSetIsRecorded) {
+  // The manifest names the clones of the clustering's hot code the loader picked
+  // (toolkit/core/isa.h): x86-64-v3 exactly when the CPU has every feature of that level and the
+  // OS saves the AVX registers, the baseline otherwise. The independent answer reads the CPUID
+  // bits itself (this machine's /proc/cpuinfo omits LZCNT's "abm" although the CPU has it).
+  unsigned a = 0, b = 0, c1 = 0, d = 0, b7 = 0, c7 = 0, cx = 0;
+  ASSERT_TRUE(__get_cpuid(1, &a, &b, &c1, &d));
+  const bool leaf7 = __get_cpuid_count(7, 0, &a, &b7, &c7, &d);
+  const bool ext = __get_cpuid(0x80000001u, &a, &b, &cx, &d);
+  auto bit = [](unsigned r, int i) { return ((r >> i) & 1u) != 0; };
+  // FMA, MOVBE, XSAVE, OSXSAVE, AVX, F16C
+  bool v3 = bit(c1, 12) && bit(c1, 22) && bit(c1, 26) && bit(c1, 27) && bit(c1, 28) && bit(c1, 29);
+  v3 = v3 && leaf7 && bit(b7, 3) && bit(b7, 5) && bit(b7, 8);  // BMI1 AVX2 BMI2
+  v3 = v3 && ext && bit(cx, 5);                                // LZCNT
+  if (v3) {
+    unsigned lo = 0, hi = 0;
+    __asm__("xgetbv" : "=a"(lo), "=d"(hi) : "c"(0));
+    v3 = (lo & 6u) == 6u;  // XMM and YMM state enabled by the OS
+  }
+  const std::string mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  const RunResult r = ptc({"cluster", mesh, "--max-count", "30", "--out", (dir_ / "isa").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto machine = nlohmann::json::parse(slurp(dir_ / "isa" / "manifest.json"))["machine"];
+  EXPECT_EQ(machine["clustering_isa"].get<std::string>(), std::string(v3 ? "x86-64-v3" : "x86-64"));
+}
+
 TEST_F(Cli, MallocOnHugePagesIsRecordedAndCanBeTurnedOff) {
   // ptc sets GLIBC_TUNABLES glibc.malloc.hugetlb=1 and executes itself once (commands/process.h),
   // unless PTC_HUGEPAGES=0, the user named the tunable, or the kernel has THP off; the manifest
@@ -416,7 +443,9 @@ TEST_F(Cli, MallocOnHugePagesIsRecordedAndCanBeTurnedOff) {
   ::unsetenv("GLIBC_TUNABLES");
   const auto on = run(nullptr, nullptr, "on");
   EXPECT_EQ(on["malloc_hugepages"], thp);
-  if (thp) EXPECT_TRUE(on["transparent_hugepages"] == "madvise" || on["transparent_hugepages"] == "always");
+  if (thp) {
+    EXPECT_TRUE(on["transparent_hugepages"] == "madvise" || on["transparent_hugepages"] == "always");
+  }
   EXPECT_EQ(run("PTC_HUGEPAGES", "0", "off")["malloc_hugepages"], false);
   EXPECT_EQ(run("GLIBC_TUNABLES", "glibc.malloc.hugetlb=0", "user")["malloc_hugepages"], false);
   EXPECT_EQ(slurp(dir_ / "on" / "triangles.csv"), slurp(dir_ / "off" / "triangles.csv"));

@@ -16,3 +16,12 @@
 #else
 #define PTC_ISA_CLONES
 #endif
+
+namespace ptc {
+
+/// The instruction set whose clones the loader picked for this process: "x86-64-v3" or "x86-64"
+/// (the baseline; also every build without the clones). Recorded in every manifest
+/// (`machine.clustering_isa`), since the clustering's times depend on it.
+[[nodiscard]] const char* clustering_isa();
+
+}  // namespace ptc
