@@ -3,7 +3,7 @@
 namespace ptc {
 
 const char* clustering_isa() {
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PTC_NO_ISA_CLONES)
+#if PTC_HAS_ISA_CLONES
   // The test GCC's dispatcher makes for an "arch=x86-64-v3" clone.
   __builtin_cpu_init();
   return __builtin_cpu_supports("x86-64-v3") ? "x86-64-v3" : "x86-64";

@@ -12,8 +12,10 @@
 /// Clang builds (the fuzzing build) and other architectures get the one baseline version, as does
 /// a build with -DPTC_NO_ISA_CLONES.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PTC_NO_ISA_CLONES)
+#define PTC_HAS_ISA_CLONES 1
 #define PTC_ISA_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
+#define PTC_HAS_ISA_CLONES 0
 #define PTC_ISA_CLONES
 #endif
 

@@ -1,5 +1,4 @@
 #include "toolkit/clustering/objectives/acc.h"
-#include "toolkit/core/isa.h"
 
 #include <emmintrin.h>
 
@@ -12,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "toolkit/core/isa.h"
 #include "toolkit/geometry/triangle.h"
 
 namespace ptc {
