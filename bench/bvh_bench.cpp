@@ -182,6 +182,11 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--clock") clock_arg = text();
     else if (a == "--ci") o.tcfg.build.cost.intersection = o.ccfg.build.cost.intersection = value();
     else if (a == "--groups") o.ccfg.cluster_group_size = static_cast<unsigned>(value());
+    else if (a == "--group-trees") {
+      const auto g = bvh::parse_group_trees(text());
+      if (!g) usage("--group-trees must be rebuild or refit");
+      o.ccfg.group_trees = *g;
+    }
     else if (a == "--median") o.ccfg.build.median_split_below = static_cast<unsigned>(value());
     else if (a == "--ct") o.tcfg.build.cost.traversal = o.ccfg.build.cost.traversal = value();
     else if (a[0] != '-') o.mesh_path = a;
@@ -470,6 +475,7 @@ int main(int argc, char** argv) {
   loop::AccelSetup setup;
   setup.origin = mesh.bounds().center();
   setup.cluster_group_size = o.ccfg.cluster_group_size;
+  setup.group_trees = o.ccfg.group_trees;
   setup.threads = o.threads;
   const RayBatch rays = primary_rays(frame_box(mesh.bounds()), o.size, o.size);
   std::printf("mesh %s, %d subdivision levels: %zu triangles, %zu vertices; %zu rays; %u thread(s); %d frames "
@@ -551,7 +557,7 @@ int main(int argc, char** argv) {
           {"clusters", o.clusterings}, {"max_count", o.max_count}, {"max_size", o.max_size},
           {"leaves", leaf_names}, {"deform", to_string(o.deform.kind)}, {"amplitude", o.deform.amplitude},
           {"period", o.deform.period}, {"vertex_order", to_string(o.vertex_order)},
-          {"cluster_group_size", o.ccfg.cluster_group_size}, {"isa", to_string(resolve(o.isa))},
+          {"cluster_group_size", o.ccfg.cluster_group_size}, {"group_trees", to_string(o.ccfg.group_trees)}, {"isa", to_string(resolve(o.isa))},
           {"clock", o.clock == StageClock::ThreadCpu ? "cpu" : "wall"},
           {"sah_traversal", o.tcfg.build.cost.traversal}, {"sah_intersection", o.tcfg.build.cost.intersection},
           {"triangle_leaf", o.tcfg.build.max_leaf_size}};

@@ -12,6 +12,7 @@
 #include <tbb/task_group.h>
 
 #include "bvh/leaf_blocks.h"
+#include "bvh/refit.h"
 #include "bvh/stage_clock.h"
 #include "bvh/sweep_sah_builder.h"
 #include "toolkit/geometry/morton.h"
@@ -202,6 +203,9 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   std::vector<std::uint32_t> lane_ids;  // triangle id per block lane (kNoTriangle: padding)
   if (cfg_.cluster_leaf == ClusterLeaf::Linear) layout_linear(lane_ids);
   else layout_block_trees(lane_ids);
+  block_nodes_ = static_cast<std::uint32_t>(sub_nodes_.size());
+  refit_groups_ = cfg_.group_trees == GroupTrees::Refit && !group_offsets_.empty();
+  if (refit_groups_) layout_group_trees();
   data.blocks.resize(lane_ids.size() / 4);
   data.triangle_ids.assign(lane_ids.begin(), lane_ids.end());
   set_vertex_order(mesh, lane_ids);
@@ -270,6 +274,140 @@ void ClusterScene::layout_block_trees(std::vector<std::uint32_t>& lane_ids) {
   }
 }
 
+// GroupTrees::Refit: per group, the binned SAH tree over its clusters' rest-pose boxes (the
+// scene's build settings), collapsed to 4-wide and appended to sub_nodes_ after the block trees.
+// A leaf child of one cluster refers to the cluster's blocks (or links to its block tree), a
+// leaf of several clusters to fixed ranges; the slots remember which cluster boxes they unite.
+// (f_.fpos holds the rest pose in the trace frame, in the mesh's numbering.)
+void ClusterScene::layout_group_trees() {
+  AlignedVector<Box3f> boxes;
+  AlignedVector<Vec3f> centres;
+  point_group_boxes(std::span<const Vec3f>(f_.fpos.data(), f_.fpos.size()), vertex_offsets_, vertices_, boxes, centres);
+  const std::size_t G = group_offsets_.size() - 1;
+  group_bvh_.resize(G);
+  group_root_.assign(G, kNoTriangle);
+  group_weights_.assign(G, 0);
+  group_boxes_.resize(G);
+  group_centres_.resize(G);
+  for (std::size_t g = 0; g < G; ++g) {
+    const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
+    for (std::uint32_t i = 0; i < n; ++i) group_weights_[g] += weights_[first + i];
+    Bvh gb = build_binned_sah({std::span<const Box3f>(boxes.data() + first, n),
+                               std::span<const Vec3f>(centres.data() + first, n),
+                               std::span<const std::uint32_t>(weights_.data() + first, n)},
+                              cfg_.build);
+    if (n > 1) {
+      const WideBvh w = collapse_to_wide(gb);
+      const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
+      group_root_[g] = base + w.root;
+      group_depth_ = std::max(group_depth_, w.depth);
+      for (WideNode nd : w.nodes) {
+        GroupSlots gs{};
+        for (int k = 0; k < 4; ++k) {
+          if (nd.is_leaf(k)) {
+            const std::uint32_t cnt = nd.count[k];
+            gs.first[k] = static_cast<std::uint32_t>(group_leaf_clusters_.size());
+            gs.count[k] = cnt;
+            for (std::uint32_t i = 0; i < cnt; ++i) group_leaf_clusters_.push_back(first + gb.prim_order[nd.child[k] + i]);
+            if (cnt == 1) {
+              const std::uint32_t c = group_leaf_clusters_.back();
+              if (sub_root_[c] != kNoTriangle) nd.child[k] = sub_root_[c], nd.count[k] = 0;  // its block tree
+              else nd.child[k] = cluster_ranges_[c].first_block, nd.count[k] = cluster_ranges_[c].triangle_count;
+            } else {
+              nd.child[k] = static_cast<std::uint32_t>(group_ranges_.size());
+              nd.count[k] = cnt | kIndirectLeaf;
+              for (std::uint32_t i = 0; i < cnt; ++i) group_ranges_.push_back(cluster_ranges_[group_leaf_clusters_[gs.first[k] + i]]);
+            }
+          } else if (!nd.is_empty(k)) {
+            nd.child[k] += base;
+          }
+        }
+        sub_nodes_.push_back(nd);
+        group_slots_.push_back(gs);
+      }
+    }
+    group_bvh_[g] = std::move(gb);
+  }
+}
+
+namespace {
+// The union of a wide node's four child boxes, as rows of min (lo) and max (hi).
+inline Box3f node_union(const WideNode& c) {
+  float r[6];
+  for (int row = 0; row < 6; ++row) {
+    __m128 x = _mm_load_ps(c.bounds[row]);
+    if (row % 2 == 0) {
+      x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
+      x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
+    } else {
+      x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
+      x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
+    }
+    r[row] = _mm_cvtss_f32(x);
+  }
+  return {{r[0], r[2], r[4]}, {r[1], r[3], r[5]}};
+}
+}  // namespace
+
+// GroupTrees::Refit, per frame: the groups' trees refitted from the cluster boxes (children after
+// parents: one reverse sweep), then one record per group for the build (its box and centre).
+void ClusterScene::refit_group_trees() {
+  WideNode* nodes = f_.data.wide.nodes.data();
+  const Box3f* cb = f_.boxes.data();
+  for (std::size_t i = sub_nodes_.size(); i-- > block_nodes_;) {
+    WideNode& n = nodes[i];
+    const GroupSlots& gs = group_slots_[i - block_nodes_];
+    for (int k = 0; k < 4; ++k) {
+      if (gs.count[k]) {
+        const std::uint32_t* c = group_leaf_clusters_.data() + gs.first[k];
+        Box3f b = cb[c[0]];
+        for (std::uint32_t j = 1; j < gs.count[k]; ++j) b.extend(cb[c[j]]);
+        n.set_child_box(k, b);
+      } else if (!n.is_empty(k)) {
+        n.set_child_box(k, node_union(nodes[n.child[k]]));
+      }
+    }
+  }
+  for (std::size_t g = 0; g + 1 < group_offsets_.size(); ++g) {
+    const Box3f b = group_root_[g] == kNoTriangle ? cb[group_offsets_[g]] : node_union(nodes[group_root_[g]]);
+    group_boxes_[g] = b;
+    group_centres_[g] = b.center();
+  }
+}
+
+Bvh ClusterScene::cluster_tree() const {
+  if (!refit_groups_ || f_.bvh.empty()) return f_.bvh;
+  const Bvh& top = f_.bvh;
+  Bvh out;
+  auto emit = [&](auto& self, std::uint32_t i) -> void {
+    const BvhNode& n = top.nodes[i];
+    if (n.is_leaf()) {
+      for (std::uint32_t p = n.index; p < n.index + n.count; ++p) {  // one group (the top's leaves hold one)
+        const std::uint32_t g = top.prim_order[p];
+        const Bvh& gb = group_bvh_[g];
+        const auto base = static_cast<std::uint32_t>(out.nodes.size());
+        const auto pbase = static_cast<std::uint32_t>(out.prim_order.size());
+        for (BvhNode m : gb.nodes) {
+          m.index += m.is_leaf() ? pbase : base;
+          out.nodes.push_back(m);
+        }
+        for (std::uint32_t q : gb.prim_order) out.prim_order.push_back(group_offsets_[g] + q);
+      }
+      return;
+    }
+    const auto at = out.nodes.size();
+    out.nodes.push_back(n);
+    self(self, i + 1);
+    out.nodes[at].index = static_cast<std::uint32_t>(out.nodes.size());
+    self(self, n.index);
+  };
+  emit(emit, 0);
+  refit(out, f_.boxes, weights_, &cfg_.build.cost);
+  return out;
+}
+
+double ClusterScene::sah_cost() const { return refit_groups_ ? cluster_tree().cost : f_.bvh.cost; }
+
 // Corner vertex indices per block (read sequentially every frame instead of looking up the
 // triangles of the lanes, which are scattered over the triangle array), in the vertex order of
 // the per-frame pass: vertices renumbered once per clustering so that the per-frame conversion
@@ -301,7 +439,7 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
 
 void ClusterScene::refit_subtrees() {
   WideNode* nodes = f_.data.wide.nodes.data();
-  for (std::size_t i = sub_nodes_.size(); i-- > 0;) {
+  for (std::size_t i = block_nodes_; i-- > 0;) {
     WideNode& n = nodes[i];
     for (int k = 0; k < 4; ++k) {
       if (n.is_leaf(k)) {
@@ -352,17 +490,26 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   // with more than one thread it is written while the tree is built and linked: the fill's
   // chunks run on the other threads. Each stage keeps its own time; overlap_ms is what they
   // shared, so total_ms() stays the update's wall time.
-  const std::size_t S = sub_nodes_.size();
+  const std::size_t B = block_nodes_;
   auto leaf_data = [&] {
     const double tl = clock_ms(cfg_.clock);
-    block_boxes_.resize(S ? data.blocks.size() : 0);
-    fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, S ? block_boxes_.data() : nullptr);  // fenced
+    block_boxes_.resize(B ? data.blocks.size() : 0);
+    fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
     times.leaf_data_ms = clock_ms(cfg_.clock) - tl;
   };
   auto tree = [&] {
     double tb = clock_ms(cfg_.clock);
-    if (cfg_.builder == SahBuilder::Sweep) f_.bvh = build_sweep_sah({f_.boxes, f_.centroids, weights_}, cfg_.build);
-    else build_binned_sah({f_.boxes, f_.centroids, weights_, group_offsets_}, cfg_.build, f_.bvh, f_.ws);
+    if (refit_groups_) {  // the groups' trees refitted, then the build over one record per group
+      if (data.wide.nodes.size() < sub_nodes_.size()) data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());
+      refit_group_trees();
+      BuildConfig top = cfg_.build;
+      top.max_leaf_size = 1;  // a leaf is one group (its tree)
+      build_binned_sah({group_boxes_, group_centres_, group_weights_}, top, f_.bvh, f_.ws);
+    } else if (cfg_.builder == SahBuilder::Sweep) {
+      f_.bvh = build_sweep_sah({f_.boxes, f_.centroids, weights_}, cfg_.build);
+    } else {
+      build_binned_sah({f_.boxes, f_.centroids, weights_, group_offsets_}, cfg_.build, f_.bvh, f_.ws);
+    }
     times.build_ms = clock_ms(cfg_.clock) - tb;
     tb = clock_ms(cfg_.clock);
     link_top_tree();
@@ -386,7 +533,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   }
 
   t0 = clock_ms(cfg_.clock);
-  if (S) refit_subtrees();
+  if (B) refit_subtrees();
   times.refit_ms = clock_ms(cfg_.clock) - t0;
 }
 
@@ -401,12 +548,26 @@ void ClusterScene::link_top_tree() {
   const auto S = static_cast<std::uint32_t>(sub_nodes_.size());
   if (data.wide.nodes.size() < S) data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());
   data.wide.nodes.resize(S + top.nodes.size());
-  data.ranges.resize(weights_.size());
-  for (std::size_t i = 0; i < bvh.prim_order.size(); ++i) data.ranges[i] = cluster_ranges_[bvh.prim_order[i]];
+  if (refit_groups_) {  // the top's leaves are single groups; the groups' trees keep fixed ranges
+    if (data.ranges.size() != group_ranges_.size()) data.ranges = group_ranges_;
+  } else {
+    data.ranges.resize(weights_.size());
+    for (std::size_t i = 0; i < bvh.prim_order.size(); ++i) data.ranges[i] = cluster_ranges_[bvh.prim_order[i]];
+  }
   for (std::size_t i = 0; i < top.nodes.size(); ++i) {
     WideNode n = top.nodes[i];
     for (int k = 0; k < 4; ++k) {
-      if (n.is_leaf(k)) {
+      if (n.is_leaf(k) && refit_groups_) {
+        if (n.count[k] != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
+        const std::uint32_t g = bvh.prim_order[n.child[k]];
+        if (group_root_[g] != kNoTriangle) {
+          n.child[k] = group_root_[g], n.count[k] = 0;
+          continue;
+        }
+        const std::uint32_t c = group_offsets_[g];  // a group of one cluster
+        if (sub_root_[c] != kNoTriangle) n.child[k] = sub_root_[c], n.count[k] = 0;
+        else n.child[k] = cluster_ranges_[c].first_block, n.count[k] = cluster_ranges_[c].triangle_count;
+      } else if (n.is_leaf(k)) {
         if (n.count[k] == 1) {
           const std::uint32_t c = bvh.prim_order[n.child[k]];
           if (sub_root_[c] != kNoTriangle) {
@@ -425,7 +586,7 @@ void ClusterScene::link_top_tree() {
   }
   data.wide.root = S;
   data.wide.bounds = top.bounds;
-  data.wide.depth = top.depth + sub_depth_;
+  data.wide.depth = top.depth + group_depth_ + sub_depth_;
   data.wide.leaves = top.leaves;
   if (top.nodes.empty()) data.wide.nodes.clear();
 }

@@ -62,7 +62,15 @@ class ClusterScene {
   void update(std::span<const Vec3> positions);
 
   [[nodiscard]] const TraceData& data() const { return f_.data; }
+  /// The last update's binary tree: over the clusters (primitive i = scene cluster i), or with
+  /// GroupTrees::Refit over the groups (primitive g = group g of group_offsets()).
   [[nodiscard]] const Bvh& bvh() const { return f_.bvh; }
+  /// The last update's binary tree over the clusters: bvh() itself, or with GroupTrees::Refit the
+  /// top tree over the groups with every group's leaf replaced by that group's fixed tree, boxes
+  /// and cost recomputed from boxes() (for reports and tests: it is not made per frame).
+  [[nodiscard]] Bvh cluster_tree() const;
+  /// The SAH cost of cluster_tree() (bvh().cost for the plain and the rebuilt two-level build).
+  [[nodiscard]] double sah_cost() const;
   /// Per-cluster data (boxes, weights, the BVH's primitive ids) is in the scene's own cluster
   /// order: scene cluster i is the clustering's cluster cluster_ids()[i] (cluster_visit_order).
   [[nodiscard]] const std::vector<std::uint32_t>& cluster_ids() const { return cluster_ids_; }
@@ -82,8 +90,10 @@ class ClusterScene {
   void layout_linear(std::vector<std::uint32_t>& lane_ids);
   void layout_block_trees(std::vector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
+  void layout_group_trees();
   void link_top_tree();
   void refit_subtrees();
+  void refit_group_trees();
   std::shared_ptr<const std::vector<Tri>> tris_;
   SceneConfig cfg_;
   std::vector<std::uint32_t> cluster_ids_;  // scene cluster -> the clustering's cluster
@@ -96,6 +106,22 @@ class ClusterScene {
   AlignedVector<WideNode> sub_nodes_;
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
   std::uint32_t sub_depth_ = 0;
+  // GroupTrees::Refit: sub_nodes_[block_nodes_ ..) are the groups' fixed trees (after the block
+  // trees), refitted from the cluster boxes; the per-frame build sees one record per group.
+  bool refit_groups_ = false;
+  std::uint32_t block_nodes_ = 0;
+  std::uint32_t group_depth_ = 0;
+  std::vector<Bvh> group_bvh_;             // per group: its rest-pose tree over its clusters (local ids)
+  std::vector<std::uint32_t> group_root_;  // per group: the wide node of its tree, or kNoTriangle (one cluster)
+  struct GroupSlots {  // per node of a group's tree: the scene clusters whose boxes a child slot unites
+    std::uint32_t first[4], count[4];      // into group_leaf_clusters_; count 0: an inner child (or empty)
+  };
+  std::vector<GroupSlots> group_slots_;
+  std::vector<std::uint32_t> group_leaf_clusters_;
+  std::vector<LeafRange> group_ranges_;     // the indirect leaves of the groups' trees (fixed)
+  std::vector<std::uint32_t> group_weights_;
+  AlignedVector<Box3f> group_boxes_;
+  AlignedVector<Vec3f> group_centres_;
   WideBvh top_;  // the collapsed top tree of the last update (kept: its nodes' memory is reused)
   std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill
   GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)

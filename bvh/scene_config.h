@@ -16,7 +16,7 @@ namespace ptc::bvh {
 struct StageTimes {
   double vertices_ms = 0;   ///< positions into the trace frame (float); 0 when fused into boxes_ms
   double boxes_ms = 0;      ///< primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion)
-  double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder)
+  double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder; GroupTrees::Refit: and the groups' refit)
   double collapse_ms = 0;   ///< binary -> 4-wide, and (clusters) linking
   double leaf_data_ms = 0;  ///< SoA triangle blocks
   double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees
@@ -35,6 +35,16 @@ enum class ClusterLeaf { Linear, BlockTree };
 [[nodiscard]] const char* to_string(ClusterLeaf l);
 [[nodiscard]] std::optional<ClusterLeaf> parse_cluster_leaf(std::string_view s);
 
+/// What the two-level build (SceneConfig::cluster_group_size) does inside a group per frame:
+/// Rebuild builds a binned SAH tree over the group's cluster boxes every frame; Refit keeps the
+/// tree built over the group's rest-pose boxes (a fixed 4-wide subtree, as the block trees of
+/// ClusterLeaf::BlockTree) and only recomputes its boxes, so the per-frame build and collapse
+/// see one record per group (docs/tracing.md, "Fixed group trees").
+enum class GroupTrees { Rebuild, Refit };
+/// "rebuild", "refit".
+[[nodiscard]] const char* to_string(GroupTrees g);
+[[nodiscard]] std::optional<GroupTrees> parse_group_trees(std::string_view s);
+
 /// Which SAH builder a scene runs per frame: Binned (Wald 2007, the per-frame one) or Sweep (the
 /// exact full sweep, sah_builder.h: the quality reference, for accuracy studies; it has no
 /// two-level build, so a cluster scene refuses it with cluster_group_size > 1).
@@ -52,6 +62,7 @@ struct SceneConfig {
   /// frame the top is built over the groups' boxes and each group over its clusters' boxes.
   /// 0 (or 1): the plain build over all cluster boxes (the paper's).
   std::uint32_t cluster_group_size = 0;
+  GroupTrees group_trees = GroupTrees::Rebuild;  ///< ClusterScene with groups only (see GroupTrees)
   SahBuilder builder = SahBuilder::Binned;  ///< the per-frame SAH builder (see SahBuilder)
 };
 
@@ -62,7 +73,9 @@ struct SceneConfig {
 /// Default build settings of a cluster scene: the same SAH constants, one cluster per leaf
 /// (leaves of several clusters cost the sum of their triangles and are rarely chosen), and the
 /// two-level build over groups of at most 8 clusters (cluster_group_size; measured on 27.6k Acc
-/// clusters of armadillo x2: build 3.6 -> 1.9 ms, SAH cost +2.6%, trace speed within 1-5%).
+/// clusters of armadillo x2: build 3.6 -> 1.9 ms, SAH cost +2.6%, trace speed within 1-5%), each
+/// group's tree fixed at the rest pose and refitted (GroupTrees::Refit: build and collapse
+/// 3.0 -> 1.0 ms, nodes per ray +1-8%; docs/tracing.md, "Fixed group trees").
 [[nodiscard]] SceneConfig cluster_scene_defaults();
 
 /// The trace frame of a scene over `mesh`: cfg.origin, or the centre of the mesh's bounds (the

@@ -91,6 +91,7 @@ SceneTracer::SceneTracer(const Mesh& first, const PartLayout& L, const SceneTrac
   tcfg.origin = ccfg.origin = origin_;
   ccfg.cluster_leaf = cfg.cluster_leaf;
   ccfg.cluster_group_size = cfg.cluster_group_size;
+  ccfg.group_trees = cfg.group_trees;
 
   const bool any_static = std::find(L.is_static.begin(), L.is_static.end(), true) != L.is_static.end();
   const bool any_moving = std::find(L.is_static.begin(), L.is_static.end(), false) != L.is_static.end();

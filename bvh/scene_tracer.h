@@ -44,6 +44,7 @@ struct SceneTracerConfig {
   const Clustering* clusters = nullptr;  ///< of the combined mesh: the moving BVH is a cluster BVH
   ClusterLeaf cluster_leaf = ClusterLeaf::Linear;
   std::uint32_t cluster_group_size = cluster_scene_defaults().cluster_group_size;  ///< SceneConfig (0: plain build)
+  GroupTrees group_trees = cluster_scene_defaults().group_trees;                    ///< SceneConfig
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
 };
 

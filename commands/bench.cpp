@@ -66,6 +66,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   }
   manifest.set_parameter("cluster_leaf", bvh::to_string(c.cluster_leaf));
   manifest.set_parameter("cluster_group_size", c.cluster_group_size);
+  manifest.set_parameter("group_trees", bvh::to_string(c.group_trees));
   manifest.set_parameter("vertex_order", r.vertex_order);
   manifest.set_parameter("tie_rel", c.tie.rel_t);
   manifest.set_parameter("embree_set_affinity", false);

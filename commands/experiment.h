@@ -37,6 +37,7 @@ struct ExperimentCommandOptions {
   unsigned threads = 0;             ///< 0: all cores
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;
   bvh::VertexOrder vertex_order = bvh::VertexOrder::Clusters;
   std::optional<std::string> shard;  ///< --shard K/N
   std::filesystem::path out_dir;

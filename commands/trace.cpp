@@ -117,6 +117,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   bvh::SceneTracerConfig tcfg;
   tcfg.clusters = use_clusters ? &clusters : nullptr;
   tcfg.cluster_group_size = opt.cluster_group_size;
+  tcfg.group_trees = opt.group_trees;
   tcfg.origin = first_bounds.center();
   loop::SceneAccel accel(mesh, bvh::PartLayout::of(scene), tcfg);
   const bvh::SceneTracer& tracer = accel.tracer();
@@ -223,6 +224,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   }());
   if (use_clusters) manifest.set_parameter("clusters", opt.clusters.string());
   if (use_clusters) manifest.set_parameter("cluster_group_size", opt.cluster_group_size);
+  if (use_clusters) manifest.set_parameter("group_trees", bvh::to_string(opt.group_trees));
   manifest.set_parameter("width", rc.width);
   manifest.set_parameter("height", rc.height);
   manifest.set_parameter("threads", threads);

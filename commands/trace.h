@@ -22,6 +22,7 @@ struct TraceCommandOptions {
   bool extend_frames = false;          ///< --extend-frames: frames outside the scene's listed range
   std::filesystem::path clusters;      ///< directory of `ptc cluster` (triangles.csv); empty: triangle BVH
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;  ///< two-level build (0: plain)
+  bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;  ///< what the two-level build does inside a group
   std::filesystem::path out_dir;       ///< images, trace.csv, manifest.json (required)
   CameraSpec camera;
   RenderConfig render;                 ///< size, shadows, AO, seed, light, threads (0 = all cores)

@@ -115,6 +115,7 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
   as.origin = rays.origin;
   as.cluster_leaf = setup.cluster_leaf;
   as.cluster_group_size = setup.cluster_group_size;
+  as.group_trees = setup.group_trees;
   as.threads = setup.threads;
   as.clusters = &method;
 

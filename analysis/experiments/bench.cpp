@@ -104,6 +104,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   setup.origin = rest_bounds.center();
   setup.cluster_leaf = cfg.cluster_leaf;
   setup.cluster_group_size = cfg.cluster_group_size;
+  setup.group_trees = cfg.group_trees;
   setup.threads = cfg.threads;
   setup.embree_packet_width = cfg.embree_packet_width;
 
@@ -137,6 +138,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     }
   }
   res.cluster_group_size = setup.cluster_group_size;
+  res.group_trees = setup.group_trees;
   std::vector<loop::Accel*> order;
   for (auto& a : accels) order.push_back(a.get());
 
@@ -332,7 +334,10 @@ std::string bench_text(const PeerBenchResult& r) {
                    median(src), r.vertex_order,
                    r.fused_vertex_pass ? " (cluster path: conversion and boxes in one pass)"
                                        : " (cluster path: positions gathered per frame)",
-                   r.cluster_group_size > 1 ? fmt::format("two-level, groups of <= {} clusters", r.cluster_group_size)
+                   r.cluster_group_size > 1 ? fmt::format("two-level, groups of <= {} clusters, {}", r.cluster_group_size,
+                                                                         r.group_trees == bvh::GroupTrees::Refit
+                                                                             ? "each group's tree fixed and refitted"
+                                                                             : "each group's tree rebuilt")
                                             : std::string("plain SAH build over all cluster boxes"));
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");

@@ -45,6 +45,8 @@ struct PeerBenchConfig {
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   /// Two-level build of the cluster BVH over groups of at most this many clusters; 0: plain.
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  /// With groups: each group's tree rebuilt per frame, or fixed and refitted (bvh::GroupTrees).
+  bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;
   TieRule tie;                            ///< what counts as a tie in the hit agreement
   /// Vertex order of the benchmark mesh. Clusters (default): the scene is renumbered once, after
   /// clustering, with bvh::cluster_vertex_order (every cluster's own vertices consecutive, parts
@@ -104,6 +106,7 @@ struct PeerBenchResult {
   std::string vertex_order;            ///< "clusters" (renumbered once) or "input"
   bool fused_vertex_pass = false;      ///< the cluster scene converts and boxes in one pass (no gather)
   std::uint32_t cluster_group_size = 0;  ///< the cluster BVH's two-level build (0: plain)
+  bvh::GroupTrees group_trees = bvh::GroupTrees::Rebuild;  ///< and what it does inside a group
   double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once
   bool shadows = false;                ///< a shadow pass was traced (cfg.light)
   bool packets = false;                ///< rays were traced in packets (cfg.packets)

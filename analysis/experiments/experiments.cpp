@@ -690,6 +690,7 @@ ExperimentRun run_experiment(Scene& scene, const ExperimentParams& p, const stud
   as.origin = rays.origin;
   as.cluster_leaf = setup.cluster_leaf;
   as.cluster_group_size = setup.cluster_group_size;
+  as.group_trees = setup.group_trees;
   as.threads = setup.threads;
 
   // The shard's configurations.

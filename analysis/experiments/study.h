@@ -74,6 +74,7 @@ struct StudySetup {
   unsigned threads = 1;              ///< oneTBB and Embree threads for the whole run
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;
   bvh::VertexOrder vertex_order = bvh::VertexOrder::Clusters;
   Shard shard;
   /// Called with the fraction done (0..1) between frames and configurations.

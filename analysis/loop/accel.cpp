@@ -47,7 +47,10 @@ class OursAccel final : public Accel {
     return bvh::trace(scene_->data(), rays, hits, opt);
   }
   [[nodiscard]] Vec3 origin() const override { return scene_->data().origin; }
-  [[nodiscard]] std::optional<double> sah_cost() const override { return scene_->bvh().cost; }
+  [[nodiscard]] std::optional<double> sah_cost() const override {
+    if constexpr (requires { scene_->sah_cost(); }) return scene_->sah_cost();  // over the clusters (fixed group trees too)
+    else return scene_->bvh().cost;
+  }
   [[nodiscard]] const S& scene() const { return *scene_; }
 
  private:
@@ -91,6 +94,7 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   cfg.origin = s.origin;
   cfg.cluster_leaf = s.cluster_leaf;
   cfg.cluster_group_size = s.cluster_group_size;
+  cfg.group_trees = s.group_trees;
   cfg.clock = s.clock;
   cfg.builder = s.builder;
   if (s.cluster_build) cfg.build = *s.cluster_build;

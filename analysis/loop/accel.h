@@ -65,6 +65,8 @@ struct AccelSetup {
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   /// ours_clusters: two-level build over groups of at most this many clusters (0: plain build).
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  /// ours_clusters with groups: the groups' trees rebuilt or refitted per frame (bvh::GroupTrees).
+  bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;
   unsigned threads = 1;                  ///< Embree's device threads (ours: the caller's oneTBB limit)
   /// Embree's packet width when a trace asks for packets (TraceOptions::packets): 4, 8 or 16.
   int embree_packet_width = 8;

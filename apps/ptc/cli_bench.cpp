@@ -12,7 +12,8 @@ struct BenchArgs {
   BenchCommandOptions opt;
   SceneArg scene;
   CameraArgs camera;
-  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters", adjacency = "auto";
+  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters", adjacency = "auto",
+      group_trees = bvh::to_string(bvh::cluster_scene_defaults().group_trees);
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -27,6 +28,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                       if (a->app->count("--deform")) o.deform = a->deform;
                       o.config.cluster_leaf =
                           *bvh::parse_cluster_leaf(a->cluster_leaf);
+                      o.config.group_trees = *bvh::parse_group_trees(a->group_trees);
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       o.config.adjacency = *parse_cluster_adjacency(a->adjacency);
@@ -83,6 +85,12 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "two-level cluster BVH build over fixed groups of at most N clusters (subtrees of the rest-pose "
                 "BVH); 0 = the plain build over all cluster boxes")
       ->check(CLI::Range(0u, 1u << 20))
+      ->capture_default_str();
+  c->add_option("--group-trees", a->group_trees,
+                "with --cluster-groups N > 1: rebuild each group's tree over its cluster boxes every frame, or "
+                "refit: keep the tree built at the rest pose and refit its boxes (the build then sees one box "
+                "per group)")
+      ->check(enum_validator("group trees", bvh::parse_group_trees))
       ->capture_default_str();
   c->add_option("--vertex-order", a->vertex_order,
                 "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "

@@ -194,6 +194,37 @@ const char* kSceneJson = R"({
 })";
 }  // namespace
 
+// --group-trees refit (the groups' trees fixed at the rest pose and refitted): the same hits and
+// shadows as the rebuilt groups, no mismatch, recorded in the manifest; a bad value is a usage
+// error naming the flag.
+TEST_F(TraceCli, BenchGroupTreesRefitTracesTheSameHits) {
+  std::ofstream(dir_ / "scene.json") << kSceneJson;
+  const std::string scene = (dir_ / "scene.json").string();
+  std::vector<decltype(csv_rows(std::string()))> rows;
+  for (const char* trees : {"rebuild", "refit"}) {
+    const fs::path out = dir_ / trees;
+    const CmdResult r = ptc({"bench", scene, "--frames", "3:5", "--width", "24", "--height", "16", "--max-count", "4",
+                             "--cluster-groups", "3", "--group-trees", trees, "--out", out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find(std::string("two-level, groups of <= 3 clusters, each group's tree ") +
+                         (std::string(trees) == "rebuild" ? "rebuilt" : "fixed and refitted")),
+              std::string::npos)
+        << r.out;
+    EXPECT_EQ(nlohmann::json::parse(slurp(out / "manifest.json"))["parameters"]["group_trees"], trees);
+    rows.push_back(csv_rows(slurp(out / "bench.csv")));
+  }
+  ASSERT_EQ(rows[0].size(), rows[1].size());
+  for (std::size_t i = 0; i < rows[0].size(); ++i) {
+    if (rows[1][i].at("config") != "ours_clusters") continue;
+    EXPECT_EQ(rows[1][i].at("hits"), rows[0][i].at("hits")) << i;
+    EXPECT_EQ(rows[1][i].at("mismatches"), "0") << i;
+    EXPECT_EQ(rows[1][i].at("shadow_occluded"), rows[0][i].at("shadow_occluded")) << i;
+    EXPECT_EQ(rows[1][i].at("shadow_mismatches"), "0") << i;
+  }
+  expect_error({"bench", scene, "--group-trees", "fixed", "--out", (dir_ / "bad").string()}, 2, "--group-trees");
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
+
 TEST_F(TraceCli, SceneFileSequenceWritesOneRowAndOneImageSetPerFrame) {
   std::ofstream(dir_ / "scene.json") << kSceneJson;
   const CmdResult r = ptc({"trace", (dir_ / "scene.json").string(), "--frames", "0:2", "--width", "20", "--height", "14",

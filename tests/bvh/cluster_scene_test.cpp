@@ -18,6 +18,7 @@
 
 #include "toolkit/clustering/morton_runs.h"
 #include "bvh/scene_config.h"
+#include "bvh/validate.h"
 #include "test_util.h"
 
 namespace ptc::bvh {
@@ -58,6 +59,7 @@ TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
     for (std::uint32_t groups : {0u, 8u}) {
       SceneConfig cfg = cluster_scene_defaults();
       cfg.cluster_group_size = groups;
+      cfg.group_trees = GroupTrees::Rebuild;  // (the primitives of bvh() are the clusters)
       ClusterScene s(m, view_of(runs), cfg);
       s.update(moved.positions());
       const std::vector<std::uint32_t> visit = cluster_visit_order(m, view_of(runs), cfg);
@@ -87,19 +89,21 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
   const Mesh m = test::load_mesh("armadillo.off");  // 13k blocks: more than one fill chunk
   const Clustering runs = ptc::morton_runs(m, 37);
   const std::vector<Mesh> frames{test::deformed(m, 0.02), test::deformed(m, 0.06)};
+  for (GroupTrees trees : {GroupTrees::Rebuild, GroupTrees::Refit})
   for (ClusterLeaf leaf : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
     std::vector<TraceData> want;
     for (int threads : {1, 2, 4}) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
       SceneConfig cfg = cluster_scene_defaults();
       cfg.cluster_leaf = leaf;
+      cfg.group_trees = trees;
       ClusterScene s(m, view_of(runs), cfg);
       for (std::size_t f = 0; f < frames.size(); ++f) {
         const auto t0 = std::chrono::steady_clock::now();
         s.update(frames[f].positions());
         const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        const std::string what = std::string(to_string(leaf)) + " threads " + std::to_string(threads) + " frame " +
-                                 std::to_string(f);
+        const std::string what = std::string(to_string(leaf)) + " " + to_string(trees) + " threads " +
+                                 std::to_string(threads) + " frame " + std::to_string(f);
         const StageTimes& t = s.times();
         EXPECT_GE(t.overlap_ms, 0.0) << what;
         if (threads == 1) {
@@ -130,6 +134,82 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
       }
     }
   }
+}
+
+// GroupTrees::Refit builds each group's tree once, over the rest-pose cluster boxes, with the
+// same builder settings the two-level rebuild uses inside a group, and builds the top over the
+// same group records: at the rest pose its tree over the clusters (cluster_tree(): the top with
+// the groups' trees spliced in) must be the rebuilt one, node for node and leaf for leaf, with
+// the same cost.
+TEST(ClusterScene, FixedGroupTreesAtTheRestPoseAreTheRebuiltTree) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  for (std::uint32_t run : {9u, 37u})
+    for (std::uint32_t groups : {2u, 3u, 8u, 16u}) {
+      const std::string what = "run " + std::to_string(run) + " groups " + std::to_string(groups);
+      const Clustering runs = ptc::morton_runs(m, run);
+      SceneConfig cfg = cluster_scene_defaults();
+      cfg.cluster_group_size = groups;
+      cfg.group_trees = GroupTrees::Rebuild;
+      const ClusterScene rebuilt(m, view_of(runs), cfg);
+      cfg.group_trees = GroupTrees::Refit;
+      const ClusterScene fixed(m, view_of(runs), cfg);
+      ASSERT_EQ(fixed.group_offsets(), rebuilt.group_offsets()) << what;
+      ASSERT_GT(fixed.group_offsets().size(), 3u) << what;
+      EXPECT_EQ(fixed.bvh().primitive_count(), fixed.group_offsets().size() - 1) << what;  // one record per group
+      const Bvh a = fixed.cluster_tree(), &b = rebuilt.bvh();
+      ASSERT_EQ(a.nodes.size(), b.nodes.size()) << what;
+      // (The leaves may refer to their primitives at other positions of prim_order: compare the
+      // primitives a leaf holds.)
+      for (std::size_t i = 0; i < a.nodes.size(); ++i) {
+        const BvhNode &x = a.nodes[i], &y = b.nodes[i];
+        ASSERT_TRUE(x.count == y.count && x.bounds == y.bounds && (x.is_leaf() || x.index == y.index)) << what << " node " << i;
+        for (std::uint32_t k = 0; k < x.count; ++k)
+          ASSERT_EQ(a.prim_order[x.index + k], b.prim_order[y.index + k]) << what << " node " << i;
+      }
+      EXPECT_NEAR(fixed.sah_cost(), rebuilt.sah_cost(), 1e-9 * rebuilt.sah_cost()) << what;
+      EXPECT_EQ(rebuilt.sah_cost(), rebuilt.bvh().cost) << what;
+    }
+}
+
+// After the mesh moves, the fixed trees are refitted: every inner box of the traced tree is the
+// exact union of its children's (validate with exact unions, linear leaves), the tree over the
+// clusters is a valid BVH whose reported cost is sah_cost()'s, its topology inside each group is
+// the rest pose's (Tracer.AccClustersMatchBruteForce checks the hits against brute force).
+TEST(ClusterScene, FixedGroupTreesAreRefittedExactly) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  const Clustering runs = ptc::morton_runs(m, 23);
+  SceneConfig cfg = cluster_scene_defaults();
+  cfg.group_trees = GroupTrees::Refit;
+  ClusterScene s(m, view_of(runs), cfg);
+  const Bvh rest = s.cluster_tree();
+  for (double amp : {0.03, 0.12}) {
+    const Mesh moved = test::deformed(m, amp);
+    s.update(moved.positions());
+    const std::string what = "amplitude " + std::to_string(amp);
+    const auto issues = validate(s.data(), m.triangle_count(), true);
+    ASSERT_TRUE(issues.empty()) << what << test::joined(issues);
+    const Bvh t = s.cluster_tree();
+    ValidateOptions vo;
+    vo.weights = s.weights();
+    vo.model = cfg.build.cost;
+    const auto tree_issues = validate(t, s.boxes(), vo);
+    ASSERT_TRUE(tree_issues.empty()) << what << test::joined(tree_issues);
+    EXPECT_EQ(s.sah_cost(), t.cost) << what;
+    // Inside a group the topology is the rest pose's: the same primitives, in the same order,
+    // under the group's subtree (the groups themselves may be ordered differently by the top).
+    std::vector<std::uint32_t> rest_pos(rest.prim_order.size()), pos(t.prim_order.size());
+    for (std::size_t i = 0; i < rest.prim_order.size(); ++i) rest_pos[rest.prim_order[i]] = static_cast<std::uint32_t>(i);
+    for (std::size_t i = 0; i < t.prim_order.size(); ++i) pos[t.prim_order[i]] = static_cast<std::uint32_t>(i);
+    const auto& go = s.group_offsets();
+    for (std::size_t g = 0; g + 1 < go.size(); ++g)
+      for (std::uint32_t c = go[g] + 1; c < go[g + 1]; ++c)
+        ASSERT_EQ(static_cast<std::int64_t>(pos[c]) - pos[go[g]], static_cast<std::int64_t>(rest_pos[c]) - rest_pos[go[g]])
+            << what << " group " << g << " cluster " << c;
+  }
+  EXPECT_STREQ(to_string(GroupTrees::Refit), "refit");
+  EXPECT_EQ(parse_group_trees("rebuild"), GroupTrees::Rebuild);
+  EXPECT_EQ(parse_group_trees("refit"), GroupTrees::Refit);
+  EXPECT_FALSE(parse_group_trees("Refit"));
 }
 
 TEST(ClusterScene, TheSweepBuilderHasNoTwoLevelBuild) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <random>
@@ -630,11 +631,14 @@ TEST(Tracer, AccClustersMatchBruteForce) {
   ASSERT_GT(cl.cluster_count(), 10u);
   const Mesh moved = test::deformed(m, 0.03);
   for (std::uint32_t group : {0u, 3u, 8u})  // plain build, and two-level builds (SceneConfig::cluster_group_size)
+  for (GroupTrees trees : {GroupTrees::Rebuild, GroupTrees::Refit})
   for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
-    SCOPED_TRACE("cluster_group_size " + std::to_string(group));
+    if (group == 0 && trees == GroupTrees::Refit) continue;  // (no groups: the same plain build)
+    SCOPED_TRACE("cluster_group_size " + std::to_string(group) + ", group trees " + to_string(trees));
     SceneConfig cfg = cluster_scene_defaults();
     cfg.cluster_leaf = mode;
     cfg.cluster_group_size = group;
+    cfg.group_trees = trees;
     ClusterScene s(m, view_of(cl), cfg);
     for (const Mesh* frame : {&m, &moved}) {
       s.update(frame->positions());
@@ -732,6 +736,15 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
       EXPECT_EQ(b.times().vertices_ms, 0.0);
       ASSERT_TRUE(std::ranges::equal(a.boxes(), b.boxes())) << "frame " << f;
       EXPECT_EQ(a.bvh().prim_order, b.bvh().prim_order);
+      // The blocks (and the block trees' boxes, refitted from them) byte for byte.
+      ASSERT_EQ(a.data().blocks.size(), b.data().blocks.size());
+      EXPECT_EQ(std::memcmp(a.data().blocks.data(), b.data().blocks.data(), a.data().blocks.size() * sizeof(TriBlock)), 0)
+          << "frame " << f;
+      ASSERT_EQ(a.data().wide.nodes.size(), b.data().wide.nodes.size());
+      EXPECT_EQ(std::memcmp(a.data().wide.nodes.data(), b.data().wide.nodes.data(),
+                            a.data().wide.nodes.size() * sizeof(WideNode)),
+                0)
+          << "frame " << f;
       ASSERT_TRUE(validate(b.data(), rm.triangle_count(), false).empty());
       const Mesh& frame = f ? rm_moved : rm;
       const RaySet rs = random_rays(frame, 200, 57);
