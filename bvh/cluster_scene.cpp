@@ -187,6 +187,9 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   {
     if (cfg_.builder == SahBuilder::Sweep && cfg_.cluster_group_size > 1)
       throw std::invalid_argument("the sweep builder has no two-level build: cluster_group_size must be 0 with it");
+    if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
+      throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
+                                  std::to_string(cfg_.build.max_leaf_size) + " given)");
     const Bvh rest = rest_tree(mesh, cv, cfg_, data.origin);
     cluster_ids_.assign(rest.prim_order.begin(), rest.prim_order.end());
     if (cfg_.cluster_group_size > 1 && !rest.nodes.empty()) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);

@@ -57,7 +57,8 @@ template <class C>
 class ClusterScene {
  public:
   /// Throws std::invalid_argument when the clustering does not cover the mesh's triangles once
-  /// each (sizes and offsets are checked, not connectivity).
+  /// each (sizes and offsets are checked, not connectivity), and for BlockTree leaves with
+  /// cfg.build.max_leaf_size > 1 (a leaf of several clusters would bypass their block trees).
   ClusterScene(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg = cluster_scene_defaults());
   void update(std::span<const Vec3> positions);
 

@@ -12,7 +12,8 @@
 //                       clusters; plain builds): the SAH build's time (the `build` stage alone),
 //                       SAH cost and primary trace time at the frame;
 //   groups/two_level    the two-level cluster BVH build against the plain one: update + build
-//                       time, SAH cost and primary trace time;
+//                       time, SAH cost and primary trace time (both built at the frame's pose,
+//                       where fixed group trees, bvh::GroupTrees::Refit, are the rebuilt ones);
 //   hits/C              closest hits of configuration C (ours_triangles, ours_clusters,
 //                       embree_low, embree_medium; float, in the trace frame) against a double
 //                       brute force over every triangle on a seeded sample of the primary rays:

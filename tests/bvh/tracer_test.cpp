@@ -657,6 +657,38 @@ TEST(Tracer, AccClustersMatchBruteForce) {
   }
 }
 
+// Fixed group trees whose leaves hold several clusters (max_leaf_size > 1: the groups' trees
+// refer to fixed ranges, the top's leaves still hold one group each) over a moved frame: a valid
+// flat structure, and brute force's hits ray by ray. Block-tree leaves hold one cluster each (a
+// leaf of several would bypass their trees): refused with such settings, whatever the build.
+TEST(Tracer, FixedGroupTreesWithLeavesOfSeveralClusters) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const Clustering runs = ptc::morton_runs(m, 6);
+  const Mesh moved = test::deformed(m, 0.08);
+  SceneConfig cfg = cluster_scene_defaults();
+  cfg.group_trees = GroupTrees::Refit;
+  cfg.cluster_group_size = 16;
+  cfg.build.max_leaf_size = 4;
+  cfg.build.cost.intersection = 0.05;  // (cheap triangles: the builder makes leaves of several clusters)
+  ClusterScene s(m, view_of(runs), cfg);
+  s.update(moved.positions());
+  ASSERT_FALSE(s.data().ranges.empty()) << "no leaf of several clusters: the test needs some";
+  const auto issues = validate(s.data(), m.triangle_count(), true);
+  ASSERT_TRUE(issues.empty()) << test::joined(issues);
+  const RaySet rs = random_rays(moved, 300, 13);
+  for (std::size_t i = 0; i < rs.org.size(); ++i)
+    expect_same(trace_ray(s.data(), rs.org[i], rs.dir[i]), test::brute_force(moved, s.data().origin, rs.org[i], rs.dir[i]),
+                "ray " + std::to_string(i));
+  for (GroupTrees trees : {GroupTrees::Rebuild, GroupTrees::Refit}) {
+    SceneConfig bt = cfg;
+    bt.group_trees = trees;
+    bt.cluster_leaf = ClusterLeaf::BlockTree;
+    EXPECT_THROW(ClusterScene(m, view_of(runs), bt), std::invalid_argument);
+    bt.build.max_leaf_size = 1;
+    EXPECT_NO_THROW(ClusterScene(m, view_of(runs), bt));
+  }
+}
+
 // The scene's per-frame cluster boxes (computed from vertices renumbered in first-touch order)
 // equal, bit for bit, brute-force min/max over each cluster's ORIGINAL vertex list in the frame,
 // widened by one ulp: Acc clusters (shared boundary vertices) and Morton runs (no vertex lists:
