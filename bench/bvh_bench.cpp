@@ -46,9 +46,11 @@
 // wall clock charges their time slices to whichever configuration was running.
 // --groups N: SceneConfig::cluster_group_size of the cluster scenes (two-level build over fixed
 // groups of at most N clusters; 0 = the plain build; default: cluster_scene_defaults()).
+// --group-trees rebuild|refit: SceneConfig::group_trees (default: cluster_scene_defaults()).
 // --median N: BuildConfig::median_split_below of the cluster BVHs (default: cluster_scene_defaults()).
 // --build-loop N: only the cluster build, N times over the first clustering's rest-pose boxes
-// (median, and the tree's SAH cost), then the box passes alone, and exit; a target for perf (use
+// (median, and the tree's SAH cost; the two-level build as --group-trees rebuild runs it, whatever
+// --group-trees says), then the box passes alone, and exit; a target for perf (use
 // with --embree none). It stays outside the frame loop: it times the builder and the box passes
 // in isolation, with no frames, update() or trace, which whole per-frame updates cannot give.
 // --out DIR writes DIR/bvh_bench.csv (schema ptc-bvh-bench/2, columns in visit_row: one row per

@@ -71,7 +71,8 @@ int main(int argc, char** argv) {
     const auto rows = cluster_rows(mesh, c, cc);
     row("per-cluster metrics (CGAL spheres)", sw.lap_ms(), std::to_string(rows.size()) + " rows");
     const bvh::SahCostModel cost = bvh::cluster_scene_defaults().build.cost;
-    const SahShares shares = sah_shares(cs.bvh(), cs.boxes(), cs.weights(), cost);
+    const bvh::Bvh ctree = cs.cluster_tree();  // over the clusters (bvh() is over the groups with fixed group trees)
+    const SahShares shares = sah_shares(ctree, cs.boxes(), cs.weights(), cost);
     row("SAH shares of the cluster BVH", sw.lap_ms(), "cost " + std::to_string(shares.cost));
     const EpoResult et = end_point_overlap(ts.bvh(), mesh.triangles(), mesh.positions(), {}, {}, cost);
     row("EPO, triangle BVH", sw.lap_ms(), "epo " + std::to_string(et.epo));
@@ -82,7 +83,7 @@ int main(int argc, char** argv) {
       ids.insert(ids.end(), t.begin(), t.end());
       offsets.push_back(static_cast<std::uint32_t>(ids.size()));
     }
-    const EpoResult ec = end_point_overlap(cs.bvh(), mesh.triangles(), mesh.positions(), offsets, ids, cost);
+    const EpoResult ec = end_point_overlap(ctree, mesh.triangles(), mesh.positions(), offsets, ids, cost);
     row("EPO, cluster BVH", sw.lap_ms(), "epo " + std::to_string(ec.epo));
     const auto shapes = meshlet_shapes(c, mesh.triangles(), mesh.vertex_count(), max_count);
     const MeshletReport mr = meshlet_report(c, shapes);

@@ -540,9 +540,10 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   times.refit_ms = clock_ms(cfg_.clock) - t0;
 }
 
-// Collapse, then link: nodes [0, S) are the per-cluster trees (kept from frame to frame), the
-// top tree follows; a leaf of one cluster becomes a link to its tree (BlockTree) or a direct
-// leaf, a leaf of several clusters an indirect one.
+// Collapse, then link: nodes [0, S) are the per-cluster trees and the fixed group trees (kept
+// from frame to frame), the top tree follows; a leaf of one cluster becomes a link to its tree
+// (BlockTree) or a direct leaf, a leaf of several clusters an indirect one; with fixed group
+// trees a leaf (one group) becomes a link to the group's tree (or its one cluster's leaf).
 void ClusterScene::link_top_tree() {
   TraceData& data = f_.data;
   const Bvh& bvh = f_.bvh;

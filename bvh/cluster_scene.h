@@ -72,14 +72,17 @@ class ClusterScene {
   [[nodiscard]] Bvh cluster_tree() const;
   /// The SAH cost of cluster_tree() (bvh().cost for the plain and the rebuilt two-level build).
   [[nodiscard]] double sah_cost() const;
-  /// Per-cluster data (boxes, weights, the BVH's primitive ids) is in the scene's own cluster
-  /// order: scene cluster i is the clustering's cluster cluster_ids()[i] (cluster_visit_order).
+  /// Per-cluster data (boxes, weights, the primitive ids of cluster_tree(), and of bvh() without
+  /// fixed group trees) is in the scene's own cluster order: scene cluster i is the clustering's
+  /// cluster cluster_ids()[i] (cluster_visit_order).
   [[nodiscard]] const std::vector<std::uint32_t>& cluster_ids() const { return cluster_ids_; }
   [[nodiscard]] std::span<const Box3f> boxes() const { return f_.boxes; }
   [[nodiscard]] const std::vector<std::uint32_t>& weights() const { return weights_; }
   /// The two-level build's groups (BuildInput::groups, in scene cluster order); empty: plain build.
   [[nodiscard]] const std::vector<std::uint32_t>& group_offsets() const { return group_offsets_; }
   [[nodiscard]] const StageTimes& times() const { return f_.times; }
+  /// Wide nodes kept from frame to frame (the block trees, then the fixed group trees): nodes
+  /// [0, subtree_nodes()) of data().wide.nodes; only their boxes change per frame.
   [[nodiscard]] std::size_t subtree_nodes() const { return sub_nodes_.size(); }
   /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with
   /// cluster_vertex_order()): the conversion is then fused into the box stage (StageTimes::

@@ -59,10 +59,11 @@ struct SceneConfig {
   StageClock clock = StageClock::Wall;  ///< clock of the StageTimes (see stage_clock.h)
   /// ClusterScene only: two-level build (BuildInput::groups). The groups are fixed once per
   /// clustering: the maximal subtrees of at most this many clusters of the rest-pose BVH; per
-  /// frame the top is built over the groups' boxes and each group over its clusters' boxes.
+  /// frame the top is built over the groups' boxes and each group's tree rebuilt over its
+  /// clusters' boxes or refitted (group_trees).
   /// 0 (or 1): the plain build over all cluster boxes (the paper's).
   std::uint32_t cluster_group_size = 0;
-  GroupTrees group_trees = GroupTrees::Rebuild;  ///< ClusterScene with groups only (see GroupTrees)
+  GroupTrees group_trees = GroupTrees::Refit;  ///< ClusterScene with groups only (see GroupTrees)
   SahBuilder builder = SahBuilder::Binned;  ///< the per-frame SAH builder (see SahBuilder)
 };
 

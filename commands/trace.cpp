@@ -224,7 +224,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   }());
   if (use_clusters) manifest.set_parameter("clusters", opt.clusters.string());
   if (use_clusters) manifest.set_parameter("cluster_group_size", opt.cluster_group_size);
-  if (use_clusters) manifest.set_parameter("group_trees", bvh::to_string(opt.group_trees));
+  if (use_clusters && opt.cluster_group_size > 1) manifest.set_parameter("group_trees", bvh::to_string(opt.group_trees));
   manifest.set_parameter("width", rc.width);
   manifest.set_parameter("height", rc.height);
   manifest.set_parameter("threads", threads);

@@ -443,8 +443,9 @@ void drift_clusters(const ExperimentParams& p, const study::StudyFrame& sf, stud
   const Mesh& m = pr.mesh;
   const bvh::ClusterScene* cs = loop::cluster_scene_of(*pr.accel);
   d.clusters = pr.clustering.cluster_count();
-  d.sah_cost = cs->bvh().cost;
-  const SahShares shares = sah_shares(cs->bvh(), cs->boxes(), cs->weights(), cost);
+  const bvh::Bvh tree = cs->cluster_tree();  // over the clusters (bvh() is over the groups with fixed group trees)
+  d.sah_cost = tree.cost;
+  const SahShares shares = sah_shares(tree, cs->boxes(), cs->weights(), cost);
   std::vector<double> share(pr.clustering.cluster_count(), 0.0);
   std::vector<std::uint32_t> offsets{0}, ids;
   for (std::size_t i = 0; i < cs->cluster_ids().size(); ++i) {
@@ -454,7 +455,7 @@ void drift_clusters(const ExperimentParams& p, const study::StudyFrame& sf, stud
     ids.insert(ids.end(), t.begin(), t.end());
     offsets.push_back(static_cast<std::uint32_t>(ids.size()));
   }
-  d.epo = end_point_overlap(cs->bvh(), m.triangles(), m.positions(), offsets, ids, cost).epo;
+  d.epo = end_point_overlap(tree, m.triangles(), m.positions(), offsets, ids, cost).epo;
   d.sah_overhead = sah_overhead(m, pr.clustering).overhead;
   const ClusterConfig mc = pr.spec.cluster.value_or(p.cluster);
   const std::vector<ClusterRow> rows = cluster_rows(m, pr.clustering, mc, std::nullopt, pr.adjacency);

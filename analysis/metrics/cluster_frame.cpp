@@ -68,7 +68,8 @@ ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& cl
   if (n > 0) {
     bvh::ClusterScene cs(mesh, bvh::view_of(clustering));
     cs.update(mesh.positions());
-    const SahShares s = sah_shares(cs.bvh(), cs.boxes(), cs.weights(), bvh::cluster_scene_defaults().build.cost);
+    // (the tree over the clusters: bvh() is over the groups with fixed group trees)
+    const SahShares s = sah_shares(cs.cluster_tree(), cs.boxes(), cs.weights(), bvh::cluster_scene_defaults().build.cost);
     for (std::size_t i = 0; i < cs.cluster_ids().size(); ++i) share[cs.cluster_ids()[i]] = s.share[i];
   }
   std::uint32_t max_vertices = cfg.max_count;

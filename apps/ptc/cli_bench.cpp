@@ -29,6 +29,8 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.cluster_leaf =
                           *bvh::parse_cluster_leaf(a->cluster_leaf);
                       o.config.group_trees = *bvh::parse_group_trees(a->group_trees);
+                      if (a->app->count("--group-trees") && o.config.cluster_group_size <= 1)
+                        throw UsageError("--group-trees", "needs the two-level build (--cluster-groups N, N > 1)");
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       o.config.adjacency = *parse_cluster_adjacency(a->adjacency);

@@ -43,6 +43,8 @@ void register_experiment(CLI::App& app, Context& ctx) {
         o.cluster_leaf = *bvh::parse_cluster_leaf(a->cluster_leaf);
         o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
         o.group_trees = *bvh::parse_group_trees(a->group_trees);
+        if (given("--group-trees") && o.cluster_group_size <= 1)
+          throw UsageError("--group-trees", "needs the two-level build (--cluster-groups N, N > 1)");
         o.threads = static_cast<unsigned>(ctx.threads);
         o.input = a->scene.input;
         a->scene.apply(o.scene_options);

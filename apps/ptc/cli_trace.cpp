@@ -30,6 +30,8 @@ void register_trace(CLI::App& app, Context& ctx) {
     if (a->app->count("--frames")) o.frames = a->frames;
     if (a->app->count("--cost-range")) o.cost_range = a->cost_range;
     o.group_trees = *bvh::parse_group_trees(a->group_trees);
+    if (a->app->count("--group-trees") && (o.clusters.empty() || o.cluster_group_size <= 1))
+      throw UsageError("--group-trees", "needs a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");
     o.render.threads = static_cast<unsigned>(ctx.threads);
     o.argv = ctx.args;
     cmd_trace(o, std::cout);

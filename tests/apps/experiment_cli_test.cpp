@@ -107,6 +107,16 @@ TEST_F(Experiment, DriftShardsMergeWithTheDerivedTablesOfTheSingleRun) {
   // The correlation recomputed from clusters_frames.csv: per clustering, Spearman over clusters of
   // connectivity against the mean |ln box_area_ratio| of the frames after the first.
   const auto cf = csv_rows(slurp(dir_ / "one" / "clusters_frames.csv"));
+  // Every cluster is a leaf of the cluster BVH, so its SAH share is positive, and a frame's shares
+  // sum to 1 (a share read from a tree over other primitives, such as the fixed group trees'
+  // top over the groups, leaves most clusters at 0).
+  std::map<std::string, double> share_sum;  // clustering/frame -> sum
+  for (const auto& r : cf) {
+    EXPECT_GT(std::stod(r.at("sah_share")), 0.0) << r.at("clustering") << " frame " << r.at("frame") << " cluster "
+                                                  << r.at("cluster_id");
+    share_sum[r.at("clustering") + "/" + r.at("frame")] += std::stod(r.at("sah_share"));
+  }
+  for (const auto& [k, s] : share_sum) EXPECT_NEAR(s, 1.0, 1e-9) << k;
   std::map<std::string, std::map<std::string, std::pair<double, double>>> acc;  // clustering -> cluster -> (conn, sum)
   for (const auto& r : cf) {
     auto& e = acc[r.at("clustering")][r.at("cluster_id")];

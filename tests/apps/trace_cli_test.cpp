@@ -222,6 +222,9 @@ TEST_F(TraceCli, BenchGroupTreesRefitTracesTheSameHits) {
     EXPECT_EQ(rows[1][i].at("shadow_mismatches"), "0") << i;
   }
   expect_error({"bench", scene, "--group-trees", "fixed", "--out", (dir_ / "bad").string()}, 2, "--group-trees");
+  expect_error({"bench", scene, "--cluster-groups", "0", "--group-trees", "refit", "--out", (dir_ / "bad").string()}, 2,
+               "--group-trees: needs the two-level build");
+  expect_error({"trace", scene, "--group-trees", "rebuild", "--out", (dir_ / "bad").string()}, 2, "--group-trees: needs a cluster BVH");
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
 

@@ -60,6 +60,7 @@ TEST(ClusterFrame, ScaledFrameScalesBoxesAndSpheresAndKeepsShapes) {
   EXPECT_EQ(tris, double(f.mesh.triangle_count()));
   const double shares = std::accumulate(ref.of("sah_share").begin(), ref.of("sah_share").end(), 0.0);
   EXPECT_NEAR(shares, 1.0, 1e-9);
+  for (std::size_t k = 0; k < n; ++k) EXPECT_GT(ref.of("sah_share")[k], 0.0) << k;  // every cluster is a leaf
 
   const Mesh big = f.moved(Vec3(5, -3, 2), 2.0);
   const ClusterFrameMetrics m = cluster_frame_metrics(big, f.c, f.cfg, ref.rows, ref.rows);
