@@ -12,9 +12,15 @@ DIR/runs/...` (packets on both sides unless --single). Repeats run one after the
 whole list, so a slow phase of the machine touches every scene a little rather than one scene a
 lot; the table gives, per scene and thread count, the median over the repeats of each
 configuration's whole frame (each run's own median over frames 1..B) and the ratios of those
-medians, plus the smallest and largest ratio of single runs. Writes DIR/runs.csv (one row per run
-and configuration), DIR/frames.csv (the table) and DIR/manifest.json; every run's own bench.csv,
-summary.csv and manifest.json stay under DIR/runs/. DIR must not exist (nothing is overwritten).
+medians, plus the smallest and largest ratio of single runs. With more than one thread count, a
+second table says how each stage scales: per scene and configuration, the median over the
+repeats of every stage (update + build and, for ours_clusters, its boxes, SAH build, collapse +
+link, leaf data and the time two of them overlapped; primary rays, shadow rays, the whole frame)
+at the first thread count and at each other one, and the speed-up between them. Writes
+DIR/runs.csv (one row per run and configuration, the stages as each run's bench.csv medians over
+its frames after the first), DIR/frames.csv (the table), DIR/scaling.csv (the stages' table) and
+DIR/manifest.json; every run's own bench.csv, summary.csv and manifest.json stay under DIR/runs/.
+DIR must not exist (nothing is overwritten).
 Exit 1 when a run fails, 2 for bad usage.
 """
 import argparse
@@ -33,6 +39,25 @@ CONFIGS = ("ours_clusters", "embree_refit", "embree_low")
 def usage(msg):
     print(f"frames.py: {msg}", file=sys.stderr)
     sys.exit(2)
+
+
+STAGES = ("boxes_ms", "sah_build_ms", "collapse_ms", "leaf_data_ms", "overlap_ms")
+MEASURES = ("update_build_ms",) + STAGES + ("trace_ms", "shadow_ms", "whole_frame_ms")
+
+
+def stage_medians(path):
+    """config -> {stage: median over the run's frames, the first left out when there are more}
+    (the rule of the bench's own medians)."""
+    per = {}
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            per.setdefault(r["config"], []).append(r)
+    out = {}
+    for c, rs in per.items():
+        rs.sort(key=lambda r: int(r["frame"]))
+        use = rs[1:] if len(rs) > 1 else rs
+        out[c] = {k: statistics.median(float(r[k]) for r in use) for k in STAGES}
+    return out
 
 
 def read_summary(path):
@@ -111,13 +136,14 @@ def main():
                           file=sys.stderr)
                     sys.exit(1)
                 summary = read_summary(os.path.join(d, "summary.csv"))
+                stages = stage_medians(os.path.join(d, "bench.csv"))
                 for c in CONFIGS:
                     r = summary[c]
                     rows.append({"repeat": rep, "threads": t, "scene": s, "config": c,
                                  "whole_frame_ms": float(r["whole_frame_ms"]),
                                  "update_build_ms": float(r["update_build_ms"]), "trace_ms": float(r["trace_ms"]),
                                  "shadow_ms": float(r["shadow_ms"]), "mismatches": int(r["mismatches"]),
-                                 "shadow_mismatches": int(r["shadow_mismatches"])})
+                                 "shadow_mismatches": int(r["shadow_mismatches"]), **stages[c]})
     with open(os.path.join(tmp, "runs.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()), lineterminator="\n")
         w.writeheader()
@@ -143,11 +169,31 @@ def main():
         w = csv.DictWriter(f, fieldnames=list(table[0].keys()), lineterminator="\n")
         w.writeheader()
         w.writerows(table)
+    # How each stage scales: the first thread count against each other one.
+    scaling = []
+    for t in threads[1:]:
+        for s in scenes:
+            for c in CONFIGS:
+                def med(tt, k):
+                    return statistics.median(r[k] for r in rows if r["threads"] == tt and r["scene"] == s and r["config"] == c)
+                for k in MEASURES:
+                    if c != "ours_clusters" and k in STAGES:
+                        continue  # (Embree's commit is one stage)
+                    base, now = med(threads[0], k), med(t, k)
+                    scaling.append({"scene": s, "config": c, "measure": k, "threads_base": threads[0], "threads": t,
+                                    "base_ms": base, "ms": now,
+                                    # (the overlap is time saved, not a stage: no speed-up)
+                                    "speedup": base / now if now > 0 and k != "overlap_ms" else float("nan")})
+    with open(os.path.join(tmp, "scaling.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=["scene", "config", "measure", "threads_base", "threads", "base_ms", "ms", "speedup"],
+                           lineterminator="\n")
+        w.writeheader()
+        w.writerows(scaling)
     git = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
     json.dump({"schema": "ptc-frames/1", "argv": sys.argv, "commands": commands, "ptc_commit": git,
                "parameters": {"threads": threads, "frames": a.frames, "scenes": scenes, "repeat": a.repeat,
                               "packets": not a.single, "width": a.width, "height": a.height},
-               "outputs": ["runs.csv", "frames.csv"]},
+               "outputs": ["runs.csv", "frames.csv", "scaling.csv"]},
               open(os.path.join(tmp, "manifest.json"), "w"), indent=2)
     os.rename(tmp, a.out)
 
@@ -159,7 +205,23 @@ def main():
         print(f"| {r['threads']} | {r['scene']} | {r['ours_ms']:.1f} / {r['refit_ms']:.1f} / {r['low_ms']:.1f} | "
               f"{r['vs_refit']:.2f}x ({r['vs_refit_min']:.2f}-{r['vs_refit_max']:.2f}) | "
               f"{r['vs_low']:.2f}x ({r['vs_low_min']:.2f}-{r['vs_low_max']:.2f}) | {r['ours_mismatches']} |")
-    print(f"wrote {a.out}/frames.csv, {a.out}/runs.csv, {a.out}/manifest.json")
+    if scaling:
+        print(f"\nhow each stage scales (medians of {a.repeat} run(s), ms at T={threads[0]} -> T; speed-up in brackets)")
+        cols = [(k, k.removesuffix("_ms")) for k in MEASURES]
+        print("| T | scene | config | " + " | ".join(n for _, n in cols) + " |")
+        print("|---|---|---|" + "---|" * len(cols))
+        for t in threads[1:]:
+            for s in scenes:
+                for c in CONFIGS:
+                    cell = {r["measure"]: r for r in scaling if r["threads"] == t and r["scene"] == s and r["config"] == c}
+                    vals = []
+                    for k, _ in cols:
+                        r = cell.get(k)
+                        vals.append("-" if r is None else
+                                    f"{r['base_ms']:.2f} -> {r['ms']:.2f} ({r['speedup']:.2f}x)" if r["speedup"] == r["speedup"] else
+                                    f"{r['base_ms']:.2f} -> {r['ms']:.2f}")
+                    print(f"| {t} | {s} | {c} | " + " | ".join(vals) + " |")
+    print(f"wrote {a.out}/frames.csv, {a.out}/runs.csv, {a.out}/scaling.csv, {a.out}/manifest.json")
 
 
 if __name__ == "__main__":

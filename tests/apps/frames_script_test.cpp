@@ -80,6 +80,39 @@ TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
     EXPECT_EQ(t.at("ours_mismatches"), "0") << what;
   }
   EXPECT_NE(r.out.find("| 2 | cloth-sphere-32 |"), std::string::npos) << r.out;
+
+  // The stages of every run row: its bench.csv's medians over the frames after the first (here
+  // frame 1 alone, of 0:1).
+  for (const auto& row : runs) {
+    const fs::path bench = out / "runs" / ("r" + row.at("repeat") + "_t" + row.at("threads") + "_" + row.at("scene")) /
+                           "bench.csv";
+    for (const auto& b : csv_rows(slurp(bench)))
+      if (b.at("config") == row.at("config") && b.at("frame") == "1")
+        for (const char* k : {"boxes_ms", "sah_build_ms", "collapse_ms", "leaf_data_ms", "overlap_ms"})
+          EXPECT_DOUBLE_EQ(std::stod(row.at(k)), std::stod(b.at(k))) << bench << " " << k;
+  }
+  // How each stage scales: per scene, configuration and stage, the medians over the repeats at
+  // T=1 and T=2 and their ratio; the stages of our update for ours_clusters only.
+  const auto scaling = csv_rows(slurp(out / "scaling.csv"));
+  ASSERT_EQ(scaling.size(), 2u * (9u + 2u * 4u));  // scenes x (ours: 9 measures, Embree: 4 each)
+  for (const auto& sc : scaling) {
+    const std::string what = sc.at("scene") + " " + sc.at("config") + " " + sc.at("measure");
+    EXPECT_EQ(sc.at("threads_base"), "1");
+    EXPECT_EQ(sc.at("threads"), "2");
+    std::map<std::string, std::vector<double>> at;  // threads -> per repeat
+    for (const auto& row : runs)
+      if (row.at("scene") == sc.at("scene") && row.at("config") == sc.at("config"))
+        at[row.at("threads")].push_back(std::stod(row.at(sc.at("measure"))));
+    ASSERT_EQ(at["1"].size(), 3u) << what;
+    const double base = median(at["1"]), now = median(at["2"]);
+    EXPECT_NEAR(std::stod(sc.at("base_ms")), base, 1e-9 * std::max(1.0, base)) << what;
+    EXPECT_NEAR(std::stod(sc.at("ms")), now, 1e-9 * std::max(1.0, now)) << what;
+    if (sc.at("measure") == "overlap_ms" || now == 0)
+      EXPECT_EQ(sc.at("speedup"), "nan") << what;  // (time two stages shared: no speed-up)
+    else
+      EXPECT_NEAR(std::stod(sc.at("speedup")), base / now, 1e-9 * std::max(1.0, base / now)) << what;
+  }
+  EXPECT_NE(r.out.find("how each stage scales"), std::string::npos) << r.out;
   EXPECT_TRUE(fs::exists(out / "manifest.json"));
   EXPECT_FALSE(fs::exists(dir_ / "out.tmp"));
 
