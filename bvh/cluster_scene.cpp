@@ -212,6 +212,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   data.blocks.resize(lane_ids.size() / 4);
   data.triangle_ids.assign(lane_ids.begin(), lane_ids.end());
   set_vertex_order(mesh, lane_ids);
+  data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());  // kept from frame to frame; the top follows
   update(mesh.positions());
 }
 
@@ -287,6 +288,8 @@ void ClusterScene::layout_group_trees() {
   AlignedVector<Vec3f> centres;
   point_group_boxes(std::span<const Vec3f>(f_.fpos.data(), f_.fpos.size()), vertex_offsets_, vertices_, boxes, centres);
   const std::size_t G = group_offsets_.size() - 1;
+  group_top_build_ = cfg_.build;
+  group_top_build_.max_leaf_size = 1;  // a leaf of the tree over the groups is one group (its tree)
   group_bvh_.resize(G);
   group_root_.assign(G, kNoTriangle);
   group_weights_.assign(G, 0);
@@ -313,9 +316,7 @@ void ClusterScene::layout_group_trees() {
             gs.count[k] = cnt;
             for (std::uint32_t i = 0; i < cnt; ++i) group_leaf_clusters_.push_back(first + gb.prim_order[nd.child[k] + i]);
             if (cnt == 1) {
-              const std::uint32_t c = group_leaf_clusters_.back();
-              if (sub_root_[c] != kNoTriangle) nd.child[k] = sub_root_[c], nd.count[k] = 0;  // its block tree
-              else nd.child[k] = cluster_ranges_[c].first_block, nd.count[k] = cluster_ranges_[c].triangle_count;
+              set_cluster_slot(nd, k, group_leaf_clusters_.back());
             } else {
               nd.child[k] = static_cast<std::uint32_t>(group_ranges_.size());
               nd.count[k] = cnt | kIndirectLeaf;
@@ -448,18 +449,7 @@ void ClusterScene::refit_subtrees() {
       if (n.is_leaf(k)) {
         n.set_child_box(k, block_boxes_[n.child[k]]);
       } else if (!n.is_empty(k)) {
-        const WideNode& c = nodes[n.child[k]];
-        for (int row = 0; row < 6; ++row) {  // lo rows: min over the 4 children, hi rows: max
-          __m128 x = _mm_load_ps(c.bounds[row]);
-          if (row % 2 == 0) {
-            x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
-            x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
-          } else {
-            x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
-            x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
-          }
-          n.bounds[row][k] = _mm_cvtss_f32(x);
-        }
+        n.set_child_box(k, node_union(nodes[n.child[k]]));
       }
     }
   }
@@ -503,11 +493,8 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   auto tree = [&] {
     double tb = clock_ms(cfg_.clock);
     if (refit_groups_) {  // the groups' trees refitted, then the build over one record per group
-      if (data.wide.nodes.size() < sub_nodes_.size()) data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());
       refit_group_trees();
-      BuildConfig top = cfg_.build;
-      top.max_leaf_size = 1;  // a leaf is one group (its tree)
-      build_binned_sah({group_boxes_, group_centres_, group_weights_}, top, f_.bvh, f_.ws);
+      build_binned_sah({group_boxes_, group_centres_, group_weights_}, group_top_build_, f_.bvh, f_.ws);
     } else if (cfg_.builder == SahBuilder::Sweep) {
       f_.bvh = build_sweep_sah({f_.boxes, f_.centroids, weights_}, cfg_.build);
     } else {
@@ -540,6 +527,12 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   times.refit_ms = clock_ms(cfg_.clock) - t0;
 }
 
+// Slot k of n holds cluster c alone: a link to its block tree, or a direct leaf of its blocks.
+void ClusterScene::set_cluster_slot(WideNode& n, int k, std::uint32_t c) const {
+  if (sub_root_[c] != kNoTriangle) n.child[k] = sub_root_[c], n.count[k] = 0;
+  else n.child[k] = cluster_ranges_[c].first_block, n.count[k] = cluster_ranges_[c].triangle_count;  // packed
+}
+
 // Collapse, then link: nodes [0, S) are the per-cluster trees and the fixed group trees (kept
 // from frame to frame), the top tree follows; a leaf of one cluster becomes a link to its tree
 // (BlockTree) or a direct leaf, a leaf of several clusters an indirect one; with fixed group
@@ -550,8 +543,7 @@ void ClusterScene::link_top_tree() {
   collapse_to_wide(bvh, top_);
   const WideBvh& top = top_;
   const auto S = static_cast<std::uint32_t>(sub_nodes_.size());
-  if (data.wide.nodes.size() < S) data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());
-  data.wide.nodes.resize(S + top.nodes.size());
+  data.wide.nodes.resize(S + top.nodes.size());  // ([0, S) since the constructor)
   if (refit_groups_) {  // the top's leaves are single groups; the groups' trees keep fixed ranges
     if (data.ranges.size() != group_ranges_.size()) data.ranges = group_ranges_;
   } else {
@@ -568,17 +560,10 @@ void ClusterScene::link_top_tree() {
           n.child[k] = group_root_[g], n.count[k] = 0;
           continue;
         }
-        const std::uint32_t c = group_offsets_[g];  // a group of one cluster
-        if (sub_root_[c] != kNoTriangle) n.child[k] = sub_root_[c], n.count[k] = 0;
-        else n.child[k] = cluster_ranges_[c].first_block, n.count[k] = cluster_ranges_[c].triangle_count;
+        set_cluster_slot(n, k, group_offsets_[g]);  // a group of one cluster
       } else if (n.is_leaf(k)) {
         if (n.count[k] == 1) {
-          const std::uint32_t c = bvh.prim_order[n.child[k]];
-          if (sub_root_[c] != kNoTriangle) {
-            n.child[k] = sub_root_[c], n.count[k] = 0;
-          } else {
-            n.child[k] = cluster_ranges_[c].first_block, n.count[k] = cluster_ranges_[c].triangle_count;  // packed
-          }
+          set_cluster_slot(n, k, bvh.prim_order[n.child[k]]);
         } else {
           n.count[k] |= kIndirectLeaf;
         }

@@ -98,6 +98,7 @@ class ClusterScene {
   void link_top_tree();
   void refit_subtrees();
   void refit_group_trees();
+  void set_cluster_slot(WideNode& n, int k, std::uint32_t c) const;
   std::shared_ptr<const std::vector<Tri>> tris_;
   SceneConfig cfg_;
   std::vector<std::uint32_t> cluster_ids_;  // scene cluster -> the clustering's cluster
@@ -124,6 +125,7 @@ class ClusterScene {
   std::vector<std::uint32_t> group_leaf_clusters_;
   std::vector<LeafRange> group_ranges_;     // the indirect leaves of the groups' trees (fixed)
   std::vector<std::uint32_t> group_weights_;
+  BuildConfig group_top_build_;             // the per-frame build over the groups: the scene's, one group a leaf
   AlignedVector<Box3f> group_boxes_;
   AlignedVector<Vec3f> group_centres_;
   WideBvh top_;  // the collapsed top tree of the last update (kept: its nodes' memory is reused)

@@ -82,6 +82,16 @@ struct CameraArgs {
   [[nodiscard]] std::optional<Vec3> light_position() const;
 };
 
+/// --group-trees rebuild|refit (bvh::GroupTrees), as `ptc trace`, `ptc bench` and `ptc experiment`
+/// spell it. get(): the choice; given without the two-level build (`two_level` false) it is a
+/// usage error saying what it `needs`.
+struct GroupTreesArg {
+  std::string value = bvh::to_string(bvh::cluster_scene_defaults().group_trees);
+  CLI::Option* opt = nullptr;
+  void add_to(CLI::App* cmd);
+  [[nodiscard]] bvh::GroupTrees get(bool two_level, const std::string& needs) const;
+};
+
 /// The clustering flags, as `ptc cluster` spells them (--method, --objective, --max-count, ...);
 /// `ptc experiment` takes the same. apply() fills the ClusterConfig and lists the parameters the
 /// user set (names of kClusterParameters) in `given`.

@@ -12,8 +12,8 @@ struct BenchArgs {
   BenchCommandOptions opt;
   SceneArg scene;
   CameraArgs camera;
-  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters", adjacency = "auto",
-      group_trees = bvh::to_string(bvh::cluster_scene_defaults().group_trees);
+  GroupTreesArg group_trees;
+  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters", adjacency = "auto";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -28,9 +28,8 @@ void register_bench(CLI::App& app, Context& ctx) {
                       if (a->app->count("--deform")) o.deform = a->deform;
                       o.config.cluster_leaf =
                           *bvh::parse_cluster_leaf(a->cluster_leaf);
-                      o.config.group_trees = *bvh::parse_group_trees(a->group_trees);
-                      if (a->app->count("--group-trees") && o.config.cluster_group_size <= 1)
-                        throw UsageError("--group-trees", "needs the two-level build (--cluster-groups N, N > 1)");
+                      o.config.group_trees = a->group_trees.get(o.config.cluster_group_size > 1,
+                                                                "the two-level build (--cluster-groups N, N > 1)");
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       o.config.adjacency = *parse_cluster_adjacency(a->adjacency);
@@ -88,12 +87,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "BVH); 0 = the plain build over all cluster boxes")
       ->check(CLI::Range(0u, 1u << 20))
       ->capture_default_str();
-  c->add_option("--group-trees", a->group_trees,
-                "with --cluster-groups N > 1: rebuild each group's tree over its cluster boxes every frame, or "
-                "refit: keep the tree built at the rest pose and refit its boxes (the build then sees one box "
-                "per group)")
-      ->check(enum_validator("group trees", bvh::parse_group_trees))
-      ->capture_default_str();
+  a->group_trees.add_to(c);
   c->add_option("--vertex-order", a->vertex_order,
                 "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "
                 "streams, no gather; every configuration sees the same mesh), or input: keep the file's order")

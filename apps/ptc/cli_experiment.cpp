@@ -14,7 +14,8 @@ struct ExperimentArgs {
   CameraArgs camera;
   ClusterFlags flags;
   std::string frames, deform, max_counts, configs, reference, clusterings, shard, cluster_leaf = "linear",
-      vertex_order = "clusters", group_trees = bvh::to_string(bvh::cluster_scene_defaults().group_trees);
+      vertex_order = "clusters";
+  GroupTreesArg group_trees;
   int ao_samples = 1;
   std::size_t reference_rays = 512;
   CLI::App* app = nullptr;
@@ -42,9 +43,7 @@ void register_experiment(CLI::App& app, Context& ctx) {
         a->flags.apply(o.cluster, o.given);
         o.cluster_leaf = *bvh::parse_cluster_leaf(a->cluster_leaf);
         o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
-        o.group_trees = *bvh::parse_group_trees(a->group_trees);
-        if (given("--group-trees") && o.cluster_group_size <= 1)
-          throw UsageError("--group-trees", "needs the two-level build (--cluster-groups N, N > 1)");
+        o.group_trees = a->group_trees.get(o.cluster_group_size > 1, "the two-level build (--cluster-groups N, N > 1)");
         o.threads = static_cast<unsigned>(ctx.threads);
         o.input = a->scene.input;
         a->scene.apply(o.scene_options);
@@ -92,12 +91,7 @@ void register_experiment(CLI::App& app, Context& ctx) {
                 "two-level cluster BVH build over groups of at most N clusters; 0 = the plain build")
       ->check(CLI::Range(0u, 1u << 20))
       ->capture_default_str();
-  c->add_option("--group-trees", a->group_trees,
-                "with --cluster-groups N > 1: rebuild each group's tree over its cluster boxes every frame, or "
-                "refit: keep the tree built at the rest pose and refit its boxes (the build then sees one box "
-                "per group)")
-      ->check(enum_validator("group trees", bvh::parse_group_trees))
-      ->capture_default_str();
+  a->group_trees.add_to(c);
   c->add_option("--vertex-order", a->vertex_order, "clusters (renumber once per clustering) or input")
       ->check(enum_validator("vertex order", bvh::parse_vertex_order))
       ->capture_default_str();

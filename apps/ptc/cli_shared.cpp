@@ -23,6 +23,20 @@ void SceneArg::add_to(CLI::App* cmd) {
   cmd->add_option("--data-dir", data_dir, "meshes of built-in scenes (default: $PTC_DATA_DIR or <ptc>/../data)");
 }
 
+void GroupTreesArg::add_to(CLI::App* cmd) {
+  opt = cmd->add_option("--group-trees", value,
+                        "with the cluster BVH's two-level build (--cluster-groups N > 1): rebuild each group's tree "
+                        "over its cluster boxes every frame, or refit: keep the tree built at the rest pose and refit "
+                        "its boxes (the build then sees one box per group)")
+            ->check(enum_validator("group trees", bvh::parse_group_trees))
+            ->capture_default_str();
+}
+
+bvh::GroupTrees GroupTreesArg::get(bool two_level, const std::string& needs) const {
+  if (opt && opt->count() && !two_level) throw UsageError("--group-trees", "needs " + needs);
+  return *bvh::parse_group_trees(value);
+}
+
 void CameraArgs::add_to(CLI::App* c, bool with_light) {
   c->add_option("--eye", eye, "camera position (default: the scene's camera, else framing the whole first frame)")
       ->check(vec3_validator());

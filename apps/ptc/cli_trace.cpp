@@ -12,7 +12,8 @@ struct TraceArgs {
   TraceCommandOptions opt;
   SceneArg scene;
   CameraArgs camera;
-  std::string frame, frames, cost_range, group_trees = bvh::to_string(bvh::cluster_scene_defaults().group_trees);
+  std::string frame, frames, cost_range;
+  GroupTreesArg group_trees;
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -29,9 +30,8 @@ void register_trace(CLI::App& app, Context& ctx) {
     if (a->app->count("--frame")) o.frame = a->frame;
     if (a->app->count("--frames")) o.frames = a->frames;
     if (a->app->count("--cost-range")) o.cost_range = a->cost_range;
-    o.group_trees = *bvh::parse_group_trees(a->group_trees);
-    if (a->app->count("--group-trees") && (o.clusters.empty() || o.cluster_group_size <= 1))
-      throw UsageError("--group-trees", "needs a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");
+    o.group_trees = a->group_trees.get(!o.clusters.empty() && o.cluster_group_size > 1,
+                                       "a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");
     o.render.threads = static_cast<unsigned>(ctx.threads);
     o.argv = ctx.args;
     cmd_trace(o, std::cout);
@@ -47,12 +47,7 @@ void register_trace(CLI::App& app, Context& ctx) {
                 "with --clusters: two-level BVH build over fixed groups of at most N clusters; 0 = plain build")
       ->check(CLI::Range(0u, 1u << 20))
       ->capture_default_str();
-  c->add_option("--group-trees", a->group_trees,
-                "with --clusters and --cluster-groups N > 1: rebuild each group's tree over its cluster boxes every frame, or "
-                "refit: keep the tree built at the rest pose and refit its boxes (the build then sees one box "
-                "per group)")
-      ->check(enum_validator("group trees", bvh::parse_group_trees))
-      ->capture_default_str();
+  a->group_trees.add_to(c);
   c->add_option("--width", rc.width, "image width in pixels")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
   c->add_option("--height", rc.height, "image height in pixels")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
   a->camera.add_to(c, /*with_light=*/true);
