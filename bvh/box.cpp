@@ -11,25 +11,28 @@
 namespace ptc::bvh {
 
 std::vector<Box3f> triangle_boxes(std::span<const Vec3> positions, std::span<const Tri> triangles,
-                                  const Vec3& origin) {
+                                  const FrameMap& f) {
   std::vector<Box3f> boxes(triangles.size());
-  const double ox = origin.x(), oy = origin.y(), oz = origin.z();
+  const double ox = f.origin.x(), oy = f.origin.y(), oz = f.origin.z(), s = f.scale;
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const Vec3& a = positions[triangles[t][0]];
     const Vec3& b = positions[triangles[t][1]];
     const Vec3& c = positions[triangles[t][2]];
     // Min/max first in double (exact), then one outward rounding per bound.
     Box3f& box = boxes[t];
-    box.lo = {round_down(std::min({a.x(), b.x(), c.x()}) - ox), round_down(std::min({a.y(), b.y(), c.y()}) - oy),
-              round_down(std::min({a.z(), b.z(), c.z()}) - oz)};
-    box.hi = {round_up(std::max({a.x(), b.x(), c.x()}) - ox), round_up(std::max({a.y(), b.y(), c.y()}) - oy),
-              round_up(std::max({a.z(), b.z(), c.z()}) - oz)};
+    box.lo = {round_down((std::min({a.x(), b.x(), c.x()}) - ox) * s),
+              round_down((std::min({a.y(), b.y(), c.y()}) - oy) * s),
+              round_down((std::min({a.z(), b.z(), c.z()}) - oz) * s)};
+    box.hi = {round_up((std::max({a.x(), b.x(), c.x()}) - ox) * s), round_up((std::max({a.y(), b.y(), c.y()}) - oy) * s),
+              round_up((std::max({a.z(), b.z(), c.z()}) - oz) * s)};
   }
   return boxes;
 }
 
 std::vector<Box3f> point_group_boxes(std::span<const Vec3> positions, std::span<const std::uint32_t> offsets,
-                                     std::span<const std::uint32_t> indices, const Vec3& origin) {
+                                     std::span<const std::uint32_t> indices, const FrameMap& f) {
+  const Vec3& origin = f.origin;
+  const double s = f.scale;
   const std::size_t groups = offsets.empty() ? 0 : offsets.size() - 1;
   std::vector<Box3f> boxes(groups);
   constexpr double inf = std::numeric_limits<double>::infinity();
@@ -41,8 +44,8 @@ std::vector<Box3f> point_group_boxes(std::span<const Vec3> positions, std::span<
       hx = std::max(hx, p.x()), hy = std::max(hy, p.y()), hz = std::max(hz, p.z());
     }
     if (offsets[g] == offsets[g + 1]) continue;  // empty group: empty box
-    boxes[g].lo = {round_down(lx - origin.x()), round_down(ly - origin.y()), round_down(lz - origin.z())};
-    boxes[g].hi = {round_up(hx - origin.x()), round_up(hy - origin.y()), round_up(hz - origin.z())};
+    boxes[g].lo = {round_down((lx - origin.x()) * s), round_down((ly - origin.y()) * s), round_down((lz - origin.z()) * s)};
+    boxes[g].hi = {round_up((hx - origin.x()) * s), round_up((hy - origin.y()) * s), round_up((hz - origin.z()) * s)};
   }
   return boxes;
 }
@@ -54,7 +57,7 @@ std::vector<Vec3f> box_centers(std::span<const Box3f> boxes) {
 }
 
 std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span<const Tri> triangles,
-                                      const Vec3& origin) {
+                                      const FrameMap& origin) {
   std::vector<Vec3f> c(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const Vec3 m = (positions[triangles[t][0]] + positions[triangles[t][1]] + positions[triangles[t][2]]) / 3.0;
@@ -63,7 +66,7 @@ std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span
   return c;
 }
 
-void frame_positions(std::span<const Vec3> positions, const Vec3& origin, AlignedVector<Vec3f>& out) {
+void frame_positions(std::span<const Vec3> positions, const FrameMap& origin, AlignedVector<Vec3f>& out) {
   out.resize(positions.size());
   for (std::size_t v = 0; v < positions.size(); ++v) out[v] = to_frame(positions[v], origin);
 }
@@ -137,21 +140,21 @@ void point_group_boxes(std::span<const Vec3f> fp, std::span<const std::uint32_t>
   }
 }
 
-void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_pos, const Vec3& origin) {
+void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_pos, const FrameMap& origin) {
   __m128 bad = _mm_setzero_ps();
   const std::size_t n = std::min(positions.size(), frame_pos.size());
   for (std::size_t v = 0; v < n; ++v) bad = _mm_or_ps(bad, _mm_sub_ps(load3(frame_pos[v]), load3(frame_pos[v])));
   if (_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7) throw_not_finite(positions, origin);
 }
 
-void throw_not_finite(std::span<const Vec3> positions, const Vec3& origin) {
+void throw_not_finite(std::span<const Vec3> positions, const FrameMap& origin) {
   for (std::size_t v = 0; v < positions.size(); ++v) {
     const Vec3f f = to_frame(positions[v], origin);
     if (!(std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2])))
       throw std::invalid_argument("vertex " + std::to_string(v) + ": position (" + std::to_string(positions[v].x()) +
                                   ", " + std::to_string(positions[v].y()) + ", " + std::to_string(positions[v].z()) +
-                                  ") is not finite in single precision (NaN, infinite, or beyond 3.4e38 from the "
-                                  "trace frame's origin)");
+                                  ") is not finite in single precision (NaN, infinite, or beyond the float range "
+                                  "in the trace frame)");
   }
   throw std::invalid_argument("a position is not finite in single precision");
 }

@@ -84,15 +84,30 @@ struct Box3f {
   return std::bit_cast<float>(b + (step & adj));
 }
 
-/// p - origin rounded to the nearest float: the tracer's vertex in the trace frame.
-[[nodiscard]] inline Vec3f to_frame(const Vec3& p, const Vec3& origin) {
-  return {static_cast<float>(p.x() - origin.x()), static_cast<float>(p.y() - origin.y()),
-          static_cast<float>(p.z() - origin.z())};
+/// The trace frame: a point p of the world is (p - origin) * scale there, rounded to float; a
+/// ray's origin likewise and its direction times scale, so the parameter t of a ray is the same
+/// in both. `scale` is a power of two (trace_frame_scale, scene_config.h): multiplying by it is
+/// exact, so the frame's floats, and every hit's t, u and v, are those of the unscaled frame
+/// wherever that one neither overflows nor underflows (scale 1 for every mesh of ordinary size).
+/// Implicit from an origin alone (scale 1).
+struct FrameMap {
+  Vec3 origin = Vec3::Zero();
+  double scale = 1.0;
+  FrameMap() = default;
+  FrameMap(const Vec3& o, double s = 1.0) : origin(o), scale(s) {}  // NOLINT: implicit on purpose
+  template <class D>  // (an Eigen expression such as Vec3::Zero())
+  FrameMap(const Eigen::MatrixBase<D>& o, double s = 1.0) : origin(o), scale(s) {}  // NOLINT
+};
+
+/// (p - origin) * scale rounded to the nearest float: the tracer's vertex in the trace frame.
+[[nodiscard]] inline Vec3f to_frame(const Vec3& p, const FrameMap& f) {
+  return {static_cast<float>((p.x() - f.origin.x()) * f.scale), static_cast<float>((p.y() - f.origin.y()) * f.scale),
+          static_cast<float>((p.z() - f.origin.z()) * f.scale)};
 }
 
-/// A double box in the frame at `origin`: its corners through to_frame (nearest floats; for
+/// A double box in the frame `f`: its corners through to_frame (nearest floats; for
 /// metrics on boxes, not for traversal, which needs the outward-rounded boxes below).
-[[nodiscard]] inline Box3f to_frame(const Box3& b, const Vec3& origin) {
+[[nodiscard]] inline Box3f to_frame(const Box3& b, const FrameMap& origin) {
   Box3f f;
   f.extend(to_frame(b.lo, origin));
   f.extend(to_frame(b.hi, origin));
@@ -102,7 +117,7 @@ struct Box3f {
 /// One box per triangle in the frame at `origin`, rounded outward (contains the float triangle
 /// to_frame(corners)). Precondition: indices < positions.size() (asserted by the Mesh class).
 [[nodiscard]] std::vector<Box3f> triangle_boxes(std::span<const Vec3> positions, std::span<const Tri> triangles,
-                                                const Vec3& origin = Vec3::Zero());
+                                                const FrameMap& origin = {});
 
 /// One box per point group g = indices[offsets[g] .. offsets[g+1]) (e.g. a clustering's
 /// vertex lists: the per-frame "cluster box update" of the method), rounded outward in the frame
@@ -111,7 +126,7 @@ struct Box3f {
 [[nodiscard]] std::vector<Box3f> point_group_boxes(std::span<const Vec3> positions,
                                                    std::span<const std::uint32_t> offsets,
                                                    std::span<const std::uint32_t> indices,
-                                                   const Vec3& origin = Vec3::Zero());
+                                                   const FrameMap& origin = {});
 
 /// The centre of every box (the builders' centroids when none better is known).
 [[nodiscard]] std::vector<Vec3f> box_centers(std::span<const Box3f> boxes);
@@ -130,7 +145,7 @@ struct Box3f {
 
 /// The positions in the trace frame, rounded to nearest (the tracer's vertices): out[v] =
 /// to_frame(positions[v], origin). One pass, done once per frame; everything else gathers from it.
-void frame_positions(std::span<const Vec3> positions, const Vec3& origin, AlignedVector<Vec3f>& out);
+void frame_positions(std::span<const Vec3> positions, const FrameMap& origin, AlignedVector<Vec3f>& out);
 
 /// Boxes from frame positions (floats rounded to nearest), widened by one unit in the last
 /// place on every side. Since a double p lies within half a unit of its float, the box contains
@@ -149,9 +164,9 @@ void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::ui
 /// Throws std::invalid_argument naming the first vertex whose position is not finite in the
 /// trace frame (NaN, infinite, or a float overflow of p - origin) when frame_pos (the converted
 /// positions) holds such a value; otherwise returns. One pass over frame_pos.
-void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_pos, const Vec3& origin);
+void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_pos, const FrameMap& origin);
 /// The message of check_finite for positions known to hold such a vertex.
-[[noreturn]] void throw_not_finite(std::span<const Vec3> positions, const Vec3& origin);
+[[noreturn]] void throw_not_finite(std::span<const Vec3> positions, const FrameMap& origin);
 
 /// Centroids of float triangles (v0 + v1 + v2) / 3, inside the boxes above.
 [[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);
@@ -160,7 +175,7 @@ void triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> t
 
 /// Centroids (v0 + v1 + v2) / 3 of the triangles in the frame at `origin`.
 [[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span<const Tri> triangles,
-                                                    const Vec3& origin = Vec3::Zero());
+                                                    const FrameMap& origin = {});
 
 /// Union of boxes.
 [[nodiscard]] Box3f union_of(std::span<const Box3f> boxes);

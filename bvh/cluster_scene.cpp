@@ -48,7 +48,7 @@ void check_view(const Mesh& mesh, const ClusterView& cv) {
 // corners, in the scene's frame; the scene's build settings, plain build): its primitive order
 // is the order in which the scene keeps the clusters, and its subtrees of at most
 // cluster_group_size clusters are the groups of the two-level build. A checked view.
-Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, const Vec3& origin) {
+Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, const FrameMap& origin) {
   const std::size_t C = cv.triangle_offsets.size() - 1;
   std::vector<std::uint32_t> offs, idx;
   std::span<const std::uint32_t> o = cv.vertex_offsets, v = cv.vertices;
@@ -159,7 +159,8 @@ void sort_clusters_by_morton(std::span<const Vec3> pos, std::span<const Tri> tri
 
 std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg) {
   check_view(mesh, clusters);
-  const Bvh rest = rest_tree(mesh, clusters, cfg, trace_frame_origin(mesh, cfg));
+  const Vec3 origin = trace_frame_origin(mesh, cfg);
+  const Bvh rest = rest_tree(mesh, clusters, cfg, {origin, trace_frame_scale(mesh, origin)});
   return {rest.prim_order.begin(), rest.prim_order.end()};
 }
 
@@ -178,10 +179,11 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   check_view(mesh, cv);
   TraceData& data = f_.data;
   data.origin = trace_frame_origin(mesh, cfg);  // (checks the rest positions)
+  data.scale = trace_frame_scale(mesh, data.origin);
   // The rest pose in the trace frame: finite in single precision (checked), and the BlockTree
   // layout's input below.
-  frame_positions(mesh.positions(), data.origin, f_.fpos);
-  check_finite(mesh.positions(), f_.fpos, data.origin);
+  frame_positions(mesh.positions(), data.frame(), f_.fpos);
+  check_finite(mesh.positions(), f_.fpos, data.frame());
   // Clusters are kept in the order of the rest-pose BVH over them (cluster_visit_order): the
   // blocks are laid out in it, and the groups of the two-level build are its subtrees.
   {
@@ -190,7 +192,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
                                   std::to_string(cfg_.build.max_leaf_size) + " given)");
-    const Bvh rest = rest_tree(mesh, cv, cfg_, data.origin);
+    const Bvh rest = rest_tree(mesh, cv, cfg_, data.frame());
     cluster_ids_.assign(rest.prim_order.begin(), rest.prim_order.end());
     if (cfg_.cluster_group_size > 1 && !rest.nodes.empty()) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
     if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
@@ -464,13 +466,13 @@ void ClusterScene::update(std::span<const Vec3> positions) {
                                 std::to_string(V) + " vertices");
   double t0 = clock_ms(cfg_.clock);
   if (runs_) {  // one pass: conversion and boxes (f_.fpos keeps its size and sentinels)
-    frame_positions_and_boxes(positions, data.origin, *runs_, std::span<Vec3f>(f_.fpos.data(), V), f_.boxes,
+    frame_positions_and_boxes(positions, data.frame(), *runs_, std::span<Vec3f>(f_.fpos.data(), V), f_.boxes,
                               f_.centroids);
     times.vertices_ms = 0.0;
     times.boxes_ms = clock_ms(cfg_.clock) - t0;
   } else {
-    frame_positions(positions, vorder_.to_old, data.origin, f_.fpos);
-    check_finite(positions, f_.fpos, data.origin);  // (a NaN box would break the build)
+    frame_positions(positions, vorder_.to_old, data.frame(), f_.fpos);
+    check_finite(positions, f_.fpos, data.frame());  // (a NaN box would break the build)
     add_sentinel(f_.fpos);
     const std::span<const Vec3f> fp(f_.fpos.data(), V);
     times.vertices_ms = clock_ms(cfg_.clock) - t0;

@@ -1,5 +1,9 @@
 #include "bvh/scene_config.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
 #include <stdexcept>
 #include <string>
 
@@ -50,6 +54,23 @@ Vec3 trace_frame_origin(const Mesh& mesh, const SceneConfig& cfg) {
   if (cfg.origin) return *cfg.origin;
   const Box3 b = mesh.bounds();
   return b.empty() ? Vec3::Zero() : b.center();
+}
+
+double trace_frame_scale(const Mesh& mesh, const Vec3& origin) {
+  double e = 0;
+  for (const Vec3& p : mesh.positions()) e = std::max(e, (p - origin).cwiseAbs().maxCoeff());
+  if (!(e > 0) || !std::isfinite(e)) return 1.0;  // empty, one point, or not finite (reported elsewhere)
+  const int k = std::ilogb(e);                       // e in [2^k, 2^(k+1))
+  if (k > 100 || k < -100) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "the mesh reaches %.3g units from its centre: beyond the single-precision tracer's range "
+                  "(%.2g to %.2g units; scale the mesh)",
+                  e, std::ldexp(1.0, -100), std::ldexp(1.0, 101));
+    throw FrameRangeError(buf);
+  }
+  if (k >= -8 && k < 16) return 1.0;
+  return std::ldexp(1.0, -(k + 1));
 }
 
 }  // namespace ptc::bvh

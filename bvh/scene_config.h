@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string_view>
 
 #include "bvh/build_config.h"
@@ -84,5 +85,20 @@ struct SceneConfig {
 /// the trace frame, the layout and, for clusters, the rest-pose tree): std::invalid_argument
 /// naming the first bad vertex otherwise.
 [[nodiscard]] Vec3 trace_frame_origin(const Mesh& mesh, const SceneConfig& cfg);
+
+/// The trace frame's scale (box.h, FrameMap) for `mesh` around `origin`: 1 when the largest
+/// |p - origin| coordinate E of the mesh's positions lies in [2^-8, 2^16] (or E = 0), else the
+/// power of two that brings E into [0.5, 1). In single precision the watertight test's
+/// products grow like E^2 t (t: the ray parameter, about E for unit directions): unscaled, a
+/// mesh of 1e13 units overflowed them and its rays missed, and one of 1e-15 units underflowed.
+/// Throws std::invalid_argument for E beyond 2^100 (about 1.3e30) or below 2^-100 (about
+/// 7.9e-31): the directions scaled with the frame would leave the float range there.
+[[nodiscard]] double trace_frame_scale(const Mesh& mesh, const Vec3& origin);
+
+/// What trace_frame_scale throws (commands name the input file with it).
+class FrameRangeError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
 
 }  // namespace ptc::bvh

@@ -44,7 +44,10 @@ struct TraceData {
   std::vector<LeafRange> ranges;
   AlignedVector<TriBlock> blocks;
   AlignedVector<std::uint32_t> triangle_ids;  ///< 4 per block: mesh triangle id or kNoTriangle
-  Vec3 origin = Vec3::Zero();                 ///< the trace frame
+  Vec3 origin = Vec3::Zero();                 ///< the trace frame's origin (box.h, FrameMap)
+  double scale = 1.0;                         ///< the trace frame's scale, a power of two (FrameMap)
+
+  [[nodiscard]] FrameMap frame() const { return {origin, scale}; }
 };
 
 /// Checks of the flat data (tests call it on every scene): every node reachable from the root

@@ -390,7 +390,10 @@ Result trace_single(const TraceData& s, const Flat& f, const Vec3& org, const Ve
                     HitMode mode, StackEntry* stack) {
   Result res;
   RayState r;
-  if (!setup(r, to_frame(org, s.origin), dir, tmin, tmax)) return res;
+  // The ray in the trace frame (box.h, FrameMap): origin (org - origin) * scale, direction
+  // dir * scale (exact: a power of two), so t is the caller's.
+  const float sc = static_cast<float>(s.scale);
+  if (!setup(r, to_frame(org, s.frame()), {dir[0] * sc, dir[1] * sc, dir[2] * sc}, tmin, tmax)) return res;
   if (mode == HitMode::Closest)
     traverse<false>(f, r, res, stack);
   else

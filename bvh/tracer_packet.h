@@ -303,17 +303,17 @@ inline __m256 load_lanes(const float* a, std::size_t first, int n) {
   for (int l = 0; l < n; ++l) v[l] = a[first + l];
   return _mm256_load_ps(v);
 }
-// Eight doubles of the batch minus `o`, rounded to float (to_frame's operations).
-inline __m256 load_frame(const double* a, std::size_t first, int n, double o) {
+// Eight doubles of the batch minus `o`, times `scale`, rounded to float (to_frame's operations).
+inline __m256 load_frame(const double* a, std::size_t first, int n, double o, double scale) {
   alignas(32) double v[kLanes] = {};
   const double* src = a + first;
   if (n < kLanes) {
     for (int l = 0; l < n; ++l) v[l] = a[first + l];
     src = v;
   }
-  const __m256d od = _mm256_set1_pd(o);
-  const __m128 lo = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(src), od));
-  const __m128 hi = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(src + 4), od));
+  const __m256d od = _mm256_set1_pd(o), sd = _mm256_set1_pd(scale);
+  const __m128 lo = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(src), od), sd));
+  const __m128 hi = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(src + 4), od), sd));
   return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
 
@@ -321,11 +321,13 @@ template <bool AnyHit>
 void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBatch& hits, std::size_t first, int n,
                   bool counters, TraceTotals& tot, PacketEntry* stack) {
   // The single-ray set-up (tracer_kernel.h, setup), eight lanes at once: the same operations.
-  const __m256 ox = load_frame(rays.ox.data(), first, n, s.origin.x());
-  const __m256 oy = load_frame(rays.oy.data(), first, n, s.origin.y());
-  const __m256 oz = load_frame(rays.oz.data(), first, n, s.origin.z());
-  const __m256 dx = load_lanes(rays.dx.data(), first, n), dy = load_lanes(rays.dy.data(), first, n),
-               dz = load_lanes(rays.dz.data(), first, n);
+  const __m256 ox = load_frame(rays.ox.data(), first, n, s.origin.x(), s.scale);
+  const __m256 oy = load_frame(rays.oy.data(), first, n, s.origin.y(), s.scale);
+  const __m256 oz = load_frame(rays.oz.data(), first, n, s.origin.z(), s.scale);
+  const __m256 sf = _mm256_set1_ps(static_cast<float>(s.scale));  // the frame's scale (exact)
+  const __m256 dx = _mm256_mul_ps(load_lanes(rays.dx.data(), first, n), sf),
+               dy = _mm256_mul_ps(load_lanes(rays.dy.data(), first, n), sf),
+               dz = _mm256_mul_ps(load_lanes(rays.dz.data(), first, n), sf);
   const __m256 t0 = load_lanes(rays.tmin.data(), first, n), t1 = load_lanes(rays.tmax.data(), first, n);
   const __m256 big = _mm256_set1_ps(kBig), zero = _mm256_setzero_ps();
   auto finite = [&](__m256 x) {  // |x| <= max float (false for inf and NaN)

@@ -8,6 +8,7 @@ namespace ptc::bvh {
 
 TriangleScene::TriangleScene(const Mesh& mesh, const SceneConfig& cfg) : tris_(mesh.shared_triangles()), cfg_(cfg) {
   f_.data.origin = trace_frame_origin(mesh, cfg);
+  f_.data.scale = trace_frame_scale(mesh, f_.data.origin);
   update(mesh.positions());
 }
 
@@ -16,8 +17,8 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
   double t0 = clock_ms(cfg_.clock);
-  frame_positions(positions, data.origin, f_.fpos);
-  check_finite(positions, f_.fpos, data.origin);  // (a NaN box would break the build)
+  frame_positions(positions, data.frame(), f_.fpos);
+  check_finite(positions, f_.fpos, data.frame());  // (a NaN box would break the build)
   const auto V = static_cast<std::uint32_t>(f_.fpos.size());
   add_sentinel(f_.fpos);
   const std::span<const Vec3f> fp(f_.fpos.data(), V);

@@ -82,7 +82,7 @@ GroupVertexOrder first_touch_order(std::size_t vertex_count, std::span<const std
   return o;
 }
 
-void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const Vec3& origin,
+void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const FrameMap& origin,
                      AlignedVector<Vec3f>& out) {
   out.resize(to_old.size());
   const std::size_t n = to_old.size();
@@ -206,10 +206,11 @@ std::vector<std::uint32_t> cluster_vertex_order(std::size_t vertex_count, std::s
 
 namespace {
 
-// to_frame(p, origin) as (x, y, z, 0): the same double subtraction and round-to-nearest.
-inline __m128 convert(const double* d, __m128d oxy, __m128d oz) {
-  const __m128d xy = _mm_sub_pd(_mm_loadu_pd(d), oxy);
-  const __m128d z = _mm_sub_sd(_mm_load_sd(d + 2), oz);
+// to_frame(p, frame) as (x, y, z, 0): the same double subtraction, product by the (power of
+// two) scale and round-to-nearest.
+inline __m128 convert(const double* d, __m128d oxy, __m128d oz, __m128d s) {
+  const __m128d xy = _mm_mul_pd(_mm_sub_pd(_mm_loadu_pd(d), oxy), s);
+  const __m128d z = _mm_mul_sd(_mm_sub_sd(_mm_load_sd(d + 2), oz), s);
   return _mm_movelh_ps(_mm_cvtpd_ps(xy), _mm_cvtpd_ps(z));
 }
 // Exactly 12 bytes (the next vertex may belong to a group converted earlier).
@@ -220,23 +221,24 @@ inline void store3(float* q, __m128 v) {
 
 // A group's own vertices [b, b + n): converted, stored, and their min / max (x y z .) returned.
 // `bad` collects x - x of every converted value: NaN in some lane iff a value is not finite.
-using OwnRangeFn = void (*)(const double* in, float* out, std::uint32_t n, const Vec3& origin, __m128& lo, __m128& hi,
-                            __m128& bad);
+using OwnRangeFn = void (*)(const double* in, float* out, std::uint32_t n, const FrameMap& frame, __m128& lo,
+                            __m128& hi, __m128& bad);
 
-void own_range_sse2(const double* in, float* q, std::uint32_t n, const Vec3& origin, __m128& lo, __m128& hi,
+void own_range_sse2(const double* in, float* q, std::uint32_t n, const FrameMap& frame, __m128& lo, __m128& hi,
                     __m128& bad) {
-  const __m128d oxy = _mm_setr_pd(origin.x(), origin.y()), oz = _mm_set_sd(origin.z());
+  const Vec3& origin = frame.origin;
+  const __m128d oxy = _mm_setr_pd(origin.x(), origin.y()), oz = _mm_set_sd(origin.z()), s = _mm_set1_pd(frame.scale);
   __m128 lo1 = lo, hi1 = hi;
   std::uint32_t i = 0;
   for (; i + 1 < n; i += 2) {  // two independent min/max chains
-    const __m128 p = convert(in + 3 * std::size_t(i), oxy, oz);
-    const __m128 r = convert(in + 3 * std::size_t(i) + 3, oxy, oz);
+    const __m128 p = convert(in + 3 * std::size_t(i), oxy, oz, s);
+    const __m128 r = convert(in + 3 * std::size_t(i) + 3, oxy, oz, s);
     store3(q + 3 * std::size_t(i), p), store3(q + 3 * std::size_t(i) + 3, r);
     lo = _mm_min_ps(lo, p), hi = _mm_max_ps(hi, p), lo1 = _mm_min_ps(lo1, r), hi1 = _mm_max_ps(hi1, r);
     bad = _mm_or_ps(bad, _mm_or_ps(_mm_sub_ps(p, p), _mm_sub_ps(r, r)));
   }
   if (i < n) {
-    const __m128 p = convert(in + 3 * std::size_t(i), oxy, oz);
+    const __m128 p = convert(in + 3 * std::size_t(i), oxy, oz, s);
     store3(q + 3 * std::size_t(i), p);
     lo = _mm_min_ps(lo, p), hi = _mm_max_ps(hi, p);
     bad = _mm_or_ps(bad, _mm_sub_ps(p, p));
@@ -252,27 +254,29 @@ struct Rows3 {
   __m128 la, lb, lc, ha, hb, hc, bad;
 };
 __attribute__((target("avx2"))) inline void own_step_avx2(const double* p, float* d, __m256d o0, __m256d o1, __m256d o2,
-                                                           Rows3& r) {
-  const __m128 a = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(p), o0));
-  const __m128 b = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(p + 4), o1));
-  const __m128 c = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(p + 8), o2));
+                                                           __m256d s, Rows3& r) {
+  const __m128 a = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p), o0), s));
+  const __m128 b = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 4), o1), s));
+  const __m128 c = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 8), o2), s));
   _mm_storeu_ps(d, a), _mm_storeu_ps(d + 4, b), _mm_storeu_ps(d + 8, c);
   r.la = _mm_min_ps(r.la, a), r.lb = _mm_min_ps(r.lb, b), r.lc = _mm_min_ps(r.lc, c);
   r.ha = _mm_max_ps(r.ha, a), r.hb = _mm_max_ps(r.hb, b), r.hc = _mm_max_ps(r.hc, c);
   r.bad = _mm_or_ps(r.bad, _mm_or_ps(_mm_sub_ps(a, a), _mm_or_ps(_mm_sub_ps(b, b), _mm_sub_ps(c, c))));
 }
 
-__attribute__((target("avx2"))) void own_range_avx2(const double* in, float* q, std::uint32_t n, const Vec3& origin,
+__attribute__((target("avx2"))) void own_range_avx2(const double* in, float* q, std::uint32_t n, const FrameMap& frame,
                                                      __m128& lo, __m128& hi, __m128& bad) {
-  if (n < 4) return own_range_sse2(in, q, n, origin, lo, hi, bad);
+  if (n < 4) return own_range_sse2(in, q, n, frame, lo, hi, bad);
+  const Vec3& origin = frame.origin;
+  const __m256d s = _mm256_set1_pd(frame.scale);
   const __m256d o0 = _mm256_setr_pd(origin.x(), origin.y(), origin.z(), origin.x());
   const __m256d o1 = _mm256_setr_pd(origin.y(), origin.z(), origin.x(), origin.y());
   const __m256d o2 = _mm256_setr_pd(origin.z(), origin.x(), origin.y(), origin.z());
   Rows3 r{_mm_set1_ps(kInf),  _mm_set1_ps(kInf),  _mm_set1_ps(kInf), _mm_set1_ps(-kInf),
           _mm_set1_ps(-kInf), _mm_set1_ps(-kInf), bad};
   std::uint32_t i = 0;
-  for (; i + 4 < n; i += 4) own_step_avx2(in + 3 * std::size_t(i), q + 3 * std::size_t(i), o0, o1, o2, r);
-  own_step_avx2(in + 3 * std::size_t(n - 4), q + 3 * std::size_t(n - 4), o0, o1, o2, r);
+  for (; i + 4 < n; i += 4) own_step_avx2(in + 3 * std::size_t(i), q + 3 * std::size_t(i), o0, o1, o2, s, r);
+  own_step_avx2(in + 3 * std::size_t(n - 4), q + 3 * std::size_t(n - 4), o0, o1, o2, s, r);
   lo = _mm_min_ps(lo, fold_rows(r.la, r.lb, r.lc, min_ps)), hi = _mm_max_ps(hi, fold_rows(r.ha, r.hb, r.hc, max_ps));
   // (every lane of the rows is data: fold lane 3 into lane 0, since the caller tests lanes 0-2)
   bad = _mm_or_ps(r.bad, _mm_shuffle_ps(r.bad, r.bad, _MM_SHUFFLE(0, 0, 0, 3)));
@@ -285,7 +289,7 @@ OwnRangeFn pick_own_range() {
 
 }  // namespace
 
-void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& origin, const GroupRuns& runs,
+void frame_positions_and_boxes(std::span<const Vec3> positions, const FrameMap& frame, const GroupRuns& runs,
                                std::span<Vec3f> out_pos, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers,
                                bool allow_avx2) {
   static const OwnRangeFn best = pick_own_range();
@@ -297,7 +301,8 @@ void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& orig
   const std::size_t groups = runs.own_begin.size();
   out.resize(groups);
   centers.resize(groups);
-  const __m128d oxy = _mm_setr_pd(origin.x(), origin.y()), oz = _mm_set_sd(origin.z());
+  const Vec3& origin = frame.origin;
+  const __m128d oxy = _mm_setr_pd(origin.x(), origin.y()), oz = _mm_set_sd(origin.z()), s = _mm_set1_pd(frame.scale);
   const Vec3* in = positions.data();
   float* base = out_pos.empty() ? nullptr : out_pos[0].data();
   // Groups are independent (own ranges are disjoint and stored exactly, shared vertices only
@@ -313,12 +318,12 @@ void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& orig
         continue;
       }
       __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf), lo1 = lo, hi1 = hi;
-      if (n) own_range(in[b].data(), base + 3 * std::size_t(b), n, origin, lo, hi, bad);
+      if (n) own_range(in[b].data(), base + 3 * std::size_t(b), n, frame, lo, hi, bad);
       // Shared vertices (owned by earlier groups) are converted again from the input rather than
       // read back from out_pos: the same bits, and no 16-byte load across the two recent stores
       // of a vertex (a failed store-to-load forwarding stalled half of this loop).
       for (std::uint32_t k = s0; k < s1; ++k) {
-        const __m128 p = convert(in[runs.shared[k]].data(), oxy, oz);
+        const __m128 p = convert(in[runs.shared[k]].data(), oxy, oz, s);
         lo1 = _mm_min_ps(lo1, p), hi1 = _mm_max_ps(hi1, p);
       }
       simd::store_widened(_mm_min_ps(lo, lo1), _mm_max_ps(hi, hi1), out[g], centers[g]);
@@ -328,11 +333,11 @@ void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& orig
   __m128 bad = _mm_setzero_ps();
   for (const auto& [a, e] : runs.gaps)
     for (std::uint32_t v = a; v < e; ++v) {
-      const __m128 p = convert(in[v].data(), oxy, oz);
+      const __m128 p = convert(in[v].data(), oxy, oz, s);
       store3(base + 3 * std::size_t(v), p);
       bad = _mm_or_ps(bad, _mm_sub_ps(p, p));
     }
-  if (any_bad.load() || (_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7)) throw_not_finite(positions, origin);
+  if (any_bad.load() || (_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7)) throw_not_finite(positions, frame);
 }
 
 }  // namespace ptc::bvh

@@ -42,7 +42,7 @@ struct GroupVertexOrder {
                                                  std::span<const std::uint32_t> indices);
 
 /// frame_positions in a new order: out[i] = to_frame(positions[to_old[i]], origin).
-void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const Vec3& origin,
+void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const FrameMap& origin,
                      AlignedVector<Vec3f>& out);
 
 /// point_group_boxes(frame_pos_old, offsets, indices, out, centers), bit for bit (NaN-free
@@ -88,7 +88,7 @@ struct GroupRuns {
 /// The own ranges are converted four vertices at a time with AVX2 when the CPU has it and
 /// allow_avx2 is true (the SSE2 path gives the same bits; tests compare them). Chunks of groups
 /// run on the caller's threads (oneTBB): the same outputs at any thread count.
-void frame_positions_and_boxes(std::span<const Vec3> positions, const Vec3& origin, const GroupRuns& runs,
+void frame_positions_and_boxes(std::span<const Vec3> positions, const FrameMap& origin, const GroupRuns& runs,
                                std::span<Vec3f> out_pos, AlignedVector<Box3f>& boxes, AlignedVector<Vec3f>& centers,
                                bool allow_avx2 = true);
 

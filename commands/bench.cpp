@@ -41,7 +41,12 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   Clustering given;
   if (!opt.clusters.empty()) given = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
   Stopwatch sw;
-  const PeerBenchResult r = run_peer_bench(scene, opt.clusters.empty() ? nullptr : &given, c);
+  PeerBenchResult r;
+  try {
+    r = run_peer_bench(scene, opt.clusters.empty() ? nullptr : &given, c);
+  } catch (const bvh::FrameRangeError& e) {
+    throw InputError(arg, "", "", e.what());
+  }
   manifest.add_timing_ms("bench", sw.ms());
   if (r.cluster_ms > 0) manifest.add_timing_ms("cluster", r.cluster_ms);
   manifest.add_timing_ms("cluster_scene_setup", r.cluster_scene_setup_ms);

@@ -119,7 +119,13 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   tcfg.cluster_group_size = opt.cluster_group_size;
   tcfg.group_trees = opt.group_trees;
   tcfg.origin = first_bounds.center();
-  loop::SceneAccel accel(mesh, bvh::PartLayout::of(scene), tcfg);
+  std::optional<loop::SceneAccel> made;
+  try {
+    made.emplace(mesh, bvh::PartLayout::of(scene), tcfg);
+  } catch (const bvh::FrameRangeError& e) {
+    throw InputError(arg, "", "", e.what());
+  }
+  loop::SceneAccel& accel = *made;
   const bvh::SceneTracer& tracer = accel.tracer();
   manifest.add_timing_ms("static_build", tracer.static_build_ms());
   manifest.add_timing_ms("setup", tracer.moving_setup_ms());

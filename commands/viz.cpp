@@ -241,7 +241,11 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     bvh::SceneTracerConfig tcfg;
     tcfg.clusters = use_clusters ? &clusters : nullptr;
     tcfg.origin = first_bounds.center();
-    accel = std::make_unique<loop::SceneAccel>(mesh, bvh::PartLayout::of(scene), tcfg);
+    try {
+      accel = std::make_unique<loop::SceneAccel>(mesh, bvh::PartLayout::of(scene), tcfg);
+    } catch (const bvh::FrameRangeError& e) {
+      throw InputError(arg, "", "", e.what());
+    }
   }
 
   // The reference frame's rows (drift "since frame 0": the scene's first frame) and positions.

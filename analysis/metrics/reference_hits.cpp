@@ -127,8 +127,8 @@ void setup_ray(RayState& s, const bvh::RayBatch& rays, std::size_t i, const Tria
                const ReferenceConfig& cfg) {
   Vec3 o(rays.ox[i], rays.oy[i], rays.oz[i]);
   if (cfg.start == RayStart::AsTraced) {
-    const bvh::Vec3f f = bvh::to_frame(o, cfg.frame);
-    o = cfg.frame + Vec3(double(f[0]), double(f[1]), double(f[2]));
+    const bvh::Vec3f f = bvh::to_frame(o, {cfg.frame, cfg.frame_scale});
+    o = cfg.frame + Vec3(double(f[0]), double(f[1]), double(f[2])) / cfg.frame_scale;  // (a power of two: exact)
   }
   const double d[3] = {double(rays.dx[i]), double(rays.dy[i]), double(rays.dz[i])};
   for (int a = 0; a < 3; ++a) s.o[a] = o[a], s.d[a] = d[a];

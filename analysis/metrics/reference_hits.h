@@ -75,6 +75,9 @@ struct ReferenceConfig {
   /// AsTraced: the trace frame's origin of the tracer compared (loop::Accel::origin(),
   /// bvh::TraceData::origin). Unused by World.
   Vec3 frame = Vec3::Zero();
+  /// AsTraced: the trace frame's scale (bvh::TraceData::scale, a power of two; 1 for every mesh
+  /// of ordinary size). Unused by World.
+  double frame_scale = 1.0;
   /// Relative t window of `ties` (> 0): rays through an edge or vertex hit its triangles at t
   /// equal to a few ulp of double, far inside 1e-9; distinct surfaces this close are not
   /// resolved by any float tracer either.

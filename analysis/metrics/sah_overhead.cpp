@@ -37,7 +37,7 @@ SahOverhead sah_overhead(const Mesh& mesh, const Clustering& c) {
   SahOverhead r;
   std::vector<bvh::Box3f> all, tops, one;
   all.reserve(mesh.triangle_count());
-  for (std::uint32_t t = 0; t < mesh.triangle_count(); ++t) all.push_back(bvh::to_frame(triangle_box(mesh, t), Vec3::Zero()));
+  for (std::uint32_t t = 0; t < mesh.triangle_count(); ++t) all.push_back(bvh::to_frame(triangle_box(mesh, t), bvh::FrameMap{}));
   for (std::size_t k = 0; k < c.cluster_count(); ++k) {
     one.clear();
     bvh::Box3f box;

@@ -118,6 +118,35 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   expect_error({"bench", mesh, "--light", "1,nan,2", "--out", out}, 2, "--light");
 }
 
+// A mesh of 1e13 units: our tracer's float products overflowed there, every ray missed, and the
+// bench charged Embree with the difference. The trace frame's scale (docs/tracing.md, "The trace
+// frame at any scale") makes them hit, and a mesh beyond the float range is refused, naming it.
+TEST_F(TraceCli, HugeAndTinyMeshesTraceOrAreRefusedNamingTheFile) {
+  auto quad = [&](const std::string& name, const char* e) {
+    return write(name, std::string("OFF\n4 2 0\n0 0 0\n") + e + " 0 0\n0 " + e + " 0\n" + e + " " + e +
+                           " 0\n3 0 1 2\n3 1 3 2\n").string();
+  };
+  for (const char* e : {"1e13", "1e-20"}) {
+    const std::string mesh = quad(std::string("quad") + e + ".off", e);
+    const fs::path out = dir_ / (std::string("b") + e);
+    const CmdResult r = ptc({"bench", mesh, "--deform", "none", "--frames", "0:1", "--width", "16", "--height", "16",
+                             "--threads", "1", "--out", out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::vector<std::string> hits;
+    for (const auto& row : csv_rows(slurp(out / "bench.csv"))) {
+      if (row.at("config").rfind("ours_", 0) != 0) continue;
+      EXPECT_GE(std::stoi(row.at("hits")), 200) << e << " " << row.at("config");  // most of the 256 pixels
+      hits.push_back(row.at("hits"));
+    }
+    ASSERT_EQ(hits.size(), 4u) << e;  // two configurations, two frames
+    EXPECT_EQ(std::count(hits.begin(), hits.end(), hits[0]), 4) << e;
+  }
+  expect_error({"trace", quad("quad1e35.off", "1e35"), "--out", (dir_ / "out").string()}, 1,
+               "quad1e35.off: the mesh reaches 5e+34 units from its centre: beyond the single-precision tracer's range");
+  expect_error({"bench", quad("quad1e-35.off", "1e-35"), "--out", (dir_ / "out").string()}, 1,
+               "quad1e-35.off: the mesh reaches");
+}
+
 TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
   const CmdResult r = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--max-count", "4",
                      "--out", (dir_ / "out").string()});

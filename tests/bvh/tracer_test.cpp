@@ -500,6 +500,81 @@ void random_inside(Kind kind, double scale, const Vec3& offset, std::optional<Ve
 }
 
 TEST_P(TracerKinds, TinySceneFromInside) { random_inside(GetParam(), 1e-3, Vec3::Zero(), std::nullopt); }
+
+// The mesh and the rays' origins times 2^j, the directions unchanged: every hit is the same
+// triangle with the same u and v and t times 2^j, bit for bit, single rays and packets. The base
+// mesh (about 100 units) keeps the unscaled frame; the scaled ones get the frame scale that
+// brings them to about one unit (trace_frame_scale). Before it, at 2^40 (about 1e14) the
+// watertight test's products overflowed and every ray missed; far below, they underflowed.
+TEST_P(TracerKinds, PowerOfTwoScaledScenesTraceTheSameHits) {
+  const Mesh base = test::load_mesh("armadillo.off");
+  const AnyScene s0 = make_scene(base, GetParam());
+  ASSERT_EQ(s0.data().scale, 1.0);
+  RaySet rs = random_rays(base, 600, 71);
+  const RayBatch cam = primary_rays(frame_box(base.bounds(), Vec3(0.3, -0.2, -1.0)), 24, 20);
+  for (std::size_t i = 0; i < cam.size(); ++i)
+    rs.org.push_back(Vec3(cam.ox[i], cam.oy[i], cam.oz[i])), rs.dir.push_back({cam.dx[i], cam.dy[i], cam.dz[i]});
+  auto batch = [&](double f) {
+    RayBatch b;
+    b.resize(rs.org.size());
+    for (std::size_t i = 0; i < rs.org.size(); ++i) b.set(i, rs.org[i] * f, rs.dir[i]);
+    return b;
+  };
+  auto run = [&](const TraceData& d, const RayBatch& b, int variant) {  // 0 single, 1 packets, 2 SSE2
+    HitBatch h;
+    TraceOptions opt;
+    opt.packets = variant == 1;
+    if (variant == 2) opt.isa = TraceIsa::Sse2;
+    trace(d, b, h, opt);
+    return h;
+  };
+  const RayBatch b0 = batch(1.0);
+  const HitBatch h0 = run(s0.data(), b0, 0);
+  std::size_t hits = 0;
+  for (std::size_t i = 0; i < b0.size(); ++i) hits += h0.triangle[i] != kNoTriangle;
+  ASSERT_GT(hits, b0.size() / 4);
+  for (int j : {-95, -60, -30, 30, 45, 60, 90}) {
+    std::vector<Vec3> p(base.positions().begin(), base.positions().end());
+    for (Vec3& q : p) q = Vec3(std::ldexp(q.x(), j), std::ldexp(q.y(), j), std::ldexp(q.z(), j));
+    const Mesh m = base.with_positions(std::move(p));
+    const AnyScene s = make_scene(m, GetParam());
+    EXPECT_NE(s.data().scale, 1.0) << j;
+    const RayBatch b = batch(std::ldexp(1.0, j));
+    for (int variant : {0, 1, 2}) {
+      const HitBatch h = run(s.data(), b, variant);
+      for (std::size_t i = 0; i < b.size(); ++i) {
+        const std::string what = std::string(name(GetParam())) + " 2^" + std::to_string(j) + " variant " +
+                                 std::to_string(variant) + " ray " + std::to_string(i);
+        ASSERT_EQ(h.triangle[i], h0.triangle[i]) << what;
+        if (h0.triangle[i] == kNoTriangle) continue;
+        ASSERT_EQ(h.t[i], std::ldexp(h0.t[i], j)) << what;
+        ASSERT_EQ(h.u[i], h0.u[i]) << what;
+        ASSERT_EQ(h.v[i], h0.v[i]) << what;
+      }
+    }
+    // and the brute force in the scaled frame agrees
+    for (std::size_t i = 0; i < b.size(); i += 41)
+      expect_same(trace_ray(s.data(), rs.org[i] * std::ldexp(1.0, j), rs.dir[i]),
+                  test::brute_force(m, s.data().frame(), rs.org[i] * std::ldexp(1.0, j), rs.dir[i]), "brute force");
+  }
+}
+
+// Beyond 2^100 (or below 2^-100) units the scaled directions would leave the float range: the
+// scene is refused with a message that says so.
+TEST(Tracer, ScenesBeyondTheFloatRangeAreRefused) {
+  const Mesh base = test::load_mesh("elephant.off");
+  for (int j : {-110, 110}) {
+    std::vector<Vec3> p(base.positions().begin(), base.positions().end());
+    for (Vec3& q : p) q = Vec3(std::ldexp(q.x(), j), std::ldexp(q.y(), j), std::ldexp(q.z(), j));
+    const Mesh m = base.with_positions(std::move(p));
+    try {
+      TriangleScene s(m, SceneConfig{});
+      ADD_FAILURE() << "2^" << j << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("beyond the single-precision tracer's range"), std::string::npos) << e.what();
+    }
+  }
+}
 TEST_P(TracerKinds, HugeOffsetSceneFromInside) { random_inside(GetParam(), 1e3, Vec3(-1e7, 1e7, 1e7), std::nullopt); }
 
 INSTANTIATE_TEST_SUITE_P(AllScenes, TracerKinds, ::testing::ValuesIn(kAllKinds),
@@ -832,13 +907,14 @@ TEST(Tracer, NonFinitePositionsAreRefusedNamingTheVertex) {
       std::vector<Vec3> p(m.positions().begin(), m.positions().end());
       p[v] = bad;
       if (bad.allFinite()) {
-        // finite in double: the float frame overflows. At construction the frame's origin (the
-        // bounds' centre) moves out with the vertex, so every vertex overflows and the first one is named.
+        // finite in double, beyond the float range: at construction the frame's origin (the
+        // bounds' centre) moves out with the vertex, and the mesh's extent is refused.
         try {
           ClusterScene s(m.with_positions(p), view_of(cl), cluster_scene_defaults());
           ADD_FAILURE() << what << ": accepted";
         } catch (const std::invalid_argument& e) {
-          EXPECT_NE(std::string(e.what()).find("not finite in single precision"), std::string::npos) << e.what();
+          EXPECT_NE(std::string(e.what()).find("beyond the single-precision tracer's range"), std::string::npos)
+              << e.what();
         }
       } else {
         expect_names([&] { TriangleScene s(m.with_positions(p)); }, v, what + " triangle ctor");

@@ -12,12 +12,14 @@
 
 namespace ptc::bvh::test {
 
-/// Closest hit by a loop over all triangles in the trace frame `frame`: the smallest
-/// (t, triangle id) pair, which is what the tracer returns whatever its tree.
-inline Hit brute_force(const Mesh& m, const Vec3& frame, const Vec3& org, const Vec3f& dir, float tmin = 0.0f,
+/// Closest hit by a loop over all triangles in the trace frame `frame` (its origin and scale; the
+/// direction is scaled with it, so t is the caller's): the smallest (t, triangle id) pair, which
+/// is what the tracer returns whatever its tree.
+inline Hit brute_force(const Mesh& m, const FrameMap& frame, const Vec3& org, const Vec3f& dir, float tmin = 0.0f,
                        float tmax = std::numeric_limits<float>::infinity()) {
   Hit best;
-  const WatertightRay r = make_watertight_ray(to_frame(org, frame), dir);
+  const auto sc = static_cast<float>(frame.scale);
+  const WatertightRay r = make_watertight_ray(to_frame(org, frame), {dir[0] * sc, dir[1] * sc, dir[2] * sc});
   float tm = std::min(tmax, std::numeric_limits<float>::max());
   for (std::uint32_t t = 0; t < m.triangle_count(); ++t) {
     const auto c = m.corners(t);
