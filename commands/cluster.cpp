@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <limits>
 #include <ostream>
 
@@ -94,8 +95,15 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   double acc_avg_sa = std::numeric_limits<double>::quiet_NaN();  // left alone when no Acc objective ran
   {
     ProgressBar bar("clustering");
-    clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); }, std::nullopt, &acc_avg_sa);
+    try {
+      clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); }, std::nullopt, &acc_avg_sa);
+    } catch (const std::invalid_argument& e) {  // what the mesh cannot give (the flags were checked before)
+      throw InputError(opt.input.string(), "", "", e.what());
+    }
   }
+  if (acc_avg_sa == 0.0 && !lm.mesh.empty())
+    std::cerr << "ptc: note: " << opt.input.string()
+              << ": every triangle has zero area (AvgSA = 0): one cluster per triangle, and reg and acc are nan\n";
   const std::optional<double> avg_sa =
       c.max_count > 0 && c.max_size > 0
           ? std::optional<double>(!std::isnan(acc_avg_sa) ? acc_avg_sa

@@ -75,7 +75,9 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
   const double scale = std::max({diag, look.cwiseAbs().maxCoeff() * 1e-6, 1e-30});
   dist = std::max(dist, 1e-3 * scale);
   c.eye = look - dist * forward;
-  if (!finite(c.eye)) throw InputError("", "", "--eye", "the mesh's bounds are too large to frame");
+  if (!finite(c.eye))  // (no --eye was given: the default camera's distance overflows)
+    throw InputError("", "", "", "the default camera cannot frame the mesh: its bounds are too large (give --eye, or "
+                                 "scale the mesh)");
   return c;
 }
 

@@ -3,6 +3,8 @@
 // included by apps/ptc (through a precompiled header: its headers are expensive).
 #pragma once
 
+#include <cstdio>
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -51,6 +53,38 @@ CLI::Validator enum_validator(std::string name, Parse parse) {
         return parse(s) ? std::string() : "'" + s + "' is not a valid " + name;
       },
       name);
+}
+
+/// A finite number in [lo, hi]: refuses nan and inf (CLI11's Range lets nan through, since no
+/// comparison with it fails) and names the bounds in %g form (its "0.000000" hid a bound of 1e-9).
+inline CLI::Validator finite_in(double lo, double hi) {
+  char desc[64];
+  std::snprintf(desc, sizeof desc, "FLOAT in [%g, %g]", lo, hi);
+  return CLI::Validator(
+      [lo, hi](std::string& s) -> std::string {
+        double v = 0;
+        try {
+          std::size_t n = 0;
+          v = std::stod(s, &n);
+          if (n != s.size()) return "'" + s + "' is not a number";
+        } catch (const std::exception&) {
+          return "'" + s + "' is not a number";
+        }
+        char why[96];
+        std::snprintf(why, sizeof why, "%s is not a finite number in [%g, %g]", s.c_str(), lo, hi);
+        return std::isfinite(v) && v >= lo && v <= hi ? std::string() : std::string(why);
+      },
+      desc);
+}
+
+/// A seed: a whole number >= 0 (an unsigned option would take "-5" as 2^64 - 5).
+inline CLI::Validator seed_validator() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos ? std::string()
+                                                                                   : "'" + s + "' is not a seed (a whole number >= 0)";
+      },
+      "UINT");
 }
 
 inline void add_threads_option(CLI::App* cmd, int& threads) {

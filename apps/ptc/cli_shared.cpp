@@ -42,7 +42,15 @@ void CameraArgs::add_to(CLI::App* c, bool with_light) {
       ->check(vec3_validator());
   c->add_option("--look-at", look_at, "point the camera looks at (default: centre of the mesh's bounds)")
       ->check(vec3_validator());
-  c->add_option("--up", up, "camera up direction (default: 0,1,0)")->check(vec3_validator());
+  c->add_option("--up", up, "camera up direction (default: 0,1,0)")
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            std::string why;
+            const auto v = parse_vec3(s, &why);
+            if (!v) return why;
+            return v->isZero() ? "the up vector is zero" : std::string();
+          },
+          "X,Y,Z"));
   fov_opt = c->add_option("--fov", fov, "vertical field of view in degrees, in (0, 180)")
                 ->check(CLI::Validator(
                     [](std::string& s) -> std::string {
@@ -90,7 +98,7 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
       ->check(CLI::Range(0u, 1u << 20))
       ->capture_default_str();
   c->add_option("--max-size", cfg.max_size, "MaxSize (sphere area in units of the mean triangle sphere area)")
-      ->check(CLI::Range(0.0, 1e12))
+      ->check(finite_in(0.0, 1e12))
       ->capture_default_str();
   c->add_option("--size-bound", size_bound, "max (as printed in the paper) or min")
       ->check(enum_validator("size bound", parse_size_bound_mode))
@@ -101,8 +109,8 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
   c->add_option("--start", start, "growth start rule: index, spatial or fewest-free")
       ->check(enum_validator("start rule", parse_start_rule))
       ->capture_default_str();
-  c->add_option("--gwh-a1", cfg.gwh.a1, "GWH01 weight of E_dir")->check(CLI::Range(0.0, 1e6))->capture_default_str();
-  c->add_option("--gwh-a2", cfg.gwh.a2, "GWH01 weight of E_shape")->check(CLI::Range(0.0, 1e6))->capture_default_str();
+  c->add_option("--gwh-a1", cfg.gwh.a1, "GWH01 weight of E_dir")->check(finite_in(0.0, 1e6))->capture_default_str();
+  c->add_option("--gwh-a2", cfg.gwh.a2, "GWH01 weight of E_shape")->check(finite_in(0.0, 1e6))->capture_default_str();
   c->add_option("--gwh-weight", gwh_weight, "GWH01 E_dir weights: area or sqrt-area")
       ->check(enum_validator("weight", parse_gwh_weight))
       ->capture_default_str();

@@ -31,7 +31,7 @@ void register_spheres(CLI::App& app, Context& ctx) {
   c->add_option("--repeats", opt->config.repeats, "timing repetitions (median reported)")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  c->add_option("--seed", opt->config.seed, "seed of the run lengths")->capture_default_str();
+  c->add_option("--seed", opt->config.seed, "seed of the run lengths")->check(seed_validator())->capture_default_str();
   c->add_option("--methods", *methods, "subset of: exact cgal ritter epos6 epos14 epos26")
       ->delimiter(',')
       ->check(enum_validator("sphere method", parse_sphere_method));

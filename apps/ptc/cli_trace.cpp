@@ -54,9 +54,9 @@ void register_trace(CLI::App& app, Context& ctx) {
   c->add_flag("--shadows", rc.shadows, "trace shadow rays to the point light");
   c->add_option("--ao", rc.ao_samples, "ambient-occlusion rays per pixel (0 = none)")->check(CLI::Range(0, 4096))->capture_default_str();
   c->add_option("--ao-distance", rc.ao_distance_rel, "AO max distance as a fraction of the mesh's bounds diagonal")
-      ->check(CLI::Range(1e-9, 1e9))
+      ->check(finite_in(1e-9, 1e9))
       ->capture_default_str();
-  c->add_option("--seed", rc.seed, "seed of the AO directions")->capture_default_str();
+  c->add_option("--seed", rc.seed, "seed of the AO directions")->check(seed_validator())->capture_default_str();
   c->add_option("--cost-range", a->cost_range,
                 "colour range MIN:MAX of the cost images (default: each image's 0..max); with numbers: ptc viz heatmap");
   c->add_option("--out", a->opt.out_dir, "output directory (written atomically)")->required();

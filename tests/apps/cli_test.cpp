@@ -453,6 +453,24 @@ TEST_F(Cli, MallocOnHugePagesIsRecordedAndCanBeTurnedOff) {
   if (had) ::setenv("GLIBC_TUNABLES", saved.c_str(), 1);
 }
 
+// Meshes the Acc objective cannot scale: all triangles of zero area (AvgSA = 0: one cluster per
+// triangle, said in a note, the nan columns documented in docs/tables.md), and coordinates whose
+// sphere areas overflow double (refused, naming the file, in the user's words).
+TEST_F(Cli, ClusterOnMeshesWithoutASizeScale) {
+  const auto zero = write("allsame.off", "OFF\n3 1 0\n0 0 0\n0 0 0\n0 0 0\n3 0 1 2\n");
+  auto r = ptc({"cluster", zero.string(), "--out", (dir_ / "z").string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("allsame.off: every triangle has zero area (AvgSA = 0): one cluster per triangle"), std::string::npos)
+      << r.err;
+  const auto huge = write("huge.off", "OFF\n4 2 0\n0 0 0\n1e300 0 0\n0 1e300 0\n1e300 1e300 0\n3 0 1 2\n3 1 3 2\n");
+  r = ptc({"cluster", huge.string(), "--out", (dir_ / "h").string()});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("huge.off: the mean bounding-sphere area of the triangles (AvgSA"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("AccObjective"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "h"));
+}
+
 TEST_F(Cli, ClusterRejectsBadArguments) {
   const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
   EXPECT_EQ(ptc({"cluster", mesh}).code, 2);  // --out is required
@@ -466,6 +484,16 @@ TEST_F(Cli, ClusterRejectsBadArguments) {
   EXPECT_NE(r.err.find("--max-count"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("cluster_mesh"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "x"));
+  // Numbers that are not finite are bad usage too, naming the flag (CLI11's range let nan through).
+  for (const char* flag : {"--gwh-a1", "--max-size"}) {
+    std::vector<std::string> args{"cluster", mesh, flag, "nan", "--out", (dir_ / "x").string()};
+    if (std::string(flag) == "--gwh-a1") args.insert(args.end(), {"--objective", "gwh01"});
+    r = ptc(args);
+    EXPECT_EQ(r.code, 2) << flag << ": " << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(std::string(flag) + ": nan is not a finite number"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "x"));
+  }
   // meshoptimizer's limits are explained, not an abort.
   r = ptc({"cluster", mesh, "--method", "meshopt", "--max-count", "1000", "--out", (dir_ / "x").string()});
   EXPECT_EQ(r.code, 2);

@@ -103,7 +103,10 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   expect_error({"trace", mesh, "--look-at", "a,b,c", "--out", out}, 2, "--look-at");
   expect_error({"trace", mesh, "--fov", "180", "--out", out}, 2, "--fov");
   expect_error({"trace", mesh, "--fov", "0", "--out", out}, 2, "--fov");
-  expect_error({"trace", mesh, "--up", "0,0,0", "--out", out}, 1, "--up: the up vector is zero");
+  expect_error({"trace", mesh, "--up", "0,0,0", "--out", out}, 2, "--up: the up vector is zero");
+  expect_error({"trace", mesh, "--ao", "2", "--ao-distance", "nan", "--out", out}, 2, "--ao-distance: nan is not a finite number in [1e-09, 1e+09]");
+  expect_error({"trace", mesh, "--ao", "2", "--ao-distance", "0", "--out", out}, 2, "0 is not a finite number in [1e-09, 1e+09]");
+  expect_error({"trace", mesh, "--ao", "2", "--seed", "-5", "--out", out}, 2, "'-5' is not a seed");
   expect_error({"trace", mesh, "--eye", "0.5,0.5,5", "--up", "0,0,1", "--out", out}, 1, "parallel");
   expect_error({"trace", mesh, "--eye", "0.5,0.5,0.5", "--out", out}, 1, "same point");
   expect_error({"trace", mesh, "--clusters", (dir_ / "none").string(), "--out", out}, 1, "none: no such file");

@@ -327,6 +327,10 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
         avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
       }
       if (avg_sa_used) *avg_sa_used = avg_sa;
+      if (!std::isfinite(avg_sa))
+        throw std::invalid_argument("the mean bounding-sphere area of the triangles (AvgSA, the Acc objective's size "
+                                    "scale) is not finite in double precision: the coordinates are too large (scale "
+                                    "the mesh)");
       if (!(avg_sa > 0.0)) return one_per_triangle(mesh);  // see the file comment
       break;
     case ObjectiveKind::Naive:
