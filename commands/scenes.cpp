@@ -1,7 +1,9 @@
 // `ptc scenes`.
 #include "commands/scenes.h"
 
+#include <optional>
 #include <ostream>
+#include <utility>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -22,6 +24,7 @@ void cmd_scenes(const ScenesOptions& opt, std::ostream& out) {
   if (!opt.json)
     out << fmt::format("{:<22} {:>10} {:>10} {:>8} {:>7} {:>10}  {}\n", "scene", "triangles", "vertices", "animated",
                        "static", "frames", "description");
+  std::optional<std::pair<std::string, std::string>> missing;  // a scene the user named that cannot be made
   for (const auto& n : names) {
     std::string desc;
     for (const auto& b : builtin_scenes())
@@ -46,10 +49,14 @@ void cmd_scenes(const ScenesOptions& opt, std::ostream& out) {
       row["available"] = false;
       row["reason"] = e.what();
       if (!opt.json) out << fmt::format("{:<22} unavailable: {}\n", n, e.what());
+      if (!opt.names.empty() && !missing) missing.emplace(n, e.what());
     }
     list.push_back(std::move(row));
   }
   if (opt.json) out << dump_json({{"schema", "ptc-scenes/1"}, {"scenes", list}});
+  // The listing is printed either way; a scene asked for by name that is unavailable is a failure
+  // (exit 1), as it is for the commands that would trace it.
+  if (missing) throw InputError("", "", "", missing->first + ": unavailable: " + missing->second);
 }
 
 }  // namespace ptc

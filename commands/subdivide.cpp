@@ -1,6 +1,8 @@
 // `ptc subdivide`.
 #include "commands/commands.h"
 
+#include <filesystem>
+#include <iostream>
 #include <ostream>
 
 #include <fmt/format.h>
@@ -37,7 +39,10 @@ void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
   const Mesh refined = sub.apply(lm.mesh);
   const double sub_ms = t0.ms();
   t0.restart();
-  write_mesh(opt.output, refined);
+  std::error_code ec;
+  const bool replaced = std::filesystem::is_regular_file(opt.output, ec);
+  write_mesh(opt.output, refined);  // whole or not at all (a temporary file renamed)
+  if (replaced) std::cerr << "ptc: note: replaced the existing " << opt.output.string() << "\n";
   const double write_ms = t0.ms();
   if (opt.json) {
     nlohmann::json j{{"input", opt.input.string()},       {"output", opt.output.string()},

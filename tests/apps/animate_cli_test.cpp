@@ -1,6 +1,7 @@
 // Scene files (good and bad, errors naming the file and the JSON path), `ptc animate` round
 // trips (frames written, read back with read_mesh, equal to the scene's positions bit for bit),
 // --stats against an independent recomputation, bad --frames, and `ptc scenes`.
+#include <algorithm>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -166,10 +167,17 @@ TEST_F(Animate, ScenesListing) {
   EXPECT_EQ(j["scenes"][0]["static_parts"], 2);
   EXPECT_EQ(j["scenes"][1]["triangles"], read_mesh(kData / "meshes/armadillo.off").mesh.triangle_count());
   EXPECT_EQ(j["scenes"][1]["frames"][1], 59);
+  // A scene asked for by name that cannot be made: listed as unavailable, and a failure (exit 1,
+  // one line naming it), as in the commands that would trace it; the whole listing still exits 0.
   const RunResult missing = ptc({"scenes", "armadillo-twist", "--data-dir", "/nonexistent/d"});
-  EXPECT_EQ(missing.code, 0);
+  EXPECT_EQ(missing.code, 1);
   EXPECT_NE(missing.out.find("unavailable"), std::string::npos);
   EXPECT_NE(missing.out.find("/nonexistent/d"), std::string::npos);
+  EXPECT_NE(missing.err.find("ptc: error: armadillo-twist: unavailable"), std::string::npos) << missing.err;
+  EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << missing.err;
+  const RunResult all = ptc({"scenes", "--data-dir", "/nonexistent/d"});
+  EXPECT_EQ(all.code, 0) << all.err;
+  EXPECT_NE(all.out.find("unavailable"), std::string::npos);
   EXPECT_EQ(ptc({"scenes", "bogus"}).code, 1);
 }
 

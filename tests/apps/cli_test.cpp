@@ -137,6 +137,14 @@ TEST_F(Cli, SubdivideCountsAndAtomicOutput) {
   r = ptc({"subdivide", bad, "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(slurp(out), before);
+  EXPECT_EQ(r.err.find("replaced"), std::string::npos) << r.err;
+  // A run that does replace a file the user had says so (and a first write does not).
+  r = ptc({"subdivide", cube, "--out", (dir_ / "new.off").string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("replaced"), std::string::npos) << r.err;
+  r = ptc({"subdivide", cube, "--out", out});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ptc: note: replaced the existing " + out), std::string::npos) << r.err;
   // Loop refuses a non-manifold mesh with a clear error.
   const auto fan = write("fan.off", "OFF\n5 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n0 -1 0\n3 0 1 2\n3 1 0 3\n3 0 1 4\n").string();
   r = ptc({"subdivide", fan, "--scheme", "loop", "--out", (dir_ / "fan2.off").string()});

@@ -122,12 +122,22 @@ TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   e = scene_error(R"({"meshes": [{"cloth": {"resolution": 1}}]})");
   has(e, "meshes[0].cloth");
   has(e, "resolution must be >= 2");
+  // said once: file and path, then the reason (they were repeated, "f: meshes[0].cloth: f: meshes[0].cloth: ...")
+  EXPECT_EQ(e.find(f), e.rfind(f)) << e;
+  EXPECT_EQ(e.find("meshes[0].cloth"), e.rfind("meshes[0].cloth")) << e;
+  e = scene_error(R"({"meshes": [{"cloth": {"resolution": 0}}]})");
+  EXPECT_EQ(e.find("meshes[0].cloth"), e.rfind("meshes[0].cloth")) << e;
   e = scene_error(R"({"meshes": [{"file": "cube.off", "colour": "red"}]})");
   has(e, "meshes[0].colour");
   has(e, "unknown key");
   e = scene_error(R"({"meshes": [{"file": "cube.off", "cloth": {}}]})");
   has(e, "needs exactly one of");
-  e = scene_error(R"({"meshes": []})");
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}], "meshes": [{"file": "nope.off"}]})");
+  has(e, f);
+  has(e, "key \"meshes\": given twice in one object");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "twist", "kind": "wave"}}]})");
+  has(e, "key \"kind\": given twice");
+    e = scene_error(R"({"meshes": []})");
   has(e, "meshes");
   e = scene_error(R"({"frames": [5, 2], "meshes": [{"file": "cube.off"}]})");
   has(e, "frames[1]");

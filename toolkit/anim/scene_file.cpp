@@ -183,7 +183,8 @@ ScenePart read_mesh_entry(const Reader& r, const json& j, const std::string& pat
     try {
       return f();
     } catch (const InputError& e) {
-      r.fail(where, e.what());
+      if (e.file() == r.file()) throw;  // already placed in this file, with its JSON path
+      r.fail(where, e.file().empty() ? e.reason() : e.what());  // (a file it names keeps its own name)
     }
   };
 
@@ -232,8 +233,24 @@ ScenePart read_mesh_entry(const Reader& r, const json& j, const std::string& pat
 
 Scene parse_scene_json(std::string_view text, const std::string& name, const fs::path& base_dir, const SceneOptions& opt) {
   json root;
+  // Each object's keys so far: a key given twice is refused (nlohmann keeps the last one silently,
+  // and a second "meshes" would replace the first without a word).
+  std::vector<std::vector<std::string>> keys;
+  const json::parser_callback_t no_duplicates = [&](int, json::parse_event_t ev, json& parsed) {
+    if (ev == json::parse_event_t::object_start) {
+      keys.emplace_back();
+    } else if (ev == json::parse_event_t::object_end) {
+      if (!keys.empty()) keys.pop_back();
+    } else if (ev == json::parse_event_t::key && !keys.empty()) {
+      const std::string k = parsed.get<std::string>();
+      if (std::find(keys.back().begin(), keys.back().end(), k) != keys.back().end())
+        throw InputError(name, "", "key \"" + k + "\"", "given twice in one object (each key once)");
+      keys.back().push_back(k);
+    }
+    return true;
+  };
   try {
-    root = json::parse(text.begin(), text.end());
+    root = json::parse(text.begin(), text.end(), no_duplicates);
   } catch (const json::exception& e) {
     // nlohmann's message: "[json.exception.parse_error.101] parse error at line 1, column 5: ...".
     std::string why = e.what();
