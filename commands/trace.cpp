@@ -2,6 +2,7 @@
 // frame the rendered view, its images and its rows of trace.csv.
 #include "commands/trace.h"
 
+#include <iostream>
 #include <ostream>
 #include <sstream>
 
@@ -142,6 +143,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   std::vector<TraceRow> rows;
   const unsigned threads = resolve_threads(rc.threads);
   double render_ms = 0, write_ms = 0, positions_ms = 0;
+  bool empty_note = false;  // said once
   nlohmann::json per_frame = nlohmann::json::array();
 
   std::ostringstream text;  // the table; --json prints the rows as JSON instead
@@ -207,6 +209,11 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     if (rc.shadows) pass("shadow", r.shadow_stats, false);
     if (rc.ao_samples > 0) pass("ao", r.ao_stats, false);
     per_frame.push_back({{"frame", f}, {"rays", r.primary_stats.rays}, {"hits", r.primary_stats.hits}});
+    if (r.primary_stats.hits == 0 && r.primary_stats.rays > 0 && !empty_note) {  // an image of background only
+      std::cerr << "ptc: note: no primary ray hit the mesh in frame " << f
+                << " (the camera sees past it or from inside it: give --eye and --look-at)\n";
+      empty_note = true;
+    }
   });
   manifest.add_timing_ms("positions", positions_ms);
   manifest.add_timing_ms("render", render_ms);

@@ -44,6 +44,19 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
   } else {
     forward = Vec3(0, 0, -1);
     if (upn.cross(forward).norm() < 1e-6) forward = Vec3(0, -1, 0);  // a z-up mesh: look along -y
+    // A flat mesh (one side of its box under 1e-3 of the longest) whose plane contains the view
+    // direction would be seen edge-on, as a line no ray hits: look at it from 45 degrees instead.
+    if (box_ok) {
+      const Vec3 ext = bounds.hi - bounds.lo;
+      const double longest = ext.maxCoeff();
+      for (int a = 0; a < 3 && longest > 0.0; ++a)
+        if (ext[a] <= 1e-3 * longest && std::abs(forward[a]) < 0.5) {
+          Vec3 tilt = forward;
+          tilt[a] = -1.0;
+          if (upn.cross(tilt.normalized()).norm() >= 1e-6) forward = tilt.normalized();
+          break;
+        }
+    }
   }
   // sin of the angle between up and the view direction; below 1e-6 the image's up is undefined.
   if (upn.cross(forward).norm() < 1e-6)

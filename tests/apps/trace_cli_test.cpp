@@ -150,6 +150,21 @@ TEST_F(TraceCli, HugeAndTinyMeshesTraceOrAreRefusedNamingTheFile) {
                "quad1e-35.off: the mesh reaches");
 }
 
+// A ground plane (y = 0) under the default camera: seen from 45 degrees, not edge-on (where no
+// ray hit it); a camera that sees nothing of the mesh is told so, once.
+TEST_F(TraceCli, FlatMeshIsSeenAndAnEmptyViewIsNoted) {
+  const std::string plane = write("plane.off", "OFF\n4 2 0\n-1 0 -1\n1 0 -1\n-1 0 1\n1 0 1\n3 0 2 1\n3 1 2 3\n").string();
+  CmdResult r = ptc({"trace", plane, "--width", "16", "--height", "16", "--json", "--out", (dir_ / "p").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["rows"][0]["hits"].get<int>(), 64) << r.out;
+  EXPECT_EQ(r.err.find("no primary ray hit"), std::string::npos) << r.err;
+  r = ptc({"trace", plane, "--width", "16", "--height", "16", "--eye", "0,5,0", "--look-at", "0,10,0", "--up", "1,0,0",
+           "--out", (dir_ / "q").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ptc: note: no primary ray hit the mesh in frame 0"), std::string::npos) << r.err;
+}
+
 TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
   const CmdResult r = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--max-count", "4",
                      "--out", (dir_ / "out").string()});

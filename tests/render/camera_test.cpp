@@ -103,3 +103,30 @@ TEST(TraceCamera, DefaultCameraFramesEveryCornerForAnyAspect) {
   const auto c = ptc::make_camera({}, pt, 10, 10);
   EXPECT_GT((c.eye - Vec3(1, 2, 3)).norm(), 0.0);
 }
+
+// A flat mesh whose plane holds the default view direction (CGAL's ground plane y = 0, a wall
+// x = 0) was seen edge-on: a line that no primary ray hit. The default camera looks at it from
+// 45 degrees, framing every corner; a mesh with some depth keeps the straight view.
+TEST(TraceCamera, DefaultCameraSeesAFlatMeshFromAbove) {
+  for (int thin : {0, 1}) {
+    ptc::Box3 b;
+    Vec3 lo(-2, -1, -3), hi(2, 1, 3);
+    lo[thin] = hi[thin] = 0.5;
+    b.extend(lo);
+    b.extend(hi);
+    const auto c = ptc::make_camera({}, b, 64, 48);
+    EXPECT_NEAR(std::abs(c.forward[thin]), std::sqrt(0.5), 1e-12) << thin;  // 45 degrees to the plane
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 q(k & 1 ? b.hi.x() : b.lo.x(), k & 2 ? b.hi.y() : b.lo.y(), k & 4 ? b.hi.z() : b.lo.z());
+      const auto p = project(c, q, 64, 48);
+      EXPECT_GE(p.x(), 0.0);
+      EXPECT_LE(p.x(), 64.0);
+      EXPECT_GE(p.y(), 0.0);
+      EXPECT_LE(p.y(), 48.0);
+    }
+  }
+  ptc::Box3 deep;
+  deep.extend(Vec3(-2, -0.01, -3));
+  deep.extend(Vec3(2, 0.01, 3));  // thin, but not flat (1/300 of its length)
+  EXPECT_EQ(ptc::make_camera({}, deep, 64, 48).forward, Vec3(0, 0, -1));
+}
