@@ -87,6 +87,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   const bool sequence = opt.frames.has_value();
   const std::optional<std::pair<double, double>> cost_range =
       opt.cost_range ? std::optional(parse_value_range(*opt.cost_range, "--cost-range")) : std::nullopt;
+  if (cost_range && !(cost_range->second > 0.0))  // (the cost images count nodes and triangles)
+    throw UsageError("--cost-range", "'" + *opt.cost_range + "': the costs are counts (>= 0), so MAX must be above 0");
 
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);

@@ -38,6 +38,8 @@ void register_bench(CLI::App& app, Context& ctx) {
                       a->scene.apply(o.scene_options);
                       o.config.camera = a->camera.spec();
                       o.light = a->camera.light_position();
+                      if (a->app->count("--light") && !o.shadows)  // (the light is only the shadow rays' target)
+                        throw UsageError("--light", "needs shadow rays (drop --no-shadows)");
                       o.argv = ctx.args;
                       cmd_bench(o, std::cout);
                     });

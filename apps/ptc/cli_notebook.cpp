@@ -28,8 +28,9 @@ void register_notebook(CLI::App& app, Context& ctx) {
                     });
   c->add_option("DIR", a->dirs, "output directories of ptc experiment sweep / compare / drift / accuracy")->required();
   c->add_option("--out", a->opt.out_dir, "output directory (written atomically)")->required();
-  c->add_flag("--no-figures", a->no_figures, "write the notebook and the script only (no Python run)");
-  c->add_flag("--execute", a->opt.execute, "also execute the notebook with jupyter nbconvert (its outputs kept in it)");
+  auto* no_fig = c->add_flag("--no-figures", a->no_figures, "write the notebook and the script only (no Python run)");
+  c->add_flag("--execute", a->opt.execute, "also execute the notebook with jupyter nbconvert (its outputs kept in it)")
+      ->excludes(no_fig);  // (executing it draws the figures)
   c->add_option("--python", a->opt.python, "the Python that runs the figure script (needs pandas, matplotlib)")->capture_default_str();
   c->add_option("--jupyter", a->opt.jupyter, "the jupyter command for --execute")->capture_default_str();
   c->add_flag("--json", a->opt.json, "print what was written as JSON");

@@ -30,6 +30,11 @@ void register_trace(CLI::App& app, Context& ctx) {
     if (a->app->count("--frame")) o.frame = a->frame;
     if (a->app->count("--frames")) o.frames = a->frames;
     if (a->app->count("--cost-range")) o.cost_range = a->cost_range;
+    // Flags that would do nothing are refused, as `ptc cluster` refuses a flag its method does not use.
+    if (a->app->count("--cluster-groups") && o.clusters.empty())
+      throw UsageError("--cluster-groups", "needs a cluster BVH (--clusters DIR)");
+    for (const char* f : {"--ao-distance", "--seed"})
+      if (a->app->count(f) && o.render.ao_samples == 0) throw UsageError(f, "needs ambient occlusion (--ao N > 0)");
     o.group_trees = a->group_trees.get(!o.clusters.empty() && o.cluster_group_size > 1,
                                        "a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");
     o.render.threads = static_cast<unsigned>(ctx.threads);

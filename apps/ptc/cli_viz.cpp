@@ -37,6 +37,9 @@ void register_viz(CLI::App& app, Context& ctx) {
                       if (a->app->count("--deform")) o.deform = a->deform;
                       o.borders = !a->no_borders;
                       o.lighting = !a->flat;
+                      if (o.kind == VizKind::Export)  // (the .vtp files carry data, not pictures)
+                        for (const char* f : {"--no-borders", "--flat"})
+                          if (a->app->count(f)) throw UsageError(f, "not used by viz export (it writes .vtp files, not pictures)");
                       o.threads = static_cast<unsigned>(ctx.threads);
                       o.argv = ctx.args;
                       cmd_viz(o, std::cout);

@@ -576,3 +576,22 @@ TEST_F(Cli, InfoMemoryEstimateAgreesWithTheMeasuredPeak) {
 }
 
 }  // namespace
+
+namespace {
+// Flags that would do nothing in the chosen mode are bad usage, naming the flag (found by a
+// new user: they were accepted silently).
+TEST_F(Cli, FlagsThatWouldDoNothingAreRefused) {
+  const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  for (const char* flag : {"--flat", "--no-borders"}) {
+    const auto r = ptc({"viz", "export", mesh, "--clusters", (dir_ / "none").string(), flag, "--out", (dir_ / "v").string()});
+    EXPECT_EQ(r.code, 2) << flag << ": " << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(std::string(flag) + ": not used by viz export"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "v"));
+  }
+  const auto r = ptc({"notebook", (dir_ / "none").string(), "--execute", "--no-figures", "--out", (dir_ / "n").string()});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--execute"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "n"));
+}
+}  // namespace

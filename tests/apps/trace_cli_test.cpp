@@ -107,6 +107,12 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   expect_error({"trace", mesh, "--ao", "2", "--ao-distance", "nan", "--out", out}, 2, "--ao-distance: nan is not a finite number in [1e-09, 1e+09]");
   expect_error({"trace", mesh, "--ao", "2", "--ao-distance", "0", "--out", out}, 2, "0 is not a finite number in [1e-09, 1e+09]");
   expect_error({"trace", mesh, "--ao", "2", "--seed", "-5", "--out", out}, 2, "'-5' is not a seed");
+  // Flags that would do nothing: refused, naming what they need.
+  expect_error({"trace", mesh, "--cluster-groups", "4", "--out", out}, 2, "--cluster-groups: needs a cluster BVH");
+  expect_error({"trace", mesh, "--ao-distance", "0.5", "--out", out}, 2, "--ao-distance: needs ambient occlusion");
+  expect_error({"trace", mesh, "--seed", "7", "--out", out}, 2, "--seed: needs ambient occlusion");
+  expect_error({"trace", mesh, "--cost-range", "-5:-1", "--out", out}, 2, "MAX must be above 0");
+  expect_error({"bench", mesh, "--no-shadows", "--light", "1,1,1", "--out", out}, 2, "--light: needs shadow rays");
   expect_error({"trace", mesh, "--eye", "0.5,0.5,5", "--up", "0,0,1", "--out", out}, 1, "parallel");
   expect_error({"trace", mesh, "--eye", "0.5,0.5,0.5", "--out", out}, 1, "same point");
   expect_error({"trace", mesh, "--clusters", (dir_ / "none").string(), "--out", out}, 1, "none: no such file");
