@@ -77,6 +77,26 @@ inline CLI::Validator finite_in(double lo, double hi) {
       desc);
 }
 
+/// A whole number in [lo, hi] (CLI11's Range said "Value 1.5 not in range 0 to 1048576" for a
+/// fraction or a word).
+inline CLI::Validator whole_in(long long lo, long long hi) {
+  const std::string desc = "INT in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  return CLI::Validator(
+      [lo, hi](std::string& s) -> std::string {
+        long long v = 0;
+        std::size_t n = 0;
+        try {
+          v = std::stoll(s, &n);
+        } catch (const std::exception&) {
+          n = 0;
+        }
+        if (s.empty() || n != s.size() || v < lo || v > hi)
+          return "'" + s + "' is not a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+        return std::string();
+      },
+      desc);
+}
+
 /// A seed: a whole number >= 0 (an unsigned option would take "-5" as 2^64 - 5).
 inline CLI::Validator seed_validator() {
   return CLI::Validator(
@@ -90,7 +110,7 @@ inline CLI::Validator seed_validator() {
 inline void add_threads_option(CLI::App* cmd, int& threads) {
   // One default for every command: all cores (oneTBB's default concurrency). `ptc bench --threads 1`
   // gives one-thread figures (ours and Embree's device alike).
-  cmd->add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  cmd->add_option("--threads", threads, "worker threads (default: all cores)")->check(whole_in(1, 4096));
 }
 
 /// The SCENE positional argument and --data-dir, as every command that takes a scene spells them.

@@ -61,7 +61,7 @@ void register_bench(CLI::App& app, Context& ctx) {
   c->add_option("--max-count", cfg.max_count,
                 "otherwise: growth/Acc clustering with MaxCount = MaxSize = N (0: one triangle per cluster, the "
                 "paper's standard)")
-      ->check(CLI::Range(0u, 1u << 20))
+      ->check(whole_in(0, 1 << 20))
       ->excludes(cl)
       ->capture_default_str();
   c->add_option("--adjacency", a->adjacency,
@@ -74,8 +74,8 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "scene frames A:B (default: an animated scene's range, else 0:4 of --deform); the first is left "
                 "out of the medians");
   c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
-  c->add_option("--width", cfg.width, "primary rays per image row")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
-  c->add_option("--height", cfg.height, "image rows")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
+  c->add_option("--width", cfg.width, "primary rays per image row")->check(whole_in(1, kMaxImageSide))->capture_default_str();
+  c->add_option("--height", cfg.height, "image rows")->check(whole_in(1, kMaxImageSide))->capture_default_str();
   add_threads_option(c, ctx.threads);  // ours and Embree's device alike
   c->add_option("--deform", a->deform,
                 "stand-in motion of a static scene (mesh file): twist (default), bend, wave, rigid, explode (the "
@@ -87,7 +87,7 @@ void register_bench(CLI::App& app, Context& ctx) {
   c->add_option("--cluster-groups", cfg.cluster_group_size,
                 "two-level cluster BVH build over fixed groups of at most N clusters (subtrees of the rest-pose "
                 "BVH); 0 = the plain build over all cluster boxes")
-      ->check(CLI::Range(0u, 1u << 20))
+      ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);
   c->add_option("--vertex-order", a->vertex_order,

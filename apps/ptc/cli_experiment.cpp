@@ -75,21 +75,21 @@ void register_experiment(CLI::App& app, Context& ctx) {
                 "drift: clusterings, comma-separated (default: acc_growth, acc_contraction (or given), naive, gwh01, "
                 "meshopt, sah_split); the triangle BVH is always measured beside them");
   c->add_option("--ao-samples", a->ao_samples, "drift: AO rays per primary hit for the ray counters (0: no AO pass)")
-      ->check(CLI::Range(0, 64))
+      ->check(whole_in(0, 64))
       ->capture_default_str();
   c->add_option("--reference-rays", a->reference_rays,
                 "accuracy: primary rays checked against the double-precision brute force")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20))
+      ->check(whole_in(1, 1 << 20))
       ->capture_default_str();
-  c->add_option("--width", a->opt.width, "primary rays per image row")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
-  c->add_option("--height", a->opt.height, "image rows")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
+  c->add_option("--width", a->opt.width, "primary rays per image row")->check(whole_in(1, kMaxImageSide))->capture_default_str();
+  c->add_option("--height", a->opt.height, "image rows")->check(whole_in(1, kMaxImageSide))->capture_default_str();
   a->camera.add_to(c, /*with_light=*/true);
   c->add_option("--cluster-leaf", a->cluster_leaf, "cluster leaves: linear (the paper's, default) or block-tree")
       ->check(enum_validator("cluster leaf", bvh::parse_cluster_leaf))
       ->capture_default_str();
   c->add_option("--cluster-groups", a->opt.cluster_group_size,
                 "two-level cluster BVH build over groups of at most N clusters; 0 = the plain build")
-      ->check(CLI::Range(0u, 1u << 20))
+      ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);
   c->add_option("--vertex-order", a->vertex_order, "clusters (renumber once per clustering) or input")

@@ -95,7 +95,7 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
         ->capture_default_str();
   }
   c->add_option("--max-count", cfg.max_count, "MaxCount (vertices); 0 with --max-size 0 = one triangle per cluster")
-      ->check(CLI::Range(0u, 1u << 20))
+      ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   c->add_option("--max-size", cfg.max_size, "MaxSize (sphere area in units of the mean triangle sphere area)")
       ->check(finite_in(0.0, 1e12))
@@ -121,7 +121,7 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
   c->add_option("--regions", cfg.regions,
                 "growth or contraction with acc or naive: cluster N spatial regions at once, on all --threads "
                 "(clusters stop at region borders; the same clusters at any thread count); 0 or 1 = one region")
-      ->check(CLI::Range(0u, 1u << 24))
+      ->check(whole_in(0, 1 << 24))
       ->capture_default_str();
   c->add_option("--adjacency", adjacency,
                 "neighbouring triangles: edges (shared vertex ids, the paper's), positions (sides whose corner "

@@ -23,13 +23,13 @@ void register_spheres(CLI::App& app, Context& ctx) {
                     });
   c->add_option("MESH", opt->input, "mesh file")->required();
   c->add_option("--min-run", opt->config.min_run, "fewest triangles per point set")
-      ->check(CLI::Range(1, 1 << 20))
+      ->check(whole_in(1, 1 << 20))
       ->capture_default_str();
   c->add_option("--max-run", opt->config.max_run, "most triangles per point set")
-      ->check(CLI::Range(1, 1 << 20))
+      ->check(whole_in(1, 1 << 20))
       ->capture_default_str();
   c->add_option("--repeats", opt->config.repeats, "timing repetitions (median reported)")
-      ->check(CLI::Range(1, 1000))
+      ->check(whole_in(1, 1000))
       ->capture_default_str();
   c->add_option("--seed", opt->config.seed, "seed of the run lengths")->check(seed_validator())->capture_default_str();
   c->add_option("--methods", *methods, "subset of: exact cgal ritter epos6 epos14 epos26")

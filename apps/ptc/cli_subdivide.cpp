@@ -14,7 +14,7 @@ void register_subdivide(CLI::App& app, Context& ctx) {
   });
   c->add_option("MESH", opt->input, "mesh file")->required();
   c->add_option("--levels", opt->levels, "subdivision levels (each multiplies the triangles by 4)")
-      ->check(CLI::Range(0, 8))
+      ->check(whole_in(0, 8))
       ->capture_default_str();
   c->add_option("--scheme", *scheme, "midpoint (the surface is kept exactly) or loop (smooth; manifold input)")
       ->check(enum_validator("scheme", parse_subdivision_scheme))

@@ -50,14 +50,14 @@ void register_trace(CLI::App& app, Context& ctx) {
   c->add_option("--clusters", a->opt.clusters, "trace a cluster BVH over the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--cluster-groups", a->opt.cluster_group_size,
                 "with --clusters: two-level BVH build over fixed groups of at most N clusters; 0 = plain build")
-      ->check(CLI::Range(0u, 1u << 20))
+      ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);
-  c->add_option("--width", rc.width, "image width in pixels")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
-  c->add_option("--height", rc.height, "image height in pixels")->check(CLI::Range(1, kMaxImageSide))->capture_default_str();
+  c->add_option("--width", rc.width, "image width in pixels")->check(whole_in(1, kMaxImageSide))->capture_default_str();
+  c->add_option("--height", rc.height, "image height in pixels")->check(whole_in(1, kMaxImageSide))->capture_default_str();
   a->camera.add_to(c, /*with_light=*/true);
   c->add_flag("--shadows", rc.shadows, "trace shadow rays to the point light");
-  c->add_option("--ao", rc.ao_samples, "ambient-occlusion rays per pixel (0 = none)")->check(CLI::Range(0, 4096))->capture_default_str();
+  c->add_option("--ao", rc.ao_samples, "ambient-occlusion rays per pixel (0 = none)")->check(whole_in(0, 4096))->capture_default_str();
   c->add_option("--ao-distance", rc.ao_distance_rel, "AO max distance as a fraction of the mesh's bounds diagonal")
       ->check(finite_in(1e-9, 1e9))
       ->capture_default_str();

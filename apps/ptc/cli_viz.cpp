@@ -60,8 +60,8 @@ void register_viz(CLI::App& app, Context& ctx) {
                 "heatmap / panel: a per-cluster metric (reg, connectivity, acc, box_area_ratio, sah_share, ...) or "
                 "the tracer's nodes_visited / triangles_tested (panel default: nodes_visited)");
   c->add_option("--range", a->range, "colour range MIN:MAX (default: the values', over all frames of --frames)");
-  c->add_option("--width", a->opt.width, "picture width in pixels")->check(CLI::Range(1, 8192))->capture_default_str();
-  c->add_option("--height", a->opt.height, "picture height in pixels")->check(CLI::Range(1, 8192))->capture_default_str();
+  c->add_option("--width", a->opt.width, "picture width in pixels")->check(whole_in(1, 8192))->capture_default_str();
+  c->add_option("--height", a->opt.height, "picture height in pixels")->check(whole_in(1, 8192))->capture_default_str();
   a->camera.add_to(c, /*with_light=*/true);
   c->add_flag("--no-borders", a->no_borders, "partition: no lines on the cluster borders");
   c->add_flag("--flat", a->flat, "no lighting: every pixel is exactly its cluster's or value's colour");

@@ -55,7 +55,20 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "ptc: " << e.what() << " (run 'ptc --help')\n";
+    std::string msg = e.what();
+    // CLI11's words for two common slips, in the user's (the flag or command named).
+    std::string names;
+    bool known = false;
+    for (const CLI::App* s : app.get_subcommands({})) {
+      names += (names.empty() ? "" : ", ") + s->get_name();
+      known = known || (argc > 1 && s->get_name() == argv[1]);
+    }
+    if (argc > 1 && argv[1][0] != '-' && !known) {
+      msg = std::string("'") + argv[1] + "' is not a ptc command (" + names + ")";
+    } else if (const auto k = msg.find(": At Most 1 required but received"); k != std::string::npos) {
+      msg = msg.substr(0, k) + ": given more than once";
+    }
+    std::cerr << "ptc: " << msg << " (run 'ptc --help')\n";
     return 2;
   }
 

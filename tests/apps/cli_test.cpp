@@ -595,3 +595,24 @@ TEST_F(Cli, FlagsThatWouldDoNothingAreRefused) {
   EXPECT_FALSE(fs::exists(dir_ / "n"));
 }
 }  // namespace
+
+namespace {
+// CLI11's words for common slips, said in the user's: an unknown command, a flag given twice, a
+// fraction or a word for a whole number.
+TEST_F(Cli, CommonSlipsAreNamed) {
+  const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  auto r = ptc({"foo"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("'foo' is not a ptc command (info, subdivide"), std::string::npos) << r.err;
+  r = ptc({"trace", mesh, "--width", "16", "--width", "17", "--out", (dir_ / "o").string()});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--width: given more than once"), std::string::npos) << r.err;
+  for (const char* v : {"1.5", "abc", "-3"}) {
+    r = ptc({"cluster", mesh, "--max-count", v, "--out", (dir_ / "o").string()});
+    EXPECT_EQ(r.code, 2) << v;
+    EXPECT_NE(r.err.find(std::string("--max-count: '") + v + "' is not a whole number in [0, 1048576]"), std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "o"));
+}
+}  // namespace
