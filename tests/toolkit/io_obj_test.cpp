@@ -170,3 +170,28 @@ TEST(IoObj, TruncatedFiles) {
 
 }  // namespace
 }  // namespace ptc
+
+namespace ptc {
+namespace {
+// UTF-16 text (the byte order mark, then a NUL after every ASCII character): said so, where the
+// readers found no line to parse and said only "no triangles" (assimp's box_UTF16BE.obj).
+TEST(IoObj, Utf16TextIsNamedAsSuch) {
+  auto utf16 = [](std::string_view text, bool big_endian) {
+    std::string s = big_endian ? std::string("\xFE\xFF", 2) : std::string("\xFF\xFE", 2);
+    for (char c : text) {
+      if (big_endian) s.push_back('\0');
+      s.push_back(c);
+      if (!big_endian) s.push_back('\0');
+    }
+    return s;
+  };
+  for (MeshFormat f : {MeshFormat::Obj, MeshFormat::Off, MeshFormat::Ply})
+    for (bool be : {true, false}) {
+      const std::string text = f == MeshFormat::Obj ? "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" : "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+      const InputError e = io_test::read_error(utf16(text, be), f);
+      EXPECT_EQ(e.location(), "byte 1");
+      EXPECT_NE(std::string(e.what()).find("UTF-16 text is not supported"), std::string::npos) << e.what();
+    }
+}
+}  // namespace
+}  // namespace ptc

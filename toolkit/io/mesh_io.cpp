@@ -75,6 +75,12 @@ std::optional<MeshFormat> format_from_extension(const std::filesystem::path& pat
 }
 
 LoadedMesh read_mesh_from_memory(std::string_view bytes, MeshFormat f, const std::string& name) {
+  // A UTF-16 text file read as bytes has a NUL after every character: no line of it parses, and
+  // the readers said only "no triangles". Its byte order mark says what it is. (Binary STL may
+  // begin with any bytes.)
+  if (f != MeshFormat::Stl && bytes.size() >= 2 &&
+      ((bytes[0] == '\xFE' && bytes[1] == '\xFF') || (bytes[0] == '\xFF' && bytes[1] == '\xFE')))
+    throw InputError(name, "byte 1", "", "UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
   switch (f) {
     case MeshFormat::Off: return io::read_off(bytes, name);
     case MeshFormat::Obj: return io::read_obj(bytes, name);
