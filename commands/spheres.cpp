@@ -56,8 +56,10 @@ void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
     out << dump_json(j);
     return;
   }
-  out << fmt::format("bounding spheres of {} point sets ({}-{} Morton-ordered triangles each) of {}\n",
-                     rep.exact_radius.size(), opt.config.min_run, opt.config.max_run, opt.input.string());
+  out << fmt::format("bounding spheres of {} point set{} (runs of {}-{} Morton-ordered triangles; the last, or a "
+                     "smaller mesh's only one, may be shorter) of {}\n",
+                     rep.exact_radius.size(), rep.exact_radius.size() == 1 ? "" : "s", opt.config.min_run,
+                     opt.config.max_run, opt.input.string());
   out << fmt::format("{:<8} {:>14} {:>14} {:>14} {:>14}\n", "method", "ns/sphere", "rel_err_mean", "rel_err_max",
                      "not_containing");
   for (const auto& m : rep.methods)

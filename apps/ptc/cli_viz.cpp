@@ -68,7 +68,7 @@ void register_viz(CLI::App& app, Context& ctx) {
   c->add_flag("--shadows", a->opt.shadows, "panel / pixel heatmap: shadow rays to the light in the traced image");
   c->add_flag("--interactive", a->opt.interactive, "also open a window on the display (partition, per-cluster heatmap, one frame)");
   c->add_flag("--xvfb", a->opt.force_xvfb, "render on a private Xvfb even when $DISPLAY answers");
-  c->add_option("--out", a->opt.out_dir, "output directory (written atomically)");
+  c->add_option("--out", a->opt.out_dir, "output directory (written atomically); required, except with --interactive");
   c->add_flag("--json", a->opt.json, "print what was written as JSON");
   add_threads_option(c, ctx.threads);
 }

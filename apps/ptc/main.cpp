@@ -102,7 +102,8 @@ int main(int argc, char** argv) {
     std::cerr << "ptc: error: " << e.what() << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
-    std::cerr << "ptc: error: out of memory\n";
+    std::cerr << "ptc: error: " << (name.empty() ? std::string() : name + ": ")
+              << "out of memory (nothing was written; 'ptc info --json MESH' estimates what a mesh needs)\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "ptc: error: " << e.what() << "\n";

@@ -616,3 +616,19 @@ TEST_F(Cli, CommonSlipsAreNamed) {
   EXPECT_FALSE(fs::exists(dir_ / "o"));
 }
 }  // namespace
+
+namespace {
+// An output file in a directory that does not exist: named as the user gave it, with the reason
+// (the message named the hidden temporary file instead).
+TEST_F(Cli, OutputInAMissingDirectoryIsNamedAsGiven) {
+  const auto cube = write("cube.off", ptc::test::kCube).string();
+  const auto out = (dir_ / "nodir" / "s.off").string();
+  const auto r = ptc({"subdivide", cube, "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find(out + ": cannot write it: the directory '" + (dir_ / "nodir").string() + "' does not exist"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find(".tmp"), std::string::npos) << r.err;
+}
+}  // namespace

@@ -35,8 +35,11 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
     if (fd_ >= 0) break;
     const int err = errno;
     if ((err == EEXIST || err == EINTR) && attempt < 100) continue;
-    throw InputError(target_.string(), "", "",
-                     "cannot create temporary file '" + temp_.string() + "': " + errno_text(err));
+    // In the user's words: the file they asked for, and why (the hidden temporary's name is ours).
+    if (err == ENOENT)
+      throw InputError(target_.string(), "", "", "cannot write it: the directory '" + (dir.empty() ? std::string(".") : dir.string()) +
+                                                     "' does not exist");
+    throw InputError(target_.string(), "", "", "cannot write it: " + errno_text(err));
   }
   slot_ = register_temporary(temp_, false);
   if (exists) (void)::fchmod(fd_, st.st_mode & 07777);  // keep the replaced file's permissions
