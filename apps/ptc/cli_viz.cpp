@@ -53,8 +53,9 @@ void register_viz(CLI::App& app, Context& ctx) {
   c->add_option("--frames", a->frames, "frames A:B: numbered pictures with one colour range (and an MP4 when ffmpeg is installed)")
       ->excludes(one);
   c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
-  c->add_option("--deform", a->deform, "stand-in motion of a static scene: twist, bend, wave, rigid or explode")
-      ->check(CLI::IsMember({"twist", "bend", "wave", "rigid", "explode"}));
+  c->add_option("--deform", a->deform,
+                "stand-in motion of a static scene: twist, bend, wave, rigid or explode; none (the default) keeps it still")
+      ->check(CLI::IsMember({"twist", "bend", "wave", "rigid", "explode", "none"}));
   c->add_option("--clusters", a->opt.clusters, "the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--metric", a->opt.metric,
                 "heatmap / panel: a per-cluster metric (reg, connectivity, acc, box_area_ratio, sah_share, ...) or "

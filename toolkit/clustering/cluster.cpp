@@ -327,7 +327,7 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
         avg_sa = average_triangle_sphere_area(mesh.positions(), mesh.triangles());
       }
       if (avg_sa_used) *avg_sa_used = avg_sa;
-      if (!std::isfinite(avg_sa))
+      if (std::isinf(avg_sa))  // (a NaN corner, which files cannot hold, leaves one triangle per cluster below)
         throw std::invalid_argument("the mean bounding-sphere area of the triangles (AvgSA, the Acc objective's size "
                                     "scale) is not finite in double precision: the coordinates are too large (scale "
                                     "the mesh)");
