@@ -105,6 +105,14 @@ TEST(MeshReport, SliverIsNearDegenerateAndHugeCoordinatesStayFinite) {
   EXPECT_EQ(r.zero_area_triangles, 0u);
   EXPECT_EQ(r.edge_length.max, std::hypot(1e300, 1e300));  // no overflow in the length
   EXPECT_TRUE(std::isinf(r.total_area));                    // 5e599 is beyond double: inf, not 0
+  // Right triangles of 1e-170 units: their area (5e-341) is below the double range, but their
+  // sine is 1: not near-degenerate (they were counted so, by their area of 0). The sliver at that
+  // scale still is.
+  const double s = 1e-170;
+  const std::vector<Vec3> q{{0, 0, 0}, {s, 0, 0}, {0, s, 0}, {s, s, 0}, {0.5 * s, 1e-14 * s, 0}};
+  const auto tiny = analyze_mesh(Mesh({{0, 1, 2}, {1, 3, 2}, {0, 1, 4}}, q));
+  EXPECT_EQ(tiny.near_degenerate_triangles, 1u);
+  EXPECT_EQ(tiny.zero_area_triangles, 0u);
 }
 
 TEST(MeshReport, BookOfManyPagesIsFast) {

@@ -111,13 +111,14 @@ MeshReport analyze_mesh(const Mesh& mesh, const EdgeMap& edges) {
     const Tri& f = tris[t];
     for (auto v : f) used[v] = 1;
     const Vec3 &a = pos[f[0]], &b = pos[f[1]], &c = pos[f[2]];
-    areas[t] = triangle_area(a, b, c);
+    const TriangleGeometry g = triangle_geometry(a, b, c);
+    areas[t] = g.area;
     if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2])
       ++r.repeated_index_triangles;
     else if (collinear_exact(a, b, c))
       ++r.zero_area_triangles;
-    else if (areas[t] == 0)
-      ++r.near_degenerate_triangles;
+    else if (g.normal == Vec3::Zero())  // the sine test (scale-free); not area == 0, which a right
+      ++r.near_degenerate_triangles;    // triangle of 1e-170 units also has (its area underflows)
   }
   for (std::size_t v = 0; v < r.vertices; ++v) {
     if (used[v])
