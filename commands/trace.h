@@ -20,6 +20,9 @@ struct TraceCommandOptions {
   std::optional<std::string> frame;    ///< "F": one frame (default: the scene's first)
   std::optional<std::string> frames;   ///< "A:B": a sequence (images named shaded_0000.png ..., CSV rows per frame)
   bool extend_frames = false;          ///< --extend-frames: frames outside the scene's listed range
+  /// --deform KIND|none: a static scene's stand-in motion (the one `ptc bench` measures; none, the
+  /// default here, keeps it still); refused for an animated scene.
+  std::optional<std::string> deform;
   std::filesystem::path clusters;      ///< directory of `ptc cluster` (triangles.csv); empty: triangle BVH
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;  ///< two-level build (0: plain)
   bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;  ///< what the two-level build does inside a group

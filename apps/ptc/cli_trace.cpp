@@ -12,7 +12,7 @@ struct TraceArgs {
   TraceCommandOptions opt;
   SceneArg scene;
   CameraArgs camera;
-  std::string frame, frames, cost_range;
+  std::string frame, frames, cost_range, deform;
   GroupTreesArg group_trees;
   CLI::App* app = nullptr;
 };
@@ -30,6 +30,7 @@ void register_trace(CLI::App& app, Context& ctx) {
     if (a->app->count("--frame")) o.frame = a->frame;
     if (a->app->count("--frames")) o.frames = a->frames;
     if (a->app->count("--cost-range")) o.cost_range = a->cost_range;
+    if (a->app->count("--deform")) o.deform = a->deform;
     // Flags that would do nothing are refused, as `ptc cluster` refuses a flag its method does not use.
     if (a->app->count("--cluster-groups") && o.clusters.empty())
       throw UsageError("--cluster-groups", "needs a cluster BVH (--clusters DIR)");
@@ -47,6 +48,10 @@ void register_trace(CLI::App& app, Context& ctx) {
   c->add_option("--frames", a->frames, "trace frames A:B: images shaded_0000.png ..., trace.csv rows per frame")
       ->excludes(one);
   c->add_flag("--extend-frames", a->opt.extend_frames, "allow frames outside the scene's listed range");
+  c->add_option("--deform", a->deform,
+                "stand-in motion of a static scene (a mesh file): twist, bend, wave, rigid or explode, the motion "
+                "ptc bench measures; none (the default) keeps it still")
+      ->check(CLI::IsMember({"twist", "bend", "wave", "rigid", "explode", "none"}));
   c->add_option("--clusters", a->opt.clusters, "trace a cluster BVH over the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--cluster-groups", a->opt.cluster_group_size,
                 "with --clusters: two-level BVH build over fixed groups of at most N clusters; 0 = plain build")

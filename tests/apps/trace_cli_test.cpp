@@ -171,6 +171,23 @@ TEST_F(TraceCli, FlatMeshIsSeenAndAnEmptyViewIsNoted) {
   EXPECT_NE(r.err.find("ptc: note: no primary ray hit the mesh in frame 0"), std::string::npos) << r.err;
 }
 
+// --deform: a mesh file traced with the stand-in motion ptc bench measures (frames of a periodic
+// motion, so no range of its own); an animated scene refuses it. Without it, a mesh stays still.
+TEST_F(TraceCli, TraceShowsTheStandInMotionOfTheBench) {
+  CmdResult r = ptc({"trace", cube_.string(), "--deform", "twist", "--frames", "0:70", "--width", "16", "--height", "16",
+                     "--out", (dir_ / "d").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(dir_ / "d" / "depth_0000.png"), slurp(dir_ / "d" / "depth_0001.png"));  // it moved
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "d" / "manifest.json"))["parameters"]["motion"],
+            "stand-in: the twist deformer (deform_preset)");
+  r = ptc({"trace", cube_.string(), "--deform", "none", "--frames", "0:1", "--width", "16", "--height", "16", "--out",
+           (dir_ / "n").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(dir_ / "n" / "depth_0000.png"), slurp(dir_ / "n" / "depth_0001.png"));
+  const fs::path scene = write("anim.json", R"({"meshes": [{"file": "cube.off", "deform": {"kind": "wave"}}]})");
+  expect_error({"trace", scene.string(), "--deform", "twist", "--out", (dir_ / "out").string()}, 2, "--deform");
+}
+
 TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
   const CmdResult r = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--max-count", "4",
                      "--out", (dir_ / "out").string()});
