@@ -103,7 +103,8 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   }
   if (acc_avg_sa == 0.0 && !lm.mesh.empty())
     std::cerr << "ptc: note: " << opt.input.string()
-              << ": every triangle has zero area (AvgSA = 0): one cluster per triangle, and reg and acc are nan\n";
+              << ": every triangle collapses to a point (AvgSA = 0): one cluster per triangle; acc, reg_bound and "
+                 "size_bound are nan\n";
   const std::optional<double> avg_sa =
       c.max_count > 0 && c.max_size > 0
           ? std::optional<double>(!std::isnan(acc_avg_sa) ? acc_avg_sa

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_harness.h"
+#include "common/csv_rows.h"
 
 namespace fs = std::filesystem;
 
@@ -468,8 +469,15 @@ TEST_F(Cli, ClusterOnMeshesWithoutASizeScale) {
   const auto zero = write("allsame.off", "OFF\n3 1 0\n0 0 0\n0 0 0\n0 0 0\n3 0 1 2\n");
   auto r = ptc({"cluster", zero.string(), "--out", (dir_ / "z").string()});
   EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("allsame.off: every triangle has zero area (AvgSA = 0): one cluster per triangle"), std::string::npos)
+  EXPECT_NE(r.err.find("allsame.off: every triangle collapses to a point (AvgSA = 0): one cluster per triangle"),
+            std::string::npos)
       << r.err;
+  {  // and the columns are as docs/tables.md says: acc, reg_bound, size_bound nan, reg 0
+    const auto rows = ptc::test::csv_rows(slurp(dir_ / "z" / "clusters.csv"));  // common/csv_rows.h
+    ASSERT_EQ(rows.size(), 1u);
+    for (const char* col : {"acc", "reg_bound", "size_bound"}) EXPECT_EQ(rows[0].at(col), "nan") << col;
+    EXPECT_EQ(rows[0].at("reg"), "0");
+  }
   const auto huge = write("huge.off", "OFF\n4 2 0\n0 0 0\n1e300 0 0\n0 1e300 0\n1e300 1e300 0\n3 0 1 2\n3 1 3 2\n");
   r = ptc({"cluster", huge.string(), "--out", (dir_ / "h").string()});
   EXPECT_EQ(r.code, 1) << r.err;
