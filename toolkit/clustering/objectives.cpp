@@ -129,7 +129,7 @@ void tables_chunk(ClusterTables& t, std::size_t begin, std::size_t end, bool wit
     t.area[i] = g.area;
     t.normal[i] = g.normal;
     if (with_sums) {
-      sum += triangle_min_sphere(p0, p1, p2).surface_area();
+      sum += triangle_sphere_area(p0, p1, p2);
       box.extend(triangle_centroid(p0, p1, p2));
     }
   }

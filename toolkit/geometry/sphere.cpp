@@ -380,7 +380,7 @@ double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<c
       if (i + kCornerPrefetchAhead < end) prefetch_corners(positions.data(), triangles[i + kCornerPrefetchAhead]);
       const Tri& t = triangles[i];
       assert(t[0] < positions.size() && t[1] < positions.size() && t[2] < positions.size());
-      s += triangle_min_sphere(positions[t[0]], positions[t[1]], positions[t[2]]).surface_area();
+      s += triangle_sphere_area(positions[t[0]], positions[t[1]], positions[t[2]]);
     }
     sums[c] = s;
   });

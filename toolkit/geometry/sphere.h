@@ -9,6 +9,7 @@
 //   (eps = DBL_EPSILON); `contains_all` checks this and tests call it.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <optional>
 #include <span>
@@ -109,11 +110,22 @@ inline constexpr SphereMethod kAllSphereMethods[] = {SphereMethod::Exact,  Spher
 /// ~1e+-62).
 [[nodiscard]] Sphere triangle_min_sphere(const Vec3& a, const Vec3& b, const Vec3& c);
 
+/// SA = 4 pi R^2 of triangle_min_sphere, on the triangle's local coordinates p - o (o = the
+/// per-axis minimum of its corners, whatever their order), so that it does not depend on where
+/// the triangle sits: an exact translation leaves p - o, and so the bits, unchanged. In world
+/// coordinates the center was rounded to ulp(|center|) and the radius, the largest
+/// |p - center|, with it: at an exact offset of 2^32 a mesh's AvgSA moved by 7e-6 relative.
+/// AvgSA's term.
+[[nodiscard]] inline double triangle_sphere_area(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 o(std::min({a.x(), b.x(), c.x()}), std::min({a.y(), b.y(), c.y()}), std::min({a.z(), b.z(), c.z()}));
+  return triangle_min_sphere(a - o, b - o, c - o).surface_area();
+}
+
 /// The chunk of average_triangle_sphere_area's sums (ClusterTables' one-pass AvgSA uses it too).
 inline constexpr std::size_t kAvgSaChunk = 65536;
 
 /// AvgSA of method.md: the mean surface area 4 pi R^2 of the minimal spheres of the single
-/// triangles (triangle_min_sphere); 0 for no triangles. Indices must be < positions.size()
+/// triangles (triangle_sphere_area); 0 for no triangles. Indices must be < positions.size()
 /// (asserted). Summed in parallel in fixed chunks of kAvgSaChunk triangles, added in order: the same
 /// value at any thread count.
 [[nodiscard]] double average_triangle_sphere_area(std::span<const Vec3> positions, std::span<const Tri> triangles);
