@@ -159,8 +159,7 @@ void sort_clusters_by_morton(std::span<const Vec3> pos, std::span<const Tri> tri
 
 std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg) {
   check_view(mesh, clusters);
-  const Vec3 origin = trace_frame_origin(mesh, cfg);
-  const Bvh rest = rest_tree(mesh, clusters, cfg, {origin, trace_frame_scale(mesh, origin)});
+  const Bvh rest = rest_tree(mesh, clusters, cfg, trace_frame(mesh, cfg));
   return {rest.prim_order.begin(), rest.prim_order.end()};
 }
 
@@ -178,8 +177,8 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
     : tris_(mesh.shared_triangles()), cfg_(cfg) {
   check_view(mesh, cv);
   TraceData& data = f_.data;
-  data.origin = trace_frame_origin(mesh, cfg);  // (checks the rest positions)
-  data.scale = trace_frame_scale(mesh, data.origin);
+  const FrameMap frame = trace_frame(mesh, cfg);  // (checks the rest positions)
+  data.origin = frame.origin, data.scale = frame.scale;
   // The rest pose in the trace frame: finite in single precision (checked), and the BlockTree
   // layout's input below.
   frame_positions(mesh.positions(), data.frame(), f_.fpos);

@@ -56,6 +56,11 @@ Vec3 trace_frame_origin(const Mesh& mesh, const SceneConfig& cfg) {
   return b.empty() ? Vec3::Zero() : b.center();
 }
 
+FrameMap trace_frame(const Mesh& mesh, const SceneConfig& cfg) {
+  const Vec3 origin = trace_frame_origin(mesh, cfg);
+  return {origin, trace_frame_scale(mesh, origin)};
+}
+
 double trace_frame_scale(const Mesh& mesh, const Vec3& origin) {
   double e = 0;
   for (const Vec3& p : mesh.positions()) e = std::max(e, (p - origin).cwiseAbs().maxCoeff());

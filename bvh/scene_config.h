@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "bvh/box.h"
 #include "bvh/build_config.h"
 #include "bvh/stage_clock.h"
 #include "toolkit/mesh/mesh.h"
@@ -94,6 +95,9 @@ struct SceneConfig {
 /// Throws std::invalid_argument for E beyond 2^100 (about 1.3e30) or below 2^-100 (about
 /// 7.9e-31): the directions scaled with the frame would leave the float range there.
 [[nodiscard]] double trace_frame_scale(const Mesh& mesh, const Vec3& origin);
+
+/// The trace frame of a scene over `mesh`: trace_frame_origin and trace_frame_scale together.
+[[nodiscard]] FrameMap trace_frame(const Mesh& mesh, const SceneConfig& cfg);
 
 /// What trace_frame_scale throws (commands name the input file with it).
 class FrameRangeError : public std::invalid_argument {

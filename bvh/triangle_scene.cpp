@@ -7,8 +7,8 @@
 namespace ptc::bvh {
 
 TriangleScene::TriangleScene(const Mesh& mesh, const SceneConfig& cfg) : tris_(mesh.shared_triangles()), cfg_(cfg) {
-  f_.data.origin = trace_frame_origin(mesh, cfg);
-  f_.data.scale = trace_frame_scale(mesh, f_.data.origin);
+  const FrameMap frame = trace_frame(mesh, cfg);
+  f_.data.origin = frame.origin, f_.data.scale = frame.scale;
   update(mesh.positions());
 }
 

@@ -22,33 +22,31 @@ Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions
   return scene;
 }
 
+std::string apply_stand_in(Scene& scene, const std::string& deform, const std::string& arg) {
+  if (deform == "none") return scene.all_static() ? "none: the rest pose every frame" : "scene";
+  const std::optional<DeformKind> k = parse_deform_kind(deform);
+  if (!k)
+    throw UsageError("--deform", fmt::format("'{}' is not a deformer (twist, bend, wave, rigid, explode or none)", deform));
+  if (!scene.all_static())
+    throw UsageError("--deform",
+                     fmt::format("'{}' is animated: the stand-in motion applies to static scenes (mesh files) only", arg));
+  scene = deform_scene(scene, deform_preset(*k));
+  return fmt::format("stand-in: the {} deformer (deform_preset)", to_string(*k));
+}
+
 MovingScene open_moving_scene(const std::filesystem::path& input, const SceneOptions& options,
                               const std::optional<std::string>& deform_arg, const std::optional<std::string>& frames,
                               bool extend, RunManifest& manifest) {
   std::optional<FrameRange> asked;
   if (frames) asked = parse_frame_range(*frames, "--frames");
-  std::optional<DeformKind> deform;
-  const bool deform_none = deform_arg && *deform_arg == "none";
-  if (deform_arg && !deform_none) {
-    deform = parse_deform_kind(*deform_arg);
-    if (!deform)
-      throw UsageError("--deform",
-                       fmt::format("'{}' is not a deformer (twist, bend, wave, rigid, explode or none)", *deform_arg));
-  }
   const std::string arg = input.string();
   MovingScene m{open_scene_recorded(input, options, manifest), {}, "scene"};
   const bool animated = !m.scene.all_static();
   if (animated && deform_arg)
     throw UsageError("--deform",
                      fmt::format("'{}' is animated: the stand-in motion applies to static scenes (mesh files) only", arg));
-  // A static scene moves by its stand-in motion (the built-in scenes' deformer of that kind).
-  if (!animated && !deform_none) {
-    const DeformKind k = deform.value_or(DeformKind::Twist);
-    m.scene = deform_scene(m.scene, deform_preset(k));
-    m.motion = fmt::format("stand-in: the {} deformer (deform_preset)", to_string(k));
-  } else if (!animated) {
-    m.motion = "none: the rest pose every frame";
-  }
+  // A static scene moves by its stand-in motion (twist unless --deform says otherwise).
+  if (!animated) m.motion = apply_stand_in(m.scene, deform_arg.value_or("twist"), arg);
   m.range = asked ? *asked : animated ? m.scene.frames() : FrameRange{0, 4};
   if (m.range.count() > 100000) throw UsageError("--frames", "at most 100000 frames");
   // The stand-in motion of a static scene has no range of its own (a periodic deformer): any frame.

@@ -35,6 +35,12 @@ struct MovingScene {
                                             const std::optional<std::string>& frames, bool extend,
                                             RunManifest& manifest);
 
+/// --deform KIND|none on `scene` (named `arg` in messages): a static scene moves by the built-in
+/// scenes' deformer of that kind (deform_preset); none leaves the scene as it is. Returns the
+/// manifest's `motion` text ("stand-in: ...", "none: the rest pose every frame" or "scene").
+/// UsageError naming --deform for an unknown kind, or a kind given for an animated scene.
+[[nodiscard]] std::string apply_stand_in(Scene& scene, const std::string& deform, const std::string& arg);
+
 /// read_clusters (commands/cluster_files.h), recording the read time and the file.
 [[nodiscard]] Clustering read_clusters_recorded(const std::filesystem::path& clusters, const Mesh& mesh,
                                                 RunManifest& manifest);

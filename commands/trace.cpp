@@ -16,7 +16,6 @@
 #include "commands/args.h"
 #include "commands/output_dir.h"
 #include "commands/scene_args.h"
-#include "toolkit/anim/deformers.h"
 #include "toolkit/core/memory.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
@@ -96,17 +95,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   RunManifest manifest("trace", opt.argv, "ptc-trace/5");
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
-  std::string motion = scene.all_static() ? "none: the rest pose every frame" : "scene";
-  const bool deformed = opt.deform && *opt.deform != "none";
-  if (deformed) {  // as ptc bench and ptc viz: the built-in scenes' deformer of that kind
-    const std::optional<DeformKind> k = parse_deform_kind(*opt.deform);
-    if (!k) throw UsageError("--deform", fmt::format("'{}' is not a deformer (twist, bend, wave, rigid, explode or none)", *opt.deform));
-    if (!scene.all_static())
-      throw UsageError("--deform", fmt::format("'{}' is animated: the stand-in motion applies to static scenes only", arg));
-    scene = deform_scene(scene, deform_preset(*k));
-    motion = fmt::format("stand-in: the {} deformer (deform_preset)", to_string(*k));
-  }
-  manifest.set_parameter("motion", motion);
+  const bool deformed = opt.deform && *opt.deform != "none";  // (none, the default here: still)
+  manifest.set_parameter("motion", apply_stand_in(scene, opt.deform.value_or("none"), arg));
   const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};
   // (a stand-in motion is periodic: it has no range of its own, as in ptc bench)
   check_frames(scene, range, arg, opt.frames ? "--frames" : "--frame", opt.extend_frames || deformed);

@@ -21,7 +21,6 @@
 #include "commands/output_dir.h"
 #include "commands/scene_args.h"
 #include "render/view.h"
-#include "toolkit/anim/deformers.h"
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
@@ -180,19 +179,10 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   RunManifest manifest("viz", opt.argv, "ptc-viz/1");
   const std::string arg = opt.input.string();
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
-  std::string motion = scene.all_static() ? "none: the rest pose every frame" : "scene";
-  if (opt.deform && *opt.deform != "none") {  // (none: as without the flag, the spelling ptc bench takes too)
-    const std::optional<DeformKind> k = parse_deform_kind(*opt.deform);
-    if (!k) throw UsageError("--deform", fmt::format("'{}' is not a deformer (twist, bend, wave, rigid or explode)", *opt.deform));
-    if (!scene.all_static())
-      throw UsageError("--deform", fmt::format("'{}' is animated: the stand-in motion applies to static scenes only", arg));
-    scene = deform_scene(scene, deform_preset(*k));
-    motion = fmt::format("stand-in: the {} deformer (deform_preset)", to_string(*k));
-  }
-  manifest.set_parameter("motion", motion);
+  const bool deformed = opt.deform && *opt.deform != "none";  // (none: as without the flag)
+  manifest.set_parameter("motion", apply_stand_in(scene, opt.deform.value_or("none"), arg));
   const FrameRange range = asked ? *asked : FrameRange{scene.frames().first, scene.frames().first};
-  check_frames(scene, range, arg, opt.frames ? "--frames" : "--frame",
-               opt.extend_frames || (opt.deform.has_value() && *opt.deform != "none"));
+  check_frames(scene, range, arg, opt.frames ? "--frames" : "--frame", opt.extend_frames || deformed);
   const std::int64_t reference_frame = scene.frames().first;
 
   Mesh mesh = scene.rest();

@@ -55,6 +55,17 @@ CLI::Validator enum_validator(std::string name, Parse parse) {
       name);
 }
 
+/// The whole string as a double (std::stod's syntax; nan and inf included), or nothing.
+inline std::optional<double> number_arg(const std::string& s) {
+  try {
+    std::size_t n = 0;
+    const double v = std::stod(s, &n);
+    if (n == s.size()) return v;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
+}
+
 /// A finite number in [lo, hi]: refuses nan and inf (CLI11's Range lets nan through, since no
 /// comparison with it fails) and names the bounds in %g form (its "0.000000" hid a bound of 1e-9).
 inline CLI::Validator finite_in(double lo, double hi) {
@@ -62,17 +73,11 @@ inline CLI::Validator finite_in(double lo, double hi) {
   std::snprintf(desc, sizeof desc, "FLOAT in [%g, %g]", lo, hi);
   return CLI::Validator(
       [lo, hi](std::string& s) -> std::string {
-        double v = 0;
-        try {
-          std::size_t n = 0;
-          v = std::stod(s, &n);
-          if (n != s.size()) return "'" + s + "' is not a number";
-        } catch (const std::exception&) {
-          return "'" + s + "' is not a number";
-        }
+        const std::optional<double> v = number_arg(s);
+        if (!v) return "'" + s + "' is not a number";
         char why[96];
         std::snprintf(why, sizeof why, "%s is not a finite number in [%g, %g]", s.c_str(), lo, hi);
-        return std::isfinite(v) && v >= lo && v <= hi ? std::string() : std::string(why);
+        return std::isfinite(*v) && *v >= lo && *v <= hi ? std::string() : std::string(why);
       },
       desc);
 }

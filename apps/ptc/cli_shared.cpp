@@ -54,15 +54,9 @@ void CameraArgs::add_to(CLI::App* c, bool with_light) {
   fov_opt = c->add_option("--fov", fov, "vertical field of view in degrees, in (0, 180)")
                 ->check(CLI::Validator(
                     [](std::string& s) -> std::string {
-                      double v = 0;
-                      try {
-                        std::size_t n = 0;
-                        v = std::stod(s, &n);
-                        if (n != s.size()) return "'" + s + "' is not a number";
-                      } catch (const std::exception&) {
-                        return "'" + s + "' is not a number";
-                      }
-                      return v > 0 && v < 180 ? std::string() : "the field of view must be in (0, 180) degrees";
+                      const std::optional<double> v = number_arg(s);
+                      if (!v) return "'" + s + "' is not a number";
+                      return *v > 0 && *v < 180 ? std::string() : "the field of view must be in (0, 180) degrees";
                     },
                     "DEG"))
                 ->capture_default_str();
