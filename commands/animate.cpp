@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <iostream>
 #include <ostream>
 
 #include <fmt/format.h>
@@ -17,6 +18,7 @@
 #include "commands/inputs.h"
 #include "commands/output_dir.h"
 #include "commands/progress.h"
+#include "commands/scene_args.h"
 #include "toolkit/anim/scene_file.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
@@ -41,8 +43,12 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
   std::error_code ec;
   if (fs::is_regular_file(opt.scene, ec)) record_input(manifest, opt.scene);
 
+  const bool deformed = opt.deform && *opt.deform != "none";
+  const bool still = scene.all_static() && !deformed;
+  manifest.set_parameter("motion", apply_stand_in(scene, opt.deform.value_or("none"), opt.scene));
   const FrameRange range = asked ? *asked : scene.frames();
-  check_frames(scene, range, opt.scene, "--frames", opt.extend_frames);
+  // (a stand-in motion is periodic: it has no range of its own, as in ptc bench and ptc trace)
+  check_frames(scene, range, opt.scene, "--frames", opt.extend_frames || deformed);
 
   const Mesh& rest = scene.rest();
   const char* ext = opt.format == MeshFormat::Ply ? "ply" : "obj";
@@ -109,6 +115,11 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
   manifest.set_result("files", files);
   const nlohmann::json doc = commit_with_manifest(dir, manifest);
 
+  if (still && range.count() > 1)  // (on stderr: --json's stdout stays one document)
+    std::cerr << fmt::format(
+        "ptc: note: '{}' does not move: its {} frames are the rest pose (--deform twist|bend|wave|rigid|explode gives it "
+        "the stand-in motion ptc bench measures)\n",
+        opt.scene, range.count());
   if (opt.json) {
     out << dump_json(doc["results"]);
     return;

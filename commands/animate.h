@@ -35,6 +35,9 @@ struct AnimateOptions {
   SceneOptions scene_options;
   std::optional<std::string> frames;     ///< "A:B"; nullopt = the scene's own frame range
   bool extend_frames = false;            ///< --extend-frames: frames outside the scene's listed range
+  /// --deform KIND|none: the stand-in motion of a static scene (commands/scene_args.h
+  /// apply_stand_in, the motion ptc bench measures); nullopt or none: the scene as it is.
+  std::optional<std::string> deform;
   std::filesystem::path out_dir;         ///< required
   MeshFormat format = MeshFormat::Ply;   ///< Ply (binary) or Obj
   bool stats = false;

@@ -110,6 +110,52 @@ TEST_F(Animate, StatsAgainstIndependentRecomputation) {
   EXPECT_EQ(rows, 5);
 }
 
+TEST_F(Animate, DeformGivesAMeshFileTheStandInMotion) {
+  // A mesh file moved by --deform: every frame equals the deformer's positions (computed here
+  // from the rest mesh and deform_preset, not through the scene), and the frames differ.
+  write("cube2.off", kCube);
+  const std::string cube = (dir_ / "cube2.off").string();
+  const Mesh rest = read_mesh(cube).mesh;
+  for (const std::string kind : {"twist", "wave", "rigid"}) {
+    const fs::path out = dir_ / ("deform_" + kind);
+    const RunResult r = ptc({"animate", cube, "--deform", kind, "--frames", "5:6", "--out", out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("does not move"), std::string::npos) << r.err;
+    const AnimationPtr d = make_deformer(rest, deform_preset(*parse_deform_kind(kind)));
+    std::vector<Vec3> expect(rest.vertex_count());
+    std::vector<Vec3> frame5;
+    for (int f = 5; f <= 6; ++f) {
+      const Mesh m = read_mesh(out / ("frame_000" + std::to_string(f) + ".ply")).mesh;
+      d->positions(f, expect);
+      ASSERT_EQ(m.vertex_count(), expect.size());
+      for (std::size_t i = 0; i < expect.size(); ++i) ASSERT_EQ(m.position(i), expect[i]) << kind << " frame " << f << " v " << i;
+      if (f == 5) frame5.assign(m.positions().begin(), m.positions().end());
+      else EXPECT_NE(frame5, std::vector<Vec3>(m.positions().begin(), m.positions().end())) << kind;
+    }
+    const auto man = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_NE(man["parameters"]["motion"].get<std::string>().find(kind), std::string::npos) << man["parameters"];
+  }
+  // Frames beyond 0..59: the motion is periodic, so no --extend-frames is needed.
+  EXPECT_EQ(ptc({"animate", cube, "--deform", "twist", "--frames", "100:100", "--out", (dir_ / "late").string()}).code, 0);
+  // Without --deform the mesh stays still, and the user is told.
+  const RunResult still = ptc({"animate", cube, "--frames", "0:1", "--out", (dir_ / "still").string()});
+  ASSERT_EQ(still.code, 0) << still.err;
+  EXPECT_NE(still.err.find("does not move"), std::string::npos) << still.err;
+  EXPECT_NE(still.err.find("--deform"), std::string::npos) << still.err;
+  EXPECT_EQ(read_mesh(dir_ / "still" / "frame_0001.ply").mesh.positions().size(), rest.vertex_count());
+  for (std::size_t i = 0; i < rest.vertex_count(); ++i)
+    ASSERT_EQ(read_mesh(dir_ / "still" / "frame_0001.ply").mesh.position(i), rest.position(i));
+  // --deform none is the default; an unknown kind and a kind on an animated scene are bad usage.
+  EXPECT_EQ(ptc({"animate", cube, "--deform", "none", "--frames", "0:0", "--out", (dir_ / "none").string()}).code, 0);
+  EXPECT_EQ(ptc({"animate", cube, "--deform", "melt", "--out", (dir_ / "bad").string()}).code, 2);
+  const fs::path scene = write("moving.json", R"({"meshes": [
+      {"file": "cube.off", "deform": {"kind": "rigid", "axis": "y", "period": 8}}]})");
+  const RunResult animated = ptc({"animate", scene.string(), "--deform", "twist", "--out", (dir_ / "bad").string()});
+  EXPECT_EQ(animated.code, 2);
+  EXPECT_NE(animated.err.find("--deform"), std::string::npos) << animated.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
+
 TEST_F(Animate, BadFramesAndUsage) {
   const fs::path out = dir_ / "out";
   const std::string cube = (dir_ / "cube.off").string();
