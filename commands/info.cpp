@@ -133,7 +133,8 @@ std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& 
     line("bbox min", fmt::format("{:.9g} {:.9g} {:.9g}", r.bounds.lo.x(), r.bounds.lo.y(), r.bounds.lo.z()));
     line("bbox max", fmt::format("{:.9g} {:.9g} {:.9g}", r.bounds.hi.x(), r.bounds.hi.y(), r.bounds.hi.z()));
   }
-  line("total area", fmt::format("{:.9g}", r.total_area));
+  line("total area", std::isinf(r.total_area) ? std::string("inf (beyond double's range: areas are lengths squared)")
+                                               : fmt::format("{:.9g}", r.total_area));
   line("triangle area", summary(r.triangle_area));
   line("edge length", summary(r.edge_length));
   line("edges", fmt::format("{} ({} boundary, {} non-manifold)", r.edges, r.boundary_edges, r.non_manifold_edges));

@@ -119,6 +119,16 @@ TEST_F(Cli, InfoJsonMatchesTheMesh) {
   EXPECT_NE(r.out.find("triangles"), std::string::npos);
 }
 
+TEST_F(Cli, InfoOnAMeshWhoseAreasOverflowSaysSo) {
+  // 1e160 units: every edge length is a double, every area (1e320) is beyond the range.
+  const auto big = write("big.off", "OFF\n4 2 0\n0 0 0\n1e160 0 0\n0 1e160 0\n1e160 1e160 0\n3 0 1 2\n3 1 3 2\n").string();
+  auto r = ptc({"info", big});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("inf (beyond double's range"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;  // the median of two infinite areas was -nan
+  EXPECT_NE(r.out.find("median 1e+160"), std::string::npos) << r.out;  // edge lengths stay finite
+}
+
 TEST_F(Cli, SubdivideCountsAndAtomicOutput) {
   const auto cube = write("cube.off", kCube).string();
   const auto out = (dir_ / "fine.ply").string();

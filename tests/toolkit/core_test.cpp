@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <thread>
 
 #include "toolkit/core/stats.h"
@@ -29,6 +30,26 @@ TEST(Stats, MedianAndPercentilesInterpolateBetweenOrderStatistics) {
   EXPECT_EQ(s.mean, 3.0);
   EXPECT_DOUBLE_EQ(s.p5, percentile(v, 0.05));
   EXPECT_DOUBLE_EQ(s.p95, percentile(v, 0.95));
+}
+
+TEST(Stats, InfinitiesAndHugeValuesKeepTheirOrderStatistics) {
+  // Areas of a mesh of 1e160 units overflow to inf: the median of equal infinities is inf, not
+  // the NaN of inf - inf; values near DBL_MAX do not overflow on the way.
+  const double inf = std::numeric_limits<double>::infinity(), big = std::numeric_limits<double>::max();
+  EXPECT_EQ(median({inf, inf}), inf);
+  EXPECT_EQ(median({-inf, -inf, 1.0}), -inf);
+  EXPECT_EQ(percentile({inf, inf, inf}, 0.3), inf);
+  EXPECT_EQ(percentile({1.0, inf}, 0.5), inf);
+  EXPECT_EQ(percentile({-inf, 1.0}, 0.5), -inf);
+  EXPECT_EQ(median({big, big}), big);
+  EXPECT_EQ(median({big, big / 2}), 0.75 * big);
+  EXPECT_EQ(median({-big, big}), 0.0);
+  EXPECT_EQ(percentile({-big, big}, 0.5), 0.0);
+  EXPECT_DOUBLE_EQ(percentile({-big, big}, 0.25), -0.5 * big);
+  const Summary s = summarize(std::vector<double>{inf, inf});
+  EXPECT_EQ(s.p5, inf);
+  EXPECT_EQ(s.p50, inf);
+  EXPECT_EQ(s.p95, inf);
 }
 
 TEST(Stats, RanksAndCorrelations) {

@@ -12,7 +12,10 @@ double percentile_sorted(std::span<const double> v, double p) {
   const double pos = p * static_cast<double>(v.size() - 1);
   const auto i = static_cast<std::size_t>(pos);
   const double f = pos - static_cast<double>(i);
-  return i + 1 < v.size() ? v[i] + f * (v[i + 1] - v[i]) : v[i];
+  if (i + 1 >= v.size() || f == 0.0 || v[i] == v[i + 1]) return v[i];  // (two equal infinities: not inf - inf)
+  const double d = v[i + 1] - v[i];
+  if (std::isfinite(d)) return v[i] + f * d;
+  return (1.0 - f) * v[i] + f * v[i + 1];  // an infinite end, or a difference beyond double's range
 }
 
 double percentile(std::vector<double> values, double p) {
@@ -24,7 +27,11 @@ double median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   const std::size_t n = values.size();
   if (n == 0) return 0.0;
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  if (n % 2) return values[n / 2];
+  const double a = values[n / 2 - 1], b = values[n / 2];
+  if (a == b) return a;  // (two equal infinities: their sum is fine, but keep every equal pair exact)
+  const double sum = a + b;
+  return std::isfinite(sum) ? 0.5 * sum : 0.5 * a + 0.5 * b;  // (two values near DBL_MAX: no overflow)
 }
 
 std::vector<double> fractional_ranks(std::span<const double> values) {
