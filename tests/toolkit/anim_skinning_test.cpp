@@ -359,6 +359,18 @@ TEST(AnimSkinning, FilesWithoutAnimationAreStaticAndBadFilesAreInputErrors) {
   }
   EXPECT_THROW((void)load_assimp_animation(dir / "missing.x"), InputError);
   fs::remove_all(dir);
+  // Motion capture without a mesh (BVH): assimp's skeleton stand-in is refused, naming the file
+  // and the reason; a file whose mesh has bones of its own still loads (above).
+  for (const char* f : {"BVH/01_01.bvh", "BVH/Boxing_Toes.bvh"}) {
+    const std::string file = std::string("/usr/share/assimp/models/") + f;
+    try {
+      (void)load_assimp_animation(file);
+      ADD_FAILURE() << f << ": the skeleton stand-in was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("motion data only"), std::string::npos) << e.what();
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------------------------

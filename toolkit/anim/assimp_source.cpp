@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -310,6 +311,22 @@ SkinRig skin_rig_from_scene(const aiScene& s, unsigned animation, const std::str
   return rig;
 }
 
+namespace {
+/// Whether every mesh of the scene is assimp's SkeletonMeshBuilder's stand-in for a file without
+/// meshes (BVH motion capture and the like): the builder names its one material "SkeletonMaterial".
+bool skeleton_stand_in(const aiScene& s) {
+  if (s.mNumMeshes == 0) return false;
+  for (unsigned k = 0; k < s.mNumMeshes; ++k) {
+    const aiMesh* m = s.mMeshes[k];
+    if (m->mMaterialIndex >= s.mNumMaterials) return false;
+    aiString mat;
+    if (s.mMaterials[m->mMaterialIndex]->Get(AI_MATKEY_NAME, mat) != AI_SUCCESS) return false;
+    if (std::string_view(mat.C_Str()) != "SkeletonMaterial") return false;
+  }
+  return true;
+}
+}  // namespace
+
 AnimationPtr load_assimp_animation(const fs::path& path, const AssimpSkinOptions& opt) {
   const std::string name = path.string();
   std::error_code ec;
@@ -317,10 +334,16 @@ AnimationPtr load_assimp_animation(const fs::path& path, const AssimpSkinOptions
   if (fs::is_directory(path, ec)) throw InputError(name, "", "", "is a directory, not a file");
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, kUnusedComponents);
-  const aiScene* s =
-      importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_ValidateDataStructure | aiProcess_RemoveComponent);
+  // Read, look at the materials (before RemoveComponent drops them), then post-process.
+  const aiScene* s = importer.ReadFile(path.string(), aiProcess_ValidateDataStructure);
   if (!s) throw InputError(name, "", "", std::string("assimp: ") + importer.GetErrorString());
   if (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw InputError(name, "", "", "assimp: incomplete scene (no meshes)");
+  if (skeleton_stand_in(*s))
+    throw InputError(name, "", "",
+                     "has motion data only, no mesh (assimp draws the skeleton's bones as a stand-in mesh, which ptc does "
+                     "not trace): use a file with the mesh and its animation together (FBX, COLLADA, glTF, MD5 mesh)");
+  s = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_ValidateDataStructure | aiProcess_RemoveComponent);
+  if (!s) throw InputError(name, "", "", std::string("assimp: ") + importer.GetErrorString());
   SkinRig rig = skin_rig_from_scene(*s, opt.animation, name);
   const std::string label = fmt::format("{} ({} meshes, animation {} of {})", name, s->mNumMeshes,
                                         s->mNumAnimations ? opt.animation : 0, s->mNumAnimations);
