@@ -9,6 +9,10 @@
 #include <string_view>
 #include <vector>
 
+#include <fmt/format.h>
+
+#include <nlohmann/json.hpp>
+
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/core/error.h"
 #include "toolkit/mesh/topology.h"
@@ -134,6 +138,38 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
     }
   }
   return c;
+}
+
+ClusteringInfo clustering_info(const std::filesystem::path& clusters) {
+  ClusteringInfo ci;
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::is_directory(clusters, ec) ? clusters : clusters.parent_path();
+  const std::filesystem::path mpath = dir / "manifest.json";
+  ci.from = "defaults (no manifest.json beside triangles.csv)";
+  ci.title = "clusters of " + clusters.string();
+  std::ifstream in(mpath);
+  if (!in) return ci;
+  const nlohmann::json m = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (m.is_discarded() || !m.contains("parameters") || !m["parameters"].is_object()) return ci;
+  const nlohmann::json& p = m["parameters"];
+  auto str = [&](const char* k) { return p.contains(k) && p[k].is_string() ? p[k].get<std::string>() : std::string(); };
+  if (p.contains("max_count") && p["max_count"].is_number_unsigned()) ci.cfg.max_count = p["max_count"].get<std::uint32_t>();
+  if (p.contains("max_size") && p["max_size"].is_number()) ci.cfg.max_size = p["max_size"].get<double>();
+  if (const auto s = parse_size_bound_mode(str("size_bound"))) ci.cfg.size_bound_mode = *s;
+  if (const auto s = parse_sphere_method(str("sphere"))) ci.cfg.sphere = *s;
+  if (const auto s = parse_cluster_method(str("method"))) ci.cfg.method = *s;
+  if (const auto s = parse_objective(str("objective"))) ci.cfg.objective = *s;
+  // The adjacency the clustering used: as resolved by that run, else as it was asked for.
+  if (const auto s = parse_cluster_adjacency(str("adjacency"))) ci.cfg.adjacency = *s;
+  if (m.contains("results") && m["results"].is_object() && m["results"].contains("adjacency") &&
+      m["results"]["adjacency"].is_string())
+    if (const auto s = parse_cluster_adjacency(m["results"]["adjacency"].get<std::string>())) ci.cfg.adjacency = *s;
+  ci.from = mpath.string();
+  ci.from_manifest = true;
+  const std::string method = str("method"), objective = str("objective");
+  ci.title = fmt::format("{}{}{}, MaxCount {}, MaxSize {:g}", method.empty() ? "clusters" : method,
+                         objective.empty() ? "" : " / ", objective, ci.cfg.max_count, ci.cfg.max_size);
+  return ci;
 }
 
 }  // namespace ptc

@@ -4,6 +4,9 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
+
+#include "toolkit/clustering/cluster.h"
 
 #include "toolkit/clustering/clustering.h"
 #include "toolkit/mesh/mesh.h"
@@ -20,5 +23,18 @@ namespace ptc {
 /// cluster 2 is not connected (triangle 5 shares no edge path with triangle 0 of the cluster)".
 /// Clusters are renumbered densely (clustering_from_labels).
 [[nodiscard]] Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh);
+
+/// The parameters a clustering was made with, from `ptc cluster`'s DIR/manifest.json beside
+/// triangles.csv (MaxCount, MaxSize, size bound, sphere, method, objective, adjacency): the
+/// per-cluster metrics of a given clustering (acc needs MaxCount and MaxSize) use them, in
+/// `ptc viz` and in the experiments. Without a readable manifest: the defaults, and
+/// from_manifest false.
+struct ClusteringInfo {
+  ClusterConfig cfg;
+  std::string title;  ///< "contraction / acc, MaxCount 50, MaxSize 50"
+  std::string from;   ///< "DIR/manifest.json" or "defaults (no manifest.json beside triangles.csv)"
+  bool from_manifest = false;
+};
+[[nodiscard]] ClusteringInfo clustering_info(const std::filesystem::path& clusters);
 
 }  // namespace ptc

@@ -16,6 +16,7 @@
 #include "analysis/schema/json.h"
 #include "analysis/schema/manifest.h"
 #include "commands/args.h"
+#include "commands/cluster_files.h"
 #include "commands/commands.h"
 #include "commands/inputs.h"
 #include "commands/output_dir.h"
@@ -280,6 +281,11 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   Clustering clusters;
   if (given) clusters = read_clusters_recorded(opt.clusters, ms.scene.rest(), manifest);
   p.given = given ? &clusters : nullptr;
+  if (given) {  // its own parameters for its metrics (acc): as ptc viz reads them
+    const ClusteringInfo ci = clustering_info(opt.clusters);
+    if (ci.from_manifest) p.given_cluster = ci.cfg;
+    manifest.set_parameter("given_parameters_from", ci.from_manifest ? ci.from : "the clustering flags (no manifest.json beside triangles.csv)");
+  }
 
   // The rest mesh as loaded (before any renumbering): what merge compares, whatever the files.
   const std::string rest_hash = mesh_fnv1a64(ms.scene.rest());

@@ -124,10 +124,14 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   tcfg.clusters = use_clusters ? &clusters : nullptr;
   tcfg.cluster_group_size = opt.cluster_group_size;
   tcfg.group_trees = opt.group_trees;
-  tcfg.origin = first_bounds.center();
+  // Set up at the rest pose, as ptc bench and the experiments do, and updated to every frame in
+  // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend
+  // on which frame the run starts at, so a frame traces the same in any range (the camera frames
+  // the first frame unless given).
+  tcfg.origin = scene.rest().bounds().center();
   std::optional<loop::SceneAccel> made;
   try {
-    made.emplace(mesh, bvh::PartLayout::of(scene), tcfg);
+    made.emplace(scene.rest(), bvh::PartLayout::of(scene), tcfg);
   } catch (const bvh::FrameRangeError& e) {
     throw InputError(arg, "", "", e.what());
   }

@@ -16,8 +16,10 @@
 #include "analysis/metrics/cluster_frame.h"
 #include "analysis/schema/json.h"
 #include "analysis/schema/manifest.h"
+#include "bvh/cluster_scene.h"
 #include "commands/args.h"
 #include "commands/child_process.h"
+#include "commands/cluster_files.h"
 #include "commands/output_dir.h"
 #include "commands/scene_args.h"
 #include "render/view.h"
@@ -59,45 +61,6 @@ constexpr int kGap = 4;
 bool is_pixel_metric(const std::string& m) {
   return std::find_if(std::begin(kPixelMetrics), std::end(kPixelMetrics), [&](const char* p) { return m == p; }) !=
          std::end(kPixelMetrics);
-}
-
-// The clustering's parameters, from DIR/manifest.json of `ptc cluster` when it is there (Acc and
-// the title need MaxCount and MaxSize); the defaults otherwise.
-struct ClusteringInfo {
-  ClusterConfig cfg;
-  std::string title;  // "contraction / acc, MaxCount 50, MaxSize 50"
-  std::string from;   // "DIR/manifest.json" or "defaults (no manifest.json beside triangles.csv)"
-};
-
-ClusteringInfo clustering_info(const std::filesystem::path& clusters) {
-  ClusteringInfo ci;
-  std::error_code ec;
-  const std::filesystem::path dir = std::filesystem::is_directory(clusters, ec) ? clusters : clusters.parent_path();
-  const std::filesystem::path mpath = dir / "manifest.json";
-  ci.from = "defaults (no manifest.json beside triangles.csv)";
-  ci.title = "clusters of " + clusters.string();
-  std::ifstream in(mpath);
-  if (!in) return ci;
-  const nlohmann::json m = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (m.is_discarded() || !m.contains("parameters") || !m["parameters"].is_object()) return ci;
-  const nlohmann::json& p = m["parameters"];
-  auto str = [&](const char* k) { return p.contains(k) && p[k].is_string() ? p[k].get<std::string>() : std::string(); };
-  if (p.contains("max_count") && p["max_count"].is_number_unsigned()) ci.cfg.max_count = p["max_count"].get<std::uint32_t>();
-  if (p.contains("max_size") && p["max_size"].is_number()) ci.cfg.max_size = p["max_size"].get<double>();
-  if (const auto s = parse_size_bound_mode(str("size_bound"))) ci.cfg.size_bound_mode = *s;
-  if (const auto s = parse_sphere_method(str("sphere"))) ci.cfg.sphere = *s;
-  if (const auto s = parse_cluster_method(str("method"))) ci.cfg.method = *s;
-  if (const auto s = parse_objective(str("objective"))) ci.cfg.objective = *s;
-  // The adjacency the clustering used: as resolved by that run, else as it was asked for.
-  if (const auto s = parse_cluster_adjacency(str("adjacency"))) ci.cfg.adjacency = *s;
-  if (m.contains("results") && m["results"].is_object() && m["results"].contains("adjacency") &&
-      m["results"]["adjacency"].is_string())
-    if (const auto s = parse_cluster_adjacency(m["results"]["adjacency"].get<std::string>())) ci.cfg.adjacency = *s;
-  ci.from = mpath.string();
-  const std::string method = str("method"), objective = str("objective");
-  ci.title = fmt::format("{}{}{}, MaxCount {}, MaxSize {:g}", method.empty() ? "clusters" : method,
-                         objective.empty() ? "" : " / ", objective, ci.cfg.max_count, ci.cfg.max_size);
-  return ci;
 }
 
 // Runs ffmpeg on the numbered PNGs; returns "" or why there is no MP4 (Interrupted on Ctrl-C).
@@ -231,9 +194,11 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   if (needs_trace) {
     bvh::SceneTracerConfig tcfg;
     tcfg.clusters = use_clusters ? &clusters : nullptr;
-    tcfg.origin = first_bounds.center();
+    // At the rest pose, as ptc trace, ptc bench and the experiments: a frame's picture does not
+    // depend on the range it is drawn in.
+    tcfg.origin = scene.rest().bounds().center();
     try {
-      accel = std::make_unique<loop::SceneAccel>(mesh, bvh::PartLayout::of(scene), tcfg);
+      accel = std::make_unique<loop::SceneAccel>(scene.rest(), bvh::PartLayout::of(scene), tcfg);
     } catch (const bvh::FrameRangeError& e) {
       throw InputError(arg, "", "", e.what());
     }
@@ -264,6 +229,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     std::optional<Render> render;
     std::vector<double> values;
   };
+  std::unique_ptr<bvh::ClusterScene> sah_tree;  // made at the first frame that needs metrics
   // `known`: the frame's per-cluster values kept from the range pass (nothing to recompute).
   auto frame_data = [&](std::int64_t f, bool for_range_only, const std::vector<double>* known) {
     FrameData d;
@@ -279,7 +245,10 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     if (known) {
       d.values = *known;
     } else if (needs_metrics) {
-      d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows, adjacency);
+      // sah_share on the drift study's cluster BVH: set up at the rest pose, updated to the frame.
+      if (!sah_tree) sah_tree = cluster_bvh_at_rest(scene.rest(), clusters);
+      sah_tree->update(mesh.positions());
+      d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows, adjacency, sah_tree.get());
       prev_rows = d.metrics->rows;
       if (cmetric) d.values = d.metrics->of(metric);
     }

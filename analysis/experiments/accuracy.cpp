@@ -61,6 +61,7 @@ double speedup_of(double ref, double t) { return t > 0 ? ref / t : kNaN; }
 // The clustering the accuracy items measure: the given one, or acc_contraction with the user's
 // parameters.
 ClusterConfig method_config(const ExperimentParams& p) {
+  if (p.given && p.given_cluster) return *p.given_cluster;  // the given clustering's own parameters
   ClusterConfig c = p.cluster;
   c.method = ClusterMethod::Contraction;
   c.objective = ObjectiveKind::Acc;

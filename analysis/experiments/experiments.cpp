@@ -69,6 +69,14 @@ ClusterConfig sweep_config(const ClusterConfig& base, std::uint32_t n) {
   return c;
 }
 
+// The parameters a configuration's per-cluster metrics use: its own clustering's, the given
+// clustering's (from its manifest), else the user's.
+ClusterConfig metric_config(const study::ConfigSpec& spec, const ExperimentParams& p) {
+  if (spec.cluster) return *spec.cluster;
+  if (spec.given && p.given_cluster) return *p.given_cluster;
+  return p.cluster;
+}
+
 study::ConfigSpec spec_of(const std::string& name, const ExperimentParams& p) {
   study::ConfigSpec s;
   s.name = name;
@@ -457,7 +465,7 @@ void drift_clusters(const ExperimentParams& p, const study::StudyFrame& sf, stud
   }
   d.epo = end_point_overlap(tree, m.triangles(), m.positions(), offsets, ids, cost).epo;
   d.sah_overhead = sah_overhead(m, pr.clustering).overhead;
-  const ClusterConfig mc = pr.spec.cluster.value_or(p.cluster);
+  const ClusterConfig mc = metric_config(pr.spec, p);
   const std::vector<ClusterRow> rows = cluster_rows(m, pr.clustering, mc, std::nullopt, pr.adjacency);
   if (tr.first.empty()) {
     tr.first = rows, tr.prev = rows;
@@ -555,7 +563,7 @@ void run_drift(Context& x) {
   std::vector<Track> tracks(x.prepared.size());
   for (std::size_t c = 0; c < x.prepared.size(); ++c)
     if (x.prepared[c].has_clusters) {
-      const ClusterConfig mc = x.prepared[c].spec.cluster.value_or(x.p.cluster);
+      const ClusterConfig mc = metric_config(x.prepared[c].spec, x.p);
       tracks[c].shapes = meshlet_shapes(x.prepared[c].clustering, x.prepared[c].mesh.triangles(),
                                         x.prepared[c].mesh.vertex_count(), std::max<std::uint32_t>(mc.max_count, 1));
     }

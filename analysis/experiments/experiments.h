@@ -43,6 +43,9 @@ struct ExperimentParams {
   std::string scene;                 ///< the SCENE argument as given (the `scene` column)
   ClusterConfig cluster;             ///< the user's clustering parameters (method/objective: sweep's)
   const Clustering* given = nullptr;  ///< --clusters DIR: compare's and drift's method, accuracy's clustering
+  /// The parameters `given` was made with (its `ptc cluster` manifest): its per-cluster metrics
+  /// (acc needs MaxCount and MaxSize) use them; nullopt: `cluster`'s.
+  std::optional<ClusterConfig> given_cluster;
   /// A clustering will be given (the item list is known before it is read); implied by `given`.
   bool clusters_given = false;
   [[nodiscard]] bool has_given() const { return given != nullptr || clusters_given; }

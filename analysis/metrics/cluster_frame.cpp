@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <optional>
 #include <stdexcept>
 
 #include "analysis/metrics/drift.h"
@@ -57,7 +58,7 @@ const std::vector<double>& ClusterFrameMetrics::of(std::string_view name) const 
 
 ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& clustering, const ClusterConfig& cfg,
                                           const std::vector<ClusterRow>& reference, const std::vector<ClusterRow>& previous,
-                                          std::span<const Tri> adjacency) {
+                                          std::span<const Tri> adjacency, bvh::ClusterScene* tree) {
   ClusterFrameMetrics out;
   out.rows = cluster_rows(mesh, clustering, cfg, std::nullopt, adjacency);
   const std::size_t n = out.rows.size();
@@ -66,8 +67,12 @@ ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& cl
 
   std::vector<double> share(n, 0.0);
   if (n > 0) {
-    bvh::ClusterScene cs(mesh, bvh::view_of(clustering));
-    cs.update(mesh.positions());
+    std::optional<bvh::ClusterScene> own;
+    if (!tree) {
+      own.emplace(mesh, bvh::view_of(clustering));
+      own->update(mesh.positions());
+    }
+    const bvh::ClusterScene& cs = tree ? *tree : *own;
     // (the tree over the clusters: bvh() is over the groups with fixed group trees)
     const SahShares s = sah_shares(cs.cluster_tree(), cs.boxes(), cs.weights(), bvh::cluster_scene_defaults().build.cost);
     for (std::size_t i = 0; i < cs.cluster_ids().size(); ++i) share[cs.cluster_ids()[i]] = s.share[i];
@@ -104,4 +109,12 @@ ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& cl
   return out;
 }
 
+}  // namespace ptc
+
+namespace ptc {
+std::unique_ptr<bvh::ClusterScene> cluster_bvh_at_rest(const Mesh& rest, const Clustering& clustering) {
+  bvh::SceneConfig cfg = bvh::cluster_scene_defaults();
+  cfg.origin = rest.bounds().center();  // the study's trace frame (study_rays)
+  return std::make_unique<bvh::ClusterScene>(rest, bvh::view_of(clustering), cfg);
+}
 }  // namespace ptc

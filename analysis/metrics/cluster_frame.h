@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -13,6 +14,10 @@
 #include <vector>
 
 #include "analysis/metrics/cluster_table.h"
+
+namespace ptc::bvh {
+class ClusterScene;
+}
 
 namespace ptc {
 
@@ -46,10 +51,19 @@ struct ClusterFrameMetrics {
 /// "this frame" (ratios 1, deltas 0). `max_vertices` for meshlet_shapes: the largest cluster's
 /// vertex count when 0. Throws std::invalid_argument when reference / previous are of another
 /// clustering (cluster_drift). `adjacency`: the rest pose's adjacency triangles of a clustering
-/// made by coincident corners (cluster_rows).
+/// made by coincident corners (cluster_rows). `tree`: the cluster BVH whose SAH shares are
+/// reported, already updated to `mesh`'s positions; the drift study's is set up once at the rest
+/// pose in the study's trace frame and updated every frame (cluster_bvh_at_rest), so a caller
+/// drawing the study's values passes one made that way. nullptr: one set up at this frame (its
+/// cluster order and fixed group trees then come from this frame, not the rest pose).
 [[nodiscard]] ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& clustering, const ClusterConfig& cfg,
                                                         const std::vector<ClusterRow>& reference,
                                                         const std::vector<ClusterRow>& previous,
-                                                        std::span<const Tri> adjacency = {});
+                                                        std::span<const Tri> adjacency = {},
+                                                        bvh::ClusterScene* tree = nullptr);
+
+/// The cluster BVH the drift study measures SAH shares on: the default cluster scene set up at
+/// `rest` in the trace frame centred on rest's box (the study's), to be updated to each frame.
+[[nodiscard]] std::unique_ptr<bvh::ClusterScene> cluster_bvh_at_rest(const Mesh& rest, const Clustering& clustering);
 
 }  // namespace ptc
