@@ -113,11 +113,14 @@ nlohmann::json item_rows_json(const std::vector<FileRows>& files) {
 // Writes the assembled files and the summary; lists them in the manifest.
 void write_assembled(OutputDir& dir, RunManifest& manifest, const Assembled& a) {
   for (const auto& f : a.files) {
-    dir.write(f.file, f.rows.str());
+    const std::string text = f.rows.str();
+    dir.write(f.file, text);
     manifest.add_output(f.file, f.schema.id());
+    manifest.add_output_hash(f.file, text.size(), bytes_fnv1a64(text));
   }
   dir.write("summary.txt", a.text);
   manifest.add_output("summary.txt");
+  manifest.add_output_hash("summary.txt", a.text.size(), bytes_fnv1a64(a.text));
 }
 
 // A CSV cell as JSON: a number when the whole cell is one (nan and inf: null, as JSON has none),
@@ -283,7 +286,7 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   p.given = given ? &clusters : nullptr;
   if (given) {  // its own parameters for its metrics (acc): as ptc viz reads them
     const ClusteringInfo ci = clustering_info(opt.clusters);
-    if (ci.from_manifest) p.given_cluster = ci.cfg;
+    if (ci.from_manifest) p.given_cluster = ci.cfg, record_input(manifest, ci.from);
     manifest.set_parameter("given_parameters_from", ci.from_manifest ? ci.from : "the clustering flags (no manifest.json beside triangles.csv)");
   }
 
@@ -513,7 +516,18 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
       const std::filesystem::path path = s.dir / name;
       CsvText t;
       try {
-        t = parse_csv(read_text(path, "the shard's manifest lists it"));
+        const std::string text = read_text(path, "the shard's manifest lists it");
+        // A shard's tables as its run wrote them (manifests since 2026-12-04 record their hashes).
+        const nlohmann::json& m = s.manifest;
+        const nlohmann::json* h = m.contains("output_hashes") && m.at("output_hashes").is_object() &&
+                                          m.at("output_hashes").contains(name)
+                                      ? &m.at("output_hashes").at(name)
+                                      : nullptr;
+        if (h && h->is_object() && h->contains("fnv1a64") && h->at("fnv1a64").is_string() &&
+            h->at("fnv1a64").get<std::string>() != bytes_fnv1a64(text))
+          throw InputError(path.string(), "", "",
+                           "its bytes differ from the FNV-1a hash its manifest records (an edited or replaced file)");
+        t = parse_csv(text);
       } catch (const std::invalid_argument& e) {
         throw InputError(path.string(), "", "", e.what());
       }

@@ -36,6 +36,12 @@ std::string mesh_fnv1a64(const Mesh& mesh) {
   return f.hex();
 }
 
+std::string bytes_fnv1a64(std::string_view bytes) {
+  Fnv1a64 f;
+  f.add(bytes.data(), bytes.size());
+  return f.hex();
+}
+
 std::string file_fnv1a64(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "", "", "cannot open file");

@@ -1,5 +1,7 @@
 #include "commands/scene_args.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "commands/args.h"
@@ -9,17 +11,28 @@
 #include "toolkit/anim/deformers.h"
 #include "toolkit/anim/scene_file.h"
 #include "toolkit/core/error.h"
+#include "toolkit/core/input_log.h"
 #include "toolkit/core/stopwatch.h"
 
 namespace ptc {
 
 Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions& options, RunManifest& manifest) {
   Stopwatch sw;
+  InputLog log;  // every file the scene reads: its data files, a scene file's meshes, frames
   Scene scene = open_scene(input.string(), options);
   manifest.add_timing_ms("read", sw.ms());
-  std::error_code ec;
-  if (std::filesystem::is_regular_file(input, ec)) record_input(manifest, input);
+  record_scene_inputs(manifest, input, log);
   return scene;
+}
+
+void record_scene_inputs(RunManifest& manifest, const std::filesystem::path& input, const InputLog& log) {
+  std::error_code ec;
+  std::vector<std::filesystem::path> files;
+  if (std::filesystem::is_regular_file(input, ec)) files.push_back(std::filesystem::absolute(input, ec).lexically_normal());
+  for (const auto& f : log.files())
+    if (std::find(files.begin(), files.end(), f) == files.end()) files.push_back(f);
+  for (std::size_t i = 0; i < files.size(); ++i)
+    record_input(manifest, i == 0 && std::filesystem::is_regular_file(input, ec) ? input : files[i]);
 }
 
 std::string apply_stand_in(Scene& scene, const std::string& deform, const std::string& arg) {

@@ -15,6 +15,8 @@
 
 namespace ptc {
 
+class InputLog;
+
 /// open_scene (toolkit/anim/scene_file.h), recording the read time and, for a file, the input.
 [[nodiscard]] Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions& options,
                                         RunManifest& manifest);
@@ -39,6 +41,10 @@ struct MovingScene {
 /// scenes' deformer of that kind (deform_preset); none leaves the scene as it is. Returns the
 /// manifest's `motion` text ("stand-in: ...", "none: the rest pose every frame" or "scene").
 /// UsageError naming --deform for an unknown kind, or a kind given for an animated scene.
+/// Records `input` (when it is a file) and every file in `log` (the files opening it read) in
+/// the manifest's inputs, each once, with its hash (commands/inputs.h).
+void record_scene_inputs(RunManifest& manifest, const std::filesystem::path& input, const InputLog& log);
+
 [[nodiscard]] std::string apply_stand_in(Scene& scene, const std::string& deform, const std::string& arg);
 
 /// read_clusters (commands/cluster_files.h), recording the read time and the file.

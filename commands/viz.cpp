@@ -20,6 +20,7 @@
 #include "commands/args.h"
 #include "commands/child_process.h"
 #include "commands/cluster_files.h"
+#include "commands/inputs.h"
 #include "commands/output_dir.h"
 #include "commands/scene_args.h"
 #include "render/view.h"
@@ -159,6 +160,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   if (use_clusters) {
     clusters = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
     ci = clustering_info(opt.clusters);
+    if (ci.from_manifest) record_input(manifest, ci.from);  // Acc's parameters come from it
   }
   const std::vector<std::uint32_t> cluster_of = use_clusters ? clusters.cluster_of_triangle() : std::vector<std::uint32_t>();
 

@@ -128,6 +128,7 @@ nlohmann::json RunManifest::to_json() const {
   j["results"] = results_;
   j["outputs"] = outputs_;
   j["output_schemas"] = schemas_;
+  if (!output_hashes_.empty()) j["output_hashes"] = output_hashes_;
   j["build"] = build_info();
   j["machine"] = machine_info();
   return j;

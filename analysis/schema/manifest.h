@@ -37,6 +37,11 @@ class RunManifest {
   void add_timing_ms(const std::string& key, double ms);
   /// A file the run wrote; `schema` ("ptc-bench/1") for a table (listed under output_schemas).
   void add_output(const std::string& file, const std::string& schema = "");
+  /// The bytes and FNV-1a hash of an output (listed under output_hashes): what `ptc merge` checks
+  /// a shard's tables against, so that an edited table is refused.
+  void add_output_hash(const std::string& file, std::size_t bytes, const std::string& fnv1a64) {
+    output_hashes_[file] = {{"bytes", bytes}, {"fnv1a64", fnv1a64}};
+  }
   void set_result(const std::string& key, nlohmann::json value) { results_[key] = std::move(value); }
 
   [[nodiscard]] nlohmann::json to_json() const;
@@ -54,6 +59,7 @@ class RunManifest {
   nlohmann::json results_ = nlohmann::json::object();
   std::vector<std::string> outputs_;
   nlohmann::json schemas_ = nlohmann::json::object();
+  nlohmann::json output_hashes_ = nlohmann::json::object();
 };
 
 }  // namespace ptc

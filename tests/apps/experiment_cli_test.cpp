@@ -2,6 +2,7 @@
 // row (timings aside), merge refuses shards that do not belong together, the derived columns
 // recomputed independently from the rows, and the flags' usage errors.
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <set>
@@ -310,6 +311,41 @@ TEST_F(Experiment, DriftAndVizExportAgreeValueForValue) {
     }
     EXPECT_GT(checked, 0u);
   }
+}
+
+// A shard's table edited after its run (one number changed, the row count kept) is refused by
+// merge, naming the file: each manifest records its tables' bytes and FNV-1a hashes.
+TEST_F(Experiment, MergeRefusesAnEditedTableNamingIt) {
+  const std::vector<std::string> run = {"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,10", "--frames",
+                                        "0:1", "--width", "8", "--height", "8", "--quiet", "--out"};
+  auto a = run, b = run;
+  a.insert(a.end(), {(dir_ / "a").string(), "--shard", "1/2"});
+  b.insert(b.end(), {(dir_ / "b").string(), "--shard", "2/2"});
+  ASSERT_EQ(ptc(a).code, 0);
+  ASSERT_EQ(ptc(b).code, 0);
+  // Untouched, they merge; the manifest's hash is FNV-1a 64 of the file's bytes (computed here).
+  ASSERT_EQ(ptc({"merge", (dir_ / "a").string(), (dir_ / "b").string(), "--out", (dir_ / "m").string()}).code, 0);
+  const std::string csv = slurp(dir_ / "a" / "sweep.csv");
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : csv) h = (h ^ c) * 1099511628211ull;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  const auto man = nlohmann::json::parse(slurp(dir_ / "a" / "manifest.json"));
+  EXPECT_EQ(man["output_hashes"]["sweep.csv"]["fnv1a64"], hex);
+  EXPECT_EQ(man["output_hashes"]["sweep.csv"]["bytes"], csv.size());
+  // One digit of the second row changed.
+  std::string edited = csv;
+  const auto row2 = edited.find('\n') + 1;
+  const auto digit = edited.find_first_of("123456789", edited.find(',', row2));
+  ASSERT_NE(digit, std::string::npos);
+  edited[digit] = edited[digit] == '9' ? '8' : static_cast<char>(edited[digit] + 1);
+  spit(dir_ / "a" / "sweep.csv", edited);
+  const RunResult r = ptc({"merge", (dir_ / "a").string(), (dir_ / "b").string(), "--out", (dir_ / "m2").string()});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find((dir_ / "a" / "sweep.csv").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("edited"), std::string::npos) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "m2"));
 }
 
 TEST_F(Experiment, MergeRefusesAnEditedManifestNamingIt) {

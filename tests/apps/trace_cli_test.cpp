@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -219,6 +220,38 @@ TEST_F(TraceCli, AFrameTracesTheSameInAnyRange) {
   EXPECT_EQ(slurp(dir_ / "all" / "depth_0005.png"), slurp(dir_ / "one" / "depth.png"));
   EXPECT_EQ(slurp(dir_ / "all" / "depth_0005.png"), slurp(dir_ / "late" / "depth_0005.png"));
   EXPECT_EQ(slurp(dir_ / "all" / "normal_0004.png"), slurp(dir_ / "late" / "normal_0004.png"));
+}
+
+// The manifest lists every file the scene read, with its hash: a scene file and the mesh it
+// names, a built-in scene's data file (the files a command is not given by name).
+TEST_F(TraceCli, ManifestHashesEveryFileTheSceneRead) {
+  auto fnv = [](const fs::path& p) {
+    std::uint64_t h = 14695981039346656037ull;
+    for (unsigned char c : slurp(p)) h = (h ^ c) * 1099511628211ull;
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+    return std::string(hex);
+  };
+  auto inputs = [](const fs::path& out) {
+    std::map<std::string, std::string> in;  // absolute path -> hash
+    const auto m = nlohmann::json::parse(slurp(out / "manifest.json"));
+    for (const auto& i : m["inputs"])
+      in[fs::path(i["absolute_path"].get<std::string>()).lexically_normal().string()] = i["fnv1a64"];
+    return in;
+  };
+  const fs::path scene = write("scene.json", R"({"meshes": [{"file": ")" + cube_.string() + R"(", "deform": {"kind": "wave"}}]})");
+  ASSERT_EQ(ptc({"trace", scene.string(), "--width", "8", "--height", "8", "--out", (dir_ / "s").string()}).code, 0);
+  const auto in = inputs(dir_ / "s");
+  EXPECT_EQ(in.size(), 2u);
+  EXPECT_EQ(in.at(fs::absolute(scene).lexically_normal().string()), fnv(scene));
+  EXPECT_EQ(in.at(fs::absolute(cube_).lexically_normal().string()), fnv(cube_));
+  const fs::path x = "/usr/share/assimp/models/X/BCN_Epileptic.X";
+  if (fs::exists(x)) {
+    ASSERT_EQ(ptc({"trace", "epileptic", "--width", "8", "--height", "8", "--out", (dir_ / "e").string()}).code, 0);
+    const auto e = inputs(dir_ / "e");
+    ASSERT_EQ(e.size(), 1u);
+    EXPECT_EQ(e.at(x.string()), fnv(x));
+  }
 }
 
 TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {

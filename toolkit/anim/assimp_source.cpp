@@ -18,6 +18,7 @@
 #include "toolkit/anim/static_source.h"
 #include "toolkit/anim/weld.h"
 #include "toolkit/core/error.h"
+#include "toolkit/core/input_log.h"
 
 namespace {
 // Model only what a scene needs: positions, faces, bones and animation channels. Everything
@@ -34,6 +35,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string slurp(const fs::path& path) {
+  note_input_file(path);
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path.string(), "", "", "no such file");
   if (fs::is_directory(path, ec)) throw InputError(path.string(), "", "", "is a directory, not a file");
@@ -334,6 +336,7 @@ AnimationPtr load_assimp_animation(const fs::path& path, const AssimpSkinOptions
   if (fs::is_directory(path, ec)) throw InputError(name, "", "", "is a directory, not a file");
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, kUnusedComponents);
+  note_input_file(path);
   // Read, look at the materials (before RemoveComponent drops them), then post-process.
   const aiScene* s = importer.ReadFile(path.string(), aiProcess_ValidateDataStructure);
   if (!s) throw InputError(name, "", "", std::string("assimp: ") + importer.GetErrorString());

@@ -13,6 +13,7 @@
 
 #include "toolkit/core/error.h"
 #include "toolkit/io/mesh_io.h"
+#include "toolkit/core/input_log.h"
 
 namespace ptc {
 
@@ -200,6 +201,7 @@ FrameSequence::FrameSequence(const std::string& dir_or_glob, const FrameSequence
 FrameSequence::FrameSequence(std::vector<fs::path> files, const FrameSequenceOptions& opt)
     : files_(std::move(files)), opt_(opt) {
   if (files_.empty()) throw InputError("", "", "", "a frame sequence needs at least one file");
+  for (const fs::path& f : files_) note_input_file(f);  // (read lazily, per frame, later)
   if (!(opt_.fps > 0.0) || !std::isfinite(opt_.fps)) throw InputError("", "", "fps", "frames per second must be > 0");
   LoadedMesh first = read_mesh(files_[0]);
   raw_tris_ = first.mesh.shared_triangles();

@@ -11,6 +11,7 @@
 #include "toolkit/anim/weld.h"
 #include "toolkit/core/error.h"
 #include "toolkit/io/atomic_file.h"
+#include "toolkit/core/input_log.h"
 
 namespace ptc {
 
@@ -298,6 +299,7 @@ void write_md3(const std::filesystem::path& path, const std::vector<Md3SurfaceDa
 // Animation
 
 AnimationPtr load_md3(const std::filesystem::path& path, const Md3Options& opt) {
+  note_input_file(path);
   Md3Model m = read_md3(path);
   if (!(opt.fps > 0.0) || !std::isfinite(opt.fps)) throw InputError(path.string(), "", "fps", "must be > 0");
   if (opt.flip_winding)

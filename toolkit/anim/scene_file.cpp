@@ -16,6 +16,7 @@
 #include "toolkit/core/error.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/subdivision.h"
+#include "toolkit/core/input_log.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -327,6 +328,7 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
 }
 
 Scene load_scene_file(const fs::path& path, const SceneOptions& opt) {
+  note_input_file(path);
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path.string(), "", "", "no such file");
   if (fs::is_directory(path, ec)) throw InputError(path.string(), "", "", "is a directory, not a scene file");

@@ -10,6 +10,7 @@
 
 #include "toolkit/core/error.h"
 #include "toolkit/io/readers.h"
+#include "toolkit/core/input_log.h"
 
 namespace ptc {
 
@@ -91,6 +92,7 @@ LoadedMesh read_mesh_from_memory(std::string_view bytes, MeshFormat f, const std
 }
 
 LoadedMesh read_mesh(const std::filesystem::path& path) {
+  note_input_file(path);
   const std::optional<MeshFormat> f = format_from_extension(path);
   if (!f)
     throw InputError(
