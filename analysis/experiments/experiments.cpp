@@ -58,6 +58,9 @@ std::vector<std::string> default_drift_clusterings(bool given) {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// |ln ratio| below this is rounding (the CGAL sphere and the box area are computed to about
+/// 1e-15 relative): the drift correlations count it as no change (docs/experiments.md).
+constexpr double kDriftNoise = 1e-12;
 
 // The configuration a sweep value is: the user's method and objective with MaxCount = MaxSize =
 // the value; 0 is one triangle per cluster (the paper's standard, any method; run as the triangle BVH).
@@ -473,9 +476,15 @@ void drift_clusters(const ExperimentParams& p, const study::StudyFrame& sf, stud
   }
   const std::vector<ClusterDrift> dr = cluster_drift(tr.first, rows), dp = cluster_drift(tr.prev, rows);
   if (sf.index > 0) {
+    // A change below kDriftNoise is rounding, not motion (a cluster carried rigidly by a bone
+    // gets ratios 1 +- a few ulps, whose ranks would decide the Spearman of such clusters): 0.
+    auto moved = [](double ratio) {
+      const double v = std::abs(std::log(ratio));
+      return v < kDriftNoise ? 0.0 : v;
+    };
     for (std::size_t k = 0; k < rows.size(); ++k) {
-      tr.drift_sum[k] += std::abs(std::log(dr[k].box_area_ratio));
-      tr.radius_sum[k] += std::abs(std::log(dr[k].sphere_radius_ratio));
+      tr.drift_sum[k] += moved(dr[k].box_area_ratio);
+      tr.radius_sum[k] += moved(dr[k].sphere_radius_ratio);
     }
     ++tr.frames_summed;
   }
