@@ -101,7 +101,7 @@ for i, cl in enumerate(clusterings):
     b.plot(e["frame"], e["sah_cost"], label=cl, **line_style(i))
     drawn += 1
 a.axhline(1.0, color="black", linestyle=":", linewidth=0.8)
-a.set_xlabel("frame"); a.set_ylabel("p95 over clusters of box area / frame 0's"); a.set_title("box-area drift per clustering")
+a.set_xlabel("frame"); a.set_ylabel("p95 over clusters of box area / the first frame's"); a.set_title("box-area drift per clustering (every frame)")
 b.set_xlabel("frame"); b.set_ylabel("SAH cost of the frame's BVH"); b.set_title("SAH cost per frame (triangles: the triangle BVH)")
 a.legend(fontsize=8); b.legend(fontsize=8)
 save(fig, "drift_frames", drawn)
@@ -114,7 +114,8 @@ parts = []
 cols = ["clustering", "frame", "cluster_id", "connectivity", "box_area_ratio"]
 for ch in pd.read_csv(os.path.join(STUDY["drift"], "clusters_frames.csv"), usecols=cols, chunksize=2_000_000):
     ch = ch[ch["frame"] > ch["clustering"].map(first)]
-    ch = ch.assign(d=np.abs(np.log(ch["box_area_ratio"])))
+    d = np.abs(np.log(ch["box_area_ratio"]))
+    ch = ch.assign(d=d.where(~(d < 1e-12), 0.0))  # rounding, not motion: as correlation.csv counts it
     parts.append(ch.groupby(["clustering", "cluster_id"]).agg(conn=("connectivity", "max"), s=("d", "sum"), n=("d", "count")))
 per = pd.concat(parts).groupby(level=[0, 1]).agg(conn=("conn", "max"), s=("s", "sum"), n=("n", "sum"))
 per["drift"] = per["s"] / per["n"]
@@ -131,7 +132,7 @@ for i, cl in enumerate(clusterings):
     label = f"{cl} (Spearman {rho.iloc[0]:+.2f})" if len(rho) else cl
     ax.scatter(p["conn"], p["drift"], s=4, color=COLOURS[i % 10], label=label)
 ax.set_xlabel("connectivity (triangles / vertices)")
-ax.set_ylabel("mean |ln(box area / frame 0's)| over the frames after the first")
+ax.set_ylabel("mean |ln(box area / the first frame's)| over the frames after it")
 ax.set_title("connectivity against box-area drift (up to 3000 clusters per clustering)")
 ax.legend(fontsize=8, markerscale=3)
 save(fig, "drift_correlation", len(clusterings))
@@ -154,7 +155,7 @@ for ax, col, model in zip(axes, ["sah_cost", "epo"], ["sah", "epo"]):
         f = f.iloc[0]
         coef = f["coef_sah"] if model == "sah" else f["coef_epo"]
         x = np.linspace(rays[col].min(), rays[col].max(), 50)
-        ax.plot(x, coef * x + f["intercept"], "k-", label=f"fit: {coef:.3f} {model.upper()} + {f['intercept']:.2f}, R^2 {f['r2']:.3f}")
+        ax.plot(x, coef * x + f["intercept"], "k-", label=f"fit: {coef:.3f} {model.upper()} {f['intercept']:+.2f}, R^2 {f['r2']:.3f}")
         fits = 1
     ax.set_xlabel("SAH cost of the frame's BVH" if model == "sah" else "EPO of the frame's BVH")
     ax.set_ylabel("measured cost per primary ray (nodes + weighted triangles)")
@@ -168,7 +169,7 @@ const char* kSpeedError = R"PY(acc = study_csv("accuracy", "accuracy.csv")
 groups = list(dict.fromkeys(acc["group"]))
 cols = 2 if len(groups) > 1 else 1
 rows = math.ceil(len(groups) / cols)
-fig, axes = plt.subplots(rows, cols, figsize=(6.5 * cols, 4 * rows), squeeze=False)
+fig, axes = plt.subplots(rows, cols, figsize=(6.5 * cols, 4.4 * rows), squeeze=False, constrained_layout=True)
 for i, g in enumerate(groups):
     ax = axes[i // cols][i % cols]
     d = acc[acc["group"] == g]
@@ -178,8 +179,16 @@ for i, g in enumerate(groups):
         ax.annotate(r["choice"], (r["speedup"], r["err"]), fontsize=7, xytext=(3, 3), textcoords="offset points")
     if (e["speedup"] > 0).all():
         ax.set_xscale("log")
-    small = e["err"].abs()[e["err"] != 0]
-    ax.set_yscale("symlog", linthresh=float(small.min()) if len(small) else 1e-12)
+    # Errors span decades: log when all are positive; else symlog, linear below the decade of the
+    # smallest non-zero one, and no negative range when there are no negative errors.
+    err = e["err"].dropna()
+    small = err.abs()[err != 0]
+    if len(err) and (err > 0).all():
+        ax.set_yscale("log")
+    elif len(small):
+        ax.set_yscale("symlog", linthresh=float(10.0 ** np.floor(np.log10(small.min()))))
+        if (err >= 0).all():
+            ax.set_ylim(bottom=0.0)
     ax.set_xlabel(f"speed-up over {d['reference'].iloc[0]} (median over frames)")
     ax.set_ylabel(f"{d['error'].iloc[0]} (mean, median over frames)")
     ax.set_title(f"speed against error: {g}")
@@ -215,8 +224,9 @@ std::string title_markdown(const StudyInputs& in) {
   std::string s = "# The paper's figures from ptc's experiment tables\n\n"
                   "Garanzha 2009, *The use of precomputed triangle clusters for accelerated ray tracing in dynamic "
                   "scenes*, redrawn from the CSVs of `ptc experiment` (docs/experiments.md says what every column "
-                  "holds and how it is measured). The first frame of every run is its warm-up and is left out, as "
-                  "in ptc's own summaries.\n\n| experiment | directory | scene |\n|---|---|---|\n";
+                  "holds and how it is measured). Times and costs leave out the first frame of every run (its "
+                  "warm-up), as ptc's own summaries do; the drift plots show every frame, the first being the "
+                  "reference of their ratios.\n\n| experiment | directory | scene |\n|---|---|---|\n";
   for (const auto& [k, d] : in.dirs) {
     const auto sc = in.scenes.find(k);
     const auto no = in.notes.find(k);
