@@ -142,7 +142,10 @@ ConfigRow config_row(const std::string& scene, const study::Prepared& p) {
     r.objective = none || (c.method != ClusterMethod::Growth && c.method != ClusterMethod::Contraction)
                       ? "" : to_string(c.objective);
     r.max_count = c.max_count;
-    r.max_size = c.max_size;
+    // MaxSize only where the method reads it (Acc): nan for the others (naive, gwh01, meshopt,
+    // sah_split), whose clusters it did not shape.
+    const auto used = used_parameters(c);
+    r.max_size = std::find(used.begin(), used.end(), "max_size") != used.end() ? c.max_size : kNaN;
   } else if (p.spec.given) {
     r.method = "given";
   }

@@ -272,6 +272,7 @@ TEST_F(Experiment, GivenClustersAreTheMethodByDefault) {
   const auto cfg = csv_rows(slurp(dir_ / "cmp" / "configs.csv"));
   const auto clusters = csv_rows(slurp(dir_ / "clusters" / "clusters.csv"));
   EXPECT_EQ(cfg.at(0).at("config"), "given");
+
   EXPECT_EQ(cfg.at(0).at("clusters"), std::to_string(clusters.size()));  // the given clustering, not a new one
 
   const RunResult d = ptc({"experiment", "drift", mesh, "--clusters", c, "--frames", "0:1", "--width", "16", "--height",
@@ -390,6 +391,19 @@ TEST_F(Experiment, RoundingIsNoDrift) {
     EXPECT_EQ(r.at("spearman"), "nan") << r.at("y");
     EXPECT_EQ(r.at("pearson"), "nan") << r.at("y");
   }
+}
+
+// configs.csv gives MaxSize only where the method reads it (Acc): nan for the others.
+TEST_F(Experiment, ConfigsListMaxSizeOnlyWhereTheMethodReadsIt) {
+  const RunResult r = ptc({"experiment", "compare", "cloth-sphere-32", "--configs", "acc_growth,naive,meshopt", "--frames",
+                           "0", "--width", "8", "--height", "8", "--max-size", "40", "--quiet", "--out",
+                           (dir_ / "c").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::map<std::string, std::string> max_size;
+  for (const auto& x : csv_rows(slurp(dir_ / "c" / "configs.csv"))) max_size[x.at("config")] = x.at("max_size");
+  EXPECT_EQ(max_size.at("acc_growth"), "40");
+  EXPECT_EQ(max_size.at("naive"), "nan");
+  EXPECT_EQ(max_size.at("meshopt"), "nan");
 }
 
 TEST_F(Experiment, MergeRefusesAnEditedManifestNamingIt) {
