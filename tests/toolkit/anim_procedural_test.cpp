@@ -106,7 +106,9 @@ TEST(Deformers, ParseNames) {
 // Identity at zero amplitude (bit-exact), and at frame 0 for the oscillating kinds
 
 TEST(Deformers, ZeroAmplitudeIsIdentity) {
-  const Mesh m = test_mesh();
+  // Also a mesh whose rest positions are not exactly c + (p - c) (c its box centre): far from the
+  // origin, with a third of a unit in it (the armadillo's frame 0 was 3.5e-15 off its rest pose).
+  for (const Mesh& m : {test_mesh(), uv_sphere(9, 13, Vec3(1000.0 / 3.0, -0.1, 77.7), Vec3(0.3, 5.0 / 3.0, 2.2))}) {
   for (auto k : {DeformKind::Twist, DeformKind::Bend, DeformKind::Wave, DeformKind::Rigid, DeformKind::Explode}) {
     for (int axis = 0; axis < 3; ++axis) {
       DeformParams p;
@@ -123,15 +125,27 @@ TEST(Deformers, ZeroAmplitudeIsIdentity) {
       }
     }
   }
-  // Twist and bend oscillate as sin(2 pi t / period): frame 0 and whole periods are the rest pose.
-  for (auto k : {DeformKind::Twist, DeformKind::Bend}) {
+  // Twist and bend oscillate as sin(2 pi t / period), rigid turns by amplitude 2 pi t / period:
+  // frame 0 is the rest pose, bit for bit.
+  for (auto k : {DeformKind::Twist, DeformKind::Bend, DeformKind::Rigid}) {
     DeformParams p;
     p.kind = k;
     p.direction = 0;
     p.amplitude = 1.3;
+    if (k == DeformKind::Rigid) p.velocity = Vec3(0.1, 0.02, 0.0);
     auto d = make_deformer(m, p);
     const auto f = frame(*d, 0.0);
     for (std::size_t i = 0; i < f.size(); ++i) ASSERT_EQ(f[i], m.position(i)) << to_string(k);
+  }
+  // A rigid motion without rotation is a translation: every vertex moved by the same vector.
+  DeformParams p;
+  p.kind = DeformKind::Rigid;
+  p.amplitude = 0.0;
+  p.velocity = Vec3(0.1, -0.3, 0.05);
+  auto d = make_deformer(m, p);
+  const auto f = frame(*d, 7.0);
+  const Vec3 move = p.velocity * m.bounds().extent().norm() * 7.0;
+  for (std::size_t i = 0; i < f.size(); ++i) ASSERT_EQ(f[i], m.position(i) + move);
   }
 }
 

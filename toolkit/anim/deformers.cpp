@@ -83,6 +83,10 @@ class Deformer final : public Animation {
           const Vec3& q = in[i];
           const double along = half > 0 ? (q[a] - c_[a]) / half : 0.0;
           const double ang = amp * along;
+          if (ang == 0.0) {  // no rotation: the rest position itself (c + (q - c) may be an ulp off)
+            out[i] = q;
+            return;
+          }
           const double cs = std::cos(ang), sn = std::sin(ang);
           const double x = q[u] - c_[u], y = q[v] - c_[v];
           Vec3 r = q;
@@ -127,7 +131,10 @@ class Deformer final : public Animation {
         const double ang = p_.amplitude * kTwoPi * t / p_.period;
         const Eigen::Matrix3d R = Eigen::AngleAxisd(ang, Vec3::Unit(a)).toRotationMatrix();
         const Vec3 move = p_.velocity * diag_ * t;
-        for_vertices(in.size(), [&](std::size_t i) { out[i] = c_ + R * (in[i] - c_) + move; });
+        if (ang == 0.0)  // a translation (or the rest pose at t = 0): exact, not c + (p - c) + move
+          for_vertices(in.size(), [&](std::size_t i) { out[i] = in[i] + move; });
+        else
+          for_vertices(in.size(), [&](std::size_t i) { out[i] = c_ + R * (in[i] - c_) + move; });
         break;
       }
       case DeformKind::Explode: {
