@@ -415,6 +415,9 @@ nlohmann::json identity(const nlohmann::json& m) {
 // named, not a crash).
 void check_shard_manifest(const nlohmann::json& m, const std::filesystem::path& file) {
   auto bad = [&](const std::string& what) { return InputError(file.string(), "", what, "missing or of the wrong type"); };
+  if (m.is_object() && m.value("command", "") == "merge")
+    throw InputError(file.string(), "", "",
+                     "is the output of `ptc merge`, not a shard: merge the shards it was made from (all of them, once)");
   if (!m.is_object() || m.value("command", "") != "experiment")
     throw InputError(file.string(), "", "", "not the manifest of a `ptc experiment` run");
   const auto get = [&](const nlohmann::json& j, const char* key) -> const nlohmann::json& {

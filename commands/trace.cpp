@@ -264,7 +264,9 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("ray_offset", "origin = p + 2^-18 M n, M = max |coordinate| of bounds and p in the trace frame");
   manifest.set_result("images", images);
   manifest.set_result("rays", std::uint64_t(rc.width) * std::uint64_t(rc.height));  // per frame
-  manifest.set_result("hits", per_frame.empty() ? nlohmann::json(0) : per_frame[0]["hits"]);  // first frame
+  std::uint64_t hits = 0;  // primary hits of every frame traced (results.frames has them per frame)
+  for (const auto& f : per_frame) hits += f["hits"].get<std::uint64_t>();
+  manifest.set_result("hits", hits);
   manifest.set_result("frames", per_frame);
   manifest.add_timing_ms("write", write_ms + sw.ms());
   (void)commit_with_manifest(dir, manifest);

@@ -229,6 +229,12 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   r = ptc({"merge", (dir_ / "nothing").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("manifest.json"), std::string::npos) << r.err;
+  // A merged directory is not a shard: said so.
+  ASSERT_EQ(ptc({"merge", a, b, "--out", (dir_ / "merged").string()}).code, 0);
+  r = ptc({"merge", (dir_ / "merged").string(), a, "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("is the output of `ptc merge`"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
   // An edited shard: a row removed. Its bytes no longer have the manifest's hash; with the hash
   // gone from the manifest (a shard of a ptc before 2026-12-04), the row count still tells.
   std::string text = slurp(dir_ / "b" / "sweep.csv");

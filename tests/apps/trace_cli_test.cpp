@@ -217,6 +217,11 @@ TEST_F(TraceCli, AFrameTracesTheSameInAnyRange) {
     for (const std::string pass : {"primary", "shadow"})
       for (const char* col : {"hits", "nodes_visited", "triangles_tested"})
         EXPECT_EQ(all.at("5/" + pass).at(col), other->at("5/" + pass).at(col)) << pass << " " << col;
+  // The manifest's hits: the primary hits of every frame traced.
+  std::uint64_t sum = 0;
+  for (const auto& [key, row] : all)
+    if (row.at("pass") == "primary") sum += std::stoull(row.at("hits"));
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "all" / "manifest.json"))["results"]["hits"].get<std::uint64_t>(), sum);
   EXPECT_EQ(slurp(dir_ / "all" / "depth_0005.png"), slurp(dir_ / "one" / "depth.png"));
   EXPECT_EQ(slurp(dir_ / "all" / "depth_0005.png"), slurp(dir_ / "late" / "depth_0005.png"));
   EXPECT_EQ(slurp(dir_ / "all" / "normal_0004.png"), slurp(dir_ / "late" / "normal_0004.png"));
