@@ -150,7 +150,8 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   manifest.add_timing_ms("write", t0.ms());
   manifest.add_output("triangles.csv", tri_schema);
   manifest.add_output("clusters.csv", cluster_schema);
-  for (const char* f : {"clusters.ply", "summary.json"}) manifest.add_output(f);
+  manifest.add_output("clusters.ply");
+  manifest.add_output("summary.json", "ptc-cluster-summary/2");
   manifest.set_result("triangles", lm.mesh.triangle_count());
   manifest.set_result("clusters", clustering.cluster_count());
   manifest.set_result("mean_triangles_per_cluster",
