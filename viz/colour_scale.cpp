@@ -51,8 +51,16 @@ ColourScale make_scale(std::string title, std::span<const double> values, bool d
     return s;
   }
   if (from_zero && lo >= 0) lo = 0;
-  if (hi - lo > 1e-12 * std::max({1.0, std::abs(lo), std::abs(hi)})) s.min = lo, s.max = hi;
-  else s.min = lo - 0.5, s.max = hi + 0.5;
+  // A spread below rounding, relative to the values (a mesh of 1e-6 units has areas of 1e-12 and
+  // spreads far below 1): one value m, drawn on m -+ m / 2 (which keeps the sign of a positive or
+  // negative quantity), or 0 .. 1 for m = 0.
+  if (hi - lo > 1e-12 * std::max(std::abs(lo), std::abs(hi))) {
+    s.min = lo, s.max = hi;
+  } else {
+    const double m = 0.5 * lo + 0.5 * hi;
+    if (m == 0.0) s.min = 0.0, s.max = 1.0;
+    else s.min = m - 0.5 * std::abs(m), s.max = m + 0.5 * std::abs(m);
+  }
   return s;
 }
 

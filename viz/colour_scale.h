@@ -40,9 +40,11 @@ struct ColourScale {
 /// The scale for `values` (NaN ignored): `fixed` when given; else sequential: [min, max] of the
 /// values (0 .. max for non-negative counters when `from_zero`), diverging: centre -+ the largest
 /// distance of a value from the centre, but never below `floor` (0 for ratios), two-slope about
-/// the centre. A constant or empty set widens to a non-empty range (value -+ 0.5, or 0 .. 1), as
-/// does a spread below rounding (1e-9 of the centre's size for diverging scales, 1e-12 of the
-/// values' for sequential ones: a rigid motion's ratios are 1 to ~1e-16, not a picture). A
+/// the centre. A constant or empty set widens to a non-empty range, as does a spread below
+/// rounding (1e-9 of the centre's size for diverging scales: a rigid motion's ratios are 1 to
+/// ~1e-16, not a picture; 1e-12 of the values' size for sequential ones, whatever their units):
+/// diverging centre -+ 0.5, sequential m -+ |m| / 2 for the one value m (its sign kept: no
+/// negative legend for an area), 0 .. 1 for m = 0 or nothing finite. A
 /// fixed diverging range is two-slope when it contains the centre, else linear.
 [[nodiscard]] ColourScale make_scale(std::string title, std::span<const double> values, bool diverging, double centre,
                                      const std::optional<std::pair<double, double>>& fixed, bool from_zero = false,

@@ -1,14 +1,17 @@
 #include "analysis/metrics/sah_overhead.h"
 
+#include <limits>
 #include <vector>
 
 #include "bvh/sah_builder.h"
 #include "bvh/sah_cost.h"
+#include "bvh/scene_config.h"
 
 namespace ptc {
 namespace {
 
-// Absolute SAH cost (traversal 1, intersection 1, one primitive per leaf) of a binned build.
+// Absolute SAH cost (traversal 1, intersection 1, one primitive per leaf) of a binned build, in
+// the frame's units (the caller divides by its scale squared).
 double absolute_sah(const std::vector<bvh::Box3f>& boxes) {
   if (boxes.empty()) return 0.0;
   std::vector<bvh::Vec3f> centroids;
@@ -37,7 +40,11 @@ SahOverhead sah_overhead(const Mesh& mesh, const Clustering& c) {
   SahOverhead r;
   std::vector<bvh::Box3f> all, tops, one;
   all.reserve(mesh.triangle_count());
-  for (std::uint32_t t = 0; t < mesh.triangle_count(); ++t) all.push_back(bvh::to_frame(triangle_box(mesh, t), bvh::FrameMap{}));
+  // The boxes in floats in the mesh's trace frame (its box centre, a power-of-two scale), as the
+  // BVHs are built: in world coordinates a mesh 1e7 from the origin had boxes rounded to whole
+  // units (an overhead of 0.8 where the same mesh at the origin gave 1.03).
+  const bvh::FrameMap frame = mesh.triangle_count() ? bvh::trace_frame(mesh, bvh::SceneConfig{}) : bvh::FrameMap{};
+  for (std::uint32_t t = 0; t < mesh.triangle_count(); ++t) all.push_back(bvh::to_frame(triangle_box(mesh, t), frame));
   for (std::size_t k = 0; k < c.cluster_count(); ++k) {
     one.clear();
     bvh::Box3f box;
@@ -48,7 +55,12 @@ SahOverhead sah_overhead(const Mesh& mesh, const Clustering& c) {
   }
   r.clustered += absolute_sah(tops);
   r.triangles = absolute_sah(all);
-  r.overhead = r.triangles > 0 ? r.clustered / r.triangles : 0.0;
+  const double to_mesh_units = 1.0 / (frame.scale * frame.scale);  // (exact: a power of two)
+  r.clustered *= to_mesh_units, r.triangles *= to_mesh_units;
+  // No area at all (every triangle degenerate): the ratio is undefined, not 0.
+  r.overhead = r.triangles > 0                ? r.clustered / r.triangles
+               : mesh.triangle_count() == 0 ? 0.0
+                                             : std::numeric_limits<double>::quiet_NaN();
   return r;
 }
 

@@ -29,8 +29,26 @@ TEST(ColourScale, RangesFromTheValues) {
   EXPECT_DOUBLE_EQ(s.min, 0.7);
   EXPECT_DOUBLE_EQ(s.max, 1.3);
   s = make_scale("c", std::vector<double>{2, 2}, false, 0, std::nullopt);
-  EXPECT_EQ(s.min, 1.5);
-  EXPECT_EQ(s.max, 2.5);
+  EXPECT_EQ(s.min, 1.0);  // one value m: m -+ m / 2, its sign kept
+  EXPECT_EQ(s.max, 3.0);
+  // A constant zero (an area, a counter): 0 .. 1, no negative legend.
+  s = make_scale("box_area", std::vector<double>{0, 0}, false, 0, std::nullopt);
+  EXPECT_EQ(s.min, 0.0);
+  EXPECT_EQ(s.max, 1.0);
+  s = make_scale("triangles_tested", std::vector<double>{0, 0}, false, 0, std::nullopt, /*from_zero=*/true);
+  EXPECT_EQ(s.min, 0.0);
+  EXPECT_EQ(s.max, 1.0);
+  s = make_scale("acc", std::vector<double>{-0.25, -0.25}, false, 0, std::nullopt);
+  EXPECT_EQ(s.min, -0.375);
+  EXPECT_EQ(s.max, -0.125);
+  // Areas of a mesh of 1e-6 units (1e-14 .. 1e-12): a real spread, drawn as it is.
+  s = make_scale("box_area", std::vector<double>{1e-14, 3e-13, 1e-12}, false, 0, std::nullopt);
+  EXPECT_EQ(s.min, 1e-14);
+  EXPECT_EQ(s.max, 1e-12);
+  // Rounding noise relative to the values' size: one value.
+  s = make_scale("box_area", std::vector<double>{1e-12, 1e-12 * (1 + 1e-15)}, false, 0, std::nullopt);
+  EXPECT_DOUBLE_EQ(s.min, 0.5e-12);
+  EXPECT_DOUBLE_EQ(s.max, 1.5e-12);
   s = make_scale("d", std::vector<double>{1, 1}, true, 1, std::nullopt);
   EXPECT_LT(s.min, 1);
   EXPECT_GT(s.max, 1);

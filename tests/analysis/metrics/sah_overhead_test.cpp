@@ -3,6 +3,8 @@
 // composition of the formula checked on a two-cluster split against its pieces.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "analysis/metrics/sah_overhead.h"
 #include "toolkit/anim/scene.h"
 #include "toolkit/clustering/cluster.h"
@@ -29,6 +31,33 @@ TEST(SahOverhead, IdentitiesAndOrder) {
   EXPECT_GT(acc.overhead, 1.0);
   EXPECT_LT(acc.overhead, 3.0);
   EXPECT_EQ(sah_overhead(Mesh{}, Clustering{}).overhead, 0.0);
+}
+
+TEST(SahOverhead, DoesNotDependOnWhereTheMeshLies) {
+  // The same clustering of a sphere at the origin, 1e7 away and scaled by 2^-20: the same
+  // overhead (in world floats the far one's boxes were rounded to whole units: 0.8 against 1.03),
+  // and absolute costs in the mesh's units (a 2^-20 scale: areas times 2^-40).
+  const Mesh m = make_sphere_mesh(Vec3(0.2, 0.0, -0.1), 1.0, 3);
+  ClusterConfig cc;
+  cc.method = ClusterMethod::Growth;
+  cc.max_count = 20;
+  cc.max_size = 20;
+  const Clustering c = cluster_mesh(m, cc);
+  const SahOverhead here = sah_overhead(m, c);
+  auto moved = [&](double scale, const Vec3& offset) {
+    std::vector<Vec3> p(m.positions().begin(), m.positions().end());
+    for (Vec3& q : p) q = q * scale + offset;
+    return Mesh(std::vector<Tri>(m.triangles().begin(), m.triangles().end()), p);
+  };
+  const SahOverhead far = sah_overhead(moved(1.0, Vec3(1e7, -3e7, 2e7)), c);
+  EXPECT_NEAR(far.overhead, here.overhead, 1e-6 * here.overhead);
+  const double s = std::ldexp(1.0, -20);
+  const SahOverhead tiny = sah_overhead(moved(s, Vec3(0, 0, 0)), c);
+  EXPECT_NEAR(tiny.overhead, here.overhead, 1e-6 * here.overhead);
+  EXPECT_NEAR(tiny.triangles, here.triangles * s * s, 1e-6 * here.triangles * s * s);
+  // No box has area (triangles on an axis): the ratio is undefined.
+  const Mesh flat({{0, 1, 2}, {1, 2, 3}}, std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}});  // boxes of no area
+  EXPECT_TRUE(std::isnan(sah_overhead(flat, clustering_from_labels(std::vector<std::uint32_t>{0, 1}, flat.triangles())).overhead));
 }
 
 TEST(SahOverhead, TwoClustersComposeFromTheirPieces) {
