@@ -3,13 +3,25 @@
 #include <algorithm>
 #include <limits>
 
+#include "toolkit/geometry/triangle.h"
+
 namespace ptc {
+
+namespace {
+// A triangle's area by the toolkit's rule (docs/mesh_policy.md): 0 for a degenerate triangle,
+// including a near-degenerate one (its sine below 1e-12: toolkit/geometry/triangle.h), whose
+// area is rounding; else half the cross product's length.
+double area_by_rule(const Vec3& a, const Vec3& b, const Vec3& c) {
+  if (triangle_geometry(a, b, c).normal == Vec3::Zero()) return 0.0;
+  return 0.5 * (b - a).cross(c - a).norm();
+}
+}  // namespace
 
 std::vector<double> triangle_areas(std::span<const Tri> triangles, std::span<const Vec3> positions) {
   std::vector<double> a(triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const Tri& f = triangles[t];
-    a[t] = 0.5 * (positions[f[1]] - positions[f[0]]).cross(positions[f[2]] - positions[f[0]]).norm();
+    a[t] = area_by_rule(positions[f[0]], positions[f[1]], positions[f[2]]);
   }
   return a;
 }
@@ -23,7 +35,7 @@ FrameStats frame_stats(std::int64_t frame, std::span<const Tri> triangles, std::
   std::size_t counted = 0;
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const Tri& f = triangles[t];
-    const double a = 0.5 * (positions[f[1]] - positions[f[0]]).cross(positions[f[2]] - positions[f[0]]).norm();
+    const double a = area_by_rule(positions[f[0]], positions[f[1]], positions[f[2]]);
     s.total_area += a;
     if (!(first_areas[t] > 0)) {
       ++s.degenerate_at_first;
