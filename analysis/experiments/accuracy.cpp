@@ -180,8 +180,10 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
           if (exact[k] > 0) err.push_back((got[k] - exact[k]) / exact[k]);
         const Summary s = summarize(err);
         r.error = "radius_rel_err";
-        r.error_mean = s.mean, r.error_max = s.count ? s.max : kNaN;
-        r.count = sets.size();
+        // Only the sets with a sphere to compare with (exact radius > 0) are measured: a frame that
+        // collapses every cluster to a point measures none (nan, not a mean of 0 over nothing).
+        r.error_mean = s.count ? s.mean : kNaN, r.error_max = s.count ? s.max : kNaN;
+        r.count = s.count;
       } else if (r.group == "sphere_in_loop") {
         const std::size_t mi = static_cast<std::size_t>(
             std::find_if(std::begin(kApprox), std::end(kApprox), [&](SphereMethod m) { return to_string(m) == r.choice; }) -

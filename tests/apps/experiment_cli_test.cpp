@@ -412,6 +412,47 @@ TEST_F(Experiment, ConfigsListMaxSizeOnlyWhereTheMethodReadsIt) {
   EXPECT_EQ(max_size.at("meshopt"), "nan");
 }
 
+// A frame that collapses every cluster to a point measures no sphere: the accuracy rows say
+// count 0 and nan, not a mean error of 0 over nothing.
+TEST_F(Experiment, AccuracyOfACollapsedFrameMeasuresNothing) {
+  const fs::path seq = dir_ / "seq";
+  fs::create_directories(seq);
+  std::string grid = "OFF\n25 32 0\n", same = "OFF\n25 32 0\n";
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 5; ++x) grid += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string((x * y) % 3) + "\n";
+  for (int i = 0; i < 25; ++i) same += "0.5 0.5 0\n";
+  std::string faces;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const int v = 5 * y + x;
+      faces += "3 " + std::to_string(v) + " " + std::to_string(v + 1) + " " + std::to_string(v + 6) + "\n";
+      faces += "3 " + std::to_string(v) + " " + std::to_string(v + 6) + " " + std::to_string(v + 5) + "\n";
+    }
+  spit(seq / "f0.off", grid + faces);
+  spit(seq / "f1.off", same + faces);
+  spit(dir_ / "grid.off", grid + faces);
+  ASSERT_EQ(ptc({"cluster", (dir_ / "grid.off").string(), "--max-count", "4", "--max-size", "4", "--out",
+                 (dir_ / "c").string()})
+                .code,
+            0);
+  const RunResult r = ptc({"experiment", "accuracy", seq.string(), "--clusters", (dir_ / "c").string(), "--frames", "0:1",
+                           "--width", "8", "--height", "8", "--quiet", "--out", (dir_ / "a").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::size_t checked = 0;
+  for (const auto& row : csv_rows(slurp(dir_ / "a" / "accuracy.csv"))) {
+    if (row.at("group") != "sphere") continue;
+    if (row.at("frame") == "1") {
+      EXPECT_EQ(row.at("count"), "0") << row.at("choice");
+      EXPECT_EQ(row.at("error_mean"), "nan") << row.at("choice");
+      EXPECT_EQ(row.at("error_max"), "nan") << row.at("choice");
+      ++checked;
+    } else {
+      EXPECT_NE(row.at("count"), "0") << row.at("choice");
+    }
+  }
+  EXPECT_GT(checked, 0u);
+}
+
 TEST_F(Experiment, MergeRefusesAnEditedManifestNamingIt) {
   const std::vector<std::string> run = {"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0", "--frames", "0",
                                         "--width", "8", "--height", "8", "--quiet", "--out"};
