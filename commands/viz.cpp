@@ -171,7 +171,10 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   // A clustering made by coincident corners (cluster.h): the rest pose's adjacency triangles,
   // once, for the partition and the metrics; empty for one made by edges.
   std::vector<Tri> adjacency;
-  if (use_clusters && resolve_adjacency(scene.rest(), ci.cfg.adjacency) == ClusterAdjacency::Positions)
+  // (the scene's mesh may be a soup of the one clustered, e.g. under the explode deformer: the
+  // clustering is read as the experiments read it, adjacency_on)
+  if (use_clusters) ci.cfg.adjacency = adjacency_on(scene.rest(), ci.cfg.adjacency);
+  if (use_clusters && ci.cfg.adjacency == ClusterAdjacency::Positions)
     adjacency = adjacency_triangles(scene.rest(), ClusterAdjacency::Positions);
   if (use_clusters) {
     // A soup's clusters meet at sides whose corners coincide at rest: the colouring and the

@@ -100,7 +100,8 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
   const Mesh& rest = scene.rest();
   const study::StudyRays rays = study::study_rays(rest, setup);
   out.rays = rays.primary.size();
-  const ClusterConfig mc = method_config(p);
+  ClusterConfig mc = method_config(p);
+  if (p.given) mc.adjacency = adjacency_on(rest, mc.adjacency);  // as drift and ptc viz read it
   FileRows file = file_rows("accuracy.csv", kAccuracySchema, columns_of<AccuracyRow>(visit_accuracy));
   if (done.empty()) {  // an empty shard: nothing to make
     out.files.push_back(std::move(file));

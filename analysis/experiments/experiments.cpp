@@ -86,6 +86,7 @@ study::ConfigSpec spec_of(const std::string& name, const ExperimentParams& p) {
   if (name == "given") {
     if (!p.given) throw std::invalid_argument("configuration 'given' needs a clustering (--clusters DIR)");
     s.given = p.given;
+    if (p.given_cluster) s.given_adjacency = p.given_cluster->adjacency;
     return s;
   }
   if (name == "standard" || name == "triangles") {

@@ -54,7 +54,7 @@ Prepared prepare(const Mesh& rest, const ConfigSpec& spec, const StudySetup& set
     p.mesh = renumber_vertices(rest, p.to_old);
   }
   if (p.has_clusters &&
-      resolve_adjacency(p.mesh, spec.cluster ? spec.cluster->adjacency : ClusterAdjacency::Auto) ==
+      (spec.cluster ? resolve_adjacency(p.mesh, spec.cluster->adjacency) : adjacency_on(p.mesh, spec.given_adjacency)) ==
           ClusterAdjacency::Positions)
     p.adjacency = adjacency_triangles(p.mesh, ClusterAdjacency::Positions);
   if (p.has_clusters) as.clusters = &p.clustering;

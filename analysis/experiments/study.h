@@ -63,6 +63,8 @@ struct ConfigSpec {
   loop::AccelKind kind = loop::AccelKind::OursClusters;
   std::optional<ClusterConfig> cluster;  ///< how the clusters are made (ours_clusters without `given`)
   const Clustering* given = nullptr;     ///< or the given clustering (ours_clusters)
+  /// The adjacency `given` was made with (its manifest; read with adjacency_on).
+  ClusterAdjacency given_adjacency = ClusterAdjacency::Auto;
 };
 
 /// What every study shares.

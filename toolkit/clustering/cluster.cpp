@@ -157,6 +157,10 @@ ClusterAdjacency resolve_adjacency(const Mesh& mesh, ClusterAdjacency a) {
   return is_triangle_soup(mesh) ? ClusterAdjacency::Positions : ClusterAdjacency::Edges;
 }
 
+ClusterAdjacency adjacency_on(const Mesh& mesh, ClusterAdjacency made_with) {
+  return made_with == ClusterAdjacency::Positions ? made_with : resolve_adjacency(mesh, ClusterAdjacency::Auto);
+}
+
 namespace {
 // The rest-pose weld of `mesh` (one frame: vertices at exactly the same position merge).
 WeldMap weld_positions(const Mesh& mesh) {

@@ -80,6 +80,12 @@ struct ClusterConfig {
 [[nodiscard]] bool is_triangle_soup(const Mesh& mesh);
 /// Auto resolved for this mesh (Edges and Positions stay as they are).
 [[nodiscard]] ClusterAdjacency resolve_adjacency(const Mesh& mesh, ClusterAdjacency a);
+/// The adjacency under which a clustering made (elsewhere) with `made_with` is read on `mesh`, a
+/// scene's rest mesh that may be a soup of the mesh it was made on (the explode deformer splits
+/// every vertex; a frame sequence without welding): coincident corners when it was made so, or
+/// when `mesh` is a soup (Auto's rule); edges otherwise. ptc viz and the experiments read a
+/// given clustering with it, so that both see the same neighbours.
+[[nodiscard]] ClusterAdjacency adjacency_on(const Mesh& mesh, ClusterAdjacency made_with);
 /// The triangles whose shared sides are the adjacency `a` (resolved here if Auto): Edges, the
 /// mesh's own; Positions, the mesh's triangles with every vertex replaced by the first vertex at
 /// exactly its position (==, so -0.0 equals +0.0; a NaN equals nothing). Same count and order as
