@@ -153,6 +153,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   const unsigned threads = resolve_threads(rc.threads);
   double render_ms = 0, write_ms = 0, positions_ms = 0;
   bool empty_note = false;  // said once
+  std::size_t empty_more = 0;  // the frames after it without a hit
   nlohmann::json per_frame = nlohmann::json::array();
 
   std::ostringstream text;  // the table; --json prints the rows as JSON instead
@@ -218,12 +219,17 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     if (rc.shadows) pass("shadow", r.shadow_stats, false);
     if (rc.ao_samples > 0) pass("ao", r.ao_stats, false);
     per_frame.push_back({{"frame", f}, {"rays", r.primary_stats.rays}, {"hits", r.primary_stats.hits}});
-    if (r.primary_stats.hits == 0 && r.primary_stats.rays > 0 && !empty_note) {  // an image of background only
-      std::cerr << "ptc: note: no primary ray hit the mesh in frame " << f
-                << " (the camera sees past it or from inside it: give --eye and --look-at)\n";
+    if (r.primary_stats.hits == 0 && r.primary_stats.rays > 0) {  // an image of background only
+      if (!empty_note)
+        std::cerr << "ptc: note: no primary ray hit the mesh in frame " << f
+                  << " (the camera sees past it or from inside it: give --eye and --look-at)\n";
+      else
+        ++empty_more;
       empty_note = true;
     }
   });
+  if (empty_more > 0)  // said once, then counted
+    std::cerr << "ptc: note: nor in " << empty_more << " later frame(s) (trace.csv: hits 0)\n";
   manifest.add_timing_ms("positions", positions_ms);
   manifest.add_timing_ms("render", render_ms);
   sw.restart();

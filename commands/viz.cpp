@@ -463,8 +463,12 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     return;
   }
   if (use_clusters)
-    out << fmt::format("{}: {} triangles, {} clusters in {} colours (no two clusters that share an edge alike)\n", arg,
-                       mesh.triangle_count(), clusters.cluster_count(), colours_used);
+  {
+    auto count = [](std::size_t n, const char* one, const char* many) { return fmt::format("{} {}", n, n == 1 ? one : many); };
+    out << fmt::format("{}: {}, {} in {} (no two clusters that share an edge alike)\n", arg,
+                       count(mesh.triangle_count(), "triangle", "triangles"),
+                       count(clusters.cluster_count(), "cluster", "clusters"), count(colours_used, "colour", "colours"));
+  }
   if (!mp4_note.empty()) out << "note: " << mp4_note << "\n";
   if (dir) {
     out << "wrote " << opt.out_dir.string() << "/";

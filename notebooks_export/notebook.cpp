@@ -129,7 +129,7 @@ for i, cl in enumerate(clusterings):
     if len(p) > 3000:
         p = p.iloc[np.sort(rng.choice(len(p), 3000, replace=False))]
     rho = corr[corr["clustering"] == cl]["spearman"]
-    label = f"{cl} (Spearman {rho.iloc[0]:+.2f})" if len(rho) else cl
+    label = f"{cl} (Spearman {rho.iloc[0]:+.2f})" if len(rho) and np.isfinite(rho.iloc[0]) else f"{cl} (no Spearman: see summary.txt)"
     ax.scatter(p["conn"], p["drift"], s=4, color=COLOURS[i % 10], label=label)
 ax.set_xlabel("connectivity (triangles / vertices)")
 ax.set_ylabel("mean |ln(box area / the first frame's)| over the frames after it")

@@ -282,9 +282,12 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
                       "SAH cost", "SAH triangles", "EPO", "nodes/ray", "box max", "box p95", "spearman");
   const Groups fg = group_by(frames, {"clustering"});
   std::map<std::string, double> rho;
+  std::map<std::string, double> rho_clusters;  // the clusters the correlation could use
   for (std::size_t r = 0; r < corr.rows.size(); ++r)
-    if (corr.rows[r][corr.column("y")] == "box_area_drift")
+    if (corr.rows[r][corr.column("y")] == "box_area_drift") {
       rho[corr.rows[r][corr.column("clustering")]] = corr.number(r, corr.column("spearman"));
+      rho_clusters[corr.rows[r][corr.column("clustering")]] = corr.number(r, corr.column("clusters"));
+    }
   auto cell = [&](std::size_t r, const char* col) { return frames.number(r, frames.column(col)); };
   for (std::size_t i = 0; i < fg.keys.size(); ++i) {
     const std::size_t a = fg.rows[i].front(), b = fg.rows[i].back();
@@ -300,7 +303,14 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
   text += "spearman: rank correlation over clusters of connectivity (N_T/N_V) with box-area drift (mean |ln box area "
           "ratio| over the frames after the first); < 0: denser clusters deform less\n";
   for (const auto& [name, r] : rho) {
-    if (!std::isfinite(r)) continue;
+    if (!std::isfinite(r)) {  // say why there is no number
+      const double n = rho_clusters[name];
+      text += fmt::format("paper: connectivity predicts drift ({}) -> no Spearman: {}\n", name,
+                          n < 3 ? fmt::format("{} cluster(s) with a finite drift (a box of zero area at some frame "
+                                              "makes |ln ratio| infinite or undefined)", n)
+                                : "no variance (every cluster drifts alike, e.g. not at all)");
+      continue;
+    }
     text += fmt::format("paper: connectivity predicts drift ({}) -> Spearman {:.3f}: {} (criterion <= -0.3)\n", name, r,
                         r <= -0.3 ? "agrees" : r < 0 ? "DISAGREES (weak)" : "DISAGREES");
   }

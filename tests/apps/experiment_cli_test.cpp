@@ -412,6 +412,8 @@ TEST_F(Experiment, RoundingIsNoDrift) {
     EXPECT_EQ(r.at("spearman"), "nan") << r.at("y");
     EXPECT_EQ(r.at("pearson"), "nan") << r.at("y");
   }
+  // The summary says why there is no number.
+  EXPECT_NE(slurp(dir_ / "d" / "summary.txt").find("no Spearman: no variance"), std::string::npos);
 }
 
 // configs.csv gives MaxSize only where the method reads it (Acc): nan for the others.

@@ -170,6 +170,13 @@ TEST_F(TraceCli, FlatMeshIsSeenAndAnEmptyViewIsNoted) {
            "--out", (dir_ / "q").string()});
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("ptc: note: no primary ray hit the mesh in frame 0"), std::string::npos) << r.err;
+  // A sequence: the first such frame named, the later ones counted (one note each, not one a frame).
+  r = ptc({"trace", plane, "--deform", "wave", "--frames", "0:3", "--width", "16", "--height", "16", "--eye", "0,5,0",
+           "--look-at", "0,10,0", "--up", "1,0,0", "--out", (dir_ / "s").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("in frame 0 "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("nor in 3 later frame(s)"), std::string::npos) << r.err;
+  EXPECT_EQ(lines(r.err), 2u) << r.err;
 }
 
 // --deform: a mesh file traced with the stand-in motion ptc bench measures (frames of a periodic
