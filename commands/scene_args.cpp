@@ -1,6 +1,7 @@
 #include "commands/scene_args.h"
 
 #include <algorithm>
+#include <iostream>
 
 #include <fmt/format.h>
 
@@ -43,7 +44,14 @@ std::string apply_stand_in(Scene& scene, const std::string& deform, const std::s
   if (!scene.all_static())
     throw UsageError("--deform",
                      fmt::format("'{}' is animated: the stand-in motion applies to static scenes (mesh files) only", arg));
-  scene = deform_scene(scene, deform_preset(*k));
+  const DeformParams params = deform_preset(*k);
+  // Twist and bend move a vertex by its place along the axis: a mesh flat across it stays still.
+  if ((*k == DeformKind::Twist || *k == DeformKind::Bend) && !scene.rest().empty() &&
+      !(scene.rest().bounds().extent()[params.axis] > 0.0))
+    std::cerr << fmt::format("ptc: note: the {} deformer leaves '{}' still: it has no extent along {} (the deformer's "
+                             "axis); wave, rigid or explode move it\n",
+                             to_string(*k), arg, "xyz"[params.axis]);
+  scene = deform_scene(scene, params);
   return fmt::format("stand-in: the {} deformer (deform_preset)", to_string(*k));
 }
 

@@ -177,6 +177,13 @@ TEST_F(TraceCli, FlatMeshIsSeenAndAnEmptyViewIsNoted) {
   EXPECT_NE(r.err.find("in frame 0 "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("nor in 3 later frame(s)"), std::string::npos) << r.err;
   EXPECT_EQ(lines(r.err), 2u) << r.err;
+  // The twist (about y) leaves a plane flat across y still, and says so.
+  r = ptc({"trace", plane, "--deform", "twist", "--frames", "0:1", "--width", "8", "--height", "8", "--out",
+           (dir_ / "t").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("the twist deformer leaves"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no extent along y"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(dir_ / "t" / "depth_0000.png"), slurp(dir_ / "t" / "depth_0001.png"));
 }
 
 // --deform: a mesh file traced with the stand-in motion ptc bench measures (frames of a periodic
