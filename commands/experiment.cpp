@@ -571,9 +571,28 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
   manifest.set_parameter("shard", {{"index", 1}, {"count", 1}});
   manifest.set_result("primary_files", primaries);
   manifest.set_result("item_rows", rows);
-  for (const char* key : {"triangles", "vertices", "rays"})
+  for (const char* key : {"triangles", "vertices", "rays", "rest_mesh_fnv1a64"})
     manifest.set_result(key, shards[0].manifest["results"].value(key, nlohmann::json()));
   manifest.set_result("source_builds", shards[0].manifest["build"]);
+  // Where each shard ran and what it read (its own manifest holds the rest), and the items done.
+  nlohmann::json runs = nlohmann::json::array();
+  std::vector<std::size_t> done;
+  for (std::uint32_t k = 1; k <= n; ++k)
+    for (const auto& s : shards)
+      if (s.dir == seen[k]) {
+        const nlohmann::json& m = s.manifest;
+        runs.push_back({{"dir", s.dir.string()},
+                        {"shard", k},
+                        {"started_utc", m.value("started_utc", nlohmann::json())},
+                        {"wall_ms", m.value("wall_ms", nlohmann::json())},
+                        {"inputs", m.value("inputs", nlohmann::json::array())},
+                        {"machine", m.value("machine", nlohmann::json())}});
+        for (const auto& i : m.at("results").value("items_done", nlohmann::json::array()))
+          if (i.is_number_unsigned()) done.push_back(i.get<std::size_t>());
+      }
+  std::sort(done.begin(), done.end());
+  manifest.set_result("shard_runs", runs);
+  manifest.set_result("items_done", done);
   write_assembled(dir, manifest, a);
   (void)commit_with_manifest(dir, manifest);
   if (opt.json) {

@@ -104,6 +104,16 @@ TEST_F(Experiment, DriftShardsMergeWithTheDerivedTablesOfTheSingleRun) {
   ASSERT_EQ(run({"--shard", "2/2", "--out", (dir_ / "b").string()}).code, 0);
   const RunResult m = ptc({"merge", (dir_ / "a").string(), (dir_ / "b").string(), "--out", (dir_ / "m").string()});
   ASSERT_EQ(m.code, 0) << m.err;
+  // The merged manifest says where each shard ran and what it read, and every item done.
+  {
+    const auto one = nlohmann::json::parse(slurp(dir_ / "one" / "manifest.json"));
+    const auto merged = nlohmann::json::parse(slurp(dir_ / "m" / "manifest.json"));
+    EXPECT_EQ(merged["results"]["items_done"], one["results"]["items_done"]);
+    EXPECT_EQ(merged["results"]["rest_mesh_fnv1a64"], one["results"]["rest_mesh_fnv1a64"]);
+    ASSERT_EQ(merged["results"]["shard_runs"].size(), 2u);
+    EXPECT_EQ(merged["results"]["shard_runs"][0]["shard"], 1);
+    EXPECT_EQ(merged["results"]["shard_runs"][1]["machine"], one["machine"]);
+  }
   // No timing enters these (counters, SAH, EPO, drift): the merged files equal the single run's.
   for (const char* f : {"clusters_frames.csv", "frames.csv", "rays.csv", "correlation.csv", "regression.csv"})
     expect_same_rows(dir_ / "one" / f, dir_ / "m" / f);
