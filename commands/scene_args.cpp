@@ -1,6 +1,5 @@
 #include "commands/scene_args.h"
 
-#include <algorithm>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -28,12 +27,11 @@ Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions
 
 void record_scene_inputs(RunManifest& manifest, const std::filesystem::path& input, const InputLog& log) {
   std::error_code ec;
-  std::vector<std::filesystem::path> files;
-  if (std::filesystem::is_regular_file(input, ec)) files.push_back(std::filesystem::absolute(input, ec).lexically_normal());
-  for (const auto& f : log.files())
-    if (std::find(files.begin(), files.end(), f) == files.end()) files.push_back(f);
-  for (std::size_t i = 0; i < files.size(); ++i)
-    record_input(manifest, i == 0 && std::filesystem::is_regular_file(input, ec) ? input : files[i]);
+  const bool file = std::filesystem::is_regular_file(input, ec);
+  const std::filesystem::path self = file ? std::filesystem::absolute(input, ec).lexically_normal() : std::filesystem::path();
+  if (file) record_input(manifest, input);  // as the user named it
+  for (const auto& f : log.files())         // (each once, absolute)
+    if (f != self) record_input(manifest, f);
 }
 
 std::string apply_stand_in(Scene& scene, const std::string& deform, const std::string& arg) {
