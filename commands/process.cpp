@@ -57,6 +57,10 @@ void print_read_note(const std::string& file, const std::string& note) {
 
 }  // namespace
 
+namespace {
+bool g_stop_blocked_by_exec = false;  // this image was executed with SIGINT and SIGTERM blocked
+}  // namespace
+
 void install_stop_handlers() {
   struct sigaction sa {};
   sa.sa_handler = on_stop_signal;
@@ -73,6 +77,13 @@ void install_stop_handlers() {
     if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
     sigaction(sig, &sa, nullptr);
   }
+  // Blocked across use_huge_page_malloc's exec: a signal that came meanwhile is delivered now.
+  if (!g_stop_blocked_by_exec) return;
+  sigset_t stop;
+  sigemptyset(&stop);
+  sigaddset(&stop, SIGINT);
+  sigaddset(&stop, SIGTERM);
+  ::sigprocmask(SIG_UNBLOCK, &stop, nullptr);
 }
 
 namespace {
@@ -87,6 +98,7 @@ void use_huge_page_malloc(char** argv) {
   // Xvfb and jupyter see the environment ptc was started with), and never exec again. The
   // marker holds "-" for "was unset", else "=" and the user's value.
   if (const char* marker = std::getenv("PTC_HUGEPAGES_EXECUTED")) {
+    g_stop_blocked_by_exec = true;  // (see the exec below)
     const std::string was = marker;
     if (was.size() > 1 && was[0] == '=') ::setenv("GLIBC_TUNABLES", was.c_str() + 1, 1);
     else ::unsetenv("GLIBC_TUNABLES");
@@ -115,8 +127,19 @@ void use_huge_page_malloc(char** argv) {
     if (t) ::setenv("GLIBC_TUNABLES", current.c_str(), 1);
     return;
   }
+  // Ctrl-C and SIGTERM are blocked across the exec (the mask and pending signals survive it):
+  // one that arrives while the new image loads stays pending until install_stop_handlers
+  // unblocks it, and is then a stop request like any other (exit 130 and its line), instead of
+  // killing the process silently by the default action.
+  sigset_t stop;
+  sigemptyset(&stop);
+  sigaddset(&stop, SIGINT);
+  sigaddset(&stop, SIGTERM);
+  sigset_t before;
+  ::sigprocmask(SIG_BLOCK, &stop, &before);
   ::execv("/proc/self/exe", argv);
   // Still here: the exec failed; carry on as we were.
+  ::sigprocmask(SIG_SETMASK, &before, nullptr);
   ::unsetenv("PTC_HUGEPAGES_EXECUTED");
   if (t) ::setenv("GLIBC_TUNABLES", current.c_str(), 1);
   else ::unsetenv("GLIBC_TUNABLES");

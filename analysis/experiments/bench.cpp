@@ -16,6 +16,7 @@
 #include "render/rays.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/core/stats.h"
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/stopwatch.h"
 
 namespace ptc {
@@ -80,7 +81,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     cc.max_size = cfg.max_count;
     cc.adjacency = cfg.adjacency;
     Stopwatch sw;
-    own = cluster_mesh(scene.rest(), cc);
+    own = cluster_mesh(scene.rest(), cc, [](double) { throw_if_cancelled(); });  // Ctrl-C at the next step
     res.cluster_ms = sw.ms();
     const ClusterAdjacency used = resolve_adjacency(scene.rest(), cfg.adjacency);
     res.clustering =

@@ -182,6 +182,24 @@ TEST_F(Interrupt, CtrlCLeavesNoOutputAndNoTemporaryDirectory) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// `ptc bench` clustering a mesh itself (--max-count) stops at the clustering's next progress
+// step: it ran the clustering to its end first (a few seconds, or minutes at a large MaxCount).
+TEST_F(Interrupt, BenchStopsWhileItClusters) {
+  const fs::path out = dir_ / "out";
+  // MaxCount 3000 on the 52k armadillo: the growth alone takes tens of seconds.
+  const pid_t pid = start({"bench", kData + "/meshes/armadillo.off", "--max-count", "3000", "--frames", "0:1", "--width",
+                           "16", "--height", "16", "--threads", "1", "--out", out.string()});
+  ASSERT_GT(pid, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // read (0.2 s), then clustering
+  ASSERT_EQ(kill(pid, SIGINT), 0);
+  const auto t0 = Clock::now();
+  const RunResult r = wait_for(pid, std::chrono::seconds(20));
+  EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 2.0);
+  EXPECT_EQ(r.code, 130) << r.err;
+  EXPECT_NE(r.err.find("ptc: bench interrupted"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(Interrupt, SigtermStopsTheSameWay) {
   const fs::path out = dir_ / "out";
   (void)interrupt(out, SIGTERM);
