@@ -59,6 +59,10 @@ void check_cluster_options(const ClusterConfig& c, const std::vector<std::string
     if (std::find(used.begin(), used.end(), g) == used.end()) {
       std::string uses;
       for (std::string_view u : used) uses += (uses.empty() ? "" : ", ") + flag_of(u);
+      if (c.max_count == 0 && c.max_size == 0.0)  // one triangle per cluster: no method runs
+        throw UsageError(flag_of(g), fmt::format("not used with --max-count 0 --max-size 0 (one triangle per cluster, "
+                                                 "whatever the method; it uses {})",
+                                                 uses));
       throw UsageError(flag_of(g), fmt::format("not used by --method {}{} (it uses {})", to_string(c.method),
                                                c.method == ClusterMethod::Growth || c.method == ClusterMethod::Contraction
                                                    ? fmt::format(" --objective {}", to_string(c.objective))

@@ -17,7 +17,8 @@ namespace ptc {
 /// header `triangle_id,cluster_id`; every row two non-negative integers; every triangle id
 /// 0 .. T-1 exactly once (T = mesh.triangle_count(); rows in any order); cluster ids any
 /// 32-bit values; every cluster connected through shared edges of `mesh` (the BVH assumes
-/// compact clusters, and a clustering of another mesh with the same triangle count fails here).
+/// compact clusters, and a clustering of another mesh with the same triangle count fails here,
+/// unless its clusters are connected in `mesh` too, as one-triangle clusters always are).
 /// Any violation throws InputError naming the file, the line (1-based, header = line 1) and the
 /// element ("triangle 12", "cluster 3"), e.g. "clusters/triangles.csv: line 7: triangle 5:
 /// cluster 2 is not connected (triangle 5 shares no edge path with triangle 0 of the cluster)".

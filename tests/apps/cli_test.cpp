@@ -549,6 +549,14 @@ TEST_F(Cli, ClusterRejectsBadArguments) {
     EXPECT_NE(r.err.find("not used by --method " + extra[1]), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "x"));
   }
+  // One triangle per cluster runs no method: that is the reason given, not the method.
+  r = ptc({"cluster", mesh, "--method", "growth", "--objective", "acc", "--max-count", "0", "--max-size", "0", "--out",
+           (dir_ / "x").string()});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--objective: not used with --max-count 0 --max-size 0 (one triangle per cluster"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
 }
 
 }  // namespace
