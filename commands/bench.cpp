@@ -71,7 +71,9 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   }
   manifest.set_parameter("cluster_leaf", bvh::to_string(c.cluster_leaf));
   manifest.set_parameter("cluster_group_size", c.cluster_group_size);
-  manifest.set_parameter("group_trees", bvh::to_string(c.group_trees));
+  // (groups of 0 or 1 cluster: the plain build, which has no group trees)
+  manifest.set_parameter("group_trees", c.cluster_group_size > 1 ? std::string(bvh::to_string(c.group_trees))
+                                                                  : std::string("none (plain build)"));
   manifest.set_parameter("vertex_order", r.vertex_order);
   manifest.set_parameter("tie_rel", c.tie.rel_t);
   manifest.set_parameter("embree_set_affinity", false);

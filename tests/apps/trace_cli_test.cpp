@@ -368,6 +368,14 @@ TEST_F(TraceCli, BenchGroupTreesRefitTracesTheSameHits) {
     EXPECT_EQ(nlohmann::json::parse(slurp(out / "manifest.json"))["parameters"]["group_trees"], trees);
     rows.push_back(csv_rows(slurp(out / "bench.csv")));
   }
+  // The plain build has no group trees, and its manifest says so.
+  {
+    const fs::path out = dir_ / "plain";
+    const CmdResult r = ptc({"bench", scene, "--frames", "3:4", "--width", "8", "--height", "8", "--max-count", "4",
+                             "--cluster-groups", "0", "--out", out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(slurp(out / "manifest.json"))["parameters"]["group_trees"], "none (plain build)");
+  }
   ASSERT_EQ(rows[0].size(), rows[1].size());
   for (std::size_t i = 0; i < rows[0].size(); ++i) {
     if (rows[1][i].at("config") != "ours_clusters") continue;
