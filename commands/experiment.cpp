@@ -286,8 +286,12 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   p.given = given ? &clusters : nullptr;
   if (given) {  // its own parameters for its metrics (acc): as ptc viz reads them
     const ClusteringInfo ci = clustering_info(opt.clusters);
-    if (ci.from_manifest) p.given_cluster = ci.cfg, record_input(manifest, ci.from);
-    manifest.set_parameter("given_parameters_from", ci.from_manifest ? ci.from : "the clustering flags (no manifest.json beside triangles.csv)");
+    if (ci.from_manifest) {
+      p.given_cluster = ci.cfg;
+      record_input(manifest, ci.from);
+    }
+    manifest.set_parameter("given_parameters_from",
+                           ci.from_manifest ? ci.from : "the clustering flags (no manifest.json beside triangles.csv)");
   }
 
   // The rest mesh as loaded (before any renumbering): what merge compares, whatever the files.

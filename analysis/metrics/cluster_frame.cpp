@@ -109,12 +109,10 @@ ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& cl
   return out;
 }
 
-}  // namespace ptc
-
-namespace ptc {
 std::unique_ptr<bvh::ClusterScene> cluster_bvh_at_rest(const Mesh& rest, const Clustering& clustering) {
   bvh::SceneConfig cfg = bvh::cluster_scene_defaults();
   cfg.origin = rest.bounds().center();  // the study's trace frame (study_rays)
   return std::make_unique<bvh::ClusterScene>(rest, bvh::view_of(clustering), cfg);
 }
+
 }  // namespace ptc
