@@ -96,6 +96,25 @@ TEST_F(SceneFile, SceneFileGood) {
   for (std::size_t i = 0; i < own.size(); ++i) ASSERT_EQ(all[s.vertex_offset(3) + i], own[i]);
 }
 
+// A glob in `file` is a frame sequence, as on the command line (it was read as one mesh file
+// named with the '*').
+TEST_F(SceneFile, AGlobIsAFrameSequence) {
+  fs::create_directories(dir_ / "frames");
+  const std::string moved =
+      "OFF\n8 12 0\n0 0 2\n1 0 2\n0 1 2\n1 1 2\n0 0 3\n1 0 3\n0 1 3\n1 1 3\n"
+      "3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n3 3 7 5\n";
+  write("frames/f_0.off", kCube);
+  write("frames/f_1.off", moved);
+  for (const std::string glob : {"frames/f_*.off", "frames/f_?.off"}) {
+    Scene s = load_scene_file(write("glob.json", R"({"meshes": [{"file": ")" + glob + R"("}]})"));
+    EXPECT_FALSE(s.all_static()) << glob;
+    EXPECT_EQ(s.frames().last, 1) << glob;
+    std::vector<Vec3> p(s.rest().vertex_count());
+    s.positions(1.0, p);
+    EXPECT_EQ(p[0], Vec3(0, 0, 2)) << glob;
+  }
+}
+
 TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   const std::string f = (dir_ / "scene.json").string();
   auto has = [&](const std::string& msg, const std::string& part) {
@@ -137,6 +156,13 @@ TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   has(e, "key \"meshes\": given twice in one object");
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "twist", "kind": "wave"}}]})");
   has(e, "key \"kind\": given twice");
+  // Finite numbers whose results overflow: named in the file, not blamed on a flag later.
+  e = scene_error(R"({"meshes": [{"sphere": {"radius": 1e308, "center": [1e308, 0, 0]}}]})");
+  has(e, f);
+  has(e, "meshes[0]: its rest positions are not finite");
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}], "camera": {"eye": [1e308, 0, 5], "look_at": [-1e308, 0, 0]}})");
+  has(e, f);
+  has(e, "camera: eye, look_at and up must be within double's range");
     e = scene_error(R"({"meshes": []})");
   has(e, "meshes");
   e = scene_error(R"({"frames": [5, 2], "meshes": [{"file": "cube.off"}]})");

@@ -332,6 +332,9 @@ Scene make_builtin_scene(const std::string& name, const SceneOptions& opt) {
 
 AnimationPtr open_animation_file(const fs::path& path) {
   std::error_code ec;
+  // A glob of frame files ("frames/*.ply") names no existing path; load_animation expands it.
+  if (!fs::exists(path, ec) && PTC_HAVE_LOAD_ANIMATION && path.string().find_first_of("*?[") != std::string::npos)
+    return load_asset(path);
   if (!fs::exists(path, ec)) throw InputError(path.string(), "", "", "no such file or directory");
   if (!fs::is_directory(path, ec) && is_mesh_file(path))
     return std::make_unique<StaticSource>(read_mesh(path).mesh, path.filename().string());

@@ -1,5 +1,7 @@
 #include "toolkit/anim/scene_file.h"
 
+#include "toolkit/anim/frame_sequence.h"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -193,7 +195,11 @@ ScenePart read_mesh_entry(const Reader& r, const json& j, const std::string& pat
   AnimationPtr anim;
   if (j.contains("file")) {
     const fs::path p = r.resolve(r.string(j["file"], path + ".file"), path + ".file");
-    if (!fs::is_directory(p) && format_from_extension(p)) {
+    // A glob ("frames/f_*.ply") is a frame sequence, as on the command line (unless a file of
+    // that very name exists).
+    std::error_code ec;
+    const bool glob = is_glob_pattern(p.string()) && !fs::exists(p, ec);
+    if (!glob && !fs::is_directory(p) && format_from_extension(p)) {
       mesh = wrap(path + ".file", [&] { return read_mesh(p).mesh; });
     } else {
       if (deform) r.fail(path + ".deform", "a deformer applies to a mesh file or sphere, not to an animated source");
@@ -227,6 +233,10 @@ ScenePart read_mesh_entry(const Reader& r, const json& j, const std::string& pat
                   [&] { return AnimationPtr(std::make_unique<SubdividedAnimation>(std::move(anim), sub->first, sub->second)); });
     part.source = std::move(anim);
   }
+  // A part whose rest positions overflow (a sphere of radius 1e308): said here, with its JSON
+  // path, not later by whatever first stumbles on an infinite box.
+  for (const Vec3& q : part.source->rest().positions())
+    if (!q.allFinite()) r.fail(path, "its rest positions are not finite (beyond double's range)");
   return part;
 }
 
@@ -304,6 +314,9 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
     if (c.contains("fov")) sc.fov_deg = r.number(c["fov"], "camera.fov");
     if (!(sc.fov_deg > 0 && sc.fov_deg < 180)) r.fail("camera.fov", "expected a vertical field of view in (0, 180) degrees");
     if ((sc.eye - sc.look_at).norm() == 0) r.fail("camera", "eye and look_at coincide");
+    // (finite coordinates whose difference or its length overflow: no direction to look in)
+    if (!std::isfinite((sc.look_at - sc.eye).norm()) || !std::isfinite(sc.up.norm()))
+      r.fail("camera", "eye, look_at and up must be within double's range of each other (a length overflows)");
     if (sc.up.norm() == 0 || sc.up.cross(sc.look_at - sc.eye).norm() == 0) r.fail("camera.up", "zero or parallel to the view direction");
     cam = sc;
   }
