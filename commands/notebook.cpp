@@ -52,9 +52,25 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
     const fs::path rel = abs.lexically_relative(out_abs);
     in.dirs[kind] = rel.empty() ? abs.string() : rel.string();
     if (j["parameters"].contains("scene") && j["parameters"]["scene"].is_string()) in.scenes[kind] = j["parameters"]["scene"];
-    if (j["parameters"].contains("shard") && !j["parameters"]["shard"].is_null())
-      in.notes[kind] = "shard " + j["parameters"]["shard"].dump() + ": part of the study";
+    if (j["parameters"].contains("shard") && j["parameters"]["shard"].is_object()) {
+      const nlohmann::json& sh = j["parameters"]["shard"];
+      const auto k = sh.value("index", 0), n = sh.value("count", 0);
+      if (n > 1) in.notes[kind] = fmt::format("shard {} of {}: part of the study", k, n);
+    }
     record_input(manifest, m);
+    // The tables the figures read, as the run wrote them: present, and (manifests since
+    // 2026-12-04) with the bytes and hash it recorded, checked here rather than by a Python error.
+    if (j.contains("output_schemas") && j["output_schemas"].is_object())
+      for (auto it = j["output_schemas"].begin(); it != j["output_schemas"].end(); ++it) {
+        const fs::path table = d / it.key();
+        if (!fs::is_regular_file(table, ec))
+          throw InputError(table.string(), "", "", "missing (its manifest lists it): an incomplete experiment output");
+        if (j.contains("output_hashes") && j["output_hashes"].contains(it.key()) &&
+            j["output_hashes"][it.key()].contains("fnv1a64") &&
+            j["output_hashes"][it.key()]["fnv1a64"] != file_fnv1a64(table))
+          throw InputError(table.string(), "", "",
+                           "its bytes differ from the FNV-1a hash its manifest records (an edited or replaced file)");
+      }
   }
   const std::vector<notebooks::Figure> figures = notebooks::figures_for(in);
 

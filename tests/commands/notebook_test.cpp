@@ -152,6 +152,29 @@ TEST_F(Notebook, RefusesWhatIsNotAStudyAndAPythonWithoutPandas) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("a second sweep study"), std::string::npos) << e.what();
   }
+  // A table the manifest lists that is missing, or edited: named before any Python runs.
+  {
+    fs::copy(dir_ / "study" / "sweep", dir_ / "edited", fs::copy_options::recursive);
+    const fs::path t = dir_ / "edited" / "sweep_summary.csv";
+    std::string text = slurp(t);
+    text.back() = text.back() == '\n' ? ' ' : '\n';
+    test::spit(t, text);
+    n.studies = {dir_ / "edited"};
+    try {
+      cmd_notebook(n, out);
+      FAIL();
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(t.string() + ": its bytes differ"), std::string::npos) << e.what();
+    }
+    fs::remove(t);
+    try {
+      cmd_notebook(n, out);
+      FAIL();
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(t.string() + ": missing (its manifest lists it)"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "nb"));
+  }
   n.studies = {dir_ / "study" / "sweep"};
   n.python = "/bin/true-not-there";
   EXPECT_THROW(cmd_notebook(n, out), InputError);
