@@ -381,6 +381,10 @@ std::string read_text(const std::filesystem::path& f, const char* why) {
 }
 
 nlohmann::json read_manifest(const std::filesystem::path& dir) {
+  std::error_code ec;
+  if (!std::filesystem::exists(dir, ec)) throw InputError(dir.string(), "", "", "no such directory");
+  if (!std::filesystem::is_directory(dir, ec))
+    throw InputError(dir.string(), "", "", "is a file: give the directory of a `ptc experiment` run");
   const std::filesystem::path f = dir / "manifest.json";
   const std::string text = read_text(f, "is the directory an output of `ptc experiment`?");
   try {
@@ -499,7 +503,10 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
       throw InputError(s.dir.string(), "", "", fmt::format("shard {}/{} is given twice (also {})", k, n, seen[k].string()));
   }
   for (std::uint32_t k = 1; k <= n; ++k)
-    if (!seen.count(k)) throw UsageError("DIR", fmt::format("shard {}/{} is missing (got {} of {})", k, n, seen.size(), n));
+    if (!seen.count(k))
+      throw InputError(shards[0].dir.string(), "", "",
+                       fmt::format("shard {}/{} of its split is missing (got {} of {}): give every shard's directory", k,
+                                   n, seen.size(), n));
 
   const auto kind = parse_experiment_kind(params["experiment"].get<std::string>());
   if (!kind) throw InputError((shards[0].dir / "manifest.json").string(), "", "", "unknown experiment");

@@ -1,6 +1,8 @@
 #include "commands/commands.h"
 #include "apps/ptc/cli.h"
 
+#include <algorithm>
+
 #include <iostream>
 
 namespace ptc::cli {
@@ -16,7 +18,13 @@ void register_spheres(CLI::App& app, Context& ctx) {
                                                         std::to_string(opt->config.min_run));
                       if (!methods->empty()) {
                         opt->config.methods.clear();
-                        for (const auto& m : *methods) opt->config.methods.push_back(*parse_sphere_method(m));
+                        for (const auto& m : *methods) {
+                          const SphereMethod k = *parse_sphere_method(m);
+                          if (std::find(opt->config.methods.begin(), opt->config.methods.end(), k) !=
+                              opt->config.methods.end())
+                            throw UsageError("--methods", "'" + m + "' is listed twice (each method once)");
+                          opt->config.methods.push_back(k);
+                        }
                       }
                       opt->argv = ctx.args;
                       cmd_spheres(*opt, std::cout);

@@ -37,6 +37,11 @@ TEST_F(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(ptc({"subdivide", cube, "--levels", "-1", "--out", (dir_ / "o.off").string()}).code, 2);
   EXPECT_EQ(ptc({"subdivide", cube, "--scheme", "butterfly", "--out", (dir_ / "o.off").string()}).code, 2);
   EXPECT_EQ(ptc({"spheres", cube, "--methods", "exact,bogus"}).code, 2);
+  {
+    const auto twice = ptc({"spheres", cube, "--methods", "exact,ritter,exact"});
+    EXPECT_EQ(twice.code, 2);
+    EXPECT_NE(twice.err.find("--methods: 'exact' is listed twice"), std::string::npos) << twice.err;
+  }
   EXPECT_EQ(ptc({"spheres", cube, "--min-run", "10", "--max-run", "5"}).code, 2);
   EXPECT_EQ(ptc({"info", "--help"}).code, 0);
 }

@@ -225,8 +225,15 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   const std::string a = (dir_ / "a").string(), b = (dir_ / "b").string(), out = (dir_ / "m").string();
 
   RunResult r = ptc({"merge", a, "--out", out});
-  EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("shard 2/2 is missing"), std::string::npos) << r.err;
+  EXPECT_EQ(r.code, 1);  // bad input, named, like a shard given twice
+  EXPECT_NE(r.err.find(a + ": shard 2/2 of its split is missing"), std::string::npos) << r.err;
+  // A manifest given instead of its directory, and a directory that does not exist.
+  r = ptc({"merge", a + "/manifest.json", b, "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find(a + "/manifest.json: is a file: give the directory"), std::string::npos) << r.err;
+  r = ptc({"merge", (dir_ / "nowhere").string(), b, "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("nowhere: no such directory"), std::string::npos) << r.err;
   r = ptc({"merge", a, a, "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("given twice"), std::string::npos) << r.err;
@@ -236,6 +243,7 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   r = ptc({"merge", a, (dir_ / "third").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("split into 3"), std::string::npos) << r.err;
+  fs::create_directories(dir_ / "nothing");  // a directory without a manifest
   r = ptc({"merge", (dir_ / "nothing").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("manifest.json"), std::string::npos) << r.err;
