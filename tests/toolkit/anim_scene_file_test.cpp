@@ -115,6 +115,25 @@ TEST_F(SceneFile, AGlobIsAFrameSequence) {
   }
 }
 
+// A frame read later (a sequence reads each file when asked) that is bad keeps the scene file
+// and the entry's JSON path in its error, before the frame file's own message.
+TEST_F(SceneFile, ALateFrameErrorNamesTheSceneEntry) {
+  fs::create_directories(dir_ / "mixed");
+  write("mixed/f_0.off", kCube);
+  write("mixed/f_1.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");  // another vertex count
+  const fs::path scene = write("lazy.json", R"({"meshes": [{"file": "cube.off"}, {"file": "mixed"}]})");
+  Scene s = load_scene_file(scene);
+  std::vector<Vec3> p(s.rest().vertex_count());
+  try {
+    s.positions(1.0, p);
+    FAIL() << "a frame of another vertex count was read";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind(scene.string() + ": meshes[1].file: ", 0), 0u) << m;
+    EXPECT_NE(m.find("f_1.off"), std::string::npos) << m;
+  }
+}
+
 TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   const std::string f = (dir_ / "scene.json").string();
   auto has = [&](const std::string& msg, const std::string& part) {

@@ -26,6 +26,34 @@ using nlohmann::json;
 namespace ptc {
 namespace {
 
+/// An animated part of a scene file: its source, with the scene file and the entry's JSON path
+/// put in front of an error it raises while a frame is read (files read lazily, per frame).
+class PlacedSource final : public Animation {
+ public:
+  PlacedSource(AnimationPtr source, std::string file, std::string path)
+      : s_(std::move(source)), file_(std::move(file)), path_(std::move(path)) {}
+  const Mesh& rest() const override { return s_->rest(); }
+  std::size_t frame_count() const override { return s_->frame_count(); }
+  double frames_per_second() const override { return s_->frames_per_second(); }
+  void positions(double frame, std::span<Vec3> out) override {
+    try {
+      s_->positions(frame, out);
+    } catch (const InputError& e) {
+      if (e.file() == file_) throw;
+      throw InputError(file_, "", path_, e.file().empty() ? e.reason() : e.what());
+    }
+  }
+  std::string describe() const override { return s_->describe(); }
+  bool is_static() const override { return s_->is_static(); }
+  bool renumber_vertices_in_place(std::span<const std::uint32_t> to_old) override {
+    return s_->renumber_vertices_in_place(to_old);
+  }
+
+ private:
+  AnimationPtr s_;
+  std::string file_, path_;
+};
+
 // Reads typed values out of a JSON object, naming the JSON path in every error.
 class Reader {
  public:
@@ -231,7 +259,9 @@ ScenePart read_mesh_entry(const Reader& r, const json& j, const std::string& pat
     if (sub)
       anim = wrap(path + ".subdivide",
                   [&] { return AnimationPtr(std::make_unique<SubdividedAnimation>(std::move(anim), sub->first, sub->second)); });
-    part.source = std::move(anim);
+    // Frames read later (a frame sequence reads each file when it is asked for) keep this
+    // entry's place in their errors.
+    part.source = std::make_unique<PlacedSource>(std::move(anim), r.file(), path + ".file");
   }
   // A part whose rest positions overflow (a sphere of radius 1e308): said here, with its JSON
   // path, not later by whatever first stumbles on an infinite box.
