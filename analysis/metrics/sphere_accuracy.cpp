@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -54,8 +55,20 @@ SphereReport run_sphere_report(const Mesh& mesh, const SphereReportConfig& cfg) 
   if (cfg.repeats < 1) throw std::invalid_argument("sphere report: repeats must be >= 1");
   SphereReport r;
   r.config = cfg;
-  const auto sets = morton_point_sets(mesh, cfg, &r.run_first);
+  auto sets = morton_point_sets(mesh, cfg, &r.run_first);
   for (const auto& s : sets) r.run_points.push_back(static_cast<std::uint32_t>(s.size()));
+  // Each set scaled by a power of two to a largest coordinate in [1, 2) (exact), as the
+  // clustering normalises before CGAL: CGAL answers radius 0 below ~1e-70 and beyond ~1e70, and
+  // distances of 1e-300 points underflow (the containment test then passed a radius of 0). The
+  // radii are reported in the mesh's units (scaled back, exactly); errors are ratios.
+  std::vector<int> exponent(sets.size(), 0);
+  for (std::size_t s = 0; s < sets.size(); ++s) {
+    double m = 0;
+    for (const Vec3& q : sets[s]) m = std::max(m, q.cwiseAbs().maxCoeff());
+    if (!(m > 0) || !std::isfinite(m)) continue;
+    exponent[s] = std::ilogb(m);
+    for (Vec3& q : sets[s]) q = Vec3(std::ldexp(q.x(), -exponent[s]), std::ldexp(q.y(), -exponent[s]), std::ldexp(q.z(), -exponent[s]));
+  }
 
   r.exact_radius.resize(sets.size());
   for (std::size_t s = 0; s < sets.size(); ++s) r.exact_radius[s] = min_sphere_exact(sets[s]).radius;
@@ -88,9 +101,11 @@ SphereReport run_sphere_report(const Mesh& mesh, const SphereReportConfig& cfg) 
         ++sum.not_containing;
     }
     sum.rel_err_mean = sets.empty() ? 0.0 : err_sum / static_cast<double>(sets.size());
+    for (std::size_t s = 0; s < sets.size(); ++s) radii[s] = std::ldexp(radii[s], exponent[s]);  // mesh units
     r.methods.push_back(sum);
     r.radius.push_back(std::move(radii));
   }
+  for (std::size_t s = 0; s < sets.size(); ++s) r.exact_radius[s] = std::ldexp(r.exact_radius[s], exponent[s]);
   return r;
 }
 

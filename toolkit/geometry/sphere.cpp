@@ -229,7 +229,7 @@ bool contains_all(const Sphere& s, std::span<const Vec3> points, double rel_tol)
   if (s.radius == 0.0) {
     double m = s.center.cwiseAbs().maxCoeff();
     for (const Vec3& p : points) m = std::max(m, p.cwiseAbs().maxCoeff());
-    limit = rel_tol * m;
+    limit = m > 0.0 ? rel_tol * m : 0.0;  // (every point at the origin: on the centre, exactly; not inf x 0)
   }
   for (const Vec3& p : points) {
     if (!((p - s.center).norm() <= limit)) return false;

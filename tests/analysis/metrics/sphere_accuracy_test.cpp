@@ -113,5 +113,34 @@ TEST(SphereReport, FarFromTheOriginTheErrorsAreTheRoutines) {
     }
 }
 
+// At any scale the report is the unit scale's: every method's radius times the scale (a power
+// of two: exactly), the same errors, every sphere containing its points. CGAL answered radius 0
+// below ~1e-70 and beyond ~1e70, and at 1e-300 the containment test passed those zero radii
+// (distances underflowed). And a set of one repeated point: contained by its radius-0 sphere.
+TEST(SphereReport, TinyAndHugeScalesGiveTheUnitScalesReport) {
+  const Mesh base = random_surface(12, 5);
+  SphereReportConfig c;
+  c.min_run = c.max_run = 16;
+  c.repeats = 1;
+  const auto unit = run_sphere_report(base, c);
+  for (const int k : {-1000, -250, 250, 900}) {
+    std::vector<Vec3> p(base.positions().begin(), base.positions().end());
+    for (Vec3& q : p) q = Vec3(std::ldexp(q.x(), k), std::ldexp(q.y(), k), std::ldexp(q.z(), k));
+    const auto r = run_sphere_report(base.with_positions(p), c);
+    ASSERT_EQ(r.exact_radius.size(), unit.exact_radius.size());
+    for (std::size_t s = 0; s < r.exact_radius.size(); ++s)
+      EXPECT_EQ(r.exact_radius[s], std::ldexp(unit.exact_radius[s], k)) << "2^" << k << " set " << s;
+    ASSERT_EQ(r.methods.size(), unit.methods.size());
+    for (std::size_t m = 0; m < r.methods.size(); ++m) {
+      EXPECT_EQ(r.methods[m].rel_err_max, unit.methods[m].rel_err_max) << to_string(r.methods[m].method) << " 2^" << k;
+      EXPECT_EQ(r.methods[m].not_containing, 0u) << to_string(r.methods[m].method) << " 2^" << k;
+      for (std::size_t s = 0; s < r.exact_radius.size(); ++s)
+        EXPECT_EQ(r.radius[m][s], std::ldexp(unit.radius[m][s], k)) << to_string(r.methods[m].method);
+    }
+  }
+  const Mesh point(std::vector<Tri>{{0, 1, 2}}, std::vector<Vec3>{{1, 1, 1}, {1, 1, 1}, {1, 1, 1}});
+  for (const auto& m : run_sphere_report(point, c).methods) EXPECT_EQ(m.not_containing, 0u) << to_string(m.method);
+}
+
 }  // namespace
 }  // namespace ptc
