@@ -175,6 +175,15 @@ TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   has(e, "key \"meshes\": given twice in one object");
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "twist", "kind": "wave"}}]})");
   has(e, "key \"kind\": given twice");
+  // A deform key the kind does not read, and a part name given twice.
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "twist", "velocity": [1, 0, 0]}}]})");
+  has(e, f);
+  has(e, "meshes[0].deform.velocity: not used by the twist deformer (it reads kind, amplitude, axis, period)");
+  e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "explode", "axis": "x"}}]})");
+  has(e, "meshes[0].deform.axis: not used by the explode deformer");
+  e = scene_error(R"({"meshes": [{"name": "a", "file": "cube.off"}, {"name": "a", "file": "cube.off"}]})");
+  has(e, f);
+  has(e, "meshes[1].name: 'a' is the name of meshes[0] too");
   // Finite numbers whose results overflow: named in the file, not blamed on a flag later.
   e = scene_error(R"({"meshes": [{"sphere": {"radius": 1e308, "center": [1e308, 0, 0]}}]})");
   has(e, f);

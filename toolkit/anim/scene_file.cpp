@@ -133,6 +133,23 @@ DeformParams read_deform(const Reader& r, const json& j, const std::string& path
   const auto kind = parse_deform_kind(r.string(j["kind"], path + ".kind"));
   if (!kind) r.fail(path + ".kind", "expected twist, bend, wave, rigid or explode");
   d.kind = *kind;
+  // A key the kind does not read is refused, as the command line refuses a flag that does nothing.
+  {
+    std::vector<std::string> used{"kind", "amplitude"};
+    switch (d.kind) {
+      case DeformKind::Twist: used.insert(used.end(), {"axis", "period"}); break;
+      case DeformKind::Bend: used.insert(used.end(), {"axis", "direction", "period"}); break;
+      case DeformKind::Wave: used.insert(used.end(), {"axis", "direction", "period", "wavelength"}); break;
+      case DeformKind::Rigid: used.insert(used.end(), {"axis", "period", "velocity"}); break;
+      case DeformKind::Explode: break;
+    }
+    for (auto it = j.begin(); it != j.end(); ++it)
+      if (std::find(used.begin(), used.end(), it.key()) == used.end()) {
+        std::string list;
+        for (const std::string& u : used) list += (list.empty() ? "" : ", ") + u;
+        r.fail(path + "." + it.key(), fmt::format("not used by the {} deformer (it reads {})", to_string(d.kind), list));
+      }
+  }
   if (j.contains("axis")) d.axis = r.axis(j["axis"], path + ".axis");
   if (j.contains("direction")) d.direction = r.axis(j["direction"], path + ".direction");
   else if (d.direction == d.axis) d.direction = (d.axis + 1) % 3;
@@ -319,8 +336,14 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
   const json& meshes = root["meshes"];
   if (!meshes.is_array() || meshes.empty()) r.fail("meshes", "expected a non-empty array");
   std::vector<ScenePart> parts;
-  for (std::size_t i = 0; i < meshes.size(); ++i)
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
     parts.push_back(read_mesh_entry(r, meshes[i], fmt::format("meshes[{}]", i), i));
+    // Parts are named in manifests and listings: each name once.
+    for (std::size_t k = 0; k + 1 < parts.size(); ++k)
+      if (parts[k].name == parts.back().name)
+        r.fail(fmt::format("meshes[{}].name", i), fmt::format("'{}' is the name of meshes[{}] too (each part's name once)",
+                                                              parts.back().name, k));
+  }
 
   std::optional<FrameRange> frames;
   if (root.contains("frames")) {
