@@ -175,6 +175,11 @@ TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   has(e, "key \"meshes\": given twice in one object");
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "twist", "kind": "wave"}}]})");
   has(e, "key \"kind\": given twice");
+  // Whole numbers beyond 64 bits: out of range (2^64 - 1 was wrapped to -1 before).
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}], "frames": [0, 18446744073709551615]})");
+  has(e, "frames[1]: 18446744073709551615 is out of the 64-bit integer range");
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}], "frames": [0, 99999999999999999999]})");
+  has(e, "is out of the 64-bit integer range");
   // A deform key the kind does not read, and a part name given twice.
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "twist", "velocity": [1, 0, 0]}}]})");
   has(e, f);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -83,6 +84,12 @@ class Reader {
     return x;
   }
   std::int64_t integer(const json& j, const std::string& path) const {
+    // A whole number beyond 64 bits (JSON reads it as a float) or above INT64_MAX (an unsigned
+    // one, which get<int64_t> would wrap to a negative value) is out of range, not a fraction.
+    const bool too_big = (j.is_number_unsigned() && j.get<std::uint64_t>() > std::uint64_t(INT64_MAX)) ||
+                         (j.is_number_float() && std::abs(j.get<double>()) >= 9223372036854775808.0 &&
+                          std::isfinite(j.get<double>()) && j.get<double>() == std::floor(j.get<double>()));
+    if (too_big) fail(path, fmt::format("{} is out of the 64-bit integer range", j.dump()));
     if (!j.is_number_integer()) fail(path, fmt::format("expected an integer, found {}", j.type_name()));
     return j.get<std::int64_t>();
   }
