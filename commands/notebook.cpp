@@ -37,6 +37,8 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
   const fs::path out_abs = fs::weakly_canonical(fs::absolute(opt.out_dir));
   for (const fs::path& d : opt.studies) {
     refuse_overwriting_input(opt.out_dir, d);
+    if (!fs::exists(d, ec)) throw InputError(d.string(), "", "", "no such directory");
+    if (!fs::is_directory(d, ec)) throw InputError(d.string(), "", "", "is a file: give the directory of a `ptc experiment` run");
     const fs::path m = d / "manifest.json";
     std::ifstream f(m);
     if (!f) throw InputError(d.string(), "", "", "no manifest.json: not an output of `ptc experiment`");

@@ -145,6 +145,16 @@ TEST_F(Notebook, RefusesWhatIsNotAStudyAndAPythonWithoutPandas) {
   EXPECT_THROW(cmd_notebook(n, out), UsageError);  // no DIR
   n.studies = {dir_};  // no manifest.json
   EXPECT_THROW(cmd_notebook(n, out), InputError);
+  for (const auto& [where, why] : {std::pair{dir_ / "nowhere", "no such directory"},
+                                   std::pair{dir_ / "study" / "sweep" / "manifest.json", "is a file"}}) {
+    n.studies = {where};
+    try {
+      cmd_notebook(n, out);
+      FAIL() << where;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(where.string() + ": " + why), std::string::npos) << e.what();
+    }
+  }
   n.studies = {dir_ / "study" / "sweep", dir_ / "study" / "sweep"};
   try {
     cmd_notebook(n, out);
