@@ -21,7 +21,6 @@
 #include "commands/scene_args.h"
 #include "toolkit/anim/scene_file.h"
 #include "toolkit/core/error.h"
-#include "toolkit/core/input_log.h"
 #include "toolkit/core/stopwatch.h"
 
 namespace fs = std::filesystem;
@@ -38,11 +37,8 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
 
   refuse_overwriting_input(opt.out_dir, opt.scene);
   RunManifest manifest("animate", opt.argv, "ptc-animate/1");
+  Scene scene = open_scene_recorded(opt.scene, opt.scene_options, manifest);  // every file it reads, hashed
   Stopwatch t0;
-  InputLog log;  // every file the scene reads
-  Scene scene = open_scene(opt.scene, opt.scene_options);
-  manifest.add_timing_ms("load", t0.ms());
-  record_scene_inputs(manifest, opt.scene, log);
 
   const bool deformed = opt.deform && *opt.deform != "none";
   const bool still = scene.all_static() && !deformed;

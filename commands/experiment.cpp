@@ -285,11 +285,8 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   if (given) clusters = read_clusters_recorded(opt.clusters, ms.scene.rest(), manifest);
   p.given = given ? &clusters : nullptr;
   if (given) {  // its own parameters for its metrics (acc): as ptc viz reads them
-    const ClusteringInfo ci = clustering_info(opt.clusters);
-    if (ci.from_manifest) {
-      p.given_cluster = ci.cfg;
-      record_input(manifest, ci.from);
-    }
+    const ClusteringInfo ci = clustering_info_recorded(opt.clusters, manifest);
+    if (ci.from_manifest) p.given_cluster = ci.cfg;
     manifest.set_parameter("given_parameters_from",
                            ci.from_manifest ? ci.from : "the clustering flags (no manifest.json beside triangles.csv)");
   }
@@ -371,28 +368,6 @@ struct ShardIn {
   std::filesystem::path dir;
   nlohmann::json manifest;
 };
-
-std::string read_text(const std::filesystem::path& f, const char* why) {
-  std::ifstream in(f, std::ios::binary);
-  if (!in) throw InputError(f.string(), "", "", std::string("cannot read it (") + why + ")");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-nlohmann::json read_manifest(const std::filesystem::path& dir) {
-  std::error_code ec;
-  if (!std::filesystem::exists(dir, ec)) throw InputError(dir.string(), "", "", "no such directory");
-  if (!std::filesystem::is_directory(dir, ec))
-    throw InputError(dir.string(), "", "", "is a file: give the directory of a `ptc experiment` run");
-  const std::filesystem::path f = dir / "manifest.json";
-  const std::string text = read_text(f, "is the directory an output of `ptc experiment`?");
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(f.string(), "", "", std::string("not valid JSON: ") + e.what());
-  }
-}
 
 // What must agree between the shards of one study: the command and its schema, every parameter
 // but the shard, the inputs' contents (sizes and hashes, not their paths), the rest mesh as
@@ -481,7 +456,7 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
   std::vector<ShardIn> shards;
   for (const auto& d : opt.shards) {
     refuse_overwriting_input(opt.out_dir, d);
-    ShardIn s{d, read_manifest(d)};
+    ShardIn s{d, read_experiment_manifest(d)};
     check_shard_manifest(s.manifest, d / "manifest.json");
     shards.push_back(std::move(s));
   }
@@ -531,16 +506,7 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
       CsvText t;
       try {
         const std::string text = read_text(path, "the shard's manifest lists it");
-        // A shard's tables as its run wrote them (manifests since 2026-12-04 record their hashes).
-        const nlohmann::json& m = s.manifest;
-        const nlohmann::json* h = m.contains("output_hashes") && m.at("output_hashes").is_object() &&
-                                          m.at("output_hashes").contains(name)
-                                      ? &m.at("output_hashes").at(name)
-                                      : nullptr;
-        if (h && h->is_object() && h->contains("fnv1a64") && h->at("fnv1a64").is_string() &&
-            h->at("fnv1a64").get<std::string>() != bytes_fnv1a64(text))
-          throw InputError(path.string(), "", "",
-                           "its bytes differ from the FNV-1a hash its manifest records (an edited or replaced file)");
+        check_output_hash(s.manifest, name, bytes_fnv1a64(text), path);  // a shard's table as its run wrote it
         t = parse_csv(text);
       } catch (const std::invalid_argument& e) {
         throw InputError(path.string(), "", "", e.what());

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <vector>
 
 #include "toolkit/core/cancel.h"
@@ -34,6 +35,37 @@ std::string mesh_fnv1a64(const Mesh& mesh) {
   for (const Tri& t : mesh.triangles()) f.add(t.data(), sizeof(Tri));
   for (const Vec3& v : mesh.positions()) f.add(v.data(), 3 * sizeof(double));
   return f.hex();
+}
+
+std::string read_text(const std::filesystem::path& f, const char* why) {
+  std::ifstream in(f, std::ios::binary);
+  if (!in) throw InputError(f.string(), "", "", std::string("cannot read it (") + why + ")");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+nlohmann::json read_experiment_manifest(const std::filesystem::path& dir) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) throw InputError(dir.string(), "", "", "no such directory");
+  if (!fs::is_directory(dir, ec)) throw InputError(dir.string(), "", "", "is a file: give the directory of a `ptc experiment` run");
+  const fs::path f = dir / "manifest.json";
+  const std::string text = read_text(f, "is the directory an output of `ptc experiment`?");
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(f.string(), "", "", std::string("not valid JSON: ") + e.what());
+  }
+}
+
+void check_output_hash(const nlohmann::json& manifest, const std::string& name, const std::string& fnv1a64,
+                       const std::filesystem::path& path) {
+  if (!manifest.is_object() || !manifest.contains("output_hashes")) return;
+  const nlohmann::json& all = manifest.at("output_hashes");
+  if (!all.is_object() || !all.contains(name)) return;
+  const nlohmann::json& h = all.at(name);
+  if (h.is_object() && h.contains("fnv1a64") && h.at("fnv1a64").is_string() && h.at("fnv1a64").get<std::string>() != fnv1a64)
+    throw InputError(path.string(), "", "", "its bytes differ from the FNV-1a hash its manifest records (an edited or replaced file)");
 }
 
 std::string bytes_fnv1a64(std::string_view bytes) {

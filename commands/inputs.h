@@ -21,6 +21,19 @@ namespace ptc {
 /// scene built from assets or data files really holds, whatever files it came from).
 [[nodiscard]] std::string mesh_fnv1a64(const Mesh& mesh);
 
+/// The bytes of `f`; InputError naming it ("cannot read it (`why`)") when it cannot be read.
+[[nodiscard]] std::string read_text(const std::filesystem::path& f, const char* why);
+/// DIR/manifest.json of a `ptc experiment` run (merge's shards, the notebook's studies), parsed;
+/// InputError naming DIR when it does not exist or is a file, the manifest when it cannot be read
+/// or is not JSON.
+[[nodiscard]] nlohmann::json read_experiment_manifest(const std::filesystem::path& dir);
+
+/// Throws InputError naming `path` when `manifest` (a run's manifest.json) records an
+/// output_hashes entry for `name` whose FNV-1a hash is not `fnv1a64` (the file as read now).
+/// Manifests without the entry (written before 2026-12-04) pass.
+void check_output_hash(const nlohmann::json& manifest, const std::string& name, const std::string& fnv1a64,
+                       const std::filesystem::path& path);
+
 /// Adds {path, absolute_path, bytes, fnv1a64} of `path` to the manifest's inputs.
 void record_input(RunManifest& manifest, const std::filesystem::path& path);
 

@@ -37,13 +37,9 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
   const fs::path out_abs = fs::weakly_canonical(fs::absolute(opt.out_dir));
   for (const fs::path& d : opt.studies) {
     refuse_overwriting_input(opt.out_dir, d);
-    if (!fs::exists(d, ec)) throw InputError(d.string(), "", "", "no such directory");
-    if (!fs::is_directory(d, ec)) throw InputError(d.string(), "", "", "is a file: give the directory of a `ptc experiment` run");
     const fs::path m = d / "manifest.json";
-    std::ifstream f(m);
-    if (!f) throw InputError(d.string(), "", "", "no manifest.json: not an output of `ptc experiment`");
-    const nlohmann::json j = nlohmann::json::parse(f, nullptr, false);
-    if (j.is_discarded() || !j.contains("parameters") || !j["parameters"].contains("experiment") ||
+    const nlohmann::json j = read_experiment_manifest(d);
+    if (!j.is_object() || !j.contains("parameters") || !j["parameters"].contains("experiment") ||
         !j["parameters"]["experiment"].is_string())
       throw InputError(m.string(), "", "", "not the manifest of `ptc experiment` (no parameters.experiment)");
     const std::string kind = j["parameters"]["experiment"];
@@ -67,11 +63,7 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
         const fs::path table = d / it.key();
         if (!fs::is_regular_file(table, ec))
           throw InputError(table.string(), "", "", "missing (its manifest lists it): an incomplete experiment output");
-        if (j.contains("output_hashes") && j["output_hashes"].contains(it.key()) &&
-            j["output_hashes"][it.key()].contains("fnv1a64") &&
-            j["output_hashes"][it.key()]["fnv1a64"] != file_fnv1a64(table))
-          throw InputError(table.string(), "", "",
-                           "its bytes differ from the FNV-1a hash its manifest records (an edited or replaced file)");
+        check_output_hash(j, it.key(), file_fnv1a64(table), table);
       }
   }
   const std::vector<notebooks::Figure> figures = notebooks::figures_for(in);

@@ -59,6 +59,13 @@ void print_read_note(const std::string& file, const std::string& note) {
 
 namespace {
 bool g_stop_blocked_by_exec = false;  // this image was executed with SIGINT and SIGTERM blocked
+sigset_t stop_signals() {              // the requests to stop: Ctrl-C and SIGTERM
+  sigset_t s;
+  sigemptyset(&s);
+  sigaddset(&s, SIGINT);
+  sigaddset(&s, SIGTERM);
+  return s;
+}
 }  // namespace
 
 void install_stop_handlers() {
@@ -79,10 +86,7 @@ void install_stop_handlers() {
   }
   // Blocked across use_huge_page_malloc's exec: a signal that came meanwhile is delivered now.
   if (!g_stop_blocked_by_exec) return;
-  sigset_t stop;
-  sigemptyset(&stop);
-  sigaddset(&stop, SIGINT);
-  sigaddset(&stop, SIGTERM);
+  const sigset_t stop = stop_signals();
   ::sigprocmask(SIG_UNBLOCK, &stop, nullptr);
 }
 
@@ -131,10 +135,7 @@ void use_huge_page_malloc(char** argv) {
   // one that arrives while the new image loads stays pending until install_stop_handlers
   // unblocks it, and is then a stop request like any other (exit 130 and its line), instead of
   // killing the process silently by the default action.
-  sigset_t stop;
-  sigemptyset(&stop);
-  sigaddset(&stop, SIGINT);
-  sigaddset(&stop, SIGTERM);
+  const sigset_t stop = stop_signals();
   sigset_t before;
   ::sigprocmask(SIG_BLOCK, &stop, &before);
   ::execv("/proc/self/exe", argv);

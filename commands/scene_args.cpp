@@ -16,15 +16,9 @@
 
 namespace ptc {
 
-Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions& options, RunManifest& manifest) {
-  Stopwatch sw;
-  InputLog log;  // every file the scene reads: its data files, a scene file's meshes, frames
-  Scene scene = open_scene(input.string(), options);
-  manifest.add_timing_ms("read", sw.ms());
-  record_scene_inputs(manifest, input, log);
-  return scene;
-}
-
+namespace {
+// `input` (when it is a file) and every file in `log` (the files opening it read) in the
+// manifest's inputs, each once, with its hash (commands/inputs.h).
 void record_scene_inputs(RunManifest& manifest, const std::filesystem::path& input, const InputLog& log) {
   std::error_code ec;
   const bool file = std::filesystem::is_regular_file(input, ec);
@@ -32,6 +26,16 @@ void record_scene_inputs(RunManifest& manifest, const std::filesystem::path& inp
   if (file) record_input(manifest, input);  // as the user named it
   for (const auto& f : log.files())         // (each once, absolute)
     if (f != self) record_input(manifest, f);
+}
+}  // namespace
+
+Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions& options, RunManifest& manifest) {
+  Stopwatch sw;
+  InputLog log;  // every file the scene reads: its data files, a scene file's meshes, frames
+  Scene scene = open_scene(input.string(), options);
+  manifest.add_timing_ms("read", sw.ms());
+  record_scene_inputs(manifest, input, log);
+  return scene;
 }
 
 std::string apply_stand_in(Scene& scene, const std::string& deform, const std::string& arg) {
@@ -80,6 +84,12 @@ Clustering read_clusters_recorded(const std::filesystem::path& clusters, const M
   std::error_code ec;
   record_input(manifest, std::filesystem::is_directory(clusters, ec) ? clusters / "triangles.csv" : clusters);
   return c;
+}
+
+ClusteringInfo clustering_info_recorded(const std::filesystem::path& clusters, RunManifest& manifest) {
+  ClusteringInfo ci = clustering_info(clusters);
+  if (ci.from_manifest) record_input(manifest, ci.from);
+  return ci;
 }
 
 CameraSpec camera_for(const CameraSpec& flags, const Scene& scene) {

@@ -9,15 +9,16 @@
 
 #include "analysis/schema/manifest.h"
 #include "bvh/camera.h"
+#include "commands/cluster_files.h"
 #include "render/camera.h"
 #include "toolkit/anim/scene.h"
 #include "toolkit/clustering/clustering.h"
 
 namespace ptc {
 
-class InputLog;
 
-/// open_scene (toolkit/anim/scene_file.h), recording the read time and, for a file, the input.
+/// open_scene (toolkit/anim/scene_file.h), recording the read time and every file it read (the
+/// input, a scene file's meshes, a built-in scene's data, a sequence's frames) with its hash.
 [[nodiscard]] Scene open_scene_recorded(const std::filesystem::path& input, const SceneOptions& options,
                                         RunManifest& manifest);
 
@@ -41,15 +42,14 @@ struct MovingScene {
 /// scenes' deformer of that kind (deform_preset); none leaves the scene as it is. Returns the
 /// manifest's `motion` text ("stand-in: ...", "none: the rest pose every frame" or "scene").
 /// UsageError naming --deform for an unknown kind, or a kind given for an animated scene.
-/// Records `input` (when it is a file) and every file in `log` (the files opening it read) in
-/// the manifest's inputs, each once, with its hash (commands/inputs.h).
-void record_scene_inputs(RunManifest& manifest, const std::filesystem::path& input, const InputLog& log);
-
 [[nodiscard]] std::string apply_stand_in(Scene& scene, const std::string& deform, const std::string& arg);
 
 /// read_clusters (commands/cluster_files.h), recording the read time and the file.
 [[nodiscard]] Clustering read_clusters_recorded(const std::filesystem::path& clusters, const Mesh& mesh,
                                                 RunManifest& manifest);
+/// clustering_info (commands/cluster_files.h), recording the manifest it read the parameters
+/// from, when there was one, among the inputs.
+[[nodiscard]] ClusteringInfo clustering_info_recorded(const std::filesystem::path& clusters, RunManifest& manifest);
 
 /// The camera: every field the user gave (flags) wins; the others come from the scene's own
 /// camera when it has one (Scene::has_own_camera: built-in scenes, scene files with "camera");

@@ -152,8 +152,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   std::vector<TraceRow> rows;
   const unsigned threads = resolve_threads(rc.threads);
   double render_ms = 0, write_ms = 0, positions_ms = 0;
-  bool empty_note = false;  // said once
-  std::size_t empty_more = 0;  // the frames after it without a hit
+  std::size_t empty_frames = 0;  // frames without a primary hit: the first noted, the rest counted
+  std::uint64_t hits = 0;        // primary hits over the frames (results.hits)
   nlohmann::json per_frame = nlohmann::json::array();
 
   std::ostringstream text;  // the table; --json prints the rows as JSON instead
@@ -219,17 +219,13 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     if (rc.shadows) pass("shadow", r.shadow_stats, false);
     if (rc.ao_samples > 0) pass("ao", r.ao_stats, false);
     per_frame.push_back({{"frame", f}, {"rays", r.primary_stats.rays}, {"hits", r.primary_stats.hits}});
-    if (r.primary_stats.hits == 0 && r.primary_stats.rays > 0) {  // an image of background only
-      if (!empty_note)
-        std::cerr << "ptc: note: no primary ray hit the mesh in frame " << f
-                  << " (the camera sees past it or from inside it: give --eye and --look-at)\n";
-      else
-        ++empty_more;
-      empty_note = true;
-    }
+    hits += r.primary_stats.hits;
+    if (r.primary_stats.hits == 0 && r.primary_stats.rays > 0 && ++empty_frames == 1)  // background only
+      std::cerr << "ptc: note: no primary ray hit the mesh in frame " << f
+                << " (the camera sees past it or from inside it: give --eye and --look-at)\n";
   });
-  if (empty_more > 0)  // said once, then counted
-    std::cerr << "ptc: note: nor in " << empty_more << " later frame(s) (trace.csv: hits 0)\n";
+  if (empty_frames > 1)  // said once, then counted
+    std::cerr << "ptc: note: nor in " << empty_frames - 1 << " later frame(s) (trace.csv: hits 0)\n";
   manifest.add_timing_ms("positions", positions_ms);
   manifest.add_timing_ms("render", render_ms);
   sw.restart();
@@ -270,9 +266,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("ray_offset", "origin = p + 2^-18 M n, M = max |coordinate| of bounds and p in the trace frame");
   manifest.set_result("images", images);
   manifest.set_result("rays", std::uint64_t(rc.width) * std::uint64_t(rc.height));  // per frame
-  std::uint64_t hits = 0;  // primary hits of every frame traced (results.frames has them per frame)
-  for (const auto& f : per_frame) hits += f["hits"].get<std::uint64_t>();
-  manifest.set_result("hits", hits);
+  manifest.set_result("hits", hits);  // over every frame traced (results.frames has them per frame)
   manifest.set_result("frames", per_frame);
   manifest.add_timing_ms("write", write_ms + sw.ms());
   (void)commit_with_manifest(dir, manifest);

@@ -159,8 +159,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   ClusteringInfo ci;
   if (use_clusters) {
     clusters = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
-    ci = clustering_info(opt.clusters);
-    if (ci.from_manifest) record_input(manifest, ci.from);  // Acc's parameters come from it
+    ci = clustering_info_recorded(opt.clusters, manifest);  // Acc's parameters come from it
   }
   const std::vector<std::uint32_t> cluster_of = use_clusters ? clusters.cluster_of_triangle() : std::vector<std::uint32_t>();
 

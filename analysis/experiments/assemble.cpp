@@ -281,13 +281,11 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
   text += fmt::format("{:<16} {:>9} {:>17} {:>17} {:>15} {:>15} {:>12} {:>12} {:>10}\n", "clustering", "clusters",
                       "SAH cost", "SAH triangles", "EPO", "nodes/ray", "box max", "box p95", "spearman");
   const Groups fg = group_by(frames, {"clustering"});
-  std::map<std::string, double> rho;
-  std::map<std::string, double> rho_clusters;  // the clusters the correlation could use
+  std::map<std::string, std::pair<double, double>> rho;  // clustering -> (Spearman, the clusters it could use)
   for (std::size_t r = 0; r < corr.rows.size(); ++r)
-    if (corr.rows[r][corr.column("y")] == "box_area_drift") {
-      rho[corr.rows[r][corr.column("clustering")]] = corr.number(r, corr.column("spearman"));
-      rho_clusters[corr.rows[r][corr.column("clustering")]] = corr.number(r, corr.column("clusters"));
-    }
+    if (corr.rows[r][corr.column("y")] == "box_area_drift")
+      rho[corr.rows[r][corr.column("clustering")]] = {corr.number(r, corr.column("spearman")),
+                                                      corr.number(r, corr.column("clusters"))};
   auto cell = [&](std::size_t r, const char* col) { return frames.number(r, frames.column(col)); };
   for (std::size_t i = 0; i < fg.keys.size(); ++i) {
     const std::size_t a = fg.rows[i].front(), b = fg.rows[i].back();
@@ -298,13 +296,13 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
                         cell(a, "sah_cost_triangles"), cell(b, "sah_cost_triangles"), cell(a, "epo"), cell(b, "epo"),
                         cell(a, "nodes_per_ray"), cell(b, "nodes_per_ray"), cell(b, "box_area_ratio_max"),
                         cell(b, "box_area_ratio_p95"),
-                        it != rho.end() && std::isfinite(it->second) ? fmt::format("{:.3f}", it->second) : "-");
+                        it != rho.end() && std::isfinite(it->second.first) ? fmt::format("{:.3f}", it->second.first) : "-");
   }
   text += "spearman: rank correlation over clusters of connectivity (N_T/N_V) with box-area drift (mean |ln box area "
           "ratio| over the frames after the first); < 0: denser clusters deform less\n";
-  for (const auto& [name, r] : rho) {
+  for (const auto& [name, rn] : rho) {
+    const auto [r, n] = rn;
     if (!std::isfinite(r)) {  // say why there is no number
-      const double n = rho_clusters[name];
       text += fmt::format("paper: connectivity predicts drift ({}) -> no Spearman: {}\n", name,
                           n < 3 ? fmt::format("{} cluster(s) with a finite drift (a box of zero area at some frame "
                                               "makes |ln ratio| infinite or undefined)", n)

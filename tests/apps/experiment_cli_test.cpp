@@ -9,6 +9,7 @@
 
 #include "apps/cli_harness.h"
 #include "common/csv_rows.h"
+#include "common/fnv.h"
 #include "viz/vtp.h"
 
 #include <nlohmann/json.hpp>
@@ -380,12 +381,8 @@ TEST_F(Experiment, MergeRefusesAnEditedTableNamingIt) {
   // Untouched, they merge; the manifest's hash is FNV-1a 64 of the file's bytes (computed here).
   ASSERT_EQ(ptc({"merge", (dir_ / "a").string(), (dir_ / "b").string(), "--out", (dir_ / "m").string()}).code, 0);
   const std::string csv = slurp(dir_ / "a" / "sweep.csv");
-  std::uint64_t h = 14695981039346656037ull;
-  for (unsigned char c : csv) h = (h ^ c) * 1099511628211ull;
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
   const auto man = nlohmann::json::parse(slurp(dir_ / "a" / "manifest.json"));
-  EXPECT_EQ(man["output_hashes"]["sweep.csv"]["fnv1a64"], hex);
+  EXPECT_EQ(man["output_hashes"]["sweep.csv"]["fnv1a64"], ptc::test::fnv1a64_hex(csv));
   EXPECT_EQ(man["output_hashes"]["sweep.csv"]["bytes"], csv.size());
   // One digit of the second row changed.
   std::string edited = csv;

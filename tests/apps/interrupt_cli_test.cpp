@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "cli_harness.h"
+#include "common/fnv.h"
 #include "viz/display.h"
 
 extern char** environ;
@@ -289,11 +290,7 @@ TEST_F(Interrupt, AnEarlierOutputStaysByteIdentical) {
 // enough for a failure message; outputs here are tens of MB).
 std::map<std::string, std::string> contents(const fs::path& p) {
   std::map<std::string, std::string> d = fs::is_directory(p) ? snapshot(p) : std::map<std::string, std::string>{{"", slurp(p)}};
-  for (auto& [name, bytes] : d) {
-    std::uint64_t h = 1469598103934665603ull;
-    for (const char c : bytes) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
-    bytes = std::to_string(bytes.size()) + " bytes, FNV-1a " + std::to_string(h);
-  }
+  for (auto& [name, bytes] : d) bytes = std::to_string(bytes.size()) + " bytes, FNV-1a " + ptc::test::fnv1a64_hex(bytes);
   return d;
 }
 

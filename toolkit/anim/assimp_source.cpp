@@ -345,7 +345,7 @@ AnimationPtr load_assimp_animation(const fs::path& path, const AssimpSkinOptions
     throw InputError(name, "", "",
                      "has motion data only, no mesh (assimp draws the skeleton's bones as a stand-in mesh, which ptc does "
                      "not trace): use a file with the mesh and its animation together (FBX, COLLADA, glTF, MD5 mesh)");
-  s = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_ValidateDataStructure | aiProcess_RemoveComponent);
+  s = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_RemoveComponent);  // (validated on reading)
   if (!s) throw InputError(name, "", "", std::string("assimp: ") + importer.GetErrorString());
   SkinRig rig = skin_rig_from_scene(*s, opt.animation, name);
   const std::string label = fmt::format("{} ({} meshes, animation {} of {})", name, s->mNumMeshes,

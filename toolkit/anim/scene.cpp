@@ -1,5 +1,7 @@
 #include "toolkit/anim/scene.h"
 
+#include "toolkit/anim/frame_sequence.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -333,7 +335,7 @@ Scene make_builtin_scene(const std::string& name, const SceneOptions& opt) {
 AnimationPtr open_animation_file(const fs::path& path) {
   std::error_code ec;
   // A glob of frame files ("frames/*.ply") names no existing path; load_animation expands it.
-  if (!fs::exists(path, ec) && PTC_HAVE_LOAD_ANIMATION && path.string().find_first_of("*?[") != std::string::npos)
+  if (!fs::exists(path, ec) && PTC_HAVE_LOAD_ANIMATION && is_glob_pattern(path.string()))
     return load_asset(path);
   if (!fs::exists(path, ec)) throw InputError(path.string(), "", "", "no such file or directory");
   if (!fs::is_directory(path, ec) && is_mesh_file(path))
@@ -350,7 +352,7 @@ Scene open_scene_input(const std::string& arg, const SceneOptions& opt) {
   std::vector<ScenePart> parts;
   if (!fs::exists(arg, ec)) {
     // A glob of frame files ("frames/*.ply") names no existing path; load_animation expands it.
-    if (PTC_HAVE_LOAD_ANIMATION && arg.find_first_of("*?[") != std::string::npos) {
+    if (PTC_HAVE_LOAD_ANIMATION && is_glob_pattern(arg)) {
       parts.push_back({label, load_asset(p)});
       return Scene(label, std::move(parts));
     }

@@ -27,6 +27,14 @@ using nlohmann::json;
 namespace ptc {
 namespace {
 
+/// An error raised by what a scene file's entry refers to (a mesh file, a frame), placed in the
+/// scene file at the entry's JSON path; one already placed in this file is rethrown as it is
+/// (the referred file keeps its own name in the message).
+[[noreturn]] void rethrow_placed(const InputError& e, const std::string& file, const std::string& path) {
+  if (e.file() == file) throw e;
+  throw InputError(file, "", path, e.file().empty() ? e.reason() : e.what());
+}
+
 /// An animated part of a scene file: its source, with the scene file and the entry's JSON path
 /// put in front of an error it raises while a frame is read (files read lazily, per frame).
 class PlacedSource final : public Animation {
@@ -40,8 +48,7 @@ class PlacedSource final : public Animation {
     try {
       s_->positions(frame, out);
     } catch (const InputError& e) {
-      if (e.file() == file_) throw;
-      throw InputError(file_, "", path_, e.file().empty() ? e.reason() : e.what());
+      rethrow_placed(e, file_, path_);
     }
   }
   std::string describe() const override { return s_->describe(); }
@@ -238,8 +245,7 @@ ScenePart read_mesh_entry(const Reader& r, const json& j, const std::string& pat
     try {
       return f();
     } catch (const InputError& e) {
-      if (e.file() == r.file()) throw;  // already placed in this file, with its JSON path
-      r.fail(where, e.file().empty() ? e.reason() : e.what());  // (a file it names keeps its own name)
+      rethrow_placed(e, r.file(), where);
     }
   };
 

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
+#include <unordered_set>
 #include <vector>
 
 namespace ptc {
@@ -21,6 +23,7 @@ class InputLog {
  private:
   friend void note_input_file(const std::filesystem::path& path);
   std::vector<std::filesystem::path> files_;
+  std::unordered_set<std::string> seen_;  // files_ as strings: each file once without a linear search
   InputLog* outer_;  // a nested log also passes its files to the one around it
 };
 
