@@ -174,8 +174,8 @@ Options parse_options(int argc, char** argv) {
                                          [](const std::string& s) { return parse_cluster_leaf(s); });
     } else if (a == "--isa") {
       const std::string s = text();
-      if (s != "auto" && s != "sse2" && s != "avx2") usage("--isa must be auto, sse2 or avx2");
-      o.isa = s == "sse2" ? TraceIsa::Sse2 : s == "avx2" ? TraceIsa::Avx2 : TraceIsa::Auto;
+      if (s != "auto" && s != "sse2" && s != "avx2" && s != "avx512") usage("--isa must be auto, sse2, avx2 or avx512");
+      o.isa = s == "sse2" ? TraceIsa::Sse2 : s == "avx2" ? TraceIsa::Avx2 : s == "avx512" ? TraceIsa::Avx512 : TraceIsa::Auto;
     } else if (a == "--embree") {
       const std::string s = text();
       if (s != "all" && s != "none") usage("--embree must be all or none");

@@ -28,19 +28,31 @@ const char* to_string(TraceIsa isa) {
     case TraceIsa::Auto: return "auto";
     case TraceIsa::Sse2: return "sse2";
     case TraceIsa::Avx2: return "avx2";
+    case TraceIsa::Avx512: return "avx512";
   }
   return "?";
 }
 
+std::optional<TraceIsa> parse_trace_isa(std::string_view s) {
+  for (TraceIsa i : {TraceIsa::Auto, TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512})
+    if (s == to_string(i)) return i;
+  return std::nullopt;
+}
+
 TraceIsa resolve(TraceIsa isa) {
   static const bool has_avx2 = __builtin_cpu_supports("avx2");
+  static const bool has_avx512 = has_avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                                 __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
   if (isa == TraceIsa::Sse2) return TraceIsa::Sse2;
+  if (isa != TraceIsa::Avx2 && has_avx512) return TraceIsa::Avx512;
   return has_avx2 ? TraceIsa::Avx2 : TraceIsa::Sse2;
 }
 
 namespace {
 detail::RangeFn range_fn(TraceIsa isa, bool packets) {
-  if (resolve(isa) != TraceIsa::Avx2) return &detail::trace_range_sse2;
+  const TraceIsa r = resolve(isa);
+  if (r == TraceIsa::Sse2) return &detail::trace_range_sse2;
+  if (r == TraceIsa::Avx512) return packets ? &detail::trace_range_packet_avx512 : &detail::trace_range_avx512;
   return packets ? &detail::trace_range_packet_avx2 : &detail::trace_range_avx2;
 }
 }  // namespace
@@ -77,8 +89,11 @@ Hit trace_ray(const TraceData& scene, const Vec3& org, const Vec3f& dir, HitMode
 
 Hit trace_ray(const TraceData& scene, const Vec3& org, const Vec3f& dir, HitMode mode, float tmin, float tmax,
               TraceIsa isa) {
-  return resolve(isa) == TraceIsa::Avx2 ? detail::trace_one_avx2(scene, org, dir, mode, tmin, tmax)
-                                        : detail::trace_one_sse2(scene, org, dir, mode, tmin, tmax);
+  switch (resolve(isa)) {
+    case TraceIsa::Avx512: return detail::trace_one_avx512(scene, org, dir, mode, tmin, tmax);
+    case TraceIsa::Avx2: return detail::trace_one_avx2(scene, org, dir, mode, tmin, tmax);
+    default: return detail::trace_one_sse2(scene, org, dir, mode, tmin, tmax);
+  }
 }
 
 }  // namespace ptc::bvh

@@ -18,6 +18,8 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <string_view>
 #include <limits>
 
 #include "bvh/aligned.h"
@@ -58,12 +60,16 @@ struct HitBatch {
 
 enum class HitMode { Closest, Any };
 
-/// Instruction set of the traversal code (see tracer_isa.h). Auto: AVX2 when the CPU has it
-/// (checked at run time, like Embree), else SSE2. Both give bit-identical hits and counters;
-/// AVX2 tests the triangles of a leaf 8 at a time instead of 4.
-enum class TraceIsa { Auto, Sse2, Avx2 };
+/// Instruction set of the traversal code (see tracer_isa.h). Auto: the widest the CPU has
+/// (checked at run time, like Embree): AVX-512 (F, VL, DQ, BW), else AVX2, else SSE2. All give
+/// bit-identical hits and counters; SSE2 tests the triangles of a leaf 4 at a time, AVX2 8 and
+/// AVX-512 16.
+enum class TraceIsa { Auto, Sse2, Avx2, Avx512 };
 [[nodiscard]] const char* to_string(TraceIsa isa);
-/// The variant Auto resolves to on this CPU; a forced Avx2 on a CPU without it resolves to Sse2.
+/// "auto", "sse2", "avx2" or "avx512"; nullopt for anything else.
+[[nodiscard]] std::optional<TraceIsa> parse_trace_isa(std::string_view s);
+/// The variant a request resolves to on this CPU: a forced variant the CPU lacks falls back to
+/// the widest one below it.
 [[nodiscard]] TraceIsa resolve(TraceIsa isa);
 
 struct TraceOptions {
@@ -74,7 +80,8 @@ struct TraceOptions {
   /// Packets of eight consecutive rays of the batch, one ray per AVX2 lane (bvh/tracer_packet.h),
   /// for coherent rays (a camera's rows, shadow rays from neighbouring pixels). Closest hits are
   /// bit-identical to single rays; an any-hit query reports some hit of each occluded ray (the
-  /// same rays are occluded). Needs AVX2 (isa Auto or Avx2 on a CPU with it); else single rays.
+  /// same rays are occluded). Needs AVX2 or AVX-512 (isa other than Sse2, on a CPU with it); else
+  /// single rays.
   bool packets = false;
 };
 

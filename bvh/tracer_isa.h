@@ -1,10 +1,11 @@
 // Internal: the tracer's instruction-set variants and the runtime choice between them.
-// tracer_kernel.h holds the one traversal code; it is compiled twice, by tracer_sse2.cpp (the
-// x86-64 baseline, 4 triangles per SIMD test) and tracer_avx2.cpp (compiled with -mavx2: the
-// leaf test takes two blocks = 8 triangles per test, everything else VEX-encoded). Both give
-// bit-identical hits and counters (same float operations per triangle, same visiting order).
-// trace() picks AVX2 when the CPU has it (__builtin_cpu_supports), as Embree dispatches at
-// runtime; TraceOptions::isa forces one (tests compare the two).
+// tracer_kernel.h holds the one traversal code; it is compiled three times, by tracer_sse2.cpp
+// (the x86-64 baseline, 4 triangles per SIMD test), tracer_avx2.cpp (for AVX2: the leaf test
+// takes two blocks = 8 triangles per test, everything else VEX-encoded) and tracer_avx512.cpp
+// (for AVX-512 F/VL/DQ/BW: four blocks = 16 triangles per test, comparisons into mask
+// registers). All give bit-identical hits and counters (same float operations per triangle, same
+// visiting order). trace() picks the widest the CPU has (__builtin_cpu_supports), as Embree
+// dispatches at runtime; TraceOptions::isa forces one (tests compare them).
 #pragma once
 
 #include <cstddef>
@@ -25,8 +26,14 @@ Hit trace_one_sse2(const TraceData&, const Vec3&, const Vec3f&, HitMode, float, 
 void trace_range_avx2(const TraceData&, const RayBatch&, HitBatch&, std::size_t, std::size_t, HitMode, bool,
                       TraceTotals&);
 Hit trace_one_avx2(const TraceData&, const Vec3&, const Vec3f&, HitMode, float, float);
-/// The packet path (tracer_packet.h, compiled into tracer_avx2.cpp): eight consecutive rays per packet; AVX2 only.
+void trace_range_avx512(const TraceData&, const RayBatch&, HitBatch&, std::size_t, std::size_t, HitMode, bool,
+                        TraceTotals&);
+Hit trace_one_avx512(const TraceData&, const Vec3&, const Vec3f&, HitMode, float, float);
+/// The packet path (tracer_packet.h, compiled into tracer_avx2.cpp and tracer_avx512.cpp): eight
+/// consecutive rays per packet; not in the SSE2 variant.
 void trace_range_packet_avx2(const TraceData&, const RayBatch&, HitBatch&, std::size_t, std::size_t, HitMode, bool,
                              TraceTotals&);
+void trace_range_packet_avx512(const TraceData&, const RayBatch&, HitBatch&, std::size_t, std::size_t, HitMode, bool,
+                               TraceTotals&);
 
 }  // namespace ptc::bvh::detail

@@ -42,6 +42,9 @@ struct RayState {
 #if defined(PTC_TRACE_AVX2)
   __m256 okx8, oky8, okz8, sx8, sy8, sz8;
 #endif
+#if defined(PTC_TRACE_AVX512)
+  __m512 okx16, oky16, okz16, sx16, sy16, sz16;
+#endif
   float tmin, tmax;  // tmax: the best hit so far (closest) or the ray's end
   Vec3f org, dir;
 };
@@ -54,6 +57,10 @@ void prepare_watertight(RayState& r) {
 #if defined(PTC_TRACE_AVX2)
   r.okx8 = _mm256_set1_ps(r.org[w.kx]), r.oky8 = _mm256_set1_ps(r.org[w.ky]), r.okz8 = _mm256_set1_ps(r.org[w.kz]);
   r.sx8 = _mm256_set1_ps(w.sx), r.sy8 = _mm256_set1_ps(w.sy), r.sz8 = _mm256_set1_ps(w.sz);
+#endif
+#if defined(PTC_TRACE_AVX512)
+  r.okx16 = _mm512_set1_ps(r.org[w.kx]), r.oky16 = _mm512_set1_ps(r.org[w.ky]), r.okz16 = _mm512_set1_ps(r.org[w.kz]);
+  r.sx16 = _mm512_set1_ps(w.sx), r.sy16 = _mm512_set1_ps(w.sy), r.sz16 = _mm512_set1_ps(w.sz);
 #endif
   r.watertight_ready = true;
 }
@@ -250,6 +257,69 @@ inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, 
 }
 #endif
 
+#if defined(PTC_TRACE_AVX512)
+// Four consecutive blocks (16 triangles, ids[0..16)) in one 512-bit test: lane l is block l / 4's
+// lane l % 4. The float operations per lane are intersect_block's (watertight8's, with mask
+// registers for the comparisons), and lanes are taken lowest first, so hits and any-hit choices
+// are identical to four calls of intersect_block (and to two of intersect_block_pair).
+template <bool AnyHit>
+inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
+                                 Result& res) {
+  const float* v0 = &blk[0].v[0][0][0];
+  const float* v1 = &blk[1].v[0][0][0];
+  const float* v2 = &blk[2].v[0][0][0];
+  const float* v3 = &blk[3].v[0][0][0];
+  auto ld = [&](int off) {
+    __m512 x = _mm512_castps128_ps512(_mm_load_ps(v0 + off));
+    x = _mm512_insertf32x4(x, _mm_load_ps(v1 + off), 1);
+    x = _mm512_insertf32x4(x, _mm_load_ps(v2 + off), 2);
+    return _mm512_insertf32x4(x, _mm_load_ps(v3 + off), 3);
+  };
+  const __m512 a_x = _mm512_sub_ps(ld(r.kx4), r.okx16), a_y = _mm512_sub_ps(ld(r.ky4), r.oky16);
+  const __m512 a_z = _mm512_sub_ps(ld(r.kz4), r.okz16);
+  const __m512 b_x = _mm512_sub_ps(ld(12 + r.kx4), r.okx16), b_y = _mm512_sub_ps(ld(12 + r.ky4), r.oky16);
+  const __m512 b_z = _mm512_sub_ps(ld(12 + r.kz4), r.okz16);
+  const __m512 c_x = _mm512_sub_ps(ld(24 + r.kx4), r.okx16), c_y = _mm512_sub_ps(ld(24 + r.ky4), r.oky16);
+  const __m512 c_z = _mm512_sub_ps(ld(24 + r.kz4), r.okz16);
+  const __m512 sx = r.sx16, sy = r.sy16;
+  const __m512 ax = _mm512_sub_ps(a_x, _mm512_mul_ps(sx, a_z)), ay = _mm512_sub_ps(a_y, _mm512_mul_ps(sy, a_z));
+  const __m512 bx = _mm512_sub_ps(b_x, _mm512_mul_ps(sx, b_z)), by = _mm512_sub_ps(b_y, _mm512_mul_ps(sy, b_z));
+  const __m512 cx = _mm512_sub_ps(c_x, _mm512_mul_ps(sx, c_z)), cy = _mm512_sub_ps(c_y, _mm512_mul_ps(sy, c_z));
+  __m512 U = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
+  __m512 V = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
+  __m512 W = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
+  const __m512 zero = _mm512_setzero_ps();
+  const int on_edge = _mm512_cmp_ps_mask(U, zero, _CMP_EQ_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_EQ_OQ) |
+                      _mm512_cmp_ps_mask(W, zero, _CMP_EQ_OQ);
+  if (on_edge) [[unlikely]] {  // exact signs in double for the lanes with a zero edge function
+    alignas(64) float fax[16], fay[16], fbx[16], fby[16], fcx[16], fcy[16], fu[16], fv[16], fw[16];
+    _mm512_store_ps(fax, ax), _mm512_store_ps(fay, ay), _mm512_store_ps(fbx, bx), _mm512_store_ps(fby, by);
+    _mm512_store_ps(fcx, cx), _mm512_store_ps(fcy, cy), _mm512_store_ps(fu, U), _mm512_store_ps(fv, V);
+    _mm512_store_ps(fw, W);
+    redo_edges_in_double(on_edge, fax, fay, fbx, fby, fcx, fcy, fu, fv, fw);
+    U = _mm512_load_ps(fu), V = _mm512_load_ps(fv), W = _mm512_load_ps(fw);
+  }
+  const __mmask16 neg = _mm512_cmp_ps_mask(U, zero, _CMP_LT_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_LT_OQ) |
+                        _mm512_cmp_ps_mask(W, zero, _CMP_LT_OQ);
+  const __mmask16 pos = _mm512_cmp_ps_mask(U, zero, _CMP_GT_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_GT_OQ) |
+                        _mm512_cmp_ps_mask(W, zero, _CMP_GT_OQ);
+  const __m512 det = _mm512_add_ps(_mm512_add_ps(U, V), W);
+  const __mmask16 det_ok = _mm512_cmp_ps_mask(det, zero, _CMP_LT_OQ) | _mm512_cmp_ps_mask(det, zero, _CMP_GT_OQ);
+  const __mmask16 valid = det_ok & static_cast<__mmask16>(~(neg & pos));
+  if (!valid) return false;
+  const __m512 sz = r.sz16;
+  const __m512 az = _mm512_mul_ps(sz, a_z), bz = _mm512_mul_ps(sz, b_z), cz = _mm512_mul_ps(sz, c_z);
+  const __m512 T = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(U, az), _mm512_mul_ps(V, bz)), _mm512_mul_ps(W, cz));
+  const __m512 t = _mm512_div_ps(T, det);
+  const int m = valid & _mm512_cmp_ps_mask(t, _mm512_set1_ps(r.tmin), _CMP_GT_OQ) &
+                _mm512_cmp_ps_mask(t, _mm512_set1_ps(tmax), _CMP_LE_OQ);
+  if (!m) return false;
+  alignas(64) float ft[16], fv[16], fw[16], fd[16];
+  _mm512_store_ps(ft, t), _mm512_store_ps(fv, V), _mm512_store_ps(fw, W), _mm512_store_ps(fd, det);
+  return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
+}
+#endif
+
 struct Flat {  // raw views of TraceData for the hot loop
   const WideNode* nodes;
   const LeafRange* ranges;
@@ -274,6 +344,10 @@ inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count
     tris += lr.triangle_count;
     const std::uint32_t end = lr.first_block + lr.block_count;
     std::uint32_t bk = lr.first_block;
+#if defined(PTC_TRACE_AVX512)
+    for (; bk + 3 < end; bk += 4)
+      if (intersect_block_quad<AnyHit>(d.blocks + bk, d.ids + 4 * std::size_t(bk), r, tmax, res) && AnyHit) return true;
+#endif
 #if defined(PTC_TRACE_AVX2)
     for (; bk + 1 < end; bk += 2)
       if (intersect_block_pair<AnyHit>(d.blocks + bk, d.ids + 4 * std::size_t(bk), r, tmax, res) && AnyHit) return true;

@@ -1,6 +1,8 @@
 // Internal: the tracer's packet path (TraceOptions::packets, tracer.h), included by
-// tracer_avx2.cpp after tracer_kernel.h (it reuses that kernel's leaf tests and result store), so
-// it exists only in the AVX2 variant; elsewhere packets fall back to single rays.
+// tracer_avx2.cpp and tracer_avx512.cpp after tracer_kernel.h (it reuses that kernel's leaf tests
+// and result store), so it exists in those variants only; with SSE2 packets fall back to single
+// rays. The AVX-512 variant is this AVX2 code compiled with AVX-512 enabled, whose per-lane leaf
+// tests take 16 triangles at a time.
 //
 // Eight consecutive rays of the batch make a packet, one ray per AVX2 lane. The single-ray
 // set-up (validity, trace frame, reciprocals) runs for the eight at once, and so do the
@@ -28,7 +30,7 @@
 #pragma once
 
 #if !defined(PTC_TRACE_AVX2)
-#error "bvh/tracer_packet.h belongs to the AVX2 variant (tracer_avx2.cpp)"
+#error "bvh/tracer_packet.h belongs to the AVX2 and AVX-512 variants (tracer_avx2.cpp, tracer_avx512.cpp)"
 #endif
 
 namespace ptc::bvh::detail::PTC_TRACE_NS {
@@ -123,6 +125,10 @@ struct alignas(32) Packet {
       r.sx = _mm_set1_ps(sx[l]), r.sy = _mm_set1_ps(sy[l]), r.sz = _mm_set1_ps(sz[l]);
       r.okx8 = _mm256_set1_ps(okx[l]), r.oky8 = _mm256_set1_ps(oky[l]), r.okz8 = _mm256_set1_ps(okz[l]);
       r.sx8 = _mm256_set1_ps(sx[l]), r.sy8 = _mm256_set1_ps(sy[l]), r.sz8 = _mm256_set1_ps(sz[l]);
+#if defined(PTC_TRACE_AVX512)
+      r.okx16 = _mm512_set1_ps(okx[l]), r.oky16 = _mm512_set1_ps(oky[l]), r.okz16 = _mm512_set1_ps(okz[l]);
+      r.sx16 = _mm512_set1_ps(sx[l]), r.sy16 = _mm512_set1_ps(sy[l]), r.sz16 = _mm512_set1_ps(sz[l]);
+#endif
       r.tmin = tmin[l];
       r.watertight_ready = true;
       ready |= 1u << l;
@@ -390,9 +396,11 @@ void trace_range_packet_impl(const TraceData& scene, const RayBatch& rays, HitBa
 }  // namespace
 }  // namespace ptc::bvh::detail::PTC_TRACE_NS
 
+// The variant's entry point (detail::trace_range_packet_avx2, ..._avx512; tracer_isa.h).
 namespace ptc::bvh::detail {
-void trace_range_packet_avx2(const TraceData& s, const RayBatch& r, HitBatch& h, std::size_t b, std::size_t e,
-                             HitMode m, bool c, TraceTotals& t) {
+void PTC_TRACE_CAT(trace_range_packet_, PTC_TRACE_NS)(const TraceData& s, const RayBatch& r, HitBatch& h,
+                                                      std::size_t b, std::size_t e, HitMode m, bool c,
+                                                      TraceTotals& t) {
   PTC_TRACE_NS::trace_range_packet_impl(s, r, h, b, e, m, c, t);
 }
 }  // namespace ptc::bvh::detail

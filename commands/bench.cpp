@@ -79,6 +79,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("embree_set_affinity", false);
   manifest.set_parameter("shadows", opt.shadows);
   manifest.set_parameter("packets", opt.config.packets);
+  manifest.set_parameter("isa", bvh::to_string(r.isa));  // our tracer's variant (Embree keeps its own)
   if (opt.config.packets) manifest.set_parameter("embree_packet_width", opt.config.embree_packet_width);
   if (opt.shadows) manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
   manifest.set_result("triangles", r.triangles);

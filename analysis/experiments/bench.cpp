@@ -147,6 +147,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   opt.threads = cfg.threads;
   opt.counters = false;
   opt.packets = cfg.packets;
+  opt.isa = cfg.isa;
   bvh::AlignedVector<Vec3> pos(mesh.positions().begin(), mesh.positions().end());
   bvh::HitBatch ref, hits, counted;
   // The shadow pass: one batch per frame, made from ours_triangles' primary hits on the frame's
@@ -154,6 +155,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   res.shadows = cfg.light.has_value();
   res.packets = cfg.packets;
   res.embree_packet_width = cfg.embree_packet_width;
+  res.isa = bvh::resolve(cfg.isa);
   std::optional<Mesh> frame_mesh;  // only with a light: the frame's positions on the mesh's triangles
   SurfaceHits surface;
   Box3 frame_bounds;
@@ -184,7 +186,13 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
         surface = surface_hits(*frame_mesh, rays, ref);
         frame_bounds = frame_mesh->bounds();
       }
-      const ShadowResult sr = trace_shadows(target_of(a), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
+      TraceTarget target = target_of(a);  // our variant cfg.isa for the shadow rays too (Embree ignores it)
+      target.trace = [&a, isa = cfg.isa](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
+        bvh::TraceOptions with_isa = o;
+        with_isa.isa = isa;
+        return a.trace(r, h, with_isa);
+      };
+      const ShadowResult sr = trace_shadows(target, surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
                                             cfg.threads, cfg.packets);
       row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
       if (fr.accel == 0) ref_lit = sr.lit;

@@ -62,6 +62,9 @@ struct PeerBenchConfig {
   /// coherent flag. Off: single rays on both sides (rtcIntersect1 / rtcOccluded1).
   bool packets = false;
   int embree_packet_width = 8;  ///< Embree's packets with `packets`: 4, 8 or 16 rays (rtcIntersect4/8/16)
+  /// Our tracer's instruction-set variant (bvh::TraceOptions::isa; Auto: the widest this CPU has).
+  /// Embree keeps its own choice.
+  bvh::TraceIsa isa = bvh::TraceIsa::Auto;
 };
 
 struct BenchRow {
@@ -111,6 +114,7 @@ struct PeerBenchResult {
   bool shadows = false;                ///< a shadow pass was traced (cfg.light)
   bool packets = false;                ///< rays were traced in packets (cfg.packets)
   int embree_packet_width = 8;         ///< and Embree's packet width
+  bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
 };
 
 /// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()

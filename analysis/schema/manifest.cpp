@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "analysis/schema/json.h"
+#include "bvh/tracer.h"
 #include "toolkit/core/isa.h"
 #include "toolkit/core/memory.h"
 #include <thread>
@@ -82,6 +83,7 @@ nlohmann::json machine_info() {
   if (const std::string mode = transparent_huge_page_mode(); !mode.empty()) j["transparent_hugepages"] = mode;
   j["malloc_hugepages"] = malloc_huge_pages();
   j["clustering_isa"] = clustering_isa();  // which clones of the clustering's hot code run (toolkit/core/isa.h)
+  j["trace_isa"] = bvh::to_string(bvh::resolve(bvh::TraceIsa::Auto));  // the tracer's variant by default (bvh/tracer.h)
   return j;
 }
 

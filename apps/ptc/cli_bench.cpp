@@ -13,7 +13,7 @@ struct BenchArgs {
   SceneArg scene;
   CameraArgs camera;
   GroupTreesArg group_trees;
-  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters", adjacency = "auto";
+  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -33,6 +33,13 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       o.config.adjacency = *parse_cluster_adjacency(a->adjacency);
+                      o.config.isa = *bvh::parse_trace_isa(a->isa);
+                      if (o.config.isa != bvh::TraceIsa::Auto && bvh::resolve(o.config.isa) != o.config.isa)
+                        throw UsageError("--isa", std::string("this CPU has no ") +
+                                                      (o.config.isa == bvh::TraceIsa::Avx512
+                                                           ? "AVX-512 (F, VL, DQ and BW)"
+                                                           : "AVX2") +
+                                                      "; the widest it has is " + bvh::to_string(bvh::resolve(bvh::TraceIsa::Auto)));
                       if (a->app->count("--frames")) o.frames = a->frames;
                       o.input = a->scene.input;
                       a->scene.apply(o.scene_options);
@@ -56,6 +63,11 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "with --packets: Embree's packet width, 4, 8 or 16 (rtcIntersect4/8/16)")
       ->check(CLI::IsMember({4, 8, 16}))
       ->needs(packets)
+      ->capture_default_str();
+  c->add_option("--isa", a->isa,
+                "our tracer's instruction set: auto (the widest this CPU has), sse2, avx2 or avx512 (the same hits "
+                "and counters; Embree keeps its own)")
+      ->check(enum_validator("instruction set", bvh::parse_trace_isa))
       ->capture_default_str();
   auto* cl = c->add_option("--clusters", a->opt.clusters, "use the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--max-count", cfg.max_count,

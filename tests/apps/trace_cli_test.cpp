@@ -331,6 +331,34 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
     EXPECT_EQ(rows[i].at("shadow_rays"), with[i].at("shadow_rays")) << rows[i].at("config");
     EXPECT_EQ(rows[i].at("shadow_occluded"), with[i].at("shadow_occluded")) << rows[i].at("config");
   }
+  // --isa: our tracer's variant, recorded; the same hits, shadows and counters (single rays and
+  // packets) with the baseline SSE2 variant and with AVX2 as with the default.
+  for (const char* isa : {"sse2", "avx2"}) {
+    for (bool pk : {false, true}) {
+      const fs::path d = dir_ / (std::string("isa_") + isa + (pk ? "_packets" : ""));
+      std::vector<std::string> args = {"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8",
+                                       "--isa", isa, "--out", d.string()};
+      if (pk) args.push_back("--packets");  // as `packed` above
+      else args.insert(args.end(), {"--max-count", "4"});  // as `with` above
+      const CmdResult r = ptc(args);
+      ASSERT_EQ(r.code, 0) << r.err;
+      EXPECT_EQ(nlohmann::json::parse(slurp(d / "manifest.json"))["parameters"]["isa"], isa);
+      const auto got = csv_rows(slurp(d / "bench.csv"));
+      const auto& want = pk ? rows : with;
+      ASSERT_EQ(got.size(), want.size());
+      for (std::size_t i = 0; i < got.size(); ++i) {
+        for (const char* col : {"config", "hits", "mismatches", "shadow_rays", "shadow_occluded"})
+          EXPECT_EQ(got[i].at(col), want[i].at(col)) << isa << " " << col << " " << got[i].at("config");
+        if (got[i].at("config").rfind("ours_", 0) == 0)
+          for (const char* col : {"nodes_per_ray", "triangles_per_ray"})
+            EXPECT_EQ(got[i].at(col), want[i].at(col)) << isa << " " << col << " " << got[i].at("config");
+      }
+    }
+  }
+  const CmdResult bad = ptc({"bench", cube_.string(), "--isa", "avx9", "--out", (dir_ / "isa_bad").string()});
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("--isa"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir_ / "isa_bad"));
 }
 
 namespace {

@@ -169,8 +169,8 @@ TEST_P(TracerKinds, RandomRaysMatchBruteForceRayByRay) {
     const Hit got = trace_ray(s.data(), rays.org[i], rays.dir[i]);
     expect_same(got, want, std::string(name(GetParam())) + " ray " + std::to_string(i));
     EXPECT_GT(got.nodes_visited, 0u);
-    // Both instruction-set variants, forced: the same hit and the same counters.
-    for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2}) {
+    // Every instruction-set variant, forced: the same hit and the same counters.
+    for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512}) {
       const Hit h = trace_ray(s.data(), rays.org[i], rays.dir[i], HitMode::Closest, 0.0f, kInf, isa);
       expect_same(h, want, std::string(to_string(isa)) + " ray " + std::to_string(i));
       ASSERT_EQ(h.nodes_visited, got.nodes_visited);
@@ -214,6 +214,16 @@ TEST_P(TracerKinds, BatchEqualsSingleRaysForAnyThreadCount) {
     const TraceTotals t2 = trace(s.data(), rays, h2, opt);
     opt.isa = TraceIsa::Sse2;  // the baseline variant gives the same batch, field by field
     const TraceTotals ts = trace(s.data(), rays, hs, opt);
+    HitBatch hv;  // and so does AVX2 where Auto is AVX-512
+    opt.isa = TraceIsa::Avx2;
+    const TraceTotals tv = trace(s.data(), rays, hv, opt);
+    EXPECT_EQ(tv.nodes_visited, t1.nodes_visited);
+    EXPECT_EQ(tv.triangles_tested, t1.triangles_tested);
+    EXPECT_EQ(hv.triangle, h1.triangle);
+    EXPECT_EQ(hv.t, h1.t);
+    EXPECT_EQ(hv.u, h1.u);
+    EXPECT_EQ(hv.v, h1.v);
+    EXPECT_EQ(hv.nodes_visited, h1.nodes_visited);
     EXPECT_EQ(ts.hits, t1.hits);
     EXPECT_EQ(ts.nodes_visited, t1.nodes_visited);
     EXPECT_EQ(ts.triangles_tested, t1.triangles_tested);
@@ -316,6 +326,22 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
         ASSERT_TRUE(h && h->t == packed.t[i]) << what;
       }
       EXPECT_EQ(nodes, tp.nodes_visited);
+      // The packet path of the AVX2 and the AVX-512 variants: the same batch, field by field (on a
+      // CPU without AVX-512 both requests run the AVX2 code).
+      HitBatch p2, p512;
+      opt.isa = TraceIsa::Avx2;
+      const TraceTotals t2 = trace(s.data(), rays, p2, opt);
+      opt.isa = TraceIsa::Avx512;
+      const TraceTotals t512 = trace(s.data(), rays, p512, opt);
+      EXPECT_EQ(t2.hits, tp.hits);
+      EXPECT_EQ(t2.nodes_visited, t512.nodes_visited);
+      EXPECT_EQ(t2.triangles_tested, t512.triangles_tested);
+      EXPECT_EQ(p2.triangle, p512.triangle);
+      EXPECT_EQ(p2.t, p512.t);
+      EXPECT_EQ(p2.u, p512.u);
+      EXPECT_EQ(p2.v, p512.v);
+      EXPECT_EQ(p2.nodes_visited, p512.nodes_visited);
+      EXPECT_EQ(p2.triangles_tested, p512.triangles_tested);
     }
   }
 }
