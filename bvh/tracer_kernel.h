@@ -258,10 +258,53 @@ inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, 
 #endif
 
 #if defined(PTC_TRACE_AVX512)
+// watertight8 on sixteen (ray, triangle) pairs: the same float operations per pair, the
+// comparisons into mask registers. Four blocks against one ray (intersect_block_quad) and two
+// triangles against eight rays (the packet path's ray-parallel leaves) call it.
+struct Pairs16 {
+  __m512 t, V, W, det;
+  __mmask16 valid;  // valid lanes among `live`; t is computed only when there is one
+};
+inline Pairs16 watertight16(__m512 a_x, __m512 a_y, __m512 a_z, __m512 b_x, __m512 b_y, __m512 b_z, __m512 c_x,
+                            __m512 c_y, __m512 c_z, __m512 sx, __m512 sy, __m512 sz, __mmask16 live) {
+  const __m512 ax = _mm512_sub_ps(a_x, _mm512_mul_ps(sx, a_z)), ay = _mm512_sub_ps(a_y, _mm512_mul_ps(sy, a_z));
+  const __m512 bx = _mm512_sub_ps(b_x, _mm512_mul_ps(sx, b_z)), by = _mm512_sub_ps(b_y, _mm512_mul_ps(sy, b_z));
+  const __m512 cx = _mm512_sub_ps(c_x, _mm512_mul_ps(sx, c_z)), cy = _mm512_sub_ps(c_y, _mm512_mul_ps(sy, c_z));
+  __m512 U = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
+  __m512 V = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
+  __m512 W = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
+  const __m512 zero = _mm512_setzero_ps();
+  const int on_edge = (_mm512_cmp_ps_mask(U, zero, _CMP_EQ_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_EQ_OQ) |
+                       _mm512_cmp_ps_mask(W, zero, _CMP_EQ_OQ)) &
+                      live;
+  if (on_edge) [[unlikely]] {  // exact signs in double for the lanes with a zero edge function
+    alignas(64) float fax[16], fay[16], fbx[16], fby[16], fcx[16], fcy[16], fu[16], fv[16], fw[16];
+    _mm512_store_ps(fax, ax), _mm512_store_ps(fay, ay), _mm512_store_ps(fbx, bx), _mm512_store_ps(fby, by);
+    _mm512_store_ps(fcx, cx), _mm512_store_ps(fcy, cy), _mm512_store_ps(fu, U), _mm512_store_ps(fv, V);
+    _mm512_store_ps(fw, W);
+    redo_edges_in_double(on_edge, fax, fay, fbx, fby, fcx, fcy, fu, fv, fw);
+    U = _mm512_load_ps(fu), V = _mm512_load_ps(fv), W = _mm512_load_ps(fw);
+  }
+  const __mmask16 neg = _mm512_cmp_ps_mask(U, zero, _CMP_LT_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_LT_OQ) |
+                        _mm512_cmp_ps_mask(W, zero, _CMP_LT_OQ);
+  const __mmask16 pos = _mm512_cmp_ps_mask(U, zero, _CMP_GT_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_GT_OQ) |
+                        _mm512_cmp_ps_mask(W, zero, _CMP_GT_OQ);
+  Pairs16 p;
+  p.det = _mm512_add_ps(_mm512_add_ps(U, V), W);
+  const __mmask16 det_ok = _mm512_cmp_ps_mask(p.det, zero, _CMP_LT_OQ) | _mm512_cmp_ps_mask(p.det, zero, _CMP_GT_OQ);
+  p.valid = det_ok & static_cast<__mmask16>(~(neg & pos)) & live;
+  p.V = V, p.W = W;
+  if (!p.valid) return p;
+  const __m512 az = _mm512_mul_ps(sz, a_z), bz = _mm512_mul_ps(sz, b_z), cz = _mm512_mul_ps(sz, c_z);
+  const __m512 T = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(U, az), _mm512_mul_ps(V, bz)), _mm512_mul_ps(W, cz));
+  p.t = _mm512_div_ps(T, p.det);
+  return p;
+}
+
 // Four consecutive blocks (16 triangles, ids[0..16)) in one 512-bit test: lane l is block l / 4's
-// lane l % 4. The float operations per lane are intersect_block's (watertight8's, with mask
-// registers for the comparisons), and lanes are taken lowest first, so hits and any-hit choices
-// are identical to four calls of intersect_block (and to two of intersect_block_pair).
+// lane l % 4. The float operations per lane are intersect_block's, and lanes are taken lowest
+// first, so hits and any-hit choices are identical to four calls of intersect_block (and to two
+// of intersect_block_pair).
 template <bool AnyHit>
 inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
                                  Result& res) {
@@ -275,47 +318,17 @@ inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids, 
     x = _mm512_insertf32x4(x, _mm_load_ps(v2 + off), 2);
     return _mm512_insertf32x4(x, _mm_load_ps(v3 + off), 3);
   };
-  const __m512 a_x = _mm512_sub_ps(ld(r.kx4), r.okx16), a_y = _mm512_sub_ps(ld(r.ky4), r.oky16);
-  const __m512 a_z = _mm512_sub_ps(ld(r.kz4), r.okz16);
-  const __m512 b_x = _mm512_sub_ps(ld(12 + r.kx4), r.okx16), b_y = _mm512_sub_ps(ld(12 + r.ky4), r.oky16);
-  const __m512 b_z = _mm512_sub_ps(ld(12 + r.kz4), r.okz16);
-  const __m512 c_x = _mm512_sub_ps(ld(24 + r.kx4), r.okx16), c_y = _mm512_sub_ps(ld(24 + r.ky4), r.oky16);
-  const __m512 c_z = _mm512_sub_ps(ld(24 + r.kz4), r.okz16);
-  const __m512 sx = r.sx16, sy = r.sy16;
-  const __m512 ax = _mm512_sub_ps(a_x, _mm512_mul_ps(sx, a_z)), ay = _mm512_sub_ps(a_y, _mm512_mul_ps(sy, a_z));
-  const __m512 bx = _mm512_sub_ps(b_x, _mm512_mul_ps(sx, b_z)), by = _mm512_sub_ps(b_y, _mm512_mul_ps(sy, b_z));
-  const __m512 cx = _mm512_sub_ps(c_x, _mm512_mul_ps(sx, c_z)), cy = _mm512_sub_ps(c_y, _mm512_mul_ps(sy, c_z));
-  __m512 U = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
-  __m512 V = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
-  __m512 W = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
-  const __m512 zero = _mm512_setzero_ps();
-  const int on_edge = _mm512_cmp_ps_mask(U, zero, _CMP_EQ_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_EQ_OQ) |
-                      _mm512_cmp_ps_mask(W, zero, _CMP_EQ_OQ);
-  if (on_edge) [[unlikely]] {  // exact signs in double for the lanes with a zero edge function
-    alignas(64) float fax[16], fay[16], fbx[16], fby[16], fcx[16], fcy[16], fu[16], fv[16], fw[16];
-    _mm512_store_ps(fax, ax), _mm512_store_ps(fay, ay), _mm512_store_ps(fbx, bx), _mm512_store_ps(fby, by);
-    _mm512_store_ps(fcx, cx), _mm512_store_ps(fcy, cy), _mm512_store_ps(fu, U), _mm512_store_ps(fv, V);
-    _mm512_store_ps(fw, W);
-    redo_edges_in_double(on_edge, fax, fay, fbx, fby, fcx, fcy, fu, fv, fw);
-    U = _mm512_load_ps(fu), V = _mm512_load_ps(fv), W = _mm512_load_ps(fw);
-  }
-  const __mmask16 neg = _mm512_cmp_ps_mask(U, zero, _CMP_LT_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_LT_OQ) |
-                        _mm512_cmp_ps_mask(W, zero, _CMP_LT_OQ);
-  const __mmask16 pos = _mm512_cmp_ps_mask(U, zero, _CMP_GT_OQ) | _mm512_cmp_ps_mask(V, zero, _CMP_GT_OQ) |
-                        _mm512_cmp_ps_mask(W, zero, _CMP_GT_OQ);
-  const __m512 det = _mm512_add_ps(_mm512_add_ps(U, V), W);
-  const __mmask16 det_ok = _mm512_cmp_ps_mask(det, zero, _CMP_LT_OQ) | _mm512_cmp_ps_mask(det, zero, _CMP_GT_OQ);
-  const __mmask16 valid = det_ok & static_cast<__mmask16>(~(neg & pos));
-  if (!valid) return false;
-  const __m512 sz = r.sz16;
-  const __m512 az = _mm512_mul_ps(sz, a_z), bz = _mm512_mul_ps(sz, b_z), cz = _mm512_mul_ps(sz, c_z);
-  const __m512 T = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(U, az), _mm512_mul_ps(V, bz)), _mm512_mul_ps(W, cz));
-  const __m512 t = _mm512_div_ps(T, det);
-  const int m = valid & _mm512_cmp_ps_mask(t, _mm512_set1_ps(r.tmin), _CMP_GT_OQ) &
-                _mm512_cmp_ps_mask(t, _mm512_set1_ps(tmax), _CMP_LE_OQ);
+  const Pairs16 h = watertight16(
+      _mm512_sub_ps(ld(r.kx4), r.okx16), _mm512_sub_ps(ld(r.ky4), r.oky16), _mm512_sub_ps(ld(r.kz4), r.okz16),
+      _mm512_sub_ps(ld(12 + r.kx4), r.okx16), _mm512_sub_ps(ld(12 + r.ky4), r.oky16),
+      _mm512_sub_ps(ld(12 + r.kz4), r.okz16), _mm512_sub_ps(ld(24 + r.kx4), r.okx16),
+      _mm512_sub_ps(ld(24 + r.ky4), r.oky16), _mm512_sub_ps(ld(24 + r.kz4), r.okz16), r.sx16, r.sy16, r.sz16, 0xffff);
+  if (!h.valid) return false;
+  const int m = h.valid & _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(r.tmin), _CMP_GT_OQ) &
+                _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(tmax), _CMP_LE_OQ);
   if (!m) return false;
   alignas(64) float ft[16], fv[16], fw[16], fd[16];
-  _mm512_store_ps(ft, t), _mm512_store_ps(fv, V), _mm512_store_ps(fw, W), _mm512_store_ps(fd, det);
+  _mm512_store_ps(ft, h.t), _mm512_store_ps(fv, h.V), _mm512_store_ps(fw, h.W), _mm512_store_ps(fd, h.det);
   return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
 }
 #endif

@@ -158,6 +158,75 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
   const __m256 tmin = _mm256_load_ps(p.tmin);
   __m256 tmax = _mm256_load_ps(p.tmax);
   std::uint32_t found = 0;
+  // The hits of triangle `id` among the lanes `m` (t, V, W, det at lane offset `o` of the stored
+  // rows): closest keeps each lane's smallest (t, id), any hit the first.
+  auto take = [&](std::uint32_t m, std::uint32_t id, const float* ft, const float* fv, const float* fw,
+                  const float* fd) {
+    for (; m; m &= m - 1) {
+      const int l = ctz(m);
+      Result& res = p.res[l];
+      if constexpr (!AnyHit) {
+        if (!(ft[l] < p.tmax[l] || (ft[l] == p.tmax[l] && id < res.tri))) continue;
+      }
+      res.t = ft[l], res.tri = id, res.u = fv[l] / fd[l], res.v = fw[l] / fd[l];
+      p.tmax[l] = ft[l];
+      found |= 1u << l;
+    }
+  };
+#if defined(PTC_TRACE_AVX512)
+  // Two triangles against the eight lanes in one 512-bit test (lanes 0-7: the first triangle,
+  // 8-15: the second), taken in the order of the one-triangle test, so the same hits: a closest
+  // hit of the second is checked against the lane's best after the first, an any-hit lane done
+  // with the first leaves the second.
+  const __m512 okx2 = _mm512_broadcast_f32x8(okx), oky2 = _mm512_broadcast_f32x8(oky);
+  const __m512 okz2 = _mm512_broadcast_f32x8(okz), sx2 = _mm512_broadcast_f32x8(sx);
+  const __m512 sy2 = _mm512_broadcast_f32x8(sy), sz2 = _mm512_broadcast_f32x8(sz);
+  const __m512 tmin2 = _mm512_broadcast_f32x8(tmin);
+  const float* pend = nullptr;  // a triangle waiting for its partner (corner rows at pend + 4 c + axis)
+  std::uint32_t pend_id = kNoTriangle;
+  auto test_pair = [&](const float* v0, std::uint32_t id0, const float* v1, std::uint32_t id1) {
+    auto at = [&](int off, __m512 o) {
+      return _mm512_sub_ps(
+          _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_broadcast_ss(v0 + off)), _mm256_broadcast_ss(v1 + off), 1), o);
+    };
+    const __mmask16 live = static_cast<__mmask16>(lanes | lanes << 8);
+    const Pairs16 h = watertight16(at(kx4, okx2), at(ky4, oky2), at(kz4, okz2), at(12 + kx4, okx2), at(12 + ky4, oky2),
+                                   at(12 + kz4, okz2), at(24 + kx4, okx2), at(24 + ky4, oky2), at(24 + kz4, okz2), sx2,
+                                   sy2, sz2, live);
+    if (!h.valid) return;
+    const __m512 tmax2 = _mm512_broadcast_f32x8(tmax);
+    const std::uint32_t m =
+        h.valid & _mm512_cmp_ps_mask(h.t, tmin2, _CMP_GT_OQ) & _mm512_cmp_ps_mask(h.t, tmax2, _CMP_LE_OQ);
+    if (!m) return;
+    alignas(64) float ft[16], fv[16], fw[16], fd[16];
+    _mm512_store_ps(ft, h.t), _mm512_store_ps(fv, h.V), _mm512_store_ps(fw, h.W), _mm512_store_ps(fd, h.det);
+    take(m & 0xffu & lanes, id0, ft, fv, fw, fd);
+    if constexpr (AnyHit) lanes &= ~found;
+    take((m >> 8) & lanes, id1, ft + 8, fv + 8, fw + 8, fd + 8);
+    if constexpr (AnyHit) lanes &= ~found;
+    else tmax = _mm256_load_ps(p.tmax);
+  };
+  // A range's last triangle without a partner, alone (its lanes 8-15 are not live). Pairs never
+  // span two ranges: an any-hit packet done in one range is not charged the next one's triangles.
+  auto test_last = [&] {
+    if (!pend) return;
+    auto at = [&](int off, __m512 o) { return _mm512_sub_ps(_mm512_set1_ps(pend[off]), o); };
+    const Pairs16 h = watertight16(at(kx4, okx2), at(ky4, oky2), at(kz4, okz2), at(12 + kx4, okx2), at(12 + ky4, oky2),
+                                   at(12 + kz4, okz2), at(24 + kx4, okx2), at(24 + ky4, oky2), at(24 + kz4, okz2), sx2,
+                                   sy2, sz2, static_cast<__mmask16>(lanes));
+    const std::uint32_t id = pend_id;
+    pend = nullptr;
+    if (!h.valid) return;
+    const std::uint32_t m = h.valid & _mm512_cmp_ps_mask(h.t, tmin2, _CMP_GT_OQ) &
+                            _mm512_cmp_ps_mask(h.t, _mm512_broadcast_f32x8(tmax), _CMP_LE_OQ) & lanes;
+    if (!m) return;
+    alignas(64) float ft[16], fv[16], fw[16], fd[16];
+    _mm512_store_ps(ft, h.t), _mm512_store_ps(fv, h.V), _mm512_store_ps(fw, h.W), _mm512_store_ps(fd, h.det);
+    take(m, id, ft, fv, fw, fd);
+    if constexpr (AnyHit) lanes &= ~found;
+    else tmax = _mm256_load_ps(p.tmax);
+  };
+#endif
   for (std::uint32_t i = 0; i < nr; ++i) {
     const LeafRange lr = ranges[i];
     for (std::uint32_t mm = lanes; mm; mm &= mm - 1) p.res[ctz(mm)].tris += lr.triangle_count;
@@ -169,34 +238,41 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
         const std::uint32_t id = ids[j];
         if (id == kNoTriangle) continue;
         const float* v = blk + j;
+#if defined(PTC_TRACE_AVX512)
+        if (!pend) {
+          pend = v, pend_id = id;
+          continue;
+        }
+        test_pair(pend, pend_id, v, id);
+        pend = nullptr;
+        if constexpr (AnyHit)
+          if (!lanes) return found;
+#else
         auto at = [&](int off, __m256 o) { return _mm256_sub_ps(_mm256_broadcast_ss(v + off), o); };
         const Pairs8 h = watertight8(at(kx4, okx), at(ky4, oky), at(kz4, okz), at(12 + kx4, okx), at(12 + ky4, oky),
                                      at(12 + kz4, okz), at(24 + kx4, okx), at(24 + ky4, oky), at(24 + kz4, okz), sx, sy, sz,
                                      static_cast<int>(lanes));
         if (!h.valid_bits) continue;
         const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, tmin, _CMP_GT_OQ), _mm256_cmp_ps(h.t, tmax, _CMP_LE_OQ));
-        std::uint32_t m = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(h.valid, in_range))) & lanes;
+        const std::uint32_t m = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(h.valid, in_range))) & lanes;
         if (!m) continue;
         alignas(32) float ft[8], fv[8], fw[8], fd[8];
         _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
-        for (; m; m &= m - 1) {
-          const int l = ctz(m);
-          Result& res = p.res[l];
-          if constexpr (!AnyHit) {
-            if (!(ft[l] < p.tmax[l] || (ft[l] == p.tmax[l] && id < res.tri))) continue;
-          }
-          res.t = ft[l], res.tri = id, res.u = fv[l] / fd[l], res.v = fw[l] / fd[l];
-          p.tmax[l] = ft[l];
-          found |= 1u << l;
-        }
+        take(m, id, ft, fv, fw, fd);
         if constexpr (AnyHit) {
           lanes &= ~found;
           if (!lanes) return found;
         } else {
           tmax = _mm256_load_ps(p.tmax);
         }
+#endif
       }
     }
+#if defined(PTC_TRACE_AVX512)
+    test_last();
+    if constexpr (AnyHit)
+      if (!lanes) return found;
+#endif
   }
   return found;
 }
