@@ -72,7 +72,8 @@ struct Result {
 };
 
 // Returns false for a ray that cannot hit (zero or non-finite direction, empty interval).
-bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax) {
+// `rcp`: 1 / d per axis when the caller computed it (the batched set-up below), else null.
+bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax, const float* rcp = nullptr) {
   if (!(std::isfinite(d[0]) && std::isfinite(d[1]) && std::isfinite(d[2]))) return false;
   if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return false;
   if (!(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]))) return false;
@@ -82,7 +83,7 @@ bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax) 
   float inv[3];
   int near[3];
   for (int a = 0; a < 3; ++a) {
-    inv[a] = 1.0f / d[a];  // +-inf for a zero component (its sign follows the zero's sign)
+    inv[a] = rcp ? rcp[a] : 1.0f / d[a];  // +-inf for a zero component (its sign follows the zero's sign)
     near[a] = 2 * a + (std::signbit(inv[a]) ? 1 : 0);
   }
   r.ox = _mm_set1_ps(o[0]), r.oy = _mm_set1_ps(o[1]), r.oz = _mm_set1_ps(o[2]);
@@ -510,11 +511,61 @@ struct Stack {
   }
 };
 
+// One ray from its set-up in the trace frame (o, d and 1 / d made for eight rays at once).
+Result trace_prepared(const Flat& f, const Vec3f& o, const Vec3f& d, const float* rcp, float tmin, float tmax,
+                      HitMode mode, StackEntry* stack) {
+  Result res;
+  RayState r;
+  if (!setup(r, o, d, tmin, tmax, rcp)) return res;
+  if (mode == HitMode::Closest)
+    traverse<false>(f, r, res, stack);
+  else
+    traverse<true>(f, r, res, stack);
+  return res;
+}
+
 void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hits, std::size_t begin,
                       std::size_t end, HitMode mode, bool counters, TraceTotals& tot) {
   const Flat f = flat_of(scene);
   Stack st;
   StackEntry* stack = st.get(stack_size(scene));
+#if defined(PTC_TRACE_AVX2)
+  // The set-up's arithmetic for eight rays at once: the origins into the trace frame (double
+  // subtraction and product, rounded to float), the directions times the frame's scale and their
+  // reciprocals, each the same IEEE operation as trace_single's per ray, so the same bits.
+  {
+    const FrameMap fm = scene.frame();
+    const __m256d sc2 = _mm256_set1_pd(fm.scale);
+    const __m256 sc = _mm256_set1_ps(static_cast<float>(fm.scale)), one = _mm256_set1_ps(1.0f);
+    const __m256d orgx = _mm256_set1_pd(fm.origin.x()), orgy = _mm256_set1_pd(fm.origin.y());
+    const __m256d orgz = _mm256_set1_pd(fm.origin.z());
+    auto frame8 = [&](const double* p, __m256d origin) {
+      const __m128 lo = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p), origin), sc2));
+      const __m128 hi = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 4), origin), sc2));
+      return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+    };
+    for (; begin + 8 <= end; begin += 8) {
+      const std::size_t i0 = begin;
+      alignas(32) float o[3][8], d[3][8], rcp[3][8];
+      _mm256_store_ps(o[0], frame8(rays.ox.data() + i0, orgx));
+      _mm256_store_ps(o[1], frame8(rays.oy.data() + i0, orgy));
+      _mm256_store_ps(o[2], frame8(rays.oz.data() + i0, orgz));
+      const float* dir[3] = {rays.dx.data() + i0, rays.dy.data() + i0, rays.dz.data() + i0};
+      for (int a = 0; a < 3; ++a) {
+        const __m256 da = _mm256_mul_ps(_mm256_loadu_ps(dir[a]), sc);
+        _mm256_store_ps(d[a], da);
+        _mm256_store_ps(rcp[a], _mm256_div_ps(one, da));
+      }
+      for (int l = 0; l < 8; ++l) {
+        const float inv[3] = {rcp[0][l], rcp[1][l], rcp[2][l]};
+        store_result(hits, i0 + l,
+                     trace_prepared(f, {o[0][l], o[1][l], o[2][l]}, {d[0][l], d[1][l], d[2][l]}, inv,
+                                    rays.tmin[i0 + l], rays.tmax[i0 + l], mode, stack),
+                     counters, tot);
+      }
+    }
+  }
+#endif
   for (std::size_t i = begin; i < end; ++i) {
     store_result(hits, i,
                  trace_single(scene, f, Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), {rays.dx[i], rays.dy[i], rays.dz[i]},
