@@ -72,8 +72,7 @@ struct Result {
 };
 
 // Returns false for a ray that cannot hit (zero or non-finite direction, empty interval).
-// `rcp`: 1 / d per axis when the caller computed it (the batched set-up below), else null.
-bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax, const float* rcp = nullptr) {
+bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax) {
   if (!(std::isfinite(d[0]) && std::isfinite(d[1]) && std::isfinite(d[2]))) return false;
   if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return false;
   if (!(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]))) return false;
@@ -83,7 +82,7 @@ bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax, 
   float inv[3];
   int near[3];
   for (int a = 0; a < 3; ++a) {
-    inv[a] = rcp ? rcp[a] : 1.0f / d[a];  // +-inf for a zero component (its sign follows the zero's sign)
+    inv[a] = 1.0f / d[a];  // +-inf for a zero component (its sign follows the zero's sign)
     near[a] = 2 * a + (std::signbit(inv[a]) ? 1 : 0);
   }
   r.ox = _mm_set1_ps(o[0]), r.oy = _mm_set1_ps(o[1]), r.oz = _mm_set1_ps(o[2]);
@@ -511,18 +510,65 @@ struct Stack {
   }
 };
 
-// One ray from its set-up in the trace frame (o, d and 1 / d made for eight rays at once).
-Result trace_prepared(const Flat& f, const Vec3f& o, const Vec3f& d, const float* rcp, float tmin, float tmax,
-                      HitMode mode, StackEntry* stack) {
-  Result res;
-  RayState r;
-  if (!setup(r, o, d, tmin, tmax, rcp)) return res;
-  if (mode == HitMode::Closest)
-    traverse<false>(f, r, res, stack);
-  else
-    traverse<true>(f, r, res, stack);
-  return res;
+#if defined(PTC_TRACE_AVX2)
+// setup() for eight consecutive rays of a batch at once: the origins into the trace frame (double
+// subtraction and product, rounded to float), the directions times the frame's scale, their
+// reciprocals and the slab constants, and setup()'s checks, each the same IEEE operation as the
+// per-ray code (trace_single and setup), so the same bits and the same rays refused.
+struct Setup8 {
+  alignas(32) float o[3][8], d[3][8], in[3][8], fa[3][8], tmin[8], tmax[8];
+  unsigned valid = 0;  // bit l: ray l passes setup()'s checks
+  unsigned neg[3] = {0, 0, 0};  // bit l: ray l's reciprocal on that axis is negative
+};
+
+inline void setup8(Setup8& s, const RayBatch& rays, std::size_t i0, const FrameMap& fm) {
+  const __m256d sc2 = _mm256_set1_pd(fm.scale);
+  const __m256 sc = _mm256_set1_ps(static_cast<float>(fm.scale));
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity()), zero = _mm256_setzero_ps();
+  auto finite = [&](__m256 x) { return _mm256_cmp_ps(_mm256_and_ps(x, abs_mask), inf, _CMP_LT_OQ); };
+  const double* org[3] = {rays.ox.data() + i0, rays.oy.data() + i0, rays.oz.data() + i0};
+  const float* dir[3] = {rays.dx.data() + i0, rays.dy.data() + i0, rays.dz.data() + i0};
+  __m256 ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1)), nonzero = zero;
+  for (int a = 0; a < 3; ++a) {
+    const __m256d origin = _mm256_set1_pd(fm.origin[a]);
+    const __m128 lo = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(org[a]), origin), sc2));
+    const __m128 hi = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(org[a] + 4), origin), sc2));
+    const __m256 o = _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+    const __m256 d = _mm256_mul_ps(_mm256_loadu_ps(dir[a]), sc);
+    const __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), d);  // +-inf for a zero component
+    _mm256_store_ps(s.o[a], o);
+    _mm256_store_ps(s.d[a], d);
+    _mm256_store_ps(s.in[a], _mm256_mul_ps(inv, _mm256_set1_ps(kNearScale)));
+    _mm256_store_ps(s.fa[a], _mm256_mul_ps(inv, _mm256_set1_ps(kFarScale)));
+    s.neg[a] = static_cast<unsigned>(_mm256_movemask_ps(inv));
+    ok = _mm256_and_ps(ok, _mm256_and_ps(finite(d), finite(o)));
+    nonzero = _mm256_or_ps(nonzero, _mm256_cmp_ps(d, zero, _CMP_NEQ_OQ));
+  }
+  const __m256 t0 = _mm256_loadu_ps(rays.tmin.data() + i0), t1 = _mm256_loadu_ps(rays.tmax.data() + i0);
+  const __m256 big = _mm256_set1_ps(kBig);
+  const __m256 t1c = _mm256_blendv_ps(big, t1, _mm256_cmp_ps(t1, big, _CMP_LT_OQ));  // tmax < kBig ? tmax : kBig
+  _mm256_store_ps(s.tmin, t0);
+  _mm256_store_ps(s.tmax, t1c);
+  ok = _mm256_and_ps(ok, _mm256_and_ps(nonzero, _mm256_cmp_ps(t0, t1c, _CMP_LT_OQ)));
+  ok = _mm256_and_ps(ok, _mm256_cmp_ps(t0, zero, _CMP_GE_OQ));
+  s.valid = static_cast<unsigned>(_mm256_movemask_ps(ok));
 }
+
+// Ray l of `s` into `r`: what setup() makes of it.
+inline void state_of(RayState& r, const Setup8& s, int l) {
+  r.tmin = s.tmin[l], r.tmax = s.tmax[l];
+  r.ox = _mm_set1_ps(s.o[0][l]), r.oy = _mm_set1_ps(s.o[1][l]), r.oz = _mm_set1_ps(s.o[2][l]);
+  r.inx = _mm_set1_ps(s.in[0][l]), r.iny = _mm_set1_ps(s.in[1][l]), r.inz = _mm_set1_ps(s.in[2][l]);
+  r.ifx = _mm_set1_ps(s.fa[0][l]), r.ify = _mm_set1_ps(s.fa[1][l]), r.ifz = _mm_set1_ps(s.fa[2][l]);
+  const int near[3] = {0 + static_cast<int>(s.neg[0] >> l & 1), 2 + static_cast<int>(s.neg[1] >> l & 1),
+                       4 + static_cast<int>(s.neg[2] >> l & 1)};
+  r.nx = 4 * near[0], r.ny = 4 * near[1], r.nz = 4 * near[2];
+  r.fx = 4 * (near[0] ^ 1), r.fy = 4 * (near[1] ^ 1), r.fz = 4 * (near[2] ^ 1);
+  r.org = {s.o[0][l], s.o[1][l], s.o[2][l]}, r.dir = {s.d[0][l], s.d[1][l], s.d[2][l]};
+  r.watertight_ready = false;
+}
+#endif
 
 void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hits, std::size_t begin,
                       std::size_t end, HitMode mode, bool counters, TraceTotals& tot) {
@@ -530,38 +576,23 @@ void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hi
   Stack st;
   StackEntry* stack = st.get(stack_size(scene));
 #if defined(PTC_TRACE_AVX2)
-  // The set-up's arithmetic for eight rays at once: the origins into the trace frame (double
-  // subtraction and product, rounded to float), the directions times the frame's scale and their
-  // reciprocals, each the same IEEE operation as trace_single's per ray, so the same bits.
+  // Eight rays' set-up at once (setup8), then each ray walks the tree alone.
   {
     const FrameMap fm = scene.frame();
-    const __m256d sc2 = _mm256_set1_pd(fm.scale);
-    const __m256 sc = _mm256_set1_ps(static_cast<float>(fm.scale)), one = _mm256_set1_ps(1.0f);
-    const __m256d orgx = _mm256_set1_pd(fm.origin.x()), orgy = _mm256_set1_pd(fm.origin.y());
-    const __m256d orgz = _mm256_set1_pd(fm.origin.z());
-    auto frame8 = [&](const double* p, __m256d origin) {
-      const __m128 lo = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p), origin), sc2));
-      const __m128 hi = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 4), origin), sc2));
-      return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
-    };
+    Setup8 s;
     for (; begin + 8 <= end; begin += 8) {
-      const std::size_t i0 = begin;
-      alignas(32) float o[3][8], d[3][8], rcp[3][8];
-      _mm256_store_ps(o[0], frame8(rays.ox.data() + i0, orgx));
-      _mm256_store_ps(o[1], frame8(rays.oy.data() + i0, orgy));
-      _mm256_store_ps(o[2], frame8(rays.oz.data() + i0, orgz));
-      const float* dir[3] = {rays.dx.data() + i0, rays.dy.data() + i0, rays.dz.data() + i0};
-      for (int a = 0; a < 3; ++a) {
-        const __m256 da = _mm256_mul_ps(_mm256_loadu_ps(dir[a]), sc);
-        _mm256_store_ps(d[a], da);
-        _mm256_store_ps(rcp[a], _mm256_div_ps(one, da));
-      }
+      setup8(s, rays, begin, fm);
       for (int l = 0; l < 8; ++l) {
-        const float inv[3] = {rcp[0][l], rcp[1][l], rcp[2][l]};
-        store_result(hits, i0 + l,
-                     trace_prepared(f, {o[0][l], o[1][l], o[2][l]}, {d[0][l], d[1][l], d[2][l]}, inv,
-                                    rays.tmin[i0 + l], rays.tmax[i0 + l], mode, stack),
-                     counters, tot);
+        Result res;
+        if (s.valid >> l & 1) {
+          RayState r;
+          state_of(r, s, l);
+          if (mode == HitMode::Closest)
+            traverse<false>(f, r, res, stack);
+          else
+            traverse<true>(f, r, res, stack);
+        }
+        store_result(hits, begin + l, res, counters, tot);
       }
     }
   }

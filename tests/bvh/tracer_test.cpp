@@ -251,6 +251,61 @@ TEST_P(TracerKinds, BatchEqualsSingleRaysForAnyThreadCount) {
   }
 }
 
+// The batch's set-up of eight rays at once (the AVX2 and AVX-512 variants) refuses and accepts
+// exactly the rays the per-ray set-up does, and makes the same ray of the rest: degenerate rays
+// (zero, NaN and infinite directions, -0 components, a NaN or a float-overflowing origin, empty,
+// negative or NaN intervals) mixed into eight-ray groups at every position, each against
+// trace_ray (the per-ray set-up), every variant.
+TEST_P(TracerKinds, BatchSetUpRefusesWhatTheRaySetUpRefuses) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const AnyScene s = make_scene(m, GetParam());
+  const RaySet rs = random_rays(m, 64, 13);
+  const float nan = std::nanf(""), inf = kInf;
+  const Vec3 c = m.bounds().center();
+  struct Odd {
+    Vec3 o;
+    Vec3f d;
+    float t0, t1;
+  };
+  const Odd odd[] = {
+      {c, {0, 0, 0}, 0, inf},          {c, {nan, 1, 0}, 0, inf},       {c, {inf, 1, 0}, 0, inf},
+      {c, {-0.0f, -0.0f, 1}, 0, inf},  {c, {-0.0f, 0.0f, -0.0f}, 0, inf}, {Vec3(nan, 0, 0), {1, 0, 0}, 0, inf},
+      {Vec3(1e39, 0, 0), {-1, 0, 0}, 0, inf}, {c, {1, 0.5f, 0}, 2, 1}, {c, {1, 0.5f, 0}, -1, inf},
+      {c, {1, 0.5f, 0}, nan, inf},     {c, {1, 0.5f, 0}, 0, nan},      {c, {0, 1, -0.0f}, 0, 3e38f},
+      {c, {0, 0, 1}, 0, 0},            {c, {1e-30f, 1e-30f, 1e-30f}, 0, inf}};
+  std::vector<Vec3> org;
+  std::vector<Vec3f> dir;
+  std::vector<float> t0, t1;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < rs.org.size(); ++i) {
+    org.push_back(rs.org[i]), dir.push_back(rs.dir[i]), t0.push_back(0.0f), t1.push_back(inf);
+    if (i % 3 == 0) {  // an odd ray every third ray: every position of a group of eight
+      const Odd& x = odd[k++ % std::size(odd)];
+      org.push_back(x.o), dir.push_back(x.d), t0.push_back(x.t0), t1.push_back(x.t1);
+    }
+  }
+  RayBatch rays;
+  rays.resize(org.size());
+  for (std::size_t i = 0; i < org.size(); ++i) rays.set(i, org[i], dir[i], t0[i], t1[i]);
+  for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512})
+    for (HitMode mode : {HitMode::Closest, HitMode::Any}) {
+      HitBatch h;
+      TraceOptions opt;
+      opt.mode = mode, opt.threads = 1, opt.isa = isa;
+      trace(s.data(), rays, h, opt);
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        const Hit one = trace_ray(s.data(), org[i], dir[i], mode, t0[i], t1[i], TraceIsa::Sse2);
+        const std::string what = std::string(to_string(isa)) + " ray " + std::to_string(i);
+        ASSERT_EQ(h.triangle[i], one.triangle) << what;
+        ASSERT_EQ(h.t[i], one.t) << what;
+        ASSERT_EQ(h.u[i], one.u) << what;
+        ASSERT_EQ(h.v[i], one.v) << what;
+        ASSERT_EQ(h.nodes_visited[i], one.nodes_visited) << what;  // 0 for a refused ray
+        ASSERT_EQ(h.triangles_tested[i], one.triangles_tested) << what;
+      }
+    }
+}
+
 // The packet path (TraceOptions::packets) against single rays, ray by ray: closest hits bit for
 // bit, any hit on the same rays (and a real hit of that ray). The batch mixes a camera's rows
 // (coherent: one lane group per packet), random rays (mixed octants and dominant axes: several
