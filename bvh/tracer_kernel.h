@@ -1,5 +1,5 @@
 // Internal: the tracer's traversal and leaf kernels, compiled once per instruction set (see
-// tracer_isa.h). Include only from tracer_sse2.cpp / tracer_avx2.cpp, after defining
+// tracer_isa.h). Include only from tracer_sse2.cpp / tracer_avx2.cpp / tracer_avx512.cpp, after defining
 // PTC_TRACE_NS (the namespace that keeps the two compilations apart: no symbol of one can be
 // picked by the linker for the other).
 #ifndef PTC_TRACE_NS
