@@ -40,6 +40,12 @@ void register_bench(CLI::App& app, Context& ctx) {
                                                            ? "AVX-512 (F, VL, DQ and BW)"
                                                            : "AVX2") +
                                                       "; the widest it has is " + bvh::to_string(bvh::resolve(bvh::TraceIsa::Auto)));
+                      // Our packet path is AVX2 / AVX-512 code; the baseline variant would trace single
+                      // rays while the run says packets.
+                      if (o.config.packets && bvh::resolve(o.config.isa) == bvh::TraceIsa::Sse2)
+                        throw UsageError("--packets", o.config.isa == bvh::TraceIsa::Sse2
+                                                          ? "our packet path needs avx2 or avx512 (--isa sse2 traces single rays)"
+                                                          : "our packet path needs AVX2, which this CPU does not have");
                       if (a->app->count("--frames")) o.frames = a->frames;
                       o.input = a->scene.input;
                       a->scene.apply(o.scene_options);

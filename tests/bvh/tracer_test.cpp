@@ -254,12 +254,13 @@ TEST_P(TracerKinds, BatchEqualsSingleRaysForAnyThreadCount) {
 // The batch's set-up of eight rays at once (the AVX2 and AVX-512 variants) refuses and accepts
 // exactly the rays the per-ray set-up does, and makes the same ray of the rest: degenerate rays
 // (zero, NaN and infinite directions, -0 components, a NaN or a float-overflowing origin, empty,
-// negative or NaN intervals) mixed into eight-ray groups at every position, each against
-// trace_ray (the per-ray set-up), every variant.
+// negative or NaN intervals) mixed into eight-ray groups, each against trace_ray (the per-ray
+// set-up), every variant. An odd ray follows every second random ray: a stride of three, coprime
+// to eight, so every kind of odd ray lands in every lane of a group (checked).
 TEST_P(TracerKinds, BatchSetUpRefusesWhatTheRaySetUpRefuses) {
   const Mesh m = test::load_mesh("bunny00.off");
   const AnyScene s = make_scene(m, GetParam());
-  const RaySet rs = random_rays(m, 64, 13);
+  const RaySet rs = random_rays(m, 400, 13);
   const float nan = std::nanf(""), inf = kInf;
   const Vec3 c = m.bounds().center();
   struct Odd {
@@ -272,18 +273,23 @@ TEST_P(TracerKinds, BatchSetUpRefusesWhatTheRaySetUpRefuses) {
       {c, {-0.0f, -0.0f, 1}, 0, inf},  {c, {-0.0f, 0.0f, -0.0f}, 0, inf}, {Vec3(nan, 0, 0), {1, 0, 0}, 0, inf},
       {Vec3(1e39, 0, 0), {-1, 0, 0}, 0, inf}, {c, {1, 0.5f, 0}, 2, 1}, {c, {1, 0.5f, 0}, -1, inf},
       {c, {1, 0.5f, 0}, nan, inf},     {c, {1, 0.5f, 0}, 0, nan},      {c, {0, 1, -0.0f}, 0, 3e38f},
-      {c, {0, 0, 1}, 0, 0},            {c, {1e-30f, 1e-30f, 1e-30f}, 0, inf}};
+      {c, {0, 0, 1}, 0, 0},            {c, {1e-30f, 1e-30f, 1e-30f}, 0, inf}, {c, {1, 0, 0}, inf, inf}};
+  static_assert(std::size(odd) % 2 == 1, "an odd count of kinds: with the stride of 3 every kind visits every lane");
   std::vector<Vec3> org;
   std::vector<Vec3f> dir;
   std::vector<float> t0, t1;
   std::size_t k = 0;
+  unsigned lane_seen[std::size(odd)] = {};  // per kind of odd ray: the lanes of a group it was put in
   for (std::size_t i = 0; i < rs.org.size(); ++i) {
     org.push_back(rs.org[i]), dir.push_back(rs.dir[i]), t0.push_back(0.0f), t1.push_back(inf);
-    if (i % 3 == 0) {  // an odd ray every third ray: every position of a group of eight
-      const Odd& x = odd[k++ % std::size(odd)];
+    if (i % 2 == 1) {  // after every second random ray
+      const std::size_t kind = k++ % std::size(odd);
+      const Odd& x = odd[kind];
+      if (org.size() + 8 <= rs.org.size()) lane_seen[kind] |= 1u << (org.size() % 8);  // (not in the tail)
       org.push_back(x.o), dir.push_back(x.d), t0.push_back(x.t0), t1.push_back(x.t1);
     }
   }
+  for (std::size_t j = 0; j < std::size(odd); ++j) ASSERT_EQ(lane_seen[j], 0xffu) << "odd ray kind " << j;
   RayBatch rays;
   rays.resize(org.size());
   for (std::size_t i = 0; i < org.size(); ++i) rays.set(i, org[i], dir[i], t0[i], t1[i]);
