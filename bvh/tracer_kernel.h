@@ -430,6 +430,19 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
         ref = n.child[i0], cnt = n.count[i0];
         continue;
       }
+      if constexpr (AnyHit) {
+        // Any hit visits every entered child until a hit ends the walk; the pop ignores entry
+        // distances, so none are stored and the others are pushed in slot order (the lowest slot
+        // is visited first). Shadow rays to a point light mostly reach it (97% on the twist
+        // view), when the order does not matter; the distances' round trip through memory and the
+        // two-child compare did (docs/tracing.md).
+        for (unsigned mm = mask; mm; mm &= mm - 1) {
+          const int i = ctz(mm);
+          *sp++ = {n.child[i], n.count[i], 0.0f};
+        }
+        ref = n.child[i0], cnt = n.count[i0];
+        continue;
+      }
       alignas(16) float dist[4];
       _mm_store_ps(dist, tn);
       const int i1 = ctz(mask);
