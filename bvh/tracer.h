@@ -18,9 +18,9 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string_view>
-#include <limits>
 
 #include "bvh/aligned.h"
 #include "bvh/trace_scene.h"

@@ -72,26 +72,36 @@ struct Result {
 };
 
 // Returns false for a ray that cannot hit (zero or non-finite direction, empty interval).
-bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax) {
-  if (!(std::isfinite(d[0]) && std::isfinite(d[1]) && std::isfinite(d[2]))) return false;
-  if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return false;
-  if (!(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]))) return false;
-  r.tmin = tmin;
-  r.tmax = tmax < kBig ? tmax : kBig;
-  if (!(r.tmin < r.tmax) || !(tmin >= 0.0f)) return false;
-  float inv[3];
-  int near[3];
-  for (int a = 0; a < 3; ++a) {
-    inv[a] = 1.0f / d[a];  // +-inf for a zero component (its sign follows the zero's sign)
-    near[a] = 2 * a + (std::signbit(inv[a]) ? 1 : 0);
-  }
+// The ray's state from its set-up values: origin and direction in the trace frame, the slab
+// constants 1/d x kNearScale and 1/d x kFarScale, per axis whether 1/d is negative, and the
+// interval (tmax already clamped to kBig). setup() and the batched set-up (setup8) both end here.
+void fill_state(RayState& r, const Vec3f& o, const Vec3f& d, const float* in, const float* fa, const bool* neg,
+                float tmin, float tmax) {
+  r.tmin = tmin, r.tmax = tmax;
   r.ox = _mm_set1_ps(o[0]), r.oy = _mm_set1_ps(o[1]), r.oz = _mm_set1_ps(o[2]);
-  r.inx = _mm_set1_ps(inv[0] * kNearScale), r.iny = _mm_set1_ps(inv[1] * kNearScale), r.inz = _mm_set1_ps(inv[2] * kNearScale);
-  r.ifx = _mm_set1_ps(inv[0] * kFarScale), r.ify = _mm_set1_ps(inv[1] * kFarScale), r.ifz = _mm_set1_ps(inv[2] * kFarScale);
+  r.inx = _mm_set1_ps(in[0]), r.iny = _mm_set1_ps(in[1]), r.inz = _mm_set1_ps(in[2]);
+  r.ifx = _mm_set1_ps(fa[0]), r.ify = _mm_set1_ps(fa[1]), r.ifz = _mm_set1_ps(fa[2]);
+  int near[3];
+  for (int a = 0; a < 3; ++a) near[a] = 2 * a + (neg[a] ? 1 : 0);
   r.nx = 4 * near[0], r.ny = 4 * near[1], r.nz = 4 * near[2];
   r.fx = 4 * (near[0] ^ 1), r.fy = 4 * (near[1] ^ 1), r.fz = 4 * (near[2] ^ 1);
   r.org = o, r.dir = d;
   r.watertight_ready = false;
+}
+
+bool setup(RayState& r, const Vec3f& o, const Vec3f& d, float tmin, float tmax) {
+  if (!(std::isfinite(d[0]) && std::isfinite(d[1]) && std::isfinite(d[2]))) return false;
+  if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return false;
+  if (!(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]))) return false;
+  const float tmax_c = tmax < kBig ? tmax : kBig;
+  if (!(tmin < tmax_c) || !(tmin >= 0.0f)) return false;
+  float in[3], fa[3];
+  bool neg[3];
+  for (int a = 0; a < 3; ++a) {
+    const float inv = 1.0f / d[a];  // +-inf for a zero component (its sign follows the zero's sign)
+    in[a] = inv * kNearScale, fa[a] = inv * kFarScale, neg[a] = std::signbit(inv);
+  }
+  fill_state(r, o, d, in, fa, neg, tmin, tmax_c);
   return true;
 }
 
@@ -432,8 +442,8 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
       }
       if constexpr (AnyHit) {
         // Any hit visits every entered child until a hit ends the walk; the pop ignores entry
-        // distances, so none are stored and the others are pushed in slot order (the lowest slot
-        // is visited first). Shadow rays to a point light mostly reach it (97% on the twist
+        // distances, so none are stored: the lowest entered slot is visited first, the others
+        // pushed in slot order (so popped from the highest down). Shadow rays to a point light mostly reach it (97% on the twist
         // view), when the order does not matter; the distances' round trip through memory and the
         // two-child compare did (docs/tracing.md).
         for (unsigned mm = mask; mm; mm &= mm - 1) {
@@ -463,10 +473,8 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
         const int i = ctz(mask);
         c[k++] = {n.child[i], n.count[i], dist[i]};
       }
-      if constexpr (!AnyHit) {
-        for (int i = 1; i < k; ++i)  // insertion sort, descending distance
-          for (int j = i; j > 0 && c[j - 1].t < c[j].t; --j) std::swap(c[j - 1], c[j]);
-      }
+      for (int i = 1; i < k; ++i)  // insertion sort, descending distance
+        for (int j = i; j > 0 && c[j - 1].t < c[j].t; --j) std::swap(c[j - 1], c[j]);
       for (int i = 0; i < k - 1; ++i) *sp++ = c[i];
       ref = c[k - 1].ref, cnt = c[k - 1].count;
     }
@@ -486,6 +494,14 @@ Flat flat_of(const TraceData& s) {
 
 std::size_t stack_size(const TraceData& s) { return 3 * std::size_t(s.wide.depth) + 8; }
 
+// The walk of one set-up ray, closest or any hit.
+inline void walk(const Flat& f, RayState& r, Result& res, HitMode mode, StackEntry* stack) {
+  if (mode == HitMode::Closest)
+    traverse<false>(f, r, res, stack);
+  else
+    traverse<true>(f, r, res, stack);
+}
+
 Result trace_single(const TraceData& s, const Flat& f, const Vec3& org, const Vec3f& dir, float tmin, float tmax,
                     HitMode mode, StackEntry* stack) {
   Result res;
@@ -494,10 +510,7 @@ Result trace_single(const TraceData& s, const Flat& f, const Vec3& org, const Ve
   // dir * scale (exact: a power of two), so t is the caller's.
   const float sc = static_cast<float>(s.scale);
   if (!setup(r, to_frame(org, s.frame()), {dir[0] * sc, dir[1] * sc, dir[2] * sc}, tmin, tmax)) return res;
-  if (mode == HitMode::Closest)
-    traverse<false>(f, r, res, stack);
-  else
-    traverse<true>(f, r, res, stack);
+  walk(f, r, res, mode, stack);
   return res;
 }
 
@@ -570,16 +583,9 @@ inline void setup8(Setup8& s, const RayBatch& rays, std::size_t i0, const FrameM
 
 // Ray l of `s` into `r`: what setup() makes of it.
 inline void state_of(RayState& r, const Setup8& s, int l) {
-  r.tmin = s.tmin[l], r.tmax = s.tmax[l];
-  r.ox = _mm_set1_ps(s.o[0][l]), r.oy = _mm_set1_ps(s.o[1][l]), r.oz = _mm_set1_ps(s.o[2][l]);
-  r.inx = _mm_set1_ps(s.in[0][l]), r.iny = _mm_set1_ps(s.in[1][l]), r.inz = _mm_set1_ps(s.in[2][l]);
-  r.ifx = _mm_set1_ps(s.fa[0][l]), r.ify = _mm_set1_ps(s.fa[1][l]), r.ifz = _mm_set1_ps(s.fa[2][l]);
-  const int near[3] = {0 + static_cast<int>(s.neg[0] >> l & 1), 2 + static_cast<int>(s.neg[1] >> l & 1),
-                       4 + static_cast<int>(s.neg[2] >> l & 1)};
-  r.nx = 4 * near[0], r.ny = 4 * near[1], r.nz = 4 * near[2];
-  r.fx = 4 * (near[0] ^ 1), r.fy = 4 * (near[1] ^ 1), r.fz = 4 * (near[2] ^ 1);
-  r.org = {s.o[0][l], s.o[1][l], s.o[2][l]}, r.dir = {s.d[0][l], s.d[1][l], s.d[2][l]};
-  r.watertight_ready = false;
+  const float in[3] = {s.in[0][l], s.in[1][l], s.in[2][l]}, fa[3] = {s.fa[0][l], s.fa[1][l], s.fa[2][l]};
+  const bool neg[3] = {(s.neg[0] >> l & 1) != 0, (s.neg[1] >> l & 1) != 0, (s.neg[2] >> l & 1) != 0};
+  fill_state(r, {s.o[0][l], s.o[1][l], s.o[2][l]}, {s.d[0][l], s.d[1][l], s.d[2][l]}, in, fa, neg, s.tmin[l], s.tmax[l]);
 }
 #endif
 
@@ -600,10 +606,7 @@ void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hi
         if (s.valid >> l & 1) {
           RayState r;
           state_of(r, s, l);
-          if (mode == HitMode::Closest)
-            traverse<false>(f, r, res, stack);
-          else
-            traverse<true>(f, r, res, stack);
+          walk(f, r, res, mode, stack);
         }
         store_result(hits, begin + l, res, counters, tot);
       }

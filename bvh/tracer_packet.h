@@ -158,8 +158,8 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
   const __m256 tmin = _mm256_load_ps(p.tmin);
   __m256 tmax = _mm256_load_ps(p.tmax);
   std::uint32_t found = 0;
-  // The hits of triangle `id` among the lanes `m` (t, V, W, det at lane offset `o` of the stored
-  // rows): closest keeps each lane's smallest (t, id), any hit the first.
+  // The hits of triangle `id` among the lanes `m` (t, V, W, det of lane l at ft[l] ...): closest
+  // keeps each lane's smallest (t, id), any hit the first.
   auto take = [&](std::uint32_t m, std::uint32_t id, const float* ft, const float* fv, const float* fw,
                   const float* fd) {
     for (; m; m &= m - 1) {
@@ -184,12 +184,13 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
   const __m512 tmin2 = _mm512_broadcast_f32x8(tmin);
   const float* pend = nullptr;  // a triangle waiting for its partner (corner rows at pend + 4 c + axis)
   std::uint32_t pend_id = kNoTriangle;
-  auto test_pair = [&](const float* v0, std::uint32_t id0, const float* v1, std::uint32_t id1) {
+  // `both` false: the first triangle alone (lanes 8-15 not live; v1 may be v0).
+  auto test_pair = [&](const float* v0, std::uint32_t id0, const float* v1, std::uint32_t id1, bool both) {
     auto at = [&](int off, __m512 o) {
       return _mm512_sub_ps(
           _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_broadcast_ss(v0 + off)), _mm256_broadcast_ss(v1 + off), 1), o);
     };
-    const __mmask16 live = static_cast<__mmask16>(lanes | lanes << 8);
+    const __mmask16 live = static_cast<__mmask16>(lanes | (both ? lanes << 8 : 0u));
     const Pairs16 h = watertight16(at(kx4, okx2), at(ky4, oky2), at(kz4, okz2), at(12 + kx4, okx2), at(12 + ky4, oky2),
                                    at(12 + kz4, okz2), at(24 + kx4, okx2), at(24 + ky4, oky2), at(24 + kz4, okz2), sx2,
                                    sy2, sz2, live);
@@ -206,25 +207,12 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
     if constexpr (AnyHit) lanes &= ~found;
     else tmax = _mm256_load_ps(p.tmax);
   };
-  // A range's last triangle without a partner, alone (its lanes 8-15 are not live). Pairs never
-  // span two ranges: an any-hit packet done in one range is not charged the next one's triangles.
+  // A range's last triangle without a partner, alone. Pairs never span two ranges: an any-hit
+  // packet done in one range is not charged the next one's triangles.
   auto test_last = [&] {
     if (!pend) return;
-    auto at = [&](int off, __m512 o) { return _mm512_sub_ps(_mm512_set1_ps(pend[off]), o); };
-    const Pairs16 h = watertight16(at(kx4, okx2), at(ky4, oky2), at(kz4, okz2), at(12 + kx4, okx2), at(12 + ky4, oky2),
-                                   at(12 + kz4, okz2), at(24 + kx4, okx2), at(24 + ky4, oky2), at(24 + kz4, okz2), sx2,
-                                   sy2, sz2, static_cast<__mmask16>(lanes));
-    const std::uint32_t id = pend_id;
+    test_pair(pend, pend_id, pend, pend_id, false);
     pend = nullptr;
-    if (!h.valid) return;
-    const std::uint32_t m = h.valid & _mm512_cmp_ps_mask(h.t, tmin2, _CMP_GT_OQ) &
-                            _mm512_cmp_ps_mask(h.t, _mm512_broadcast_f32x8(tmax), _CMP_LE_OQ) & lanes;
-    if (!m) return;
-    alignas(64) float ft[16], fv[16], fw[16], fd[16];
-    _mm512_store_ps(ft, h.t), _mm512_store_ps(fv, h.V), _mm512_store_ps(fw, h.W), _mm512_store_ps(fd, h.det);
-    take(m, id, ft, fv, fw, fd);
-    if constexpr (AnyHit) lanes &= ~found;
-    else tmax = _mm256_load_ps(p.tmax);
   };
 #endif
   for (std::uint32_t i = 0; i < nr; ++i) {
@@ -243,7 +231,7 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
           pend = v, pend_id = id;
           continue;
         }
-        test_pair(pend, pend_id, v, id);
+        test_pair(pend, pend_id, v, id, true);
         pend = nullptr;
         if constexpr (AnyHit)
           if (!lanes) return found;

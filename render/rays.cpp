@@ -80,6 +80,16 @@ TraceTarget with_counters(TraceTarget target) {
   return target;
 }
 
+TraceTarget with_isa(TraceTarget target, bvh::TraceIsa isa) {
+  auto inner = std::move(target.trace);
+  target.trace = [inner = std::move(inner), isa](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
+    bvh::TraceOptions c = o;
+    c.isa = isa;
+    return inner(r, h, c);
+  };
+  return target;
+}
+
 void PassStats::add(const bvh::TraceTotals& t, double ms) {
   rays += t.rays, hits += t.hits, nodes_visited += t.nodes_visited, triangles_tested += t.triangles_tested;
   trace_ms += ms;

@@ -80,6 +80,9 @@ template <class Tracer>
 /// The same target tracing with the per-ray counters on, whatever the pass asks (the untimed
 /// counted trace of the experiments and benchmarks).
 [[nodiscard]] TraceTarget with_counters(TraceTarget target);
+/// The same target tracing with our tracer's instruction-set variant `isa`, whatever the pass
+/// asks (Embree's targets ignore it).
+[[nodiscard]] TraceTarget with_isa(TraceTarget target, bvh::TraceIsa isa);
 
 /// Totals and wall time of one trace pass.
 struct PassStats {

@@ -186,13 +186,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
         surface = surface_hits(*frame_mesh, rays, ref);
         frame_bounds = frame_mesh->bounds();
       }
-      TraceTarget target = target_of(a);  // our variant cfg.isa for the shadow rays too (Embree ignores it)
-      target.trace = [&a, isa = cfg.isa](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
-        bvh::TraceOptions with_isa = o;
-        with_isa.isa = isa;
-        return a.trace(r, h, with_isa);
-      };
-      const ShadowResult sr = trace_shadows(target, surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
+      const ShadowResult sr = trace_shadows(with_isa(target_of(a), cfg.isa), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
                                             cfg.threads, cfg.packets);
       row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
       if (fr.accel == 0) ref_lit = sr.lit;

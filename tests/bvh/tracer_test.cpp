@@ -119,6 +119,21 @@ void expect_same(const Hit& got, const Hit& want, const std::string& what) {
   ASSERT_EQ(got.v, want.v) << what;
 }
 
+// Two traces of the same batch, field by field: every hit, t, u, v and counter, and the totals.
+void expect_same_batch(const HitBatch& got, const TraceTotals& got_t, const HitBatch& want, const TraceTotals& want_t,
+                       const std::string& what) {
+  EXPECT_EQ(got_t.rays, want_t.rays) << what;
+  EXPECT_EQ(got_t.hits, want_t.hits) << what;
+  EXPECT_EQ(got_t.nodes_visited, want_t.nodes_visited) << what;
+  EXPECT_EQ(got_t.triangles_tested, want_t.triangles_tested) << what;
+  EXPECT_EQ(got.triangle, want.triangle) << what;
+  EXPECT_EQ(got.t, want.t) << what;
+  EXPECT_EQ(got.u, want.u) << what;
+  EXPECT_EQ(got.v, want.v) << what;
+  EXPECT_EQ(got.nodes_visited, want.nodes_visited) << what;
+  EXPECT_EQ(got.triangles_tested, want.triangles_tested) << what;
+}
+
 Vec3f unit(std::mt19937& g) {
   std::normal_distribution<float> n;
   while (true) {
@@ -217,22 +232,8 @@ TEST_P(TracerKinds, BatchEqualsSingleRaysForAnyThreadCount) {
     HitBatch hv;  // and so does AVX2 where Auto is AVX-512
     opt.isa = TraceIsa::Avx2;
     const TraceTotals tv = trace(s.data(), rays, hv, opt);
-    EXPECT_EQ(tv.nodes_visited, t1.nodes_visited);
-    EXPECT_EQ(tv.triangles_tested, t1.triangles_tested);
-    EXPECT_EQ(hv.triangle, h1.triangle);
-    EXPECT_EQ(hv.t, h1.t);
-    EXPECT_EQ(hv.u, h1.u);
-    EXPECT_EQ(hv.v, h1.v);
-    EXPECT_EQ(hv.nodes_visited, h1.nodes_visited);
-    EXPECT_EQ(ts.hits, t1.hits);
-    EXPECT_EQ(ts.nodes_visited, t1.nodes_visited);
-    EXPECT_EQ(ts.triangles_tested, t1.triangles_tested);
-    EXPECT_EQ(hs.triangle, h1.triangle);
-    EXPECT_EQ(hs.t, h1.t);
-    EXPECT_EQ(hs.u, h1.u);
-    EXPECT_EQ(hs.v, h1.v);
-    EXPECT_EQ(hs.nodes_visited, h1.nodes_visited);
-    EXPECT_EQ(hs.triangles_tested, h1.triangles_tested);
+    expect_same_batch(hs, ts, h1, t1, "sse2");
+    expect_same_batch(hv, tv, h1, t1, "avx2");
     EXPECT_EQ(t1.rays, rays.size());
     EXPECT_EQ(t1.hits, t2.hits);
     EXPECT_EQ(t1.nodes_visited, t2.nodes_visited);
@@ -395,14 +396,7 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
       opt.isa = TraceIsa::Avx512;
       const TraceTotals t512 = trace(s.data(), rays, p512, opt);
       EXPECT_EQ(t2.hits, tp.hits);
-      EXPECT_EQ(t2.nodes_visited, t512.nodes_visited);
-      EXPECT_EQ(t2.triangles_tested, t512.triangles_tested);
-      EXPECT_EQ(p2.triangle, p512.triangle);
-      EXPECT_EQ(p2.t, p512.t);
-      EXPECT_EQ(p2.u, p512.u);
-      EXPECT_EQ(p2.v, p512.v);
-      EXPECT_EQ(p2.nodes_visited, p512.nodes_visited);
-      EXPECT_EQ(p2.triangles_tested, p512.triangles_tested);
+      expect_same_batch(p512, t512, p2, t2, "avx512 packets against avx2 packets");
     }
   }
 }
