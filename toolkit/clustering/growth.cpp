@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <functional>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -14,6 +16,12 @@ namespace ptc {
 namespace {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
+/// During the run an untaken triangle's label holds kNone, or kFrontier | c while it is in cluster
+/// c's frontier; a taken one holds its cluster (< kFrontier). One array where a label array and
+/// a frontier stamp array were two: the neighbour checks of a step read one cache line, not two
+/// (at 13M triangles both were 53 MB, far beyond the caches).
+constexpr std::uint32_t kFrontier = 0x80000000u;
+[[nodiscard]] inline bool untaken(std::uint32_t label) { return label >= kFrontier; }
 
 /// The start rules of growth.h. FewestFree keeps the untaken triangles in an indexed binary
 /// min-heap on (free count, Morton rank): a taken triangle leaves it, a neighbour's key drops in
@@ -44,10 +52,10 @@ class StartPicker {
     const std::uint32_t T = tb_->triangle_count();
     switch (rule_) {
       case StartRule::IndexOrder:
-        while (cursor_ < T && label[cursor_] != kNone) ++cursor_;
+        while (cursor_ < T && !untaken(label[cursor_])) ++cursor_;
         return cursor_ < T ? cursor_ : kNone;
       case StartRule::SpatialOrder:
-        while (cursor_ < T && label[order_[cursor_]] != kNone) ++cursor_;
+        while (cursor_ < T && !untaken(label[order_[cursor_]])) ++cursor_;
         return cursor_ < T ? order_[cursor_] : kNone;
       case StartRule::FewestFree:
         return heap_.empty() ? kNone : heap_.front();  // every triangle in the heap is untaken
@@ -61,7 +69,7 @@ class StartPicker {
     if (rule_ != StartRule::FewestFree) return;
     remove(t);
     for (std::uint32_t u : tb_->neighbours_of(t)) {
-      if (label[u] != kNone) continue;
+      if (!untaken(label[u])) continue;
       --free_[u];
       sift_up(pos_[u]);
     }
@@ -132,11 +140,12 @@ template <ClusterObjective O>
     if (progress) progress(1.0);
     return run;
   }
+  if (T >= kFrontier)  // (cluster ids must stay below the frontier bit; 2^31 triangles need 24 GB of indices alone)
+    throw std::invalid_argument("growth clusters at most 2^31 - 1 triangles (" + std::to_string(T) + " given)");
 
   // Acc's O(1) level in two passes (acc.h, growth_prepare / growth_key).
   constexpr bool kFast = requires { objective.growth_bound_applies(); };
   std::vector<std::uint32_t> vstamp(tb.positions.size(), kNone);  // vertex in cluster c <=> vstamp == c
-  std::vector<std::uint32_t> fstamp(T, kNone);                    // triangle in c's frontier <=> fstamp == c
   struct Candidate {  // a frontier triangle with what does not change while it waits
     std::uint32_t t;
     int nv, ne;
@@ -210,8 +219,8 @@ template <ClusterObjective O>
     label[t] = cluster;
     picker.taken(t, label);
     for (std::uint32_t u : tb.neighbours_of(t))
-      if (label[u] == kNone && fstamp[u] != cluster) {
-        fstamp[u] = cluster;
+      if (untaken(label[u]) && label[u] != (kFrontier | cluster)) {
+        label[u] = kFrontier | cluster;
         Candidate c{u, 0, 0, {}, {}, 0, {}};
         if constexpr (kFast) {
           c.kept = objective.triangle_box(u);
