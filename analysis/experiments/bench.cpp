@@ -15,8 +15,8 @@
 #include "analysis/loop/frame_loop.h"
 #include "render/rays.h"
 #include "toolkit/clustering/cluster.h"
-#include "toolkit/core/stats.h"
 #include "toolkit/core/cancel.h"
+#include "toolkit/core/stats.h"
 #include "toolkit/core/stopwatch.h"
 
 namespace ptc {
