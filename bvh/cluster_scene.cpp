@@ -214,7 +214,41 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   data.triangle_ids.assign(lane_ids.begin(), lane_ids.end());
   set_vertex_order(mesh, lane_ids);
   data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());  // kept from frame to frame; the top follows
+  layout_wide8();
   update(mesh.positions());
+}
+
+// The fixed subtrees (block trees, then the groups' trees, which link to them) regrouped into
+// 8-wide nodes once, at the rest pose; per frame their boxes are copied again from the refitted
+// 4-wide nodes (refresh_boxes) and only the top is regrouped (make_wide8).
+void ClusterScene::layout_wide8() {
+  link8_.assign(sub_nodes_.size(), kNoTriangle);
+  for (const std::uint32_t r : sub_root_)
+    if (r != kNoTriangle) link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, sub_depth8_, 0, {}, &sub8_sources_);
+  for (const std::uint32_t r : group_root_)
+    if (r != kNoTriangle)
+      link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, group_depth8_, block_nodes_, link8_, &sub8_sources_);
+  f_.data.wide8.nodes.assign(sub8_.begin(), sub8_.end());
+}
+
+// Per frame, after the top is linked and the fixed subtrees refitted: the 8-wide tree the
+// single-ray walk reads (nodes [0, sub8_.size()) the fixed subtrees, the top's regrouping after).
+void ClusterScene::make_wide8() {
+  TraceData& data = f_.data;
+  WideBvh8& w8 = data.wide8;
+  const std::size_t S8 = sub8_.size();
+  if (w8.nodes.size() < S8) w8.nodes.assign(sub8_.begin(), sub8_.end());
+  w8.nodes.resize(S8);
+  if (data.wide.nodes.empty()) {
+    w8.nodes.clear(), w8.root = 0, w8.depth = 0;
+    return;
+  }
+  refresh_boxes(data.wide.nodes, sub8_sources_, std::span<WideNode8>(w8.nodes.data(), S8));
+  w8.nodes.reserve(S8 + (data.wide.nodes.size() - sub_nodes_.size()));
+  std::uint32_t depth = 0;
+  w8.root = regroup_subtree(data.wide.nodes, data.wide.root, w8.nodes, depth,
+                            static_cast<std::uint32_t>(sub_nodes_.size()), link8_, nullptr);
+  w8.depth = depth + group_depth8_ + sub_depth8_;
 }
 
 // Linear: each cluster's triangles packed in blocks of four, in the (Morton) order above.
@@ -504,6 +538,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     times.build_ms = clock_ms(cfg_.clock) - tb;
     tb = clock_ms(cfg_.clock);
     link_top_tree();
+    if (B == 0) make_wide8();  // (block trees: after their refit, below)
     times.collapse_ms = clock_ms(cfg_.clock) - tb;
   };
   times.overlap_ms = 0.0;
@@ -526,6 +561,11 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   t0 = clock_ms(cfg_.clock);
   if (B) refit_subtrees();
   times.refit_ms = clock_ms(cfg_.clock) - t0;
+  if (B) {
+    t0 = clock_ms(cfg_.clock);
+    make_wide8();
+    times.collapse_ms += clock_ms(cfg_.clock) - t0;
+  }
 }
 
 // Slot k of n holds cluster c alone: a link to its block tree, or a direct leaf of its blocks.

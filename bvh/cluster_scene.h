@@ -97,6 +97,8 @@ class ClusterScene {
   void layout_group_trees();
   void link_top_tree();
   void refit_subtrees();
+  void layout_wide8();
+  void make_wide8();
   void refit_group_trees();
   void set_cluster_slot(WideNode& n, int k, std::uint32_t c) const;
   std::shared_ptr<const std::vector<Tri>> tris_;
@@ -116,6 +118,13 @@ class ClusterScene {
   bool refit_groups_ = false;
   std::uint32_t block_nodes_ = 0;
   std::uint32_t group_depth_ = 0;
+  // The single-ray walk's 8-wide nodes of the fixed subtrees (layout_wide8): their structure is
+  // fixed, their boxes are copied from the 4-wide ones per frame (sub8_sources_); link8_ maps a
+  // 4-wide subtree root to its 8-wide one.
+  AlignedVector<WideNode8> sub8_;
+  std::vector<SlotSource> sub8_sources_;
+  std::vector<std::uint32_t> link8_;
+  std::uint32_t sub_depth8_ = 0, group_depth8_ = 0;
   std::vector<Bvh> group_bvh_;             // per group: its rest-pose tree over its clusters (local ids)
   std::vector<std::uint32_t> group_root_;  // per group: the wide node of its tree, or kNoTriangle (one cluster)
   struct GroupSlots {  // per node of a group's tree: the scene clusters whose boxes a child slot unites

@@ -19,7 +19,7 @@ struct StageTimes {
   double vertices_ms = 0;   ///< positions into the trace frame (float); 0 when fused into boxes_ms
   double boxes_ms = 0;      ///< primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion)
   double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder; GroupTrees::Refit: and the groups' refit)
-  double collapse_ms = 0;   ///< binary -> 4-wide, and (clusters) linking
+  double collapse_ms = 0;   ///< binary -> 4-wide, (clusters) linking, and the 8-wide regroup (regroup_to_8)
   double leaf_data_ms = 0;  ///< SoA triangle blocks
   double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees
   /// Time during which two of the stages above ran at once (a ClusterScene on more than one

@@ -4,29 +4,33 @@
 
 namespace ptc::bvh {
 
-std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count, bool exact_unions) {
-  std::vector<std::string> issues;
+namespace {
+
+// The checks of validate() on one of the trees (WideBvh or WideBvh8: kWidth children a node);
+// `tree` names it in the messages ("" or "8-wide ").
+template <int kWidth, class Tree>
+void validate_tree(const TraceData& d, const Tree& tree, std::size_t triangle_count, bool exact_unions,
+                   const std::string& tree_name, std::vector<std::string>& issues) {
   auto fail = [&](std::string s) {
-    if (issues.size() < 20) issues.push_back(std::move(s));
+    if (issues.size() < 20) issues.push_back(tree_name + std::move(s));
   };
-  const auto& nodes = d.wide.nodes;
-  if (d.triangle_ids.size() != 4 * d.blocks.size()) fail("triangle_ids size is not 4 per block");
+  const auto& nodes = tree.nodes;
   if (nodes.empty()) {
     if (triangle_count != 0) fail("no nodes for " + std::to_string(triangle_count) + " triangles");
-    return issues;
+    return;
   }
-  if (d.wide.root >= nodes.size()) {
+  if (tree.root >= nodes.size()) {
     fail("root out of range");
-    return issues;
+    return;
   }
   std::vector<std::uint8_t> reached(nodes.size(), 0), tri_seen(triangle_count, 0), lane_used(d.triangle_ids.size(), 0);
-  std::vector<std::uint32_t> stack{d.wide.root};
-  reached[d.wide.root] = 1;
+  std::vector<std::uint32_t> stack{tree.root};
+  reached[tree.root] = 1;
   while (!stack.empty()) {
     const std::uint32_t i = stack.back();
     stack.pop_back();
-    const WideNode& n = nodes[i];
-    for (int k = 0; k < 4; ++k) {
+    const auto& n = nodes[i];
+    for (int k = 0; k < kWidth; ++k) {
       const Box3f box = n.child_box(k);
       const std::string where = "node " + std::to_string(i) + " child " + std::to_string(k);
       if (n.is_empty(k)) {
@@ -45,7 +49,7 @@ std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count
         }
         stack.push_back(c);
         Box3f u;
-        for (int j = 0; j < 4; ++j) u.extend(nodes[c].child_box(j));
+        for (int j = 0; j < kWidth; ++j) u.extend(nodes[c].child_box(j));
         if (exact_unions ? !(u == box) : !box.contains(u))
           fail(where + ": box is not the union of (does not contain) its children's boxes");
         continue;
@@ -105,6 +109,19 @@ std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count
       fail("triangle " + std::to_string(t) + " is in no leaf");
       break;
     }
+}
+
+}  // namespace
+
+std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count, bool exact_unions) {
+  std::vector<std::string> issues;
+  if (d.triangle_ids.size() != 4 * d.blocks.size()) issues.push_back("triangle_ids size is not 4 per block");
+  validate_tree<4>(d, d.wide, triangle_count, exact_unions, "", issues);
+  if (d.wide8.nodes.empty() != d.wide.nodes.empty()) {
+    issues.push_back(d.wide8.nodes.empty() ? "no 8-wide nodes beside the 4-wide tree" : "8-wide nodes without a 4-wide tree");
+  } else {
+    validate_tree<8>(d, d.wide8, triangle_count, exact_unions, "8-wide ", issues);
+  }
   return issues;
 }
 

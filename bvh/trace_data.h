@@ -41,6 +41,9 @@ inline constexpr std::uint32_t kIndirectLeaf = 0x80000000u;
 /// single blocks) and indirect ones for leaves of several clusters.
 struct TraceData {
   WideBvh wide;
+  /// `wide` regrouped into 8-wide nodes (regroup_to_8), with the same leaf children: what the
+  /// single-ray walk reads (the packet walk reads `wide`). The scenes make it with every update.
+  WideBvh8 wide8;
   std::vector<LeafRange> ranges;
   AlignedVector<TriBlock> blocks;
   AlignedVector<std::uint32_t> triangle_ids;  ///< 4 per block: mesh triangle id or kNoTriangle
@@ -50,8 +53,8 @@ struct TraceData {
   [[nodiscard]] FrameMap frame() const { return {origin, scale}; }
 };
 
-/// Checks of the flat data (tests call it on every scene): every node reachable from the root
-/// exactly once (a tree), every leaf child's ranges inside `ranges` and blocks inside `blocks`,
+/// Checks of the flat data (tests call it on every scene), of `wide` and of `wide8` alike (and
+/// `wide8` present whenever `wide` is): every node reachable from the root exactly once (a tree), every leaf child's ranges inside `ranges` and blocks inside `blocks`,
 /// every mesh triangle id 0 .. triangle_count-1 in exactly one used lane (padding lanes:
 /// kNoTriangle and NaN corners), every inner child box containing its node's child boxes
 /// (equal to their union when `exact_unions`), every leaf child box containing its triangles'

@@ -344,7 +344,9 @@ inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids, 
 #endif
 
 struct Flat {  // raw views of TraceData for the hot loop
-  const WideNode* nodes;
+  const WideNode8* nodes;  // the single-ray walk's (root, empty: of these)
+  const WideNode* nodes4;  // the packet walk's (root4)
+  std::uint32_t root4;
   const LeafRange* ranges;
   const TriBlock* blocks;
   const std::uint32_t* ids;
@@ -385,14 +387,28 @@ template <bool AnyHit>
 void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
   if (d.empty) return;
   // The slab constants as locals: nothing the loop stores (stack entries, results) can alias
-  // them, so they stay in registers (through `r` every store forced reloads and spills).
+  // them, so they stay in registers (through `r` every store forced reloads and spills). A node's
+  // eight children are tested at once (AVX2 / AVX-512: one 8-lane test; SSE2: two 4-lane tests of
+  // the same float operations, lane by lane), so every variant visits the same nodes in the same
+  // order. Rows of WideNode8::bounds are 8 floats: a row offset is 2x RayState's 4-wide one.
+  const std::ptrdiff_t nx = 2 * r.nx, ny = 2 * r.ny, nz = 2 * r.nz, fx = 2 * r.fx, fy = 2 * r.fy, fz = 2 * r.fz;
+#if defined(PTC_TRACE_AVX2)
+  const __m256 ox = _mm256_broadcastss_ps(r.ox), oy = _mm256_broadcastss_ps(r.oy), oz = _mm256_broadcastss_ps(r.oz);
+  const __m256 inx = _mm256_broadcastss_ps(r.inx), iny = _mm256_broadcastss_ps(r.iny), inz = _mm256_broadcastss_ps(r.inz);
+  const __m256 ifx = _mm256_broadcastss_ps(r.ifx), ify = _mm256_broadcastss_ps(r.ify), ifz = _mm256_broadcastss_ps(r.ifz);
+  const __m256 tmin8 = _mm256_set1_ps(r.tmin);
+#else
   const __m128 ox = r.ox, oy = r.oy, oz = r.oz;
   const __m128 inx = r.inx, iny = r.iny, inz = r.inz, ifx = r.ifx, ify = r.ify, ifz = r.ifz;
-  const std::ptrdiff_t nx = r.nx, ny = r.ny, nz = r.nz, fx = r.fx, fy = r.fy, fz = r.fz;
   const __m128 tmin4 = _mm_set1_ps(r.tmin);
-  const WideNode* const nodes = d.nodes;
+#endif
+  const WideNode8* const nodes = d.nodes;
   float tmax = r.tmax;
+#if defined(PTC_TRACE_AVX2)
+  __m256 tmax8 = _mm256_set1_ps(tmax);
+#else
   __m128 tmax4 = _mm_set1_ps(tmax);
+#endif
   StackEntry* sp = stack;
   std::uint32_t ref = d.root, cnt = 0;  // the entry being visited (the root: entered at -inf)
   std::uint32_t visited = 0, tris = 0;
@@ -413,27 +429,44 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
     while (cnt == 0) {
       const float* b = &nodes[ref].bounds[0][0];
       ++visited;
-      const __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nx), ox), inx);
-      const __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + ny), oy), iny);
-      const __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nz), oz), inz);
-      const __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fx), ox), ifx);
-      const __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fy), oy), ify);
-      const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fz), oz), ifz);
-      // A tree of two levels (the chain of three was the longest part of a node's latency).
-      // _mm_max_ps(a, b) returns b when either is NaN (0 * inf: an origin on a slab plane of an
-      // axis the ray does not move along). The outer max's right-hand operand holds the ray's
-      // own bound and is never NaN, so the result is never NaN; a NaN drops itself and possibly
-      // its partner of the inner max (tny NaN drops tnx too): the interval only widens, no box
-      // the ray touches is culled, and an axis-aligned ray on a slab plane may visit a box its
-      // other slab would have culled.
-      const __m128 tn = _mm_max_ps(_mm_max_ps(tnx, tny), _mm_max_ps(tnz, tmin4));
-      const __m128 tf = _mm_min_ps(_mm_min_ps(tfx, tfy), _mm_min_ps(tfz, tmax4));
-      unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(tn, tf)));
+      // A tree of two levels for the max and the min (the chain of three was the longest part of
+      // a node's latency). max(a, b) returns b when either is NaN (0 * inf: an origin on a slab
+      // plane of an axis the ray does not move along). The outer max's right-hand operand holds
+      // the ray's own bound and is never NaN, so the result is never NaN; a NaN drops itself and
+      // possibly its partner of the inner max (tny NaN drops tnx too): the interval only widens,
+      // no box the ray touches is culled, and an axis-aligned ray on a slab plane may visit a box
+      // its other slab would have culled.
+#if defined(PTC_TRACE_AVX2)
+      const __m256 tnx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b + nx), ox), inx);
+      const __m256 tny = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b + ny), oy), iny);
+      const __m256 tnz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b + nz), oz), inz);
+      const __m256 tfx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b + fx), ox), ifx);
+      const __m256 tfy = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b + fy), oy), ify);
+      const __m256 tfz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(b + fz), oz), ifz);
+      const __m256 tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, tmin8));
+      const __m256 tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, tmax8));
+      unsigned mask = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ)));
+#else
+      auto half = [&](int h, __m128& tn) {
+        const float* bh = b + 4 * h;
+        const __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(bh + nx), ox), inx);
+        const __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(bh + ny), oy), iny);
+        const __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(bh + nz), oz), inz);
+        const __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(bh + fx), ox), ifx);
+        const __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(bh + fy), oy), ify);
+        const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(bh + fz), oz), ifz);
+        tn = _mm_max_ps(_mm_max_ps(tnx, tny), _mm_max_ps(tnz, tmin4));
+        const __m128 tf = _mm_min_ps(_mm_min_ps(tfx, tfy), _mm_min_ps(tfz, tmax4));
+        return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(tn, tf)));
+      };
+      __m128 tn_lo, tn_hi;
+      unsigned mask = half(0, tn_lo) | half(1, tn_hi) << 4;
+#endif
       if (!mask) {
         miss = true;
         break;
       }
-      const WideNode& n = nodes[ref];
+      const WideNode8& n = nodes[ref];
       const int i0 = ctz(mask);
       mask &= mask - 1;
       if (!mask) {
@@ -443,9 +476,9 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
       if constexpr (AnyHit) {
         // Any hit visits every entered child until a hit ends the walk; the pop ignores entry
         // distances, so none are stored: the lowest entered slot is visited first, the others
-        // pushed in slot order (so popped from the highest down). Shadow rays to a point light mostly reach it (97% on the twist
-        // view), when the order does not matter; the distances' round trip through memory and the
-        // two-child compare did (docs/tracing.md).
+        // pushed in slot order (so popped from the highest down). Shadow rays to a point light
+        // mostly reach it (97% on the twist view), when the order does not matter; the
+        // distances' round trip through memory and the two-child compare did (docs/tracing.md).
         for (unsigned mm = mask; mm; mm &= mm - 1) {
           const int i = ctz(mm);
           *sp++ = {n.child[i], n.count[i], 0.0f};
@@ -453,8 +486,13 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
         ref = n.child[i0], cnt = n.count[i0];
         continue;
       }
-      alignas(16) float dist[4];
-      _mm_store_ps(dist, tn);
+      alignas(32) float dist[8];
+#if defined(PTC_TRACE_AVX2)
+      _mm256_store_ps(dist, tn);
+#else
+      _mm_store_ps(dist, tn_lo);
+      _mm_store_ps(dist + 4, tn_hi);
+#endif
       const int i1 = ctz(mask);
       mask &= mask - 1;
       if (!mask) {
@@ -464,8 +502,8 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
         ref = n.child[nearer], cnt = n.count[nearer];
         continue;
       }
-      // Three or four children: sort by entry distance, farthest pushed first.
-      StackEntry c[4];
+      // Three or more children: sort by entry distance, farthest pushed first.
+      StackEntry c[8];
       int k = 0;
       c[k++] = {n.child[i0], n.count[i0], dist[i0]};
       c[k++] = {n.child[i1], n.count[i1], dist[i1]};
@@ -481,18 +519,22 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
     if (!miss) {
       const float before = tmax;
       if (intersect_leaf<AnyHit>(d, ref, cnt, r, tmax, res, tris)) break;  // any hit: done
+#if defined(PTC_TRACE_AVX2)
+      if (tmax != before) tmax8 = _mm256_set1_ps(tmax);
+#else
       if (tmax != before) tmax4 = _mm_set1_ps(tmax);
+#endif
     }
   } while (pop());
   res.nodes = visited, res.tris = tris;
 }
 
 Flat flat_of(const TraceData& s) {
-  return {s.wide.nodes.data(), s.ranges.data(), s.blocks.data(), s.triangle_ids.data(), s.wide.root,
-          s.wide.nodes.empty()};
+  return {s.wide8.nodes.data(), s.wide.nodes.data(), s.wide.root, s.ranges.data(), s.blocks.data(),
+          s.triangle_ids.data(), s.wide8.root, s.wide8.nodes.empty() || s.wide.nodes.empty()};
 }
 
-std::size_t stack_size(const TraceData& s) { return 3 * std::size_t(s.wide.depth) + 8; }
+std::size_t stack_size(const TraceData& s) { return 7 * std::size_t(s.wide8.depth) + 8; }
 
 // The walk of one set-up ray, closest or any hit.
 inline void walk(const Flat& f, RayState& r, Result& res, HitMode mode, StackEntry* stack) {

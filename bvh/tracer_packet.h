@@ -268,12 +268,12 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
 template <bool AnyHit>
 void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, Packet& p, PacketEntry* stack) {
   if (d.empty) return;
-  const WideNode* const nodes = d.nodes;
+  const WideNode* const nodes = d.nodes4;
   const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
   const __m256i one = _mm256_set1_epi32(1);
   __m256 tmax = _mm256_load_ps(p.tmax);
   PacketEntry* sp = stack;
-  std::uint32_t ref = d.root, cnt = 0, m = group;
+  std::uint32_t ref = d.root4, cnt = 0, m = group;
   auto pop = [&] {
     while (sp != stack) {
       --sp;
@@ -444,10 +444,13 @@ void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBa
   }
 }
 
+// The packet walk's stack: up to three entries a 4-wide level.
+std::size_t stack_size4(const TraceData& s) { return 3 * std::size_t(s.wide.depth) + 8; }
+
 void trace_range_packet_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hits, std::size_t begin,
                              std::size_t end, HitMode mode, bool counters, TraceTotals& tot) {
   const Flat f = flat_of(scene);
-  std::vector<PacketEntry> stack(stack_size(scene));
+  std::vector<PacketEntry> stack(stack_size4(scene));
   for (std::size_t i = begin; i < end; i += kLanes) {
     const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - i));
     if (mode == HitMode::Closest)

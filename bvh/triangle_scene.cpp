@@ -63,6 +63,9 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   fence_blocks();
   times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
   times.refit_ms = 0.0;
+  t0 = clock_ms(cfg_.clock);
+  regroup_to_8(data.wide, data.wide8);
+  times.collapse_ms += clock_ms(cfg_.clock) - t0;
 }
 
 }  // namespace ptc::bvh

@@ -85,6 +85,107 @@ void collapse_to_wide(const Bvh& bvh, WideBvh& w) {
   }
 }
 
+std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4, AlignedVector<WideNode8>& out,
+                              std::uint32_t& depth, std::uint32_t linked_below, std::span<const std::uint32_t> linked8,
+                              std::vector<SlotSource>* sources) {
+  // A slot of the 8-wide node being filled; an inner one keeps its area and its node's number of
+  // live children, computed once when it enters (the choice below reads them up to seven times).
+  struct Slot {
+    Box3f box;
+    std::uint32_t child, count;
+    SlotSource from;
+    int live;  // an inner child that may be opened: live children of w4[child]; otherwise 9
+    float area;
+  };
+  auto slot_of = [&](std::uint32_t n4, int j) {
+    const WideNode& n = w4[n4];
+    Slot s{n.child_box(j), n.child[j], n.count[j], {n4, static_cast<std::uint32_t>(j)}, 9, 0.0f};
+    if (s.count == 0 && s.child >= linked_below) {
+      const WideNode& c = w4[s.child];
+      s.live = 0;
+      for (int k = 0; k < 4; ++k) s.live += !c.is_empty(k);
+      s.area = static_cast<float>(s.box.surface_area());
+    }
+    return s;
+  };
+  struct Item {
+    std::uint32_t node4, node8, depth;
+  };
+  std::vector<Item> stack;
+  stack.reserve(64);
+  const auto root8 = static_cast<std::uint32_t>(out.size());
+  out.emplace_back();
+  if (sources) sources->resize(8 * std::size_t{out.size()});
+  stack.push_back({root4, root8, 1});
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    depth = std::max(depth, it.depth);
+    Slot s[8];
+    int ns = 0;
+    for (int j = 0; j < 4; ++j)
+      if (!w4[it.node4].is_empty(j)) s[ns++] = slot_of(it.node4, j);
+    for (;;) {  // open the inner child of largest area whose children fit
+      int best = -1;
+      float best_area = -1.0f;
+      for (int i = 0; i < ns; ++i)
+        if (ns - 1 + s[i].live <= 8 && s[i].area > best_area) best = i, best_area = s[i].area;
+      if (best < 0) break;
+      const std::uint32_t c = s[best].child;
+      int j = 0;
+      while (w4[c].is_empty(j)) ++j;  // the first live child takes the opened slot, the others go last
+      s[best] = slot_of(c, j);
+      for (++j; j < 4; ++j)
+        if (!w4[c].is_empty(j)) s[ns++] = slot_of(c, j);
+    }
+    for (int i = 0; i < 8; ++i) {
+      std::uint32_t child = WideNode::kEmptySlot, count = 0;
+      Box3f box;
+      SlotSource from{WideNode::kEmptySlot, 0};
+      if (i < ns) {
+        box = s[i].box, count = s[i].count, from = s[i].from;
+        if (count != 0) {
+          child = s[i].child;
+        } else if (s[i].child < linked_below) {
+          child = linked8[s[i].child];
+        } else {
+          child = static_cast<std::uint32_t>(out.size());
+          out.emplace_back();
+          stack.push_back({s[i].child, child, it.depth + 1});
+        }
+      }
+      WideNode8& dst = out[it.node8];
+      dst.set_child_box(i, box);
+      dst.child[i] = child, dst.count[i] = count;
+      if (sources) {
+        sources->resize(8 * std::size_t{out.size()});
+        (*sources)[8 * std::size_t{it.node8} + i] = from;
+      }
+    }
+  }
+  return root8;
+}
+
+void regroup_to_8(const WideBvh& w4, WideBvh8& out) {
+  out.nodes.clear();
+  out.root = 0, out.depth = 0;
+  if (w4.nodes.empty()) return;
+  out.nodes.reserve(w4.nodes.size());  // at least one 4-wide node per 8-wide one
+  out.root = regroup_subtree(w4.nodes, w4.root, out.nodes, out.depth, 0, {}, nullptr);
+}
+
+void refresh_boxes(std::span<const WideNode> w4, std::span<const SlotSource> sources, std::span<WideNode8> out) {
+  for (std::size_t n = 0; n < out.size(); ++n) {
+    WideNode8& dst = out[n];
+    for (int i = 0; i < 8; ++i) {
+      const SlotSource& f = sources[8 * n + i];
+      if (f.node == WideNode::kEmptySlot) continue;
+      const WideNode& src = w4[f.node];
+      for (int r = 0; r < 6; ++r) dst.bounds[r][i] = src.bounds[r][f.slot];
+    }
+  }
+}
+
 std::vector<std::string> validate_wide(const WideBvh& wide, const Bvh& bvh) {
   std::vector<std::string> issues;
   auto fail = [&](std::string s) {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,62 @@ struct WideBvh {
   std::uint32_t depth = 0;
   std::uint32_t leaves = 0;
 };
+
+/// 256 bytes, four cache lines: eight children in WideNode's layout (row 2a lo on axis a, row
+/// 2a + 1 hi; `child` and `count` as in WideNode). The single-ray tracer walks these (one 8-lane
+/// slab test a node, or two 4-lane ones on SSE2), made from the 4-wide tree by regroup_to_8.
+struct alignas(64) WideNode8 {
+  float bounds[6][8];
+  std::uint32_t child[8];
+  std::uint32_t count[8];
+
+  /// Uninitialised (regroup_to_8 writes every field; value-initialising 256 bytes per node took
+  /// a tenth of its time).
+  WideNode8() {}  // NOLINT: not = default, which would zero the node in emplace_back()
+
+  [[nodiscard]] Box3f child_box(int i) const {
+    return {{bounds[0][i], bounds[2][i], bounds[4][i]}, {bounds[1][i], bounds[3][i], bounds[5][i]}};
+  }
+  void set_child_box(int i, const Box3f& b) {
+    for (int a = 0; a < 3; ++a) bounds[2 * a][i] = b.lo[a], bounds[2 * a + 1][i] = b.hi[a];
+  }
+  [[nodiscard]] bool is_leaf(int i) const { return count[i] != 0; }
+  [[nodiscard]] bool is_empty(int i) const { return count[i] == 0 && child[i] == WideNode::kEmptySlot; }
+};
+static_assert(sizeof(WideNode8) == 256);
+
+/// 8-wide nodes, root first, children after parents. `depth`: the number of 8-wide levels (the
+/// traversal stack needs at most 7 * depth + 1 entries).
+struct WideBvh8 {
+  AlignedVector<WideNode8> nodes;
+  std::uint32_t root = 0;
+  std::uint32_t depth = 0;
+};
+
+/// Regroups a 4-wide tree into 8-wide nodes with the same leaf children (the same child, count
+/// and box: leaf references are copied, not interpreted) and the same boxes. An 8-wide node
+/// starts with its 4-wide node's children and repeatedly replaces the inner child of largest
+/// surface area whose children still fit (at most 8 in all) by those children. Half as many
+/// dependent node visits a ray on the way down (log8 against log4 levels). O(nodes); `out`
+/// keeps its capacity (per-frame use allocates nothing).
+void regroup_to_8(const WideBvh& w4, WideBvh8& out);
+
+/// Where an 8-wide slot's box comes from: slot `slot` of 4-wide node `node` (node kEmptySlot:
+/// an empty slot).
+struct SlotSource {
+  std::uint32_t node, slot;
+};
+/// regroup_to_8 of the subtree of `w4` rooted at `root4`, appended to `out` (its root first; the
+/// root's index is returned; `depth` is raised to the subtree's 8-wide levels). An inner child
+/// below `linked_below` is a link into fixed subtrees regrouped before: it is never opened and
+/// becomes a link to linked8[child], their 8-wide root. With `sources`, slot i of the node made
+/// at index n records where its box came from in sources[8 n + i] (refresh_boxes).
+std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4, AlignedVector<WideNode8>& out,
+                              std::uint32_t& depth, std::uint32_t linked_below, std::span<const std::uint32_t> linked8,
+                              std::vector<SlotSource>* sources);
+/// The boxes of 8-wide nodes regrouped once (fixed subtrees) copied again from their 4-wide
+/// sources, after those were refitted: out[n]'s slot i from sources[8 n + i].
+void refresh_boxes(std::span<const WideNode> w4, std::span<const SlotSource> sources, std::span<WideNode8> out);
 
 /// Collapses a binary tree (validate()d) into a 4-wide one with the same leaves. A binary tree
 /// that is a single leaf becomes one wide node with one leaf child. O(nodes).

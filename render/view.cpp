@@ -114,7 +114,7 @@ RgbImage ao_image(const Render& r) {
 
 RgbImage nodes_image(const Render& r, ColorLegend& legend, const std::optional<std::pair<double, double>>& range) {
   legend.quantity = "nodes_visited";
-  legend.note = "4-wide nodes whose boxes a primary ray tested; viridis from min (dark) to max (yellow)";
+  legend.note = "8-wide nodes whose boxes a primary ray tested; viridis from min (dark) to max (yellow)";
   return cost_heatmap(r.primary.nodes_visited, r.width, r.height, legend, range);
 }
 

@@ -84,13 +84,18 @@ std::vector<std::uint32_t> morton_order(std::span<const Vec3> positions, std::sp
   const std::size_t n = codes.size();
   std::vector<std::uint32_t> order(n);
   if (n == 0) return order;
-  // (code, id) order in two cache-friendly steps (at 13M triangles they replaced a comparison
-  // sort that looked each code up through its id; docs/scale.md, "Open (issue 15)"):
+  // (code, id) order in cache-friendly steps (at 13M triangles they replaced a comparison sort
+  // that looked each code up through its id; docs/scale.md, "Open (issue 15)"):
   // 1. ids scattered by the code's top 11 bits, in ascending id order (a counting sort);
-  // 2. each bucket sorted by (code, id) as pairs, in a buffer of the bucket's size (per task). A
-  //    bucket's ids ascend, so its codes are read front to back.
+  // 2. each bucket as (code, id) pairs, in buffers of the bucket's size (per task). A bucket's ids
+  //    ascend, so its codes are read front to back. A small bucket is sorted by (code, id) as it
+  //    is; a large one is first scattered by the next 11 bits of the code (stable, so ids still
+  //    ascend within each sub-bucket), then each sub-bucket sorted by (code, id): the same order,
+  //    with a comparison sort of a few dozen pairs where one of thousands took most of the time.
   constexpr int kTopBits = 11, kShift = 3 * kMortonBits - kTopBits;
-  constexpr std::size_t kBuckets = std::size_t{1} << kTopBits;
+  constexpr int kSubBits = 11, kSubShift = kShift - kSubBits;
+  constexpr std::size_t kBuckets = std::size_t{1} << kTopBits, kSubBuckets = std::size_t{1} << kSubBits;
+  constexpr std::size_t kLargeBucket = 1024;  // below: one comparison sort
   std::vector<std::size_t> start(kBuckets + 1, 0);
   for (const std::uint64_t c : codes) ++start[(c >> kShift) + 1];
   for (std::size_t b = 0; b < kBuckets; ++b) start[b + 1] += start[b];
@@ -99,15 +104,34 @@ std::vector<std::uint32_t> morton_order(std::span<const Vec3> positions, std::sp
     for (std::size_t i = 0; i < n; ++i) order[fill[codes[i] >> kShift]++] = static_cast<std::uint32_t>(i);
   }
   // The buckets are independent: sorted on the caller's threads, the same order at any count.
+  using Pair = std::pair<std::uint64_t, std::uint32_t>;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kBuckets, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
+    std::vector<Pair> pairs, scattered;
+    std::vector<std::uint32_t> sub(kSubBuckets + 1);
     for (std::size_t b = r.begin(); b < r.end(); ++b) {
       const std::size_t lo = start[b], hi = start[b + 1];
       if (hi - lo < 2) continue;
       pairs.clear();
       for (std::size_t i = lo; i < hi; ++i) pairs.emplace_back(codes[order[i]], order[i]);
-      std::sort(pairs.begin(), pairs.end());
-      for (std::size_t i = lo; i < hi; ++i) order[i] = pairs[i - lo].second;
+      if (hi - lo < kLargeBucket) {
+        std::sort(pairs.begin(), pairs.end());
+        for (std::size_t i = lo; i < hi; ++i) order[i] = pairs[i - lo].second;
+        continue;
+      }
+      auto sub_of = [&](std::uint64_t c) { return static_cast<std::size_t>(c >> kSubShift) & (kSubBuckets - 1); };
+      std::fill(sub.begin(), sub.end(), 0u);
+      for (const Pair& p : pairs) ++sub[sub_of(p.first) + 1];
+      for (std::size_t s = 0; s < kSubBuckets; ++s) sub[s + 1] += sub[s];
+      scattered.resize(pairs.size());
+      for (const Pair& p : pairs) scattered[sub[sub_of(p.first)]++] = p;  // sub[s] ends as the start of s + 1
+      std::size_t s_lo = 0;
+      for (std::size_t s = 0; s < kSubBuckets; ++s) {
+        const std::size_t s_hi = sub[s];
+        if (s_hi - s_lo > 1) std::sort(scattered.begin() + static_cast<std::ptrdiff_t>(s_lo),
+                                       scattered.begin() + static_cast<std::ptrdiff_t>(s_hi));
+        s_lo = s_hi;
+      }
+      for (std::size_t i = lo; i < hi; ++i) order[i] = scattered[i - lo].second;
     }
   });
   return order;
