@@ -219,15 +219,19 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
 }
 
 // The fixed subtrees (block trees, then the groups' trees, which link to them) regrouped into
-// 8-wide nodes once, at the rest pose; per frame their boxes are copied again from the refitted
-// 4-wide nodes (refresh_boxes) and only the top is regrouped (make_wide8).
+// 8-wide nodes once, at the rest pose. Per frame the refits of the 4-wide subtrees write each box
+// into its 8-wide slot too (set_box8: every 8-wide slot of the fixed part comes from one 4-wide
+// slot), and only the top is regrouped (make_wide8).
 void ClusterScene::layout_wide8() {
   link8_.assign(sub_nodes_.size(), kNoTriangle);
+  std::vector<SlotSource> sources;
   for (const std::uint32_t r : sub_root_)
-    if (r != kNoTriangle) link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, sub_depth8_, 0, {}, &sub8_sources_);
+    if (r != kNoTriangle) link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, sub_depth8_, 0, {}, &sources);
   for (const std::uint32_t r : group_root_)
-    if (r != kNoTriangle)
-      link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, group_depth8_, block_nodes_, link8_, &sub8_sources_);
+    if (r != kNoTriangle) link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, group_depth8_, block_nodes_, link8_, &sources);
+  slot8_.assign(4 * sub_nodes_.size(), kNoTriangle);
+  for (std::size_t i = 0; i < 8 * sub8_.size(); ++i)
+    if (sources[i].node != WideNode::kEmptySlot) slot8_[4 * std::size_t{sources[i].node} + sources[i].slot] = static_cast<std::uint32_t>(i);
   f_.data.wide8.nodes.assign(sub8_.begin(), sub8_.end());
 }
 
@@ -243,7 +247,6 @@ void ClusterScene::make_wide8() {
     w8.nodes.clear(), w8.root = 0, w8.depth = 0;
     return;
   }
-  refresh_boxes(data.wide.nodes, sub8_sources_, std::span<WideNode8>(w8.nodes.data(), S8));
   w8.nodes.reserve(S8 + (data.wide.nodes.size() - sub_nodes_.size()));
   std::uint32_t depth = 0;
   w8.root = regroup_subtree(data.wide.nodes, data.wide.root, w8.nodes, depth,
@@ -402,8 +405,11 @@ void ClusterScene::refit_group_trees() {
         Box3f b = cb[c[0]];
         for (std::uint32_t j = 1; j < gs.count[k]; ++j) b.extend(cb[c[j]]);
         n.set_child_box(k, b);
+        set_box8(i, k, b);
       } else if (!n.is_empty(k)) {
-        n.set_child_box(k, node_union(nodes[n.child[k]]));
+        const Box3f b = node_union(nodes[n.child[k]]);
+        n.set_child_box(k, b);
+        set_box8(i, k, b);
       }
     }
   }
@@ -483,8 +489,11 @@ void ClusterScene::refit_subtrees() {
     for (int k = 0; k < 4; ++k) {
       if (n.is_leaf(k)) {
         n.set_child_box(k, block_boxes_[n.child[k]]);
+        set_box8(i, k, block_boxes_[n.child[k]]);
       } else if (!n.is_empty(k)) {
-        n.set_child_box(k, node_union(nodes[n.child[k]]));
+        const Box3f b = node_union(nodes[n.child[k]]);
+        n.set_child_box(k, b);
+        set_box8(i, k, b);
       }
     }
   }

@@ -98,6 +98,11 @@ class ClusterScene {
   void link_top_tree();
   void refit_subtrees();
   void layout_wide8();
+  /// The refitted box of 4-wide slot k of fixed node n into its 8-wide slot, if it has one.
+  void set_box8(std::size_t n, int k, const Box3f& b) {
+    const std::uint32_t d = slot8_[4 * n + static_cast<std::size_t>(k)];
+    if (d != 0xffffffffu) f_.data.wide8.nodes[d >> 3].set_child_box(static_cast<int>(d & 7), b);
+  }
   void make_wide8();
   void refit_group_trees();
   void set_cluster_slot(WideNode& n, int k, std::uint32_t c) const;
@@ -119,10 +124,11 @@ class ClusterScene {
   std::uint32_t block_nodes_ = 0;
   std::uint32_t group_depth_ = 0;
   // The single-ray walk's 8-wide nodes of the fixed subtrees (layout_wide8): their structure is
-  // fixed, their boxes are copied from the 4-wide ones per frame (sub8_sources_); link8_ maps a
-  // 4-wide subtree root to its 8-wide one.
+  // fixed, the refits write their boxes (slot8_: 4-wide slot 4 n + k of the fixed part -> its
+  // 8-wide slot 8 m + i in data().wide8, or kNoTriangle for a slot opened by the regrouping);
+  // link8_ maps a 4-wide subtree root to its 8-wide one.
   AlignedVector<WideNode8> sub8_;
-  std::vector<SlotSource> sub8_sources_;
+  std::vector<std::uint32_t> slot8_;
   std::vector<std::uint32_t> link8_;
   std::uint32_t sub_depth8_ = 0, group_depth8_ = 0;
   std::vector<Bvh> group_bvh_;             // per group: its rest-pose tree over its clusters (local ids)

@@ -1,5 +1,6 @@
-// What the tracer reads (TraceData): a 4-wide BVH whose leaves refer to SIMD blocks of four
-// triangles, the same layout for triangle and cluster scenes, and its self-check validate().
+// What the tracer reads (TraceData): a BVH (built 4-wide, walked as its 8-wide regrouping) whose
+// leaves refer to SIMD blocks of four triangles, the same layout for triangle and cluster scenes,
+// and its self-check validate().
 #pragma once
 
 #include <cstdint>
@@ -42,7 +43,7 @@ inline constexpr std::uint32_t kIndirectLeaf = 0x80000000u;
 struct TraceData {
   WideBvh wide;
   /// `wide` regrouped into 8-wide nodes (regroup_to_8), with the same leaf children: what the
-  /// single-ray walk reads (the packet walk reads `wide`). The scenes make it with every update.
+  /// tracer walks (single rays and packets). The scenes make it with every update.
   WideBvh8 wide8;
   std::vector<LeafRange> ranges;
   AlignedVector<TriBlock> blocks;

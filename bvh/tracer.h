@@ -1,9 +1,9 @@
 // The reference CPU tracer: rays in structure-of-arrays batches, closest hit or any hit, over a
 // TriangleScene or a ClusterScene (both give a TraceData), multithreaded with oneTBB.
 //
-// One traversal code serves both queries (a compile-time flag): a 4-wide BVH walked with one
-// SSE box test per node, children visited nearest first (closest hit) and the stack culled by
-// the best hit so far; leaves test their triangles four (SSE2) or eight (AVX2, chosen at run
+// One traversal code serves both queries (a compile-time flag): an 8-wide BVH (the 4-wide one
+// regrouped, TraceData::wide8) walked with one 8-lane box test per node (two 4-lane ones on
+// SSE2), children visited nearest first (closest hit) and the stack culled by the best hit so far; leaves test their triangles four (SSE2) or eight (AVX2, chosen at run
 // time, see TraceIsa) at a time with the watertight test of watertight.h (bit-identical to the
 // scalar intersect_triangle).
 // Robust traversal: the slab test uses (bound - origin) * (1/dir) with the near and far
@@ -47,7 +47,7 @@ struct RayBatch {
 
 /// Results, one entry per ray. triangle = kNoTriangle for a miss (t, u, v are then 0).
 /// u, v: barycentric weights of the triangle's corners 1 and 2. Counters (when requested):
-/// wide nodes whose four boxes were tested, and triangles tested (padding lanes not counted).
+/// 8-wide nodes whose boxes were tested, and triangles tested (padding lanes not counted).
 /// Threads write disjoint tiles of 64 rays: no cache line is shared between threads.
 struct HitBatch {
   AlignedVector<float> t, u, v;

@@ -343,10 +343,8 @@ inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids, 
 }
 #endif
 
-struct Flat {  // raw views of TraceData for the hot loop
-  const WideNode8* nodes;  // the single-ray walk's (root, empty: of these)
-  const WideNode* nodes4;  // the packet walk's (root4)
-  std::uint32_t root4;
+struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: both walks read those)
+  const WideNode8* nodes;
   const LeafRange* ranges;
   const TriBlock* blocks;
   const std::uint32_t* ids;
@@ -530,8 +528,8 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
 }
 
 Flat flat_of(const TraceData& s) {
-  return {s.wide8.nodes.data(), s.wide.nodes.data(), s.wide.root, s.ranges.data(), s.blocks.data(),
-          s.triangle_ids.data(), s.wide8.root, s.wide8.nodes.empty() || s.wide.nodes.empty()};
+  return {s.wide8.nodes.data(), s.ranges.data(), s.blocks.data(), s.triangle_ids.data(), s.wide8.root,
+          s.wide8.nodes.empty()};
 }
 
 std::size_t stack_size(const TraceData& s) { return 7 * std::size_t(s.wide8.depth) + 8; }

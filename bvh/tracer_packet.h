@@ -9,11 +9,11 @@
 // watertight test's constants (make_watertight_ray), at the packet's first leaf; both with the
 // same float operations as for one ray. The rays are split
 // into groups of one direction octant (so the same near and far box rows); a camera's rows make
-// one group almost always. A group walks the tree once:
-//   - at an inner node, each child's box is tested against every active lane with exactly the
-//     float operations of the single-ray slab test (rewritten here for one box broadcast against
-//     eight rays; the single-ray test is four boxes against one ray), so a lane enters exactly the boxes its own
-//     ray would; a child is visited when any lane enters it, with those lanes active; children
+// one group almost always. A group walks the 8-wide tree (TraceData::wide8) once:
+//   - at an inner node, each of the eight children's boxes is tested against every active lane
+//     with exactly the float operations of the single-ray slab test (rewritten here for one box
+//     broadcast against eight rays; the single-ray test is eight boxes against one ray), so a
+//     lane enters exactly the boxes its own ray would; a child is visited when any lane enters it, with those lanes active; children
 //     are visited nearest first (the smallest entry distance among their lanes), the others
 //     pushed with their lanes and per-lane entry distances;
 //   - a popped entry keeps the lanes whose entry distance is not beyond their best hit (closest)
@@ -25,7 +25,7 @@
 // So the node chain of a packet is walked once for up to eight rays, and the closest hit of
 // every ray is its smallest (t, id), bit-identical to the single-ray path (a test checks it on
 // every scene). Any hit reports some hit of the ray (not necessarily the one the single-ray path
-// finds first); the same rays are occluded. Counters: per ray, the wide nodes tested with the ray
+// finds first); the same rays are occluded. Counters: per ray, the 8-wide nodes tested with the ray
 // active and the triangles of the leaves tested for it.
 #pragma once
 
@@ -265,15 +265,17 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
   return found;
 }
 
+// The walk of one octant group over the 8-wide nodes (those of the single-ray walk): per node,
+// each of the eight children tested against the group's lanes.
 template <bool AnyHit>
 void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, Packet& p, PacketEntry* stack) {
   if (d.empty) return;
-  const WideNode* const nodes = d.nodes4;
+  const WideNode8* const nodes = d.nodes;
   const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
   const __m256i one = _mm256_set1_epi32(1);
   __m256 tmax = _mm256_load_ps(p.tmax);
   PacketEntry* sp = stack;
-  std::uint32_t ref = d.root4, cnt = 0, m = group;
+  std::uint32_t ref = d.root, cnt = 0, m = group;
   auto pop = [&] {
     while (sp != stack) {
       --sp;
@@ -294,10 +296,10 @@ void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, P
     while (cnt == 0) {
       const float* b = &nodes[ref].bounds[0][0];
       p.nodes = _mm256_add_epi32(p.nodes, _mm256_and_si256(_mm256_castps_si256(lane_mask(m)), one));
-      __m256 tn[4];
-      std::uint32_t lanes[4];
+      __m256 tn[8];
+      std::uint32_t lanes[8];
       unsigned any = 0;
-      for (int c = 0; c < 4; ++c) {
+      for (int c = 0; c < 8; ++c) {
         // The single-ray kernel's operations and operand order (its comment explains the NaN rule).
         const __m256 tnx = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.nx + c), g.ox), g.inx);
         const __m256 tny = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.ny + c), g.oy), g.iny);
@@ -314,16 +316,16 @@ void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, P
         miss = true;
         break;
       }
-      const WideNode& n = nodes[ref];
+      const WideNode8& n = nodes[ref];
       if ((any & (any - 1)) == 0) {  // one child
         const int c = ctz(any);
         ref = n.child[c], cnt = n.count[c], m = lanes[c];
         continue;
       }
-      int order[4], k = 0;
+      int order[8], k = 0;
       for (unsigned a = any; a; a &= a - 1) order[k++] = ctz(a);
       if constexpr (!AnyHit) {  // (any hit pops by lanes alone, in slot order)
-        float dist[4];
+        float dist[8];
         for (int i = 0; i < k; ++i) {
           const int c = order[i];
           tn[c] = _mm256_blendv_ps(inf, tn[c], lane_mask(lanes[c]));
@@ -432,8 +434,8 @@ void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBa
     const int ax = sx >> rep & 1, ay = sy >> rep & 1, az = sz >> rep & 1;
     const std::uint32_t group = todo & (ax ? sx : ~sx) & (ay ? sy : ~sy) & (az ? sz : ~sz);
     todo &= ~group;
-    g.nx = 4 * (0 + ax), g.ny = 4 * (2 + ay), g.nz = 4 * (4 + az);
-    g.fx = 4 * (1 - ax), g.fy = 4 * (3 - ay), g.fz = 4 * (5 - az);
+    g.nx = 8 * (0 + ax), g.ny = 8 * (2 + ay), g.nz = 8 * (4 + az);  // rows of eight floats (WideNode8)
+    g.fx = 8 * (1 - ax), g.fy = 8 * (3 - ay), g.fz = 8 * (5 - az);
     traverse_packet<AnyHit>(f, g, group, p, stack);
   }
   alignas(32) std::uint32_t nodes[kLanes];
@@ -444,13 +446,10 @@ void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBa
   }
 }
 
-// The packet walk's stack: up to three entries a 4-wide level.
-std::size_t stack_size4(const TraceData& s) { return 3 * std::size_t(s.wide.depth) + 8; }
-
 void trace_range_packet_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hits, std::size_t begin,
                              std::size_t end, HitMode mode, bool counters, TraceTotals& tot) {
   const Flat f = flat_of(scene);
-  std::vector<PacketEntry> stack(stack_size4(scene));
+  std::vector<PacketEntry> stack(stack_size(scene));
   for (std::size_t i = begin; i < end; i += kLanes) {
     const int n = static_cast<int>(std::min<std::size_t>(kLanes, end - i));
     if (mode == HitMode::Closest)

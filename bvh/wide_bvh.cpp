@@ -174,18 +174,6 @@ void regroup_to_8(const WideBvh& w4, WideBvh8& out) {
   out.root = regroup_subtree(w4.nodes, w4.root, out.nodes, out.depth, 0, {}, nullptr);
 }
 
-void refresh_boxes(std::span<const WideNode> w4, std::span<const SlotSource> sources, std::span<WideNode8> out) {
-  for (std::size_t n = 0; n < out.size(); ++n) {
-    WideNode8& dst = out[n];
-    for (int i = 0; i < 8; ++i) {
-      const SlotSource& f = sources[8 * n + i];
-      if (f.node == WideNode::kEmptySlot) continue;
-      const WideNode& src = w4[f.node];
-      for (int r = 0; r < 6; ++r) dst.bounds[r][i] = src.bounds[r][f.slot];
-    }
-  }
-}
-
 std::vector<std::string> validate_wide(const WideBvh& wide, const Bvh& bvh) {
   std::vector<std::string> issues;
   auto fail = [&](std::string s) {

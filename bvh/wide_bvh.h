@@ -99,13 +99,11 @@ struct SlotSource {
 /// root's index is returned; `depth` is raised to the subtree's 8-wide levels). An inner child
 /// below `linked_below` is a link into fixed subtrees regrouped before: it is never opened and
 /// becomes a link to linked8[child], their 8-wide root. With `sources`, slot i of the node made
-/// at index n records where its box came from in sources[8 n + i] (refresh_boxes).
+/// at index n records where its box came from in sources[8 n + i] (so that refits of the 4-wide
+/// subtree can write the 8-wide boxes too; ClusterScene).
 std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4, AlignedVector<WideNode8>& out,
                               std::uint32_t& depth, std::uint32_t linked_below, std::span<const std::uint32_t> linked8,
                               std::vector<SlotSource>* sources);
-/// The boxes of 8-wide nodes regrouped once (fixed subtrees) copied again from their 4-wide
-/// sources, after those were refitted: out[n]'s slot i from sources[8 n + i].
-void refresh_boxes(std::span<const WideNode> w4, std::span<const SlotSource> sources, std::span<WideNode8> out);
 
 /// Collapses a binary tree (validate()d) into a 4-wide one with the same leaves. A binary tree
 /// that is a single leaf becomes one wide node with one leaf child. O(nodes).
