@@ -547,7 +547,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     times.build_ms = clock_ms(cfg_.clock) - tb;
     tb = clock_ms(cfg_.clock);
     link_top_tree();
-    if (B == 0) make_wide8();  // (block trees: after their refit, below)
+    make_wide8();  // (the fixed subtrees' 8-wide boxes are written by their refits: set_box8)
     times.collapse_ms = clock_ms(cfg_.clock) - tb;
   };
   times.overlap_ms = 0.0;
@@ -570,11 +570,6 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   t0 = clock_ms(cfg_.clock);
   if (B) refit_subtrees();
   times.refit_ms = clock_ms(cfg_.clock) - t0;
-  if (B) {
-    t0 = clock_ms(cfg_.clock);
-    make_wide8();
-    times.collapse_ms += clock_ms(cfg_.clock) - t0;
-  }
 }
 
 // Slot k of n holds cluster c alone: a link to its block tree, or a direct leaf of its blocks.

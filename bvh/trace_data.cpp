@@ -1,6 +1,7 @@
 #include "bvh/trace_data.h"
 
 #include <cmath>
+#include <utility>
 
 namespace ptc::bvh {
 
@@ -24,11 +25,18 @@ void validate_tree(const TraceData& d, const Tree& tree, std::size_t triangle_co
     return;
   }
   std::vector<std::uint8_t> reached(nodes.size(), 0), tri_seen(triangle_count, 0), lane_used(d.triangle_ids.size(), 0);
-  std::vector<std::uint32_t> stack{tree.root};
+  // (node, its level: the root's is 1); no level beyond tree.depth, which sizes the walks' stacks
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{tree.root, 1}};
   reached[tree.root] = 1;
+  bool too_deep = false;
   while (!stack.empty()) {
-    const std::uint32_t i = stack.back();
+    const auto [i, level] = stack.back();
     stack.pop_back();
+    if (level > tree.depth && !too_deep) {
+      fail("node " + std::to_string(i) + " at level " + std::to_string(level) + ", deeper than the tree's depth " +
+           std::to_string(tree.depth));
+      too_deep = true;
+    }
     const auto& n = nodes[i];
     for (int k = 0; k < kWidth; ++k) {
       const Box3f box = n.child_box(k);
@@ -47,7 +55,7 @@ void validate_tree(const TraceData& d, const Tree& tree, std::size_t triangle_co
           fail("node " + std::to_string(c) + " is reached twice");
           continue;
         }
-        stack.push_back(c);
+        stack.push_back({c, level + 1});
         Box3f u;
         for (int j = 0; j < kWidth; ++j) u.extend(nodes[c].child_box(j));
         if (exact_unions ? !(u == box) : !box.contains(u))

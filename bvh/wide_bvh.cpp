@@ -104,6 +104,7 @@ std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4,
       const WideNode& c = w4[s.child];
       s.live = 0;
       for (int k = 0; k < 4; ++k) s.live += !c.is_empty(k);
+      if (s.live == 0) s.live = 9;  // (a node without children: nothing to open; the builds make none)
       s.area = static_cast<float>(s.box.surface_area());
     }
     return s;

@@ -1,5 +1,6 @@
-// The 4-wide BVH the tracer walks: a binary Bvh collapsed so that one node holds up to four
-// children's boxes in SIMD order (one SSE test for four boxes, as Embree's BVH4).
+// The wide BVHs: a binary Bvh collapsed so that one node holds up to four children's boxes in
+// SIMD order (WideNode, as Embree's BVH4: what the scenes build, link and refit), and that tree
+// regrouped into nodes of up to eight (WideNode8, as Embree's BVH8: what the tracer walks).
 //
 // Collapse (the usual greedy rule): a wide node starts with its binary node's two children and
 // repeatedly replaces the inner child of largest surface area by that child's two children
@@ -74,7 +75,8 @@ struct alignas(64) WideNode8 {
 };
 static_assert(sizeof(WideNode8) == 256);
 
-/// 8-wide nodes, root first, children after parents. `depth`: the number of 8-wide levels (the
+/// 8-wide nodes (regroup_to_8: root first, children after parents; a ClusterScene puts its fixed
+/// subtrees first and the top after them, see cluster_scene.h). `depth`: the number of 8-wide levels (the
 /// traversal stack needs at most 7 * depth + 1 entries).
 struct WideBvh8 {
   AlignedVector<WideNode8> nodes;
@@ -85,9 +87,9 @@ struct WideBvh8 {
 /// Regroups a 4-wide tree into 8-wide nodes with the same leaf children (the same child, count
 /// and box: leaf references are copied, not interpreted) and the same boxes. An 8-wide node
 /// starts with its 4-wide node's children and repeatedly replaces the inner child of largest
-/// surface area whose children still fit (at most 8 in all) by those children. Half as many
-/// dependent node visits a ray on the way down (log8 against log4 levels). O(nodes); `out`
-/// keeps its capacity (per-frame use allocates nothing).
+/// surface area whose children still fit (at most 8 in all) by those children. About two thirds
+/// of the dependent node visits a ray makes on the way down (log8 against log4 levels). O(nodes); `out`
+/// keeps its capacity (per frame only the small work stack is allocated).
 void regroup_to_8(const WideBvh& w4, WideBvh8& out);
 
 /// Where an 8-wide slot's box comes from: slot `slot` of 4-wide node `node` (node kEmptySlot:

@@ -131,6 +131,11 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
                       d.ranges[i].triangle_count == w.ranges[i].triangle_count)
               << what << " range " << i;
         EXPECT_EQ(d.wide.root, w.wide.root) << what;
+        ASSERT_EQ(d.wide8.nodes.size(), w.wide8.nodes.size()) << what;
+        EXPECT_EQ(std::memcmp(d.wide8.nodes.data(), w.wide8.nodes.data(), w.wide8.nodes.size() * sizeof(WideNode8)), 0)
+            << what;
+        EXPECT_EQ(d.wide8.root, w.wide8.root) << what;
+        EXPECT_EQ(d.wide8.depth, w.wide8.depth) << what;
       }
     }
   }

@@ -933,6 +933,11 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
                             a.data().wide.nodes.size() * sizeof(WideNode)),
                 0)
           << "frame " << f;
+      ASSERT_EQ(a.data().wide8.nodes.size(), b.data().wide8.nodes.size());
+      EXPECT_EQ(std::memcmp(a.data().wide8.nodes.data(), b.data().wide8.nodes.data(),
+                            a.data().wide8.nodes.size() * sizeof(WideNode8)),
+                0)
+          << "frame " << f;
       ASSERT_TRUE(validate(b.data(), rm.triangle_count(), false).empty());
       const Mesh& frame = f ? rm_moved : rm;
       const RaySet rs = random_rays(frame, 200, 57);

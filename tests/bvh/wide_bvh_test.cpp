@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <set>
 #include <cstring>
 #include <vector>
 
@@ -259,6 +261,28 @@ TEST(WideBvh8, ScenesKeepTheirEightWideTreesValid) {
       const auto issues = validate(cs.data(), m.triangle_count(), exact);
       EXPECT_TRUE(issues.empty()) << "config " << c << " amount " << amount << ": " << test::joined(issues);
       EXPECT_LT(cs.data().wide8.nodes.size(), cs.data().wide.nodes.size());
+      // Every 8-wide slot comes from one 4-wide slot: its box (and a leaf's reference) must be
+      // one of the 4-wide tree's, each used once -- a fixed slot left at an earlier frame's box
+      // is not (the boxes move with every deformation).
+      std::multiset<std::array<float, 8>> slots4;
+      auto key = [](const auto& n, int k) {
+        const Box3f b = n.child_box(k);
+        const bool leaf = n.is_leaf(k);
+        return std::array<float, 8>{b.lo[0], b.lo[1], b.lo[2], b.hi[0], b.hi[1], b.hi[2],
+                                    leaf ? static_cast<float>(n.child[k]) : -1.0f, leaf ? static_cast<float>(n.count[k]) : -1.0f};
+      };
+      for (const WideNode& n : cs.data().wide.nodes)
+        for (int k = 0; k < 4; ++k)
+          if (!n.is_empty(k)) slots4.insert(key(n, k));
+      std::size_t missing = 0;
+      for (const WideNode8& n : cs.data().wide8.nodes)
+        for (int k = 0; k < 8; ++k) {
+          if (n.is_empty(k)) continue;
+          const auto it = slots4.find(key(n, k));
+          if (it == slots4.end()) ++missing;
+          else slots4.erase(it);
+        }
+      EXPECT_EQ(missing, 0u) << "config " << c << " amount " << amount;
     }
     TraceData d = cs.data();
     d.wide8.nodes.clear();
