@@ -228,15 +228,17 @@ void ClusterScene::layout_wide8() {
   for (const std::uint32_t r : sub_root_)
     if (r != kNoTriangle) link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, sub_depth8_, 0, {}, &sources);
   for (const std::uint32_t r : group_root_)
-    if (r != kNoTriangle) link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, group_depth8_, block_nodes_, link8_, &sources);
+    if (r != kNoTriangle)
+      link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, group_depth8_, block_nodes_, link8_, &sources);
   slot8_.assign(4 * sub_nodes_.size(), kNoTriangle);
   for (std::size_t i = 0; i < 8 * sub8_.size(); ++i)
-    if (sources[i].node != WideNode::kEmptySlot) slot8_[4 * std::size_t{sources[i].node} + sources[i].slot] = static_cast<std::uint32_t>(i);
+    if (sources[i].node != WideNode::kEmptySlot)
+      slot8_[4 * std::size_t{sources[i].node} + sources[i].slot] = static_cast<std::uint32_t>(i);
   f_.data.wide8.nodes.assign(sub8_.begin(), sub8_.end());
 }
 
-// Per frame, after the top is linked and the fixed subtrees refitted: the 8-wide tree the
-// single-ray walk reads (nodes [0, sub8_.size()) the fixed subtrees, the top's regrouping after).
+// Per frame, after the top is linked: the 8-wide tree the tracer walks (nodes [0, sub8_.size())
+// the fixed subtrees, whose boxes their refits write, the top's regrouping after).
 void ClusterScene::make_wide8() {
   TraceData& data = f_.data;
   WideBvh8& w8 = data.wide8;

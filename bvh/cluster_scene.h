@@ -101,7 +101,7 @@ class ClusterScene {
   /// The refitted box of 4-wide slot k of fixed node n into its 8-wide slot, if it has one.
   void set_box8(std::size_t n, int k, const Box3f& b) {
     const std::uint32_t d = slot8_[4 * n + static_cast<std::size_t>(k)];
-    if (d != 0xffffffffu) f_.data.wide8.nodes[d >> 3].set_child_box(static_cast<int>(d & 7), b);
+    if (d != kNoTriangle) f_.data.wide8.nodes[d >> 3].set_child_box(static_cast<int>(d & 7), b);
   }
   void make_wide8();
   void refit_group_trees();
@@ -123,7 +123,7 @@ class ClusterScene {
   bool refit_groups_ = false;
   std::uint32_t block_nodes_ = 0;
   std::uint32_t group_depth_ = 0;
-  // The single-ray walk's 8-wide nodes of the fixed subtrees (layout_wide8): their structure is
+  // The 8-wide nodes of the fixed subtrees, which the tracer walks (layout_wide8): their structure is
   // fixed, the refits write their boxes (slot8_: 4-wide slot 4 n + k of the fixed part -> its
   // 8-wide slot 8 m + i in data().wide8, or kNoTriangle for a slot opened by the regrouping);
   // link8_ maps a 4-wide subtree root to its 8-wide one.

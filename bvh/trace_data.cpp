@@ -1,21 +1,23 @@
 #include "bvh/trace_data.h"
 
 #include <cmath>
+#include <type_traits>
 #include <utility>
 
 namespace ptc::bvh {
 
 namespace {
 
-// The checks of validate() on one of the trees (WideBvh or WideBvh8: kWidth children a node);
-// `tree` names it in the messages ("" or "8-wide ").
-template <int kWidth, class Tree>
+// The checks of validate() on one of the trees (WideBvh or WideBvh8); `tree_name` names it in
+// the messages ("" or "8-wide ").
+template <class Tree>
 void validate_tree(const TraceData& d, const Tree& tree, std::size_t triangle_count, bool exact_unions,
                    const std::string& tree_name, std::vector<std::string>& issues) {
   auto fail = [&](std::string s) {
     if (issues.size() < 20) issues.push_back(tree_name + std::move(s));
   };
   const auto& nodes = tree.nodes;
+  constexpr int kWidth = std::remove_cvref_t<decltype(nodes[0])>::kWidth;
   if (nodes.empty()) {
     if (triangle_count != 0) fail("no nodes for " + std::to_string(triangle_count) + " triangles");
     return;
@@ -124,11 +126,12 @@ void validate_tree(const TraceData& d, const Tree& tree, std::size_t triangle_co
 std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count, bool exact_unions) {
   std::vector<std::string> issues;
   if (d.triangle_ids.size() != 4 * d.blocks.size()) issues.push_back("triangle_ids size is not 4 per block");
-  validate_tree<4>(d, d.wide, triangle_count, exact_unions, "", issues);
+  validate_tree(d, d.wide, triangle_count, exact_unions, "", issues);
   if (d.wide8.nodes.empty() != d.wide.nodes.empty()) {
-    issues.push_back(d.wide8.nodes.empty() ? "no 8-wide nodes beside the 4-wide tree" : "8-wide nodes without a 4-wide tree");
+    issues.push_back(d.wide8.nodes.empty() ? "no 8-wide nodes beside the 4-wide tree"
+                                           : "8-wide nodes without a 4-wide tree");
   } else {
-    validate_tree<8>(d, d.wide8, triangle_count, exact_unions, "8-wide ", issues);
+    validate_tree(d, d.wide8, triangle_count, exact_unions, "8-wide ", issues);
   }
   return issues;
 }

@@ -55,7 +55,9 @@ struct TraceData {
 };
 
 /// Checks of the flat data (tests call it on every scene), of `wide` and of `wide8` alike (and
-/// `wide8` present whenever `wide` is): every node reachable from the root exactly once (a tree), every leaf child's ranges inside `ranges` and blocks inside `blocks`,
+/// `wide8` present whenever `wide` is): every node reachable from the root exactly once (a
+/// tree) and none deeper than the tree's `depth`, every leaf child's ranges inside `ranges` and
+/// blocks inside `blocks`,
 /// every mesh triangle id 0 .. triangle_count-1 in exactly one used lane (padding lanes:
 /// kNoTriangle and NaN corners), every inner child box containing its node's child boxes
 /// (equal to their union when `exact_unions`), every leaf child box containing its triangles'

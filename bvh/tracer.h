@@ -3,7 +3,8 @@
 //
 // One traversal code serves both queries (a compile-time flag): an 8-wide BVH (the 4-wide one
 // regrouped, TraceData::wide8) walked with one 8-lane box test per node (two 4-lane ones on
-// SSE2), children visited nearest first (closest hit) and the stack culled by the best hit so far; leaves test their triangles four (SSE2) or eight (AVX2, chosen at run
+// SSE2), children visited nearest first (closest hit) and the stack culled by the best hit so
+// far; leaves test their triangles four (SSE2), eight (AVX2) or sixteen (AVX-512; chosen at run
 // time, see TraceIsa) at a time with the watertight test of watertight.h (bit-identical to the
 // scalar intersect_triangle).
 // Robust traversal: the slab test uses (bound - origin) * (1/dir) with the near and far

@@ -34,7 +34,7 @@ struct StackEntry {
 struct RayState {
   // slab test
   __m128 ox, oy, oz, inx, iny, inz, ifx, ify, ifz;
-  int nx, ny, nz, fx, fy, fz;  // float offsets of the near/far rows in WideNode::bounds
+  int nx, ny, nz, fx, fy, fz;  // float offsets of the near/far rows in WideNode8::bounds
   // watertight test: made when the ray reaches its first leaf (most primary rays never do)
   bool watertight_ready;
   int kx4, ky4, kz4;  // 4 * permuted axes (offsets inside a corner's 3x4 block)
@@ -83,8 +83,8 @@ void fill_state(RayState& r, const Vec3f& o, const Vec3f& d, const float* in, co
   r.ifx = _mm_set1_ps(fa[0]), r.ify = _mm_set1_ps(fa[1]), r.ifz = _mm_set1_ps(fa[2]);
   int near[3];
   for (int a = 0; a < 3; ++a) near[a] = 2 * a + (neg[a] ? 1 : 0);
-  r.nx = 4 * near[0], r.ny = 4 * near[1], r.nz = 4 * near[2];
-  r.fx = 4 * (near[0] ^ 1), r.fy = 4 * (near[1] ^ 1), r.fz = 4 * (near[2] ^ 1);
+  r.nx = 8 * near[0], r.ny = 8 * near[1], r.nz = 8 * near[2];  // rows of eight floats (WideNode8)
+  r.fx = 8 * (near[0] ^ 1), r.fy = 8 * (near[1] ^ 1), r.fz = 8 * (near[2] ^ 1);
   r.org = o, r.dir = d;
   r.watertight_ready = false;
 }
@@ -388,8 +388,8 @@ void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
   // them, so they stay in registers (through `r` every store forced reloads and spills). A node's
   // eight children are tested at once (AVX2 / AVX-512: one 8-lane test; SSE2: two 4-lane tests of
   // the same float operations, lane by lane), so every variant visits the same nodes in the same
-  // order. Rows of WideNode8::bounds are 8 floats: a row offset is 2x RayState's 4-wide one.
-  const std::ptrdiff_t nx = 2 * r.nx, ny = 2 * r.ny, nz = 2 * r.nz, fx = 2 * r.fx, fy = 2 * r.fy, fz = 2 * r.fz;
+  // order.
+  const std::ptrdiff_t nx = r.nx, ny = r.ny, nz = r.nz, fx = r.fx, fy = r.fy, fz = r.fz;
 #if defined(PTC_TRACE_AVX2)
   const __m256 ox = _mm256_broadcastss_ps(r.ox), oy = _mm256_broadcastss_ps(r.oy), oz = _mm256_broadcastss_ps(r.oz);
   const __m256 inx = _mm256_broadcastss_ps(r.inx), iny = _mm256_broadcastss_ps(r.iny), inz = _mm256_broadcastss_ps(r.inz);

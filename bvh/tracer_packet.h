@@ -13,8 +13,8 @@
 //   - at an inner node, each of the eight children's boxes is tested against every active lane
 //     with exactly the float operations of the single-ray slab test (rewritten here for one box
 //     broadcast against eight rays; the single-ray test is eight boxes against one ray), so a
-//     lane enters exactly the boxes its own ray would; a child is visited when any lane enters it, with those lanes active; children
-//     are visited nearest first (the smallest entry distance among their lanes), the others
+//     lane enters exactly the boxes its own ray would; a child is visited when any lane enters
+//     it, with those lanes active; children are visited nearest first (the smallest entry distance among their lanes), the others
 //     pushed with their lanes and per-lane entry distances;
 //   - a popped entry keeps the lanes whose entry distance is not beyond their best hit (closest)
 //     or that have no hit yet (any hit);
@@ -25,8 +25,8 @@
 // So the node chain of a packet is walked once for up to eight rays, and the closest hit of
 // every ray is its smallest (t, id), bit-identical to the single-ray path (a test checks it on
 // every scene). Any hit reports some hit of the ray (not necessarily the one the single-ray path
-// finds first); the same rays are occluded. Counters: per ray, the 8-wide nodes tested with the ray
-// active and the triangles of the leaves tested for it.
+// finds first); the same rays are occluded. Counters: per ray, the 8-wide nodes tested with the
+// ray active and the triangles of the leaves tested for it.
 #pragma once
 
 #if !defined(PTC_TRACE_AVX2)

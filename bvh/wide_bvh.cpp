@@ -116,12 +116,12 @@ std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4,
   stack.reserve(64);
   const auto root8 = static_cast<std::uint32_t>(out.size());
   out.emplace_back();
-  if (sources) sources->resize(8 * std::size_t{out.size()});
   stack.push_back({root4, root8, 1});
   while (!stack.empty()) {
     const Item it = stack.back();
     stack.pop_back();
     depth = std::max(depth, it.depth);
+    if (sources) sources->resize(8 * std::size_t{out.size()});  // (room for it.node8's slots)
     Slot s[8];
     int ns = 0;
     for (int j = 0; j < 4; ++j)
@@ -158,10 +158,7 @@ std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4,
       WideNode8& dst = out[it.node8];
       dst.set_child_box(i, box);
       dst.child[i] = child, dst.count[i] = count;
-      if (sources) {
-        sources->resize(8 * std::size_t{out.size()});
-        (*sources)[8 * std::size_t{it.node8} + i] = from;
-      }
+      if (sources) (*sources)[8 * std::size_t{it.node8} + i] = from;
     }
   }
   return root8;

@@ -17,17 +17,20 @@
 
 namespace ptc::bvh {
 
-/// 128 bytes, two cache lines. Child i's box is (bounds[0][i], bounds[2][i], bounds[4][i]) ..
-/// (bounds[1][i], bounds[3][i], bounds[5][i]): row 2a is lo on axis a, row 2a+1 hi on axis a,
-/// so a ray picks its near/far rows by the sign of its direction once.
-struct alignas(64) WideNode {
-  float bounds[6][4];
+/// A node of W children (WideNode: 4, 128 bytes, two cache lines; WideNode8: 8, 256 bytes).
+/// Child i's box is (bounds[0][i], bounds[2][i], bounds[4][i]) .. (bounds[1][i], bounds[3][i],
+/// bounds[5][i]): row 2a is lo on axis a, row 2a+1 hi on axis a, so a ray picks its near/far
+/// rows by the sign of its direction once.
+template <int W>
+struct alignas(64) WideNodeOf {
+  static constexpr int kWidth = W;
+  float bounds[6][W];
   /// Inner child: node index, count = 0. Leaf child: `child` is the first item and `count`
   /// (> 0) the number of items of the leaf (collapse: a range of Bvh::prim_order; the tracer
   /// rebinds it to its own leaf table). Empty slot: empty box (+inf..-inf), count = 0,
   /// child = kEmptySlot.
-  std::uint32_t child[4];
-  std::uint32_t count[4];
+  std::uint32_t child[W];
+  std::uint32_t count[W];
 
   [[nodiscard]] Box3f child_box(int i) const {
     return {{bounds[0][i], bounds[2][i], bounds[4][i]}, {bounds[1][i], bounds[3][i], bounds[5][i]}};
@@ -39,6 +42,8 @@ struct alignas(64) WideNode {
   static constexpr std::uint32_t kEmptySlot = 0xffffffffu;
   [[nodiscard]] bool is_empty(int i) const { return count[i] == 0 && child[i] == kEmptySlot; }
 };
+/// The nodes the builds make, link and refit (as Embree's BVH4).
+using WideNode = WideNodeOf<4>;
 static_assert(sizeof(WideNode) == 128);
 
 /// Nodes (an empty tree has none) and the root's index; collapse_to_wide puts the root first and
@@ -52,32 +57,18 @@ struct WideBvh {
   std::uint32_t leaves = 0;
 };
 
-/// 256 bytes, four cache lines: eight children in WideNode's layout (row 2a lo on axis a, row
-/// 2a + 1 hi; `child` and `count` as in WideNode). The single-ray tracer walks these (one 8-lane
-/// slab test a node, or two 4-lane ones on SSE2), made from the 4-wide tree by regroup_to_8.
-struct alignas(64) WideNode8 {
-  float bounds[6][8];
-  std::uint32_t child[8];
-  std::uint32_t count[8];
-
+/// The nodes the tracer walks, single rays and packets (one 8-lane slab test a node, or two
+/// 4-lane ones on SSE2), made from the 4-wide tree by regroup_to_8 (as Embree's BVH8).
+struct WideNode8 : WideNodeOf<8> {
   /// Uninitialised (regroup_to_8 writes every field; value-initialising 256 bytes per node took
   /// a tenth of its time).
   WideNode8() {}  // NOLINT: not = default, which would zero the node in emplace_back()
-
-  [[nodiscard]] Box3f child_box(int i) const {
-    return {{bounds[0][i], bounds[2][i], bounds[4][i]}, {bounds[1][i], bounds[3][i], bounds[5][i]}};
-  }
-  void set_child_box(int i, const Box3f& b) {
-    for (int a = 0; a < 3; ++a) bounds[2 * a][i] = b.lo[a], bounds[2 * a + 1][i] = b.hi[a];
-  }
-  [[nodiscard]] bool is_leaf(int i) const { return count[i] != 0; }
-  [[nodiscard]] bool is_empty(int i) const { return count[i] == 0 && child[i] == WideNode::kEmptySlot; }
 };
 static_assert(sizeof(WideNode8) == 256);
 
-/// 8-wide nodes (regroup_to_8: root first, children after parents; a ClusterScene puts its fixed
-/// subtrees first and the top after them, see cluster_scene.h). `depth`: the number of 8-wide levels (the
-/// traversal stack needs at most 7 * depth + 1 entries).
+/// 8-wide nodes (regroup_to_8: root first, children after parents; a ClusterScene puts its
+/// fixed subtrees first and the top after them, see cluster_scene.h). `depth`: the number of
+/// 8-wide levels (the traversal stack needs at most 7 * depth + 1 entries).
 struct WideBvh8 {
   AlignedVector<WideNode8> nodes;
   std::uint32_t root = 0;
@@ -88,8 +79,8 @@ struct WideBvh8 {
 /// and box: leaf references are copied, not interpreted) and the same boxes. An 8-wide node
 /// starts with its 4-wide node's children and repeatedly replaces the inner child of largest
 /// surface area whose children still fit (at most 8 in all) by those children. About two thirds
-/// of the dependent node visits a ray makes on the way down (log8 against log4 levels). O(nodes); `out`
-/// keeps its capacity (per frame only the small work stack is allocated).
+/// of the dependent node visits a ray makes on the way down (log8 against log4 levels).
+/// O(nodes); `out` keeps its capacity (per frame only the small work stack is allocated).
 void regroup_to_8(const WideBvh& w4, WideBvh8& out);
 
 /// Where an 8-wide slot's box comes from: slot `slot` of 4-wide node `node` (node kEmptySlot:

@@ -186,8 +186,8 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
         surface = surface_hits(*frame_mesh, rays, ref);
         frame_bounds = frame_mesh->bounds();
       }
-      const ShadowResult sr = trace_shadows(with_isa(target_of(a), cfg.isa), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
-                                            cfg.threads, cfg.packets);
+      const ShadowResult sr = trace_shadows(with_isa(target_of(a), cfg.isa), surface, *cfg.light,
+                                            RayFrame{frame_bounds, a.origin()}, cfg.threads, cfg.packets);
       row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
       if (fr.accel == 0) ref_lit = sr.lit;
       else
