@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -9,7 +10,50 @@
 #include <utility>
 #include <vector>
 
+#include <boost/pending/container_traits.hpp>
+
+#include "toolkit/clustering/small_arcs.h"
+
+namespace ptc {
+namespace {
+/// The selector of SmallArcs for Boost's container_gen.
+struct SmallArcsS {};
+}  // namespace
+
+// SmallArcs is a vector for Boost's generic container functions (push, erase_if; found by
+// argument-dependent lookup).
+template <class T>
+boost::graph_detail::vector_tag container_category(const SmallArcs<T>&) {
+  return {};
+}
+template <class T>
+boost::graph_detail::unstable_tag iterator_stability(const SmallArcs<T>&) {
+  return {};
+}
+}  // namespace ptc
+
+namespace boost {
+namespace graph_detail {
+template <class T>
+struct container_traits<ptc::SmallArcs<T>> {
+  typedef vector_tag category;
+  typedef unstable_tag iterator_stability;
+};
+}  // namespace graph_detail
+}  // namespace boost
+
 #include <boost/graph/adjacency_list.hpp>
+
+namespace boost {
+template <class ValueType>
+struct container_gen<ptc::SmallArcsS, ValueType> {
+  typedef ptc::SmallArcs<ValueType> type;
+};
+template <>
+struct parallel_edge_traits<ptc::SmallArcsS> {
+  typedef allow_parallel_edge_tag type;
+};
+}  // namespace boost
 
 #include "toolkit/core/isa.h"
 
@@ -17,20 +61,20 @@ namespace ptc {
 
 namespace {
 
-/// What an entry's key is (in ver_hi's two top bits): the exact score, or an upper bound from
-/// Precision::SupportBound; neither: from Precision::UpperBoundAllowed. Versions stay below 2^30
-/// (a version counts its cluster's merges, and the contraction takes fewer than 2^30 triangles).
+/// What an entry's key is (in its stamp's two top bits): the exact score, or an upper bound from
+/// Precision::SupportBound; neither: from Precision::UpperBoundAllowed. Push times stay below 2^30
+/// (a push time counts merges, and the contraction takes fewer than 2^30 triangles).
 constexpr std::uint32_t kExactBit = 0x80000000u;
 constexpr std::uint32_t kSupportBit = 0x40000000u;
 constexpr std::uint32_t kKeyBits = kExactBit | kSupportBit;
 
-/// A queue entry: the key (score, pair (lo << 32) | hi, lo < hi) and the version stamps of lo and
-/// hi when it was pushed (ver_hi carries the key's kind, kKeyBits).
+/// A queue entry: the key (score, pair (lo << 32) | hi, lo < hi) and its stamp: the number of
+/// merges done when it was pushed, with the key's kind (kKeyBits). It is current while neither
+/// cluster has changed since (contract_impl's `changed`): 4 bytes where two version numbers took 8.
 struct Entry {
   double score;
   std::uint64_t pair;
-  std::uint32_t ver_lo;
-  std::uint32_t ver_hi;
+  std::uint32_t stamp;
 };
 
 /// Queue order: higher score first, equal scores by the smaller pair.
@@ -52,7 +96,7 @@ class EntryHeap {
   /// Appends without ordering; call heapify() before the next push/pop.
   void append(const Entry& e) {
     keys_.push_back({e.score, e.pair});
-    stamps_.push_back({e.ver_lo, e.ver_hi});
+    stamps_.push_back(e.stamp);
   }
   void heapify() {
     const std::size_t n = keys_.size();
@@ -63,7 +107,7 @@ class EntryHeap {
     append(e);
     sift_up(keys_.size() - 1);
   }
-  [[nodiscard]] Entry top() const { return {keys_[0].score, keys_[0].pair, stamps_[0].ver_lo, stamps_[0].ver_hi}; }
+  [[nodiscard]] Entry top() const { return {keys_[0].score, keys_[0].pair, stamps_[0]}; }
   void pop() {
     keys_[0] = keys_.back();
     stamps_[0] = stamps_.back();
@@ -76,7 +120,7 @@ class EntryHeap {
   void purge(F&& stale) {
     std::size_t w = 0;
     for (std::size_t r = 0; r < keys_.size(); ++r) {
-      const Entry e{keys_[r].score, keys_[r].pair, stamps_[r].ver_lo, stamps_[r].ver_hi};
+      const Entry e{keys_[r].score, keys_[r].pair, stamps_[r]};
       if (stale(e)) continue;
       keys_[w] = keys_[r];
       stamps_[w++] = stamps_[r];
@@ -91,9 +135,7 @@ class EntryHeap {
     double score;
     std::uint64_t pair;
   };
-  struct Stamps {
-    std::uint32_t ver_lo, ver_hi;
-  };
+  using Stamps = std::uint32_t;
   static bool below(const Key& x, const Key& y) { return ranks_below(x.score, x.pair, y.score, y.pair); }
   void sift_up(std::size_t i) {
     const Key k = keys_[i];
@@ -169,16 +211,21 @@ namespace boost::detail {
 /// properties"). Without a property the arc is its target alone.
 /// Every arc then reports the same property address, so edge descriptors of this graph must not
 /// be compared or removed by descriptor (the contraction removes arcs by target only).
+/// The target is kept in 4 bytes (the contraction takes fewer than 2^30 triangles).
 template <class Vertex>
-class stored_edge_property<Vertex, ptc::NoEdgeData> : public stored_edge<Vertex> {
+class stored_edge_property<Vertex, ptc::NoEdgeData> {
  public:
   using property_type = ptc::NoEdgeData;
   stored_edge_property() = default;
-  stored_edge_property(Vertex target, const ptc::NoEdgeData& = {}) : stored_edge<Vertex>(target) {}
+  stored_edge_property(Vertex target, const ptc::NoEdgeData& = {}) : target_(static_cast<std::uint32_t>(target)) {}
+  [[nodiscard]] Vertex get_target() const { return target_; }
   ptc::NoEdgeData& get_property() { return none_; }
   const ptc::NoEdgeData& get_property() const { return none_; }
+  bool operator==(const stored_edge_property& x) const { return target_ == x.target_; }
+  bool operator<(const stored_edge_property& x) const { return target_ < x.target_; }
 
  private:
+  std::uint32_t target_ = 0;
   static inline ptc::NoEdgeData none_{};
 };
 }  // namespace boost::detail
@@ -188,15 +235,18 @@ namespace {
 
 /// The cluster graph (contraction.h, "Graph"): a Boost.Graph adjacency_list whose vertices are the
 /// clusters (vertex c = the cluster whose id is c; a dead cluster is an isolated vertex) and whose
-/// arcs come in pairs (c -> x and x -> c for every adjacent pair). directedS with vecS out-edge
-/// lists: no global edge list (undirectedS keeps one in a std::list, a node allocation per edge),
-/// and without an edge property (Acc, Naive) an arc is one stored vertex index (NoEdgeData).
+/// arcs come in pairs (c -> x and x -> c for every adjacent pair). directedS with vector-like
+/// out-edge lists: no global edge list (undirectedS keeps one in a std::list, a node allocation
+/// per edge). Without an edge property (Acc, Naive) an arc is its target in 4 bytes (NoEdgeData)
+/// and the out-edge list a SmallArcs (three arcs in place); with one (GWH01) a std::vector.
 template <bool kBoundary>
-using ClusterGraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::directedS, boost::no_property,
-                                           std::conditional_t<kBoundary, SharedLength, NoEdgeData>>;
+using ClusterGraph =
+    boost::adjacency_list<std::conditional_t<kBoundary, boost::vecS, SmallArcsS>, boost::vecS, boost::directedS,
+                          boost::no_property, std::conditional_t<kBoundary, SharedLength, NoEdgeData>>;
 static_assert(sizeof(typename decltype(std::declval<ClusterGraph<false>::stored_vertex&>().m_out_edges)::value_type) ==
-                  sizeof(std::size_t),
-              "an arc of the cluster graph without a boundary term is its target alone (NoEdgeData)");
+                  sizeof(std::uint32_t),
+              "an arc of the cluster graph without a boundary term is its target alone, in 4 bytes (NoEdgeData)");
+static_assert(sizeof(ClusterGraph<false>::stored_vertex) == 20, "a vertex of the cluster graph: SmallArcs in place");
 
 }  // namespace
 
@@ -216,18 +266,18 @@ template <ClusterObjective O>
   if (T >= (1u << 30))
     throw std::invalid_argument("contraction: at most 2^30 - 1 triangles (" + std::to_string(T) + " given)");
 
-  // ---- Clusters: one per triangle. A singleton's member and vertex lists are implicit (no
-  // allocation for the T initial clusters); a merged cluster owns one block [member count,
-  // vertex count, members..., vertices...] (8 bytes a triangle for the handles, where two vectors
-  // each were 48, and one allocation per merge instead of two or three).
-  std::vector<std::uint32_t> single_verts(3 * std::size_t{T});
-  std::vector<std::uint8_t> single_nv(T);
+  // ---- Clusters: one per triangle. A singleton {t} has no stored lists (its member is t, its
+  // vertices those of triangle t, made when needed); a merged cluster owns one block [member
+  // count, vertex count, summary slot, members..., vertices...] (8 bytes a triangle for the
+  // handles, where two vectors each were 48, and one allocation per merge instead of two or three).
+  constexpr std::size_t kHead = 3;
   std::vector<std::unique_ptr<std::uint32_t[]>> lists(T);
-  std::vector<std::uint32_t> version(T, 0);
-  std::vector<char> alive(T, 1);
+  // changed[c]: the number of merges done when cluster c last changed (0: never), kDead once it
+  // is merged into another. An entry is current while both its clusters are unchanged since it
+  // was pushed (one array for what a version count and an alive flag per cluster did).
+  constexpr std::uint32_t kDead = 0xffffffffu;
+  std::vector<std::uint32_t> changed(T, 0);
   std::uint32_t alive_count = T;
-  for (std::uint32_t t = 0; t < T; ++t)
-    single_nv[t] = static_cast<std::uint8_t>(tb.distinct_vertices(t, &single_verts[3 * std::size_t{t}]));
   // Summaries: a merged cluster's is kept in a slot; a singleton's is made when it is needed
   // (objective.single gives the same values every time), and the last ones made are kept in a
   // small direct-mapped cache: half of the singletons a contraction evaluates were evaluated a
@@ -236,7 +286,7 @@ template <ClusterObjective O>
   // would be 3.4 GB at 13M triangles (256 bytes each). The pair in use never shares a cache entry
   // (pair_summaries); the other of two colliding singletons goes to the scratch summary.
   constexpr std::uint32_t kNoSlot = 0xffffffffu;
-  std::vector<std::uint32_t> summary_slot(T, kNoSlot), free_slots;
+  std::vector<std::uint32_t> free_slots;
   SlotStore<Summary> merged;
   constexpr int kSingleCacheBits = 10;  // 1024 summaries (256 KiB for Acc)
   std::vector<Summary> single_cache(std::size_t{1} << kSingleCacheBits);
@@ -244,7 +294,7 @@ template <ClusterObjective O>
   Summary scratch;
   // The summary of cluster c; `pinned` is a cache entry that must not be overwritten (in use).
   auto summary_ptr = [&](std::uint32_t c, std::size_t pinned) -> std::pair<const Summary*, std::size_t> {
-    if (summary_slot[c] != kNoSlot) return {&merged[summary_slot[c]], ~std::size_t{0}};
+    if (const std::uint32_t* l = lists[c].get()) return {&merged[l[2]], ~std::size_t{0}};
     const std::size_t h = (c * 2654435761u) >> (32 - kSingleCacheBits);
     if (single_tag[h] == c) return {&single_cache[h], h};
     if (h == pinned) {
@@ -260,16 +310,27 @@ template <ClusterObjective O>
     const Summary* sb = summary_ptr(b, ha).first;
     return {*sa, *sb};
   };
-  std::vector<std::uint32_t> iota(T);
-  for (std::uint32_t t = 0; t < T; ++t) iota[t] = t;
-  auto members = [&](std::uint32_t c) -> std::span<const std::uint32_t> {
-    const std::uint32_t* l = lists[c].get();
-    return l ? std::span<const std::uint32_t>(l + 2, l[0]) : std::span<const std::uint32_t>(&iota[c], 1);
+  // The member and vertex lists of cluster c; a singleton's are written into `s`, which must
+  // outlive the spans (make_ctx keeps one per role; no per-triangle arrays for them).
+  struct SingleLists {
+    std::uint32_t member = 0;
+    std::uint32_t verts[3] = {0, 0, 0};
   };
-  auto verts = [&](std::uint32_t c) -> std::span<const std::uint32_t> {
-    const std::uint32_t* l = lists[c].get();
-    return l ? std::span<const std::uint32_t>(l + 2 + l[0], l[1])
-             : std::span<const std::uint32_t>(&single_verts[3 * std::size_t{c}], single_nv[c]);
+  using Ids = std::span<const std::uint32_t>;
+  auto lists_of = [&](std::uint32_t c, SingleLists& s, Ids& members, Ids& verts) {
+    if (const std::uint32_t* l = lists[c].get()) {
+      members = Ids(l + kHead, l[0]);
+      verts = Ids(l + kHead + l[0], l[1]);
+    } else {
+      s.member = c;
+      members = Ids(&s.member, 1);
+      verts = Ids(s.verts, static_cast<std::size_t>(tb.distinct_vertices(c, s.verts)));
+    }
+  };
+  auto vertex_count = [&](std::uint32_t c) -> std::size_t {
+    if (const std::uint32_t* l = lists[c].get()) return l[1];
+    std::uint32_t v[3];
+    return static_cast<std::size_t>(tb.distinct_vertices(c, v));
   };
 
   // ---- Adjacency: the dual graph (ClusterTables' CSR; the same pairs as build_dual_graph,
@@ -319,7 +380,7 @@ template <ClusterObjective O>
 
   // ---- MergeContext with vertex stamps (the stamped cluster is cached across calls).
   std::vector<std::uint32_t> vstamp(tb.positions.size(), 0);
-  std::uint32_t stamp = 0, stamped = 0xffffffffu, stamped_version = 0;
+  std::uint32_t stamp = 0, stamped = 0xffffffffu, stamped_changed = 0;
   std::vector<std::uint32_t> added, shared;
   auto shared2_of = [&](std::uint32_t a, std::uint32_t b) {
     if constexpr (O::kUsesBoundary) {
@@ -332,23 +393,26 @@ template <ClusterObjective O>
   // Canonical roles: `a` is the pair's cluster with more vertices (ties: the smaller id), so that
   // a pair is always evaluated the same way (bit-identical scores at push and at pop).
   auto roles = [&](std::uint32_t x, std::uint32_t y) {
-    const std::size_t nx = verts(x).size(), ny = verts(y).size();
+    const std::size_t nx = vertex_count(x), ny = vertex_count(y);
     return nx > ny || (nx == ny && x < y) ? std::pair{x, y} : std::pair{y, x};
   };
+  SingleLists single_a, single_b;  // the lists of make_ctx's a and b when they are singletons
   auto make_ctx = [&](std::uint32_t a, std::uint32_t b, MergeContext& ctx) {
-    const auto va = verts(a);
-    if (stamped != a || stamped_version != version[a]) {
+    Ids ma, va, mb, vb;
+    lists_of(a, single_a, ma, va);
+    lists_of(b, single_b, mb, vb);
+    if (stamped != a || stamped_changed != changed[a]) {
       if (++stamp == 0) {  // wrapped: clear
         std::fill(vstamp.begin(), vstamp.end(), 0u);
         stamp = 1;
       }
       for (std::uint32_t v : va) vstamp[v] = stamp;
       stamped = a;
-      stamped_version = version[a];
+      stamped_changed = changed[a];
     }
     added.clear();
     shared.clear();
-    for (std::uint32_t v : verts(b)) (vstamp[v] == stamp ? shared : added).push_back(v);
+    for (std::uint32_t v : vb) (vstamp[v] == stamp ? shared : added).push_back(v);
     double removed = 0;
     if constexpr (O::kUsesBoundary) {
       removed = shared2_of(a, b);
@@ -373,8 +437,8 @@ template <ClusterObjective O>
         }
       }
     }
-    ctx.a_triangles = members(a);
-    ctx.b_triangles = members(b);
+    ctx.a_triangles = ma;
+    ctx.b_triangles = mb;
     ctx.a_vertices = va;
     ctx.added = added;
     ctx.shared = shared;
@@ -385,13 +449,14 @@ template <ClusterObjective O>
   // ---- The queue.
   EntryHeap heap;
   // Live pairs = adj_total / 2, and a live pair has at most one current entry; stale entries are
-  // purged once the heap holds 1.5x the live pairs (below), so this capacity is never exceeded
+  // purged once the heap holds 1.25x the live pairs (below), so this capacity is never exceeded
   // (live pairs only decrease) and the heap is never copied to grow.
-  auto purge_above = [&] { return adj_total / 2 + adj_total / 4 + 1024; };
+  auto purge_above = [&] { return adj_total / 2 + adj_total / 8 + 1024; };
   heap.reserve(purge_above() + 65536);  // + the pushes of the merges before a purge
+  std::uint32_t merges = 0;  // merges done (the push time of the entries made now)
   auto make_entry = [&](std::uint32_t x, std::uint32_t y, double score, std::uint32_t key_kind) {
     const std::uint32_t lo = std::min(x, y), hi = std::max(x, y);
-    return Entry{score, (std::uint64_t{lo} << 32) | hi, version[lo], version[hi] | key_kind};
+    return Entry{score, (std::uint64_t{lo} << 32) | hi, merges | key_kind};
   };
   // Evaluates the pair (x, y) cheaply; false when it deserves no entry (illegal, or never positive).
   auto entry_of = [&](std::uint32_t x, std::uint32_t y, Entry& out) {
@@ -415,7 +480,8 @@ template <ClusterObjective O>
   heap.heapify();
   auto current = [&](const Entry& e) {
     const auto lo = static_cast<std::uint32_t>(e.pair >> 32), hi = static_cast<std::uint32_t>(e.pair);
-    return alive[lo] && alive[hi] && version[lo] == e.ver_lo && version[hi] == (e.ver_hi & ~kKeyBits);
+    const std::uint32_t pushed = e.stamp & ~kKeyBits;  // (kDead is above every push time)
+    return changed[lo] <= pushed && changed[hi] <= pushed;
   };
 
   // ---- A direct-mapped cache of the exact evaluations of re-inserted entries, so that an entry
@@ -431,7 +497,7 @@ template <ClusterObjective O>
   using CacheValue = decltype(cache_value(std::declval<const Evaluation&>()));
   struct CacheSlot {
     std::uint64_t pair = ~std::uint64_t{0};
-    std::uint32_t ver_lo = 0, ver_hi = 0;
+    std::uint32_t stamp = 0;
     CacheValue value{};
   };
   const int cache_bits = kKnown ? std::clamp(static_cast<int>(std::bit_width(T / 8u)), 12, 20) : 14;
@@ -439,8 +505,7 @@ template <ClusterObjective O>
 
   // ---- Contract.
   const std::uint64_t report_every = std::max<std::uint64_t>(1, T / 256);
-  std::uint64_t merges = 0;
-  std::vector<std::uint32_t> mark(T, 0);  // mark[x] == merges + 1: x is a neighbour of lo (this merge)
+  std::vector<std::uint32_t> mark(T, 0);  // mark[x] == merges (after this merge's count): x is a neighbour of lo
   while (!heap.empty()) {
     if (options.target_clusters > 0 && alive_count <= options.target_clusters) break;
     const Entry top = heap.top();
@@ -451,11 +516,11 @@ template <ClusterObjective O>
     MergeContext ctx;
     make_ctx(a, b, ctx);
     if (!objective.legal(ctx)) continue;  // re-check after the pop
-    const bool exact_key = (top.ver_hi & kExactBit) != 0;
+    const bool exact_key = (top.stamp & kExactBit) != 0;
     CacheSlot& slot = cache[(top.pair * 0x9E3779B97F4A7C15ull) >> (64 - cache_bits)];
     Evaluation ev;
     bool have = false;
-    if (exact_key && slot.pair == top.pair && slot.ver_lo == top.ver_lo && slot.ver_hi == top.ver_hi) {
+    if (exact_key && slot.pair == top.pair && slot.stamp == top.stamp) {
       // evaluated when it was re-inserted (the same value evaluate() gives again)
       if constexpr (kKnown) {
         const auto [sa, sb] = pair_summaries(a, b);
@@ -464,7 +529,7 @@ template <ClusterObjective O>
         ev = slot.value;
       }
       have = true;
-    } else if (options.support_level && (top.ver_hi & kKeyBits) == 0) {
+    } else if (options.support_level && (top.stamp & kKeyBits) == 0) {
       // The key is the O(1) bound: first the bound from three points of the union
       // (Precision::SupportBound). Most such pairs rank below the next entry with it and wait
       // without their exact sphere (docs/scale.md, "Contraction time on one thread"). Which pair
@@ -492,18 +557,19 @@ template <ClusterObjective O>
       const Entry exact = make_entry(a, b, ev.score, kExactBit);
       if (!heap.empty() && ranks_below(exact.score, exact.pair, heap.top().score, heap.top().pair)) {
         heap.push(exact);  // another entry ranks higher: wait
-        slot = {exact.pair, exact.ver_lo, exact.ver_hi, cache_value(ev)};
+        slot = {exact.pair, exact.stamp, cache_value(ev)};
         continue;
       }
     }
 
     // Merge hi into lo (the smaller id survives).
     const std::uint32_t keep = lo, gone = hi;
+    std::uint32_t slot_keep = kNoSlot;  // the merged summary's slot (in keep's new block)
     {
       const auto [sa, sb] = pair_summaries(a, b);
       Summary m = objective.merge(sa, sb, ctx, ev);
-      std::uint32_t& slot_keep = summary_slot[keep];
-      std::uint32_t& slot_gone = summary_slot[gone];
+      slot_keep = lists[keep] ? lists[keep][2] : kNoSlot;
+      std::uint32_t slot_gone = lists[gone] ? lists[gone][2] : kNoSlot;
       if (slot_keep == kNoSlot) std::swap(slot_keep, slot_gone);  // reuse gone's slot, if it had one
       if (slot_gone != kNoSlot) free_slots.push_back(std::exchange(slot_gone, kNoSlot));
       if (slot_keep == kNoSlot) {
@@ -519,14 +585,15 @@ template <ClusterObjective O>
     {
       // Members: the longer list first, then the shorter (keep's first on a tie); vertices:
       // V(a) u added, ascending.
-      auto mk = members(keep), mg = members(gone);
+      Ids mk = keep == a ? ctx.a_triangles : ctx.b_triangles, mg = keep == a ? ctx.b_triangles : ctx.a_triangles;
       if (mk.size() < mg.size()) std::swap(mk, mg);
-      const auto va = verts(a);
+      const Ids va = ctx.a_vertices;
       const std::size_t nm_total = mk.size() + mg.size(), nv_total = va.size() + added.size();
-      auto block = std::make_unique_for_overwrite<std::uint32_t[]>(2 + nm_total + nv_total);
+      auto block = std::make_unique_for_overwrite<std::uint32_t[]>(kHead + nm_total + nv_total);
       block[0] = static_cast<std::uint32_t>(nm_total);
       block[1] = static_cast<std::uint32_t>(nv_total);
-      std::uint32_t* out = std::copy(mk.begin(), mk.end(), block.get() + 2);
+      block[2] = slot_keep;
+      std::uint32_t* out = std::copy(mk.begin(), mk.end(), block.get() + kHead);
       out = std::copy(mg.begin(), mg.end(), out);
       std::merge(va.begin(), va.end(), added.begin(), added.end(), out);
       for (std::uint32_t v : added) vstamp[v] = stamp;  // the stamps now mark the union
@@ -545,7 +612,7 @@ template <ClusterObjective O>
 
     // Adjacency, on the Boost graph: lo's arcs to hi and hi's arcs go; every other neighbour x of
     // hi becomes a neighbour of lo (shared lengths summed when x already was one).
-    const std::uint32_t tag = static_cast<std::uint32_t>(merges + 1);
+    const std::uint32_t tag = ++merges;  // entries pushed from here on are younger than this merge
     for (const auto arc : boost::make_iterator_range(boost::out_edges(lo, g)))
       mark[boost::target(arc, g)] = tag;
     boost::remove_edge(lo, hi, g);
@@ -575,28 +642,33 @@ template <ClusterObjective O>
     adj_total -= boost::out_degree(hi, g);
     boost::clear_out_edges(hi, g);
     g.out_edge_list(hi).shrink_to_fit();  // a dead cluster keeps no storage
-    alive[gone] = 0;
-    ++version[keep];
+    changed[gone] = kDead;
+    changed[keep] = merges;
     stamped = keep;  // the stamps mark V(keep) (see above)
-    stamped_version = version[keep];
+    stamped_changed = changed[keep];
     --alive_count;
     if (options.record_merges) run.merges.push_back({keep, gone, ev.score});
-    if (++merges % report_every == 0 && progress) progress(static_cast<double>(merges) / T);
+    if (merges % report_every == 0 && progress) progress(static_cast<double>(merges) / T);
 
     for (const auto arc : boost::make_iterator_range(boost::out_edges(keep, g))) {
       Entry e;
       if (entry_of(keep, static_cast<std::uint32_t>(boost::target(arc, g)), e)) heap.push(e);
     }
-    // Purge stale entries once the heap holds 1.5x the live pairs (memory O(live pairs)). After a
-    // purge at most the live pairs are left, so at least half as many pushes come before the next
-    // one: O(1) amortised per push.
+    // Purge stale entries once the heap holds 1.25x the live pairs (memory O(live pairs)). After a
+    // purge at most the live pairs are left, so at least a quarter as many pushes come before the
+    // next one: O(1) amortised per push.
     if (heap.size() > purge_above()) heap.purge([&](const Entry& e) { return !current(e); });
   }
 
   run.labels.assign(T, 0);
-  for (std::uint32_t c = 0; c < T; ++c)
-    if (alive[c])
-      for (std::uint32_t t : members(c)) run.labels[t] = c;
+  for (std::uint32_t c = 0; c < T; ++c) {
+    if (changed[c] == kDead) continue;
+    if (const std::uint32_t* l = lists[c].get()) {
+      for (std::uint32_t t : Ids(l + kHead, l[0])) run.labels[t] = c;
+    } else {
+      run.labels[c] = c;
+    }
+  }
   if (progress) progress(1.0);
   return run;
 }
