@@ -12,10 +12,12 @@
 #include <numeric>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <vector>
 
 #include <boost/graph/adjacency_list.hpp>
 
+#include "toolkit/clustering/growth.h"
 #include "toolkit/clustering/objectives.h"
 #include "toolkit/clustering/objectives/acc.h"
 #include "toolkit/clustering/objectives/gwh01.h"
@@ -321,6 +323,50 @@ TEST(ClusterTables, SumsInTheTablesPassEqualTheSeparatePasses) {
       });
     }
   }
+}
+
+// Lean tables store no areas, normals or neighbour lists; geometry_of makes the same bits as
+// the full tables hold (multi-chunk grids near and far from the origin, degenerate, tiny and
+// huge triangles), and the neighbour lists made alone equal the full tables' ones.
+TEST(ClusterTables, LeanTablesMakeTheSameBits) {
+  Mesh far = grid(230, 160, 0.3, 5);
+  {
+    std::vector<Vec3> p(far.positions().begin(), far.positions().end());
+    for (Vec3& q : p) q = 1e-3 * q + Vec3(3e6, -2e5, 7.0);
+    far = far.with_positions(std::move(p));
+  }
+  std::vector<Mesh> meshes = {far, degenerate_mix(), load("elephant.off")};
+  for (const double scale : {1e-150, 1e150}) {
+    std::vector<Vec3> p(meshes[2].positions().begin(), meshes[2].positions().end());
+    for (Vec3& q : p) q *= scale;
+    meshes.push_back(meshes[2].with_positions(std::move(p)));
+  }
+  for (const Mesh& m : meshes) {
+    const ClusterTables full = ClusterTables::build(m, /*with_edges=*/false, /*with_sums=*/true);
+    const ClusterTables lean = ClusterTables::build(m, /*with_edges=*/false, /*with_sums=*/true, /*lean=*/true);
+    EXPECT_FALSE(full.lean);
+    EXPECT_TRUE(lean.lean);
+    EXPECT_TRUE(lean.area.empty() && lean.normal.empty() && lean.neighbours.empty() && lean.neighbour_offsets.empty());
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(lean.avg_sphere_area), std::bit_cast<std::uint64_t>(full.avg_sphere_area));
+    for (std::uint32_t t = 0; t < full.triangle_count(); ++t) {
+      const TriangleGeometry g = lean.geometry_of(t), h = full.geometry_of(t);
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(g.area), std::bit_cast<std::uint64_t>(full.area[t])) << "triangle " << t;
+      for (int k = 0; k < 3; ++k)
+        ASSERT_EQ(std::bit_cast<std::uint64_t>(g.normal[k]), std::bit_cast<std::uint64_t>(full.normal[t][k]))
+            << "triangle " << t;
+      EXPECT_EQ(h.area, full.area[t]);
+      EXPECT_EQ(h.normal, full.normal[t]);
+    }
+    std::vector<std::uint32_t> offsets, neighbours;
+    build_neighbours(m.triangles(), m.vertex_count(), offsets, neighbours);
+    EXPECT_EQ(offsets, full.neighbour_offsets);
+    EXPECT_EQ(neighbours, full.neighbours);
+  }
+  // Growth reads them all the time and refuses lean tables.
+  const Mesh g = grid(4, 4, 0.1, 1);
+  const ClusterTables lean = ClusterTables::build(g, false, false, true);
+  NaiveObjective naive(lean, 5);
+  EXPECT_THROW((void)grow_clusters(lean, naive, GrowthOptions{}), std::logic_error);
 }
 
 TEST(ClusterTables, DegenerateTriangles) {

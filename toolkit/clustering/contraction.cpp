@@ -10,6 +10,9 @@
 #include <utility>
 #include <vector>
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <boost/pending/container_traits.hpp>
 
 #include "toolkit/clustering/small_arcs.h"
@@ -115,9 +118,10 @@ class EntryHeap {
     stamps_.pop_back();
     if (!keys_.empty()) sift_down(0);
   }
-  /// Removes every entry for which `stale` is true, then restores the heap (O(n)).
+  /// Removes every entry for which `stale` is true, then restores the heap (O(n)). The pages of
+  /// the storage beyond `room` entries go back to the system (release_beyond).
   template <class F>
-  void purge(F&& stale) {
+  void purge(F&& stale, std::size_t room) {
     std::size_t w = 0;
     for (std::size_t r = 0; r < keys_.size(); ++r) {
       const Entry e{keys_[r].score, keys_[r].pair, stamps_[r]};
@@ -128,6 +132,8 @@ class EntryHeap {
     keys_.resize(w);
     stamps_.resize(w);
     heapify();
+    release_beyond(keys_, room);
+    release_beyond(stamps_, room);
   }
 
  private:
@@ -137,6 +143,20 @@ class EntryHeap {
   };
   using Stamps = std::uint32_t;
   static bool below(const Key& x, const Key& y) { return ranks_below(x.score, x.pair, y.score, y.pair); }
+  /// The live pairs only decrease, and with them the heap after each purge: the whole pages of
+  /// v's storage past its first `room` elements (never written before the next purge) are
+  /// returned with madvise(MADV_DONTNEED), which keeps the reservation (a page written again
+  /// comes back zeroed). The queue's pages then make room for the merged clusters' summaries,
+  /// whose count peaks later (docs/scale.md, "Contraction in one run: the memory").
+  template <class V>
+  static void release_beyond(V& v, std::size_t room) {
+    if (room >= v.capacity()) return;
+    static const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+    const auto from = reinterpret_cast<std::uintptr_t>(v.data() + room);
+    const auto to = reinterpret_cast<std::uintptr_t>(v.data() + v.capacity());
+    const std::uintptr_t lo = (from + page - 1) / page * page, hi = to / page * page;
+    if (hi > lo) (void)madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_DONTNEED);
+  }
   void sift_up(std::size_t i) {
     const Key k = keys_[i];
     const Stamps st = stamps_[i];
@@ -336,14 +356,21 @@ template <ClusterObjective O>
   // ---- Adjacency: the dual graph (ClusterTables' CSR; the same pairs as build_dual_graph,
   // tested) as the Boost.Graph cluster graph, with 2 x the length of the manifold mesh edges
   // shared when the objective measures the boundary.
+  // Lean tables (ClusterTables::build lean) have no neighbour lists: they are made here for the
+  // graph and freed before the queue and the summaries take their room.
+  std::vector<std::uint32_t> own_offsets, own_neighbours;
+  if (tb.lean) build_neighbours(tb.triangles, tb.positions.size(), own_offsets, own_neighbours);
+  const std::vector<std::uint32_t>& nb_offsets = tb.lean ? own_offsets : tb.neighbour_offsets;
+  const std::vector<std::uint32_t>& nbrs = tb.lean ? own_neighbours : tb.neighbours;
   using Graph = ClusterGraph<O::kUsesBoundary>;
   Graph g(T);
   std::size_t adj_total = 0;  // arcs in g = 2 x live pairs
   for (std::uint32_t t = 0; t < T; ++t) {
+    const std::span<const std::uint32_t> ns(nbrs.data() + nb_offsets[t], nbrs.data() + nb_offsets[t + 1]);
     // Exactly the room for t's arcs (growth by doubling left room for four: heaptrack, docs/scale.md).
-    g.out_edge_list(t).reserve(tb.neighbours_of(t).size());
-    for (std::uint32_t u : tb.neighbours_of(t)) boost::add_edge(t, u, g);  // symmetric: both arcs
-    adj_total += tb.neighbours_of(t).size();
+    g.out_edge_list(t).reserve(ns.size());
+    for (std::uint32_t u : ns) boost::add_edge(t, u, g);  // symmetric: both arcs
+    adj_total += ns.size();
     if constexpr (O::kUsesBoundary) {
       std::uint32_t es[3];
       const int ne = tb.distinct_edges(t, es);
@@ -356,6 +383,8 @@ template <ClusterObjective O>
       }
     }
   }
+  std::vector<std::uint32_t>().swap(own_offsets);
+  std::vector<std::uint32_t>().swap(own_neighbours);
   // Non-manifold edges (valence >= 3) per cluster, and a union-find to count their triangles per
   // cluster (only needed by objectives that measure the boundary, and only on such meshes).
   std::vector<std::vector<std::uint32_t>> nm;
@@ -452,7 +481,8 @@ template <ClusterObjective O>
   // purged once the heap holds 1.25x the live pairs (below), so this capacity is never exceeded
   // (live pairs only decrease) and the heap is never copied to grow.
   auto purge_above = [&] { return adj_total / 2 + adj_total / 8 + 1024; };
-  heap.reserve(purge_above() + 65536);  // + the pushes of the merges before a purge
+  constexpr std::size_t kPushRoom = 65536;  // + the pushes of the merge before a purge
+  heap.reserve(purge_above() + kPushRoom);
   std::uint32_t merges = 0;  // merges done (the push time of the entries made now)
   auto make_entry = [&](std::uint32_t x, std::uint32_t y, double score, std::uint32_t key_kind) {
     const std::uint32_t lo = std::min(x, y), hi = std::max(x, y);
@@ -657,7 +687,7 @@ template <ClusterObjective O>
     // Purge stale entries once the heap holds 1.25x the live pairs (memory O(live pairs)). After a
     // purge at most the live pairs are left, so at least a quarter as many pushes come before the
     // next one: O(1) amortised per push.
-    if (heap.size() > purge_above()) heap.purge([&](const Entry& e) { return !current(e); });
+    if (heap.size() > purge_above()) heap.purge([&](const Entry& e) { return !current(e); }, purge_above() + kPushRoom);
   }
 
   run.labels.assign(T, 0);

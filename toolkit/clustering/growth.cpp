@@ -130,6 +130,11 @@ class StartPicker {
 template <ClusterObjective O>
 [[gnu::always_inline]] inline ClusterRun grow_impl(const ClusterTables& tb, O& objective, const GrowthOptions& options,
                                                    const ProgressFn& progress) {
+  // (Checked here, inside the instruction-set clone: GCC 12 compiles a call to a target_clones
+  // function as one that cannot throw, so a caller with a landing pad of its own terminates the
+  // program when the clone throws.)
+  if (tb.lean)  // growth reads the neighbour lists, areas and normals all the time
+    throw std::logic_error("grow_clusters: the tables were built lean (ClusterTables::build lean)");
   using Summary = typename O::Summary;
   using Evaluation = typename O::Evaluation;
   const std::uint32_t T = tb.triangle_count();

@@ -11,8 +11,6 @@
 
 namespace ptc {
 
-namespace {
-
 /// The distinct edge-neighbours of every triangle, ascending (ClusterTables::neighbours), without
 /// an edge map: a run of equal pairs in topology.h's SortedSides is one mesh edge, and its
 /// distinct triangles are pairwise neighbours (every pair, at any valence: the dual graph without
@@ -113,6 +111,8 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
   out.resize(w);
 }
 
+namespace {
+
 // Triangles [begin, end) of the tables' pass: area and normal, and with the sums the sum of their
 // minimal spheres' areas (in order) and their centroids' box. A function of its own so that it has
 // instruction-set clones (toolkit/core/isa.h).
@@ -125,9 +125,11 @@ void tables_chunk(ClusterTables& t, std::size_t begin, std::size_t end, bool wit
     if (i + kCornerPrefetchAhead < end) prefetch_corners(t.positions.data(), t.triangles[i + kCornerPrefetchAhead]);
     const Tri& f = t.triangles[i];
     const Vec3 &p0 = t.positions[f[0]], &p1 = t.positions[f[1]], &p2 = t.positions[f[2]];
-    const TriangleGeometry g = triangle_geometry(p0, p1, p2);
-    t.area[i] = g.area;
-    t.normal[i] = g.normal;
+    if (!t.lean) {
+      const TriangleGeometry g = triangle_geometry(p0, p1, p2);
+      t.area[i] = g.area;
+      t.normal[i] = g.normal;
+    }
     if (with_sums) {
       sum += triangle_sphere_area(p0, p1, p2);
       box.extend(triangle_centroid(p0, p1, p2));
@@ -138,14 +140,17 @@ void tables_chunk(ClusterTables& t, std::size_t begin, std::size_t end, bool wit
 
 }  // namespace
 
-ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges, bool with_sums) {
+ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges, bool with_sums, bool lean) {
   ClusterTables t;
   t.mesh = &mesh;
   t.positions = mesh.positions();
   t.triangles = mesh.triangles();
+  t.lean = lean;
   const std::size_t T = t.triangles.size();
-  t.area.resize(T);
-  t.normal.resize(T);
+  if (!lean) {
+    t.area.resize(T);
+    t.normal.resize(T);
+  }
   // Per triangle: area and normal, and with the sums its minimal sphere's area and its centroid.
   // In average_triangle_sphere_area's fixed chunks (each summed in order, then the chunks' sums in
   // order), so AvgSA is its value bit for bit; chunks run on the caller's threads.
@@ -153,7 +158,7 @@ ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges, bool with_
   const std::size_t chunks = (T + chunk - 1) / chunk;
   std::vector<double> sums(with_sums ? chunks : 0);
   std::vector<Box3> boxes(with_sums ? chunks : 0);
-  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+  if (!lean || with_sums) tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     tables_chunk(t, c * chunk, std::min(T, (c + 1) * chunk), with_sums, with_sums ? &sums[c] : nullptr,
                  with_sums ? &boxes[c] : nullptr);
   });
@@ -177,7 +182,7 @@ ClusterTables ClusterTables::build(const Mesh& mesh, bool with_edges, bool with_
     }
     t.mean_edge_length = E > 0 ? sum / static_cast<double>(E) : 0.0;
   }
-  build_neighbours(t.triangles, mesh.vertex_count(), t.neighbour_offsets, t.neighbours);
+  if (!lean) build_neighbours(t.triangles, mesh.vertex_count(), t.neighbour_offsets, t.neighbours);
   return t;
 }
 

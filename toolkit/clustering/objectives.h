@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "toolkit/core/types.h"
+#include "toolkit/geometry/triangle.h"
 #include "toolkit/mesh/mesh.h"
 #include "toolkit/mesh/topology.h"
 
@@ -69,9 +70,23 @@ struct ClusterTables {
   /// with_sums: AvgSA and the centroids' box too, in the same pass over the triangles as their
   /// areas and normals (each reads a triangle's three corners, which on a large mesh whose vertex
   /// numbers are far from its triangle order are cache misses; docs/scale.md, "Open (issue 15)").
-  [[nodiscard]] static ClusterTables build(const Mesh& mesh, bool with_edges = true, bool with_sums = false);
+  /// lean: without the per-triangle areas and normals (geometry_of makes them again, bit for bit)
+  /// and without the neighbour lists (build_neighbours makes them for a caller that needs them
+  /// once): 48 bytes a triangle less, for the contraction, which reads them rarely (areas and
+  /// normals) or once (neighbours; docs/scale.md, "Contraction in one run: the memory").
+  [[nodiscard]] static ClusterTables build(const Mesh& mesh, bool with_edges = true, bool with_sums = false,
+                                           bool lean = false);
+  bool lean = false;  ///< built lean: `area`, `normal` and the neighbour lists are empty
+
+  /// Area_i and n_i of triangle t (`area[t]`, `normal[t]`, or made again when lean).
+  [[nodiscard]] TriangleGeometry geometry_of(std::uint32_t t) const {
+    if (!lean) return {area[t], normal[t]};
+    const Tri& f = triangles[t];
+    return triangle_geometry(positions[f[0]], positions[f[1]], positions[f[2]]);
+  }
 
   [[nodiscard]] std::uint32_t triangle_count() const { return static_cast<std::uint32_t>(triangles.size()); }
+  /// Not when lean.
   [[nodiscard]] std::span<const std::uint32_t> neighbours_of(std::uint32_t t) const {
     return {neighbours.data() + neighbour_offsets[t], neighbours.data() + neighbour_offsets[t + 1]};
   }
@@ -84,6 +99,10 @@ struct ClusterTables {
   /// (gwh01.h's boundary rule). Requires edge lengths.
   [[nodiscard]] double triangle_perimeter(std::uint32_t t) const;
 };
+
+/// The tables' neighbour lists of `triangles` (ClusterTables::neighbour_offsets and neighbours).
+void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, std::vector<std::uint32_t>& offsets,
+                      std::vector<std::uint32_t>& out);
 
 /// Everything an objective may ask about one candidate merge A + B, computed once by the
 /// algorithm. Vertex lists are distinct vertex ids, ascending.

@@ -11,6 +11,11 @@
 /// differ. Measured on the growth at 13.3M triangles: docs/scale.md, "Open (issue 15)".
 /// Clang builds (the fuzzing build) and other architectures get the one baseline version, as does
 /// a build with -DPTC_NO_ISA_CLONES.
+/// Exceptions: GCC 12 compiles a call to such a function as one that cannot throw. A caller
+/// that only tail-calls it is fine; a caller with cleanups or a throw of its own gets no
+/// call-site entry for that call, and an exception from the clone then terminates the program
+/// (found when grow_clusters got a check of its own: Regions.StopsOnRequest... aborted). Put
+/// checks that throw inside the cloned function.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(PTC_NO_ISA_CLONES)
 #define PTC_HAS_ISA_CLONES 1
 #define PTC_ISA_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))

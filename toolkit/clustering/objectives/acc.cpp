@@ -171,10 +171,11 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
   const ClusterTables& tb = *tables_;
   Summary s;
   s.serial = std::uint64_t{t} + 1;  // the same for every summary of {t}: they describe one cluster
-  const Vec3& n = tb.normal[t];
+  const TriangleGeometry g = tb.geometry_of(t);
+  const Vec3& n = g.normal;
   if (!n.isZero(0.0)) {
     s.normal_sum = n;
-    s.area_normal_sum = tb.area[t] * n;
+    s.area_normal_sum = g.area * n;
     s.nonzero = 1;
     set_cone(s, n, 1.0);  // N_avg of any merge is recomputed from the sums (evaluate)
   }
@@ -320,7 +321,10 @@ PTC_ISA_CLONES
 double AccObjective::area_p_of(const Summary& part, std::span<const std::uint32_t> members, const Vec3& n) const {
   if (part.nonzero == 0) return 0.0;
   double s = 0;
-  for (std::uint32_t t : members) s += tables_->area[t] * std::abs(n.dot(tables_->normal[t]));
+  for (std::uint32_t t : members) {
+    const TriangleGeometry g = tables_->geometry_of(t);
+    s += g.area * std::abs(n.dot(g.normal));
+  }
   return s;
 }
 
@@ -459,8 +463,10 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
     recomputed = true;
     sort_members();
     ns = Vec3::Zero();
-    for (std::uint32_t t : scratch_ids_)
-      if (!tb.normal[t].isZero(0.0)) ns += tb.normal[t];
+    for (std::uint32_t t : scratch_ids_) {
+      const Vec3 nt = tb.geometry_of(t).normal;
+      if (!nt.isZero(0.0)) ns += nt;
+    }
     len = safe_norm(ns);  // the same sum and norm as average_normal
   }
   ev.normal_sum = ns;
@@ -472,8 +478,9 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
     scratch_normals_.clear();
     scratch_areas_.clear();
     for (std::uint32_t t : scratch_ids_) {
-      scratch_normals_.push_back(tb.normal[t]);
-      scratch_areas_.push_back(tb.area[t]);
+      const TriangleGeometry g = tb.geometry_of(t);
+      scratch_normals_.push_back(g.normal);
+      scratch_areas_.push_back(g.area);
     }
     const NormalAverage na = average_normal(scratch_normals_, scratch_areas_);
     ev.n_avg = na.n;
@@ -719,8 +726,10 @@ AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, co
   if (s.nonzero > 0 && !certified(s, ev.n_avg)) {  // rebuild the cone around N_avg (O(k), exact dots)
     double c = 1.0;
     for (auto members : {ctx.a_triangles, ctx.b_triangles})
-      for (std::uint32_t t : members)
-        if (!tables_->normal[t].isZero(0.0)) c = std::min(c, ev.n_avg.dot(tables_->normal[t]));
+      for (std::uint32_t t : members) {
+        const Vec3 nt = tables_->geometry_of(t).normal;
+        if (!nt.isZero(0.0)) c = std::min(c, ev.n_avg.dot(nt));
+      }
     set_cone(s, ev.n_avg, c - 1e-15);
   }
   return s;

@@ -28,8 +28,9 @@ Gwh01Objective::Summary Gwh01Objective::single(std::uint32_t t) const {
   s.origin_vertex = v[0];
   s.quadric = Quadric(tb.positions[v[0]]);
   for (int i = 0; i < nv; ++i) s.quadric.add(tb.positions[v[i]]);
-  const double a = tb.area[t];
-  const Vec3& n = tb.normal[t];
+  const TriangleGeometry g = tb.geometry_of(t);
+  const double a = g.area;
+  const Vec3& n = g.normal;
   s.ref = a * n;
   s.area = a;
   s.w = params_.weight == GwhWeight::Area ? a : std::sqrt(a);

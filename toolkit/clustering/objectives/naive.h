@@ -51,7 +51,7 @@ class NaiveObjective {
 
   [[nodiscard]] Summary single(std::uint32_t t) const {
     Summary s;
-    s.area = tables_->area[t];
+    s.area = tables_->geometry_of(t).area;
     for (std::uint32_t v : tables_->triangles[t]) s.box.extend(tables_->positions[v]);
     return s;
   }
