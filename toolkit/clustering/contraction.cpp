@@ -535,7 +535,9 @@ template <ClusterObjective O>
 
   // ---- Contract.
   const std::uint64_t report_every = std::max<std::uint64_t>(1, T / 256);
-  std::vector<std::uint32_t> mark(T, 0);  // mark[x] == merges (after this merge's count): x is a neighbour of lo
+  // During a merge, bit 30 of changed[x] marks the neighbours x of lo (push times stay below
+  // 2^30, and a neighbour is alive), which spares an array per cluster.
+  constexpr std::uint32_t kNeighbourOfLo = 0x40000000u;
   while (!heap.empty()) {
     if (options.target_clusters > 0 && alive_count <= options.target_clusters) break;
     const Entry top = heap.top();
@@ -642,16 +644,16 @@ template <ClusterObjective O>
 
     // Adjacency, on the Boost graph: lo's arcs to hi and hi's arcs go; every other neighbour x of
     // hi becomes a neighbour of lo (shared lengths summed when x already was one).
-    const std::uint32_t tag = ++merges;  // entries pushed from here on are younger than this merge
+    ++merges;  // entries pushed from here on are younger than this merge
     for (const auto arc : boost::make_iterator_range(boost::out_edges(lo, g)))
-      mark[boost::target(arc, g)] = tag;
+      changed[boost::target(arc, g)] |= kNeighbourOfLo;
     boost::remove_edge(lo, hi, g);
     --adj_total;
     for (const auto arc : boost::make_iterator_range(boost::out_edges(hi, g))) {
       const auto x = static_cast<std::uint32_t>(boost::target(arc, g));
       if (x == lo) continue;
       boost::remove_edge(x, hi, g);
-      if (mark[x] == tag) {  // already adjacent to lo
+      if (changed[x] & kNeighbourOfLo) {  // already adjacent to lo
         if constexpr (O::kUsesBoundary) {
           const double w = g[arc].shared2;
           g[boost::edge(lo, x, g).first].shared2 += w;
@@ -669,6 +671,8 @@ template <ClusterObjective O>
         ++adj_total;  // x -> hi went, lo -> x and x -> lo came
       }
     }
+    for (const auto arc : boost::make_iterator_range(boost::out_edges(lo, g)))
+      changed[boost::target(arc, g)] &= ~kNeighbourOfLo;
     adj_total -= boost::out_degree(hi, g);
     boost::clear_out_edges(hi, g);
     g.out_edge_list(hi).shrink_to_fit();  // a dead cluster keeps no storage
