@@ -322,6 +322,86 @@ TEST(Contraction, LeanTablesGiveTheSameMergesBitForBit) {
   EXPECT_GT(merges, 1000u);
 }
 
+// cluster_mesh's contraction tuning (no DOP bound) keeps merged summaries in AccObjective::Stored
+// form and makes them whole again; the default tuning (DOP bound) keeps them whole. Same merges,
+// same score bits, on the hard meshes and the elephant far away and tiny; and the stored form
+// made whole is the summary, field by field.
+TEST(Contraction, StoredSummariesGiveTheSameMergesBitForBit) {
+  std::vector<Named> meshes = generic_meshes();
+  const Mesh elephant = load("elephant.off");
+  meshes.push_back({"elephant", elephant});
+  meshes.push_back({"elephant far away", moved(elephant, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))});
+  meshes.push_back({"elephant at 1e-100", moved(elephant, 1e-100 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
+  std::size_t merges = 0;
+  for (const auto& [name, m] : meshes)
+    for (double k : {10.0, 50.0}) {
+      const ClusterTables tb = ClusterTables::build(m, false, false, true);
+      const Scenario s{ObjectiveKind::Acc, k, k};
+      ClusterRun runs[2];
+      for (int stored = 0; stored < 2; ++stored) {
+        ContractionOptions o;
+        o.record_merges = true;
+        AccObjective obj(tb, acc_params(m, s), stored ? AccTuning::for_contraction() : AccTuning{false, true});
+        EXPECT_EQ(obj.stores_whole(), stored == 1);
+        runs[stored] = contract_clusters(tb, obj, o);
+      }
+      const std::string what = std::string(name) + ", MaxCount " + std::to_string(k);
+      EXPECT_EQ(runs[0].labels, runs[1].labels) << what;
+      ASSERT_EQ(runs[0].merges.size(), runs[1].merges.size()) << what;
+      merges += runs[0].merges.size();
+      for (std::size_t i = 0; i < runs[0].merges.size(); ++i) {
+        EXPECT_EQ(runs[0].merges[i].into, runs[1].merges[i].into) << what << ", merge " << i;
+        EXPECT_EQ(runs[0].merges[i].from, runs[1].merges[i].from) << what << ", merge " << i;
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(runs[0].merges[i].score),
+                  std::bit_cast<std::uint64_t>(runs[1].merges[i].score))
+            << what << ", merge " << i;
+      }
+    }
+  EXPECT_GT(merges, 1000u);
+
+  // The round trip, on summaries merged along the elephant's triangle order.
+  const ClusterTables tb = ClusterTables::build(elephant);
+  AccObjective obj(tb, acc_params(elephant, Scenario{ObjectiveKind::Acc, 50, 50}), AccTuning::for_contraction());
+  AccObjective::Summary acc = obj.single(0);
+  for (std::uint32_t t = 1; t < 40; ++t) {
+    const AccObjective::Summary b = obj.single(t);
+    MergeContext ctx;  // members and vertices as the contraction passes them
+    std::vector<std::uint32_t> ma(t), va, vb, added, shared;
+    std::iota(ma.begin(), ma.end(), 0u);
+    for (std::uint32_t u = 0; u < t; ++u)
+      for (std::uint32_t v : elephant.triangles()[u]) va.push_back(v);
+    std::sort(va.begin(), va.end());
+    va.erase(std::unique(va.begin(), va.end()), va.end());
+    for (std::uint32_t v : elephant.triangles()[t]) (std::binary_search(va.begin(), va.end(), v) ? shared : added).push_back(v);
+    std::sort(added.begin(), added.end());
+    added.erase(std::unique(added.begin(), added.end()), added.end());
+    const std::uint32_t mb = t;
+    ctx.a_triangles = ma;
+    ctx.b_triangles = std::span<const std::uint32_t>(&mb, 1);
+    ctx.a_vertices = va;
+    ctx.added = added;
+    ctx.shared = shared;
+    ctx.vertex_count = static_cast<std::uint32_t>(va.size() + added.size());
+    const AccObjective::Evaluation ev = obj.evaluate(acc, b, ctx, Precision::Exact);
+    acc = obj.merge(acc, b, ctx, ev);
+    AccObjective::Summary back;
+    AccObjective::expand(AccObjective::stored(acc), back);
+    EXPECT_EQ(back.normal_sum, acc.normal_sum);
+    EXPECT_EQ(back.area_normal_sum, acc.area_normal_sum);
+    EXPECT_EQ(back.nonzero, acc.nonzero);
+    EXPECT_EQ(back.pending, acc.pending);
+    EXPECT_EQ(back.cone_axis, acc.cone_axis);
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(back.cone_cos), std::bit_cast<std::uint64_t>(acc.cone_cos));
+    EXPECT_EQ(back.sphere.center, acc.sphere.center);
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(back.sphere.radius), std::bit_cast<std::uint64_t>(acc.sphere.radius));
+    EXPECT_EQ(back.box.lo, acc.box.lo);
+    EXPECT_EQ(back.box.hi, acc.box.hi);
+    EXPECT_EQ(back.dop_lo, acc.dop_lo);
+    EXPECT_EQ(back.dop_hi, acc.dop_hi);
+    EXPECT_EQ(back.serial, acc.serial);
+  }
+}
+
 // The SupportBound level (ContractionOptions::support_level) changes which pairs wait, not which
 // merge: the same merges with the same score bits as the run that evaluates every popped pair
 // exactly at once, with fewer exact evaluations. On the hard meshes, the elephant far from the

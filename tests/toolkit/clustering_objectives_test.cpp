@@ -464,7 +464,7 @@ TEST(AccObjective, ExactScoreEqualsClusterAccFromScratch) {
   const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
   const ClusterTables tb = ClusterTables::build(m);
   for (SphereMethod sm : {SphereMethod::Cgal, SphereMethod::Ritter, SphereMethod::Epos26, SphereMethod::Exact})
-  for (const AccTuning& tuning : {AccTuning::for_contraction(), AccTuning::for_growth()}) {
+  for (const AccTuning& tuning : {AccTuning::for_contraction(), AccTuning::for_growth(), AccTuning{false, true}}) {
     const ClusterParams p = acc_params(m, 40, 20, sm);
     AccObjective o(tb, p, tuning);
     std::mt19937_64 rng(42);
@@ -614,7 +614,7 @@ TEST(AccObjective, DopBoundIsABoundWhereItIsTight) {
       const Mesh m(std::vector<Tri>{{0, 2, 3}, {1, 3, 2}}, std::move(p));
       const EdgeMap em = EdgeMap::build(m.triangles(), m.vertex_count());
       const ClusterTables tb = ClusterTables::build(m);
-      AccObjective o(tb, acc_params(m, 50, 50), AccTuning::for_contraction());
+      AccObjective o(tb, acc_params(m, 50, 50), AccTuning{.vertex_memo = false, .dop_bound = true});
       Candidate cand;
       make_candidate(m, em, {0}, {1}, cand);
       const auto exact = o.evaluate(o.single(0), o.single(1), cand.ctx, Precision::Exact);
@@ -672,7 +672,7 @@ TEST(AccObjective, DopEndsAreTheNearestFloatsInside) {
   params.max_count = 50;
   params.max_size = 50;
   params.avg_sa = 1.0;
-  AccObjective o(tb, params, AccTuning::for_contraction());
+  AccObjective o(tb, params, AccTuning{.vertex_memo = false, .dop_bound = true});
   auto bits = [](float f) { return std::bit_cast<std::uint32_t>(f); };
   int stepped = 0;
   for (std::uint32_t t = 0; t < m.triangle_count(); ++t) {

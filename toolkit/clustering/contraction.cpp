@@ -211,6 +211,18 @@ class SlotStore {
   std::uint32_t size_ = 0;
 };
 
+/// What the contraction keeps of a merged cluster's summary when the objective says it keeps it
+/// whole (stores_whole()): O::Stored where the objective has one, else the summary itself.
+template <class O>
+struct StoredOf {
+  using type = typename O::Summary;
+};
+template <class O>
+  requires requires { typename O::Stored; }
+struct StoredOf<O> {
+  using type = typename O::Stored;
+};
+
 /// Edge property of the cluster graph for objectives that measure the boundary: 2 x the length
 /// of the manifold mesh edges the two clusters share (kept equal on both arcs of a pair).
 struct SharedLength {
@@ -305,16 +317,33 @@ template <ClusterObjective O>
   // summary (its 26-DOP rounded to floats, its box) costs more than a copy. One per triangle
   // would be 3.4 GB at 13M triangles (256 bytes each). The pair in use never shares a cache entry
   // (pair_summaries); the other of two colliding singletons goes to the scratch summary.
+  // A merged summary is kept whole, or in the objective's smaller Stored form when that keeps it
+  // whole (Acc without the DOP bound: 176 bytes instead of 256; made whole again in `expanded`,
+  // one per role of pair_summaries).
   constexpr std::uint32_t kNoSlot = 0xffffffffu;
   std::vector<std::uint32_t> free_slots;
-  SlotStore<Summary> merged;
+  constexpr bool kHasStored = requires { typename O::Stored; };
+  bool use_stored = false;
+  if constexpr (kHasStored) use_stored = objective.stores_whole();
+  SlotStore<Summary> merged;                           // unless use_stored
+  SlotStore<typename StoredOf<O>::type> merged_stored;  // if use_stored
+  Summary expanded[2];
   constexpr int kSingleCacheBits = 10;  // 1024 summaries (256 KiB for Acc)
   std::vector<Summary> single_cache(std::size_t{1} << kSingleCacheBits);
   std::vector<std::uint32_t> single_tag(single_cache.size(), kNoSlot);
   Summary scratch;
-  // The summary of cluster c; `pinned` is a cache entry that must not be overwritten (in use).
-  auto summary_ptr = [&](std::uint32_t c, std::size_t pinned) -> std::pair<const Summary*, std::size_t> {
-    if (const std::uint32_t* l = lists[c].get()) return {&merged[l[2]], ~std::size_t{0}};
+  // The summary of cluster c; `pinned` is a cache entry that must not be overwritten (in use);
+  // `role` picks the buffer of a stored summary made whole.
+  auto summary_ptr = [&](std::uint32_t c, std::size_t pinned, int role) -> std::pair<const Summary*, std::size_t> {
+    if (const std::uint32_t* l = lists[c].get()) {
+      if constexpr (kHasStored) {
+        if (use_stored) {
+          O::expand(merged_stored[l[2]], expanded[role]);
+          return {&expanded[role], ~std::size_t{0}};
+        }
+      }
+      return {&merged[l[2]], ~std::size_t{0}};
+    }
     const std::size_t h = (c * 2654435761u) >> (32 - kSingleCacheBits);
     if (single_tag[h] == c) return {&single_cache[h], h};
     if (h == pinned) {
@@ -326,8 +355,8 @@ template <ClusterObjective O>
     return {&single_cache[h], h};
   };
   auto pair_summaries = [&](std::uint32_t a, std::uint32_t b) -> std::pair<const Summary&, const Summary&> {
-    const auto [sa, ha] = summary_ptr(a, ~std::size_t{0});
-    const Summary* sb = summary_ptr(b, ha).first;
+    const auto [sa, ha] = summary_ptr(a, ~std::size_t{0}, 0);
+    const Summary* sb = summary_ptr(b, ha, 1).first;
     return {*sa, *sb};
   };
   // The member and vertex lists of cluster c; a singleton's are written into `s`, which must
@@ -606,13 +635,18 @@ template <ClusterObjective O>
       if (slot_gone != kNoSlot) free_slots.push_back(std::exchange(slot_gone, kNoSlot));
       if (slot_keep == kNoSlot) {
         if (free_slots.empty()) {
-          slot_keep = merged.add();
+          slot_keep = use_stored ? merged_stored.add() : merged.add();
         } else {
           slot_keep = free_slots.back();
           free_slots.pop_back();
         }
       }
-      merged[slot_keep] = std::move(m);
+      if constexpr (kHasStored) {
+        if (use_stored) merged_stored[slot_keep] = O::stored(m);
+        else merged[slot_keep] = std::move(m);
+      } else {
+        merged[slot_keep] = std::move(m);
+      }
     }
     {
       // Members: the longer list first, then the shorter (keep's first on a tie); vertices:

@@ -182,7 +182,7 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
   s.dop_lo.fill(std::numeric_limits<float>::infinity());
   s.dop_hi.fill(-std::numeric_limits<float>::infinity());
   s.box = triangle_box(t);
-  if (!tuning_.dop_bound) {  // growth: the box only
+  if (!tuning_.dop_bound) {  // growth and the contraction: the box only
     s.pending = t;
     return s;
   }

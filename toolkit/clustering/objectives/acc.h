@@ -72,6 +72,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -98,7 +99,10 @@ struct AccTuning {
   bool dop_bound = true;
 
   [[nodiscard]] static AccTuning for_growth() { return {true, false}; }
-  [[nodiscard]] static AccTuning for_contraction() { return {false, true}; }
+  /// The contraction without the DOP: its SupportBound level leaves the DOP about 6% of the time
+  /// at 832k, and without it a merged cluster's summary is kept in 176 bytes instead of 256
+  /// (AccObjective::Stored; docs/scale.md, "Contraction in one run: the memory").
+  [[nodiscard]] static AccTuning for_contraction() { return {false, false}; }
 };
 
 class AccObjective {
@@ -140,6 +144,37 @@ class AccObjective {
     /// same cluster), unique for a merged one (T + 1 on).
     std::uint64_t serial = 0;
   };
+  /// A summary without its 26-DOP, for a tuning without AccTuning::dop_bound, where the DOP is
+  /// always empty: the contraction keeps its merged clusters' summaries so (176 bytes).
+  struct Stored {
+    Vec3 normal_sum, area_normal_sum;
+    std::uint32_t nonzero, pending;
+    Vec3 cone_axis;
+    double cone_cos;
+    Sphere sphere;
+    Box3 box;
+    std::uint64_t serial;
+  };
+  /// True when stored() and expand() keep a summary whole (no DOP bound in the tuning).
+  [[nodiscard]] bool stores_whole() const { return !tuning_.dop_bound; }
+  [[nodiscard]] static Stored stored(const Summary& s) {
+    return {s.normal_sum, s.area_normal_sum, s.nonzero, s.pending, s.cone_axis, s.cone_cos, s.sphere, s.box, s.serial};
+  }
+  /// The summary `stored` was made from (when stores_whole()): its fields, and the empty DOP.
+  static void expand(const Stored& st, Summary& s) {
+    s.normal_sum = st.normal_sum;
+    s.area_normal_sum = st.area_normal_sum;
+    s.nonzero = st.nonzero;
+    s.pending = st.pending;
+    s.cone_axis = st.cone_axis;
+    s.cone_cos = st.cone_cos;
+    s.sphere = st.sphere;
+    s.box = st.box;
+    s.dop_lo.fill(std::numeric_limits<float>::infinity());
+    s.dop_hi.fill(-std::numeric_limits<float>::infinity());
+    s.serial = st.serial;
+  }
+
   struct Evaluation : ScoreBase {
     Sphere sphere;                ///< S(A u B) (exact evaluations only)
     Box3 box;                     ///< box of A u B
