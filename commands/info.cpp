@@ -31,7 +31,7 @@ struct MemoryModel {
 };
 constexpr MemoryModel kMemoryModels[] = {
     {"cluster_growth", 32, 102, true},       // ptc cluster --method growth: 52 MiB at 208k, 1329 MiB at 13.3M
-    {"cluster_contraction", 40, 288, true},  // ptc cluster --method contraction: 95 MiB at 208k, 3698 MiB at 13.3M
+    {"cluster_contraction", 40, 142, true},  // ptc cluster --method contraction: 66 MiB at 208k, 1832 MiB at 13.3M
     {"trace", 40, 215, false},               // ptc trace MESH --clusters DIR --frame 0: 703 MiB at 3.3M
     {"bench", 60, 730, false},               // ptc bench MESH --frames 0:2 (Embree beside): 2397 MiB at 3.3M, 94-100 MiB at 52k
 };

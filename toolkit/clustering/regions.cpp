@@ -106,7 +106,8 @@ Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, dou
         Scratch& sc = scratch.local();
         if (sc.seen.empty()) sc.seen.assign(mesh.vertex_count(), 0), sc.local.resize(mesh.vertex_count());
         const Mesh sub = region_mesh(mesh, members[r], r + 1, sc.seen, sc.local);
-        const ClusterTables tables = ClusterTables::build(sub, /*with_edges=*/false);
+        const ClusterTables tables =
+            ClusterTables::build(sub, /*with_edges=*/false, false, /*lean=*/config.method == ClusterMethod::Contraction);
         const ProgressFn region_progress = [&, r](double f) { report(r, f); };
         labels[r] = detail::run_objective(tables, config, avg_sa, region_progress).labels;
       });
