@@ -112,6 +112,36 @@ TEST_F(TraceClusters, DefectsNameFileLineAndElement) {
   }
 }
 
+// The file is read in blocks of 1 MiB: rows that straddle blocks, a row longer than a block (its
+// cluster id after 3 MiB of spaces), no final newline, a final empty line, two of them.
+TEST_F(TraceClusters, RowsAcrossBlocksAndLongRows) {
+  const int n = 150000;  // 300,000 triangles: about 4 MB of rows, so rows straddle the blocks
+  const Mesh m = strip(n);
+  std::string csv = "triangle_id,cluster_id\n";
+  std::vector<std::uint32_t> want(2 * n);
+  for (int t = 0; t < 2 * n; ++t) {
+    want[t] = static_cast<std::uint32_t>(t / 10);  // runs of 10 neighbours along the strip
+    csv += std::to_string(t) + "," + std::to_string(1000 + t / 10) + "\n";
+  }
+  const auto pos = csv.find("\n77777,") + 1;  // one row padded beyond a block
+  csv.insert(csv.find(',', pos) + 1, std::string(3 << 20, ' '));
+  ptc::Clustering c = ptc::read_clusters(write(csv), m);
+  EXPECT_EQ(c.cluster_count(), static_cast<std::size_t>(2 * n / 10));
+  EXPECT_EQ(c.cluster_of_triangle(), want);
+  csv.pop_back();  // no final newline
+  c = ptc::read_clusters(write(csv), m);
+  EXPECT_EQ(c.cluster_of_triangle(), want);
+  EXPECT_EQ(ptc::read_clusters(write(csv + "\n\n"), m).cluster_of_triangle(), want);  // one final empty line
+  const std::string e = error(csv + "\n\n\n", m);
+  EXPECT_NE(e.find("line " + std::to_string(2 * n + 2) + ": empty line"), std::string::npos) << e;
+  // An error far into the file names its line, and a duplicate its first line.
+  std::string dup = csv;
+  dup.replace(dup.rfind("\n") + 1, std::string::npos, "5,1000");
+  const std::string d = error(dup, m);
+  EXPECT_NE(d.find("line " + std::to_string(2 * n + 1) + ": triangle 5: listed twice (first on line 7)"), std::string::npos)
+      << d;
+}
+
 TEST_F(TraceClusters, ClustersOfAnotherMeshWithTheSameTriangleCountAreRefused) {
   // Same triangle count, other topology: triangle order reversed pairs up non-neighbours.
   const Mesh m = strip(4);  // 8 triangles
