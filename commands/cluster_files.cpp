@@ -69,7 +69,7 @@ void for_each_line(std::istream& in, F&& on_line) {
       p = e + 1;
     }
   }
-  if (!carry.empty()) on_line(++number, std::string_view(carry));
+  if (!carry.empty() && !in.bad()) on_line(++number, std::string_view(carry));  // (a failed read: no line)
 }
 
 Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
@@ -82,8 +82,10 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
   const std::size_t T = mesh.triangle_count();
   std::vector<std::uint32_t> label(T, 0);
   std::vector<std::uint8_t> listed(T, 0);  // each triangle's row seen (its line: line_of, on errors only)
-  // The line of triangle t's first row, for the error messages: the file read again.
+  // The line of triangle t's first row, for the error messages: the file read again (a regular
+  // file only: a pipe cannot be read twice); 0 when not found again.
   auto line_of = [&](std::size_t t) -> std::uint64_t {
+    if (!std::filesystem::is_regular_file(file, ec)) return 0;
     std::ifstream again(file, std::ios::binary);
     std::uint64_t found = 0;
     for_each_line(again, [&](std::uint64_t ln, std::string_view l) {
@@ -122,7 +124,10 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
                        "out of range: the mesh has " + std::to_string(T) + " triangles (clusters of another mesh?)");
     if (listed[t])
       throw InputError(name, line_loc(line), "triangle " + std::to_string(t),
-                       "listed twice (first on line " + std::to_string(line_of(t)) + ")");
+                       "listed twice (first on " + [&] {
+                         const std::uint64_t first = line_of(t);
+                         return first ? "line " + std::to_string(first) : std::string("an earlier line");
+                       }() + ")");
     listed[t] = 1;
     label[t] = static_cast<std::uint32_t>(c);
     ++rows;
@@ -193,7 +198,8 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
     if (k != 0xffffffffu) {
       const auto tris = c.triangles_of(k);
       const std::uint32_t bad = unjoined;
-      throw InputError(name, line_loc(line_of(bad)), "triangle " + std::to_string(bad),
+      const std::uint64_t bad_line = line_of(bad);
+      throw InputError(name, bad_line ? line_loc(bad_line) : std::string(), "triangle " + std::to_string(bad),
                        "cluster " + std::to_string(label[bad]) +
                            " is not connected through shared sides, not even by coincident corners (triangle " +
                            std::to_string(tris[0]) + " of the same cluster cannot be reached; clusters of another mesh?)");

@@ -142,6 +142,23 @@ TEST_F(TraceClusters, RowsAcrossBlocksAndLongRows) {
       << d;
 }
 
+// CRLF rows whose '\r' ends one block and '\n' starts the next; three triangles on one edge
+// (labels A, B, A: the two A triangles are connected through it).
+TEST_F(TraceClusters, CrlfAcrossABlockAndANonManifoldEdge) {
+  const Mesh m = strip(2);
+  std::string csv = "triangle_id,cluster_id\r\n0,7\r\n1,7\r\n2,9\r\n";
+  const std::string last = "3,9";
+  csv += last + std::string((1u << 20) - 1 - csv.size() - last.size(), ' ') + "\r\n";  // '\r' at 2^20 - 1
+  ASSERT_EQ(csv[(1u << 20) - 1], '\r');
+  EXPECT_EQ(ptc::read_clusters(write(csv), m).cluster_of_triangle(), (std::vector<std::uint32_t>{0, 0, 1, 1}));
+
+  // Vertices 0 and 1 carry three triangles (a book of three pages); pages 0 and 2 form one cluster.
+  const Mesh book(std::vector<ptc::Tri>{{0, 1, 2}, {1, 0, 3}, {0, 1, 4}},
+                  std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}});
+  EXPECT_EQ(ptc::read_clusters(write("triangle_id,cluster_id\n0,5\n1,6\n2,5\n"), book).cluster_of_triangle(),
+            (std::vector<std::uint32_t>{0, 1, 0}));
+}
+
 TEST_F(TraceClusters, ClustersOfAnotherMeshWithTheSameTriangleCountAreRefused) {
   // Same triangle count, other topology: triangle order reversed pairs up non-neighbours.
   const Mesh m = strip(4);  // 8 triangles

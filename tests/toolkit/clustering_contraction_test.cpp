@@ -328,6 +328,8 @@ TEST(Contraction, LeanTablesGiveTheSameMergesBitForBit) {
 // made whole is the summary, field by field.
 TEST(Contraction, StoredSummariesGiveTheSameMergesBitForBit) {
   std::vector<Named> meshes = generic_meshes();
+  meshes.push_back({"flat grid (ties)", grid(12, 9)});  // unjittered: many equal scores
+  meshes.push_back({"sphere patch (ties)", sphere_patch(14, 10)});
   const Mesh elephant = load("elephant.off");
   meshes.push_back({"elephant", elephant});
   meshes.push_back({"elephant far away", moved(elephant, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))});
@@ -400,6 +402,55 @@ TEST(Contraction, StoredSummariesGiveTheSameMergesBitForBit) {
     EXPECT_EQ(back.dop_hi, acc.dop_hi);
     EXPECT_EQ(back.serial, acc.serial);
   }
+}
+
+// Purges after nearly every merge, each handing back the queue's pages past the next purge's room
+// (ContractionOptions::purge_often): the same merges with the same score bits, for every
+// objective, on meshes with ties and the elephant.
+TEST(Contraction, PurgingOftenGivesTheSameMergesBitForBit) {
+  const std::vector<Named> meshes = {{"flat grid (ties)", grid(12, 9)},
+                                     {"sphere patch (ties)", sphere_patch(14, 10)},
+                                     {"non-manifold fan", edge_fan(7)},
+                                     {"elephant", load("elephant.off")}};
+  for (const auto& [name, m] : meshes)
+    for (const Scenario& s : {Scenario{ObjectiveKind::Acc, 20, 20}, Scenario{ObjectiveKind::Naive, 8, 0},
+                              Scenario{ObjectiveKind::Gwh01, 12, 0}}) {
+      const ClusterTables tb = ClusterTables::build(m, s.kind == ObjectiveKind::Gwh01, false, true);
+      ClusterRun runs[2];
+      for (int often = 0; often < 2; ++often) {
+        ContractionOptions o;
+        o.record_merges = true;
+        o.purge_often = often == 1;
+        switch (s.kind) {
+          case ObjectiveKind::Acc: {
+            AccObjective obj(tb, acc_params(m, s), AccTuning::for_contraction());
+            runs[often] = contract_clusters(tb, obj, o);
+            break;
+          }
+          case ObjectiveKind::Naive: {
+            NaiveObjective obj(tb, static_cast<std::uint32_t>(s.max_count));
+            runs[often] = contract_clusters(tb, obj, o);
+            break;
+          }
+          case ObjectiveKind::Gwh01: {
+            Gwh01Objective obj(tb, static_cast<std::uint32_t>(s.max_count), s.gwh);
+            runs[often] = contract_clusters(tb, obj, o);
+            break;
+          }
+        }
+      }
+      const std::string what = std::string(name) + ", " + std::string(to_string(s.kind));
+      EXPECT_EQ(runs[0].labels, runs[1].labels) << what;
+      ASSERT_EQ(runs[0].merges.size(), runs[1].merges.size()) << what;
+      EXPECT_GT(runs[0].merges.size(), 4u) << what;
+      for (std::size_t i = 0; i < runs[0].merges.size(); ++i) {
+        EXPECT_EQ(runs[0].merges[i].into, runs[1].merges[i].into) << what << ", merge " << i;
+        EXPECT_EQ(runs[0].merges[i].from, runs[1].merges[i].from) << what << ", merge " << i;
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(runs[0].merges[i].score),
+                  std::bit_cast<std::uint64_t>(runs[1].merges[i].score))
+            << what << ", merge " << i;
+      }
+    }
 }
 
 // The SupportBound level (ContractionOptions::support_level) changes which pairs wait, not which

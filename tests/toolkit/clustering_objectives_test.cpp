@@ -349,13 +349,11 @@ TEST(ClusterTables, LeanTablesMakeTheSameBits) {
     EXPECT_TRUE(lean.area.empty() && lean.normal.empty() && lean.neighbours.empty() && lean.neighbour_offsets.empty());
     EXPECT_EQ(std::bit_cast<std::uint64_t>(lean.avg_sphere_area), std::bit_cast<std::uint64_t>(full.avg_sphere_area));
     for (std::uint32_t t = 0; t < full.triangle_count(); ++t) {
-      const TriangleGeometry g = lean.geometry_of(t), h = full.geometry_of(t);
+      const TriangleGeometry g = lean.geometry_of(t);
       ASSERT_EQ(std::bit_cast<std::uint64_t>(g.area), std::bit_cast<std::uint64_t>(full.area[t])) << "triangle " << t;
       for (int k = 0; k < 3; ++k)
         ASSERT_EQ(std::bit_cast<std::uint64_t>(g.normal[k]), std::bit_cast<std::uint64_t>(full.normal[t][k]))
             << "triangle " << t;
-      EXPECT_EQ(h.area, full.area[t]);
-      EXPECT_EQ(h.normal, full.normal[t]);
     }
     std::vector<std::uint32_t> offsets, neighbours;
     build_neighbours(m.triangles(), m.vertex_count(), offsets, neighbours);
@@ -367,6 +365,14 @@ TEST(ClusterTables, LeanTablesMakeTheSameBits) {
   const ClusterTables lean = ClusterTables::build(g, false, false, true);
   NaiveObjective naive(lean, 5);
   EXPECT_THROW((void)grow_clusters(lean, naive, GrowthOptions{}), std::logic_error);
+  // Acc's growth runs in an instruction-set clone: the exception leaves it without ending the
+  // program (isa.h: GCC 12 compiles calls to clones as calls that cannot throw).
+  ClusterParams params;
+  params.max_count = 10;
+  params.max_size = 10;
+  params.avg_sa = 1.0;
+  AccObjective acc(lean, params, AccTuning::for_growth());
+  EXPECT_THROW((void)grow_clusters(lean, acc, GrowthOptions{}), std::logic_error);
 }
 
 TEST(ClusterTables, DegenerateTriangles) {

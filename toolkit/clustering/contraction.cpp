@@ -150,6 +150,7 @@ class EntryHeap {
   /// whose count peaks later (docs/scale.md, "Contraction in one run: the memory").
   template <class V>
   static void release_beyond(V& v, std::size_t room) {
+    room = std::max(room, v.size());  // (never the entries in use)
     if (room >= v.capacity()) return;
     static const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
     const auto from = reinterpret_cast<std::uintptr_t>(v.data() + room);
@@ -248,7 +249,7 @@ template <class Vertex>
 class stored_edge_property<Vertex, ptc::NoEdgeData> {
  public:
   using property_type = ptc::NoEdgeData;
-  stored_edge_property() = default;
+  stored_edge_property() = default;  // trivial (SmallArcs keeps arcs in a union)
   stored_edge_property(Vertex target, const ptc::NoEdgeData& = {}) : target_(static_cast<std::uint32_t>(target)) {}
   [[nodiscard]] Vertex get_target() const { return target_; }
   ptc::NoEdgeData& get_property() { return none_; }
@@ -257,7 +258,7 @@ class stored_edge_property<Vertex, ptc::NoEdgeData> {
   bool operator<(const stored_edge_property& x) const { return target_ < x.target_; }
 
  private:
-  std::uint32_t target_ = 0;
+  std::uint32_t target_;
   static inline ptc::NoEdgeData none_{};
 };
 }  // namespace boost::detail
@@ -509,9 +510,9 @@ template <ClusterObjective O>
   // Live pairs = adj_total / 2, and a live pair has at most one current entry; stale entries are
   // purged once the heap holds 1.25x the live pairs (below), so this capacity is never exceeded
   // (live pairs only decrease) and the heap is never copied to grow.
-  auto purge_above = [&] { return adj_total / 2 + adj_total / 8 + 1024; };
-  constexpr std::size_t kPushRoom = 65536;  // + the pushes of the merge before a purge
-  heap.reserve(purge_above() + kPushRoom);
+  auto purge_above = [&] { return options.purge_often ? adj_total / 2 + 8 : adj_total / 2 + adj_total / 8 + 1024; };
+  const std::size_t push_room = options.purge_often ? 8 : 65536;  // + the pushes of the merge before a purge
+  heap.reserve(purge_above() + push_room);
   std::uint32_t merges = 0;  // merges done (the push time of the entries made now)
   auto make_entry = [&](std::uint32_t x, std::uint32_t y, double score, std::uint32_t key_kind) {
     const std::uint32_t lo = std::min(x, y), hi = std::max(x, y);
@@ -725,7 +726,7 @@ template <ClusterObjective O>
     // Purge stale entries once the heap holds 1.25x the live pairs (memory O(live pairs)). After a
     // purge at most the live pairs are left, so at least a quarter as many pushes come before the
     // next one: O(1) amortised per push.
-    if (heap.size() > purge_above()) heap.purge([&](const Entry& e) { return !current(e); }, purge_above() + kPushRoom);
+    if (heap.size() > purge_above()) heap.purge([&](const Entry& e) { return !current(e); }, purge_above() + push_room);
   }
 
   run.labels.assign(T, 0);

@@ -83,11 +83,15 @@ struct ContractionOptions {
   /// evaluation (docs/scale.md, "Contraction time on one thread"). The same merges either way;
   /// false: the exact evaluation at once (the reference in the tests).
   bool support_level = true;
+  /// Purge the queue's stale entries as soon as it holds 8 more entries than live pairs (instead
+  /// of 1.25x the live pairs, with 1024 of slack), and hand back every page past 8 more: the same
+  /// merges, with the purges and the page release run thousands of times (for the tests).
+  bool purge_often = false;
 };
 
 /// Contracts the dual graph. Labels are the clusters' smallest triangle ids. Deterministic.
 /// Empty mesh: empty labels. Progress: merges done / triangles (the final count is not known).
-/// At most 2^30 - 1 triangles (the queue's version stamps), else std::invalid_argument.
+/// At most 2^30 - 1 triangles (the queue's push-time stamps), else std::invalid_argument.
 template <ClusterObjective O>
 [[nodiscard]] ClusterRun contract_clusters(const ClusterTables& tables, O& objective,
                                            const ContractionOptions& options = {}, const ProgressFn& progress = {});

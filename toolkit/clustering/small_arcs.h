@@ -19,7 +19,8 @@ namespace ptc {
 /// size, begin/end), plus reserve and shrink_to_fit.
 template <class T>
 class SmallArcs {
-  static_assert(sizeof(T) == 4 && std::is_trivially_copyable_v<T>, "4-byte trivially copyable arcs");
+  static_assert(sizeof(T) == 4 && std::is_trivially_copyable_v<T> && std::is_trivially_default_constructible_v<T>,
+                "4-byte trivial arcs (assigning one in place begins its lifetime in the union)");
 
  public:
   using value_type = T;
@@ -32,10 +33,7 @@ class SmallArcs {
 
   SmallArcs() = default;
   SmallArcs(const SmallArcs& o) { assign(o.begin(), o.size()); }
-  SmallArcs(SmallArcs&& o) noexcept : size_(o.size_) {
-    std::memcpy(words_, o.words_, sizeof words_);
-    o.size_ = 0;
-  }
+  SmallArcs(SmallArcs&& o) noexcept : st_(o.st_), size_(o.size_) { o.size_ = 0; }
   SmallArcs& operator=(const SmallArcs& o) {
     if (this != &o) {
       release();
@@ -46,7 +44,7 @@ class SmallArcs {
   SmallArcs& operator=(SmallArcs&& o) noexcept {
     if (this != &o) {
       release();
-      std::memcpy(words_, o.words_, sizeof words_);
+      st_ = o.st_;
       size_ = o.size_;
       o.size_ = 0;
     }
@@ -56,17 +54,18 @@ class SmallArcs {
 
   [[nodiscard]] std::size_t size() const { return size_ & ~kHeap; }
   [[nodiscard]] bool empty() const { return size() == 0; }
-  [[nodiscard]] std::size_t capacity() const { return heap() ? words_[2] : kInline; }
+  [[nodiscard]] std::size_t capacity() const { return heap() ? st_.heap.cap : kInline; }
   T* begin() { return data(); }
   T* end() { return data() + size(); }
   const T* begin() const { return data(); }
   const T* end() const { return data() + size(); }
 
   void push_back(const T& x) {
+    const T v = x;  // (x may be an element of this list, which reserve frees)
     const std::size_t n = size();
     // Grows by about half; 4 * cap + 8 a multiple of 16 (malloc's chunks): 6, 14, 26, 42, ...
     if (n == capacity()) reserve(n < 6 ? 6 : ((n + n / 2 + 3) & ~std::size_t{3}) + 2);
-    data()[n] = x;
+    data()[n] = v;
     ++size_;
   }
   iterator erase(iterator first, iterator last) {
@@ -89,10 +88,10 @@ class SmallArcs {
   /// Back in place when the arcs fit (a dead cluster has none), else a block of exactly size().
   void shrink_to_fit() {
     const std::size_t n = size();
-    if (!heap() || n == words_[2]) return;
-    T* old = heap_ptr();
+    if (!heap() || n == st_.heap.cap) return;
+    T* old = st_.heap.ptr;
     if (n <= kInline) {
-      std::memcpy(words_, old, sizeof(T) * n);
+      std::memcpy(st_.inl, old, sizeof(T) * n);
       size_ = static_cast<std::uint32_t>(n);
     } else {
       T* block = static_cast<T*>(::operator new(sizeof(T) * n));
@@ -106,19 +105,14 @@ class SmallArcs {
   static constexpr std::uint32_t kHeap = 0x80000000u;
   static constexpr std::size_t kInline = 3;
   [[nodiscard]] bool heap() const { return (size_ & kHeap) != 0; }
-  [[nodiscard]] T* heap_ptr() const {
-    T* p;
-    std::memcpy(&p, words_, sizeof p);
-    return p;
-  }
   void set_heap(T* p, std::uint32_t cap) {
-    std::memcpy(words_, &p, sizeof p);
-    words_[2] = cap;
+    st_.heap.ptr = p;
+    st_.heap.cap = cap;
   }
-  T* data() { return heap() ? heap_ptr() : reinterpret_cast<T*>(words_); }
-  const T* data() const { return heap() ? heap_ptr() : reinterpret_cast<const T*>(words_); }
+  T* data() { return heap() ? st_.heap.ptr : st_.inl; }
+  const T* data() const { return heap() ? st_.heap.ptr : st_.inl; }
   void release() {
-    if (heap()) ::operator delete(heap_ptr());
+    if (heap()) ::operator delete(st_.heap.ptr);
     size_ = 0;
   }
   void assign(const T* src, std::size_t n) {
@@ -127,8 +121,19 @@ class SmallArcs {
     std::memcpy(data(), src, sizeof(T) * n);
     size_ = static_cast<std::uint32_t>(n) | (size_ & kHeap);
   }
-  // In place: three arcs. On the heap: the block's pointer (words 0-1) and capacity (word 2).
-  std::uint32_t words_[3] = {0, 0, 0};
+  // In place: three arcs. On the heap: the block's pointer and capacity, packed into the same 12
+  // bytes (the pointer 4-aligned; x86-64 reads it so at no cost).
+  struct [[gnu::packed]] Block {
+    T* ptr;
+    std::uint32_t cap;
+  };
+  union Storage {
+    T inl[kInline];
+    Block heap;
+    Storage() : heap{nullptr, 0} {}
+  };
+  static_assert(sizeof(Storage) == 12);
+  Storage st_;
   std::uint32_t size_ = 0;  // arc count, kHeap when on the heap
 };
 static_assert(sizeof(SmallArcs<std::uint32_t>) == 16);
