@@ -43,8 +43,12 @@ TraceIsa resolve(TraceIsa isa) {
   static const bool has_avx2 = __builtin_cpu_supports("avx2");
   static const bool has_avx512 = has_avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
                                  __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
+  // Auto takes the 512-bit variant on AMD CPUs only: on the Zen 5 host it was the faster one, on
+  // the Intel Xeon host (AVX-512 FP16, AMX) of 2026-12-05 the 256-bit one was faster by 3-11% per
+  // frame, single rays and packets alike (docs/tracing.md, "The machine changed").
+  static const bool auto_avx512 = has_avx512 && __builtin_cpu_is("amd");
   if (isa == TraceIsa::Sse2) return TraceIsa::Sse2;
-  if (isa != TraceIsa::Avx2 && has_avx512) return TraceIsa::Avx512;
+  if (has_avx512 && (isa == TraceIsa::Avx512 || (isa == TraceIsa::Auto && auto_avx512))) return TraceIsa::Avx512;
   return has_avx2 ? TraceIsa::Avx2 : TraceIsa::Sse2;
 }
 

@@ -61,10 +61,10 @@ struct HitBatch {
 
 enum class HitMode { Closest, Any };
 
-/// Instruction set of the traversal code (see tracer_isa.h). Auto: the widest the CPU has
-/// (checked at run time, like Embree): AVX-512 (F, VL, DQ, BW), else AVX2, else SSE2. All give
-/// bit-identical hits and counters; SSE2 tests the triangles of a leaf 4 at a time, AVX2 8 and
-/// AVX-512 16.
+/// Instruction set of the traversal code (see tracer_isa.h). Auto, checked at run time: AVX-512
+/// (F, VL, DQ, BW) on an AMD CPU that has it, else AVX2, else SSE2 (on the Intel Xeon measured,
+/// the AVX2 variant was the faster; docs/tracing.md). All give bit-identical hits and counters;
+/// SSE2 tests the triangles of a leaf 4 at a time, AVX2 8 and AVX-512 16.
 enum class TraceIsa { Auto, Sse2, Avx2, Avx512 };
 [[nodiscard]] const char* to_string(TraceIsa isa);
 /// "auto", "sse2", "avx2" or "avx512"; nullopt for anything else.

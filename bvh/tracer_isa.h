@@ -4,8 +4,8 @@
 // takes two blocks = 8 triangles per test, everything else VEX-encoded) and tracer_avx512.cpp
 // (for AVX-512 F/VL/DQ/BW: four blocks = 16 triangles per test, comparisons into mask
 // registers). All give bit-identical hits and counters (same float operations per triangle, same
-// visiting order). trace() picks the widest the CPU has (__builtin_cpu_supports), as Embree
-// dispatches at runtime; TraceOptions::isa forces one (tests compare them).
+// visiting order). trace() picks one at run time (__builtin_cpu_supports; AVX-512 on AMD CPUs only,
+// see tracer.h), as Embree dispatches at runtime; TraceOptions::isa forces one (tests compare them).
 #pragma once
 
 #include <cstddef>

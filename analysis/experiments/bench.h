@@ -62,7 +62,7 @@ struct PeerBenchConfig {
   /// coherent flag. Off: single rays on both sides (rtcIntersect1 / rtcOccluded1).
   bool packets = false;
   int embree_packet_width = 8;  ///< Embree's packets with `packets`: 4, 8 or 16 rays (rtcIntersect4/8/16)
-  /// Our tracer's instruction-set variant (bvh::TraceOptions::isa; Auto: the widest this CPU has).
+  /// Our tracer's instruction-set variant (bvh::TraceOptions::isa; Auto: see bvh/tracer.h).
   /// Embree keeps its own choice.
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;
 };

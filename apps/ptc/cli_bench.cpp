@@ -71,7 +71,7 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->needs(packets)
       ->capture_default_str();
   c->add_option("--isa", a->isa,
-                "our tracer's instruction set: auto (the widest this CPU has), sse2, avx2 or avx512 (the same hits "
+                "our tracer's instruction set: auto (avx512 on AMD CPUs with AVX-512, else the widest up to avx2), sse2, avx2 or avx512 (the same hits "
                 "and counters; Embree keeps its own)")
       ->check(enum_validator("instruction set", bvh::parse_trace_isa))
       ->capture_default_str();
