@@ -110,15 +110,17 @@ std::vector<std::uint32_t> reference_contraction(const Mesh& m, const Scenario& 
   return st.labels();
 }
 
-ClusterRun run_contraction(const Mesh& m, const Scenario& s, bool lean = true) {
-  // Lean tables, as cluster_mesh builds them for the contraction (with edges for GWH01).
+// One contraction with its merges recorded. Lean tables, as cluster_mesh builds them for the
+// contraction (with edges for GWH01), unless `lean` is false; `o`'s target and record_merges are
+// set from the scenario; Acc takes `tuning` (default: AccObjective's).
+ClusterRun run_contraction(const Mesh& m, const Scenario& s, bool lean = true, ContractionOptions o = {},
+                           const AccTuning& tuning = AccTuning{}) {
   const ClusterTables tb = ClusterTables::build(m, /*with_edges=*/s.kind == ObjectiveKind::Gwh01, false, lean);
-  ContractionOptions o;
   o.target_clusters = s.target;
   o.record_merges = true;
   switch (s.kind) {
     case ObjectiveKind::Acc: {
-      AccObjective obj(tb, acc_params(m, s));
+      AccObjective obj(tb, acc_params(m, s), tuning);
       return contract_clusters(tb, obj, o);
     }
     case ObjectiveKind::Naive: {
@@ -132,6 +134,41 @@ ClusterRun run_contraction(const Mesh& m, const Scenario& s, bool lean = true) {
   }
   return {};
 }
+
+// The two runs merged alike: the same labels, and merge by merge the same clusters and score bits.
+// Returns the number of merges compared.
+std::size_t expect_same_merges(const ClusterRun& a, const ClusterRun& b, const std::string& what) {
+  EXPECT_EQ(a.labels, b.labels) << what;
+  EXPECT_EQ(a.merges.size(), b.merges.size()) << what;
+  const std::size_t n = std::min(a.merges.size(), b.merges.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(a.merges[i].into, b.merges[i].into) << what << ", merge " << i;
+    EXPECT_EQ(a.merges[i].from, b.merges[i].from) << what << ", merge " << i;
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(a.merges[i].score), std::bit_cast<std::uint64_t>(b.merges[i].score))
+        << what << ", merge " << i;
+  }
+  return n;
+}
+
+// m under the rotation (or scaling) r, then moved by t.
+Mesh moved(const Mesh& m, const Eigen::Matrix3d& r, const Vec3& t) {
+  std::vector<Vec3> p(m.positions().begin(), m.positions().end());
+  for (Vec3& v : p) v = r * v + t;
+  return m.with_positions(std::move(p));
+}
+
+// The hard meshes and the elephant, near, far from the origin and at 1e-100.
+std::vector<Named> hard_meshes_and_elephants() {
+  std::vector<Named> meshes = generic_meshes();
+  const Mesh elephant = load("elephant.off");
+  meshes.push_back({"elephant", elephant});
+  meshes.push_back({"elephant far away", moved(elephant, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))});
+  meshes.push_back({"elephant at 1e-100", moved(elephant, 1e-100 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
+  return meshes;
+}
+
+// One scenario per objective.
+const Scenario kEveryObjective[] = {{ObjectiveKind::Acc, 20, 20}, {ObjectiveKind::Naive, 8, 0}, {ObjectiveKind::Gwh01, 12, 0}};
 
 std::vector<Scenario> setups() {
   std::vector<Scenario> out;
@@ -264,12 +301,6 @@ TEST(Contraction, AccOfEveryFinalClusterEqualsClusterAccFromScratch) {
 
 // ---- Invariances and determinism ----------------------------------------------------------
 
-Mesh moved(const Mesh& m, const Eigen::Matrix3d& r, const Vec3& t) {
-  std::vector<Vec3> p(m.positions().begin(), m.positions().end());
-  for (Vec3& v : p) v = r * v + t;
-  return m.with_positions(std::move(p));
-}
-
 Clustering cluster(const Mesh& m, ObjectiveKind o, std::uint32_t k, ClusterMethod method = ClusterMethod::Contraction) {
   ClusterConfig c;
   c.method = method;
@@ -298,27 +329,11 @@ TEST(Contraction, DeterministicBitForBit) {
 // same merges with the same score bits as full ones, for every objective, on the hard meshes
 // (non-manifold and degenerate ones among them) and the elephant far away and tiny.
 TEST(Contraction, LeanTablesGiveTheSameMergesBitForBit) {
-  std::vector<Named> meshes = generic_meshes();
-  const Mesh elephant = load("elephant.off");
-  meshes.push_back({"elephant", elephant});
-  meshes.push_back({"elephant far away", moved(elephant, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))});
-  meshes.push_back({"elephant at 1e-100", moved(elephant, 1e-100 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
   std::size_t merges = 0;
-  for (const auto& [name, m] : meshes)
-    for (const Scenario& s : {Scenario{ObjectiveKind::Acc, 20, 20}, Scenario{ObjectiveKind::Naive, 8, 0},
-                              Scenario{ObjectiveKind::Gwh01, 12, 0}}) {
-      const ClusterRun full = run_contraction(m, s, false), lean = run_contraction(m, s, true);
-      const std::string what = std::string(name) + ", " + std::string(to_string(s.kind));
-      EXPECT_EQ(full.labels, lean.labels) << what;
-      ASSERT_EQ(full.merges.size(), lean.merges.size()) << what;
-      merges += full.merges.size();
-      for (std::size_t i = 0; i < full.merges.size(); ++i) {
-        EXPECT_EQ(full.merges[i].into, lean.merges[i].into) << what << ", merge " << i;
-        EXPECT_EQ(full.merges[i].from, lean.merges[i].from) << what << ", merge " << i;
-        EXPECT_EQ(std::bit_cast<std::uint64_t>(full.merges[i].score), std::bit_cast<std::uint64_t>(lean.merges[i].score))
-            << what << ", merge " << i;
-      }
-    }
+  for (const auto& [name, m] : hard_meshes_and_elephants())
+    for (const Scenario& s : kEveryObjective)
+      merges += expect_same_merges(run_contraction(m, s, false), run_contraction(m, s, true),
+                                   std::string(name) + ", " + std::string(to_string(s.kind)));
   EXPECT_GT(merges, 1000u);
 }
 
@@ -327,37 +342,23 @@ TEST(Contraction, LeanTablesGiveTheSameMergesBitForBit) {
 // same score bits, on the hard meshes and the elephant far away and tiny; and the stored form
 // made whole is the summary, field by field.
 TEST(Contraction, StoredSummariesGiveTheSameMergesBitForBit) {
-  std::vector<Named> meshes = generic_meshes();
+  std::vector<Named> meshes = hard_meshes_and_elephants();
   meshes.push_back({"flat grid (ties)", grid(12, 9)});  // unjittered: many equal scores
   meshes.push_back({"sphere patch (ties)", sphere_patch(14, 10)});
   const Mesh elephant = load("elephant.off");
-  meshes.push_back({"elephant", elephant});
-  meshes.push_back({"elephant far away", moved(elephant, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))});
-  meshes.push_back({"elephant at 1e-100", moved(elephant, 1e-100 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
+  {
+    const ClusterTables tb = ClusterTables::build(elephant);
+    const ClusterParams p = acc_params(elephant, Scenario{ObjectiveKind::Acc, 50, 50});
+    EXPECT_FALSE(AccObjective(tb, p, AccTuning{false, true}).stores_whole());
+    EXPECT_TRUE(AccObjective(tb, p, AccTuning::for_contraction()).stores_whole());
+  }
   std::size_t merges = 0;
   for (const auto& [name, m] : meshes)
     for (double k : {10.0, 50.0}) {
-      const ClusterTables tb = ClusterTables::build(m, false, false, true);
       const Scenario s{ObjectiveKind::Acc, k, k};
-      ClusterRun runs[2];
-      for (int stored = 0; stored < 2; ++stored) {
-        ContractionOptions o;
-        o.record_merges = true;
-        AccObjective obj(tb, acc_params(m, s), stored ? AccTuning::for_contraction() : AccTuning{false, true});
-        EXPECT_EQ(obj.stores_whole(), stored == 1);
-        runs[stored] = contract_clusters(tb, obj, o);
-      }
-      const std::string what = std::string(name) + ", MaxCount " + std::to_string(k);
-      EXPECT_EQ(runs[0].labels, runs[1].labels) << what;
-      ASSERT_EQ(runs[0].merges.size(), runs[1].merges.size()) << what;
-      merges += runs[0].merges.size();
-      for (std::size_t i = 0; i < runs[0].merges.size(); ++i) {
-        EXPECT_EQ(runs[0].merges[i].into, runs[1].merges[i].into) << what << ", merge " << i;
-        EXPECT_EQ(runs[0].merges[i].from, runs[1].merges[i].from) << what << ", merge " << i;
-        EXPECT_EQ(std::bit_cast<std::uint64_t>(runs[0].merges[i].score),
-                  std::bit_cast<std::uint64_t>(runs[1].merges[i].score))
-            << what << ", merge " << i;
-      }
+      merges += expect_same_merges(run_contraction(m, s, true, {}, AccTuning{false, true}),
+                                   run_contraction(m, s, true, {}, AccTuning::for_contraction()),
+                                   std::string(name) + ", MaxCount " + std::to_string(k));
     }
   EXPECT_GT(merges, 1000u);
 
@@ -412,44 +413,15 @@ TEST(Contraction, PurgingOftenGivesTheSameMergesBitForBit) {
                                      {"sphere patch (ties)", sphere_patch(14, 10)},
                                      {"non-manifold fan", edge_fan(7)},
                                      {"elephant", load("elephant.off")}};
+  ContractionOptions often;
+  often.purge_often = true;
   for (const auto& [name, m] : meshes)
-    for (const Scenario& s : {Scenario{ObjectiveKind::Acc, 20, 20}, Scenario{ObjectiveKind::Naive, 8, 0},
-                              Scenario{ObjectiveKind::Gwh01, 12, 0}}) {
-      const ClusterTables tb = ClusterTables::build(m, s.kind == ObjectiveKind::Gwh01, false, true);
-      ClusterRun runs[2];
-      for (int often = 0; often < 2; ++often) {
-        ContractionOptions o;
-        o.record_merges = true;
-        o.purge_often = often == 1;
-        switch (s.kind) {
-          case ObjectiveKind::Acc: {
-            AccObjective obj(tb, acc_params(m, s), AccTuning::for_contraction());
-            runs[often] = contract_clusters(tb, obj, o);
-            break;
-          }
-          case ObjectiveKind::Naive: {
-            NaiveObjective obj(tb, static_cast<std::uint32_t>(s.max_count));
-            runs[often] = contract_clusters(tb, obj, o);
-            break;
-          }
-          case ObjectiveKind::Gwh01: {
-            Gwh01Objective obj(tb, static_cast<std::uint32_t>(s.max_count), s.gwh);
-            runs[often] = contract_clusters(tb, obj, o);
-            break;
-          }
-        }
-      }
+    for (const Scenario& s : kEveryObjective) {
       const std::string what = std::string(name) + ", " + std::string(to_string(s.kind));
-      EXPECT_EQ(runs[0].labels, runs[1].labels) << what;
-      ASSERT_EQ(runs[0].merges.size(), runs[1].merges.size()) << what;
-      EXPECT_GT(runs[0].merges.size(), 4u) << what;
-      for (std::size_t i = 0; i < runs[0].merges.size(); ++i) {
-        EXPECT_EQ(runs[0].merges[i].into, runs[1].merges[i].into) << what << ", merge " << i;
-        EXPECT_EQ(runs[0].merges[i].from, runs[1].merges[i].from) << what << ", merge " << i;
-        EXPECT_EQ(std::bit_cast<std::uint64_t>(runs[0].merges[i].score),
-                  std::bit_cast<std::uint64_t>(runs[1].merges[i].score))
-            << what << ", merge " << i;
-      }
+      EXPECT_GT(expect_same_merges(run_contraction(m, s, true, {}, AccTuning::for_contraction()),
+                                   run_contraction(m, s, true, often, AccTuning::for_contraction()), what),
+                4u)
+          << what;
     }
 }
 
@@ -458,37 +430,21 @@ TEST(Contraction, PurgingOftenGivesTheSameMergesBitForBit) {
 // exactly at once, with fewer exact evaluations. On the hard meshes, the elephant far from the
 // origin and tiny, at two sizes.
 TEST(Contraction, SupportLevelGivesTheSameMergesBitForBit) {
-  std::vector<Named> meshes = generic_meshes();
-  const Mesh elephant = load("elephant.off");
-  meshes.push_back({"elephant", elephant});
-  meshes.push_back({"elephant far away", moved(elephant, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))});
-  meshes.push_back({"elephant tiny", moved(elephant, 1e-30 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
-  meshes.push_back({"elephant at 1e-100", moved(elephant, 1e-100 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
+  std::vector<Named> meshes = hard_meshes_and_elephants();
+  meshes.push_back({"elephant tiny", moved(load("elephant.off"), 1e-30 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
   meshes.push_back({"grid at 1e-80", moved(grid(5, 4), 1e-80 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))});
   std::uint64_t exact[2] = {0, 0};
   for (const auto& [name, m] : meshes)
     for (double k : {10.0, 50.0}) {
-      const ClusterTables tb = ClusterTables::build(m);
       const Scenario s{ObjectiveKind::Acc, k, k};
       ClusterRun runs[2];
       for (int level = 0; level < 2; ++level) {
         ContractionOptions o;
-        o.record_merges = true;
         o.support_level = level == 1;
-        AccObjective obj(tb, acc_params(m, s));
-        runs[level] = contract_clusters(tb, obj, o);
+        runs[level] = run_contraction(m, s, /*lean=*/false, o);
         exact[level] += runs[level].exact_evaluations;
       }
-      const std::string what = std::string(name) + ", MaxCount " + std::to_string(k);
-      EXPECT_EQ(runs[0].labels, runs[1].labels) << what;
-      ASSERT_EQ(runs[0].merges.size(), runs[1].merges.size()) << what;
-      for (std::size_t i = 0; i < runs[0].merges.size(); ++i) {
-        EXPECT_EQ(runs[0].merges[i].into, runs[1].merges[i].into) << what << ", merge " << i;
-        EXPECT_EQ(runs[0].merges[i].from, runs[1].merges[i].from) << what << ", merge " << i;
-        EXPECT_EQ(std::bit_cast<std::uint64_t>(runs[0].merges[i].score),
-                  std::bit_cast<std::uint64_t>(runs[1].merges[i].score))
-            << what << ", merge " << i;
-      }
+      expect_same_merges(runs[0], runs[1], std::string(name) + ", MaxCount " + std::to_string(k));
     }
   EXPECT_LT(exact[1], exact[0] * 3 / 4);  // the level did spare exact evaluations
 }

@@ -361,7 +361,7 @@ template <ClusterObjective O>
     return {*sa, *sb};
   };
   // The member and vertex lists of cluster c; a singleton's are written into `s`, which must
-  // outlive the spans (make_ctx keeps one per role; no per-triangle arrays for them).
+  // outlive the spans (make_ctx keeps one per cluster of the pair; no per-triangle arrays for them).
   struct SingleLists {
     std::uint32_t member = 0;
     std::uint32_t verts[3] = {0, 0, 0};
@@ -376,11 +376,6 @@ template <ClusterObjective O>
       members = Ids(&s.member, 1);
       verts = Ids(s.verts, static_cast<std::size_t>(tb.distinct_vertices(c, s.verts)));
     }
-  };
-  auto vertex_count = [&](std::uint32_t c) -> std::size_t {
-    if (const std::uint32_t* l = lists[c].get()) return l[1];
-    std::uint32_t v[3];
-    return static_cast<std::size_t>(tb.distinct_vertices(c, v));
   };
 
   // ---- Adjacency: the dual graph (ClusterTables' CSR; the same pairs as build_dual_graph,
@@ -449,17 +444,17 @@ template <ClusterObjective O>
       return 0.0;
     }
   };
-  // Canonical roles: `a` is the pair's cluster with more vertices (ties: the smaller id), so that
-  // a pair is always evaluated the same way (bit-identical scores at push and at pop).
-  auto roles = [&](std::uint32_t x, std::uint32_t y) {
-    const std::size_t nx = vertex_count(x), ny = vertex_count(y);
-    return nx > ny || (nx == ny && x < y) ? std::pair{x, y} : std::pair{y, x};
-  };
-  SingleLists single_a, single_b;  // the lists of make_ctx's a and b when they are singletons
-  auto make_ctx = [&](std::uint32_t a, std::uint32_t b, MergeContext& ctx) {
-    Ids ma, va, mb, vb;
-    lists_of(a, single_a, ma, va);
-    lists_of(b, single_b, mb, vb);
+  // The context of the pair (x, y) in its canonical roles, returned as {a, b}: `a` is the
+  // cluster with more vertices (ties: the smaller id), so that a pair is always evaluated the
+  // same way (bit-identical scores at push and at pop).
+  SingleLists single_x, single_y;  // the lists of make_ctx's x and y when they are singletons
+  auto make_ctx = [&](std::uint32_t x, std::uint32_t y, MergeContext& ctx) -> std::pair<std::uint32_t, std::uint32_t> {
+    Ids mx, vx, my, vy;
+    lists_of(x, single_x, mx, vx);
+    lists_of(y, single_y, my, vy);
+    const bool x_is_a = vx.size() > vy.size() || (vx.size() == vy.size() && x < y);
+    const std::uint32_t a = x_is_a ? x : y, b = x_is_a ? y : x;
+    const Ids ma = x_is_a ? mx : my, va = x_is_a ? vx : vy, mb = x_is_a ? my : mx, vb = x_is_a ? vy : vx;
     if (stamped != a || stamped_changed != changed[a]) {
       if (++stamp == 0) {  // wrapped: clear
         std::fill(vstamp.begin(), vstamp.end(), 0u);
@@ -503,6 +498,7 @@ template <ClusterObjective O>
     ctx.shared = shared;
     ctx.vertex_count = static_cast<std::uint32_t>(va.size() + added.size());
     ctx.boundary_removed = removed;
+    return {a, b};
   };
 
   // ---- The queue.
@@ -520,9 +516,8 @@ template <ClusterObjective O>
   };
   // Evaluates the pair (x, y) cheaply; false when it deserves no entry (illegal, or never positive).
   auto entry_of = [&](std::uint32_t x, std::uint32_t y, Entry& out) {
-    const auto [a, b] = roles(x, y);
     MergeContext ctx;
-    make_ctx(a, b, ctx);
+    const auto [a, b] = make_ctx(x, y, ctx);
     if (!objective.legal(ctx)) return false;
     const auto [sa, sb] = pair_summaries(a, b);
     const Evaluation ev = objective.evaluate(sa, sb, ctx, Precision::UpperBoundAllowed);
@@ -574,9 +569,8 @@ template <ClusterObjective O>
     heap.pop();
     if (!current(top)) continue;  // stale: lazy deletion
     const auto lo = static_cast<std::uint32_t>(top.pair >> 32), hi = static_cast<std::uint32_t>(top.pair);
-    const auto [a, b] = roles(lo, hi);
     MergeContext ctx;
-    make_ctx(a, b, ctx);
+    const auto [a, b] = make_ctx(lo, hi, ctx);
     if (!objective.legal(ctx)) continue;  // re-check after the pop
     const bool exact_key = (top.stamp & kExactBit) != 0;
     CacheSlot& slot = cache[(top.pair * 0x9E3779B97F4A7C15ull) >> (64 - cache_bits)];

@@ -150,6 +150,7 @@ void set_cone(AccObjective::Summary& s, const Vec3& axis, double c) {
 }  // namespace
 
 static_assert(sizeof(AccObjective::Summary) == 256, "acc.h: Summary is meant to stay at 256 bytes");
+static_assert(sizeof(AccObjective::Stored) == 176, "acc.h: Stored is the summary without its 80-byte DOP");
 
 AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& params, const AccTuning& tuning)
     : tables_(&tables), params_(params), tuning_(tuning) {

@@ -117,10 +117,10 @@ class AccObjective {
   /// ascending triangle order (see the file comment).
   static constexpr double kRecomputeNormalSum = 0.05;
 
-  /// 256 bytes: contraction keeps one per merged cluster alive (docs/scale.md, "Contraction in one
-  /// run"), so nothing is stored that a function of the rest gives to the bit (N_avg and its
-  /// fallback flag are recomputed from the sums by evaluate(), the cone's sine from its cosine).
-  struct Summary {
+  /// A cluster's summary without its 26-DOP: what the contraction keeps of a merged cluster
+  /// when the tuning has no DOP bound (AccTuning::dop_bound; the DOP is always empty then), in
+  /// 176 bytes (docs/scale.md, "Contraction in one run: what was left").
+  struct Stored {
     Vec3 normal_sum = Vec3::Zero();       ///< sum of the unit normals n_i (zero normals add nothing)
     Vec3 area_normal_sum = Vec3::Zero();  ///< sum Area_i n_i (L^2)
     std::uint32_t nonzero = 0;            ///< number of non-zero normals
@@ -133,6 +133,14 @@ class AccObjective {
     /// per-triangle table of spheres: 32 bytes a triangle at 13M triangles).
     mutable Sphere sphere;
     Box3 box;                             ///< box of the distinct vertices (the sphere's local origin)
+    /// Keys the memo: t + 1 for the singleton {t} (every summary single(t) makes describes the
+    /// same cluster), unique for a merged one (T + 1 on).
+    std::uint64_t serial = 0;
+  };
+  /// 256 bytes: contraction keeps one per merged cluster alive (docs/scale.md, "Contraction in one
+  /// run"), so nothing is stored that a function of the rest gives to the bit (N_avg and its
+  /// fallback flag are recomputed from the sums by evaluate(), the cone's sine from its cosine).
+  struct Summary : Stored {
     /// Extent of the vertices along the 4 cube diagonals (x+y+z, x+y-z, x-y+z, -x+y+z) and the 6
     /// cube edge directions (x+y, x-y, x+z, x-z, y+z, y-z), unnormalised: with the box a 26-DOP
     /// (EPOS-26's directions), merged by min/max; its widths bound the sphere's radius from
@@ -140,39 +148,15 @@ class AccObjective {
     /// merges commute with it): a stored width is never above the true one, so the bound stays a
     /// bound. Empty (+inf, -inf) without AccTuning::dop_bound.
     std::array<float, 10> dop_lo{}, dop_hi{};
-    /// Keys the memo: t + 1 for the singleton {t} (every summary single(t) makes describes the
-    /// same cluster), unique for a merged one (T + 1 on).
-    std::uint64_t serial = 0;
-  };
-  /// A summary without its 26-DOP, for a tuning without AccTuning::dop_bound, where the DOP is
-  /// always empty: the contraction keeps its merged clusters' summaries so (176 bytes).
-  struct Stored {
-    Vec3 normal_sum, area_normal_sum;
-    std::uint32_t nonzero, pending;
-    Vec3 cone_axis;
-    double cone_cos;
-    Sphere sphere;
-    Box3 box;
-    std::uint64_t serial;
   };
   /// True when stored() and expand() keep a summary whole (no DOP bound in the tuning).
   [[nodiscard]] bool stores_whole() const { return !tuning_.dop_bound; }
-  [[nodiscard]] static Stored stored(const Summary& s) {
-    return {s.normal_sum, s.area_normal_sum, s.nonzero, s.pending, s.cone_axis, s.cone_cos, s.sphere, s.box, s.serial};
-  }
+  [[nodiscard]] static Stored stored(const Summary& s) { return s; }
   /// The summary `stored` was made from (when stores_whole()): its fields, and the empty DOP.
   static void expand(const Stored& st, Summary& s) {
-    s.normal_sum = st.normal_sum;
-    s.area_normal_sum = st.area_normal_sum;
-    s.nonzero = st.nonzero;
-    s.pending = st.pending;
-    s.cone_axis = st.cone_axis;
-    s.cone_cos = st.cone_cos;
-    s.sphere = st.sphere;
-    s.box = st.box;
+    static_cast<Stored&>(s) = st;
     s.dop_lo.fill(std::numeric_limits<float>::infinity());
     s.dop_hi.fill(-std::numeric_limits<float>::infinity());
-    s.serial = st.serial;
   }
 
   struct Evaluation : ScoreBase {
