@@ -136,20 +136,18 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
   std::string tri_schema, cluster_schema;
-  {  // one table's text at a time (triangles.csv is 16 bytes a triangle)
-    const Table tri_table = triangles_table(clustering);
-    dir.write("triangles.csv", tri_table.csv.str());
-    tri_schema = tri_table.schema.id();
-  }
+  // Each triangle's cluster once, for triangles.csv (streamed in blocks: it is 16 bytes a
+  // triangle) and as clusters.ply's face values (the same 32 bits read as int32).
+  const std::vector<std::uint32_t> label = clustering.cluster_of_triangle();
+  tri_schema = write_triangles_csv(label, dir.path("triangles.csv"));
   {
     const Table cluster_table = clusters_table(rows);
     dir.write("clusters.csv", cluster_table.csv.str());
     cluster_schema = cluster_table.schema.id();
   }
-  std::vector<std::int32_t> face_cluster;
-  for (std::uint32_t k : clustering.cluster_of_triangle()) face_cluster.push_back(static_cast<std::int32_t>(k));
   WriteOptions wo;
-  wo.face_values = face_cluster;
+  // (int32 and uint32 may alias each other; ids at or above 2^31 read negative, as a cast gave.)
+  wo.face_values = std::span<const std::int32_t>(reinterpret_cast<const std::int32_t*>(label.data()), label.size());
   write_mesh(dir.path("clusters.ply"), lm.mesh, wo);
   manifest.add_timing_ms("write", t0.ms());
   manifest.add_output("triangles.csv", tri_schema);

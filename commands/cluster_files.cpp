@@ -146,47 +146,62 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
   Clustering c = clustering_from_labels(label, mesh.triangles());
   // Connectivity through shared sides, cluster by cluster: by the mesh's edges, or else by sides
   // whose corner positions coincide (a clustering made with --adjacency positions, cluster.h).
-  // A union-find over the sides sorted by vertex (topology.h's SortedSides: a run of equal
-  // pairs is one mesh edge) joins the triangles of one cluster that share an edge; the first
-  // cluster whose triangles are not all joined to its first one, or 0xffffffff, and the first
-  // of its triangles that is not (`unjoined`). 28 bytes a triangle, where the edge map and a
-  // breadth-first walk took about 46.
-  std::vector<std::uint32_t> parent(T);
+  // Each cluster alone: its triangles' sides, keyed by their two corners in a hash table, join
+  // the triangles of one key (one mesh edge) in a union-find over the cluster's own triangles. The
+  // first cluster whose triangles are not all joined to its first one, or 0xffffffff, and the
+  // first of its triangles that is not (`unjoined`). Scratch of the largest cluster's size only
+  // (a union-find over all triangles and the sides of the whole mesh sorted by vertex took 28
+  // bytes a triangle of fresh memory, 370 MB at 13M triangles; docs/scale.md).
   std::uint32_t unjoined = 0;
+  // The sides of one cluster in an open-addressing table (key: smaller corner << 32 | larger
+  // corner; value: the first triangle of the cluster seen on that side), at most half full; a
+  // slot is empty unless its stamp is the current cluster's.
+  std::vector<std::uint64_t> keys;
+  std::vector<std::uint32_t> first_on, stamp;
+  std::uint32_t round = 0;
+  std::vector<std::uint32_t> parent;
   auto find = [&](std::uint32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];  // path halving
     return x;
   };
   auto first_unconnected = [&](std::span<const Tri> tris_of_mesh) -> std::uint32_t {
-    for (std::uint32_t t = 0; t < T; ++t) parent[t] = t;
-    {
-      using Side = SortedSides::Side;
-      const SortedSides ss = SortedSides::build(tris_of_mesh, mesh.vertex_count());
-      for (std::size_t v = 0; v + 1 < ss.first.size(); ++v) {
-        const Side* lo = ss.sides.data() + ss.first[v];
-        const Side* const hi = ss.sides.data() + ss.first[v + 1];
-        for (const Side* e = lo; lo != hi; lo = e) {
-          while (e != hi && e->other == lo->other) ++e;
-          // One edge: each triangle joins the first of the run with its label.
-          for (const Side* s = lo + 1; s != e; ++s) {
-            const std::uint32_t ts = s->slot / 3;
-            for (const Side* u = lo; u != s; ++u) {
-              const std::uint32_t tu = u->slot / 3;
-              if (label[tu] != label[ts]) continue;
-              const std::uint32_t ra = find(ts), rb = find(tu);
+    for (std::size_t k = 0; k < c.cluster_count(); ++k) {
+      const auto tris = c.triangles_of(k);
+      if (tris.size() < 2) continue;
+      std::size_t size = 64;
+      while (size < 6 * tris.size()) size *= 2;
+      if (keys.size() < size || ++round == 0) {  // a larger table, or the stamps wrapped around
+        keys.assign(std::max(keys.size(), size), 0);
+        first_on.assign(keys.size(), 0);
+        stamp.assign(keys.size(), 0);
+        round = 1;
+      }
+      const std::size_t mask = size - 1;
+      parent.resize(tris.size());
+      for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+      for (std::uint32_t i = 0; i < tris.size(); ++i) {
+        const Tri& f = tris_of_mesh[tris[i]];
+        for (int j = 0; j < 3; ++j) {
+          const std::uint32_t a = f[j], b = f[(j + 1) % 3];
+          if (a == b) continue;
+          const std::uint64_t key = std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
+          for (std::size_t h = (key * 0x9E3779B97F4A7C15ull) >> 32;; ++h) {
+            const std::size_t slot = h & mask;
+            if (stamp[slot] != round) {
+              stamp[slot] = round, keys[slot] = key, first_on[slot] = i;
+              break;
+            }
+            if (keys[slot] == key) {  // one mesh edge: join the triangle to the first on it
+              const std::uint32_t ra = find(first_on[slot]), rb = find(i);
               if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
               break;
             }
           }
         }
       }
-    }
-    for (std::size_t k = 0; k < c.cluster_count(); ++k) {
-      const auto tris = c.triangles_of(k);
-      const std::uint32_t root = find(tris[0]);
-      for (std::uint32_t t : tris)
-        if (find(t) != root) {
-          unjoined = t;
+      for (std::uint32_t i = 1; i < tris.size(); ++i)
+        if (find(i) != find(0)) {
+          unjoined = tris[i];
           return static_cast<std::uint32_t>(k);
         }
     }

@@ -1,6 +1,7 @@
 #include "analysis/metrics/cluster_table.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -10,6 +11,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "analysis/schema/json.h"
+#include "toolkit/io/atomic_file.h"
 #include "toolkit/mesh/mesh_report.h"
 
 namespace ptc {
@@ -77,6 +79,30 @@ Table triangles_table(const Clustering& c) {
         col("cluster_id", r.cluster);
       },
       64 + n * most);  // a bound on the text: the header and the longest row n times
+}
+
+std::string write_triangles_csv(std::span<const std::uint32_t> label, const std::filesystem::path& path) {
+  constexpr std::size_t kBlock = std::size_t{1} << 20;
+  AtomicFile f(path);
+  std::string buf;
+  buf.reserve(kBlock + 64);
+  buf = "triangle_id,cluster_id\n";
+  char* end = nullptr;
+  for (std::size_t t = 0; t < label.size(); ++t) {
+    char row[48];
+    end = std::to_chars(row, row + 24, t).ptr;
+    *end++ = ',';
+    end = std::to_chars(end, row + sizeof row - 1, label[t]).ptr;
+    *end++ = '\n';
+    buf.append(row, end);
+    if (buf.size() >= kBlock) {
+      f.write(buf);
+      buf.clear();
+    }
+  }
+  f.write(buf);
+  f.commit();
+  return Schema{"ptc-cluster-triangles", 1}.id();
 }
 
 namespace {

@@ -3,7 +3,9 @@
 // with a new schema version.
 #pragma once
 
+#include <filesystem>
 #include <optional>
+#include <string>
 #include <span>
 #include <vector>
 
@@ -39,6 +41,10 @@ struct ClusterRow {
 
 /// triangles.csv (schema ptc-cluster-triangles/1): triangle_id,cluster_id in input triangle order.
 [[nodiscard]] Table triangles_table(const Clustering& c);
+/// The same bytes as triangles_table(c).csv.str() from `label` (c.cluster_of_triangle()), written
+/// to `path` in blocks of 1 MiB (whole or not at all: toolkit/io/atomic_file.h) instead of held
+/// as one string (16 bytes a triangle). Returns the schema id.
+std::string write_triangles_csv(std::span<const std::uint32_t> label, const std::filesystem::path& path);
 /// cluster_id,triangles,vertices,connectivity,reg,acc,sphere_radius,sphere_area,bbox_area,p_hit,
 /// area,area_p,reg_bound,size_bound,n_avg_fallback
 /// (clusters.csv, schema ptc-clusters/1; columns defined in docs/tables.md)

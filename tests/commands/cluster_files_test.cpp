@@ -4,7 +4,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <random>
 #include <fstream>
 
 #include "analysis/metrics/cluster_table.h"
@@ -194,4 +196,125 @@ TEST_F(TraceClusters, ASoupReadsBackConnectedByCoincidentCorners) {
   EXPECT_NE(error("triangle_id,cluster_id\n0,0\n1,1\n2,1\n3,0\n4,2\n5,2\n6,2\n7,2\n", soup)
                 .find("line 5: triangle 3: cluster 0 is not connected through shared sides, not even by coincident"),
             std::string::npos);
+}
+
+// The connectivity check against a brute force, item by item: random labellings (grown regions,
+// some with a triangle moved to another label, so that a cluster falls apart) on a mesh with a
+// non-manifold edge (a fin of three triangles on one side), a triangle with a repeated corner, a
+// duplicated triangle and a lone triangle. The brute force walks each cluster from its first
+// triangle through triangles of the same label that share two distinct corners; read_clusters
+// must accept exactly the labellings where every cluster is reached whole, and otherwise name the
+// first triangle (ascending) of the first cluster (by first triangle) that is not reached.
+TEST_F(TraceClusters, ConnectivityAgreesWithABruteForceWalk) {
+  Mesh grid = ptc::subdivide(strip(3), ptc::SubdivisionScheme::Midpoint, 1);  // 24 triangles
+  std::vector<ptc::Tri> t(grid.triangles().begin(), grid.triangles().end());
+  std::vector<Vec3> p(grid.positions().begin(), grid.positions().end());
+  const auto v = [&](Vec3 x) {
+    p.push_back(x);
+    return static_cast<std::uint32_t>(p.size() - 1);
+  };
+  const ptc::Tri e = t[5];
+  t.push_back({e[0], e[1], v(Vec3(0.3, 0.4, 2.0))});   // a third triangle on t[5]'s first side
+  t.push_back({e[1], e[0], v(Vec3(0.2, 0.7, -2.0))});  // and a fourth
+  t.push_back({e[2], e[2], t[9][1]});                   // a repeated corner (a segment)
+  t.push_back(t[12]);                                   // a duplicate
+  const std::uint32_t a = v(Vec3(9, 9, 9)), b = v(Vec3(9, 10, 9)), c = v(Vec3(10, 9, 9));
+  t.push_back({a, b, c});  // alone
+  const Mesh m(t, p);  // every vertex at a position of its own: adjacency by positions is the same
+  const std::size_t T = t.size();
+  auto share_side = [&](std::size_t x, std::size_t y) {  // a side {s0, s1}, s0 != s1, of both
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t s0 = t[y][i], s1 = t[y][(i + 1) % 3], r0 = t[x][k], r1 = t[x][(k + 1) % 3];
+        if (s0 != s1 && ((r0 == s0 && r1 == s1) || (r0 == s1 && r1 == s0))) return true;
+      }
+    return false;
+  };
+  std::mt19937 rng(7);
+  int refused = 0, accepted = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    // Regions grown from a few random seeds, then maybe one triangle moved to another label.
+    const int k = 1 + static_cast<int>(rng() % 5);
+    std::vector<int> label(T, -1);
+    std::vector<std::size_t> queue;
+    for (int s = 0; s < k; ++s) {
+      const std::size_t seed = rng() % T;
+      if (label[seed] < 0) label[seed] = s, queue.push_back(seed);
+    }
+    for (std::size_t q = 0; q < queue.size(); ++q)
+      for (std::size_t y = 0; y < T; ++y)
+        if (label[y] < 0 && share_side(queue[q], y)) label[y] = label[queue[q]], queue.push_back(y);
+    for (std::size_t x = 0; x < T; ++x)
+      if (label[x] < 0) label[x] = 100 + static_cast<int>(x);  // unreached: a cluster of its own
+    if (rng() % 2) label[rng() % T] = static_cast<int>(rng() % static_cast<unsigned>(k));
+    std::string csv = "triangle_id,cluster_id\n";
+    for (std::size_t x = 0; x < T; ++x) csv += std::to_string(x) + "," + std::to_string(label[x]) + "\n";
+
+    // The brute force: clusters in the order of their first triangles.
+    std::string want;
+    std::vector<bool> done(T, false);
+    for (std::size_t first = 0; first < T && want.empty(); ++first) {
+      if (done[first]) continue;
+      std::vector<bool> reached(T, false);
+      std::vector<std::size_t> walk{first};
+      reached[first] = true;
+      for (std::size_t q = 0; q < walk.size(); ++q)
+        for (std::size_t y = 0; y < T; ++y)
+          if (!reached[y] && label[y] == label[first] && share_side(walk[q], y)) reached[y] = true, walk.push_back(y);
+      for (std::size_t y = 0; y < T; ++y) {
+        if (label[y] != label[first]) continue;
+        done[y] = true;
+        if (!reached[y] && want.empty())
+          want = "line " + std::to_string(y + 2) + ": triangle " + std::to_string(y) + ": cluster " +
+                 std::to_string(label[y]) + " is not connected through shared sides, not even by coincident corners "
+                 "(triangle " + std::to_string(first) + " of the same cluster cannot be reached";
+      }
+    }
+    if (want.empty()) {
+      ++accepted;
+      write(csv);
+      const ptc::Clustering got = ptc::read_clusters(dir_, m);
+      for (std::size_t x = 0; x < T; ++x)
+        for (std::size_t y = 0; y < T; ++y)
+          ASSERT_EQ(got.cluster_of_triangle()[x] == got.cluster_of_triangle()[y], label[x] == label[y]) << csv;
+    } else {
+      ++refused;
+      const std::string got = error(csv, m);
+      EXPECT_NE(got.find(want), std::string::npos) << got << "\nwanted: " << want << "\n" << csv;
+    }
+  }
+  EXPECT_GT(accepted, 50);
+  EXPECT_GT(refused, 50);
+}
+
+// Clusters of very different sizes one after the other (the side table grows and is reused): a
+// strip of 20,000 triangles cut into runs of 1, 2, 3, ... triangles reads back; the same with
+// one triangle of the longest run given to the next run's cluster splits that run, and the
+// error names the first triangle after the cut.
+TEST_F(TraceClusters, ClustersOfGrowingSizesAndOneCutInTheLargest) {
+  const Mesh m = strip(10000);
+  const std::size_t T = m.triangle_count();
+  std::vector<std::uint32_t> label(T);
+  std::vector<std::size_t> run_start;
+  for (std::size_t t = 0, len = 1, id = 0; t < T; t += len, ++len, ++id) {
+    run_start.push_back(t);
+    for (std::size_t i = t; i < std::min(T, t + len); ++i) label[i] = static_cast<std::uint32_t>(id);
+  }
+  auto csv_of = [&](const std::vector<std::uint32_t>& l) {
+    std::string s = "triangle_id,cluster_id\n";
+    for (std::size_t t = 0; t < T; ++t) s += std::to_string(t) + "," + std::to_string(l[t]) + "\n";
+    return s;
+  };
+  const ptc::Clustering c = ptc::read_clusters(write(csv_of(label)), m);
+  ASSERT_EQ(c.cluster_count(), run_start.size());
+  EXPECT_EQ(c.cluster_of_triangle(), label);
+  // The longest complete run: [run_start[n - 2], run_start[n - 1]); its middle triangle moves to
+  // the last run's cluster (and is cut off from it too, so only the first failure is named).
+  const std::size_t n = run_start.size(), lo = run_start[n - 2], hi = run_start[n - 1], mid = (lo + hi) / 2;
+  label[mid] = label[hi];
+  const std::string e = error(csv_of(label), m);
+  EXPECT_NE(e.find("line " + std::to_string(mid + 3) + ": triangle " + std::to_string(mid + 1) + ": cluster " +
+                   std::to_string(label[lo]) + " is not connected"),
+            std::string::npos)
+      << e;
 }

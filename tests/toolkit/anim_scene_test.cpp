@@ -230,6 +230,47 @@ TEST(Renumbering, SceneRenumbersEachPartWithinItsRange) {
   EXPECT_THROW(c.renumber_vertices(std::vector<std::uint32_t>{0}), std::invalid_argument);
 }
 
+// One part (the scene's rest is then the part's own rest mesh, its triangle array shared): the
+// same checks, with a source that renumbers itself in place and one that needs a gather.
+TEST(Renumbering, SceneOfOnePartRenumbersItsRest) {
+  for (const bool in_place : {true, false}) {
+    auto make = [&] {
+      std::vector<ScenePart> parts;
+      DeformParams dp;
+      dp.kind = DeformKind::Explode;
+      dp.amplitude = 0.3;
+      if (in_place)
+        parts.push_back({"ball", make_deformer(make_sphere_mesh(Vec3(1, 2, 3), 0.5, 1), dp)});
+      else
+        parts.push_back({"tri", std::make_unique<Shifted>(tri_mesh(7), 4)});
+      return Scene("one", std::move(parts));
+    };
+    Scene a = make(), b = make();
+    const std::size_t V = a.rest().vertex_count();
+    const std::vector<std::uint32_t> to_old = shuffled_within({0, V}, 11);
+    b.renumber_vertices(to_old);
+    ASSERT_EQ(b.rest().vertex_count(), V);
+    ASSERT_EQ(b.rest().triangle_count(), a.rest().triangle_count());
+    for (std::size_t t = 0; t < a.rest().triangle_count(); ++t)
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(to_old[b.rest().triangle(t)[c]], a.rest().triangle(t)[c]);
+    for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(b.rest().position(i), a.rest().position(to_old[i]));
+    std::vector<Vec3> pa(V), pb(V);
+    for (double t : {0.0, 1.0, 2.5}) {
+      a.positions(t, pa);
+      b.positions(t, pb);
+      for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(pb[i], pa[to_old[i]]) << "t " << t << " v " << i;
+    }
+    EXPECT_EQ(b.describe().find("gather") != std::string::npos, !in_place);
+    // Twice: the second renumbering composes with the first.
+    const std::vector<std::uint32_t> again = shuffled_within({0, V}, 12);
+    b.renumber_vertices(again);
+    for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(b.rest().position(i), a.rest().position(to_old[again[i]]));
+    // Refused permutations leave the rest as it was.
+    EXPECT_THROW(b.renumber_vertices(std::vector<std::uint32_t>(V, 0)), std::invalid_argument);
+    for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(b.rest().position(i), a.rest().position(to_old[again[i]]));
+  }
+}
+
 TEST(SceneModel, DefaultCameraSeesTheBounds) {
   Box3 b;
   b.extend(Vec3(-1, -2, -3));

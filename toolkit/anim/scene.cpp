@@ -52,17 +52,7 @@ Scene::Scene(std::string name, std::vector<ScenePart> parts, std::optional<Scene
   }
   if (V > 0xffffffffull || T > 0xffffffffull)
     throw InputError("", "", "scene", "the combined mesh exceeds 32-bit vertex or triangle indices");
-  std::vector<Tri> tris;
-  tris.reserve(T);
-  std::vector<Vec3> pos;
-  pos.reserve(V);
-  for (std::size_t k = 0; k < parts_.size(); ++k) {
-    const Mesh& m = parts_[k].source->rest();
-    const auto off = static_cast<std::uint32_t>(vertex_offsets_[k]);
-    for (const Tri& t : m.triangles()) tris.push_back({t[0] + off, t[1] + off, t[2] + off});
-    pos.insert(pos.end(), m.positions().begin(), m.positions().end());
-  }
-  rest_ = Mesh(std::move(tris), std::move(pos));
+  combine_rest();
 
   const std::size_t fc = frame_count();
   if (frames) {
@@ -124,7 +114,7 @@ void Scene::renumber_vertices(std::span<const std::uint32_t> to_old) {
   if (to_old.size() != rest_.vertex_count())
     throw std::invalid_argument(fmt::format("renumber_vertices: {} entries for {} vertices", to_old.size(),
                                             rest_.vertex_count()));
-  Mesh renumbered = ptc::renumber_vertices(rest_, to_old);  // validates the permutation
+  (void)inverse_permutation(to_old);  // validates the permutation before anything changes
   for (std::size_t k = 0; k < parts_.size(); ++k)
     for (std::size_t i = vertex_offsets_[k]; i < vertex_offsets_[k + 1]; ++i)
       if (to_old[i] < vertex_offsets_[k] || to_old[i] >= vertex_offsets_[k + 1])
@@ -140,7 +130,28 @@ void Scene::renumber_vertices(std::span<const std::uint32_t> to_old) {
     }
     if (!identity) parts_[k].source = ptc::renumber_vertices(std::move(parts_[k].source), local);
   }
-  rest_ = std::move(renumbered);
+  combine_rest();  // the parts' renumbered rests, as the constructor combined them
+}
+
+void Scene::combine_rest() {
+  // One part: its rest mesh itself (the triangle array shared, the positions copied; at 13M
+  // triangles a second triangle array is 160 MB). Several: concatenated, each part's corners
+  // moved past the vertices of the parts before it.
+  if (parts_.size() == 1) {
+    rest_ = parts_[0].source->rest();
+    return;
+  }
+  std::vector<Tri> tris;
+  tris.reserve(triangle_offsets_.back());
+  std::vector<Vec3> pos;
+  pos.reserve(vertex_offsets_.back());
+  for (std::size_t k = 0; k < parts_.size(); ++k) {
+    const Mesh& m = parts_[k].source->rest();
+    const auto off = static_cast<std::uint32_t>(vertex_offsets_[k]);
+    for (const Tri& t : m.triangles()) tris.push_back({t[0] + off, t[1] + off, t[2] + off});
+    pos.insert(pos.end(), m.positions().begin(), m.positions().end());
+  }
+  rest_ = Mesh(std::move(tris), std::move(pos));
 }
 
 std::string Scene::describe() const {

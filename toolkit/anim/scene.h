@@ -113,6 +113,8 @@ class Scene {
   [[nodiscard]] std::string describe() const;
 
  private:
+  void combine_rest();  // rest_ from the parts' rest meshes
+
   std::string name_;
   std::vector<ScenePart> parts_;
   std::vector<std::size_t> vertex_offsets_, triangle_offsets_;

@@ -3,9 +3,16 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
 #include <sstream>
 
+#include "toolkit/core/error.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/mesh_report.h"
 #include "toolkit/test_meshes.h"
@@ -144,6 +151,53 @@ TEST(ClusterReport, NoObjectiveGivesNanAccAndNullDistribution) {
   EXPECT_TRUE(std::isnan(rows[0].acc));
   EXPECT_TRUE(cluster_distributions(rows)["acc"].is_null());
   EXPECT_EQ(cluster_distributions(rows)["triangles"]["max"].get<double>(), 1.0);
+}
+
+}  // namespace
+}  // namespace ptc
+
+namespace ptc {
+namespace {
+
+std::string read_whole(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The streamed triangles.csv is the generic table's text byte for byte: no triangles, one, a
+// clustering over several 1 MiB blocks, labels up to 2^32 - 1; a write that cannot start throws
+// and leaves nothing behind.
+TEST(ClusterReport, StreamedTrianglesCsvIsTheTablesText) {
+  const auto dir = std::filesystem::temp_directory_path() / ("ptc_tri_csv_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::mt19937 rng(3);
+  for (const std::size_t T : {std::size_t{0}, std::size_t{1}, std::size_t{77}, std::size_t{150000}}) {
+    // Clusters as runs of random length with random ids (the last few at the top of the range).
+    std::vector<std::uint32_t> label(T);
+    for (std::size_t t = 0; t < T;) {
+      const std::size_t len = 1 + rng() % 40;
+      const std::uint32_t id = T > 100 && t + len >= T ? 0xffffffffu - static_cast<std::uint32_t>(rng() % 3)
+                                                       : static_cast<std::uint32_t>(rng());
+      for (std::size_t i = t; i < std::min(T, t + len); ++i) label[i] = id;
+      t += len;
+    }
+    const Clustering c = clustering_from_labels(label, std::vector<Tri>(T, Tri{0, 1, 2}));
+    const Table want = triangles_table(c);
+    const auto path = dir / ("t" + std::to_string(T) + ".csv");
+    EXPECT_EQ(write_triangles_csv(c.cluster_of_triangle(), path), want.schema.id());
+    EXPECT_EQ(read_whole(path), want.csv.str()) << T;
+    // The labels as given (not renumbered): the rows carry them verbatim.
+    write_triangles_csv(label, path);
+    const std::string text = read_whole(path);
+    if (T > 0) {
+      const std::string last = std::to_string(T - 1) + "," + std::to_string(label[T - 1]) + "\n";
+      EXPECT_EQ(text.substr(text.size() - last.size()), last);
+    }
+  }
+  EXPECT_THROW(write_triangles_csv(std::vector<std::uint32_t>{1, 2}, dir / "missing" / "t.csv"), InputError);
+  EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
