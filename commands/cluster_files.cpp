@@ -16,7 +16,6 @@
 
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/core/error.h"
-#include "toolkit/mesh/topology.h"
 
 namespace ptc {
 namespace {

@@ -67,12 +67,12 @@ Scene::Scene(std::string name, std::vector<ScenePart> parts, std::optional<Scene
   }
   own_camera_ = camera.has_value();
   own_light_ = light.has_value();
-  camera_ = camera ? *camera : default_camera(rest_.bounds());
+  camera_ = camera ? *camera : default_camera(rest().bounds());
   if (light) {
     light_ = *light;
   } else {
     // Above and behind the camera's right shoulder: the lit side faces the viewer.
-    const Box3 b = rest_.bounds();
+    const Box3 b = rest().bounds();
     const double d = b.extent().norm();
     light_.position = camera_.eye + Vec3(0.5, 1.0, 0.5) * d;
     light_.intensity = 1.0;
@@ -101,9 +101,9 @@ std::size_t Scene::frame_count() const {
 }
 
 void Scene::positions(double frame, std::span<Vec3> out, bool update_static) {
-  if (out.size() != rest_.vertex_count())
+  if (out.size() != rest().vertex_count())
     throw std::invalid_argument(
-        fmt::format("positions: output holds {} vertices, the scene has {}", out.size(), rest_.vertex_count()));
+        fmt::format("positions: output holds {} vertices, the scene has {}", out.size(), rest().vertex_count()));
   for (std::size_t k = 0; k < parts_.size(); ++k) {
     if (!update_static && parts_[k].source->is_static()) continue;
     parts_[k].source->positions(frame, out.subspan(vertex_offsets_[k], vertex_offsets_[k + 1] - vertex_offsets_[k]));
@@ -111,9 +111,9 @@ void Scene::positions(double frame, std::span<Vec3> out, bool update_static) {
 }
 
 void Scene::renumber_vertices(std::span<const std::uint32_t> to_old) {
-  if (to_old.size() != rest_.vertex_count())
+  if (to_old.size() != rest().vertex_count())
     throw std::invalid_argument(fmt::format("renumber_vertices: {} entries for {} vertices", to_old.size(),
-                                            rest_.vertex_count()));
+                                            rest().vertex_count()));
   (void)inverse_permutation(to_old);  // validates the permutation before anything changes
   for (std::size_t k = 0; k < parts_.size(); ++k)
     for (std::size_t i = vertex_offsets_[k]; i < vertex_offsets_[k + 1]; ++i)
@@ -134,11 +134,11 @@ void Scene::renumber_vertices(std::span<const std::uint32_t> to_old) {
 }
 
 void Scene::combine_rest() {
-  // One part: its rest mesh itself (the triangle array shared, the positions copied; at 13M
-  // triangles a second triangle array is 160 MB). Several: concatenated, each part's corners
-  // moved past the vertices of the parts before it.
+  // One part: rest() is the part's own rest mesh, nothing combined (at 13M triangles a copy is
+  // 320 MB). Several: concatenated, each part's corners moved past the vertices of the parts
+  // before it.
   if (parts_.size() == 1) {
-    rest_ = parts_[0].source->rest();
+    rest_ = Mesh();
     return;
   }
   std::vector<Tri> tris;

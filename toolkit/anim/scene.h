@@ -78,7 +78,7 @@ class Scene {
   [[nodiscard]] std::size_t triangle_offset(std::size_t p) const { return triangle_offsets_[p]; }
 
   /// The combined topology with every part's rest positions.
-  [[nodiscard]] const Mesh& rest() const { return rest_; }
+  [[nodiscard]] const Mesh& rest() const { return parts_.size() == 1 ? parts_[0].source->rest() : rest_; }
   /// The camera and light: the scene's own, or the defaults of the constructor.
   [[nodiscard]] const SceneCamera& camera() const { return camera_; }
   [[nodiscard]] const SceneLight& light() const { return light_; }
@@ -104,7 +104,8 @@ class Scene {
   /// part's range [vertex_offset(p), vertex_offset(p + 1)) onto itself, as
   /// bvh::cluster_vertex_order with the part offsets makes it; std::invalid_argument otherwise):
   /// each part renumbers its source (renumber_vertices: in place, or by a gather per frame,
-  /// which describe() then says), rest() is renumbered, triangles keep their ids.
+  /// which describe() then says), rest() is renumbered, triangles keep their ids. A reference to
+  /// rest() taken before does not survive it (one part: rest() is the part's source's own mesh).
   void renumber_vertices(std::span<const std::uint32_t> to_old);
   /// The vertex offsets of the parts (part_count() + 1 entries).
   [[nodiscard]] std::span<const std::size_t> vertex_offsets() const { return vertex_offsets_; }
@@ -113,7 +114,7 @@ class Scene {
   [[nodiscard]] std::string describe() const;
 
  private:
-  void combine_rest();  // rest_ from the parts' rest meshes
+  void combine_rest();  // rest_ from the parts' rest meshes (several parts; one part: rest() is its own)
 
   std::string name_;
   std::vector<ScenePart> parts_;
