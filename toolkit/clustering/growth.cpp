@@ -229,6 +229,10 @@ template <ClusterObjective O>
         Candidate c{u, 0, 0, {}, {}, 0, {}};
         if constexpr (kFast) {
           c.kept = objective.triangle_box(u);
+          // growth_prepare reads the candidate's normal and area at the next step, first from
+          // tables far beyond the caches on a large mesh: ask for them now.
+          __builtin_prefetch(tb.normal.data() + u);
+          __builtin_prefetch(tb.area.data() + u);
         } else {
           c.kept = objective.single(u);
         }
@@ -236,6 +240,9 @@ template <ClusterObjective O>
         if constexpr (O::kUsesBoundary) c.ne = tb.distinct_edges(u, c.e);  // the edge map exists only then
         for (int i = 0; i < c.nv; ++i)
           if (vstamp[c.v[i]] == cluster) c.in_k = static_cast<std::uint8_t>(c.in_k | (1u << i));
+        if constexpr (kFast)  // growth_key reads the learnt bound of the vertex the candidate adds
+          for (int i = 0; i < c.nv; ++i)
+            if (!((c.in_k >> i) & 1)) objective.prefetch_vertex(c.v[i]);
         frontier.push_back(std::move(c));
       }
     if (++taken % report_every == 0 && progress) progress(static_cast<double>(taken) / T);

@@ -211,6 +211,10 @@ class AccObjective {
   [[nodiscard]] bool growth_bound_applies() const { return minimal_ && tuning_.vertex_memo && !tuning_.dop_bound; }
   void growth_prepare(const Summary& a, std::span<const GrowthQuery> queries, GrowthPrepared* out);
   [[nodiscard]] bool growth_key(const GrowthPrepared& p, std::uint32_t v, std::uint32_t vertex_count, double& key);
+  /// Asks for vertex v's entries of the learnt bounds (read by growth_key) ahead of their use.
+  void prefetch_vertex(std::uint32_t v) const {
+    if (v < lb_owner_.size()) __builtin_prefetch(lb_owner_.data() + v), __builtin_prefetch(lb_r2_.data() + v);
+  }
   /// evaluate(a, single(t), ctx, precision) for a candidate growth_prepare did not mark general,
   /// at any level (growth's refinements): the same Evaluation and side effects, without
   /// recomputing what growth_prepare kept, and without single(t).
