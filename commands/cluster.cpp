@@ -140,11 +140,7 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   // triangle) and as clusters.ply's face values (the same 32 bits read as int32).
   const std::vector<std::uint32_t> label = clustering.cluster_of_triangle();
   tri_schema = write_triangles_csv(label, dir.path("triangles.csv"));
-  {
-    const Table cluster_table = clusters_table(rows);
-    dir.write("clusters.csv", cluster_table.csv.str());
-    cluster_schema = cluster_table.schema.id();
-  }
+  cluster_schema = write_clusters_csv(rows, dir.path("clusters.csv"));  // in blocks, as triangles.csv
   WriteOptions wo;
   // (int32 and uint32 may alias each other; ids at or above 2^31 read negative, as a cast gave.)
   wo.face_values = std::span<const std::int32_t>(reinterpret_cast<const std::int32_t*>(label.data()), label.size());

@@ -125,25 +125,40 @@ void for_each_metric(const ClusterRow& r, F&& f) {
 }
 }  // namespace
 
-Table clusters_table(const std::vector<ClusterRow>& rows) {
-  struct Row {
-    std::uint64_t id = 0;
-    const ClusterRow* r = nullptr;
-  };
-  std::vector<Row> ids;
-  for (std::size_t k = 0; k < rows.size(); ++k) ids.push_back({k, &rows[k]});
-  return tabulate(Schema{"ptc-clusters", 1}, ids, [](const Row& x, Columns& col) {
-    static const ClusterRow none{};
-    const ClusterRow& r = x.r ? *x.r : none;
-    col("cluster_id", x.id);
-    for_each_metric(r, [&](const char* name, double v) {
-      if (std::string_view(name) == "triangles" || std::string_view(name) == "vertices")
-        col(name, static_cast<std::uint64_t>(v));
-      else
-        col(name, v);
-    });
-    col("n_avg_fallback", static_cast<std::uint64_t>(r.m.n_avg_fallback));
+namespace {
+// clusters.csv's rows: the cluster's id and its metrics (a default row for the header).
+struct ClustersCsvRow {
+  std::uint64_t id = 0;
+  const ClusterRow* r = nullptr;
+};
+void visit_clusters_csv_row(const ClustersCsvRow& x, Columns& col) {
+  static const ClusterRow none{};
+  const ClusterRow& r = x.r ? *x.r : none;
+  col("cluster_id", x.id);
+  for_each_metric(r, [&](const char* name, double v) {
+    if (std::string_view(name) == "triangles" || std::string_view(name) == "vertices")
+      col(name, static_cast<std::uint64_t>(v));
+    else
+      col(name, v);
   });
+  col("n_avg_fallback", static_cast<std::uint64_t>(r.m.n_avg_fallback));
+}
+const Schema kClustersSchema{"ptc-clusters", 1};
+}  // namespace
+
+Table clusters_table(const std::vector<ClusterRow>& rows) {
+  return tabulate_each<ClustersCsvRow>(
+      kClustersSchema, rows.size(), [&](std::size_t k) { return ClustersCsvRow{k, &rows[k]}; },
+      visit_clusters_csv_row);
+}
+
+std::string write_clusters_csv(const std::vector<ClusterRow>& rows, const std::filesystem::path& path) {
+  AtomicFile f(path);
+  const std::string id = stream_each<ClustersCsvRow>(
+      kClustersSchema, rows.size(), [&](std::size_t k) { return ClustersCsvRow{k, &rows[k]}; },
+      visit_clusters_csv_row, [&](std::string_view block) { f.write(block); });
+  f.commit();
+  return id;
 }
 
 nlohmann::json cluster_distributions(const std::vector<ClusterRow>& rows) {

@@ -49,6 +49,9 @@ std::string write_triangles_csv(std::span<const std::uint32_t> label, const std:
 /// area,area_p,reg_bound,size_bound,n_avg_fallback
 /// (clusters.csv, schema ptc-clusters/1; columns defined in docs/tables.md)
 [[nodiscard]] Table clusters_table(const std::vector<ClusterRow>& rows);
+/// The same bytes as clusters_table(rows).csv.str(), written to `path` in blocks of about 1 MiB
+/// (whole or not at all). Returns the schema id.
+std::string write_clusters_csv(const std::vector<ClusterRow>& rows, const std::filesystem::path& path);
 /// {metric: {count, min, mean, p5, p50, p95, max}} for every numeric column of clusters.csv.
 [[nodiscard]] nlohmann::json cluster_distributions(const std::vector<ClusterRow>& rows);
 

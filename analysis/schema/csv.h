@@ -30,6 +30,9 @@ class CsvTable {
   /// RFC 4180 text: fields with commas, quotes or newlines are quoted; "\n" line ends;
   /// non-finite doubles are written as nan / inf / -inf.
   [[nodiscard]] const std::string& str() const { return text_; }
+  /// Empties the text written so far, keeping its room (a caller that streams the table hands
+  /// str() to its file, then clears it; the next rows start an empty text).
+  void clear_text() { text_.clear(); }
 
  private:
   std::vector<std::string> columns_;

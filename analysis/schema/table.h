@@ -106,6 +106,28 @@ template <class Row, class RowAt, class Visit>
   }
   return t;
 }
+/// tabulate_each's text handed to `sink(std::string_view)` in blocks of about 1 MiB instead of
+/// kept as one string (a table of a million rows never holds its text whole). The same bytes in
+/// the same order; returns the schema's id.
+template <class Row, class RowAt, class Visit, class Sink>
+std::string stream_each(const Schema& schema, std::size_t n, RowAt&& row_at, Visit&& visit, Sink&& sink) {
+  constexpr std::size_t kBlock = std::size_t{1} << 20;
+  const std::vector<std::string> header = columns_of<Row>(visit);
+  CsvTable csv(header);
+  csv.reserve(kBlock + 4096);
+  Columns c(header);
+  for (std::size_t i = 0; i < n; ++i) {
+    c.clear();
+    visit(static_cast<const Row&>(row_at(i)), c);
+    csv.add_row(c.values());
+    if (csv.str().size() >= kBlock) {
+      sink(std::string_view(csv.str()));
+      csv.clear_text();
+    }
+  }
+  sink(std::string_view(csv.str()));
+  return schema.id();
+}
 /// One row per element of `rows`.
 template <class Row, class Visit>
 [[nodiscard]] Table tabulate(Schema schema, std::span<const Row> rows, Visit&& visit) {

@@ -9,11 +9,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <sstream>
 
 #include "toolkit/core/error.h"
 #include "toolkit/io/mesh_io.h"
+#include "toolkit/mesh/subdivision.h"
 #include "toolkit/mesh/mesh_report.h"
 #include "toolkit/test_meshes.h"
 
@@ -164,10 +166,11 @@ std::string read_whole(const std::filesystem::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// The streamed triangles.csv is the generic table's text byte for byte: no triangles, one, a
-// clustering over several 1 MiB blocks, labels up to 2^32 - 1; a write that cannot start throws
-// and leaves nothing behind.
-TEST(ClusterReport, StreamedTrianglesCsvIsTheTablesText) {
+// The streamed triangles.csv and clusters.csv are the generic table's text byte for byte:
+// triangles.csv for no triangles, one, a clustering over several 1 MiB blocks, labels up to
+// 2^32 - 1; clusters.csv over several blocks, with nan and infinite values, and empty; a write
+// that cannot start throws and leaves nothing behind.
+TEST(ClusterReport, StreamedCsvFilesAreTheTablesText) {
   const auto dir = std::filesystem::temp_directory_path() / ("ptc_tri_csv_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
@@ -195,7 +198,32 @@ TEST(ClusterReport, StreamedTrianglesCsvIsTheTablesText) {
       EXPECT_EQ(text.substr(text.size() - last.size()), last);
     }
   }
+  // clusters.csv in blocks: the elephant subdivided once, in clusters of two triangles (several
+  // MiB of text),
+  // then rows with nan and infinite values and a default row.
+  {
+    const Mesh m = subdivide(read_mesh(std::string(PTC_TEST_DATA) + "/meshes/elephant.off").mesh,
+                             SubdivisionScheme::Midpoint, 1);
+    std::vector<std::uint32_t> pairs(m.triangle_count());
+    for (std::size_t t = 0; t < pairs.size(); ++t) pairs[t] = static_cast<std::uint32_t>(t / 2);
+    ClusterConfig cfg;
+    std::vector<ClusterRow> rows = cluster_rows(m, clustering_from_labels(pairs, m.triangles()), cfg);
+    ClusterRow odd = rows[0];
+    odd.acc = std::numeric_limits<double>::quiet_NaN();
+    odd.m.reg = std::numeric_limits<double>::infinity();
+    odd.m.area = -std::numeric_limits<double>::infinity();
+    rows.push_back(odd);
+    rows.push_back(ClusterRow{});
+    const Table want = clusters_table(rows);
+    ASSERT_GT(want.csv.str().size(), std::size_t{2} << 20);  // three blocks at least
+    const auto path = dir / "clusters.csv";
+    EXPECT_EQ(write_clusters_csv(rows, path), want.schema.id());
+    EXPECT_EQ(read_whole(path), want.csv.str());
+    EXPECT_EQ(write_clusters_csv({}, path), want.schema.id());
+    EXPECT_EQ(read_whole(path), clusters_table({}).csv.str());
+  }
   EXPECT_THROW(write_triangles_csv(std::vector<std::uint32_t>{1, 2}, dir / "missing" / "t.csv"), InputError);
+  EXPECT_THROW(write_clusters_csv({}, dir / "missing" / "c.csv"), InputError);
   EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
   std::filesystem::remove_all(dir);
 }
