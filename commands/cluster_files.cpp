@@ -153,8 +153,8 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
   // bytes a triangle of fresh memory, 370 MB at 13M triangles; docs/scale.md).
   std::uint32_t unjoined = 0;
   // The sides of one cluster in an open-addressing table (key: smaller corner << 32 | larger
-  // corner; value: the first triangle of the cluster seen on that side), at most half full; a
-  // slot is empty unless its stamp is the current cluster's.
+  // corner; value: the first triangle of the cluster seen on that side), four slots a triangle or
+  // more; a slot is empty unless its stamp is the current cluster's.
   std::vector<std::uint64_t> keys;
   std::vector<std::uint32_t> first_on, stamp;
   std::uint32_t round = 0;
@@ -163,40 +163,71 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];  // path halving
     return x;
   };
+  // A cluster of more than kHashedLimit triangles (a clustering of a few huge clusters, or one
+  // for the whole mesh) sorts its sides instead: 12 bytes a side, where the table would take up
+  // to 128 bytes a triangle (at 13M triangles in one cluster: 480 MB against 1.7 GB).
+  constexpr std::size_t kHashedLimit = std::size_t{1} << 17;
+  struct Side {
+    std::uint32_t lo, hi, local;
+  };
+  std::vector<Side> sides;
+  auto join = [&](std::uint32_t x, std::uint32_t y) {
+    const std::uint32_t ra = find(x), rb = find(y);
+    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+  };
+  // The sides of one cluster (of at most kHashedLimit triangles) through the table.
+  auto hashed = [&](std::span<const Tri> tris_of_mesh, std::span<const std::uint32_t> tris) {
+    std::size_t size = 64;
+    while (size < 4 * tris.size()) size *= 2;  // at most three quarters full (no side shared)
+    if (keys.size() < size || ++round == 0) {  // a larger table, or the stamps wrapped around
+      keys.assign(std::max(keys.size(), size), 0);
+      first_on.assign(keys.size(), 0);
+      stamp.assign(keys.size(), 0);
+      round = 1;
+    }
+    const std::size_t mask = size - 1;
+    for (std::uint32_t i = 0; i < tris.size(); ++i) {
+      const Tri& f = tris_of_mesh[tris[i]];
+      for (int j = 0; j < 3; ++j) {
+        const std::uint32_t a = f[j], b = f[(j + 1) % 3];
+        if (a == b) continue;
+        const std::uint64_t key = std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
+        for (std::size_t h = (key * 0x9E3779B97F4A7C15ull) >> 32;; ++h) {
+          const std::size_t slot = h & mask;
+          if (stamp[slot] != round) {
+            stamp[slot] = round, keys[slot] = key, first_on[slot] = i;
+            break;
+          }
+          if (keys[slot] == key) {  // one mesh edge: join the triangle to the first on it
+            join(first_on[slot], i);
+            break;
+          }
+        }
+      }
+    }
+  };
   auto first_unconnected = [&](std::span<const Tri> tris_of_mesh) -> std::uint32_t {
     for (std::size_t k = 0; k < c.cluster_count(); ++k) {
       const auto tris = c.triangles_of(k);
       if (tris.size() < 2) continue;
-      std::size_t size = 64;
-      while (size < 6 * tris.size()) size *= 2;
-      if (keys.size() < size || ++round == 0) {  // a larger table, or the stamps wrapped around
-        keys.assign(std::max(keys.size(), size), 0);
-        first_on.assign(keys.size(), 0);
-        stamp.assign(keys.size(), 0);
-        round = 1;
-      }
-      const std::size_t mask = size - 1;
       parent.resize(tris.size());
       for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-      for (std::uint32_t i = 0; i < tris.size(); ++i) {
-        const Tri& f = tris_of_mesh[tris[i]];
-        for (int j = 0; j < 3; ++j) {
-          const std::uint32_t a = f[j], b = f[(j + 1) % 3];
-          if (a == b) continue;
-          const std::uint64_t key = std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
-          for (std::size_t h = (key * 0x9E3779B97F4A7C15ull) >> 32;; ++h) {
-            const std::size_t slot = h & mask;
-            if (stamp[slot] != round) {
-              stamp[slot] = round, keys[slot] = key, first_on[slot] = i;
-              break;
-            }
-            if (keys[slot] == key) {  // one mesh edge: join the triangle to the first on it
-              const std::uint32_t ra = find(first_on[slot]), rb = find(i);
-              if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
-              break;
-            }
-          }
+      if (tris.size() > kHashedLimit) {
+        sides.clear();
+        for (std::uint32_t i = 0; i < tris.size(); ++i) {
+          const Tri& f = tris_of_mesh[tris[i]];
+          for (int j = 0; j < 3; ++j)
+            if (f[j] != f[(j + 1) % 3])
+              sides.push_back({std::min(f[j], f[(j + 1) % 3]), std::max(f[j], f[(j + 1) % 3]), i});
         }
+        std::sort(sides.begin(), sides.end(),
+                  [](const Side& x, const Side& y) { return x.lo != y.lo ? x.lo < y.lo : x.hi < y.hi; });
+        for (std::size_t lo = 0, hi; lo < sides.size(); lo = hi)  // one run: one edge
+          for (hi = lo + 1; hi < sides.size() && sides[hi].lo == sides[lo].lo && sides[hi].hi == sides[lo].hi; ++hi)
+            join(sides[lo].local, sides[hi].local);
+        std::vector<Side>().swap(sides);
+      } else {
+        hashed(tris_of_mesh, tris);
       }
       for (std::uint32_t i = 1; i < tris.size(); ++i)
         if (find(i) != find(0)) {

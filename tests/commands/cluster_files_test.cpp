@@ -318,3 +318,26 @@ TEST_F(TraceClusters, ClustersOfGrowingSizesAndOneCutInTheLargest) {
             std::string::npos)
       << e;
 }
+
+// A cluster beyond the side table's limit (its sides sorted instead): a strip of 200,000
+// triangles as one cluster of 150,000 and one of 50,000 reads back; with the middle triangle of
+// the large one moved to the small one, the large one is cut there and the error names the
+// triangle after the cut.
+TEST_F(TraceClusters, AHugeClusterSortsItsSides) {
+  const Mesh m = strip(100000);
+  const std::size_t T = m.triangle_count(), big = 150000;
+  std::vector<std::uint32_t> label(T);
+  for (std::size_t t = 0; t < T; ++t) label[t] = t < big ? 0u : 1u;
+  auto csv_of = [&](const std::vector<std::uint32_t>& l) {
+    std::string s = "triangle_id,cluster_id\n";
+    for (std::size_t t = 0; t < T; ++t) s += std::to_string(t) + "," + std::to_string(l[t]) + "\n";
+    return s;
+  };
+  EXPECT_EQ(ptc::read_clusters(write(csv_of(label)), m).cluster_of_triangle(), label);
+  label[big / 2] = 1;
+  const std::string e = error(csv_of(label), m);
+  EXPECT_NE(e.find("line " + std::to_string(big / 2 + 3) + ": triangle " + std::to_string(big / 2 + 1) +
+                   ": cluster 0 is not connected"),
+            std::string::npos)
+      << e;
+}
