@@ -16,7 +16,8 @@ Meshes: Debian's armadillo (libcgal-demo, 52,000 triangles) midpoint-subdivided 
 Every command runs as a child; its wall time, peak resident memory and user and system CPU time
 come from wait4's rusage, its stages from its manifest.json (timings_ms, peak_rss_mb). With
 --repeat N every command but subdivide runs N times (the whole list, then again), and each figure
-is the median of the N runs (every run's value is kept in the CSV). Writes OUT/scale.csv (one row
+is the median of the N runs (every run's time is kept in the CSV, column ms_each_run; every run's
+peak memory and CPU times in manifest.json's commands). Writes OUT/scale.csv (one row
 per size, command and stage) and OUT/manifest.json (commands, machine, ptc build), prints a table:
 per stage the per-triangle cost's growth per 4x triangles ('!' above 1.3x), and with levels 2 and
 4 the issue's 13.3M rule, the 13.3M stage against 16 times its 832k time ('*' above 1.3x).
