@@ -175,6 +175,17 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
     const std::uint32_t ra = find(x), rb = find(y);
     if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
   };
+  // on_side(smaller corner, larger corner, i) for every side of two distinct corners of the
+  // cluster's triangles tris[i].
+  auto for_each_side = [](std::span<const Tri> tris_of_mesh, std::span<const std::uint32_t> tris, auto&& on_side) {
+    for (std::uint32_t i = 0; i < tris.size(); ++i) {
+      const Tri& f = tris_of_mesh[tris[i]];
+      for (int j = 0; j < 3; ++j) {
+        const std::uint32_t a = f[j], b = f[(j + 1) % 3];
+        if (a != b) on_side(std::min(a, b), std::max(a, b), i);
+      }
+    }
+  };
   // The sides of one cluster (of at most kHashedLimit triangles) through the table.
   auto hashed = [&](std::span<const Tri> tris_of_mesh, std::span<const std::uint32_t> tris) {
     std::size_t size = 64;
@@ -186,25 +197,20 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
       round = 1;
     }
     const std::size_t mask = size - 1;
-    for (std::uint32_t i = 0; i < tris.size(); ++i) {
-      const Tri& f = tris_of_mesh[tris[i]];
-      for (int j = 0; j < 3; ++j) {
-        const std::uint32_t a = f[j], b = f[(j + 1) % 3];
-        if (a == b) continue;
-        const std::uint64_t key = std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
-        for (std::size_t h = (key * 0x9E3779B97F4A7C15ull) >> 32;; ++h) {
-          const std::size_t slot = h & mask;
-          if (stamp[slot] != round) {
-            stamp[slot] = round, keys[slot] = key, first_on[slot] = i;
-            break;
-          }
-          if (keys[slot] == key) {  // one mesh edge: join the triangle to the first on it
-            join(first_on[slot], i);
-            break;
-          }
+    for_each_side(tris_of_mesh, tris, [&](std::uint32_t lo, std::uint32_t hi, std::uint32_t i) {
+      const std::uint64_t key = std::uint64_t{lo} << 32 | hi;
+      for (std::size_t h = (key * 0x9E3779B97F4A7C15ull) >> 32;; ++h) {
+        const std::size_t slot = h & mask;
+        if (stamp[slot] != round) {
+          stamp[slot] = round, keys[slot] = key, first_on[slot] = i;
+          return;
+        }
+        if (keys[slot] == key) {  // one mesh edge: join the triangle to the first on it
+          join(first_on[slot], i);
+          return;
         }
       }
-    }
+    });
   };
   auto first_unconnected = [&](std::span<const Tri> tris_of_mesh) -> std::uint32_t {
     for (std::size_t k = 0; k < c.cluster_count(); ++k) {
@@ -214,12 +220,8 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
       for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
       if (tris.size() > kHashedLimit) {
         sides.clear();
-        for (std::uint32_t i = 0; i < tris.size(); ++i) {
-          const Tri& f = tris_of_mesh[tris[i]];
-          for (int j = 0; j < 3; ++j)
-            if (f[j] != f[(j + 1) % 3])
-              sides.push_back({std::min(f[j], f[(j + 1) % 3]), std::max(f[j], f[(j + 1) % 3]), i});
-        }
+        for_each_side(tris_of_mesh, tris,
+                      [&](std::uint32_t lo, std::uint32_t hi, std::uint32_t i) { sides.push_back({lo, hi, i}); });
         std::sort(sides.begin(), sides.end(),
                   [](const Side& x, const Side& y) { return x.lo != y.lo ? x.lo < y.lo : x.hi < y.hi; });
         for (std::size_t lo = 0, hi; lo < sides.size(); lo = hi)  // one run: one edge

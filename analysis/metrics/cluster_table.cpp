@@ -61,6 +61,10 @@ std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, cons
   return rows;
 }
 
+namespace {
+const Schema kTrianglesSchema{"ptc-cluster-triangles", 1};
+}  // namespace
+
 Table triangles_table(const Clustering& c) {
   struct Row {
     std::uint64_t triangle = 0, cluster = 0;
@@ -73,7 +77,7 @@ Table triangles_table(const Clustering& c) {
   };
   const std::size_t n = label.size(), most = n ? digits(n - 1) + digits(c.cluster_count()) + 2 : 0;
   return tabulate_each<Row>(
-      Schema{"ptc-cluster-triangles", 1}, n, [&](std::size_t i) { return Row{i, label[i]}; },
+      kTrianglesSchema, n, [&](std::size_t i) { return Row{i, label[i]}; },
       [](const Row& r, Columns& col) {
         col("triangle_id", r.triangle);
         col("cluster_id", r.cluster);
@@ -82,7 +86,9 @@ Table triangles_table(const Clustering& c) {
 }
 
 std::string write_triangles_csv(std::span<const std::uint32_t> label, const std::filesystem::path& path) {
-  constexpr std::size_t kBlock = std::size_t{1} << 20;
+  // (Not through stream_each: its rows of two integers formatted in place, file included, take
+  // half the time of the generic rows of variants: 0.06 against 0.13 s for 3.3M rows.)
+  constexpr std::size_t kBlock = kCsvBlockBytes;
   AtomicFile f(path);
   std::string buf;
   buf.reserve(kBlock + 64);
@@ -102,7 +108,7 @@ std::string write_triangles_csv(std::span<const std::uint32_t> label, const std:
   }
   f.write(buf);
   f.commit();
-  return Schema{"ptc-cluster-triangles", 1}.id();
+  return kTrianglesSchema.id();
 }
 
 namespace {

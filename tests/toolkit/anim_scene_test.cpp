@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -192,6 +193,23 @@ TEST(Renumbering, SourcesProduceTheirPositionsInTheNewOrder) {
   EXPECT_EQ(e->rest().positions()[0], sphere.positions()[0]);
 }
 
+// b is a renumbered with to_old: b's rest triangles and positions, and its positions at `times`,
+// are a's through to_old, item by item.
+void expect_renumbered(Scene& a, Scene& b, const std::vector<std::uint32_t>& to_old, std::initializer_list<double> times) {
+  const std::size_t V = a.rest().vertex_count();
+  ASSERT_EQ(b.rest().vertex_count(), V);
+  ASSERT_EQ(b.rest().triangle_count(), a.rest().triangle_count());
+  for (std::size_t t = 0; t < a.rest().triangle_count(); ++t)
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(to_old[b.rest().triangle(t)[c]], a.rest().triangle(t)[c]);
+  for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(b.rest().position(i), a.rest().position(to_old[i]));
+  std::vector<Vec3> pa(V), pb(V);
+  for (double t : times) {
+    a.positions(t, pa);
+    b.positions(t, pb);
+    for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(pb[i], pa[to_old[i]]) << "t " << t << " v " << i;
+  }
+}
+
 TEST(Renumbering, SceneRenumbersEachPartWithinItsRange) {
   auto make = [] {
     std::vector<ScenePart> parts;
@@ -208,17 +226,8 @@ TEST(Renumbering, SceneRenumbersEachPartWithinItsRange) {
   ASSERT_EQ(offs.size(), 4u);
   const std::vector<std::uint32_t> to_old = shuffled_within(offs, 5);
   b.renumber_vertices(to_old);
+  expect_renumbered(a, b, to_old, {0.0, 2.0, 3.0});
   const std::size_t V = a.rest().vertex_count();
-  ASSERT_EQ(b.rest().vertex_count(), V);
-  for (std::size_t t = 0; t < a.rest().triangle_count(); ++t)
-    for (int c = 0; c < 3; ++c) ASSERT_EQ(to_old[b.rest().triangle(t)[c]], a.rest().triangle(t)[c]);
-  for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(b.rest().position(i), a.rest().position(to_old[i]));
-  std::vector<Vec3> pa(V), pb(V);
-  for (double t : {0.0, 2.0, 3.0}) {
-    a.positions(t, pa);
-    b.positions(t, pb);
-    for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(pb[i], pa[to_old[i]]) << "t " << t << " v " << i;
-  }
   EXPECT_NE(b.describe().find("gather"), std::string::npos);  // the test source cannot renumber itself
   // A permutation that moves a vertex into another part's range is refused, nothing changed.
   Scene c = make();
@@ -249,17 +258,7 @@ TEST(Renumbering, SceneOfOnePartRenumbersItsRest) {
     const std::size_t V = a.rest().vertex_count();
     const std::vector<std::uint32_t> to_old = shuffled_within({0, V}, 11);
     b.renumber_vertices(to_old);
-    ASSERT_EQ(b.rest().vertex_count(), V);
-    ASSERT_EQ(b.rest().triangle_count(), a.rest().triangle_count());
-    for (std::size_t t = 0; t < a.rest().triangle_count(); ++t)
-      for (int c = 0; c < 3; ++c) ASSERT_EQ(to_old[b.rest().triangle(t)[c]], a.rest().triangle(t)[c]);
-    for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(b.rest().position(i), a.rest().position(to_old[i]));
-    std::vector<Vec3> pa(V), pb(V);
-    for (double t : {0.0, 1.0, 2.5}) {
-      a.positions(t, pa);
-      b.positions(t, pb);
-      for (std::size_t i = 0; i < V; ++i) ASSERT_EQ(pb[i], pa[to_old[i]]) << "t " << t << " v " << i;
-    }
+    expect_renumbered(a, b, to_old, {0.0, 1.0, 2.5});
     EXPECT_EQ(b.describe().find("gather") != std::string::npos, !in_place);
     // Twice: the second renumbering composes with the first.
     const std::vector<std::uint32_t> again = shuffled_within({0, V}, 12);
