@@ -23,12 +23,18 @@ const fs::path kMeshes = fs::path(PTC_TEST_DATA) / "meshes";
 void expect_consistent(const LoadedMesh& lm, const std::string& what) {
   const Mesh& m = lm.mesh;
   ASSERT_GT(m.triangle_count(), 0u) << what;
-  ASSERT_EQ(lm.report.source_face.size(), m.triangle_count()) << what;
+  if (lm.report.source_face.empty()) {  // triangle t is face t: only triangles, none skipped
+    ASSERT_EQ(lm.report.faces, m.triangle_count()) << what;
+    ASSERT_EQ(lm.report.polygons + lm.report.short_faces, 0u) << what;
+  } else {
+    ASSERT_EQ(lm.report.source_face.size(), m.triangle_count()) << what;
+    ASSERT_GT(lm.report.polygons + lm.report.short_faces, 0u) << what;
+  }
   for (std::size_t t = 0; t < m.triangle_count(); ++t) {
     for (std::uint32_t v : m.triangle(t)) ASSERT_LT(v, m.vertex_count()) << what;
-    ASSERT_LT(lm.report.source_face[t], lm.report.faces) << what;
+    ASSERT_LT(lm.report.source_face_of(t), lm.report.faces) << what;
     if (t > 0) {
-      ASSERT_LE(lm.report.source_face[t - 1], lm.report.source_face[t]) << what;
+      ASSERT_LE(lm.report.source_face_of(t - 1), lm.report.source_face_of(t)) << what;
     }
   }
   for (const Vec3& p : m.positions()) ASSERT_TRUE(p.allFinite()) << what;

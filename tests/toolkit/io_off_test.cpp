@@ -37,7 +37,8 @@ TEST(IoOff, TetrahedronElementByElement) {
   EXPECT_EQ(lm.report.polygons, 0u);
   EXPECT_EQ(lm.report.triangles_from_polygons, 0u);
   EXPECT_EQ(lm.report.welded_vertices, 0u);
-  EXPECT_EQ(lm.report.source_face, (std::vector<std::uint32_t>{0, 1, 2, 3}));
+  EXPECT_TRUE(lm.report.source_face.empty());  // triangle t is face t
+  for (std::size_t t = 0; t < 4; ++t) EXPECT_EQ(lm.report.source_face_of(t), t);
 }
 
 TEST(IoOff, CommentsBeforeHeaderBlankLinesTrailingCommentsAndCrLf) {

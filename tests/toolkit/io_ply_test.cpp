@@ -6,9 +6,17 @@
 #include <cstring>
 #include <string>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <functional>
+#include <random>
+
+#include "common/temp_dir.h"
 #include "toolkit/core/error.h"
 #include "io_helpers.h"
 #include "toolkit/io/mesh_io.h"
+#include "toolkit/io/readers.h"
 
 namespace ptc {
 namespace {
@@ -432,6 +440,134 @@ TEST(IoPly, HugeHeaderIsLinear) {
   EXPECT_EQ(ply(h).mesh.triangle_count(), 1u);  // ctest's timeout catches a quadratic regression
   h.insert(h.find("end_header"), "element e7 0\n");
   EXPECT_NE(std::string(ply_error(h).what()).find("declared twice"), std::string::npos);
+}
+
+std::string fmt_report(const ReadReport& r) {
+  std::string o = " faces " + std::to_string(r.faces) + " polygons " + std::to_string(r.polygons) + " from " +
+                  std::to_string(r.triangles_from_polygons) + " short " + std::to_string(r.short_faces) + " " +
+                  r.first_short_face + " surplus " + std::to_string(r.surplus_lines) + " " + r.first_surplus +
+                  " binary " + std::to_string(r.binary) + " source";
+  for (std::uint32_t f : r.source_face) o += " " + std::to_string(f);
+  return o;
+}
+
+// ---- a file read through a sliding window (read_ply_file) -------------------------------------
+
+// What a read gave: the mesh and report, or the error's text.
+std::string outcome(const std::function<LoadedMesh()>& read) {
+  try {
+    const LoadedMesh lm = read();
+    std::string o = "ok " + std::to_string(lm.mesh.vertex_count()) + " " + std::to_string(lm.mesh.triangle_count());
+    for (const Vec3& p : lm.mesh.positions()) o.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
+    for (std::size_t t = 0; t < lm.mesh.triangle_count(); ++t)
+      for (std::uint32_t v : lm.mesh.triangle(t)) o += " " + std::to_string(v);
+    const ReadReport& r = lm.report;
+    o += fmt_report(r);
+    return o;
+  } catch (const InputError& e) {
+    return std::string("error ") + e.what();
+  }
+}
+
+class IoPlyFile : public test::TempDirTest {
+ protected:
+  // The outcome of reading `bytes` from a file through a window of `window` bytes; `claimed_size`
+  // stands for a file that shrank after its size was taken.
+  std::string from_file(std::string_view bytes, std::size_t window, std::uint64_t claimed_size = ~std::uint64_t{0}) {
+    const auto path = dir_ / "t.ply";
+    test::spit(path, bytes);
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    EXPECT_GE(fd, 0);
+    const std::uint64_t size = claimed_size == ~std::uint64_t{0} ? bytes.size() : claimed_size;
+    std::string o = outcome([&] { return io::read_ply_file(fd, size, "t.ply", window); });
+    ::close(fd);
+    return o;
+  }
+};
+
+// A binary file of n vertices and about n faces: skipped scalar and list properties on both, faces
+// of 0 to 7 corners, and an index list long enough to cross several windows.
+std::string big_binary_file(bool big, int n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::string s = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+                  " 1.0\nelement vertex " + std::to_string(n) +
+                  "\nproperty float x\nproperty list uchar short junk\nproperty double y\nproperty int16 z\n"
+                  "element face " + std::to_string(n + 1) +
+                  "\nproperty uchar flags\nproperty list ushort int vertex_indices\nproperty list uchar float q\n"
+                  "end_header\n";
+  Bytes b{big, {}};
+  for (int i = 0; i < n; ++i) {
+    b.put(static_cast<float>(rng() % 1000) / 7.0f).put<std::uint8_t>(static_cast<std::uint8_t>(rng() % 3));
+    b.s.append(2 * static_cast<std::size_t>(static_cast<unsigned char>(b.s.back())), 'j');
+    b.put(static_cast<double>(rng()) / 3.0).put<std::int16_t>(static_cast<std::int16_t>(rng()));
+  }
+  for (int i = 0; i <= n; ++i) {
+    const int corners = i == n / 2 ? 3000 : static_cast<int>(rng() % 8);
+    b.put<std::uint8_t>(7).put<std::uint16_t>(static_cast<std::uint16_t>(corners));
+    for (int k = 0; k < corners; ++k) b.put<std::int32_t>(static_cast<std::int32_t>(rng() % n));
+    b.put<std::uint8_t>(1).put(0.5f);
+  }
+  return s + b.s;
+}
+
+TEST_F(IoPlyFile, WindowedReadAgreesWithTheWholeFileInMemory) {
+  std::vector<std::string> files = {binary_file(false), binary_file(true), kAsciiFile,
+                                    big_binary_file(false, 2000, 1), big_binary_file(true, 2000, 2)};
+  // Every cut of the small files, and cuts of the large ones (in the header, the vertices, the
+  // long list, the last face).
+  for (bool big : {false, true}) {
+    const std::string full = binary_file(big);
+    for (std::size_t cut = 0; cut < full.size(); ++cut) files.push_back(full.substr(0, cut));
+  }
+  for (std::size_t i : {3u, 4u}) {
+    const std::string full = files[i];
+    const std::size_t data = full.find("end_header\n") + 11;
+    for (std::size_t cut : {std::size_t{40}, data - 1, data, data + 1, data + 20000, full.size() / 2,
+                            full.size() / 2 + 5001, full.size() - 1})
+      files.push_back(full.substr(0, cut));
+  }
+  // Random damage: bytes of the body overwritten (bad counts, indices, NaNs, truncation claims).
+  std::mt19937 rng(7);
+  for (int k = 0; k < 200; ++k) {
+    std::string f = k % 2 ? binary_file(k % 4 == 1) : big_binary_file(false, 300, static_cast<std::uint32_t>(k));
+    const std::size_t data = f.find("end_header\n") + 11;
+    for (int j = 0; j < 3; ++j) f[data + rng() % (f.size() - data)] = static_cast<char>(rng());
+    files.push_back(f);
+  }
+  std::size_t loaded = 0, refused = 0;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    const std::string want = outcome([&] { return io_test::read(files[i], MeshFormat::Ply); });
+    (want.rfind("ok", 0) == 0 ? loaded : refused)++;
+    const bool large = files[i].size() > 20000;
+    for (std::size_t window : large ? std::vector<std::size_t>{1, 4093, io::kPlyWindowBytes}
+                                    : std::vector<std::size_t>{1, 2, 3, 5, 8, 64, io::kPlyWindowBytes})
+      ASSERT_EQ(from_file(files[i], window), want) << "file " << i << ", window " << window;
+  }
+  // Both kinds occur, so the comparison covers meshes and errors alike.
+  EXPECT_GT(loaded, 10u);
+  EXPECT_GT(refused, 100u);
+}
+
+TEST_F(IoPlyFile, AFileThatShrankAfterItsSizeWasTakenIsRefused) {
+  const std::string full = big_binary_file(false, 2000, 3);
+  const std::size_t data = full.find("end_header\n") + 11;
+  // (Cuts where the reader needs bytes: skipped values at the very end are never read, so a file
+  // cut there may still load.)
+  for (std::size_t cut : {std::size_t{20}, data + 100, full.size() / 2}) {
+    const std::string o = from_file(full.substr(0, cut), 4096, full.size());
+    EXPECT_EQ(o.rfind("error t.ply", 0), 0u) << cut << ": " << o.substr(0, 200);
+    if (cut > data) EXPECT_NE(o.find("file ends after"), std::string::npos) << o;
+  }
+}
+
+TEST_F(IoPlyFile, ReadMeshReadsALargeBinaryFileThroughTheWindow) {
+  // Public entry: more than one window of body, the same mesh as from memory.
+  const std::string full = big_binary_file(true, 60000, 4);
+  ASSERT_GT(full.size(), 2 * io::kPlyWindowBytes);
+  test::spit(dir_ / "big.ply", full);
+  const std::string want = outcome([&] { return read_mesh_from_memory(full, MeshFormat::Ply, (dir_ / "big.ply").string()); });
+  EXPECT_EQ(want.rfind("ok", 0), 0u) << want.substr(0, 200);
+  EXPECT_EQ(outcome([&] { return read_mesh(dir_ / "big.ply"); }), want);
 }
 
 }  // namespace

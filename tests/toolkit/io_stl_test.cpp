@@ -58,7 +58,8 @@ void expect_square_and_facet(const LoadedMesh& lm) {
   EXPECT_EQ(lm.report.faces, 3u);
   EXPECT_EQ(lm.report.welded_vertices, 3u);
   EXPECT_EQ(lm.report.polygons, 0u);
-  EXPECT_EQ(lm.report.source_face, (std::vector<std::uint32_t>{0, 1, 2}));
+  EXPECT_TRUE(lm.report.source_face.empty());  // triangle t is face t
+  for (std::size_t t = 0; t < 3; ++t) EXPECT_EQ(lm.report.source_face_of(t), t);
 }
 
 const char* kAscii =

@@ -32,18 +32,27 @@ std::optional<MeshFormat> parse_mesh_format(std::string_view s) {
 
 namespace {
 
-// The whole file in memory (one read; the parsers index into it).
-std::string read_file(const std::filesystem::path& path) {
-  const std::string name = path.string();
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw InputError(name, "", "", std::string("cannot open: ") + std::strerror(errno));
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
+struct OpenFile {
+  int fd = -1;
   struct stat st {};
-  if (::fstat(fd, &st) != 0) throw InputError(name, "", "", std::string("cannot stat: ") + std::strerror(errno));
-  if (S_ISDIR(st.st_mode)) throw InputError(name, "", "", "is a directory");
+  OpenFile() = default;
+  OpenFile(const OpenFile&) = delete;
+  OpenFile& operator=(const OpenFile&) = delete;
+  ~OpenFile() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+void open_input(const std::filesystem::path& path, OpenFile& f) {
+  const std::string name = path.string();
+  f.fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (f.fd < 0) throw InputError(name, "", "", std::string("cannot open: ") + std::strerror(errno));
+  if (::fstat(f.fd, &f.st) != 0) throw InputError(name, "", "", std::string("cannot stat: ") + std::strerror(errno));
+  if (S_ISDIR(f.st.st_mode)) throw InputError(name, "", "", "is a directory");
+}
+
+// The whole file in memory (one read; the parsers index into it).
+std::string read_file(const std::string& name, int fd, const struct stat& st) {
   std::string data;
   if (S_ISREG(st.st_mode)) data.reserve(static_cast<std::size_t>(st.st_size));
   char buf[1 << 16];
@@ -75,13 +84,18 @@ std::optional<MeshFormat> format_from_extension(const std::filesystem::path& pat
   return std::nullopt;
 }
 
-LoadedMesh read_mesh_from_memory(std::string_view bytes, MeshFormat f, const std::string& name) {
+namespace io {
+void check_not_utf16(std::string_view first_bytes, const std::string& name) {
   // A UTF-16 text file read as bytes has a NUL after every character: no line of it parses, and
-  // the readers said only "no triangles". Its byte order mark says what it is. (Binary STL may
-  // begin with any bytes.)
-  if (f != MeshFormat::Stl && bytes.size() >= 2 &&
-      ((bytes[0] == '\xFE' && bytes[1] == '\xFF') || (bytes[0] == '\xFF' && bytes[1] == '\xFE')))
+  // the readers said only "no triangles". Its byte order mark says what it is.
+  const std::string_view b = first_bytes;
+  if (b.size() >= 2 && ((b[0] == '\xFE' && b[1] == '\xFF') || (b[0] == '\xFF' && b[1] == '\xFE')))
     throw InputError(name, "byte 1", "", "UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
+}
+}  // namespace io
+
+LoadedMesh read_mesh_from_memory(std::string_view bytes, MeshFormat f, const std::string& name) {
+  if (f != MeshFormat::Stl) io::check_not_utf16(bytes, name);  // (binary STL may begin with any bytes)
   switch (f) {
     case MeshFormat::Off: return io::read_off(bytes, name);
     case MeshFormat::Obj: return io::read_obj(bytes, name);
@@ -100,8 +114,13 @@ LoadedMesh read_mesh(const std::filesystem::path& path) {
         "unknown mesh format " +
             (path.extension().empty() ? std::string("(no extension)") : "'" + path.extension().string() + "'") +
             " (use .off, .obj, .ply or .stl)");
-  const std::string data = read_file(path);
-  LoadedMesh lm = read_mesh_from_memory(data, *f, path.string());
+  OpenFile file;
+  open_input(path, file);
+  // A regular binary PLY file is read block by block (its body can be hundreds of MB); every
+  // other file whole.
+  LoadedMesh lm = *f == MeshFormat::Ply && S_ISREG(file.st.st_mode)
+                      ? io::read_ply_file(file.fd, static_cast<std::uint64_t>(file.st.st_size), path.string())
+                      : read_mesh_from_memory(read_file(path.string(), file.fd, file.st), *f, path.string());
   if (const ReadNoteHandler h = g_note_handler.load())
     for (const std::string& note : read_notes(lm.report)) h(path.string(), note);
   return lm;

@@ -38,7 +38,9 @@ struct ReadReport {
   std::size_t polygons = 0;                 ///< faces with more than 3 corners (fan-triangulated from corner 0)
   std::size_t triangles_from_polygons = 0;  ///< triangles those polygons produced
   std::size_t welded_vertices = 0;          ///< STL: corners merged into shared vertices (corners - vertices)
-  std::vector<std::uint32_t> source_face;   ///< per output triangle: index of the file face it came from
+  /// Per output triangle: the index of the file face it came from; empty when triangle t is face t
+  /// for every t (no polygon, no skipped face: most files). `source_face_of` reads either form.
+  std::vector<std::uint32_t> source_face;
   /// Faces with fewer than three corners ("f 1 2", "2 0 1", a PLY list of length 0..2): skipped,
   /// the rest of the file loaded. Their indices are still checked. They keep their face number,
   /// so `source_face` still counts faces as the file does.
@@ -48,6 +50,9 @@ struct ReadReport {
   /// writers); the extra values are ignored.
   std::size_t surplus_lines = 0;
   std::string first_surplus;  ///< "face 0 (line 13): 4 extra values" of the first one
+
+  /// The file face triangle t came from.
+  [[nodiscard]] std::size_t source_face_of(std::size_t t) const { return source_face.empty() ? t : source_face[t]; }
 };
 
 /// One line per thing a user should know about a file that was read anyway (short faces skipped,

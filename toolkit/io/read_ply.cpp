@@ -3,7 +3,11 @@
 // aliases). Positions come from the "vertex" element's x, y, z (any scalar type); faces from the
 // "face" element's list "vertex_indices" (or "vertex_index") of any integer types. Every other
 // property and element (edge, material, ...) is skipped, list properties included.
+#include <unistd.h>
+
+#include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <cstring>
 #include <optional>
 #include <string>
@@ -80,14 +84,40 @@ T byteswap(T v) {
   return v;
 }
 
+// Reads up to n bytes at file offset `at` into dst (fewer only at the end of the file).
+std::size_t pread_full(int fd, char* dst, std::size_t n, std::uint64_t at, const std::string& name) {
+  std::size_t got = 0;
+  while (got < n) {
+    const ssize_t r = ::pread(fd, dst + got, n - got, static_cast<off_t>(at + got));
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      throw InputError(name, byte_loc(at + got), "", std::string("cannot read: ") + std::strerror(errno));
+    }
+    if (r == 0) break;
+    got += static_cast<std::size_t>(r);
+  }
+  return got;
+}
+
 class PlyParser {
  public:
-  PlyParser(std::string_view bytes, const std::string& name) : bytes_(bytes), name_(name) {}
+  /// The whole file in memory.
+  PlyParser(std::string_view bytes, const std::string& name) : bytes_(bytes), size_(bytes.size()), name_(name) {}
+  /// A regular file of `size` bytes, read through a window; `first` holds its first bytes, the
+  /// whole header among them.
+  PlyParser(int fd, std::uint64_t size, std::string first, std::size_t window, const std::string& name)
+      : buf_(std::move(first)), bytes_(buf_), fd_(fd), window_(window), size_(size), name_(name) {}
 
   LoadedMesh parse() {
     parse_header();
     report_.format = MeshFormat::Ply;
     report_.binary = enc_ != Encoding::Ascii;
+    if (!report_.binary && bytes_.size() < size_) {  // ascii is parsed from the whole file
+      buf_.resize(size_);
+      buf_.resize(bytes_.size() + pread_full(fd_, buf_.data() + bytes_.size(), size_ - bytes_.size(), bytes_.size(), name_));
+      bytes_ = buf_;
+      size_ = buf_.size();
+    }
     if (report_.binary) {
       swap_ = (enc_ == Encoding::BinaryBig) != (std::endian::native == std::endian::big);
       read_binary();
@@ -183,7 +213,7 @@ class PlyParser {
     }
     if (!ended) header_error(lines.line(), "header has no end_header line");
     if (!have_format) header_error(lines.line(), "header has no format line");
-    data_offset_ = bytes_.size() - lines.remaining();
+    data_offset_ = bytes_.size() - lines.remaining();  // (the window starts at byte 0)
     data_line_ = lines.line() + 1;
 
     // The vertex and face elements, and whether they have what we need.
@@ -216,7 +246,7 @@ class PlyParser {
     // item (a list of length 0, a one-character token), so that a short item is reported as what
     // it is; reservations use the minimum of a valid item.
     const bool ascii = enc_ == Encoding::Ascii;
-    const std::uint64_t after_header = bytes_.size() - data_offset_;
+    const std::uint64_t after_header = size_ - data_offset_;
     std::uint64_t left = after_header + (ascii ? 1 : 0);  // ascii: the last token needs no separator
     for (const Element& e : elements_) {
       std::uint64_t min = 0;
@@ -280,10 +310,28 @@ class PlyParser {
   }
 
   // ---- binary ----------------------------------------------------------------------------------
+  // The next n bytes from at_ (n <= size_ - at_) are in the window; false when the file ended
+  // before them (it shrank while being read).
+  bool ensure(std::uint64_t n) {
+    if (at_ >= base_ && at_ + n <= base_ + bytes_.size()) return true;
+    return slide(n);
+  }
+  bool slide(std::uint64_t n) {
+    const std::uint64_t end = base_ + bytes_.size();
+    const std::size_t kept = at_ < end ? static_cast<std::size_t>(end - at_) : 0;  // read, not yet used
+    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(std::max<std::uint64_t>(window_, n), size_ - at_));
+    if (kept > 0) std::memmove(buf_.data(), buf_.data() + (at_ - base_), kept);
+    if (buf_.size() < want) buf_.resize(want);
+    const std::size_t got = kept + pread_full(fd_, buf_.data() + kept, want - kept, at_ + kept, name_);
+    base_ = at_;
+    bytes_ = std::string_view(buf_.data(), got);
+    return got >= n;
+  }
+
   template <class T>
   T raw() {
     T v;
-    std::memcpy(&v, bytes_.data() + at_, sizeof(T));
+    std::memcpy(&v, bytes_.data() + (at_ - base_), sizeof(T));
     at_ += sizeof(T);
     return swap_ ? byteswap(v) : v;
   }
@@ -314,7 +362,7 @@ class PlyParser {
 
   void read_binary() {
     at_ = data_offset_;
-    const std::size_t size = bytes_.size();
+    const std::uint64_t size = size_;
     for (const Element& e : elements_) {
       const bool is_vertex = &e == &elements_[vertex_el_];
       const bool is_face = face_el_ != kNone && &e == &elements_[face_el_];
@@ -334,7 +382,7 @@ class PlyParser {
       for (std::uint64_t i = 0; i < e.count; ++i) {
         const std::size_t item_at = at_;
         const auto need = [&](std::uint64_t n) {
-          if (n > size - at_) element_error(byte_loc(at_), e, i, truncated(e, i));
+          if (n > size - at_ || !ensure(n)) element_error(byte_loc(at_), e, i, truncated(e, i));
         };
         Vec3 p(0, 0, 0);
         corners_.clear();
@@ -359,6 +407,7 @@ class PlyParser {
             at_ += static_cast<std::size_t>(n) * unit;
             continue;
           }
+          need(static_cast<std::uint64_t>(n) * unit);
           const std::uint64_t nv = elements_[vertex_el_].count;
           for (std::int64_t k = 0; k < n; ++k) {
             const std::size_t idx_at = at_;
@@ -480,7 +529,12 @@ class PlyParser {
 
   static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
 
-  std::string_view bytes_;
+  std::string buf_;       // file mode: the window's bytes
+  std::string_view bytes_;  // the window: the file's bytes from base_ on (memory mode: all of them)
+  int fd_ = -1;             // file mode: the file
+  std::size_t window_ = 0;  // file mode: the bytes read at a time
+  std::uint64_t base_ = 0;  // file offset of bytes_[0]
+  std::uint64_t size_;      // the file's size
   const std::string& name_;
   Encoding enc_ = Encoding::Ascii;
   std::vector<Element> elements_;
@@ -488,7 +542,7 @@ class PlyParser {
   std::size_t data_offset_ = 0;
   std::uint64_t data_line_ = 0;
   bool swap_ = false;
-  std::size_t at_ = 0;  // binary read position (from the start of the file)
+  std::uint64_t at_ = 0;  // binary read position (from the start of the file)
 
   ReadReport report_;
   std::vector<Vec3> pos_;
@@ -500,5 +554,26 @@ class PlyParser {
 }  // namespace
 
 LoadedMesh read_ply(std::string_view bytes, const std::string& name) { return PlyParser(bytes, name).parse(); }
+
+LoadedMesh read_ply_file(int fd, std::uint64_t size, const std::string& name, std::size_t window) {
+  window = std::max<std::size_t>(window, 1);
+  // The first window holds the whole header (a line "end_header" ended within it) or the whole
+  // file: it doubles until it does.
+  std::string first;
+  for (std::size_t want = window;; want *= 2) {
+    first.resize(static_cast<std::size_t>(std::min<std::uint64_t>(size, want)));
+    first.resize(pread_full(fd, first.data(), first.size(), 0, name));
+    check_not_utf16(first, name);
+    if (first.size() < std::min<std::uint64_t>(size, want)) break;  // the file ended early (it shrank)
+    if (first.size() == size) break;
+    LineReader lines(first);
+    std::string_view line;
+    bool whole_header = false;
+    while (!whole_header && lines.next(line))
+      whole_header = Fields(line).next() == "end_header" && line.data() + line.size() < first.data() + first.size();
+    if (whole_header) break;
+  }
+  return PlyParser(fd, size, std::move(first), window, name).parse();
+}
 
 }  // namespace ptc::io

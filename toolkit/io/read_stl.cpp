@@ -123,7 +123,7 @@ LoadedMesh read_binary(std::string_view bytes, const std::string& name) {
   Welder w(3ull * n);
   std::vector<Tri> tris;
   tris.reserve(n);
-  report.source_face.reserve(n);
+  // (facet f is triangle f: ReadReport::source_face stays empty)
   for (std::uint32_t f = 0; f < n; ++f) {
     const char* rec = bytes.data() + 84 + 50ull * f;
     Tri t{};
@@ -143,7 +143,6 @@ LoadedMesh read_binary(std::string_view bytes, const std::string& name) {
       t[c] = w.id(p);
     }
     tris.push_back(t);
-    report.source_face.push_back(f);
   }
   report.faces = n;
   return make_mesh(std::move(tris), w, std::move(report), name);
@@ -188,8 +187,7 @@ class AsciiStl {
         expect("endloop");
         expect("endfacet");
         if (tris.size() >= kMaxElements) fail("more facets than 32-bit ids can number");
-        report.source_face.push_back(static_cast<std::uint32_t>(tris.size()));
-        tris.push_back(tri);
+        tris.push_back(tri);  // (facet f is triangle f: ReadReport::source_face stays empty)
       }
       tr_.skip_line();  // "endsolid name"
       t = tr_.next();
