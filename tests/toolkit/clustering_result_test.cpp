@@ -640,5 +640,79 @@ TEST(Renumbering, MeshAndClusteringFollowThePermutation) {
   EXPECT_THROW((void)renumber_vertices(broken, to_new), std::invalid_argument);
 }
 
+// The in-place renumbering against the copying one (the brute force: a gather), item by item:
+// random permutations (one long cycle, fixed points, many short cycles), the triangle array
+// renamed where it is when not shared and copied when another mesh shares it (that mesh keeps
+// its corners), and bad permutations refused with inverse_permutation's message and nothing changed.
+TEST(Renumbering, InPlaceEqualsTheGatherAndLeavesSharersAlone) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::size_t n = 1 + rng() % (trial < 30 ? 12 : 5000);
+    std::vector<Vec3> pos(n);
+    for (std::size_t i = 0; i < n; ++i) pos[i] = Vec3(double(rng() % 1000), double(i), -double(i) * 0.5);
+    std::vector<Tri> tris(2 * n);
+    for (Tri& t : tris)
+      for (auto& v : t) v = static_cast<std::uint32_t>(rng() % n);
+    Ids to_old(n);
+    std::iota(to_old.begin(), to_old.end(), 0u);
+    if (trial % 3 == 0) {  // one cycle through every vertex
+      for (std::size_t i = 0; i < n; ++i) to_old[i] = static_cast<std::uint32_t>((i + 1) % n);
+    } else if (trial % 3 == 1) {  // a shuffle (many cycles)
+      std::shuffle(to_old.begin(), to_old.end(), rng);
+    } else {  // mostly fixed points, a few swaps
+      for (std::size_t k = 0; k + 1 < n && k < 4; ++k) std::swap(to_old[rng() % n], to_old[rng() % n]);
+    }
+    const Mesh original(tris, pos);
+    const Mesh want = renumber_vertices(original, to_old);
+    // Not shared: renamed where it is.
+    Mesh alone(tris, pos);
+    const Tri* before = alone.triangles().data();
+    alone.renumber_vertices(to_old);
+    EXPECT_EQ(alone.triangles().data(), before) << trial;
+    // Shared with another mesh: that one keeps its corners and positions.
+    Mesh shared(tris, pos);
+    const Mesh sharer = shared.with_positions(pos);
+    shared.renumber_vertices(to_old);
+    for (const Mesh* m : {&alone, &shared}) {
+      ASSERT_EQ(m->vertex_count(), n);
+      for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(m->position(i), want.position(i)) << trial << " vertex " << i;
+      for (std::size_t t = 0; t < tris.size(); ++t) ASSERT_EQ(m->triangle(t), want.triangle(t)) << trial << " triangle " << t;
+    }
+    for (std::size_t t = 0; t < tris.size(); ++t) ASSERT_EQ(sharer.triangle(t), tris[t]) << trial;
+    for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(sharer.position(i), pos[i]) << trial;
+  }
+  // Refused before anything changes, with the message inverse_permutation gives.
+  const Mesh m({{0, 1, 2}, {2, 1, 3}}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)});
+  for (const Ids& bad : {Ids{0, 1, 2, 2}, Ids{3, 1, 0, 4}, Ids{0, 1, 2}, Ids{0, 1, 2, 3, 4}}) {
+    Mesh c = m.with_positions(std::vector<Vec3>(m.positions().begin(), m.positions().end()));
+    std::string want_msg;
+    if (bad.size() == m.vertex_count()) {
+      try {
+        (void)inverse_permutation(bad);
+      } catch (const std::invalid_argument& e) {
+        want_msg = e.what();
+      }
+      try {
+        check_permutation(bad);
+        ADD_FAILURE() << "check_permutation accepted a bad permutation";
+      } catch (const std::invalid_argument& e) {
+        EXPECT_EQ(std::string(e.what()), want_msg);
+      }
+    }
+    try {
+      c.renumber_vertices(bad);
+      ADD_FAILURE() << "renumbered with a bad permutation";
+    } catch (const std::invalid_argument& e) {
+      if (!want_msg.empty()) EXPECT_EQ(std::string(e.what()), want_msg);
+    }
+    for (std::size_t i = 0; i < m.vertex_count(); ++i) EXPECT_EQ(c.position(i), m.position(i));
+    for (std::size_t t = 0; t < m.triangle_count(); ++t) EXPECT_EQ(c.triangle(t), m.triangle(t));
+  }
+  check_permutation(Ids{});  // the empty permutation
+  Mesh empty;
+  empty.renumber_vertices(Ids{});
+  EXPECT_TRUE(empty.empty());
+}
+
 }  // namespace
 }  // namespace ptc

@@ -51,7 +51,7 @@ AnimationPtr renumber_vertices(AnimationPtr source, std::span<const std::uint32_
   if (to_old.size() != source->rest().vertex_count())
     throw std::invalid_argument("renumber_vertices: " + std::to_string(to_old.size()) + " entries for " +
                                 std::to_string(source->rest().vertex_count()) + " vertices");
-  (void)inverse_permutation(to_old);  // validates before anything changes
+  check_permutation(to_old);  // before anything changes
   if (source->renumber_vertices_in_place(to_old)) return source;
   return std::make_unique<GatheredAnimation>(std::move(source), std::vector<std::uint32_t>(to_old.begin(), to_old.end()));
 }

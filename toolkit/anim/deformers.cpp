@@ -151,14 +151,17 @@ class Deformer final : public Animation {
   // Every kind but explode is a function of the rest position alone: renumbering the rest mesh
   // renumbers the output. Explode keeps each (soup) vertex's triangle.
   bool renumber_vertices_in_place(std::span<const std::uint32_t> to_old) override {
-    Mesh renumbered = renumber_vertices(rest_, to_old);  // validates before anything changes
+    if (to_old.size() != rest_.vertex_count())
+      throw std::invalid_argument("renumber_vertices: " + std::to_string(to_old.size()) + " entries for " +
+                                  std::to_string(rest_.vertex_count()) + " vertices");
+    check_permutation(to_old);  // before anything changes
     if (p_.kind == DeformKind::Explode) {
       std::vector<std::uint32_t> vt(to_old.size());
       for (std::size_t i = 0; i < to_old.size(); ++i)
         vt[i] = vertex_triangle_.empty() ? to_old[i] / 3 : vertex_triangle_[to_old[i]];
       vertex_triangle_ = std::move(vt);
     }
-    rest_ = std::move(renumbered);
+    rest_.renumber_vertices(to_old);  // in place (13.3M triangles: 320 MB not allocated)
     return true;
   }
 

@@ -114,7 +114,7 @@ void Scene::renumber_vertices(std::span<const std::uint32_t> to_old) {
   if (to_old.size() != rest().vertex_count())
     throw std::invalid_argument(fmt::format("renumber_vertices: {} entries for {} vertices", to_old.size(),
                                             rest().vertex_count()));
-  (void)inverse_permutation(to_old);  // validates the permutation before anything changes
+  check_permutation(to_old);  // before anything changes
   for (std::size_t k = 0; k < parts_.size(); ++k)
     for (std::size_t i = vertex_offsets_[k]; i < vertex_offsets_[k + 1]; ++i)
       if (to_old[i] < vertex_offsets_[k] || to_old[i] >= vertex_offsets_[k + 1])
@@ -122,12 +122,14 @@ void Scene::renumber_vertices(std::span<const std::uint32_t> to_old) {
                                                 i, parts_[k].name));
   for (std::size_t k = 0; k < parts_.size(); ++k) {
     const std::size_t a = vertex_offsets_[k], n = vertex_offsets_[k + 1] - a;
-    std::vector<std::uint32_t> local(n);
-    bool identity = true;
-    for (std::size_t i = 0; i < n; ++i) {
-      local[i] = static_cast<std::uint32_t>(to_old[a + i] - a);
-      identity &= local[i] == i;
+    std::vector<std::uint32_t> shifted;  // the part's own numbering (the first part's is to_old's)
+    if (a > 0) {
+      shifted.resize(n);
+      for (std::size_t i = 0; i < n; ++i) shifted[i] = static_cast<std::uint32_t>(to_old[a + i] - a);
     }
+    const std::span<const std::uint32_t> local = a > 0 ? std::span<const std::uint32_t>(shifted) : to_old.subspan(0, n);
+    bool identity = true;
+    for (std::size_t i = 0; i < n && identity; ++i) identity = local[i] == i;
     if (!identity) parts_[k].source = ptc::renumber_vertices(std::move(parts_[k].source), local);
   }
   combine_rest();  // the parts' renumbered rests, as the constructor combined them

@@ -19,7 +19,7 @@ void StaticSource::positions(double frame, std::span<Vec3> out) {
 }
 
 bool StaticSource::renumber_vertices_in_place(std::span<const std::uint32_t> to_old) {
-  mesh_ = renumber_vertices(mesh_, to_old);
+  mesh_.renumber_vertices(to_old);  // in place
   return true;
 }
 

@@ -12,7 +12,7 @@ Mesh::Mesh(std::vector<Tri> triangles, std::vector<Vec3> positions) : pos_(std::
       if (v >= n)
         throw std::invalid_argument("Mesh: triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
                                     " of " + std::to_string(n));
-  tris_ = std::make_shared<const std::vector<Tri>>(std::move(triangles));
+  tris_ = std::make_shared<std::vector<Tri>>(std::move(triangles));
 }
 
 void Mesh::set_positions(std::vector<Vec3> positions) {
@@ -44,6 +44,36 @@ std::vector<std::uint32_t> inverse_permutation(std::span<const std::uint32_t> to
     to_new[v] = static_cast<std::uint32_t>(i);
   }
   return to_new;
+}
+
+void check_permutation(std::span<const std::uint32_t> to_old) {
+  constexpr std::uint32_t none = 0xffffffffu;
+  if (to_old.size() >= none) throw std::invalid_argument("inverse_permutation: too many entries");
+  std::vector<std::uint64_t> seen((to_old.size() + 63) / 64, 0);
+  for (std::size_t i = 0; i < to_old.size(); ++i) {
+    const std::uint32_t v = to_old[i];
+    if (v >= to_old.size() || (seen[v / 64] >> (v % 64) & 1))
+      throw std::invalid_argument("renumbering: entry " + std::to_string(i) + " (" + std::to_string(v) +
+                                  (v >= to_old.size() ? ") is out of range" : ") repeats an earlier entry"));
+    seen[v / 64] |= std::uint64_t{1} << (v % 64);
+  }
+}
+
+void Mesh::renumber_vertices(std::span<const std::uint32_t> to_old) {
+  if (to_old.size() != pos_.size())
+    throw std::invalid_argument("renumber_vertices: " + std::to_string(to_old.size()) + " entries for " +
+                                std::to_string(pos_.size()) + " vertices");
+  const std::vector<std::uint32_t> to_new = inverse_permutation(to_old);  // validates first
+  if (tris_ && tris_.use_count() != 1) tris_ = std::make_shared<std::vector<Tri>>(*tris_);  // shared: a copy
+  if (tris_)
+    for (Tri& t : *tris_)
+      for (std::uint32_t& v : t) v = to_new[v];
+  // Positions gathered into a new array: new i takes old to_old[i]. (Following the cycles of the
+  // permutation in place saves the array but jumps at random for every read and write: the
+  // bench's renumbering at 13.3M took 1.6 s that way against 1.0-1.15 s with the gather.)
+  std::vector<Vec3> pos(pos_.size());
+  for (std::size_t i = 0; i < pos.size(); ++i) pos[i] = pos_[to_old[i]];
+  pos_ = std::move(pos);
 }
 
 Mesh renumber_vertices(const Mesh& mesh, std::span<const std::uint32_t> to_old) {

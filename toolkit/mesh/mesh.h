@@ -41,7 +41,14 @@ class Mesh {
   void set_positions(std::vector<Vec3> positions);
 
   /// The shared, immutable triangle array (the topology every frame refers to).
-  [[nodiscard]] const std::shared_ptr<const std::vector<Tri>>& shared_triangles() const { return tris_; }
+  [[nodiscard]] std::shared_ptr<const std::vector<Tri>> shared_triangles() const { return tris_; }
+
+  /// Renumbers the vertices in place: new vertex i is old vertex to_old[i] (positions moved,
+  /// triangle corners renamed, the triangle order kept). The triangle array is renamed where it
+  /// is (no copy) when no other mesh shares it, else this mesh gets a renamed copy; the positions
+  /// are gathered into a new array. Throws std::invalid_argument, before anything changes, unless
+  /// to_old is a permutation of 0 .. vertex_count-1.
+  void renumber_vertices(std::span<const std::uint32_t> to_old);
 
   /// Same topology, new positions (no copy of the triangle array).
   [[nodiscard]] Mesh with_positions(std::vector<Vec3> positions) const;
@@ -50,13 +57,17 @@ class Mesh {
   [[nodiscard]] Box3 bounds() const;
 
  private:
-  std::shared_ptr<const std::vector<Tri>> tris_;
+  std::shared_ptr<std::vector<Tri>> tris_;  // never changed while shared (see renumber_vertices)
   std::vector<Vec3> pos_;
 };
 
 /// The inverse of a vertex renumbering: to_new[to_old[i]] = i. Throws std::invalid_argument
 /// unless to_old is a permutation of 0 .. n-1 (n = to_old.size()), naming the first bad entry.
 [[nodiscard]] std::vector<std::uint32_t> inverse_permutation(std::span<const std::uint32_t> to_old);
+
+/// Throws the same std::invalid_argument as inverse_permutation unless to_old is a permutation
+/// of 0 .. n-1, with one bit of memory an entry.
+void check_permutation(std::span<const std::uint32_t> to_old);
 
 /// The mesh with its vertices renumbered: new vertex i is old vertex to_old[i] (positions moved,
 /// triangle corners renamed; the triangle order is kept, so triangle ids stay valid). Throws
