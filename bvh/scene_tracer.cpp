@@ -75,6 +75,15 @@ PartLayout PartLayout::single(const Mesh& mesh, bool is_static) {
   return L;
 }
 
+SceneConfig cluster_config(const SceneTracerConfig& cfg, const Vec3& origin) {
+  SceneConfig c = cluster_scene_defaults();
+  c.origin = cfg.origin ? *cfg.origin : origin;
+  c.cluster_leaf = cfg.cluster_leaf;
+  c.cluster_group_size = cfg.cluster_group_size;
+  c.group_trees = cfg.group_trees;
+  return c;
+}
+
 SceneTracer::SceneTracer(const Mesh& first, const PartLayout& L, const SceneTracerConfig& cfg) {
   const std::size_t np = L.part_count();
   if (np == 0 || L.vertex_offsets.size() != np + 1 || L.triangle_offsets.size() != np + 1 ||
@@ -87,11 +96,9 @@ SceneTracer::SceneTracer(const Mesh& first, const PartLayout& L, const SceneTrac
     throw std::invalid_argument("SceneTracer: the clustering does not cover the mesh's triangles");
   combined_vertices_ = first.vertex_count();
   origin_ = cfg.origin ? *cfg.origin : first.bounds().center();
-  SceneConfig tcfg = triangle_scene_defaults(), ccfg = cluster_scene_defaults();
-  tcfg.origin = ccfg.origin = origin_;
-  ccfg.cluster_leaf = cfg.cluster_leaf;
-  ccfg.cluster_group_size = cfg.cluster_group_size;
-  ccfg.group_trees = cfg.group_trees;
+  SceneConfig tcfg = triangle_scene_defaults();
+  tcfg.origin = origin_;
+  const SceneConfig ccfg = cluster_config(cfg, origin_);
 
   const bool any_static = std::find(L.is_static.begin(), L.is_static.end(), true) != L.is_static.end();
   const bool any_moving = std::find(L.is_static.begin(), L.is_static.end(), false) != L.is_static.end();

@@ -48,6 +48,11 @@ struct SceneTracerConfig {
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
 };
 
+/// The configuration of the cluster BVH a SceneTracer with `cfg` builds, in the trace frame
+/// around `origin` (cfg.origin when given, else the first frame's bounds' centre): what
+/// cluster_vertex_order needs to renumber the vertices for it.
+[[nodiscard]] SceneConfig cluster_config(const SceneTracerConfig& cfg, const Vec3& origin);
+
 class SceneTracer {
  public:
   /// `first` = the combined mesh at the first traced frame (topology + positions). Builds every

@@ -10,6 +10,7 @@
 #include "render/images.h"
 #include "render/camera.h"
 #include "render/view.h"
+#include "bvh/vertex_order.h"
 #include "toolkit/anim/scene.h"
 
 namespace ptc {
@@ -26,6 +27,11 @@ struct TraceCommandOptions {
   std::filesystem::path clusters;      ///< directory of `ptc cluster` (triangles.csv); empty: triangle BVH
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;  ///< two-level build (0: plain)
   bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;  ///< what the two-level build does inside a group
+  /// --vertex-order: with --clusters, Clusters renumbers the scene's vertices once so that each
+  /// cluster's are consecutive (the method's precomputation, as in `ptc bench`: the cluster BVH's
+  /// per-frame pass then streams instead of gathering, which pays over a sequence); Input, the
+  /// default, keeps the file's order. The images, counters and hits are the same either way.
+  bvh::VertexOrder vertex_order = bvh::VertexOrder::Input;
   std::filesystem::path out_dir;       ///< images, trace.csv, manifest.json (required)
   CameraSpec camera;
   RenderConfig render;                 ///< size, shadows, AO, seed, light, threads (0 = all cores)

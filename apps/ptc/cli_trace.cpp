@@ -12,7 +12,7 @@ struct TraceArgs {
   TraceCommandOptions opt;
   SceneArg scene;
   CameraArgs camera;
-  std::string frame, frames, cost_range, deform;
+  std::string frame, frames, cost_range, deform, vertex_order = "input";
   GroupTreesArg group_trees;
   CLI::App* app = nullptr;
 };
@@ -32,8 +32,9 @@ void register_trace(CLI::App& app, Context& ctx) {
     if (a->app->count("--cost-range")) o.cost_range = a->cost_range;
     if (a->app->count("--deform")) o.deform = a->deform;
     // Flags that would do nothing are refused, as `ptc cluster` refuses a flag its method does not use.
-    if (a->app->count("--cluster-groups") && o.clusters.empty())
-      throw UsageError("--cluster-groups", "needs a cluster BVH (--clusters DIR)");
+    for (const char* f : {"--cluster-groups", "--vertex-order"})
+      if (a->app->count(f) && o.clusters.empty()) throw UsageError(f, "needs a cluster BVH (--clusters DIR)");
+    o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
     for (const char* f : {"--ao-distance", "--seed"})
       if (a->app->count(f) && o.render.ao_samples == 0) throw UsageError(f, "needs ambient occlusion (--ao N > 0)");
     o.group_trees = a->group_trees.get(!o.clusters.empty() && o.cluster_group_size > 1,
@@ -58,6 +59,12 @@ void register_trace(CLI::App& app, Context& ctx) {
       ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);
+  c->add_option("--vertex-order", a->vertex_order,
+                "with --clusters: clusters renumbers the vertices once so each cluster's are consecutive (the "
+                "method's precomputation, as in ptc bench: each frame's update streams instead of gathering, which "
+                "pays over a sequence; the same images and hits), or input: keep the file's order")
+      ->check(enum_validator("vertex order", bvh::parse_vertex_order))
+      ->capture_default_str();
   c->add_option("--width", rc.width, "image width in pixels")->check(whole_in(1, kMaxImageSide))->capture_default_str();
   c->add_option("--height", rc.height, "image height in pixels")->check(whole_in(1, kMaxImageSide))->capture_default_str();
   a->camera.add_to(c, /*with_light=*/true);

@@ -582,3 +582,65 @@ TEST_F(TraceCli, SceneWithClustersOfTheCombinedMesh) {
                 (dir_ / "out").string()},
                1, "triangles.csv");
 }
+
+// --vertex-order clusters (the method's precomputation, as in ptc bench) renumbers the scene's
+// vertices: every image and every counter stay those of the file's order, over a moving sequence
+// with shadows and AO and over a scene of a static and a moving part; without clusters the flag
+// does nothing and is refused.
+TEST_F(TraceCli, VertexOrderClustersTracesTheSameAsInput) {
+  const fs::path fine = dir_ / "fine.ply";
+  ASSERT_EQ(ptc({"subdivide", cube_.string(), "--levels", "4", "--out", fine.string()}).code, 0);  // 3072 triangles
+  ASSERT_EQ(ptc({"cluster", fine.string(), "--method", "growth", "--max-count", "6", "--max-size", "6", "--out",
+                 (dir_ / "cl").string()})
+                .code,
+            0);
+  std::ofstream(dir_ / "scene.json") << kSceneJson;
+  fs::create_directories(dir_ / "scl");
+  {
+    std::ofstream csv(dir_ / "scl" / "triangles.csv");
+    csv << "triangle_id,cluster_id\n";
+    for (int t = 0; t < 332; ++t) csv << t << "," << (t < 12 ? 0 : 1) << "\n";
+  }
+  struct Case {
+    std::string name;
+    std::vector<std::string> args;
+  };
+  const std::vector<Case> cases = {
+      {"mesh", {"trace", fine.string(), "--deform", "twist", "--clusters", (dir_ / "cl").string(), "--frames", "0:3",
+                "--shadows", "--ao", "2", "--width", "40", "--height", "32"}},
+      {"scene", {"trace", (dir_ / "scene.json").string(), "--clusters", (dir_ / "scl").string(), "--frames", "1:2",
+                 "--shadows", "--width", "24", "--height", "20"}}};
+  for (const Case& c : cases) {
+    std::map<std::string, std::map<std::string, std::string>> rows[2];
+    for (int k = 0; k < 2; ++k) {
+      const std::string order = k == 0 ? "input" : "clusters";
+      std::vector<std::string> a = c.args;
+      a.insert(a.end(), {"--vertex-order", order, "--out", (dir_ / (c.name + order)).string()});
+      const CmdResult r = ptc(a);
+      ASSERT_EQ(r.code, 0) << r.err;
+      for (const auto& row : csv_rows(slurp(dir_ / (c.name + order) / "trace.csv")))
+        rows[k][row.at("frame") + "/" + row.at("pass")] = row;
+      const auto m = nlohmann::json::parse(slurp(dir_ / (c.name + order) / "manifest.json"));
+      EXPECT_EQ(m["parameters"]["vertex_order"], order) << c.name;
+      EXPECT_EQ(m["timings_ms"].contains("renumber_vertices"), k == 1) << c.name;
+      EXPECT_EQ(m["results"].contains("scene_after_renumbering"), k == 1) << c.name;
+    }
+    ASSERT_FALSE(rows[0].empty()) << c.name;
+    ASSERT_EQ(rows[0].size(), rows[1].size()) << c.name;
+    for (const auto& [key, row] : rows[0])
+      for (const char* col : {"rays", "hits", "nodes_visited", "triangles_tested"})
+        EXPECT_EQ(row.at(col), rows[1].at(key).at(col)) << c.name << " " << key << " " << col;
+    std::size_t images = 0;
+    for (const auto& e : fs::directory_iterator(dir_ / (c.name + "input")))
+      if (e.path().extension() == ".png") {
+        ++images;
+        EXPECT_EQ(slurp(e.path()), slurp(dir_ / (c.name + "clusters") / e.path().filename())) << c.name << " " << e.path();
+      }
+    EXPECT_GE(images, 5u) << c.name;
+  }
+  expect_error({"trace", cube_.string(), "--vertex-order", "clusters", "--out", (dir_ / "out").string()}, 2,
+               "--vertex-order");
+  expect_error({"trace", fine.string(), "--clusters", (dir_ / "cl").string(), "--vertex-order", "sorted", "--out",
+                (dir_ / "out").string()},
+               2, "--vertex-order");
+}
