@@ -204,16 +204,20 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   for (std::size_t c = 0; c < C; ++c) weights_[c] = offsets_[c + 1] - offsets_[c];
   cluster_ranges_.resize(C);
   sub_root_.assign(C, kNoTriangle);
-  std::vector<std::uint32_t> lane_ids;  // triangle id per block lane (kNoTriangle: padding)
+  // Triangle id per block lane (kNoTriangle: padding); it becomes data.triangle_ids (moved, as
+  // the fixed nodes below: at 13.3M triangles each copy was 30-60 MB of new memory).
+  AlignedVector<std::uint32_t> lane_ids;
   if (cfg_.cluster_leaf == ClusterLeaf::Linear) layout_linear(lane_ids);
   else layout_block_trees(lane_ids);
   block_nodes_ = static_cast<std::uint32_t>(sub_nodes_.size());
   refit_groups_ = cfg_.group_trees == GroupTrees::Refit && !group_offsets_.empty();
   if (refit_groups_) layout_group_trees();
   data.blocks.resize(lane_ids.size() / 4);
-  data.triangle_ids.assign(lane_ids.begin(), lane_ids.end());
   set_vertex_order(mesh, lane_ids);
-  data.wide.nodes.assign(sub_nodes_.begin(), sub_nodes_.end());  // kept from frame to frame; the top follows
+  data.triangle_ids = std::move(lane_ids);
+  sub_count_ = static_cast<std::uint32_t>(sub_nodes_.size());
+  data.wide.nodes = std::move(sub_nodes_);  // kept from frame to frame; the top follows
+  sub_nodes_ = {};
   layout_wide8();
   update(mesh.positions());
 }
@@ -223,18 +227,21 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
 // into its 8-wide slot too (set_box8: every 8-wide slot of the fixed part comes from one 4-wide
 // slot), and only the top is regrouped (make_wide8).
 void ClusterScene::layout_wide8() {
-  link8_.assign(sub_nodes_.size(), kNoTriangle);
+  const std::span<const WideNode> fixed(f_.data.wide.nodes.data(), sub_count_);
+  link8_.assign(sub_count_, kNoTriangle);
   std::vector<SlotSource> sources;
   for (const std::uint32_t r : sub_root_)
-    if (r != kNoTriangle) link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, sub_depth8_, 0, {}, &sources);
+    if (r != kNoTriangle) link8_[r] = regroup_subtree(fixed, r, sub8_, sub_depth8_, 0, {}, &sources);
   for (const std::uint32_t r : group_root_)
     if (r != kNoTriangle)
-      link8_[r] = regroup_subtree(sub_nodes_, r, sub8_, group_depth8_, block_nodes_, link8_, &sources);
-  slot8_.assign(4 * sub_nodes_.size(), kNoTriangle);
+      link8_[r] = regroup_subtree(fixed, r, sub8_, group_depth8_, block_nodes_, link8_, &sources);
+  slot8_.assign(4 * std::size_t{sub_count_}, kNoTriangle);
   for (std::size_t i = 0; i < 8 * sub8_.size(); ++i)
     if (sources[i].node != WideNode::kEmptySlot)
       slot8_[4 * std::size_t{sources[i].node} + sources[i].slot] = static_cast<std::uint32_t>(i);
-  f_.data.wide8.nodes.assign(sub8_.begin(), sub8_.end());
+  sub8_count_ = sub8_.size();
+  f_.data.wide8.nodes = std::move(sub8_);
+  sub8_ = {};
 }
 
 // Per frame, after the top is linked: the 8-wide tree the tracer walks (nodes [0, sub8_.size())
@@ -242,22 +249,27 @@ void ClusterScene::layout_wide8() {
 void ClusterScene::make_wide8() {
   TraceData& data = f_.data;
   WideBvh8& w8 = data.wide8;
-  const std::size_t S8 = sub8_.size();
-  if (w8.nodes.size() < S8) w8.nodes.assign(sub8_.begin(), sub8_.end());
+  const std::size_t S8 = sub8_count_;
+  // (The fixed part [0, S8) stays from frame to frame; w8 is cleared only without clusters,
+  // when there is no fixed part.)
+  if (w8.nodes.size() < S8) throw std::logic_error("ClusterScene: the fixed 8-wide nodes were lost");
   w8.nodes.resize(S8);
   if (data.wide.nodes.empty()) {
     w8.nodes.clear(), w8.root = 0, w8.depth = 0;
     return;
   }
-  w8.nodes.reserve(S8 + (data.wide.nodes.size() - sub_nodes_.size()));
+  w8.nodes.reserve(S8 + (data.wide.nodes.size() - sub_count_));
   std::uint32_t depth = 0;
   w8.root = regroup_subtree(data.wide.nodes, data.wide.root, w8.nodes, depth,
-                            static_cast<std::uint32_t>(sub_nodes_.size()), link8_, nullptr);
+                            sub_count_, link8_, nullptr);
   w8.depth = depth + group_depth8_ + sub_depth8_;
 }
 
 // Linear: each cluster's triangles packed in blocks of four, in the (Morton) order above.
-void ClusterScene::layout_linear(std::vector<std::uint32_t>& lane_ids) {
+void ClusterScene::layout_linear(AlignedVector<std::uint32_t>& lane_ids) {
+  std::size_t lanes = 0;
+  for (const std::uint32_t w : weights_) lanes += 4 * std::size_t{blocks_for(w)};
+  lane_ids.reserve(lanes);
   for (std::size_t c = 0; c < weights_.size(); ++c) {
     const auto first = static_cast<std::uint32_t>(lane_ids.size() / 4);
     for (std::uint32_t i = 0; i < 4 * blocks_for(weights_[c]); ++i)
@@ -269,7 +281,7 @@ void ClusterScene::layout_linear(std::vector<std::uint32_t>& lane_ids) {
 // BlockTree: per cluster a binned SAH tree over its rest-pose triangles, leaves of at most 4
 // triangles = one block each, collapsed to 4-wide; blocks in leaf order; topology kept.
 // (f_.fpos holds the rest pose in the trace frame.)
-void ClusterScene::layout_block_trees(std::vector<std::uint32_t>& lane_ids) {
+void ClusterScene::layout_block_trees(AlignedVector<std::uint32_t>& lane_ids) {
   const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
   BuildConfig sub;
   sub.max_leaf_size = 4;
@@ -398,7 +410,7 @@ inline Box3f node_union(const WideNode& c) {
 void ClusterScene::refit_group_trees() {
   WideNode* nodes = f_.data.wide.nodes.data();
   const Box3f* cb = f_.boxes.data();
-  for (std::size_t i = sub_nodes_.size(); i-- > block_nodes_;) {
+  for (std::size_t i = sub_count_; i-- > block_nodes_;) {
     WideNode& n = nodes[i];
     const GroupSlots& gs = group_slots_[i - block_nodes_];
     for (int k = 0; k < 4; ++k) {
@@ -589,7 +601,7 @@ void ClusterScene::link_top_tree() {
   const Bvh& bvh = f_.bvh;
   collapse_to_wide(bvh, top_);
   const WideBvh& top = top_;
-  const auto S = static_cast<std::uint32_t>(sub_nodes_.size());
+  const std::uint32_t S = sub_count_;
   data.wide.nodes.resize(S + top.nodes.size());  // ([0, S) since the constructor)
   if (refit_groups_) {  // the top's leaves are single groups; the groups' trees keep fixed ranges
     if (data.ranges.size() != group_ranges_.size()) data.ranges = group_ranges_;

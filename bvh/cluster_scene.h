@@ -83,7 +83,7 @@ class ClusterScene {
   [[nodiscard]] const StageTimes& times() const { return f_.times; }
   /// Wide nodes kept from frame to frame (the block trees, then the fixed group trees): nodes
   /// [0, subtree_nodes()) of data().wide.nodes; only their boxes change per frame.
-  [[nodiscard]] std::size_t subtree_nodes() const { return sub_nodes_.size(); }
+  [[nodiscard]] std::size_t subtree_nodes() const { return sub_count_; }
   /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with
   /// cluster_vertex_order()): the conversion is then fused into the box stage (StageTimes::
   /// vertices_ms = 0, boxes_ms = both) and reads the input once, in order; otherwise the
@@ -91,8 +91,8 @@ class ClusterScene {
   [[nodiscard]] bool fused_vertex_pass() const { return runs_.has_value(); }
 
  private:
-  void layout_linear(std::vector<std::uint32_t>& lane_ids);
-  void layout_block_trees(std::vector<std::uint32_t>& lane_ids);
+  void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
+  void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
   void layout_group_trees();
   void link_top_tree();
@@ -114,8 +114,9 @@ class ClusterScene {
   std::vector<std::uint32_t> group_offsets_;  // SceneConfig::cluster_group_size: runs of clusters
   std::vector<LeafRange> cluster_ranges_;  // blocks of cluster c (fixed layout)
   // BlockTree: the per-cluster trees (child indices relative to the start of sub_nodes_, which
-  // become absolute because the subtrees occupy nodes [0, sub_nodes_.size()) of every frame).
-  AlignedVector<WideNode> sub_nodes_;
+  // become absolute because the subtrees occupy nodes [0, sub_count_) of every frame).
+  AlignedVector<WideNode> sub_nodes_;  // (moved into data().wide.nodes by the constructor; sub_count_ stays)
+  std::uint32_t sub_count_ = 0;        // fixed nodes [0, sub_count_) of data().wide.nodes
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
   std::uint32_t sub_depth_ = 0;
   // GroupTrees::Refit: sub_nodes_[block_nodes_ ..) are the groups' fixed trees (after the block
@@ -127,7 +128,8 @@ class ClusterScene {
   // fixed, the refits write their boxes (slot8_: 4-wide slot 4 n + k of the fixed part -> its
   // 8-wide slot 8 m + i in data().wide8, or kNoTriangle for a slot opened by the regrouping);
   // link8_ maps a 4-wide subtree root to its 8-wide one.
-  AlignedVector<WideNode8> sub8_;
+  AlignedVector<WideNode8> sub8_;  // (moved into data().wide8.nodes by layout_wide8; sub8_count_ stays)
+  std::size_t sub8_count_ = 0;
   std::vector<std::uint32_t> slot8_;
   std::vector<std::uint32_t> link8_;
   std::uint32_t sub_depth8_ = 0, group_depth8_ = 0;
