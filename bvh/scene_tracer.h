@@ -75,8 +75,8 @@ class SceneTracer {
   [[nodiscard]] const Vec3& origin() const { return origin_; }
   [[nodiscard]] bool split() const { return static_ != nullptr && moving_any(); }
   [[nodiscard]] bool all_static() const { return all_static_; }
-  [[nodiscard]] std::size_t static_triangles() const { return static_ids_.size(); }
-  [[nodiscard]] std::size_t moving_triangles() const { return moving_ids_.size(); }
+  [[nodiscard]] std::size_t static_triangles() const { return static_n_; }
+  [[nodiscard]] std::size_t moving_triangles() const { return moving_n_; }
   [[nodiscard]] bool moving_is_clusters() const { return bool(moving_cs_); }
   /// Construction time of the static BVH (all parts static: of the one BVH), milliseconds.
   [[nodiscard]] double static_build_ms() const { return static_build_ms_; }
@@ -94,7 +94,8 @@ class SceneTracer {
   std::unique_ptr<TriangleScene> static_;
   std::unique_ptr<TriangleScene> moving_ts_;
   std::unique_ptr<ClusterScene> moving_cs_;
-  std::vector<std::uint32_t> static_ids_, moving_ids_;  // sub-mesh triangle -> combined triangle
+  std::vector<std::uint32_t> static_ids_, moving_ids_;  // sub-mesh triangle -> combined triangle (split only)
+  std::size_t static_n_ = 0, moving_n_ = 0;             // triangles of each BVH
   struct Range {
     std::size_t first, count;  // combined vertices [first, first + count)
   };

@@ -180,10 +180,24 @@ TEST(SceneTrace, StaticBvhIsBuiltOnceAndNeverUpdated) {
   EXPECT_FALSE(s.split());
   s.update(m.positions());
   EXPECT_EQ(s.moving_times().total_ms(), 0.0);
+  EXPECT_EQ(s.static_triangles(), m.triangle_count());
+  EXPECT_EQ(s.moving_triangles(), 0u);
   ptc::bvh::SceneTracer d(m, ptc::bvh::PartLayout::single(m, false));
   EXPECT_FALSE(d.split());
   d.update(m.positions());
   EXPECT_GT(d.moving_times().total_ms(), 0.0);
+  EXPECT_EQ(d.static_triangles(), 0u);
+  EXPECT_EQ(d.moving_triangles(), m.triangle_count());
+  // With clusters, all static: the one BVH is the cluster BVH, counted as moving (built once).
+  const ptc::Clustering one = ptc::clustering_from_labels(std::vector<std::uint32_t>(m.triangle_count(), 0), m.triangles());
+  ptc::bvh::SceneTracerConfig cc;
+  cc.clusters = &one;
+  ptc::bvh::SceneTracer sc(m, ptc::bvh::PartLayout::single(m, true), cc);
+  EXPECT_TRUE(sc.all_static());
+  EXPECT_TRUE(sc.moving_is_clusters());
+  EXPECT_EQ(sc.static_triangles(), 0u);
+  EXPECT_EQ(sc.moving_triangles(), m.triangle_count());
+  EXPECT_TRUE(ptc::bvh::validate(sc.moving_data(), sc.moving_triangles()).empty());
 }
 
 TEST(SceneTrace, BadLayoutsAndSizesAreRefused) {
