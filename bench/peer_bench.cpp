@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
     parts.push_back({"mesh", make_deformer(std::move(mesh), deform_preset(kind))});
     Scene scene("peer_bench", std::move(parts), std::nullopt, std::nullopt, FrameRange{0, frames - 1});
     cfg.frames = {0, frames - 1};
-    const PeerBenchResult r = run_peer_bench(scene, nullptr, cfg);
+    const PeerBenchResult r = run_peer_bench(scene, std::nullopt, cfg);
     std::printf("%s, %d midpoint subdivision levels: %zu triangles; %zu clusters (%s, clustered in %.0f ms, cluster "
                 "scene setup %.1f ms); %d frames of the %s deformer; %u thread(s); cluster leaves %s\n",
                 mesh_path.c_str(), levels, r.triangles, r.clusters, r.clustering.c_str(), r.cluster_ms,

@@ -43,7 +43,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   Stopwatch sw;
   PeerBenchResult r;
   try {
-    r = run_peer_bench(scene, opt.clusters.empty() ? nullptr : &given, c);
+    r = run_peer_bench(scene, opt.clusters.empty() ? std::nullopt : std::optional<Clustering>(std::move(given)), c);
   } catch (const bvh::FrameRangeError& e) {
     throw InputError(arg, "", "", e.what());
   }

@@ -146,7 +146,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
       sw.restart();
       const std::vector<std::uint32_t> to_old = bvh::cluster_vertex_order(
           scene.rest(), bvh::view_of(clusters), scene.vertex_offsets(), bvh::cluster_config(tcfg, *tcfg.origin));
-      clusters = renumber_vertices(clusters, inverse_permutation(to_old));
+      clusters = renumber_vertices(std::move(clusters), inverse_permutation(to_old));  // (no copy)
       scene.renumber_vertices(to_old);
       std::vector<Vec3> moved(first.size());
       for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = first[to_old[i]];

@@ -61,7 +61,7 @@ std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first
   return out;
 }
 
-PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const PeerBenchConfig& cfg) {
+PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters, const PeerBenchConfig& cfg) {
   if (cfg.frames.first < 0 || cfg.frames.count() < 1) throw std::invalid_argument("frames must be a range A:B, 0 <= A <= B");
   if (cfg.threads < 1) throw std::invalid_argument("threads must be >= 1");
   if (cfg.width < 1 || cfg.height < 1 || cfg.width > kMaxImageSide || cfg.height > kMaxImageSide)
@@ -72,8 +72,8 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
   PeerBenchResult res;
   res.triangles = scene.rest().triangle_count();
   res.vertices = scene.rest().vertex_count();
-  Clustering own;
-  if (!clusters) {
+  const bool given = clusters.has_value();
+  if (!given) {
     ClusterConfig cc;
     cc.method = ClusterMethod::Growth;
     cc.objective = ObjectiveKind::Acc;
@@ -81,7 +81,7 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
     cc.max_size = cfg.max_count;
     cc.adjacency = cfg.adjacency;
     Stopwatch sw;
-    own = cluster_mesh(scene.rest(), cc, [](double) { throw_if_cancelled(); });  // Ctrl-C at the next step
+    clusters = cluster_mesh(scene.rest(), cc, [](double) { throw_if_cancelled(); });  // Ctrl-C at the next step
     res.cluster_ms = sw.ms();
     const ClusterAdjacency used = resolve_adjacency(scene.rest(), cfg.adjacency);
     res.clustering =
@@ -92,7 +92,6 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
                           cfg.adjacency == ClusterAdjacency::Auto && used == ClusterAdjacency::Positions
                               ? " (auto: the rest pose is a triangle soup)"
                               : "");
-    clusters = &own;
   } else {
     res.clustering = "given";
   }
@@ -111,18 +110,16 @@ PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const P
 
   // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
   // are consecutive; the scene renumbers its sources (or gathers, which it then says).
-  Clustering renumbered;
   res.vertex_order = to_string(cfg.vertex_order);
   if (cfg.vertex_order == bvh::VertexOrder::Clusters) {
     Stopwatch sw;
     const std::vector<std::uint32_t> to_old = bvh::cluster_vertex_order(
         scene.rest(), bvh::view_of(*clusters), scene.vertex_offsets(), loop::cluster_scene_config(setup));
-    renumbered = renumber_vertices(*clusters, inverse_permutation(to_old));
+    *clusters = renumber_vertices(std::move(*clusters), inverse_permutation(to_old));  // (no copy)
     scene.renumber_vertices(to_old);
     res.renumber_ms = sw.ms();
-    clusters = &renumbered;
   }
-  setup.clusters = clusters;
+  setup.clusters = &*clusters;
   const Mesh& mesh = scene.rest();
 
   const bvh::PinholeCamera cam = make_camera(cfg.camera, rest_bounds, cfg.width, cfg.height);

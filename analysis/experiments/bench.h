@@ -118,11 +118,11 @@ struct PeerBenchResult {
 };
 
 /// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()
-/// (validated by the caller), or nullptr to compute growth / Acc with MaxCount = MaxSize =
-/// cfg.max_count (timed as cluster_ms). With VertexOrder::Clusters the scene is renumbered
+/// (validated by the caller; taken over, renumbered with the vertices without a copy), or
+/// nullopt to compute growth / Acc with MaxCount = MaxSize = cfg.max_count (timed as cluster_ms). With VertexOrder::Clusters the scene is renumbered
 /// in place (Scene::renumber_vertices). Throws std::invalid_argument for a bad configuration,
 /// std::runtime_error when Embree fails.
-[[nodiscard]] PeerBenchResult run_peer_bench(Scene& scene, const Clustering* clusters, const PeerBenchConfig& cfg);
+[[nodiscard]] PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters, const PeerBenchConfig& cfg);
 
 /// Medians over benchmark frames >= first_frame per configuration (order of first appearance)
 /// and mismatch sums over all frames: the summary of run_peer_bench, recomputable from rows.

@@ -638,6 +638,21 @@ TEST(Renumbering, MeshAndClusteringFollowThePermutation) {
   Clustering broken = c;
   broken.vertex_offsets.back() += 5;
   EXPECT_THROW((void)renumber_vertices(broken, to_new), std::invalid_argument);
+  // The form that takes the clustering over: the same lists; refused before anything changes,
+  // so the caller's clustering is intact after the throw.
+  Clustering moved = c;
+  const Clustering rm = renumber_vertices(std::move(moved), to_new);
+  EXPECT_EQ(rm.vertices, rc.vertices);
+  EXPECT_EQ(rm.vertex_offsets, rc.vertex_offsets);
+  EXPECT_EQ(rm.triangle_order, rc.triangle_order);
+  for (const Ids& bad : {Ids{0, 1}, Ids{}}) {
+    Clustering keep = c;
+    EXPECT_THROW((void)renumber_vertices(std::move(keep), bad), std::invalid_argument);
+    EXPECT_EQ(keep.vertices, c.vertices);
+  }
+  Clustering keep_broken = broken;
+  EXPECT_THROW((void)renumber_vertices(std::move(keep_broken), to_new), std::invalid_argument);
+  EXPECT_EQ(keep_broken.vertices, broken.vertices);
 }
 
 // The in-place renumbering against the copying one (the brute force: a gather), item by item:

@@ -374,21 +374,24 @@ Clustering split_disconnected(const Clustering& c, std::span<const Tri> triangle
   return clustering_from_labels(label, triangles);
 }
 
-Clustering renumber_vertices(const Clustering& c, std::span<const std::uint32_t> to_new) {
-  Clustering r = c;
-  for (std::uint32_t& v : r.vertices) {
+Clustering renumber_vertices(Clustering&& c, std::span<const std::uint32_t> to_new) {
+  // Checked before anything changes (the caller may still hold on to a refused clustering).
+  for (const std::uint32_t v : c.vertices)
     if (v >= to_new.size())
       throw std::invalid_argument("renumber_vertices: vertex " + std::to_string(v) + " of the clustering is outside the " +
                                   std::to_string(to_new.size()) + " renumbered vertices");
-    v = to_new[v];
-  }
-  for (std::size_t k = 0; k + 1 < r.vertex_offsets.size(); ++k) {
-    if (r.vertex_offsets[k] > r.vertex_offsets[k + 1] || r.vertex_offsets[k + 1] > r.vertices.size())
+  for (std::size_t k = 0; k + 1 < c.vertex_offsets.size(); ++k)
+    if (c.vertex_offsets[k] > c.vertex_offsets[k + 1] || c.vertex_offsets[k + 1] > c.vertices.size())
       throw std::invalid_argument("renumber_vertices: vertex offsets of cluster " + std::to_string(k) +
                                   " decrease or run past the vertex list");
-    std::sort(r.vertices.begin() + r.vertex_offsets[k], r.vertices.begin() + r.vertex_offsets[k + 1]);
-  }
-  return r;
+  for (std::uint32_t& v : c.vertices) v = to_new[v];
+  for (std::size_t k = 0; k + 1 < c.vertex_offsets.size(); ++k)
+    std::sort(c.vertices.begin() + c.vertex_offsets[k], c.vertices.begin() + c.vertex_offsets[k + 1]);
+  return std::move(c);
+}
+
+Clustering renumber_vertices(const Clustering& c, std::span<const std::uint32_t> to_new) {
+  return renumber_vertices(Clustering(c), to_new);
 }
 
 }  // namespace ptc

@@ -86,7 +86,10 @@ struct ClusterLimits {
 
 /// The clustering of a mesh whose vertices were renumbered (to_new[old] = new, e.g.
 /// inverse_permutation of the renumbering): vertex lists renamed and sorted ascending again;
-/// triangles and clusters unchanged. Throws std::invalid_argument for a vertex id outside to_new.
+/// triangles and clusters unchanged. Throws std::invalid_argument for a vertex id outside to_new
+/// (or bad vertex offsets), before anything changes. The second form renames `c`'s own lists (no
+/// copy: at 13.3M triangles the clustering is 100 MB).
 [[nodiscard]] Clustering renumber_vertices(const Clustering& c, std::span<const std::uint32_t> to_new);
+[[nodiscard]] Clustering renumber_vertices(Clustering&& c, std::span<const std::uint32_t> to_new);
 
 }  // namespace ptc

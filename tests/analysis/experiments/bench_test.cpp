@@ -57,7 +57,7 @@ TEST(PeerBench, SmallMeshAllConfigurationsNoMismatches) {
   cfg.width = 40, cfg.height = 32;
   cfg.max_count = 20;
   ptc::Scene sc = scene_of(m);
-  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, nullptr, cfg);
+  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, std::nullopt, cfg);
   const auto names = names_of_configs();
   ASSERT_EQ(r.rows.size(), 3u * names.size());
   EXPECT_EQ(r.rays, 40u * 32u);
@@ -119,7 +119,7 @@ TEST(PeerBench, ShadowRaysOfAConvexMeshAreNeverOccluded) {
   cfg.max_count = 20;
   cfg.light = Vec3(3.0, 5.0, 4.0);
   ptc::Scene sc = scene_of(m, ptc::DeformKind::Rigid);
-  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, nullptr, cfg);
+  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, std::nullopt, cfg);
   EXPECT_TRUE(r.shadows);
   const auto names = names_of_configs();
   ASSERT_EQ(r.rows.size(), 3u * names.size());
@@ -166,12 +166,12 @@ TEST(PeerBench, ShadowRaysAgreeAcrossConfigurationsWithOccluders) {
   cfg.max_count = 20;
   cfg.light = Vec3(1.6, 5.0, 2.4);
   ptc::Scene sc = scene_of(m, ptc::DeformKind::Rigid);
-  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, nullptr, cfg);
+  const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, std::nullopt, cfg);
   // Packets on both sides (ours: 8 lanes; Embree: rtcIntersect8 / rtcOccluded8): the same hits
   // and the same occluded points as single rays, configuration by configuration.
   cfg.packets = true;
   ptc::Scene sc2 = scene_of(m, ptc::DeformKind::Rigid);
-  const ptc::PeerBenchResult rp = ptc::run_peer_bench(sc2, nullptr, cfg);
+  const ptc::PeerBenchResult rp = ptc::run_peer_bench(sc2, std::nullopt, cfg);
   const auto names = names_of_configs();
   ASSERT_EQ(rp.rows.size(), r.rows.size());
   for (int f = 0; f < 2; ++f) {
@@ -204,11 +204,11 @@ TEST(PeerBench, GivenClusteringAndLinearLeavesAlsoMatch) {
   cfg.cluster_leaf = ptc::bvh::ClusterLeaf::Linear;
   cfg.threads = 2;
   ptc::Scene sc = scene_of(m, ptc::DeformKind::Wave);
-  const auto r = ptc::run_peer_bench(sc, &c, cfg);
+  const auto r = ptc::run_peer_bench(sc, c, cfg);
   EXPECT_EQ(r.clusters, 8u);
   for (const auto& row : r.rows) EXPECT_EQ(row.agreement.mismatches(), 0u) << row.config << " frame " << row.frame;
   ptc::Scene sc2 = scene_of(m, ptc::DeformKind::Wave);
-  EXPECT_THROW((void)ptc::run_peer_bench(sc2, &c, [&] { auto x = cfg; x.frames = {3, 2}; return x; }()),
+  EXPECT_THROW((void)ptc::run_peer_bench(sc2, c, [&] { auto x = cfg; x.frames = {3, 2}; return x; }()),
                std::invalid_argument);
 }
 
@@ -246,7 +246,7 @@ TEST(PeerBench, ScenePositionsDriveTheFrames) {
   rigid.velocity = Vec3(0.07, 0.0, 0.0);  // 7% of the diagonal per frame along x
   ptc::Scene sc = scene_of(m, ptc::DeformKind::Rigid, rigid);
   // The camera frames the rest pose (scene frame 0), so the moving mesh leaves the view.
-  const auto r = ptc::run_peer_bench(sc, nullptr, cfg);
+  const auto r = ptc::run_peer_bench(sc, std::nullopt, cfg);
   EXPECT_EQ(r.vertex_order, "clusters");
   EXPECT_TRUE(r.fused_vertex_pass);
   const std::size_t nc = names_of_configs().size();
@@ -263,7 +263,7 @@ TEST(PeerBench, ScenePositionsDriveTheFrames) {
   // The file's vertex order: the cluster path gathers; the same hits, frame by frame.
   cfg.vertex_order = ptc::bvh::VertexOrder::Input;
   ptc::Scene sc2 = scene_of(m, ptc::DeformKind::Rigid, rigid);
-  const auto ri = ptc::run_peer_bench(sc2, nullptr, cfg);
+  const auto ri = ptc::run_peer_bench(sc2, std::nullopt, cfg);
   EXPECT_EQ(ri.vertex_order, "input");
   EXPECT_FALSE(ri.fused_vertex_pass);
   ASSERT_EQ(ri.rows.size(), r.rows.size());
