@@ -155,13 +155,14 @@ class Deformer final : public Animation {
       throw std::invalid_argument("renumber_vertices: " + std::to_string(to_old.size()) + " entries for " +
                                   std::to_string(rest_.vertex_count()) + " vertices");
     check_permutation(to_old);  // before anything changes
+    std::vector<std::uint32_t> vt;
     if (p_.kind == DeformKind::Explode) {
-      std::vector<std::uint32_t> vt(to_old.size());
+      vt.resize(to_old.size());
       for (std::size_t i = 0; i < to_old.size(); ++i)
         vt[i] = vertex_triangle_.empty() ? to_old[i] / 3 : vertex_triangle_[to_old[i]];
-      vertex_triangle_ = std::move(vt);
     }
-    rest_.renumber_vertices(to_old);  // in place (13.3M triangles: 320 MB not allocated)
+    rest_.renumber_vertices(to_old);  // in place (13.3M triangles: 160 MB not allocated); may throw, changing nothing
+    if (p_.kind == DeformKind::Explode) vertex_triangle_ = std::move(vt);
     return true;
   }
 

@@ -118,7 +118,8 @@ LoadedMesh read_mesh(const std::filesystem::path& path) {
   open_input(path, file);
   // A regular binary PLY file is read block by block (its body can be hundreds of MB); every
   // other file whole.
-  LoadedMesh lm = *f == MeshFormat::Ply && S_ISREG(file.st.st_mode)
+  // (A regular file that reports size 0, as procfs files do, is read to its end instead.)
+  LoadedMesh lm = *f == MeshFormat::Ply && S_ISREG(file.st.st_mode) && file.st.st_size > 0
                       ? io::read_ply_file(file.fd, static_cast<std::uint64_t>(file.st.st_size), path.string())
                       : read_mesh_from_memory(read_file(path.string(), file.fd, file.st), *f, path.string());
   if (const ReadNoteHandler h = g_note_handler.load())
