@@ -259,6 +259,41 @@ TEST_F(IoWrite, AtomicFileReplacesOnlyOnCommit) {
   EXPECT_EQ(slurp(target), "");
 }
 
+// Written behind (every 8 MiB the chunk before leaves the page cache): the file holds every byte
+// in order, from pieces of every size across the chunk boundaries (1 byte, odd sizes, one piece
+// of 20 MiB, a piece ending exactly on a boundary), and a file never committed still goes away.
+TEST_F(IoWrite, AtomicFileWrittenBehindHoldsEveryByte) {
+  std::mt19937 rng(5);
+  std::string all;
+  const fs::path target = dir_ / "big.bin";
+  {
+    AtomicFile f(target);
+    auto piece = [&](std::size_t n) {
+      std::string b(n, '\0');
+      for (char& c : b) c = static_cast<char>(rng());
+      f.write(b);
+      all += b;
+    };
+    piece(1);
+    piece((std::size_t{8} << 20) - 1);  // ends exactly on the first boundary
+    for (int k = 0; k < 40; ++k) piece(1 + rng() % 700000);
+    piece(std::size_t{20} << 20);
+    piece(3);
+    f.commit();
+  }
+  ASSERT_GT(all.size(), std::size_t{36} << 20);  // several chunks
+  EXPECT_TRUE(slurp(target) == all);
+  EXPECT_EQ(entries(dir_), (std::vector<std::string>{"big.bin"}));
+  fs::path temp;
+  {
+    AtomicFile g(dir_ / "never.bin");
+    temp = g.temp_path();
+    g.write(std::string(std::size_t{17} << 20, 'x'));
+  }
+  EXPECT_FALSE(fs::exists(temp));
+  EXPECT_EQ(entries(dir_), (std::vector<std::string>{"big.bin"}));
+}
+
 TEST_F(IoWrite, AtomicFileCommitFailureKeepsTheTarget) {
   // The target becomes a non-empty directory between creation and commit: rename fails.
   const fs::path target = dir_ / "x.off";

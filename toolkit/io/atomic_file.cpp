@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -74,16 +75,34 @@ void AtomicFile::fail(const char* what, int err) {
 void AtomicFile::write(std::string_view bytes) {
   if (fd_ < 0) throw InputError(target_.string(), "", "", "write after commit or failure");
   stop_if_cancelled();
+  constexpr std::uint64_t kChunk = std::uint64_t{8} << 20;
   const char* p = bytes.data();
   std::size_t left = bytes.size();
   while (left > 0) {
-    const ssize_t n = ::write(fd_, p, left);
+    // At most to the next chunk boundary, so that a large write is written behind too.
+    const std::size_t step = static_cast<std::size_t>(std::min<std::uint64_t>(left, kChunk - written_ % kChunk));
+    const ssize_t n = ::write(fd_, p, step);
     if (n < 0) {
       if (errno == EINTR) continue;
       fail("cannot write", errno);
     }
     p += n;
     left -= static_cast<std::size_t>(n);
+    written_ += static_cast<std::uint64_t>(n);
+    if (written_ - flushing_ >= kChunk) {
+      // Best effort (errors show in commit()'s fsync): start writing the new chunk out; wait for
+      // the one before and drop its pages.
+      (void)::sync_file_range(fd_, static_cast<off_t>(flushing_), static_cast<off_t>(written_ - flushing_),
+                              SYNC_FILE_RANGE_WRITE);
+      if (flushing_ > dropped_) {
+        (void)::sync_file_range(fd_, static_cast<off_t>(dropped_), static_cast<off_t>(flushing_ - dropped_),
+                                SYNC_FILE_RANGE_WAIT_BEFORE | SYNC_FILE_RANGE_WRITE | SYNC_FILE_RANGE_WAIT_AFTER);
+        (void)::posix_fadvise(fd_, static_cast<off_t>(dropped_), static_cast<off_t>(flushing_ - dropped_),
+                              POSIX_FADV_DONTNEED);
+        dropped_ = flushing_;
+      }
+      flushing_ = written_;
+    }
   }
 }
 

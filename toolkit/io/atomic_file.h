@@ -17,6 +17,7 @@
 #pragma once
 
 #include <filesystem>
+#include <cstdint>
 #include <string_view>
 
 namespace ptc {
@@ -31,7 +32,11 @@ class AtomicFile {
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
 
-  /// Appends bytes (unbuffered: pass large chunks). Throws InputError on failure.
+  /// Appends bytes (unbuffered: pass large chunks). Throws InputError on failure. A large file
+  /// is written behind: every 8 MiB the kernel is told to write the bytes out, and the chunk
+  /// before, once on disk, leaves the page cache. The file's pages are then reused instead of
+  /// new memory taken for each (at 13.3M triangles `ptc cluster` writes 670 MB; commit() fsyncs
+  /// the file anyway).
   void write(std::string_view bytes);
   /// fsync + close + rename over the target. Throws InputError (naming the target and strerror) on
   /// failure, after which the temporary is removed and the target is unchanged. Call once.
@@ -49,6 +54,7 @@ class AtomicFile {
   std::filesystem::path target_, temp_;
   int fd_ = -1;
   int slot_ = -1;  // register_temporary's slot
+  std::uint64_t written_ = 0, flushing_ = 0, dropped_ = 0;  // write behind: bytes written, sent, dropped
   bool committed_ = false;
 };
 
