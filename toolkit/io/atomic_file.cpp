@@ -79,6 +79,7 @@ void AtomicFile::write(std::string_view bytes) {
   const char* p = bytes.data();
   std::size_t left = bytes.size();
   while (left > 0) {
+    if (written_ % kChunk == 0 && p != bytes.data()) stop_if_cancelled();  // Ctrl-C between chunks of a large write
     // At most to the next chunk boundary, so that a large write is written behind too.
     const std::size_t step = static_cast<std::size_t>(std::min<std::uint64_t>(left, kChunk - written_ % kChunk));
     const ssize_t n = ::write(fd_, p, step);
