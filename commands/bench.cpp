@@ -38,12 +38,12 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   if (opt.shadows) c.light = light.position;
   // The output directory is checked before the (long) run, so a refused target costs nothing.
   OutputDir dir(opt.out_dir);
-  Clustering given;
+  std::optional<Clustering> given;  // (handed over to the bench, which renames it with the vertices)
   if (!opt.clusters.empty()) given = read_clusters_recorded(opt.clusters, scene.rest(), manifest);
   Stopwatch sw;
   PeerBenchResult r;
   try {
-    r = run_peer_bench(scene, opt.clusters.empty() ? std::nullopt : std::optional<Clustering>(std::move(given)), c);
+    r = run_peer_bench(scene, std::move(given), c);
   } catch (const bvh::FrameRangeError& e) {
     throw InputError(arg, "", "", e.what());
   }

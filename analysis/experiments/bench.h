@@ -119,8 +119,9 @@ struct PeerBenchResult {
 
 /// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()
 /// (validated by the caller; taken over, renumbered with the vertices without a copy), or
-/// nullopt to compute growth / Acc with MaxCount = MaxSize = cfg.max_count (timed as cluster_ms). With VertexOrder::Clusters the scene is renumbered
-/// in place (Scene::renumber_vertices). Throws std::invalid_argument for a bad configuration,
+/// nullopt to compute growth / Acc with MaxCount = MaxSize = cfg.max_count (timed as
+/// cluster_ms). With VertexOrder::Clusters the scene is renumbered in place
+/// (Scene::renumber_vertices). Throws std::invalid_argument for a bad configuration,
 /// std::runtime_error when Embree fails.
 [[nodiscard]] PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters, const PeerBenchConfig& cfg);
 

@@ -106,11 +106,11 @@ template <class Row, class RowAt, class Visit>
   }
   return t;
 }
+/// The block size of the tables written as they are made (stream_each, analysis/metrics's writers).
+inline constexpr std::size_t kCsvBlockBytes = std::size_t{1} << 20;
 /// tabulate_each's text handed to `sink(std::string_view)` in blocks of about 1 MiB instead of
 /// kept as one string (a table of a million rows never holds its text whole). The same bytes in
 /// the same order; returns the schema's id.
-/// The block size of the tables written as they are made (stream_each, analysis/metrics's writers).
-inline constexpr std::size_t kCsvBlockBytes = std::size_t{1} << 20;
 template <class Row, class RowAt, class Visit, class Sink>
 std::string stream_each(const Schema& schema, std::size_t n, RowAt&& row_at, Visit&& visit, Sink&& sink) {
   constexpr std::size_t kBlock = kCsvBlockBytes;

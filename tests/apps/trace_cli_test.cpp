@@ -43,6 +43,17 @@ class TraceCli : public ptc::test::CliTest {
     EXPECT_FALSE(fs::exists(dir_ / "out")) << r.err;
     fs::remove_all(dir_ / "out");
   }
+  // The cube subdivided four times (fine.ply, 3072 triangles) and its growth clustering of at
+  // most six triangles a cluster in cl/.
+  fs::path clustered_fine_mesh() const {
+    const fs::path fine = dir_ / "fine.ply";
+    EXPECT_EQ(ptc({"subdivide", cube_.string(), "--levels", "4", "--out", fine.string()}).code, 0);
+    EXPECT_EQ(ptc({"cluster", fine.string(), "--method", "growth", "--max-count", "6", "--max-size", "6", "--out",
+                   (dir_ / "cl").string()})
+                  .code,
+              0);
+    return fine;
+  }
   fs::path cube_;
 };
 
@@ -208,12 +219,8 @@ TEST_F(TraceCli, TraceShowsTheStandInMotionOfTheBench) {
 // fixed group trees) and the trace frame are set up at the rest pose, not at the range's first
 // frame (a study split over runs reproduces the single run's counters).
 TEST_F(TraceCli, AFrameTracesTheSameInAnyRange) {
-  const fs::path fine = dir_ / "fine.ply";
-  ASSERT_EQ(ptc({"subdivide", cube_.string(), "--levels", "4", "--out", fine.string()}).code, 0);  // 3072 triangles
-  ASSERT_EQ(ptc({"cluster", fine.string(), "--method", "growth", "--max-count", "6", "--max-size", "6", "--out",
-                 (dir_ / "cl").string()})
-                .code,
-            0);
+  const fs::path fine = clustered_fine_mesh();
+  ASSERT_FALSE(HasFailure());
   auto trace = [&](const std::string& name, std::vector<std::string> frames) {
     std::vector<std::string> a = {"trace", fine.string(), "--deform", "twist", "--clusters", (dir_ / "cl").string(),
                                   "--eye", "3,2,4", "--look-at", "0.5,0.5,0.5", "--shadows", "--width", "48",
@@ -382,6 +389,14 @@ const char* kSceneJson = R"({
      "deform": {"kind": "rigid", "amplitude": 0.1, "velocity": [0, -0.03, 0]}}
   ]
 })";
+// Two clusters over kSceneJson's 332 combined triangles, the cube (0..11) and the sphere
+// (12..331), as DIR/triangles.csv.
+void write_box_and_ball_clusters(const fs::path& dir) {
+  fs::create_directories(dir);
+  std::ofstream csv(dir / "triangles.csv");
+  csv << "triangle_id,cluster_id\n";
+  for (int t = 0; t < 332; ++t) csv << t << "," << (t < 12 ? 0 : 1) << "\n";
+}
 }  // namespace
 
 // --group-trees refit (the groups' trees fixed at the rest pose and refitted): the same hits and
@@ -554,13 +569,7 @@ TEST_F(TraceCli, BenchTakesPositionsFromTheScene) {
 
 TEST_F(TraceCli, SceneWithClustersOfTheCombinedMesh) {
   std::ofstream(dir_ / "scene.json") << kSceneJson;
-  // Two clusters over the 332 combined triangles: the cube (0..11) and the sphere (12..331).
-  fs::create_directories(dir_ / "cl");
-  {
-    std::ofstream csv(dir_ / "cl" / "triangles.csv");
-    csv << "triangle_id,cluster_id\n";
-    for (int t = 0; t < 332; ++t) csv << t << "," << (t < 12 ? 0 : 1) << "\n";
-  }
+  write_box_and_ball_clusters(dir_ / "cl");
   const CmdResult r = ptc({"trace", (dir_ / "scene.json").string(), "--clusters", (dir_ / "cl").string(), "--frames",
                            "1:2", "--width", "12", "--height", "10", "--out", (dir_ / "out").string()});
   ASSERT_EQ(r.code, 0) << r.err;
@@ -588,19 +597,10 @@ TEST_F(TraceCli, SceneWithClustersOfTheCombinedMesh) {
 // with shadows and AO and over a scene of a static and a moving part; without clusters the flag
 // does nothing and is refused.
 TEST_F(TraceCli, VertexOrderClustersTracesTheSameAsInput) {
-  const fs::path fine = dir_ / "fine.ply";
-  ASSERT_EQ(ptc({"subdivide", cube_.string(), "--levels", "4", "--out", fine.string()}).code, 0);  // 3072 triangles
-  ASSERT_EQ(ptc({"cluster", fine.string(), "--method", "growth", "--max-count", "6", "--max-size", "6", "--out",
-                 (dir_ / "cl").string()})
-                .code,
-            0);
+  const fs::path fine = clustered_fine_mesh();
+  ASSERT_FALSE(HasFailure());
   std::ofstream(dir_ / "scene.json") << kSceneJson;
-  fs::create_directories(dir_ / "scl");
-  {
-    std::ofstream csv(dir_ / "scl" / "triangles.csv");
-    csv << "triangle_id,cluster_id\n";
-    for (int t = 0; t < 332; ++t) csv << t << "," << (t < 12 ? 0 : 1) << "\n";
-  }
+  write_box_and_ball_clusters(dir_ / "scl");
   struct Case {
     std::string name;
     std::vector<std::string> args;
