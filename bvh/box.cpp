@@ -6,6 +6,9 @@
 #include <stdexcept>
 #include <string>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "bvh/box_simd.h"
 
 namespace ptc::bvh {
@@ -36,17 +39,20 @@ std::vector<Box3f> point_group_boxes(std::span<const Vec3> positions, std::span<
   const std::size_t groups = offsets.empty() ? 0 : offsets.size() - 1;
   std::vector<Box3f> boxes(groups);
   constexpr double inf = std::numeric_limits<double>::infinity();
-  for (std::size_t g = 0; g < groups; ++g) {
-    double lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf;
-    for (std::uint32_t i = offsets[g]; i < offsets[g + 1]; ++i) {
-      const Vec3& p = positions[indices[i]];
-      lx = std::min(lx, p.x()), ly = std::min(ly, p.y()), lz = std::min(lz, p.z());
-      hx = std::max(hx, p.x()), hy = std::max(hy, p.y()), hz = std::max(hz, p.z());
+  // Groups are independent: chunks of them on the caller's threads (the same boxes at any count).
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t g = r.begin(); g < r.end(); ++g) {
+      double lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf;
+      for (std::uint32_t i = offsets[g]; i < offsets[g + 1]; ++i) {
+        const Vec3& p = positions[indices[i]];
+        lx = std::min(lx, p.x()), ly = std::min(ly, p.y()), lz = std::min(lz, p.z());
+        hx = std::max(hx, p.x()), hy = std::max(hy, p.y()), hz = std::max(hz, p.z());
+      }
+      if (offsets[g] == offsets[g + 1]) continue;  // empty group: empty box
+      boxes[g].lo = {round_down((lx - origin.x()) * s), round_down((ly - origin.y()) * s), round_down((lz - origin.z()) * s)};
+      boxes[g].hi = {round_up((hx - origin.x()) * s), round_up((hy - origin.y()) * s), round_up((hz - origin.z()) * s)};
     }
-    if (offsets[g] == offsets[g + 1]) continue;  // empty group: empty box
-    boxes[g].lo = {round_down((lx - origin.x()) * s), round_down((ly - origin.y()) * s), round_down((lz - origin.z()) * s)};
-    boxes[g].hi = {round_up((hx - origin.x()) * s), round_up((hy - origin.y()) * s), round_up((hz - origin.z()) * s)};
-  }
+  });
   return boxes;
 }
 

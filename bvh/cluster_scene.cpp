@@ -7,7 +7,9 @@
 #include <string>
 #include <utility>
 
+#include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
@@ -21,6 +23,11 @@
 namespace ptc::bvh {
 
 namespace {
+
+// The set-up's per-cluster and per-block passes run in chunks on the caller's threads (oneTBB,
+// `--threads N`); each chunk writes only its own clusters' or blocks' entries.
+constexpr std::size_t kSetupClustersPerTask = 1024;
+constexpr std::size_t kSetupBlocksPerTask = 8192;
 
 // The clustering's consistency (what ClusterScene relies on): offsets from 0 to T, no empty
 // cluster, triangle_order a permutation of the mesh's triangles, vertex offsets matching.
@@ -143,28 +150,32 @@ void reorder_clusters(const Mesh& mesh, const ClusterView& cv, std::span<const s
 // clusters differently: only its bit interleave, morton_encode, is shared).
 void sort_clusters_by_morton(std::span<const Vec3> pos, std::span<const Tri> tris, std::span<const std::uint32_t> offsets,
                              std::vector<std::uint32_t>& order) {
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed;  // (code, triangle id)
-  std::vector<Vec3> cen;
-  for (std::size_t c = 0; c + 1 < offsets.size(); ++c) {
-    Box3 box;
-    cen.clear();
-    for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) {
-      const Tri& t = tris[order[i]];
-      cen.push_back(triangle_centroid(pos[t[0]], pos[t[1]], pos[t[2]]));
-      box.extend(cen.back());
+  // Clusters are independent: chunks of them on the caller's threads, the same order at any count.
+  const std::size_t C = offsets.empty() ? 0 : offsets.size() - 1;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kSetupClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed;  // (code, triangle id)
+    std::vector<Vec3> cen;
+    for (std::size_t c = r.begin(); c < r.end(); ++c) {
+      Box3 box;
+      cen.clear();
+      for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) {
+        const Tri& t = tris[order[i]];
+        cen.push_back(triangle_centroid(pos[t[0]], pos[t[1]], pos[t[2]]));
+        box.extend(cen.back());
+      }
+      const Vec3 ext = box.extent();
+      const double scale = ext.maxCoeff() > 0 ? 1023.0 / ext.maxCoeff() : 0.0;
+      keyed.clear();
+      for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) {
+        const Vec3 q = (cen[i - offsets[c]] - box.lo) * scale;
+        const auto code = morton_encode(static_cast<std::uint32_t>(q.x()), static_cast<std::uint32_t>(q.y()),
+                                        static_cast<std::uint32_t>(q.z()));  // < 2^30: cells < 2^10
+        keyed.push_back({static_cast<std::uint32_t>(code), order[i]});
+      }
+      std::sort(keyed.begin(), keyed.end());
+      for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) order[i] = keyed[i - offsets[c]].second;
     }
-    const Vec3 ext = box.extent();
-    const double scale = ext.maxCoeff() > 0 ? 1023.0 / ext.maxCoeff() : 0.0;
-    keyed.clear();
-    for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) {
-      const Vec3 q = (cen[i - offsets[c]] - box.lo) * scale;
-      const auto code = morton_encode(static_cast<std::uint32_t>(q.x()), static_cast<std::uint32_t>(q.y()),
-                                      static_cast<std::uint32_t>(q.z()));  // < 2^30: cells < 2^10
-      keyed.push_back({static_cast<std::uint32_t>(code), order[i]});
-    }
-    std::sort(keyed.begin(), keyed.end());
-    for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) order[i] = keyed[i - offsets[c]].second;
-  }
+  });
 }
 
 }  // namespace
@@ -279,15 +290,20 @@ void ClusterScene::make_wide8() {
 
 // Linear: each cluster's triangles packed in blocks of four, in the (Morton) order above.
 void ClusterScene::layout_linear(AlignedVector<std::uint32_t>& lane_ids) {
-  std::size_t lanes = 0;
-  for (const std::uint32_t w : weights_) lanes += 4 * std::size_t{blocks_for(w)};
-  lane_ids.reserve(lanes);
-  for (std::size_t c = 0; c < weights_.size(); ++c) {
-    const auto first = static_cast<std::uint32_t>(lane_ids.size() / 4);
-    for (std::uint32_t i = 0; i < 4 * blocks_for(weights_[c]); ++i)
-      lane_ids.push_back(i < weights_[c] ? order_[offsets_[c] + i] : kNoTriangle);
-    cluster_ranges_[c] = {first, blocks_for(weights_[c]), weights_[c]};
+  const std::size_t C = weights_.size();
+  std::uint32_t blocks = 0;
+  for (std::size_t c = 0; c < C; ++c) {
+    cluster_ranges_[c] = {blocks, blocks_for(weights_[c]), weights_[c]};
+    blocks += blocks_for(weights_[c]);
   }
+  lane_ids.resize(4 * std::size_t{blocks});
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kSetupClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t c = r.begin(); c < r.end(); ++c) {
+      std::uint32_t* lanes = lane_ids.data() + 4 * std::size_t{cluster_ranges_[c].first_block};
+      const std::uint32_t* ids = order_.data() + offsets_[c];
+      for (std::uint32_t i = 0; i < 4 * cluster_ranges_[c].block_count; ++i) lanes[i] = i < weights_[c] ? ids[i] : kNoTriangle;
+    }
+  });
 }
 
 // BlockTree: per cluster a binned SAH tree over its rest-pose triangles, leaves of at most 4
@@ -359,15 +375,25 @@ void ClusterScene::layout_group_trees() {
   group_weights_.assign(G, 0);
   group_boxes_.resize(G);
   group_centres_.resize(G);
+  // The groups' trees are independent: built and collapsed in chunks on the caller's threads,
+  // then appended in group order (the same nodes at any thread count).
+  std::vector<WideBvh> wide(G);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, G, kSetupClustersPerTask / 8), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t g = r.begin(); g < r.end(); ++g) {
+      const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
+      for (std::uint32_t i = 0; i < n; ++i) group_weights_[g] += weights_[first + i];
+      group_bvh_[g] = build_binned_sah({std::span<const Box3f>(boxes.data() + first, n),
+                                        std::span<const Vec3f>(centres.data() + first, n),
+                                        std::span<const std::uint32_t>(weights_.data() + first, n)},
+                                       cfg_.build);
+      if (n > 1) wide[g] = collapse_to_wide(group_bvh_[g]);
+    }
+  });
   for (std::size_t g = 0; g < G; ++g) {
     const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
-    for (std::uint32_t i = 0; i < n; ++i) group_weights_[g] += weights_[first + i];
-    Bvh gb = build_binned_sah({std::span<const Box3f>(boxes.data() + first, n),
-                               std::span<const Vec3f>(centres.data() + first, n),
-                               std::span<const std::uint32_t>(weights_.data() + first, n)},
-                              cfg_.build);
+    const Bvh& gb = group_bvh_[g];
     if (n > 1) {
-      const WideBvh w = collapse_to_wide(gb);
+      const WideBvh& w = wide[g];
       const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
       group_root_[g] = base + w.root;
       group_depth_ = std::max(group_depth_, w.depth);
@@ -393,8 +419,8 @@ void ClusterScene::layout_group_trees() {
         sub_nodes_.push_back(nd);
         group_slots_.push_back(gs);
       }
+      wide[g] = {};
     }
-    group_bvh_[g] = std::move(gb);
   }
 }
 
@@ -493,12 +519,16 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
   runs_ = group_runs(vorder_);
   const auto sentinel = static_cast<std::uint32_t>(mesh.vertex_count());
   corners_.resize(lane_ids.size() * 3);
-  for (std::size_t b = 0; b < lane_ids.size() / 4; ++b)
-    for (int l = 0; l < 4; ++l) {
-      const std::uint32_t id = lane_ids[4 * b + l];
-      for (int c = 0; c < 3; ++c)
-        corners_[12 * b + 4 * c + l] = id == kNoTriangle ? sentinel : runs_ ? tris[id][c] : vorder_.to_new[tris[id][c]];
-    }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lane_ids.size() / 4, kSetupBlocksPerTask),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t b = r.begin(); b < r.end(); ++b)
+                        for (int l = 0; l < 4; ++l) {
+                          const std::uint32_t id = lane_ids[4 * b + l];
+                          for (int c = 0; c < 3; ++c)
+                            corners_[12 * b + 4 * c + l] =
+                                id == kNoTriangle ? sentinel : runs_ ? tris[id][c] : vorder_.to_new[tris[id][c]];
+                        }
+                    });
   if (runs_) {
     vorder_ = {};
     f_.fpos.resize(mesh.vertex_count());
