@@ -152,28 +152,30 @@ void sort_clusters_by_morton(std::span<const Vec3> pos, std::span<const Tri> tri
                              std::vector<std::uint32_t>& order) {
   // Clusters are independent: chunks of them on the caller's threads, the same order at any count.
   const std::size_t C = offsets.empty() ? 0 : offsets.size() - 1;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kSetupClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+  std::uint32_t* const ord = order.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kSetupClustersPerTask), [=](const tbb::blocked_range<std::size_t>& r) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> keyed;  // (code, triangle id)
     std::vector<Vec3> cen;
     for (std::size_t c = r.begin(); c < r.end(); ++c) {
+      const std::uint32_t first = offsets[c], end = offsets[c + 1];
       Box3 box;
       cen.clear();
-      for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) {
-        const Tri& t = tris[order[i]];
+      for (std::uint32_t i = first; i < end; ++i) {
+        const Tri& t = tris[ord[i]];
         cen.push_back(triangle_centroid(pos[t[0]], pos[t[1]], pos[t[2]]));
         box.extend(cen.back());
       }
       const Vec3 ext = box.extent();
       const double scale = ext.maxCoeff() > 0 ? 1023.0 / ext.maxCoeff() : 0.0;
       keyed.clear();
-      for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) {
-        const Vec3 q = (cen[i - offsets[c]] - box.lo) * scale;
+      for (std::uint32_t i = first; i < end; ++i) {
+        const Vec3 q = (cen[i - first] - box.lo) * scale;
         const auto code = morton_encode(static_cast<std::uint32_t>(q.x()), static_cast<std::uint32_t>(q.y()),
                                         static_cast<std::uint32_t>(q.z()));  // < 2^30: cells < 2^10
-        keyed.push_back({static_cast<std::uint32_t>(code), order[i]});
+        keyed.push_back({static_cast<std::uint32_t>(code), ord[i]});
       }
       std::sort(keyed.begin(), keyed.end());
-      for (std::uint32_t i = offsets[c]; i < offsets[c + 1]; ++i) order[i] = keyed[i - offsets[c]].second;
+      for (std::uint32_t i = first; i < end; ++i) ord[i] = keyed[i - first].second;
     }
   });
 }
@@ -375,51 +377,55 @@ void ClusterScene::layout_group_trees() {
   group_weights_.assign(G, 0);
   group_boxes_.resize(G);
   group_centres_.resize(G);
-  // The groups' trees are independent: built and collapsed in chunks on the caller's threads,
-  // then appended in group order (the same nodes at any thread count).
-  std::vector<WideBvh> wide(G);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, G, kSetupClustersPerTask / 8), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t g = r.begin(); g < r.end(); ++g) {
-      const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
-      for (std::uint32_t i = 0; i < n; ++i) group_weights_[g] += weights_[first + i];
-      group_bvh_[g] = build_binned_sah({std::span<const Box3f>(boxes.data() + first, n),
-                                        std::span<const Vec3f>(centres.data() + first, n),
-                                        std::span<const std::uint32_t>(weights_.data() + first, n)},
-                                       cfg_.build);
-      if (n > 1) wide[g] = collapse_to_wide(group_bvh_[g]);
-    }
-  });
-  for (std::size_t g = 0; g < G; ++g) {
-    const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
-    const Bvh& gb = group_bvh_[g];
-    if (n > 1) {
-      const WideBvh& w = wide[g];
-      const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
-      group_root_[g] = base + w.root;
-      group_depth_ = std::max(group_depth_, w.depth);
-      for (WideNode nd : w.nodes) {
-        GroupSlots gs{};
-        for (int k = 0; k < 4; ++k) {
-          if (nd.is_leaf(k)) {
-            const std::uint32_t cnt = nd.count[k];
-            gs.first[k] = static_cast<std::uint32_t>(group_leaf_clusters_.size());
-            gs.count[k] = cnt;
-            for (std::uint32_t i = 0; i < cnt; ++i) group_leaf_clusters_.push_back(first + gb.prim_order[nd.child[k] + i]);
-            if (cnt == 1) {
-              set_cluster_slot(nd, k, group_leaf_clusters_.back());
-            } else {
-              nd.child[k] = static_cast<std::uint32_t>(group_ranges_.size());
-              nd.count[k] = cnt | kIndirectLeaf;
-              for (std::uint32_t i = 0; i < cnt; ++i) group_ranges_.push_back(cluster_ranges_[group_leaf_clusters_[gs.first[k] + i]]);
-            }
-          } else if (!nd.is_empty(k)) {
-            nd.child[k] += base;
-          }
-        }
-        sub_nodes_.push_back(nd);
-        group_slots_.push_back(gs);
+  // The groups' trees are independent: a chunk of groups is built and collapsed on the caller's
+  // threads, then appended in group order (the same nodes at any thread count; chunks keep the
+  // collapsed trees in the cache until they are appended).
+  constexpr std::size_t kGroupsPerChunk = 512;
+  std::vector<WideBvh> wide(std::min(G, kGroupsPerChunk));
+  for (std::size_t g0 = 0; g0 < G; g0 += kGroupsPerChunk) {
+    const std::size_t g1 = std::min(G, g0 + kGroupsPerChunk);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(g0, g1, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t g = r.begin(); g < r.end(); ++g) {
+        const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
+        for (std::uint32_t i = 0; i < n; ++i) group_weights_[g] += weights_[first + i];
+        group_bvh_[g] = build_binned_sah({std::span<const Box3f>(boxes.data() + first, n),
+                                          std::span<const Vec3f>(centres.data() + first, n),
+                                          std::span<const std::uint32_t>(weights_.data() + first, n)},
+                                         cfg_.build);
+        if (n > 1) collapse_to_wide(group_bvh_[g], wide[g - g0]);
       }
-      wide[g] = {};
+    });
+    for (std::size_t g = g0; g < g1; ++g) {
+      const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
+      const Bvh& gb = group_bvh_[g];
+      if (n > 1) {
+        const WideBvh& w = wide[g - g0];
+        const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
+        group_root_[g] = base + w.root;
+        group_depth_ = std::max(group_depth_, w.depth);
+        for (WideNode nd : w.nodes) {
+          GroupSlots gs{};
+          for (int k = 0; k < 4; ++k) {
+            if (nd.is_leaf(k)) {
+              const std::uint32_t cnt = nd.count[k];
+              gs.first[k] = static_cast<std::uint32_t>(group_leaf_clusters_.size());
+              gs.count[k] = cnt;
+              for (std::uint32_t i = 0; i < cnt; ++i) group_leaf_clusters_.push_back(first + gb.prim_order[nd.child[k] + i]);
+              if (cnt == 1) {
+                set_cluster_slot(nd, k, group_leaf_clusters_.back());
+              } else {
+                nd.child[k] = static_cast<std::uint32_t>(group_ranges_.size());
+                nd.count[k] = cnt | kIndirectLeaf;
+                for (std::uint32_t i = 0; i < cnt; ++i) group_ranges_.push_back(cluster_ranges_[group_leaf_clusters_[gs.first[k] + i]]);
+              }
+            } else if (!nd.is_empty(k)) {
+              nd.child[k] += base;
+            }
+          }
+          sub_nodes_.push_back(nd);
+          group_slots_.push_back(gs);
+        }
+      }
     }
   }
 }

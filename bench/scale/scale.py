@@ -35,7 +35,6 @@ The warm-up gives every command the same state. Default 0 (off: what a user's ru
 import argparse
 import csv
 import json
-import mmap
 import os
 import platform
 import shutil
@@ -59,19 +58,25 @@ def run(cmd, log):
     return wall, ru.ru_maxrss / 1024.0, ru.ru_utime, ru.ru_stime  # ru_maxrss is in KiB on Linux
 
 
+WARM = """
+import mmap, sys
+n = int(float(sys.argv[1]) * (1 << 30))
+m = mmap.mmap(-1, n, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+if hasattr(mmap, "MADV_HUGEPAGE"):
+    m.madvise(mmap.MADV_HUGEPAGE)
+chunk = b"\\1" * (64 << 20)
+for off in range(0, n, len(chunk)):
+    m[off:off + min(len(chunk), n - off)] = chunk[:min(len(chunk), n - off)]
+"""
+
+
 def warm_memory(gib):
     """Touches gib GiB of fresh anonymous memory (advised as huge pages, as ptc's large arrays are)
-    and unmaps it, so that the kernel holds that much freed memory the host still backs."""
-    n = int(gib * (1 << 30))
-    if n <= 0:
-        return
-    m = mmap.mmap(-1, n, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
-    if hasattr(mmap, "MADV_HUGEPAGE"):
-        m.madvise(mmap.MADV_HUGEPAGE)
-    chunk = b"\1" * (64 << 20)
-    for off in range(0, n, len(chunk)):
-        m[off:off + min(len(chunk), n - off)] = chunk[:min(len(chunk), n - off)]
-    m.close()
+    in a child process, which frees it on exit: the kernel then holds that much freed memory the
+    host still backs. (A child, so that this process's peak does not become the commands': a
+    forked child inherits its parent's peak resident size in wait4's rusage.)"""
+    if gib > 0:
+        subprocess.run([sys.executable, "-c", WARM, str(gib)], check=True)
 
 
 def main():
