@@ -35,6 +35,7 @@ The warm-up gives every command the same state. Default 0 (off: what a user's ru
 import argparse
 import csv
 import json
+import math
 import os
 import platform
 import shutil
@@ -76,7 +77,9 @@ def warm_memory(gib):
     host still backs. (A child, so that this process's peak does not become the commands': a
     forked child inherits its parent's peak resident size in wait4's rusage.)"""
     if gib > 0:
-        subprocess.run([sys.executable, "-c", WARM, str(gib)], check=True)
+        r = subprocess.run([sys.executable, "-c", WARM, str(gib)])
+        if r.returncode != 0:
+            sys.exit(f"scale: the warm-up of {gib:g} GiB failed (exit {r.returncode}); give a smaller --warm-memory")
 
 
 def main():
@@ -91,8 +94,10 @@ def main():
     a = ap.parse_args()
     if a.repeat < 1:
         ap.error("--repeat must be at least 1")
-    if not a.warm_memory >= 0:
-        ap.error("--warm-memory must be 0 or more GiB")
+    ram_gib = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / float(1 << 30)
+    if not (math.isfinite(a.warm_memory) and 0 <= a.warm_memory < ram_gib):
+        ap.error(f"--warm-memory must be from 0 to less than this machine's memory ({ram_gib:.1f} GiB), "
+                 f"{a.warm_memory:g} given")
     ptc = os.path.join(a.build, "bin", "ptc")
     base = os.path.join(a.build, "data", "meshes", "armadillo.off")
     if not os.path.exists(ptc) or not os.path.exists(base):

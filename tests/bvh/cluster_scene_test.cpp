@@ -12,14 +12,18 @@
 
 #include <algorithm>
 #include <limits>
+#include <random>
+#include <string>
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
 #include "toolkit/clustering/morton_runs.h"
 #include "bvh/scene_config.h"
+#include "bvh/tracer.h"
 #include "bvh/validate.h"
 #include "test_util.h"
+#include "common/brute_force.h"
 
 namespace ptc::bvh {
 namespace {
@@ -137,6 +141,71 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
         EXPECT_EQ(d.wide8.root, w.wide8.root) << what;
         EXPECT_EQ(d.wide8.depth, w.wide8.depth) << what;
       }
+    }
+  }
+}
+
+// The set-up's passes run in chunks (1024 clusters, 8192 blocks, 512 groups' trees): with
+// clusters of nine triangles and groups of two there are several chunks of each. The scene must
+// be the same bytes at 1, 2 and 4 threads, and its closest hits those of a loop over all
+// triangles (the independent answer for the chunked append of the groups' trees), at the rest
+// pose and after the mesh moved.
+TEST(ClusterScene, SetUpInChunksIsTheSameAtAnyThreadCountAndHitsLikeBruteForce) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  const Clustering runs = ptc::morton_runs(m, 9);
+  ASSERT_GT(runs.cluster_count(), 4u * 1024u);
+  const Mesh moved = test::deformed(m, 0.04);
+  SceneConfig cfg = cluster_scene_defaults();
+  cfg.cluster_group_size = 2;
+  cfg.group_trees = GroupTrees::Refit;
+  std::vector<TraceData> want;
+  for (int threads : {1, 2, 4}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    ClusterScene s(m, view_of(runs), cfg);
+    ASSERT_GT(s.group_offsets().size(), 3u * 512u);
+    for (int f = 0; f < 2; ++f) {
+      if (f == 1) s.update(moved.positions());
+      const std::string what = "threads " + std::to_string(threads) + " frame " + std::to_string(f);
+      const TraceData& d = s.data();
+      ASSERT_TRUE(validate(d, m.triangle_count(), false).empty()) << what;
+      if (threads == 1) {
+        want.push_back(d);
+        const Mesh& mesh = f == 0 ? m : moved;
+        const Box3 box = mesh.bounds();
+        const Vec3 c = box.center(), e = box.extent();
+        std::mt19937 rng(17u + static_cast<unsigned>(f));
+        std::uniform_real_distribution<double> u(-1.0, 1.0);
+        int hits = 0;
+        for (int i = 0; i < 300; ++i) {
+          const Vec3 org = c + 1.5 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
+          const Vec3 to = c + 0.4 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
+          const Vec3f dir{float(to.x() - org.x()), float(to.y() - org.y()), float(to.z() - org.z())};
+          const Hit b = test::brute_force(mesh, d.frame(), org, dir);
+          const Hit h = trace_ray(d, org, dir);
+          ASSERT_EQ(h.triangle, b.triangle) << what << " ray " << i;
+          ASSERT_EQ(h.t, b.t) << what << " ray " << i;
+          hits += b.hit();
+        }
+        EXPECT_GT(hits, 100) << what;
+        continue;
+      }
+      const TraceData& w = want[static_cast<std::size_t>(f)];
+      ASSERT_EQ(d.wide.nodes.size(), w.wide.nodes.size()) << what;
+      EXPECT_EQ(std::memcmp(d.wide.nodes.data(), w.wide.nodes.data(), w.wide.nodes.size() * sizeof(WideNode)), 0) << what;
+      ASSERT_EQ(d.wide8.nodes.size(), w.wide8.nodes.size()) << what;
+      EXPECT_EQ(std::memcmp(d.wide8.nodes.data(), w.wide8.nodes.data(), w.wide8.nodes.size() * sizeof(WideNode8)), 0)
+          << what;
+      ASSERT_EQ(d.blocks.size(), w.blocks.size()) << what;
+      EXPECT_EQ(std::memcmp(d.blocks.data(), w.blocks.data(), w.blocks.size() * sizeof(TriBlock)), 0) << what;
+      EXPECT_TRUE(std::equal(d.triangle_ids.begin(), d.triangle_ids.end(), w.triangle_ids.begin(), w.triangle_ids.end()))
+          << what;
+      ASSERT_EQ(d.ranges.size(), w.ranges.size()) << what;
+      for (std::size_t i = 0; i < w.ranges.size(); ++i)
+        ASSERT_TRUE(d.ranges[i].first_block == w.ranges[i].first_block && d.ranges[i].block_count == w.ranges[i].block_count &&
+                    d.ranges[i].triangle_count == w.ranges[i].triangle_count)
+            << what << " range " << i;
+      EXPECT_EQ(d.wide.root, w.wide.root) << what;
+      EXPECT_EQ(d.wide8.root, w.wide8.root) << what;
     }
   }
 }
