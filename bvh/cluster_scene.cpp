@@ -28,6 +28,7 @@ namespace {
 // `--threads N`); each chunk writes only its own clusters' or blocks' entries.
 constexpr std::size_t kSetupClustersPerTask = 1024;
 constexpr std::size_t kSetupBlocksPerTask = 8192;
+constexpr std::size_t kSetupGroupsPerChunk = 512;  // groups' trees built before they are appended
 
 // The clustering's consistency (what ClusterScene relies on): offsets from 0 to T, no empty
 // cluster, triangle_order a permutation of the mesh's triangles, vertex offsets matching.
@@ -380,10 +381,9 @@ void ClusterScene::layout_group_trees() {
   // The groups' trees are independent: a chunk of groups is built and collapsed on the caller's
   // threads, then appended in group order (the same nodes at any thread count; chunks keep the
   // collapsed trees in the cache until they are appended).
-  constexpr std::size_t kGroupsPerChunk = 512;
-  std::vector<WideBvh> wide(std::min(G, kGroupsPerChunk));
-  for (std::size_t g0 = 0; g0 < G; g0 += kGroupsPerChunk) {
-    const std::size_t g1 = std::min(G, g0 + kGroupsPerChunk);
+  std::vector<WideBvh> wide(std::min(G, kSetupGroupsPerChunk));
+  for (std::size_t g0 = 0; g0 < G; g0 += kSetupGroupsPerChunk) {
+    const std::size_t g1 = std::min(G, g0 + kSetupGroupsPerChunk);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(g0, g1, 64), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t g = r.begin(); g < r.end(); ++g) {
         const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
@@ -395,38 +395,41 @@ void ClusterScene::layout_group_trees() {
         if (n > 1) collapse_to_wide(group_bvh_[g], wide[g - g0]);
       }
     });
-    for (std::size_t g = g0; g < g1; ++g) {
-      const std::uint32_t first = group_offsets_[g], n = group_offsets_[g + 1] - first;
-      const Bvh& gb = group_bvh_[g];
-      if (n > 1) {
-        const WideBvh& w = wide[g - g0];
-        const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
-        group_root_[g] = base + w.root;
-        group_depth_ = std::max(group_depth_, w.depth);
-        for (WideNode nd : w.nodes) {
-          GroupSlots gs{};
-          for (int k = 0; k < 4; ++k) {
-            if (nd.is_leaf(k)) {
-              const std::uint32_t cnt = nd.count[k];
-              gs.first[k] = static_cast<std::uint32_t>(group_leaf_clusters_.size());
-              gs.count[k] = cnt;
-              for (std::uint32_t i = 0; i < cnt; ++i) group_leaf_clusters_.push_back(first + gb.prim_order[nd.child[k] + i]);
-              if (cnt == 1) {
-                set_cluster_slot(nd, k, group_leaf_clusters_.back());
-              } else {
-                nd.child[k] = static_cast<std::uint32_t>(group_ranges_.size());
-                nd.count[k] = cnt | kIndirectLeaf;
-                for (std::uint32_t i = 0; i < cnt; ++i) group_ranges_.push_back(cluster_ranges_[group_leaf_clusters_[gs.first[k] + i]]);
-              }
-            } else if (!nd.is_empty(k)) {
-              nd.child[k] += base;
-            }
-          }
-          sub_nodes_.push_back(nd);
-          group_slots_.push_back(gs);
+    for (std::size_t g = g0; g < g1; ++g)
+      if (group_offsets_[g + 1] - group_offsets_[g] > 1) append_group_tree(g, wide[g - g0]);
+  }
+}
+
+// Group g's collapsed tree (of more than one cluster) appended to the fixed nodes: a leaf child
+// of one cluster refers to its blocks (or block tree), a leaf of several to fixed ranges; the
+// slots remember which clusters they unite.
+void ClusterScene::append_group_tree(std::size_t g, const WideBvh& w) {
+  const std::uint32_t first = group_offsets_[g];
+  const Bvh& gb = group_bvh_[g];
+  const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
+  group_root_[g] = base + w.root;
+  group_depth_ = std::max(group_depth_, w.depth);
+  for (WideNode nd : w.nodes) {
+    GroupSlots gs{};
+    for (int k = 0; k < 4; ++k) {
+      if (nd.is_leaf(k)) {
+        const std::uint32_t cnt = nd.count[k];
+        gs.first[k] = static_cast<std::uint32_t>(group_leaf_clusters_.size());
+        gs.count[k] = cnt;
+        for (std::uint32_t i = 0; i < cnt; ++i) group_leaf_clusters_.push_back(first + gb.prim_order[nd.child[k] + i]);
+        if (cnt == 1) {
+          set_cluster_slot(nd, k, group_leaf_clusters_.back());
+        } else {
+          nd.child[k] = static_cast<std::uint32_t>(group_ranges_.size());
+          nd.count[k] = cnt | kIndirectLeaf;
+          for (std::uint32_t i = 0; i < cnt; ++i) group_ranges_.push_back(cluster_ranges_[group_leaf_clusters_[gs.first[k] + i]]);
         }
+      } else if (!nd.is_empty(k)) {
+        nd.child[k] += base;
       }
     }
+    sub_nodes_.push_back(nd);
+    group_slots_.push_back(gs);
   }
 }
 
@@ -525,16 +528,14 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
   runs_ = group_runs(vorder_);
   const auto sentinel = static_cast<std::uint32_t>(mesh.vertex_count());
   corners_.resize(lane_ids.size() * 3);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lane_ids.size() / 4, kSetupBlocksPerTask),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t b = r.begin(); b < r.end(); ++b)
-                        for (int l = 0; l < 4; ++l) {
-                          const std::uint32_t id = lane_ids[4 * b + l];
-                          for (int c = 0; c < 3; ++c)
-                            corners_[12 * b + 4 * c + l] =
-                                id == kNoTriangle ? sentinel : runs_ ? tris[id][c] : vorder_.to_new[tris[id][c]];
-                        }
-                    });
+  auto corner = [&](std::uint32_t id, int c) {
+    return id == kNoTriangle ? sentinel : runs_ ? tris[id][c] : vorder_.to_new[tris[id][c]];
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lane_ids.size() / 4, kSetupBlocksPerTask), [&](const auto& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b)
+      for (int l = 0; l < 4; ++l)
+        for (int c = 0; c < 3; ++c) corners_[12 * b + 4 * c + l] = corner(lane_ids[4 * b + l], c);
+  });
   if (runs_) {
     vorder_ = {};
     f_.fpos.resize(mesh.vertex_count());

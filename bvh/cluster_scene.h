@@ -95,6 +95,7 @@ class ClusterScene {
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
   void layout_group_trees();
+  void append_group_tree(std::size_t g, const WideBvh& w);
   void link_top_tree();
   void refit_subtrees();
   void layout_wide8();

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace ptc::bvh {
 namespace {
@@ -257,6 +258,13 @@ TraceTotals SceneTracer::trace(const RayBatch& rays, HitBatch& hits, const Trace
   a.nodes_visited += b.nodes_visited;
   a.triangles_tested += b.triangles_tested;
   return a;
+}
+
+std::vector<std::uint32_t> renumber_by_clusters(Scene& scene, Clustering& clusters, const SceneConfig& cfg) {
+  std::vector<std::uint32_t> to_old = cluster_vertex_order(scene.rest(), view_of(clusters), scene.vertex_offsets(), cfg);
+  clusters = renumber_vertices(std::move(clusters), inverse_permutation(to_old));  // (no copy)
+  scene.renumber_vertices(to_old);
+  return to_old;
 }
 
 }  // namespace ptc::bvh

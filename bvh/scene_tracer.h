@@ -53,6 +53,12 @@ struct SceneTracerConfig {
 /// cluster_vertex_order needs to renumber the vertices for it.
 [[nodiscard]] SceneConfig cluster_config(const SceneTracerConfig& cfg, const Vec3& origin);
 
+/// The method's precomputation on a scene (ptc bench, ptc trace --vertex-order clusters): to_old
+/// = cluster_vertex_order over the scene's rest mesh, its parts and `clusters` (cfg: the cluster
+/// BVH's configuration), then `clusters` (in place) and the scene's sources renamed with it.
+/// Returns to_old, for whatever else the caller holds in the old numbering.
+std::vector<std::uint32_t> renumber_by_clusters(Scene& scene, Clustering& clusters, const SceneConfig& cfg);
+
 class SceneTracer {
  public:
   /// `first` = the combined mesh at the first traced frame (topology + positions). Builds every

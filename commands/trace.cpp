@@ -106,12 +106,12 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   // The first frame's positions: the camera and the trace frame are fixed from them. (Kept apart
   // from the scene's rest mesh until the vertices are renumbered, which then renames the rest's
   // triangles where they are.)
-  std::vector<Vec3> first(scene.rest().vertex_count());
+  std::vector<Vec3> first_pos(scene.rest().vertex_count());
   Stopwatch sw;
-  scene.positions(double(range.first), first, true);
+  scene.positions(double(range.first), first_pos, true);
   manifest.add_timing_ms("first_positions", sw.ms());
   Box3 first_bounds;
-  for (const Vec3& p : first) first_bounds.extend(p);
+  for (const Vec3& p : first_pos) first_bounds.extend(p);
 
   // Camera and light: flags > the scene's own > framing the first frame (commands/scene_args.h).
   const CameraSpec spec = camera_for(opt.camera, scene);
@@ -144,13 +144,11 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
       // 3.2 ms a frame; the set-up takes as long either way). Triangle ids, and so every
       // output, stay.
       sw.restart();
-      const std::vector<std::uint32_t> to_old = bvh::cluster_vertex_order(
-          scene.rest(), bvh::view_of(clusters), scene.vertex_offsets(), bvh::cluster_config(tcfg, *tcfg.origin));
-      clusters = renumber_vertices(std::move(clusters), inverse_permutation(to_old));  // (no copy)
-      scene.renumber_vertices(to_old);
-      std::vector<Vec3> moved(first.size());
-      for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = first[to_old[i]];
-      first = std::move(moved);
+      const std::vector<std::uint32_t> to_old =
+          bvh::renumber_by_clusters(scene, clusters, bvh::cluster_config(tcfg, *tcfg.origin));
+      std::vector<Vec3> moved(first_pos.size());
+      for (std::size_t i = 0; i < moved.size(); ++i) moved[i] = first_pos[to_old[i]];
+      first_pos = std::move(moved);
       manifest.add_timing_ms("renumber_vertices", sw.ms());
       manifest.set_result("scene_after_renumbering", scene.describe());
     }
@@ -158,7 +156,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   } catch (const bvh::FrameRangeError& e) {
     throw InputError(arg, "", "", e.what());
   }
-  Mesh mesh = scene.rest().with_positions(std::move(first));
+  Mesh mesh = scene.rest().with_positions(std::move(first_pos));
   loop::SceneAccel& accel = *made;
   const bvh::SceneTracer& tracer = accel.tracer();
   manifest.add_timing_ms("static_build", tracer.static_build_ms());

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "analysis/loop/frame_loop.h"
+#include "bvh/scene_tracer.h"
 #include "render/rays.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/core/cancel.h"
@@ -113,10 +114,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   res.vertex_order = to_string(cfg.vertex_order);
   if (cfg.vertex_order == bvh::VertexOrder::Clusters) {
     Stopwatch sw;
-    const std::vector<std::uint32_t> to_old = bvh::cluster_vertex_order(
-        scene.rest(), bvh::view_of(*clusters), scene.vertex_offsets(), loop::cluster_scene_config(setup));
-    *clusters = renumber_vertices(std::move(*clusters), inverse_permutation(to_old));  // (no copy)
-    scene.renumber_vertices(to_old);
+    bvh::renumber_by_clusters(scene, *clusters, loop::cluster_scene_config(setup));
     res.renumber_ms = sw.ms();
   }
   setup.clusters = &*clusters;

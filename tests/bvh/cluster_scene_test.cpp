@@ -85,6 +85,27 @@ TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
   }
 }
 
+// The flat data of two scenes, byte for byte: the 4-wide and 8-wide nodes, the blocks, the
+// lane ids and the leaf ranges.
+void expect_same_data(const TraceData& d, const TraceData& w, const std::string& what) {
+  ASSERT_EQ(d.wide.nodes.size(), w.wide.nodes.size()) << what;
+  EXPECT_EQ(std::memcmp(d.wide.nodes.data(), w.wide.nodes.data(), w.wide.nodes.size() * sizeof(WideNode)), 0) << what;
+  ASSERT_EQ(d.blocks.size(), w.blocks.size()) << what;
+  EXPECT_EQ(std::memcmp(d.blocks.data(), w.blocks.data(), w.blocks.size() * sizeof(TriBlock)), 0) << what;
+  EXPECT_TRUE(std::equal(d.triangle_ids.begin(), d.triangle_ids.end(), w.triangle_ids.begin(), w.triangle_ids.end()))
+      << what;
+  ASSERT_EQ(d.ranges.size(), w.ranges.size()) << what;
+  for (std::size_t i = 0; i < w.ranges.size(); ++i)
+    ASSERT_TRUE(d.ranges[i].first_block == w.ranges[i].first_block && d.ranges[i].block_count == w.ranges[i].block_count &&
+                d.ranges[i].triangle_count == w.ranges[i].triangle_count)
+        << what << " range " << i;
+  EXPECT_EQ(d.wide.root, w.wide.root) << what;
+  ASSERT_EQ(d.wide8.nodes.size(), w.wide8.nodes.size()) << what;
+  EXPECT_EQ(std::memcmp(d.wide8.nodes.data(), w.wide8.nodes.data(), w.wide8.nodes.size() * sizeof(WideNode8)), 0) << what;
+  EXPECT_EQ(d.wide8.root, w.wide8.root) << what;
+  EXPECT_EQ(d.wide8.depth, w.wide8.depth) << what;
+}
+
 // With more than one thread the leaf data is written while the tree is built and linked: the
 // flat data must be the same bytes at 1, 2 and 4 threads, frame after frame, and the stage times
 // must add up to no more than the update's wall time (overlap_ms = what two stages shared; 0 on
@@ -121,25 +142,7 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
           want.push_back(d);
           continue;
         }
-        const TraceData& w = want[f];
-        ASSERT_EQ(d.wide.nodes.size(), w.wide.nodes.size()) << what;
-        EXPECT_EQ(std::memcmp(d.wide.nodes.data(), w.wide.nodes.data(), w.wide.nodes.size() * sizeof(WideNode)), 0) << what;
-        ASSERT_EQ(d.blocks.size(), w.blocks.size()) << what;
-        EXPECT_EQ(std::memcmp(d.blocks.data(), w.blocks.data(), w.blocks.size() * sizeof(TriBlock)), 0) << what;
-        EXPECT_TRUE(std::equal(d.triangle_ids.begin(), d.triangle_ids.end(), w.triangle_ids.begin(), w.triangle_ids.end()))
-            << what;
-        ASSERT_EQ(d.ranges.size(), w.ranges.size()) << what;
-        for (std::size_t i = 0; i < w.ranges.size(); ++i)
-          ASSERT_TRUE(d.ranges[i].first_block == w.ranges[i].first_block &&
-                      d.ranges[i].block_count == w.ranges[i].block_count &&
-                      d.ranges[i].triangle_count == w.ranges[i].triangle_count)
-              << what << " range " << i;
-        EXPECT_EQ(d.wide.root, w.wide.root) << what;
-        ASSERT_EQ(d.wide8.nodes.size(), w.wide8.nodes.size()) << what;
-        EXPECT_EQ(std::memcmp(d.wide8.nodes.data(), w.wide8.nodes.data(), w.wide8.nodes.size() * sizeof(WideNode8)), 0)
-            << what;
-        EXPECT_EQ(d.wide8.root, w.wide8.root) << what;
-        EXPECT_EQ(d.wide8.depth, w.wide8.depth) << what;
+        expect_same_data(d, want[f], what);
       }
     }
   }
@@ -189,23 +192,7 @@ TEST(ClusterScene, SetUpInChunksIsTheSameAtAnyThreadCountAndHitsLikeBruteForce) 
         EXPECT_GT(hits, 100) << what;
         continue;
       }
-      const TraceData& w = want[static_cast<std::size_t>(f)];
-      ASSERT_EQ(d.wide.nodes.size(), w.wide.nodes.size()) << what;
-      EXPECT_EQ(std::memcmp(d.wide.nodes.data(), w.wide.nodes.data(), w.wide.nodes.size() * sizeof(WideNode)), 0) << what;
-      ASSERT_EQ(d.wide8.nodes.size(), w.wide8.nodes.size()) << what;
-      EXPECT_EQ(std::memcmp(d.wide8.nodes.data(), w.wide8.nodes.data(), w.wide8.nodes.size() * sizeof(WideNode8)), 0)
-          << what;
-      ASSERT_EQ(d.blocks.size(), w.blocks.size()) << what;
-      EXPECT_EQ(std::memcmp(d.blocks.data(), w.blocks.data(), w.blocks.size() * sizeof(TriBlock)), 0) << what;
-      EXPECT_TRUE(std::equal(d.triangle_ids.begin(), d.triangle_ids.end(), w.triangle_ids.begin(), w.triangle_ids.end()))
-          << what;
-      ASSERT_EQ(d.ranges.size(), w.ranges.size()) << what;
-      for (std::size_t i = 0; i < w.ranges.size(); ++i)
-        ASSERT_TRUE(d.ranges[i].first_block == w.ranges[i].first_block && d.ranges[i].block_count == w.ranges[i].block_count &&
-                    d.ranges[i].triangle_count == w.ranges[i].triangle_count)
-            << what << " range " << i;
-      EXPECT_EQ(d.wide.root, w.wide.root) << what;
-      EXPECT_EQ(d.wide8.root, w.wide8.root) << what;
+      expect_same_data(d, want[static_cast<std::size_t>(f)], what);
     }
   }
 }
