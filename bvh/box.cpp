@@ -73,6 +73,7 @@ std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span
 }
 
 void frame_positions(std::span<const Vec3> positions, const FrameMap& origin, AlignedVector<Vec3f>& out) {
+  out.reserve(positions.size() + 2);  // room for add_sentinel's two entries: no second array
   out.resize(positions.size());
   for (std::size_t v = 0; v < positions.size(); ++v) out[v] = to_frame(positions[v], origin);
 }

@@ -239,13 +239,34 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   refit_groups_ = cfg_.group_trees == GroupTrees::Refit && !group_offsets_.empty();
   if (refit_groups_) layout_group_trees();
   data.blocks.resize(lane_ids.size() / 4);
-  set_vertex_order(mesh, lane_ids);
+  if (!cfg_.fixed) set_vertex_order(mesh, lane_ids);
   data.triangle_ids = std::move(lane_ids);
   sub_count_ = static_cast<std::uint32_t>(sub_nodes_.size());
   data.wide.nodes = std::move(sub_nodes_);  // kept from frame to frame; the top follows
   sub_nodes_ = {};
   layout_wide8();
-  update(mesh.positions());
+  if (cfg_.fixed) fixed_frame(mesh);
+  else update(mesh.positions());
+  // Needed only to lay the clusters out (the per-frame pass has its own vertex order).
+  order_ = {}, offsets_ = {}, vertices_ = {}, vertex_offsets_ = {};
+}
+
+// The one frame of a fixed scene: the rest pose in the trace frame (f_.fpos, the mesh's
+// numbering, checked finite by the constructor), the cluster boxes over the clusters' vertex
+// lists, the blocks filled from the lanes' triangles. The same values as update() computes from
+// its own vertex order (point_group_boxes is bit for bit the same in either order, and a block's
+// corners are the same floats). The frame positions and block boxes are dropped afterwards.
+void ClusterScene::fixed_frame(const Mesh& mesh) {
+  StageTimes& times = f_.times;
+  const double t0 = clock_ms(cfg_.clock);
+  const std::size_t V = mesh.vertex_count();
+  add_sentinel(f_.fpos);
+  point_group_boxes(std::span<const Vec3f>(f_.fpos.data(), V), vertex_offsets_, vertices_, f_.boxes, f_.centroids);
+  times.vertices_ms = 0.0;
+  times.boxes_ms = clock_ms(cfg_.clock) - t0;
+  build_frame(static_cast<std::uint32_t>(V));
+  f_.fpos = {};
+  block_boxes_ = {};
 }
 
 // The fixed subtrees (block trees, then the groups' trees, which link to them) regrouped into
@@ -563,6 +584,8 @@ void ClusterScene::refit_subtrees() {
 }
 
 void ClusterScene::update(std::span<const Vec3> positions) {
+  if (cfg_.fixed)
+    throw std::logic_error("ClusterScene::update: the scene was built once (SceneConfig::fixed) and keeps no per-frame state");
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
   const std::size_t V = runs_ ? runs_->vertex_count : vorder_.to_old.size();
@@ -585,6 +608,15 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     point_group_boxes(fp, vorder_, f_.boxes, f_.centroids);
     times.boxes_ms = clock_ms(cfg_.clock) - t0;
   }
+  build_frame(static_cast<std::uint32_t>(V));
+}
+
+// The frame after its cluster boxes (f_.boxes, f_.centroids) and frame positions (f_.fpos, the
+// sentinel at index `sentinel`): the leaf data, the tree over the clusters or groups, the link and
+// the refit of the fixed subtrees.
+void ClusterScene::build_frame(std::uint32_t sentinel) {
+  TraceData& data = f_.data;
+  StageTimes& times = f_.times;
 
   // The leaf data depends on the positions only (the blocks' layout is fixed per clustering), so
   // with more than one thread it is written while the tree is built and linked: the fill's
@@ -594,7 +626,11 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   auto leaf_data = [&] {
     const double tl = clock_ms(cfg_.clock);
     block_boxes_.resize(B ? data.blocks.size() : 0);
-    fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
+    if (cfg_.fixed)  // (no corner indices: the lanes' triangles in the mesh's numbering)
+      fill_blocks_from_lanes(data.triangle_ids, tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>(),
+                             f_.fpos[0].data(), sentinel, data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
+    else
+      fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
     times.leaf_data_ms = clock_ms(cfg_.clock) - tl;
   };
   auto tree = [&] {
@@ -618,7 +654,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
                        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1 &&
                        tbb::this_task_arena::max_concurrency() > 1;
   if (overlap) {
-    t0 = clock_ms(cfg_.clock);
+    const double t0 = clock_ms(cfg_.clock);
     tbb::task_group tg;
     tg.run(leaf_data);
     tree();
@@ -630,7 +666,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     leaf_data();
   }
 
-  t0 = clock_ms(cfg_.clock);
+  const double t0 = clock_ms(cfg_.clock);
   if (B) refit_subtrees();
   times.refit_ms = clock_ms(cfg_.clock) - t0;
 }

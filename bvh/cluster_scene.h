@@ -60,6 +60,8 @@ class ClusterScene {
   /// each (sizes and offsets are checked, not connectivity), and for BlockTree leaves with
   /// cfg.build.max_leaf_size > 1 (a leaf of several clusters would bypass their block trees).
   ClusterScene(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg = cluster_scene_defaults());
+  /// A frame: the positions of the mesh's vertices. std::logic_error for a fixed scene
+  /// (SceneConfig::fixed), std::invalid_argument for a wrong count or a non-finite position.
   void update(std::span<const Vec3> positions);
 
   [[nodiscard]] const TraceData& data() const { return f_.data; }
@@ -94,6 +96,8 @@ class ClusterScene {
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
+  void fixed_frame(const Mesh& mesh);
+  void build_frame(std::uint32_t sentinel);
   void layout_group_trees();
   void append_group_tree(std::size_t g, const WideBvh& w);
   void link_top_tree();

@@ -10,6 +10,9 @@ namespace ptc::bvh {
 
 namespace {
 
+// Blocks are independent: the fills run in chunks of this many on the caller's threads.
+constexpr std::size_t kBlocksPerTask = 8192;  // 1.2 MB of blocks
+
 // One block from its corner vertex indices v[corner][lane]: corners gathered with one 16-byte
 // load per vertex and transposed to SoA. When `box` is given it receives the block's exact
 // float box (NaN lanes ignored: _mm_min_ps(x, acc) returns acc for a NaN x).
@@ -40,9 +43,10 @@ inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, 
   }
 }
 
-// One block from four triangle ids (kNoTriangle: padding, the sentinel's corners).
+// One block from four triangle ids (kNoTriangle: padding, the sentinel's corners); its box as
+// in fill_block_corners.
 inline void fill_block(const std::uint32_t* ids, std::span<const Tri> tris, const float* fp, std::uint32_t sentinel,
-                       TriBlock& out) {
+                       TriBlock& out, Box3f* box = nullptr) {
   std::uint32_t v[3][4];
   for (int l = 0; l < 4; ++l) {
     if (ids[l] != kNoTriangle) {
@@ -52,7 +56,7 @@ inline void fill_block(const std::uint32_t* ids, std::span<const Tri> tris, cons
       v[0][l] = v[1][l] = v[2][l] = sentinel;
     }
   }
-  fill_block_corners(v, fp, out, nullptr);
+  fill_block_corners(v, fp, out, box);
 }
 
 }  // namespace
@@ -74,12 +78,21 @@ void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const floa
                               Box3f* boxes) {
   // Blocks are independent: chunks of them on the caller's threads (the same bytes at any
   // count). Each chunk fences its own streaming stores, so they are visible once the loop returns.
-  constexpr std::size_t kBlocksPerTask = 8192;  // 1.2 MB of blocks
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), kBlocksPerTask),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t b = r.begin(); b < r.end(); ++b)
                         fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp,
                                            blocks[b], boxes ? boxes + b : nullptr);
+                      _mm_sfence();
+                    });
+}
+
+void fill_blocks_from_lanes(std::span<const std::uint32_t> lane_ids, std::span<const Tri> tris, const float* fp,
+                            std::uint32_t sentinel, std::span<TriBlock> blocks, Box3f* boxes) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), kBlocksPerTask),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t b = r.begin(); b < r.end(); ++b)
+                        fill_block(lane_ids.data() + 4 * b, tris, fp, sentinel, blocks[b], boxes ? boxes + b : nullptr);
                       _mm_sfence();
                     });
 }

@@ -34,6 +34,11 @@ void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> t
 void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* frame_pos, std::span<TriBlock> blocks,
                               Box3f* boxes);
 
+/// The same blocks and boxes from the lanes' triangle ids (lane_ids[4 b + l], kNoTriangle for
+/// padding) and the triangles' corners, for a scene filled once (no corner indices kept).
+void fill_blocks_from_lanes(std::span<const std::uint32_t> lane_ids, std::span<const Tri> triangles,
+                            const float* frame_pos, std::uint32_t sentinel, std::span<TriBlock> blocks, Box3f* boxes);
+
 /// Makes the streaming stores of the fills visible before the blocks are traced.
 void fence_blocks();
 

@@ -123,8 +123,10 @@ SceneTracer::SceneTracer(const Mesh& first, const PartLayout& L, const SceneTrac
       ts = std::make_unique<TriangleScene>(*m, tcfg);
       return;
     }
-    if (whole) {
-      *cs = std::make_unique<ClusterScene>(*m, view_of(*cfg.clusters), ccfg);
+    if (whole) {  // (all static: built once, without the per-frame state)
+      SceneConfig c = ccfg;
+      c.fixed = want;
+      *cs = std::make_unique<ClusterScene>(*m, view_of(*cfg.clusters), c);
       return;
     }
     // The clusters of this sub-mesh, renumbered (monotone maps keep every list ascending).

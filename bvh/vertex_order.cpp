@@ -84,6 +84,7 @@ GroupVertexOrder first_touch_order(std::size_t vertex_count, std::span<const std
 
 void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const FrameMap& origin,
                      AlignedVector<Vec3f>& out) {
+  out.reserve(to_old.size() + 2);  // room for add_sentinel's two entries: no second array
   out.resize(to_old.size());
   const std::size_t n = to_old.size();
   constexpr std::size_t ahead = 16;  // a gather: the positions are fetched ahead (24 bytes, <= 2 lines)

@@ -41,7 +41,8 @@ struct GroupVertexOrder {
 [[nodiscard]] GroupVertexOrder first_touch_order(std::size_t vertex_count, std::span<const std::uint32_t> offsets,
                                                  std::span<const std::uint32_t> indices);
 
-/// frame_positions in a new order: out[i] = to_frame(positions[to_old[i]], origin).
+/// frame_positions in a new order: out[i] = to_frame(positions[to_old[i]], origin) (room for the
+/// sentinel reserved as there).
 void frame_positions(std::span<const Vec3> positions, std::span<const std::uint32_t> to_old, const FrameMap& origin,
                      AlignedVector<Vec3f>& out);
 

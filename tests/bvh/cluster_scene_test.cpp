@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "toolkit/clustering/morton_runs.h"
+#include "toolkit/clustering/clustering.h"
+#include "toolkit/mesh/mesh.h"
 #include "bvh/scene_config.h"
 #include "bvh/tracer.h"
 #include "bvh/validate.h"
@@ -193,6 +195,68 @@ TEST(ClusterScene, SetUpInChunksIsTheSameAtAnyThreadCountAndHitsLikeBruteForce) 
         continue;
       }
       expect_same_data(d, want[static_cast<std::size_t>(f)], what);
+    }
+  }
+}
+
+// A scene built once (SceneConfig::fixed, the one BVH of a static scene in ptc trace) keeps no
+// per-frame state: it fills its blocks from the lanes' triangles in the mesh's numbering, where a
+// scene made for animation gathers them through corner indices in its own vertex order. Its trace
+// data must be the bytes of the animated scene's first frame, with the same cluster boxes and
+// tree: both leaf modes, plain and two-level builds, the mesh as given and renumbered in the
+// clusters' vertex order (the animated scene's fused pass), a view without vertex lists, at 1
+// and 2 threads. The mesh has an unreferenced vertex, a triangle with a repeated corner and a
+// duplicated triangle; clusters of nine triangles make more than one fill chunk.
+TEST(ClusterScene, AFixedSceneIsTheFirstFrameOfAnAnimatedOne) {
+  const Mesh arm = test::load_mesh("armadillo.off");
+  std::vector<Tri> tris(arm.triangles().begin(), arm.triangles().end());
+  std::vector<Vec3> pos(arm.positions().begin(), arm.positions().end());
+  tris.push_back({tris[5][0], tris[5][0], tris[5][1]});
+  tris.push_back(tris[7]);
+  pos.push_back(arm.bounds().hi + Vec3(3.0, -1.0, 2.0));  // referenced by no triangle
+  const Mesh m(std::move(tris), std::move(pos));
+  const Clustering runs = ptc::morton_runs(m, 9);
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, cluster_scene_defaults());
+  const Mesh rm = renumber_vertices(m, to_old);
+  const Clustering rruns = renumber_vertices(runs, inverse_permutation(to_old));
+  struct Case {
+    const Mesh* mesh;
+    const Clustering* cl;
+    bool vertex_lists;
+    const char* name;
+  };
+  for (const Case& k : {Case{&m, &runs, true, "as given"}, Case{&rm, &rruns, true, "renumbered"},
+                        Case{&m, &runs, false, "no vertex lists"}})
+  for (ClusterLeaf leaf : {ClusterLeaf::Linear, ClusterLeaf::BlockTree})
+  for (std::uint32_t group : {0u, 4u})
+  for (GroupTrees trees : {GroupTrees::Rebuild, GroupTrees::Refit}) {
+    if (group == 0 && trees == GroupTrees::Rebuild) continue;  // (the plain build has no group trees)
+    SceneConfig cfg = cluster_scene_defaults();
+    cfg.cluster_leaf = leaf;
+    cfg.cluster_group_size = group;
+    cfg.group_trees = trees;
+    ClusterView v = view_of(*k.cl);
+    if (!k.vertex_lists) v.vertices = {}, v.vertex_offsets = {};
+    const std::string what = std::string(k.name) + " " + to_string(leaf) + " groups " + std::to_string(group) + " " +
+                             to_string(trees);
+    const ClusterScene animated(*k.mesh, v, cfg);
+    if (std::string(k.name) == "renumbered") {
+      ASSERT_TRUE(animated.fused_vertex_pass()) << what;
+    }
+    cfg.fixed = true;
+    for (int threads : {1, 2}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+      ClusterScene once(*k.mesh, v, cfg);
+      const std::string w = what + " threads " + std::to_string(threads);
+      expect_same_data(once.data(), animated.data(), w);
+      ASSERT_EQ(once.boxes().size(), animated.boxes().size()) << w;
+      for (std::size_t c = 0; c < once.boxes().size(); ++c) ASSERT_EQ(once.boxes()[c], animated.boxes()[c]) << w << " cluster " << c;
+      EXPECT_EQ(once.cluster_ids(), animated.cluster_ids()) << w;
+      EXPECT_EQ(once.sah_cost(), animated.sah_cost()) << w;
+      EXPECT_EQ(once.subtree_nodes(), animated.subtree_nodes()) << w;
+      EXPECT_FALSE(once.fused_vertex_pass()) << w;
+      EXPECT_TRUE(validate(once.data(), k.mesh->triangle_count(), false).empty()) << w;
+      EXPECT_THROW(once.update(k.mesh->positions()), std::logic_error) << w;
     }
   }
 }
