@@ -30,6 +30,12 @@ constexpr std::size_t kSetupClustersPerTask = 1024;
 constexpr std::size_t kSetupBlocksPerTask = 8192;
 constexpr std::size_t kSetupGroupsPerChunk = 512;  // groups' trees built before they are appended
 
+// Frees a vector's storage (`v = {}` would pick the initializer-list assignment and keep it).
+template <class V>
+void release(V& v) {
+  V().swap(v);
+}
+
 // The clustering's consistency (what ClusterScene relies on): offsets from 0 to T, no empty
 // cluster, triangle_order a permutation of the mesh's triangles, vertex offsets matching.
 void check_view(const Mesh& mesh, const ClusterView& cv) {
@@ -248,7 +254,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   if (cfg_.fixed) fixed_frame(mesh);
   else update(mesh.positions());
   // Needed only to lay the clusters out (the per-frame pass has its own vertex order).
-  order_ = {}, offsets_ = {}, vertices_ = {}, vertex_offsets_ = {};
+  release(order_), release(offsets_), release(vertices_), release(vertex_offsets_);
 }
 
 // The one frame of a fixed scene: the rest pose in the trace frame (f_.fpos, the mesh's
@@ -265,8 +271,8 @@ void ClusterScene::fixed_frame(const Mesh& mesh) {
   times.vertices_ms = 0.0;
   times.boxes_ms = clock_ms(cfg_.clock) - t0;
   build_frame(static_cast<std::uint32_t>(V));
-  f_.fpos = {};
-  block_boxes_ = {};
+  release(f_.fpos);
+  release(block_boxes_);
 }
 
 // The fixed subtrees (block trees, then the groups' trees, which link to them) regrouped into
@@ -562,7 +568,7 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
     f_.fpos.resize(mesh.vertex_count());
     add_sentinel(f_.fpos);
   } else {
-    vorder_.to_new = {};  // only needed for the corners
+    release(vorder_.to_new);  // only needed for the corners
   }
 }
 
