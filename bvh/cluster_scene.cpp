@@ -204,7 +204,8 @@ std::vector<std::uint32_t> cluster_vertex_order(const Mesh& mesh, const ClusterV
 
 // The layout, once per clustering: clusters in the visiting order, their triangles in Morton
 // order (Linear) or in the leaf order of their block trees (BlockTree), blocks cluster by
-// cluster; then the vertex order of the per-frame pass and the first frame.
+// cluster; then the vertex order of the per-frame pass and the first frame (a scene built once:
+// its only frame, without that vertex order). The lists needed only here are freed at the end.
 ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg)
     : tris_(mesh.shared_triangles()), cfg_(cfg) {
   check_view(mesh, cv);
@@ -245,24 +246,24 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   refit_groups_ = cfg_.group_trees == GroupTrees::Refit && !group_offsets_.empty();
   if (refit_groups_) layout_group_trees();
   data.blocks.resize(lane_ids.size() / 4);
-  if (!cfg_.fixed) set_vertex_order(mesh, lane_ids);
+  if (!cfg_.built_once) set_vertex_order(mesh, lane_ids);
   data.triangle_ids = std::move(lane_ids);
   sub_count_ = static_cast<std::uint32_t>(sub_nodes_.size());
   data.wide.nodes = std::move(sub_nodes_);  // kept from frame to frame; the top follows
   sub_nodes_ = {};
   layout_wide8();
-  if (cfg_.fixed) fixed_frame(mesh);
+  if (cfg_.built_once) only_frame(mesh);
   else update(mesh.positions());
   // Needed only to lay the clusters out (the per-frame pass has its own vertex order).
   release(order_), release(offsets_), release(vertices_), release(vertex_offsets_);
 }
 
-// The one frame of a fixed scene: the rest pose in the trace frame (f_.fpos, the mesh's
+// The one frame of a scene built once: the rest pose in the trace frame (f_.fpos, the mesh's
 // numbering, checked finite by the constructor), the cluster boxes over the clusters' vertex
 // lists, the blocks filled from the lanes' triangles. The same values as update() computes from
 // its own vertex order (point_group_boxes is bit for bit the same in either order, and a block's
 // corners are the same floats). The frame positions and block boxes are dropped afterwards.
-void ClusterScene::fixed_frame(const Mesh& mesh) {
+void ClusterScene::only_frame(const Mesh& mesh) {
   StageTimes& times = f_.times;
   const double t0 = clock_ms(cfg_.clock);
   const std::size_t V = mesh.vertex_count();
@@ -270,7 +271,7 @@ void ClusterScene::fixed_frame(const Mesh& mesh) {
   point_group_boxes(std::span<const Vec3f>(f_.fpos.data(), V), vertex_offsets_, vertices_, f_.boxes, f_.centroids);
   times.vertices_ms = 0.0;
   times.boxes_ms = clock_ms(cfg_.clock) - t0;
-  build_frame(static_cast<std::uint32_t>(V));
+  build_frame();
   release(f_.fpos);
   release(block_boxes_);
 }
@@ -340,7 +341,7 @@ void ClusterScene::layout_linear(AlignedVector<std::uint32_t>& lane_ids) {
 // triangles = one block each, collapsed to 4-wide; blocks in leaf order; topology kept.
 // (f_.fpos holds the rest pose in the trace frame.)
 void ClusterScene::layout_block_trees(AlignedVector<std::uint32_t>& lane_ids) {
-  const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
+  const std::span<const Tri> tris = triangles();
   BuildConfig sub;
   sub.max_leaf_size = 4;
   sub.cost = cfg_.build.cost;
@@ -590,8 +591,8 @@ void ClusterScene::refit_subtrees() {
 }
 
 void ClusterScene::update(std::span<const Vec3> positions) {
-  if (cfg_.fixed)
-    throw std::logic_error("ClusterScene::update: the scene was built once (SceneConfig::fixed) and keeps no per-frame state");
+  if (cfg_.built_once)
+    throw std::logic_error("ClusterScene::update: the scene was built once (SceneConfig::built_once) and keeps no per-frame state");
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
   const std::size_t V = runs_ ? runs_->vertex_count : vorder_.to_old.size();
@@ -614,13 +615,13 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     point_group_boxes(fp, vorder_, f_.boxes, f_.centroids);
     times.boxes_ms = clock_ms(cfg_.clock) - t0;
   }
-  build_frame(static_cast<std::uint32_t>(V));
+  build_frame();
 }
 
-// The frame after its cluster boxes (f_.boxes, f_.centroids) and frame positions (f_.fpos, the
-// sentinel at index `sentinel`): the leaf data, the tree over the clusters or groups, the link and
+// The frame after its cluster boxes (f_.boxes, f_.centroids) and frame positions (f_.fpos, then
+// add_sentinel's two entries): the leaf data, the tree over the clusters or groups, the link and
 // the refit of the fixed subtrees.
-void ClusterScene::build_frame(std::uint32_t sentinel) {
+void ClusterScene::build_frame() {
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
 
@@ -632,9 +633,10 @@ void ClusterScene::build_frame(std::uint32_t sentinel) {
   auto leaf_data = [&] {
     const double tl = clock_ms(cfg_.clock);
     block_boxes_.resize(B ? data.blocks.size() : 0);
-    if (cfg_.fixed)  // (no corner indices: the lanes' triangles in the mesh's numbering)
-      fill_blocks_from_lanes(data.triangle_ids, tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>(),
-                             f_.fpos[0].data(), sentinel, data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
+    if (cfg_.built_once)  // (no corner indices: the lanes' triangles in the mesh's numbering; the sentinel last but one)
+      fill_blocks_from_lanes(data.triangle_ids, triangles(), f_.fpos[0].data(),
+                             static_cast<std::uint32_t>(f_.fpos.size() - 2), data.blocks,
+                             B ? block_boxes_.data() : nullptr);  // fenced
     else
       fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
     times.leaf_data_ms = clock_ms(cfg_.clock) - tl;

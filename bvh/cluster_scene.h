@@ -59,9 +59,10 @@ class ClusterScene {
   /// Throws std::invalid_argument when the clustering does not cover the mesh's triangles once
   /// each (sizes and offsets are checked, not connectivity), and for BlockTree leaves with
   /// cfg.build.max_leaf_size > 1 (a leaf of several clusters would bypass their block trees).
+  /// The scene is at the mesh's positions; with cfg.built_once it stays there (no per-frame state).
   ClusterScene(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg = cluster_scene_defaults());
-  /// A frame: the positions of the mesh's vertices. std::logic_error for a fixed scene
-  /// (SceneConfig::fixed), std::invalid_argument for a wrong count or a non-finite position.
+  /// A frame: the positions of the mesh's vertices. std::logic_error for a scene built once
+  /// (SceneConfig::built_once), std::invalid_argument for a wrong count or a non-finite position.
   void update(std::span<const Vec3> positions);
 
   [[nodiscard]] const TraceData& data() const { return f_.data; }
@@ -89,15 +90,19 @@ class ClusterScene {
   /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with
   /// cluster_vertex_order()): the conversion is then fused into the box stage (StageTimes::
   /// vertices_ms = 0, boxes_ms = both) and reads the input once, in order; otherwise the
-  /// conversion gathers the positions in that order (vertices_ms) before the boxes.
+  /// conversion gathers the positions in that order (vertices_ms) before the boxes. False for a
+  /// scene built once (SceneConfig::built_once), which has no per-frame pass.
   [[nodiscard]] bool fused_vertex_pass() const { return runs_.has_value(); }
 
  private:
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
-  void fixed_frame(const Mesh& mesh);
-  void build_frame(std::uint32_t sentinel);
+  void only_frame(const Mesh& mesh);
+  void build_frame();
+  [[nodiscard]] std::span<const Tri> triangles() const {
+    return tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
+  }
   void layout_group_trees();
   void append_group_tree(std::size_t g, const WideBvh& w);
   void link_top_tree();
@@ -114,7 +119,7 @@ class ClusterScene {
   std::shared_ptr<const std::vector<Tri>> tris_;
   SceneConfig cfg_;
   std::vector<std::uint32_t> cluster_ids_;  // scene cluster -> the clustering's cluster
-  std::vector<std::uint32_t> order_, offsets_, vertices_, vertex_offsets_;  // in the scene's cluster order
+  std::vector<std::uint32_t> order_, offsets_, vertices_, vertex_offsets_;  // in the scene's cluster order (set-up only: freed)
   std::vector<std::uint32_t> weights_;
   std::vector<std::uint32_t> group_offsets_;  // SceneConfig::cluster_group_size: runs of clusters
   std::vector<LeafRange> cluster_ranges_;  // blocks of cluster c (fixed layout)
@@ -151,7 +156,7 @@ class ClusterScene {
   AlignedVector<Box3f> group_boxes_;
   AlignedVector<Vec3f> group_centres_;
   WideBvh top_;  // the collapsed top tree of the last update (kept: its nodes' memory is reused)
-  std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill
+  std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill (none kept when built once)
   GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)
   std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): f_.fpos in input order
   AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel)

@@ -10,7 +10,7 @@ namespace ptc::bvh {
 
 namespace {
 
-// Blocks are independent: the fills run in chunks of this many on the caller's threads.
+// The fills' chunks (fill_in_chunks).
 constexpr std::size_t kBlocksPerTask = 8192;  // 1.2 MB of blocks
 
 // One block from its corner vertex indices v[corner][lane]: corners gathered with one 16-byte
@@ -59,6 +59,17 @@ inline void fill_block(const std::uint32_t* ids, std::span<const Tri> tris, cons
   fill_block_corners(v, fp, out, box);
 }
 
+// Blocks [0, n), each by fill(b). Blocks are independent: chunks of them on the caller's threads
+// (the same bytes at any count). Each chunk fences its own streaming stores, so they are visible
+// once the loop returns.
+template <class Fill>
+void fill_in_chunks(std::size_t n, const Fill& fill) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kBlocksPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b) fill(b);
+    _mm_sfence();
+  });
+}
+
 }  // namespace
 
 void add_sentinel(AlignedVector<Vec3f>& fp) {
@@ -76,25 +87,17 @@ void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> t
 
 void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
                               Box3f* boxes) {
-  // Blocks are independent: chunks of them on the caller's threads (the same bytes at any
-  // count). Each chunk fences its own streaming stores, so they are visible once the loop returns.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), kBlocksPerTask),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t b = r.begin(); b < r.end(); ++b)
-                        fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp,
-                                           blocks[b], boxes ? boxes + b : nullptr);
-                      _mm_sfence();
-                    });
+  fill_in_chunks(blocks.size(), [&](std::size_t b) {
+    fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
+                       boxes ? boxes + b : nullptr);
+  });
 }
 
 void fill_blocks_from_lanes(std::span<const std::uint32_t> lane_ids, std::span<const Tri> tris, const float* fp,
                             std::uint32_t sentinel, std::span<TriBlock> blocks, Box3f* boxes) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), kBlocksPerTask),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t b = r.begin(); b < r.end(); ++b)
-                        fill_block(lane_ids.data() + 4 * b, tris, fp, sentinel, blocks[b], boxes ? boxes + b : nullptr);
-                      _mm_sfence();
-                    });
+  fill_in_chunks(blocks.size(), [&](std::size_t b) {
+    fill_block(lane_ids.data() + 4 * b, tris, fp, sentinel, blocks[b], boxes ? boxes + b : nullptr);
+  });
 }
 
 void fence_blocks() { _mm_sfence(); }

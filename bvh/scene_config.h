@@ -68,11 +68,13 @@ struct SceneConfig {
   GroupTrees group_trees = GroupTrees::Refit;  ///< ClusterScene with groups only (see GroupTrees)
   SahBuilder builder = SahBuilder::Binned;  ///< the per-frame SAH builder (see SahBuilder)
   /// ClusterScene only: built once, at the positions it is made with, and never updated (a
-  /// static scene's one BVH). It then keeps no per-frame state: no corner indices, no vertex
-  /// order, no frame positions (at 13.3M triangles 160 MB, 50 MB and 80 MB, and their set-up
-  /// time); its trace data is the same bytes as that of a scene made with fixed = false.
-  /// update() throws std::logic_error.
-  bool fixed = false;
+  /// static scene's one BVH, SceneTracer). It then keeps no per-frame state: no corner indices,
+  /// no vertex order, no frame positions or block boxes after its one fill (at 13.3M triangles
+  /// 160 MB, 50 MB and 80 MB, and their set-up time); its trace data is the same bytes as the
+  /// first frame of a scene made with built_once = false. update() throws std::logic_error;
+  /// fused_vertex_pass() is false, and times() has vertices_ms 0 (the conversion is part of
+  /// the constructor's layout).
+  bool built_once = false;
 };
 
 /// Default build settings of a triangle scene: SAH traversal 1, intersection 0.3 (a 4-wide node

@@ -123,9 +123,9 @@ SceneTracer::SceneTracer(const Mesh& first, const PartLayout& L, const SceneTrac
       ts = std::make_unique<TriangleScene>(*m, tcfg);
       return;
     }
-    if (whole) {  // (all static: built once, without the per-frame state)
+    if (whole) {
       SceneConfig c = ccfg;
-      c.fixed = want;
+      c.built_once = want;  // all static: never updated, so no per-frame state
       *cs = std::make_unique<ClusterScene>(*m, view_of(*cfg.clusters), c);
       return;
     }

@@ -6,6 +6,8 @@
 //   - the static parts' triangles in a TriangleScene built once, never updated;
 //   - the moving parts' triangles in a TriangleScene or (given a clustering of the combined
 //     mesh) a ClusterScene, updated per frame from positions only.
+// With a clustering and every part static the one BVH is a ClusterScene built once
+// (SceneConfig::built_once: no per-frame state).
 // Static and moving parts may interleave in part order: each sub-mesh keeps its triangles in
 // combined order, and an id map turns a sub-mesh triangle id back into the combined id (monotone,
 // so the (t, id) order inside a sub-mesh is the combined order). A ray is traced through both and

@@ -199,7 +199,7 @@ TEST(ClusterScene, SetUpInChunksIsTheSameAtAnyThreadCountAndHitsLikeBruteForce) 
   }
 }
 
-// A scene built once (SceneConfig::fixed, the one BVH of a static scene in ptc trace) keeps no
+// A scene built once (SceneConfig::built_once, the one BVH of a static scene in ptc trace) keeps no
 // per-frame state: it fills its blocks from the lanes' triangles in the mesh's numbering, where a
 // scene made for animation gathers them through corner indices in its own vertex order. Its trace
 // data must be the bytes of the animated scene's first frame, with the same cluster boxes and
@@ -207,7 +207,7 @@ TEST(ClusterScene, SetUpInChunksIsTheSameAtAnyThreadCountAndHitsLikeBruteForce) 
 // clusters' vertex order (the animated scene's fused pass), a view without vertex lists, at 1
 // and 2 threads. The mesh has an unreferenced vertex, a triangle with a repeated corner and a
 // duplicated triangle; clusters of nine triangles make more than one fill chunk.
-TEST(ClusterScene, AFixedSceneIsTheFirstFrameOfAnAnimatedOne) {
+TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
   const Mesh arm = test::load_mesh("armadillo.off");
   std::vector<Tri> tris(arm.triangles().begin(), arm.triangles().end());
   std::vector<Vec3> pos(arm.positions().begin(), arm.positions().end());
@@ -240,10 +240,9 @@ TEST(ClusterScene, AFixedSceneIsTheFirstFrameOfAnAnimatedOne) {
     const std::string what = std::string(k.name) + " " + to_string(leaf) + " groups " + std::to_string(group) + " " +
                              to_string(trees);
     const ClusterScene animated(*k.mesh, v, cfg);
-    if (std::string(k.name) == "renumbered") {
-      ASSERT_TRUE(animated.fused_vertex_pass()) << what;
-    }
-    cfg.fixed = true;
+    // (both per-frame passes of the animated scene are covered: the fused one and the gather)
+    ASSERT_EQ(animated.fused_vertex_pass(), std::string(k.name) == "renumbered") << what;
+    cfg.built_once = true;
     for (int threads : {1, 2}) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
       ClusterScene once(*k.mesh, v, cfg);
@@ -259,6 +258,21 @@ TEST(ClusterScene, AFixedSceneIsTheFirstFrameOfAnAnimatedOne) {
       EXPECT_THROW(once.update(k.mesh->positions()), std::logic_error) << w;
     }
   }
+  // The sweep builder (plain build), and an empty mesh.
+  SceneConfig sweep = cluster_scene_defaults();
+  sweep.builder = SahBuilder::Sweep;
+  sweep.cluster_group_size = 0;
+  const ClusterScene animated(m, view_of(runs), sweep);
+  sweep.built_once = true;
+  expect_same_data(ClusterScene(m, view_of(runs), sweep).data(), animated.data(), "sweep");
+  const Mesh empty;
+  const Clustering none;
+  SceneConfig cfg = cluster_scene_defaults();
+  const ClusterScene empty_animated(empty, view_of(none), cfg);
+  cfg.built_once = true;
+  const ClusterScene empty_once(empty, view_of(none), cfg);
+  expect_same_data(empty_once.data(), empty_animated.data(), "empty mesh");
+  EXPECT_TRUE(empty_once.data().blocks.empty());
 }
 
 // GroupTrees::Refit builds each group's tree once, over the rest-pose cluster boxes, with the
