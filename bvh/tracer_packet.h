@@ -138,10 +138,11 @@ struct alignas(32) Packet {
 };
 
 // A leaf is tested ray-parallel (one triangle against the lanes) for the lanes of one watertight
-// axis permutation when there are at least this many of them, else ray by ray. Measured on the
-// cloth's and the twist's camera rays (2026-12-03, docs/tracing.md): 4 beat 2, 3, 5 and 8 on the
-// cluster BVH (leaves of 30-50 triangles), and helps the triangle BVH's one-block leaves too.
-constexpr int kRayParallel = 4;
+// axis permutation when there are at least this many of them, else ray by ray. On the AMD host
+// (2026-12-03) 4 beat 2, 3, 5 and 8 on the cluster BVH (leaves of 30-50 triangles). On the Intel
+// host since (2026-12-05, docs/tracing.md, "The ray-parallel threshold on this host") 5-7 beat 4
+// and 8 on every built-in scene with AVX2 and AVX-512: 6.
+constexpr int kRayParallel = 6;
 
 // One leaf against the lanes `lanes` (all of one axis permutation kx, ky, kz), one triangle
 // against all lanes at a time: the single-ray test's float operations per (ray, triangle), so the
