@@ -244,6 +244,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   else layout_block_trees(lane_ids);
   block_nodes_ = static_cast<std::uint32_t>(sub_nodes_.size());
   refit_groups_ = cfg_.group_trees == GroupTrees::Refit && !group_offsets_.empty();
+  if (refit_groups_ || cfg_.built_once) rest_boxes();  // (read by the groups' trees and by only_frame)
   if (refit_groups_) layout_group_trees();
   data.blocks.resize(lane_ids.size() / 4);
   if (!cfg_.built_once) set_vertex_order(mesh, lane_ids);
@@ -252,25 +253,28 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   data.wide.nodes = std::move(sub_nodes_);  // kept from frame to frame; the top follows
   sub_nodes_ = {};
   layout_wide8();
-  if (cfg_.built_once) only_frame(mesh);
+  if (cfg_.built_once) only_frame();
   else update(mesh.positions());
   // Needed only to lay the clusters out (the per-frame pass has its own vertex order).
   release(order_), release(offsets_), release(vertices_), release(vertex_offsets_);
 }
 
-// The one frame of a scene built once: the rest pose in the trace frame (f_.fpos, the mesh's
-// numbering, checked finite by the constructor), the cluster boxes over the clusters' vertex
-// lists, the blocks filled from the lanes' triangles. The same values as update() computes from
-// its own vertex order (point_group_boxes is bit for bit the same in either order, and a block's
-// corners are the same floats). The frame positions and block boxes are dropped afterwards.
-void ClusterScene::only_frame(const Mesh& mesh) {
-  StageTimes& times = f_.times;
+// The clusters' boxes and centres at the rest pose (f_.fpos, the mesh's numbering, checked finite
+// by the constructor, no sentinel yet) over their vertex lists, into f_.boxes and f_.centroids.
+void ClusterScene::rest_boxes() {
   const double t0 = clock_ms(cfg_.clock);
-  const std::size_t V = mesh.vertex_count();
+  point_group_boxes(std::span<const Vec3f>(f_.fpos.data(), f_.fpos.size()), vertex_offsets_, vertices_, f_.boxes,
+                    f_.centroids);
+  f_.times.vertices_ms = 0.0;
+  f_.times.boxes_ms = clock_ms(cfg_.clock) - t0;
+}
+
+// The one frame of a scene built once: the rest pose's cluster boxes (rest_boxes(), made by the
+// constructor), the blocks filled from the lanes' triangles. The same values as update() computes
+// from its own vertex order (point_group_boxes is bit for bit the same in either order, and a
+// block's corners are the same floats). The frame positions and block boxes are dropped after.
+void ClusterScene::only_frame() {
   add_sentinel(f_.fpos);
-  point_group_boxes(std::span<const Vec3f>(f_.fpos.data(), V), vertex_offsets_, vertices_, f_.boxes, f_.centroids);
-  times.vertices_ms = 0.0;
-  times.boxes_ms = clock_ms(cfg_.clock) - t0;
   build_frame();
   release(f_.fpos);
   release(block_boxes_);
@@ -393,11 +397,10 @@ void ClusterScene::layout_block_trees(AlignedVector<std::uint32_t>& lane_ids) {
 // scene's build settings), collapsed to 4-wide and appended to sub_nodes_ after the block trees.
 // A leaf child of one cluster refers to the cluster's blocks (or links to its block tree), a
 // leaf of several clusters to fixed ranges; the slots remember which cluster boxes they unite.
-// (f_.fpos holds the rest pose in the trace frame, in the mesh's numbering.)
+// (f_.boxes and f_.centroids hold the clusters' rest-pose boxes: rest_boxes().)
 void ClusterScene::layout_group_trees() {
-  AlignedVector<Box3f> boxes;
-  AlignedVector<Vec3f> centres;
-  point_group_boxes(std::span<const Vec3f>(f_.fpos.data(), f_.fpos.size()), vertex_offsets_, vertices_, boxes, centres);
+  const AlignedVector<Box3f>& boxes = f_.boxes;
+  const AlignedVector<Vec3f>& centres = f_.centroids;
   const std::size_t G = group_offsets_.size() - 1;
   group_top_build_ = cfg_.build;
   group_top_build_.max_leaf_size = 1;  // a leaf of the tree over the groups is one group (its tree)

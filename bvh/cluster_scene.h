@@ -98,7 +98,8 @@ class ClusterScene {
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
-  void only_frame(const Mesh& mesh);
+  void rest_boxes();
+  void only_frame();
   void build_frame();
   [[nodiscard]] std::span<const Tri> triangles() const {
     return tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
