@@ -355,7 +355,7 @@ struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: bot
 // Tests the triangles of one leaf child (direct: `count` triangles from block `ref`;
 // indirect: the ranges ranges[ref .. ref + n)). Returns true for an any-hit query's hit.
 template <bool AnyHit>
-inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, RayState& r, float& tmax,
+[[gnu::always_inline]] inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, RayState& r, float& tmax,
                            Result& res, std::uint32_t& tris) {
   if (!r.watertight_ready) [[unlikely]] prepare_watertight(r);
   LeafRange one{ref, (count + 3) / 4, count};
