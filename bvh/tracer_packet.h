@@ -147,6 +147,12 @@ constexpr int kRayParallel = 6;
 // One leaf against the lanes `lanes` (all of one axis permutation kx, ky, kz), one triangle
 // against all lanes at a time: the single-ray test's float operations per (ray, triangle), so the
 // same hits. Returns the lanes that found a hit (any hit: they are done).
+#if defined(PTC_TRACE_AVX512)
+// x in both 256-bit halves (as _mm512_broadcast_f32x8, whose GCC 12 header reads an uninitialised
+// operand and warned at every use).
+inline __m512 dup8(__m256 x) { return _mm512_insertf32x8(_mm512_castps256_ps512(x), x, 1); }
+#endif
+
 template <bool AnyHit>
 std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_t count, Packet& p,
                                   std::uint32_t lanes, int kx4, int ky4, int kz4) {
@@ -179,10 +185,10 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
   // 8-15: the second), taken in the order of the one-triangle test, so the same hits: a closest
   // hit of the second is checked against the lane's best after the first, an any-hit lane done
   // with the first leaves the second.
-  const __m512 okx2 = _mm512_broadcast_f32x8(okx), oky2 = _mm512_broadcast_f32x8(oky);
-  const __m512 okz2 = _mm512_broadcast_f32x8(okz), sx2 = _mm512_broadcast_f32x8(sx);
-  const __m512 sy2 = _mm512_broadcast_f32x8(sy), sz2 = _mm512_broadcast_f32x8(sz);
-  const __m512 tmin2 = _mm512_broadcast_f32x8(tmin);
+  const __m512 okx2 = dup8(okx), oky2 = dup8(oky);
+  const __m512 okz2 = dup8(okz), sx2 = dup8(sx);
+  const __m512 sy2 = dup8(sy), sz2 = dup8(sz);
+  const __m512 tmin2 = dup8(tmin);
   const float* pend = nullptr;  // a triangle waiting for its partner (corner rows at pend + 4 c + axis)
   std::uint32_t pend_id = kNoTriangle;
   // `both` false: the first triangle alone (lanes 8-15 not live; v1 may be v0).
@@ -196,7 +202,7 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
                                    at(12 + kz4, okz2), at(24 + kx4, okx2), at(24 + ky4, oky2), at(24 + kz4, okz2), sx2,
                                    sy2, sz2, live);
     if (!h.valid) return;
-    const __m512 tmax2 = _mm512_broadcast_f32x8(tmax);
+    const __m512 tmax2 = dup8(tmax);
     const std::uint32_t m =
         h.valid & _mm512_cmp_ps_mask(h.t, tmin2, _CMP_GT_OQ) & _mm512_cmp_ps_mask(h.t, tmax2, _CMP_LE_OQ);
     if (!m) return;
