@@ -75,7 +75,7 @@ struct Result {
 // The ray's state from its set-up values: origin and direction in the trace frame, the slab
 // constants 1/d x kNearScale and 1/d x kFarScale, per axis whether 1/d is negative, and the
 // interval (tmax already clamped to kBig). setup() and the batched set-up (setup8) both end here.
-void fill_state(RayState& r, const Vec3f& o, const Vec3f& d, const float* in, const float* fa, const bool* neg,
+[[gnu::always_inline]] inline void fill_state(RayState& r, const Vec3f& o, const Vec3f& d, const float* in, const float* fa, const bool* neg,
                 float tmin, float tmax) {
   r.tmin = tmin, r.tmax = tmax;
   r.ox = _mm_set1_ps(o[0]), r.oy = _mm_set1_ps(o[1]), r.oz = _mm_set1_ps(o[2]);
@@ -144,7 +144,7 @@ inline void redo_edges_in_double(int on_edge, const float* ax, const float* ay, 
 // smallest (t, id); any: the first hit). Returns true when a hit was recorded. The float
 // operations and their order are those of intersect_triangle (watertight.cpp).
 template <bool AnyHit>
-inline bool intersect_block(const TriBlock& blk, const std::uint32_t* ids, const RayState& r, float& tmax,
+[[gnu::always_inline]] inline bool intersect_block(const TriBlock& blk, const std::uint32_t* ids, const RayState& r, float& tmax,
                             Result& res) {
   const float* v = &blk.v[0][0][0];
   const __m128 a_x = _mm_sub_ps(_mm_load_ps(v + r.kx4), r.okx);
@@ -244,7 +244,7 @@ inline Pairs8 watertight8(__m256 a_x, __m256 a_y, __m256 a_z, __m256 b_x, __m256
 // intersect_block, and lanes are taken in the same order (block 0 first), so hits and any-hit
 // choices are identical to two calls of intersect_block.
 template <bool AnyHit>
-inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
+[[gnu::always_inline]] inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
                                  Result& res) {
   const float* v0 = &blk[0].v[0][0][0];
   const float* v1 = &blk[1].v[0][0][0];
@@ -316,7 +316,7 @@ inline Pairs16 watertight16(__m512 a_x, __m512 a_y, __m512 a_z, __m512 b_x, __m5
 // first, so hits and any-hit choices are identical to four calls of intersect_block (and to two
 // of intersect_block_pair).
 template <bool AnyHit>
-inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
+[[gnu::always_inline]] inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
                                  Result& res) {
   const float* v0 = &blk[0].v[0][0][0];
   const float* v1 = &blk[1].v[0][0][0];
