@@ -243,9 +243,14 @@ std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_
         if constexpr (AnyHit)
           if (!lanes) return found;
 #else
-        auto at = [&](int off, __m256 o) { return _mm256_sub_ps(_mm256_broadcast_ss(v + off), o); };
-        const Pairs8 h = watertight8(at(kx4, okx), at(ky4, oky), at(kz4, okz), at(12 + kx4, okx), at(12 + ky4, oky),
-                                     at(12 + kz4, okz), at(24 + kx4, okx), at(24 + ky4, oky), at(24 + kz4, okz), sx, sy, sz,
+        // The corner rows of the permuted axes from three bases and fixed offsets (with `v + 12 *
+        // corner + axis` the compiler kept nine row pointers on the stack, three instructions a row).
+        const float* px = v + kx4;
+        const float* py = v + ky4;
+        const float* pz = v + kz4;
+        auto at = [&](const float* row, __m256 o) { return _mm256_sub_ps(_mm256_broadcast_ss(row), o); };
+        const Pairs8 h = watertight8(at(px, okx), at(py, oky), at(pz, okz), at(px + 12, okx), at(py + 12, oky),
+                                     at(pz + 12, okz), at(px + 24, okx), at(py + 24, oky), at(pz + 24, okz), sx, sy, sz,
                                      static_cast<int>(lanes));
         if (!h.valid_bits) continue;
         const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, tmin, _CMP_GT_OQ), _mm256_cmp_ps(h.t, tmax, _CMP_LE_OQ));
