@@ -87,13 +87,20 @@ TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
   }
 }
 
+// n objects at a and b, byte for byte (memcmp, whose pointers must not be null even for n = 0:
+// an empty scene's arrays have none).
+template <class T>
+bool same_bytes(const T* a, const T* b, std::size_t n) {
+  return n == 0 || std::memcmp(a, b, n * sizeof(T)) == 0;
+}
+
 // The flat data of two scenes, byte for byte: the 4-wide and 8-wide nodes, the blocks, the
 // lane ids and the leaf ranges.
 void expect_same_data(const TraceData& d, const TraceData& w, const std::string& what) {
   ASSERT_EQ(d.wide.nodes.size(), w.wide.nodes.size()) << what;
-  EXPECT_EQ(std::memcmp(d.wide.nodes.data(), w.wide.nodes.data(), w.wide.nodes.size() * sizeof(WideNode)), 0) << what;
+  EXPECT_TRUE(same_bytes(d.wide.nodes.data(), w.wide.nodes.data(), w.wide.nodes.size())) << what;
   ASSERT_EQ(d.blocks.size(), w.blocks.size()) << what;
-  EXPECT_EQ(std::memcmp(d.blocks.data(), w.blocks.data(), w.blocks.size() * sizeof(TriBlock)), 0) << what;
+  EXPECT_TRUE(same_bytes(d.blocks.data(), w.blocks.data(), w.blocks.size())) << what;
   EXPECT_TRUE(std::equal(d.triangle_ids.begin(), d.triangle_ids.end(), w.triangle_ids.begin(), w.triangle_ids.end()))
       << what;
   ASSERT_EQ(d.ranges.size(), w.ranges.size()) << what;
@@ -103,7 +110,7 @@ void expect_same_data(const TraceData& d, const TraceData& w, const std::string&
         << what << " range " << i;
   EXPECT_EQ(d.wide.root, w.wide.root) << what;
   ASSERT_EQ(d.wide8.nodes.size(), w.wide8.nodes.size()) << what;
-  EXPECT_EQ(std::memcmp(d.wide8.nodes.data(), w.wide8.nodes.data(), w.wide8.nodes.size() * sizeof(WideNode8)), 0) << what;
+  EXPECT_TRUE(same_bytes(d.wide8.nodes.data(), w.wide8.nodes.data(), w.wide8.nodes.size())) << what;
   EXPECT_EQ(d.wide8.root, w.wide8.root) << what;
   EXPECT_EQ(d.wide8.depth, w.wide8.depth) << what;
 }
