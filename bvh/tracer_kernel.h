@@ -75,8 +75,8 @@ struct Result {
 // The ray's state from its set-up values: origin and direction in the trace frame, the slab
 // constants 1/d x kNearScale and 1/d x kFarScale, per axis whether 1/d is negative, and the
 // interval (tmax already clamped to kBig). setup() and the batched set-up (setup8) both end here.
-[[gnu::always_inline]] inline void fill_state(RayState& r, const Vec3f& o, const Vec3f& d, const float* in, const float* fa, const bool* neg,
-                float tmin, float tmax) {
+[[gnu::always_inline]] inline void fill_state(RayState& r, const Vec3f& o, const Vec3f& d, const float* in,
+                                              const float* fa, const bool* neg, float tmin, float tmax) {
   r.tmin = tmin, r.tmax = tmax;
   r.ox = _mm_set1_ps(o[0]), r.oy = _mm_set1_ps(o[1]), r.oz = _mm_set1_ps(o[2]);
   r.inx = _mm_set1_ps(in[0]), r.iny = _mm_set1_ps(in[1]), r.inz = _mm_set1_ps(in[2]);
@@ -144,8 +144,8 @@ inline void redo_edges_in_double(int on_edge, const float* ax, const float* ay, 
 // smallest (t, id); any: the first hit). Returns true when a hit was recorded. The float
 // operations and their order are those of intersect_triangle (watertight.cpp).
 template <bool AnyHit>
-[[gnu::always_inline]] inline bool intersect_block(const TriBlock& blk, const std::uint32_t* ids, const RayState& r, float& tmax,
-                            Result& res) {
+[[gnu::always_inline]] inline bool intersect_block(const TriBlock& blk, const std::uint32_t* ids, const RayState& r,
+                                                   float& tmax, Result& res) {
   const float* v = &blk.v[0][0][0];
   const __m128 a_x = _mm_sub_ps(_mm_load_ps(v + r.kx4), r.okx);
   const __m128 a_y = _mm_sub_ps(_mm_load_ps(v + r.ky4), r.oky);
@@ -244,8 +244,8 @@ inline Pairs8 watertight8(__m256 a_x, __m256 a_y, __m256 a_z, __m256 b_x, __m256
 // intersect_block, and lanes are taken in the same order (block 0 first), so hits and any-hit
 // choices are identical to two calls of intersect_block.
 template <bool AnyHit>
-[[gnu::always_inline]] inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
-                                 Result& res) {
+[[gnu::always_inline]] inline bool intersect_block_pair(const TriBlock* blk, const std::uint32_t* ids,
+                                                        const RayState& r, float& tmax, Result& res) {
   const float* v0 = &blk[0].v[0][0][0];
   const float* v1 = &blk[1].v[0][0][0];
   auto ld = [&](int off) {
@@ -316,8 +316,8 @@ inline Pairs16 watertight16(__m512 a_x, __m512 a_y, __m512 a_z, __m512 b_x, __m5
 // first, so hits and any-hit choices are identical to four calls of intersect_block (and to two
 // of intersect_block_pair).
 template <bool AnyHit>
-[[gnu::always_inline]] inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids, const RayState& r, float& tmax,
-                                 Result& res) {
+[[gnu::always_inline]] inline bool intersect_block_quad(const TriBlock* blk, const std::uint32_t* ids,
+                                                        const RayState& r, float& tmax, Result& res) {
   const float* v0 = &blk[0].v[0][0][0];
   const float* v1 = &blk[1].v[0][0][0];
   const float* v2 = &blk[2].v[0][0][0];
@@ -355,8 +355,8 @@ struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: bot
 // Tests the triangles of one leaf child (direct: `count` triangles from block `ref`;
 // indirect: the ranges ranges[ref .. ref + n)). Returns true for an any-hit query's hit.
 template <bool AnyHit>
-[[gnu::always_inline]] inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, RayState& r, float& tmax,
-                           Result& res, std::uint32_t& tris) {
+[[gnu::always_inline]] inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, RayState& r,
+                                                  float& tmax, Result& res, std::uint32_t& tris) {
   if (!r.watertight_ready) [[unlikely]] prepare_watertight(r);
   LeafRange one{ref, (count + 3) / 4, count};
   const LeafRange* ranges = &one;

@@ -144,15 +144,15 @@ struct alignas(32) Packet {
 // and 8 on every built-in scene with AVX2 and AVX-512: 6.
 constexpr int kRayParallel = 6;
 
-// One leaf against the lanes `lanes` (all of one axis permutation kx, ky, kz), one triangle
-// against all lanes at a time: the single-ray test's float operations per (ray, triangle), so the
-// same hits. Returns the lanes that found a hit (any hit: they are done).
 #if defined(PTC_TRACE_AVX512)
 // x in both 256-bit halves (as _mm512_broadcast_f32x8, whose GCC 12 header reads an uninitialised
 // operand and warned at every use).
 inline __m512 dup8(__m256 x) { return _mm512_insertf32x8(_mm512_castps256_ps512(x), x, 1); }
 #endif
 
+// One leaf against the lanes `lanes` (all of one axis permutation kx, ky, kz), one triangle
+// against all lanes at a time: the single-ray test's float operations per (ray, triangle), so the
+// same hits. Returns the lanes that found a hit (any hit: they are done).
 template <bool AnyHit>
 std::uint32_t intersect_leaf_rays(const Flat& d, std::uint32_t ref, std::uint32_t count, Packet& p,
                                   std::uint32_t lanes, int kx4, int ky4, int kz4) {
