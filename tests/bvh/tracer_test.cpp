@@ -5,7 +5,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <limits>
 #include <memory>
 #include <random>
@@ -16,6 +15,7 @@
 #include "bvh/sah_builder.h"
 #include "bvh/trace_scene.h"
 #include "test_util.h"
+#include "common/same_trace_data.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/clustering.h"
 #include "toolkit/mesh/topology.h"
@@ -925,19 +925,7 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
       ASSERT_TRUE(std::ranges::equal(a.boxes(), b.boxes())) << "frame " << f;
       EXPECT_EQ(a.bvh().prim_order, b.bvh().prim_order);
       // The blocks (and the block trees' boxes, refitted from them) byte for byte.
-      ASSERT_EQ(a.data().blocks.size(), b.data().blocks.size());
-      EXPECT_EQ(std::memcmp(a.data().blocks.data(), b.data().blocks.data(), a.data().blocks.size() * sizeof(TriBlock)), 0)
-          << "frame " << f;
-      ASSERT_EQ(a.data().wide.nodes.size(), b.data().wide.nodes.size());
-      EXPECT_EQ(std::memcmp(a.data().wide.nodes.data(), b.data().wide.nodes.data(),
-                            a.data().wide.nodes.size() * sizeof(WideNode)),
-                0)
-          << "frame " << f;
-      ASSERT_EQ(a.data().wide8.nodes.size(), b.data().wide8.nodes.size());
-      EXPECT_EQ(std::memcmp(a.data().wide8.nodes.data(), b.data().wide8.nodes.data(),
-                            a.data().wide8.nodes.size() * sizeof(WideNode8)),
-                0)
-          << "frame " << f;
+      test::expect_same_data(a.data(), b.data(), "frame " + std::to_string(f));
       ASSERT_TRUE(validate(b.data(), rm.triangle_count(), false).empty());
       const Mesh& frame = f ? rm_moved : rm;
       const RaySet rs = random_rays(frame, 200, 57);
