@@ -4,7 +4,7 @@
 //   build/bin/bvh_bench [MESH] [--levels 2] [--reps 5] [--size 1024] [--threads 1]
 //                       [--clusters acc,meshopt] [--max-count 50] [--max-size 50]
 //                       [--leaves linear,block-tree] [--leaf 8] [--ct 1] [--ci 0.3]
-//                       [--isa auto|sse2|avx2|avx512] [--embree all|none] [--deform twist] [--amplitude A]
+//                       [--isa auto|sse2|avx2|avx512vl|avx512] [--embree all|none] [--deform twist] [--amplitude A]
 //                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--median 4]
 //                       [--vertex-order clusters|input] [--groups 8]
 //
@@ -175,7 +175,7 @@ Options parse_options(int argc, char** argv) {
     } else if (a == "--isa") {
       const std::string s = text();
       const auto isa = parse_trace_isa(s);
-      if (!isa) usage("--isa must be auto, sse2, avx2 or avx512");
+      if (!isa) usage("--isa must be auto, sse2, avx2, avx512vl or avx512");
       o.isa = *isa;
     } else if (a == "--embree") {
       const std::string s = text();

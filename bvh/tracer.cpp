@@ -28,13 +28,14 @@ const char* to_string(TraceIsa isa) {
     case TraceIsa::Auto: return "auto";
     case TraceIsa::Sse2: return "sse2";
     case TraceIsa::Avx2: return "avx2";
+    case TraceIsa::Avx512Vl: return "avx512vl";
     case TraceIsa::Avx512: return "avx512";
   }
   return "?";
 }
 
 std::optional<TraceIsa> parse_trace_isa(std::string_view s) {
-  for (TraceIsa i : {TraceIsa::Auto, TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512})
+  for (TraceIsa i : {TraceIsa::Auto, TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512Vl, TraceIsa::Avx512})
     if (s == to_string(i)) return i;
   return std::nullopt;
 }
@@ -44,11 +45,16 @@ TraceIsa resolve(TraceIsa isa) {
   static const bool has_avx512 = has_avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
                                  __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
   // Auto takes the 512-bit variant on AMD CPUs only: on the Zen 5 host it was the faster one, on
-  // the Intel Xeon host (AVX-512 FP16, AMX) of 2026-12-05 the 256-bit one was faster by 3-11% per
-  // frame, single rays and packets alike (docs/tracing.md, "The machine changed").
-  static const bool auto_avx512 = has_avx512 && __builtin_cpu_is("amd");
+  // the Intel Xeon host (AVX-512 FP16, AMX) of 2026-12-05 the 256-bit ones were faster by 3-11%
+  // per frame, single rays and packets alike (docs/tracing.md, "The machine changed"). There the
+  // AVX-512VL variant (256-bit, EVEX) beat the AVX2 one by 1-3% (docs/tracing.md, "The AVX-512VL
+  // variant").
+  static const bool amd = __builtin_cpu_is("amd");
   if (isa == TraceIsa::Sse2) return TraceIsa::Sse2;
-  if (has_avx512 && (isa == TraceIsa::Avx512 || (isa == TraceIsa::Auto && auto_avx512))) return TraceIsa::Avx512;
+  if (has_avx512) {
+    if (isa == TraceIsa::Avx512 || (isa == TraceIsa::Auto && amd)) return TraceIsa::Avx512;
+    if (isa == TraceIsa::Avx512Vl || isa == TraceIsa::Auto) return TraceIsa::Avx512Vl;
+  }
   return has_avx2 ? TraceIsa::Avx2 : TraceIsa::Sse2;
 }
 
@@ -57,6 +63,7 @@ detail::RangeFn range_fn(TraceIsa isa, bool packets) {
   const TraceIsa r = resolve(isa);
   if (r == TraceIsa::Sse2) return &detail::trace_range_sse2;
   if (r == TraceIsa::Avx512) return packets ? &detail::trace_range_packet_avx512 : &detail::trace_range_avx512;
+  if (r == TraceIsa::Avx512Vl) return packets ? &detail::trace_range_packet_avx512vl : &detail::trace_range_avx512vl;
   return packets ? &detail::trace_range_packet_avx2 : &detail::trace_range_avx2;
 }
 }  // namespace
@@ -95,6 +102,7 @@ Hit trace_ray(const TraceData& scene, const Vec3& org, const Vec3f& dir, HitMode
               TraceIsa isa) {
   switch (resolve(isa)) {
     case TraceIsa::Avx512: return detail::trace_one_avx512(scene, org, dir, mode, tmin, tmax);
+    case TraceIsa::Avx512Vl: return detail::trace_one_avx512vl(scene, org, dir, mode, tmin, tmax);
     case TraceIsa::Avx2: return detail::trace_one_avx2(scene, org, dir, mode, tmin, tmax);
     default: return detail::trace_one_sse2(scene, org, dir, mode, tmin, tmax);
   }

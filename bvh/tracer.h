@@ -61,13 +61,15 @@ struct HitBatch {
 
 enum class HitMode { Closest, Any };
 
-/// Instruction set of the traversal code (see tracer_isa.h). Auto, checked at run time: AVX-512
-/// (F, VL, DQ, BW) on an AMD CPU that has it, else AVX2, else SSE2 (on the Intel Xeon measured,
-/// the AVX2 variant was the faster; docs/tracing.md). All give bit-identical hits and counters;
-/// SSE2 tests the triangles of a leaf 4 at a time, AVX2 8 and AVX-512 16.
-enum class TraceIsa { Auto, Sse2, Avx2, Avx512 };
+/// Instruction set of the traversal code (see tracer_isa.h). Auto, checked at run time: on a CPU
+/// with AVX-512 (F, VL, DQ, BW) the 512-bit variant on AMD, the AVX-512VL one elsewhere (on the
+/// Intel Xeon measured, 256-bit vectors were the faster; docs/tracing.md), else AVX2, else SSE2.
+/// All give bit-identical hits and counters; SSE2 tests the triangles of a leaf 4 at a time,
+/// AVX2 and AVX-512VL 8 (AVX-512VL: the AVX2 code in AVX-512's encoding, 32 registers) and
+/// AVX-512 16.
+enum class TraceIsa { Auto, Sse2, Avx2, Avx512Vl, Avx512 };
 [[nodiscard]] const char* to_string(TraceIsa isa);
-/// "auto", "sse2", "avx2" or "avx512"; nullopt for anything else.
+/// "auto", "sse2", "avx2", "avx512vl" or "avx512"; nullopt for anything else.
 [[nodiscard]] std::optional<TraceIsa> parse_trace_isa(std::string_view s);
 /// The variant a request resolves to on this CPU: a forced variant the CPU lacks falls back to
 /// the widest one below it.

@@ -48,6 +48,7 @@ struct alignas(32) PacketEntry {
 // The slab-test constants of one octant group, one ray per lane.
 struct PacketGroup {
   __m256 ox, oy, oz, inx, iny, inz, ifx, ify, ifz, tmin;
+  __m256 ninx, niny, ninz, nifx, nify, nifz;  // the same negated
   std::ptrdiff_t nx, ny, nz, fx, fy, fz;
 };
 
@@ -311,14 +312,17 @@ void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, P
       __m256 tn[8];
       std::uint32_t lanes[8];
       unsigned any = 0;
+#pragma GCC unroll 8
       for (int c = 0; c < 8; ++c) {
         // The single-ray kernel's operations and operand order (its comment explains the NaN rule).
-        const __m256 tnx = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.nx + c), g.ox), g.inx);
-        const __m256 tny = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.ny + c), g.oy), g.iny);
-        const __m256 tnz = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.nz + c), g.oz), g.inz);
-        const __m256 tfx = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.fx + c), g.ox), g.ifx);
-        const __m256 tfy = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.fy + c), g.oy), g.ify);
-        const __m256 tfz = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(b + g.fz + c), g.oz), g.ifz);
+        // (o - b) * -inv: the same bits as (b - o) * inv (rounding is symmetric in sign), with the
+        // plane as the second operand (one instruction with an embedded broadcast on AVX-512VL).
+        const __m256 tnx = _mm256_mul_ps(_mm256_sub_ps(g.ox, _mm256_broadcast_ss(b + g.nx + c)), g.ninx);
+        const __m256 tny = _mm256_mul_ps(_mm256_sub_ps(g.oy, _mm256_broadcast_ss(b + g.ny + c)), g.niny);
+        const __m256 tnz = _mm256_mul_ps(_mm256_sub_ps(g.oz, _mm256_broadcast_ss(b + g.nz + c)), g.ninz);
+        const __m256 tfx = _mm256_mul_ps(_mm256_sub_ps(g.ox, _mm256_broadcast_ss(b + g.fx + c)), g.nifx);
+        const __m256 tfy = _mm256_mul_ps(_mm256_sub_ps(g.oy, _mm256_broadcast_ss(b + g.fy + c)), g.nify);
+        const __m256 tfz = _mm256_mul_ps(_mm256_sub_ps(g.oz, _mm256_broadcast_ss(b + g.fz + c)), g.nifz);
         tn[c] = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, g.tmin));
         const __m256 tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, tmax));
         lanes[c] = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(tn[c], tf, _CMP_LE_OQ))) & m;
@@ -435,6 +439,9 @@ void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBa
   g.ox = ox, g.oy = oy, g.oz = oz, g.tmin = t0;
   g.inx = _mm256_mul_ps(ix, ns), g.iny = _mm256_mul_ps(iy, ns), g.inz = _mm256_mul_ps(iz, ns);
   g.ifx = _mm256_mul_ps(ix, fs), g.ify = _mm256_mul_ps(iy, fs), g.ifz = _mm256_mul_ps(iz, fs);
+  const __m256 sgn = _mm256_set1_ps(-0.0f);
+  g.ninx = _mm256_xor_ps(g.inx, sgn), g.niny = _mm256_xor_ps(g.iny, sgn), g.ninz = _mm256_xor_ps(g.inz, sgn);
+  g.nifx = _mm256_xor_ps(g.ifx, sgn), g.nify = _mm256_xor_ps(g.ify, sgn), g.nifz = _mm256_xor_ps(g.ifz, sgn);
 
   Packet p;
   p.nodes = _mm256_setzero_si256();

@@ -36,7 +36,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.isa = *bvh::parse_trace_isa(a->isa);
                       if (o.config.isa != bvh::TraceIsa::Auto && bvh::resolve(o.config.isa) != o.config.isa)
                         throw UsageError("--isa", std::string("this CPU has no ") +
-                                                      (o.config.isa == bvh::TraceIsa::Avx512
+                                                      (o.config.isa == bvh::TraceIsa::Avx512 || o.config.isa == bvh::TraceIsa::Avx512Vl
                                                            ? "AVX-512 (F, VL, DQ and BW)"
                                                            : "AVX2") +
                                                       "; the widest it has is " + bvh::to_string(bvh::resolve(bvh::TraceIsa::Auto)));
@@ -44,7 +44,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                       // rays while the run says packets.
                       if (o.config.packets && bvh::resolve(o.config.isa) == bvh::TraceIsa::Sse2)
                         throw UsageError("--packets", o.config.isa == bvh::TraceIsa::Sse2
-                                                          ? "our packet path needs avx2 or avx512 (--isa sse2 traces single rays)"
+                                                          ? "our packet path needs avx2, avx512vl or avx512 (--isa sse2 traces single rays)"
                                                           : "our packet path needs AVX2, which this CPU does not have");
                       if (a->app->count("--frames")) o.frames = a->frames;
                       o.input = a->scene.input;
@@ -71,7 +71,7 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->needs(packets)
       ->capture_default_str();
   c->add_option("--isa", a->isa,
-                "our tracer's instruction set: auto (avx512 on AMD CPUs with AVX-512, else the widest up to avx2), sse2, avx2 or avx512 (the same hits "
+                "our tracer's instruction set: auto (with AVX-512: avx512 on AMD CPUs, avx512vl on others; else the widest up to avx2), sse2, avx2, avx512vl (AVX2's 256-bit code in AVX-512's encoding) or avx512 (the same hits "
                 "and counters; Embree keeps its own)")
       ->check(enum_validator("instruction set", bvh::parse_trace_isa))
       ->capture_default_str();

@@ -444,9 +444,9 @@ TEST_F(Cli, ClusteringAndTracerInstructionSetsAreRecorded) {
   ASSERT_EQ(r.code, 0) << r.err;
   const auto machine = nlohmann::json::parse(slurp(dir_ / "isa" / "manifest.json"))["machine"];
   EXPECT_EQ(machine["clustering_isa"].get<std::string>(), std::string(v3 ? "x86-64-v3" : "x86-64"));
-  // And the tracer's default variant (bvh/tracer.h): avx512 on an AMD CPU (vendor string
-  // "AuthenticAMD") with AVX-512 F, DQ, BW and VL and the OS saving the opmask and ZMM state, else
-  // avx2 with AVX2 and the YMM state, else sse2.
+  // And the tracer's default variant (bvh/tracer.h): with AVX-512 F, DQ, BW and VL and the OS
+  // saving the opmask and ZMM state, avx512 on an AMD CPU (vendor string "AuthenticAMD") and
+  // avx512vl on others; else avx2 with AVX2 and the YMM state, else sse2.
   bool avx2 = bit(c1, 27) && bit(c1, 28) && leaf7 && bit(b7, 5);
   unsigned xlo = 0, xhi = 0;
   if (avx2) __asm__("xgetbv" : "=a"(xlo), "=d"(xhi) : "c"(0));
@@ -456,7 +456,7 @@ TEST_F(Cli, ClusteringAndTracerInstructionSetsAreRecorded) {
   ASSERT_TRUE(__get_cpuid(0, &v0, &vb, &vc, &vd));
   const bool amd = vb == 0x68747541u && vd == 0x69746e65u && vc == 0x444d4163u;  // "Auth" "enti" "cAMD"
   EXPECT_EQ(machine["trace_isa"].get<std::string>(),
-            std::string(avx512 && amd ? "avx512" : avx2 ? "avx2" : "sse2"));
+            std::string(avx512 ? (amd ? "avx512" : "avx512vl") : avx2 ? "avx2" : "sse2"));
 }
 
 TEST_F(Cli, MallocOnHugePagesIsRecordedAndCanBeTurnedOff) {

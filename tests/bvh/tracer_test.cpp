@@ -185,7 +185,7 @@ TEST_P(TracerKinds, RandomRaysMatchBruteForceRayByRay) {
     expect_same(got, want, std::string(name(GetParam())) + " ray " + std::to_string(i));
     EXPECT_GT(got.nodes_visited, 0u);
     // Every instruction-set variant, forced: the same hit and the same counters.
-    for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512}) {
+    for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512Vl, TraceIsa::Avx512}) {
       const Hit h = trace_ray(s.data(), rays.org[i], rays.dir[i], HitMode::Closest, 0.0f, kInf, isa);
       expect_same(h, want, std::string(to_string(isa)) + " ray " + std::to_string(i));
       ASSERT_EQ(h.nodes_visited, got.nodes_visited);
@@ -294,7 +294,7 @@ TEST_P(TracerKinds, BatchSetUpRefusesWhatTheRaySetUpRefuses) {
   RayBatch rays;
   rays.resize(org.size());
   for (std::size_t i = 0; i < org.size(); ++i) rays.set(i, org[i], dir[i], t0[i], t1[i]);
-  for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512})
+  for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512Vl, TraceIsa::Avx512})
     for (HitMode mode : {HitMode::Closest, HitMode::Any}) {
       HitBatch h;
       TraceOptions opt;
@@ -388,15 +388,18 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
         ASSERT_TRUE(h && h->t == packed.t[i]) << what;
       }
       EXPECT_EQ(nodes, tp.nodes_visited);
-      // The packet path of the AVX2 and the AVX-512 variants: the same batch, field by field (on a
-      // CPU without AVX-512 both requests run the AVX2 code).
-      HitBatch p2, p512;
+      // The packet path of the AVX2, AVX-512VL and AVX-512 variants: the same batch, field by field
+      // (on a CPU without AVX-512 all three requests run the AVX2 code).
+      HitBatch p2, p512, p512vl;
       opt.isa = TraceIsa::Avx2;
       const TraceTotals t2 = trace(s.data(), rays, p2, opt);
       opt.isa = TraceIsa::Avx512;
       const TraceTotals t512 = trace(s.data(), rays, p512, opt);
+      opt.isa = TraceIsa::Avx512Vl;
+      const TraceTotals t512vl = trace(s.data(), rays, p512vl, opt);
       EXPECT_EQ(t2.hits, tp.hits);
       expect_same_batch(p512, t512, p2, t2, "avx512 packets against avx2 packets");
+      expect_same_batch(p512vl, t512vl, p2, t2, "avx512vl packets against avx2 packets");
     }
   }
 }

@@ -206,7 +206,9 @@ TEST(WideBvh8, RegroupKeepsLeavesAndBoxes) {
         int inner_live = 0;
         for (int j = 0; j < 8; ++j) inner_live += !w8.nodes[n.child[k]].is_empty(j);
         // an 8-wide child made from one 4-wide node that would have fitted here
-        if (inner_live <= 4) EXPECT_GT(live - 1 + inner_live, 8);
+        if (inner_live <= 4) {
+          EXPECT_GT(live - 1 + inner_live, 8);
+        }
       }
     }
   }
