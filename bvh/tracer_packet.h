@@ -1,8 +1,8 @@
 // Internal: the tracer's packet path (TraceOptions::packets, tracer.h), included by
-// tracer_avx2.cpp and tracer_avx512.cpp after tracer_kernel.h (it reuses that kernel's leaf tests
-// and result store), so it exists in those variants only; with SSE2 packets fall back to single
-// rays. The AVX-512 variant is this AVX2 code compiled with AVX-512 enabled, whose per-lane leaf
-// tests take 16 triangles at a time.
+// tracer_avx2.cpp, tracer_avx512vl.cpp and tracer_avx512.cpp after tracer_kernel.h (it reuses
+// that kernel's leaf tests and result store), so it exists in those variants only; with SSE2
+// packets fall back to single rays. The AVX-512VL variant is this AVX2 code compiled for AVX-512
+// on 256-bit vectors; the AVX-512 variant the same with per-lane leaf tests of 16 triangles.
 //
 // Eight consecutive rays of the batch make a packet, one ray per AVX2 lane. The single-ray
 // set-up (validity, trace frame, reciprocals) runs for the eight at once, and so do the
@@ -30,7 +30,7 @@
 #pragma once
 
 #if !defined(PTC_TRACE_AVX2)
-#error "bvh/tracer_packet.h belongs to the AVX2 and AVX-512 variants (tracer_avx2.cpp, tracer_avx512.cpp)"
+#error "bvh/tracer_packet.h belongs to the AVX2 and AVX-512 variants (tracer_avx2.cpp, tracer_avx512vl.cpp, tracer_avx512.cpp)"
 #endif
 
 namespace ptc::bvh::detail::PTC_TRACE_NS {
@@ -314,9 +314,12 @@ void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, P
       unsigned any = 0;
 #pragma GCC unroll 8
       for (int c = 0; c < 8; ++c) {
-        // The single-ray kernel's operations and operand order (its comment explains the NaN rule).
-        // (o - b) * -inv: the same bits as (b - o) * inv (rounding is symmetric in sign), with the
-        // plane as the second operand (one instruction with an embedded broadcast on AVX-512VL).
+        // The single-ray kernel's operations (its comment explains the NaN rule), each slab
+        // distance as (o - b) * -inv: the same value as its (b - o) * inv, rounding to nearest being
+        // symmetric in sign, and NaN in the same cases (0 * inf). Only a zero's sign may differ;
+        // the distances are only compared (and ordered), where the two zeros are equal, so every
+        // lane enters the same boxes in the same order. The plane is the second operand, which
+        // AVX-512VL takes from memory with an embedded broadcast (one instruction instead of two).
         const __m256 tnx = _mm256_mul_ps(_mm256_sub_ps(g.ox, _mm256_broadcast_ss(b + g.nx + c)), g.ninx);
         const __m256 tny = _mm256_mul_ps(_mm256_sub_ps(g.oy, _mm256_broadcast_ss(b + g.ny + c)), g.niny);
         const __m256 tnz = _mm256_mul_ps(_mm256_sub_ps(g.oz, _mm256_broadcast_ss(b + g.nz + c)), g.ninz);
