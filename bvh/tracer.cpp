@@ -47,8 +47,8 @@ TraceIsa resolve(TraceIsa isa) {
   // Auto takes the 512-bit variant on AMD CPUs only: on the Zen 5 host it was the faster one, on
   // the Intel Xeon host (AVX-512 FP16, AMX) of 2026-12-05 the 256-bit ones were faster by 3-11%
   // per frame, single rays and packets alike (docs/tracing.md, "The machine changed"). There the
-  // AVX-512VL variant (256-bit, EVEX) beat the AVX2 one by 1-3% (docs/tracing.md, "The AVX-512VL
-  // variant").
+  // AVX-512VL variant (256-bit, EVEX) gave 0-8% faster whole frames than the AVX2 one at one
+  // thread, packets on both sides (docs/tracing.md, "The AVX-512VL variant").
   static const bool amd = __builtin_cpu_is("amd");
   if (isa == TraceIsa::Sse2) return TraceIsa::Sse2;
   if (has_avx512) {

@@ -45,10 +45,10 @@ struct alignas(32) PacketEntry {
   std::uint32_t mask;   // lanes that entered the box
 };
 
-// The slab-test constants of one octant group, one ray per lane.
+// The slab-test constants of one octant group, one ray per lane: the single-ray kernel's
+// 1/d x kNearScale and 1/d x kFarScale negated (the node test computes (o - b) * -inv).
 struct PacketGroup {
-  __m256 ox, oy, oz, inx, iny, inz, ifx, ify, ifz, tmin;
-  __m256 ninx, niny, ninz, nifx, nify, nifz;  // the same negated
+  __m256 ox, oy, oz, ninx, niny, ninz, nifx, nify, nifz, tmin;
   std::ptrdiff_t nx, ny, nz, fx, fy, fz;
 };
 
@@ -440,11 +440,10 @@ void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBa
   const __m256 ns = _mm256_set1_ps(kNearScale), fs = _mm256_set1_ps(kFarScale);
   PacketGroup g;
   g.ox = ox, g.oy = oy, g.oz = oz, g.tmin = t0;
-  g.inx = _mm256_mul_ps(ix, ns), g.iny = _mm256_mul_ps(iy, ns), g.inz = _mm256_mul_ps(iz, ns);
-  g.ifx = _mm256_mul_ps(ix, fs), g.ify = _mm256_mul_ps(iy, fs), g.ifz = _mm256_mul_ps(iz, fs);
-  const __m256 sgn = _mm256_set1_ps(-0.0f);
-  g.ninx = _mm256_xor_ps(g.inx, sgn), g.niny = _mm256_xor_ps(g.iny, sgn), g.ninz = _mm256_xor_ps(g.inz, sgn);
-  g.nifx = _mm256_xor_ps(g.ifx, sgn), g.nify = _mm256_xor_ps(g.ify, sgn), g.nifz = _mm256_xor_ps(g.ifz, sgn);
+  const __m256 sgn = _mm256_set1_ps(-0.0f);  // (the products' sign flipped: exact)
+  auto neg = [&](__m256 x) { return _mm256_xor_ps(x, sgn); };
+  g.ninx = neg(_mm256_mul_ps(ix, ns)), g.niny = neg(_mm256_mul_ps(iy, ns)), g.ninz = neg(_mm256_mul_ps(iz, ns));
+  g.nifx = neg(_mm256_mul_ps(ix, fs)), g.nify = neg(_mm256_mul_ps(iy, fs)), g.nifz = neg(_mm256_mul_ps(iz, fs));
 
   Packet p;
   p.nodes = _mm256_setzero_si256();

@@ -31,6 +31,8 @@
 #include <string>
 #include <vector>
 
+#include "probe_input.h"
+
 namespace {
 using u32 = std::uint32_t;
 double now_ms() {
@@ -48,41 +50,12 @@ struct alignas(16) Block { float v[3][3][4]; };
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 3) {
-    std::fprintf(stderr, "usage: %s MESH.ply TRIANGLES.csv\n", argv[0]);
-    return 2;
-  }
-  FILE* f = std::fopen(argv[1], "rb");
-  if (!f) return std::fprintf(stderr, "%s: cannot open\n", argv[1]), 1;
-  char line[256];
-  std::size_t V = 0, T = 0;
-  while (std::fgets(line, sizeof line, f)) {
-    if (std::sscanf(line, "element vertex %zu", &V) == 1 || std::sscanf(line, "element face %zu", &T) == 1) continue;
-    if (!std::strncmp(line, "end_header", 10)) break;
-  }
-  std::vector<double> P(3 * V);
-  std::vector<u32> tri(3 * T);
-  bool ok = std::fread(P.data(), 8, 3 * V, f) == 3 * V;
-  for (std::size_t t = 0; ok && t < T; ++t) {
-    unsigned char n = 0;
-    int x[3];
-    ok = std::fread(&n, 1, 1, f) == 1 && n == 3 && std::fread(x, 4, 3, f) == 3;
-    for (int k = 0; k < 3; ++k) tri[3 * t + k] = static_cast<u32>(x[k]);
-  }
-  std::fclose(f);
-  if (!ok) return std::fprintf(stderr, "%s: not a binary PLY of double positions and triangles\n", argv[1]), 1;
-  std::ifstream lf(argv[2]);
-  std::string s;
-  std::getline(lf, s);  // header
-  std::vector<u32> label(T, 0);
-  u32 C = 0;
-  while (std::getline(lf, s)) {
-    u32 a = 0, b = 0;
-    if (std::sscanf(s.c_str(), "%u,%u", &a, &b) != 2 || a >= T) return std::fprintf(stderr, "%s: bad row\n", argv[2]), 1;
-    label[a] = b, C = std::max(C, b + 1);
-  }
-  std::vector<std::vector<u32>> cl(C);
-  for (u32 t = 0; t < T; ++t) cl[label[t]].push_back(t);
+  probe::Input input = probe::read_input(argc, argv);
+  const std::size_t V = input.V, T = input.T;
+  const std::vector<double>& P = input.P;
+  std::vector<u32>& tri = input.tri;
+  const u32 C = input.C;
+  const std::vector<std::vector<u32>>& cl = input.clusters;
 
   // Groups: at most 16 triangles and 16 distinct vertices; unused slots repeat the first vertex.
   std::vector<u32> gverts, coff{0};

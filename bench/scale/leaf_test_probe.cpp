@@ -4,8 +4,8 @@
 // build; compile it once per instruction set and run both on the same inputs (a binary PLY of
 // double positions from `ptc subdivide`, `triangles.csv` from `ptc cluster`):
 //     g++ -O2 -ffp-contract=off -mavx2 bench/scale/leaf_test_probe.cpp -o /tmp/ltp_avx2
-//     g++ -O2 -ffp-contract=off -mavx2 -mavx512f -mavx512vl -mavx512bw -mavx512dq -mprefer-vector-width=256 \
-//         bench/scale/leaf_test_probe.cpp -o /tmp/ltp_vl
+//     g++ -O2 -ffp-contract=off -mavx2 -mavx512f -mavx512vl -mavx512bw -mavx512dq
+//         -mprefer-vector-width=256 bench/scale/leaf_test_probe.cpp -o /tmp/ltp_vl
 //     /tmp/ltp_avx2 a2.ply D/triangles.csv; /tmp/ltp_vl a2.ply D/triangles.csv
 // Groups as in leaf_tables_probe.cpp (each cluster's triangles greedily into groups of at most 16
 // triangles on at most 16 distinct vertices). Per group, both layouts hold the same 16 triangle
@@ -34,6 +34,8 @@
 #include <random>
 #include <string>
 #include <vector>
+
+#include "probe_input.h"
 
 namespace {
 using u32 = std::uint32_t;
@@ -132,41 +134,12 @@ inline int pair_table(const Table& tb, const Idx& ix, int h, const Consts& c, __
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 3) {
-    std::fprintf(stderr, "usage: %s MESH.ply TRIANGLES.csv\n", argv[0]);
-    return 2;
-  }
-  FILE* f = std::fopen(argv[1], "rb");
-  if (!f) return std::fprintf(stderr, "%s: cannot open\n", argv[1]), 1;
-  char line[256];
-  std::size_t V = 0, T = 0;
-  while (std::fgets(line, sizeof line, f)) {
-    if (std::sscanf(line, "element vertex %zu", &V) == 1 || std::sscanf(line, "element face %zu", &T) == 1) continue;
-    if (!std::strncmp(line, "end_header", 10)) break;
-  }
-  std::vector<double> P(3 * V);
-  std::vector<u32> tri(3 * T);
-  bool ok = std::fread(P.data(), 8, 3 * V, f) == 3 * V;
-  for (std::size_t t = 0; ok && t < T; ++t) {
-    unsigned char n = 0;
-    int x[3];
-    ok = std::fread(&n, 1, 1, f) == 1 && n == 3 && std::fread(x, 4, 3, f) == 3;
-    for (int k = 0; k < 3; ++k) tri[3 * t + k] = static_cast<u32>(x[k]);
-  }
-  std::fclose(f);
-  if (!ok) return std::fprintf(stderr, "%s: not a binary PLY of double positions and triangles\n", argv[1]), 1;
-  std::ifstream lf(argv[2]);
-  std::string s;
-  std::getline(lf, s);  // header
-  std::vector<u32> label(T, 0);
-  u32 C = 0;
-  while (std::getline(lf, s)) {
-    u32 a = 0, b = 0;
-    if (std::sscanf(s.c_str(), "%u,%u", &a, &b) != 2 || a >= T) return std::fprintf(stderr, "%s: bad row\n", argv[2]), 1;
-    label[a] = b, C = std::max(C, b + 1);
-  }
-  std::vector<std::vector<u32>> cl(C);
-  for (u32 t = 0; t < T; ++t) cl[label[t]].push_back(t);
+  probe::Input input = probe::read_input(argc, argv);
+  const std::size_t V = input.V, T = input.T;
+  const std::vector<double>& P = input.P;
+  std::vector<u32>& tri = input.tri;
+  const u32 C = input.C;
+  const std::vector<std::vector<u32>>& cl = input.clusters;
   // Float positions (centred, as the trace frame).
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (std::size_t v = 0; v < V; ++v)
