@@ -567,6 +567,7 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
       for (int l = 0; l < 4; ++l)
         for (int c = 0; c < 3; ++c) corners_[12 * b + 4 * c + l] = corner(lane_ids[4 * b + l], c);
   });
+  lists_are_corners_ = runs_ && lists_are_corners(mesh.vertex_count(), lane_ids);
   if (runs_) {
     vorder_ = {};
     f_.fpos.resize(mesh.vertex_count());
@@ -574,6 +575,32 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
   } else {
     release(vorder_.to_new);  // only needed for the corners
   }
+}
+
+// Whether every cluster's vertex list (vertices_, the mesh's numbering) holds exactly the corners of
+// its triangles (the lanes of its blocks), as a Clustering's lists and the corner lists made
+// without them do: then boxes over the blocks' corners are the lists' boxes, bit for bit. A
+// stamp per vertex: 2c for cluster c's list, 2c + 1 once a corner of c was seen there.
+bool ClusterScene::lists_are_corners(std::size_t vertex_count, std::span<const std::uint32_t> lane_ids) const {
+  const std::span<const Tri> tris = triangles();
+  const std::size_t C = cluster_ranges_.size();
+  if (C >= (std::size_t{1} << 31)) return false;
+  std::vector<std::uint32_t> stamp(vertex_count, ~0u);
+  for (std::size_t c = 0; c < C; ++c) {
+    const auto s = static_cast<std::uint32_t>(2 * c);
+    for (std::uint32_t i = vertex_offsets_[c]; i < vertex_offsets_[c + 1]; ++i) stamp[vertices_[i]] = s;
+    const LeafRange& r = cluster_ranges_[c];
+    for (std::size_t l = 4 * std::size_t{r.first_block}; l < 4 * (std::size_t{r.first_block} + r.block_count); ++l) {
+      if (lane_ids[l] == kNoTriangle) continue;
+      for (const std::uint32_t v : tris[lane_ids[l]]) {
+        if ((stamp[v] | 1u) != s + 1) return false;  // a corner not in the list
+        stamp[v] = s + 1;
+      }
+    }
+    for (std::uint32_t i = vertex_offsets_[c]; i < vertex_offsets_[c + 1]; ++i)
+      if (stamp[vertices_[i]] != s + 1) return false;  // a listed vertex that is no corner
+  }
+  return true;
 }
 
 void ClusterScene::refit_subtrees() {
@@ -603,6 +630,15 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     throw std::invalid_argument("ClusterScene::update: " + std::to_string(positions.size()) + " positions for " +
                                 std::to_string(V) + " vertices");
   double t0 = clock_ms(cfg_.clock);
+  if (runs_ && lists_are_corners_ && !overlap_possible()) {
+    // One thread: the conversion streams over the input (f_.fpos keeps its size and sentinels),
+    // and the fill, which reads every corner anyway, takes the cluster boxes (build_frame).
+    frame_positions_streamed(positions, data.frame(), std::span<Vec3f>(f_.fpos.data(), V));
+    times.vertices_ms = clock_ms(cfg_.clock) - t0;
+    times.boxes_ms = 0.0;
+    build_frame(true);
+    return;
+  }
   if (runs_) {  // one pass: conversion and boxes (f_.fpos keeps its size and sentinels)
     frame_positions_and_boxes(positions, data.frame(), *runs_, std::span<Vec3f>(f_.fpos.data(), V), f_.boxes,
                               f_.centroids);
@@ -621,10 +657,18 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   build_frame();
 }
 
+// Whether build_frame can write the leaf data beside the tree: more than one thread, wall-clock
+// stage times (each stage's own time is then wall time too).
+bool ClusterScene::overlap_possible() const {
+  return cfg_.clock == StageClock::Wall &&
+         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1 &&
+         tbb::this_task_arena::max_concurrency() > 1;
+}
+
 // The frame after its cluster boxes (f_.boxes, f_.centroids) and frame positions (f_.fpos, then
 // add_sentinel's two entries): the leaf data, the tree over the clusters or groups, the link and
 // the refit of the fixed subtrees.
-void ClusterScene::build_frame() {
+void ClusterScene::build_frame(bool boxes_from_fill) {
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
 
@@ -661,10 +705,21 @@ void ClusterScene::build_frame() {
     times.collapse_ms = clock_ms(cfg_.clock) - tb;
   };
   times.overlap_ms = 0.0;
-  const bool overlap = cfg_.clock == StageClock::Wall &&
-                       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1 &&
-                       tbb::this_task_arena::max_concurrency() > 1;
-  if (overlap) {
+  if (boxes_from_fill) {  // the tree needs the boxes the fill makes: the fill first, then the tree
+    const double tl = clock_ms(cfg_.clock);
+    block_boxes_.resize(B ? data.blocks.size() : 0);
+    f_.boxes.resize(weights_.size());
+    f_.centroids.resize(weights_.size());
+    fill_blocks_and_cluster_boxes(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr,
+                                  cluster_ranges_, f_.boxes.data(), f_.centroids.data());  // fenced
+    times.leaf_data_ms = clock_ms(cfg_.clock) - tl;
+    tree();
+    const double t0 = clock_ms(cfg_.clock);
+    if (B) refit_subtrees();
+    times.refit_ms = clock_ms(cfg_.clock) - t0;
+    return;
+  }
+  if (overlap_possible()) {
     const double t0 = clock_ms(cfg_.clock);
     tbb::task_group tg;
     tg.run(leaf_data);

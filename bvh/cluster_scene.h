@@ -88,10 +88,15 @@ class ClusterScene {
   /// [0, subtree_nodes()) of data().wide.nodes; only their boxes change per frame.
   [[nodiscard]] std::size_t subtree_nodes() const { return sub_count_; }
   /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with
-  /// cluster_vertex_order()): the conversion is then fused into the box stage (StageTimes::
-  /// vertices_ms = 0, boxes_ms = both) and reads the input once, in order; otherwise the
-  /// conversion gathers the positions in that order (vertices_ms) before the boxes. False for a
-  /// scene built once (SceneConfig::built_once), which has no per-frame pass.
+  /// cluster_vertex_order()): the conversion then reads the input once, in order. On more than
+  /// one thread it is fused into the box stage (StageTimes::vertices_ms = 0, boxes_ms = both) and
+  /// the blocks are filled beside the tree's build; on one thread (and clusters whose vertex
+  /// lists are their triangles' corners, as a Clustering's are) it streams alone (vertices_ms)
+  /// and the fill of the blocks takes the cluster boxes from the corners it writes (boxes_ms =
+  /// 0, leaf_data_ms = both): the same boxes, bit for bit, without a second read of the
+  /// vertices the clusters share. Otherwise the conversion gathers the positions in that order
+  /// (vertices_ms) before the boxes. False for a scene built once (SceneConfig::built_once),
+  /// which has no per-frame pass.
   [[nodiscard]] bool fused_vertex_pass() const { return runs_.has_value(); }
 
  private:
@@ -100,7 +105,11 @@ class ClusterScene {
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
   void rest_boxes();
   void only_frame();
-  void build_frame();
+  /// boxes_from_fill: the cluster boxes are made by the fill of the blocks (update() on one
+  /// thread), which then runs before the tree instead of beside it.
+  void build_frame(bool boxes_from_fill = false);
+  [[nodiscard]] bool overlap_possible() const;
+  [[nodiscard]] bool lists_are_corners(std::size_t vertex_count, std::span<const std::uint32_t> lane_ids) const;
   [[nodiscard]] std::span<const Tri> triangles() const {
     return tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
   }
@@ -160,6 +169,7 @@ class ClusterScene {
   std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill (none kept when built once)
   GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)
   std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): f_.fpos in input order
+  bool lists_are_corners_ = false;  // fused mode: the clusters' vertex lists are their corners (lists_are_corners)
   AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel)
   SceneFrame f_;
 };

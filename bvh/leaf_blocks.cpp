@@ -1,5 +1,7 @@
 #include "bvh/leaf_blocks.h"
 
+#include "bvh/box_simd.h"
+
 #include <emmintrin.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,11 +14,14 @@ namespace {
 
 // The fills' chunks (fill_in_chunks).
 constexpr std::size_t kBlocksPerTask = 8192;  // 1.2 MB of blocks
+constexpr std::size_t kClustersPerTask = 1024;  // (fill_blocks_and_cluster_boxes) about 8k blocks
 
 // One block from its corner vertex indices v[corner][lane]: corners gathered with one 16-byte
 // load per vertex and transposed to SoA. When `box` is given it receives the block's exact
 // float box (NaN lanes ignored: _mm_min_ps(x, acc) returns acc for a NaN x).
-inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, TriBlock& out, Box3f* box) {
+// The rows' min and max are also taken into acc_lo / acc_hi (x y z rows of four lanes) when given.
+inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, TriBlock& out, Box3f* box,
+                               __m128* acc_lo = nullptr, __m128* acc_hi = nullptr) {
   __m128 lo[3], hi[3];
   for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
   for (int c = 0; c < 3; ++c) {
@@ -29,6 +34,10 @@ inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, 
     if (box) {
       lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
       hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
+    }
+    if (acc_lo) {
+      acc_lo[0] = _mm_min_ps(r0, acc_lo[0]), acc_lo[1] = _mm_min_ps(r1, acc_lo[1]), acc_lo[2] = _mm_min_ps(r2, acc_lo[2]);
+      acc_hi[0] = _mm_max_ps(r0, acc_hi[0]), acc_hi[1] = _mm_max_ps(r1, acc_hi[1]), acc_hi[2] = _mm_max_ps(r2, acc_hi[2]);
     }
   }
   if (box) {
@@ -90,6 +99,36 @@ void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const floa
   fill_in_chunks(blocks.size(), [&](std::size_t b) {
     fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
                        boxes ? boxes + b : nullptr);
+  });
+}
+
+void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
+                                   Box3f* block_boxes, std::span<const LeafRange> ranges, Box3f* cluster_boxes,
+                                   Vec3f* centres) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ranges.size(), kClustersPerTask),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t c = r.begin(); c < r.end(); ++c) {
+      __m128 lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
+      const LeafRange lr = ranges[c];
+      for (std::size_t b = lr.first_block; b < std::size_t{lr.first_block} + lr.block_count; ++b)
+        fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
+                           block_boxes ? block_boxes + b : nullptr, lo, hi);
+      // The four lanes' minima and maxima folded into one (x y z .) row each.
+      __m128 l = _mm_unpacklo_ps(lo[0], lo[1]), l2 = _mm_unpackhi_ps(lo[0], lo[1]);
+      __m128 h = _mm_unpacklo_ps(hi[0], hi[1]), h2 = _mm_unpackhi_ps(hi[0], hi[1]);
+      // lanes: l = (x0 y0 x1 y1), l2 = (x2 y2 x3 y3)
+      __m128 lxy = _mm_min_ps(l, l2);                       // (x02 y02 x13 y13)
+      lxy = _mm_min_ps(lxy, _mm_movehl_ps(lxy, lxy));       // (x y . .)
+      __m128 hxy = _mm_max_ps(h, h2);
+      hxy = _mm_max_ps(hxy, _mm_movehl_ps(hxy, hxy));
+      __m128 lz = _mm_min_ps(lo[2], _mm_movehl_ps(lo[2], lo[2]));
+      lz = _mm_min_ss(lz, _mm_shuffle_ps(lz, lz, 1));
+      __m128 hz = _mm_max_ps(hi[2], _mm_movehl_ps(hi[2], hi[2]));
+      hz = _mm_max_ss(hz, _mm_shuffle_ps(hz, hz, 1));
+      simd::store_widened(_mm_movelh_ps(lxy, lz), _mm_movelh_ps(hxy, hz), cluster_boxes[c], centres[c]);
+    }
+    _mm_sfence();
   });
 }
 

@@ -34,6 +34,16 @@ void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> t
 void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* frame_pos, std::span<TriBlock> blocks,
                               Box3f* boxes);
 
+/// fill_blocks_from_corners, cluster by cluster: cluster c's blocks are ranges[c] (consecutive,
+/// first_block .. + block_count), and cluster_boxes[c] / centres[c] receive the box of all its
+/// blocks' corners widened one unit in the last place and its centre: bit for bit
+/// point_group_boxes over the clusters' corner vertices (padding lanes ignored). block_boxes:
+/// null or one entry per block, as in fill_blocks_from_corners. Chunks of clusters run on the
+/// caller's threads; the same bytes at any count.
+void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const float* frame_pos,
+                                   std::span<TriBlock> blocks, Box3f* block_boxes, std::span<const LeafRange> ranges,
+                                   Box3f* cluster_boxes, Vec3f* centres);
+
 /// The same blocks and boxes from the lanes' triangle ids (lane_ids[4 b + l], kNoTriangle for
 /// padding) and the triangles' corners, for a scene filled once (no corner indices kept).
 void fill_blocks_from_lanes(std::span<const std::uint32_t> lane_ids, std::span<const Tri> triangles,

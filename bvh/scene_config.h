@@ -16,11 +16,16 @@ namespace ptc::bvh {
 
 /// Times of the last update's stages, milliseconds (wall-clock unless SceneConfig::clock says otherwise).
 struct StageTimes {
-  double vertices_ms = 0;   ///< positions into the trace frame (float); 0 when fused into boxes_ms
-  double boxes_ms = 0;      ///< primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion)
+  /// positions into the trace frame (float); 0 when fused into boxes_ms
+  double vertices_ms = 0;
+  /// primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion, on
+  /// more than one thread); 0 when the fill of the blocks makes them (leaf_data_ms)
+  double boxes_ms = 0;
   double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder; GroupTrees::Refit: and the groups' refit)
   double collapse_ms = 0;   ///< binary -> 4-wide, (clusters) linking, and the 8-wide regroup (regroup_to_8)
-  double leaf_data_ms = 0;  ///< SoA triangle blocks
+  /// SoA triangle blocks (ClusterScene::fused_vertex_pass() on one thread: and the cluster boxes,
+  /// taken from the blocks' corners as they are written)
+  double leaf_data_ms = 0;
   double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees
   /// Time during which two of the stages above ran at once (a ClusterScene on more than one
   /// thread writes the leaf data while it builds and links the tree); 0 otherwise.

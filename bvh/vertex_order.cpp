@@ -27,6 +27,8 @@ namespace {
 
 /// Groups (clusters) per task of the fused per-frame pass: about 60k vertices, 0.1-0.2 ms of work.
 constexpr std::size_t kGroupsPerTask = 2048;
+/// Vertices per task of the streamed conversion (frame_positions_streamed): 1.5 MB of input.
+constexpr std::size_t kVerticesPerTask = 65536;
 
 // Four vertices as 48 contiguous bytes in three registers, lanes (x y z x)(y z x y)(z x y z),
 // reduced per register by `op` (min or max) and folded back to one (x y z .) row: a, (a3 b0 b1),
@@ -289,6 +291,28 @@ OwnRangeFn pick_own_range() {
 }
 
 }  // namespace
+
+void frame_positions_streamed(std::span<const Vec3> positions, const FrameMap& frame, std::span<Vec3f> out_pos,
+                              bool allow_avx2) {
+  static const OwnRangeFn best = pick_own_range();
+  const OwnRangeFn own_range = allow_avx2 ? best : &own_range_sse2;
+  if (out_pos.size() < positions.size())
+    throw std::invalid_argument("frame_positions_streamed: " + std::to_string(positions.size()) + " positions for " +
+                                std::to_string(out_pos.size()) + " outputs");
+  const std::size_t V = positions.size();
+  if (V == 0) return;
+  const double* in = positions[0].data();
+  float* base = out_pos[0].data();
+  std::atomic<bool> any_bad{false};
+  // Chunks of vertices on the caller's threads; each value is converted alone, so the same bits
+  // at any count. (The min / max the range function takes is not used here.)
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, V, kVerticesPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+    __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf), bad = _mm_setzero_ps();
+    own_range(in + 3 * r.begin(), base + 3 * r.begin(), static_cast<std::uint32_t>(r.size()), frame, lo, hi, bad);
+    if (_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7) any_bad.store(true, std::memory_order_relaxed);
+  });
+  if (any_bad.load()) throw_not_finite(positions, frame);
+}
 
 void frame_positions_and_boxes(std::span<const Vec3> positions, const FrameMap& frame, const GroupRuns& runs,
                                std::span<Vec3f> out_pos, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers,

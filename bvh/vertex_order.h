@@ -79,6 +79,13 @@ struct GroupRuns {
                                                               std::span<const std::uint32_t> indices,
                                                               std::span<const std::size_t> part_offsets = {});
 
+/// out_pos[v] = to_frame(positions[v], frame) for every vertex v (out_pos.size() >= positions.size(),
+/// else std::invalid_argument), in one streaming pass (AVX2 when allow_avx2 and the CPU has it;
+/// the same bits either way); a position that is not finite in the trace frame throws
+/// std::invalid_argument (check_finite's message) after the pass.
+void frame_positions_streamed(std::span<const Vec3> positions, const FrameMap& frame, std::span<Vec3f> out_pos,
+                              bool allow_avx2 = true);
+
 /// One pass per frame: out_pos[v] = to_frame(positions[v], origin) for every input vertex v
 /// (positions.size() == runs.vertex_count <= out_pos.size(), else std::invalid_argument; entries
 /// past it are not touched), and the boxes and

@@ -14,7 +14,7 @@ lot; the table gives, per scene and thread count, the median over the repeats of
 configuration's whole frame (each run's own median over frames 1..B) and the ratios of those
 medians, plus the smallest and largest ratio of single runs. With more than one thread count, a
 second table says how each stage scales: per scene and configuration, the median over the
-repeats of every stage (update + build and, for ours_clusters, its boxes, SAH build, collapse +
+repeats of every stage (update + build and, for ours_clusters, its conversion, boxes, SAH build, collapse +
 link, leaf data and the time two of them overlapped; primary rays, shadow rays, the whole frame)
 at the first thread count and at each other one, and the speed-up between them. Writes
 DIR/runs.csv (one row per run and configuration, the stages as each run's bench.csv medians over
@@ -41,7 +41,7 @@ def usage(msg):
     sys.exit(2)
 
 
-STAGES = ("boxes_ms", "sah_build_ms", "collapse_ms", "leaf_data_ms", "overlap_ms")
+STAGES = ("vertices_ms", "boxes_ms", "sah_build_ms", "collapse_ms", "leaf_data_ms", "overlap_ms")
 MEASURES = ("update_build_ms",) + STAGES + ("trace_ms", "shadow_ms", "whole_frame_ms")
 
 

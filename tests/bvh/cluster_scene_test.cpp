@@ -93,29 +93,51 @@ using test::expect_same_data;
 // flat data must be the same bytes at 1, 2 and 4 threads, frame after frame, and the stage times
 // must add up to no more than the update's wall time (overlap_ms = what two stages shared; 0 on
 // one thread).
+// Both per-frame passes: the gather (the file's vertex order) and, on a mesh renumbered with
+// cluster_vertex_order, the streamed one, whose fill makes the cluster boxes on one thread while
+// more threads fuse the boxes into the conversion and fill the blocks beside the tree: the same
+// bytes and boxes either way.
 TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
   const Mesh m = test::load_mesh("armadillo.off");  // 13k blocks: more than one fill chunk
   const Clustering runs = ptc::morton_runs(m, 37);
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, cluster_scene_defaults());
+  const Mesh rm = renumber_vertices(m, to_old);
+  const Clustering rruns = renumber_vertices(runs, inverse_permutation(to_old));
   const std::vector<Mesh> frames{test::deformed(m, 0.02), test::deformed(m, 0.06)};
+  for (const bool renumbered : {false, true})
   for (GroupTrees trees : {GroupTrees::Rebuild, GroupTrees::Refit})
   for (ClusterLeaf leaf : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
     std::vector<TraceData> want;
+    std::vector<std::vector<Box3f>> want_boxes;
     for (int threads : {1, 2, 4}) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
       SceneConfig cfg = cluster_scene_defaults();
       cfg.cluster_leaf = leaf;
       cfg.group_trees = trees;
-      ClusterScene s(m, view_of(runs), cfg);
+      ClusterScene s(renumbered ? rm : m, view_of(renumbered ? rruns : runs), cfg);
+      ASSERT_EQ(s.fused_vertex_pass(), renumbered);
       for (std::size_t f = 0; f < frames.size(); ++f) {
         const auto t0 = std::chrono::steady_clock::now();
-        s.update(frames[f].positions());
+        s.update(renumbered ? renumber_vertices(frames[f], to_old).positions() : frames[f].positions());
         const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        const std::string what = std::string(to_string(leaf)) + " " + to_string(trees) + " threads " +
-                                 std::to_string(threads) + " frame " + std::to_string(f);
+        const std::string what = std::string(renumbered ? "renumbered " : "") + to_string(leaf) + " " +
+                                 to_string(trees) + " threads " + std::to_string(threads) + " frame " + std::to_string(f);
         const StageTimes& t = s.times();
         EXPECT_GE(t.overlap_ms, 0.0) << what;
         if (threads == 1) {
           EXPECT_EQ(t.overlap_ms, 0.0) << what;
+        }
+        if (renumbered && threads == 1) {  // the fill made the boxes
+          EXPECT_EQ(t.boxes_ms, 0.0) << what;
+        } else if (renumbered) {  // the conversion fused into the boxes
+          EXPECT_EQ(t.vertices_ms, 0.0) << what;
+        }
+        const std::vector<Box3f> boxes(s.boxes().begin(), s.boxes().end());
+        if (threads == 1) {
+          want_boxes.push_back(boxes);
+        } else {
+          ASSERT_EQ(boxes.size(), want_boxes[f].size()) << what;
+          for (std::size_t c = 0; c < boxes.size(); ++c) ASSERT_EQ(boxes[c], want_boxes[f][c]) << what << " cluster " << c;
         }
         EXPECT_LE(t.overlap_ms, std::min(t.leaf_data_ms, t.build_ms + t.collapse_ms) + 1e-9) << what;
         EXPECT_LE(t.total_ms(), wall + 1e-6) << what;
@@ -128,6 +150,53 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
         expect_same_data(d, want[f], what);
       }
     }
+  }
+}
+
+// The fill makes the cluster boxes (one thread, renumbered mesh) only when every cluster's vertex
+// list is its triangles' corners. A view whose list holds one more vertex (a corner of another
+// cluster, far away) keeps the fused pass's boxes over the lists: at 1 and 2 threads the same
+// boxes, and that cluster's box contains the extra vertex.
+TEST(ClusterScene, VertexListsBeyondTheCornersKeepTheListsBoxes) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  const Clustering runs = ptc::morton_runs(m, 37);
+  std::vector<std::uint32_t> verts, voffs{0};
+  const std::uint32_t far_vertex = m.triangles()[runs.triangle_order[runs.triangle_offsets[runs.cluster_count() - 1]]][0];
+  for (std::size_t c = 0; c < runs.cluster_count(); ++c) {
+    for (std::uint32_t i = runs.vertex_offsets[c]; i < runs.vertex_offsets[c + 1]; ++i) verts.push_back(runs.vertices[i]);
+    if (c == 0) verts.push_back(far_vertex);
+    voffs.push_back(static_cast<std::uint32_t>(verts.size()));
+  }
+  const ClusterView plus{runs.triangle_order, runs.triangle_offsets, verts, voffs};
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, plus, {}, cluster_scene_defaults());
+  const Mesh rm = renumber_vertices(m, to_old);
+  const std::vector<std::uint32_t> to_new = inverse_permutation(to_old);
+  std::vector<std::uint32_t> rverts(verts.size());
+  for (std::size_t i = 0; i < verts.size(); ++i) rverts[i] = to_new[verts[i]];
+  const Clustering rruns = renumber_vertices(runs, to_new);
+  const ClusterView rplus{rruns.triangle_order, rruns.triangle_offsets, rverts, voffs};
+  const Mesh moved = renumber_vertices(test::deformed(m, 0.05), to_old);
+  std::vector<Box3f> want;
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    ClusterScene s(rm, rplus, cluster_scene_defaults());
+    ASSERT_TRUE(s.fused_vertex_pass());
+    s.update(moved.positions());
+    EXPECT_GT(s.times().boxes_ms, 0.0) << threads;  // the boxes were made over the lists
+    const std::vector<Box3f> boxes(s.boxes().begin(), s.boxes().end());
+    const std::size_t i0 = std::find(s.cluster_ids().begin(), s.cluster_ids().end(), 0u) - s.cluster_ids().begin();
+    ASSERT_LT(i0, boxes.size());
+    const Vec3f p = to_frame(moved.positions()[to_new[far_vertex]], s.data().frame());
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_LE(boxes[i0].lo[a], p[a]) << threads;
+      EXPECT_GE(boxes[i0].hi[a], p[a]) << threads;
+    }
+    if (threads == 1) {
+      want = boxes;
+      continue;
+    }
+    ASSERT_EQ(boxes.size(), want.size());
+    for (std::size_t c = 0; c < boxes.size(); ++c) ASSERT_EQ(boxes[c], want[c]) << "cluster " << c;
   }
 }
 

@@ -7,6 +7,8 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstring>
+#include <string>
 #include <random>
 #include <vector>
 
@@ -128,6 +130,67 @@ TEST(LeafBlocks, CornerFillIsTheSameAtAnyThreadCount) {
       Box3f want;
       ASSERT_TRUE(block_matches(corners, fp, V, blocks[b], b, want)) << "threads " << threads;
       ASSERT_EQ(boxes[b], want) << "threads " << threads << " block " << b;
+    }
+  }
+}
+
+// The fill cluster by cluster (ClusterScene's update on one thread): the same blocks and block
+// boxes as fill_blocks_from_corners, and per cluster the box of its corners widened one ulp
+// outwards and its centre, against a brute-force box of the corners read back (padding lanes
+// ignored); clusters of one block, of padded blocks, of many blocks, with +-0, huge and tiny
+// coordinates; several chunks of clusters, at 1, 2 and 4 threads.
+TEST(LeafBlocks, ClusterBoxesFromTheFillAreTheCornersBoxes) {
+  const std::uint32_t V = 3000;
+  AlignedVector<Vec3f> fp = random_frame_positions(V, 17);
+  fp[0] = {0.0f, -0.0f, 0.0f}, fp[1] = {-0.0f, 0.0f, -0.0f};
+  fp[2] = {3e38f, -3e38f, 1e-38f}, fp[3] = {-1e-45f, 1e-45f, 2e38f};
+  add_sentinel(fp);
+  std::mt19937 g(19);
+  std::vector<LeafRange> ranges;
+  std::uint32_t nb = 0;
+  while (ranges.size() < 1024 * 3 + 5) {  // several chunks of clusters
+    const auto count = static_cast<std::uint32_t>(1 + g() % 60);
+    ranges.push_back({nb, blocks_for(count), count});
+    nb += blocks_for(count);
+  }
+  std::vector<std::uint32_t> corners(12 * std::size_t{nb});
+  for (const LeafRange& r : ranges) {
+    const auto lo = static_cast<std::uint32_t>(g() % (V - 64));  // a cluster's vertices are near each other
+    for (std::uint32_t i = 0; i < 4 * r.block_count; ++i) {
+      const std::size_t b = r.first_block + i / 4, l = i % 4;
+      for (int c = 0; c < 3; ++c) corners[12 * b + 4 * c + l] = i < r.triangle_count ? lo + g() % 64 : V;
+    }
+  }
+  AlignedVector<TriBlock> want_blocks(nb);
+  AlignedVector<Box3f> want_block_boxes(nb);
+  fill_blocks_from_corners(corners, fp[0].data(), want_blocks, want_block_boxes.data());
+  for (int threads : {1, 2, 4}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    for (const bool with_block_boxes : {true, false}) {
+      AlignedVector<TriBlock> blocks(nb);
+      AlignedVector<Box3f> block_boxes(with_block_boxes ? nb : 0), boxes(ranges.size());
+      AlignedVector<Vec3f> centres(ranges.size());
+      fill_blocks_and_cluster_boxes(corners, fp[0].data(), blocks, with_block_boxes ? block_boxes.data() : nullptr,
+                                    ranges, boxes.data(), centres.data());
+      const std::string what = "threads " + std::to_string(threads) + (with_block_boxes ? " with" : " without") +
+                               " block boxes";
+      for (std::uint32_t b = 0; b < nb; ++b) {
+        ASSERT_EQ(std::memcmp(&blocks[b], &want_blocks[b], sizeof(TriBlock)), 0) << what << " block " << b;
+        if (with_block_boxes) {
+          ASSERT_EQ(block_boxes[b], want_block_boxes[b]) << what << " block " << b;
+        }
+      }
+      for (std::size_t c = 0; c < ranges.size(); ++c) {
+        std::vector<std::uint32_t> vs;
+        const LeafRange& r = ranges[c];
+        for (std::uint32_t i = 0; i < r.triangle_count; ++i)
+          for (int k = 0; k < 3; ++k) vs.push_back(corners[12 * (r.first_block + i / 4) + 4 * k + i % 4]);
+        Box3f want;
+        for (std::uint32_t v : vs) want.extend(fp[v]);
+        for (int a = 0; a < 3; ++a) want.lo[a] = next_below(want.lo[a]), want.hi[a] = next_above(want.hi[a]);
+        ASSERT_EQ(boxes[c], want) << what << " cluster " << c;
+        ASSERT_EQ(centres[c], want.center()) << what << " cluster " << c;
+      }
     }
   }
 }

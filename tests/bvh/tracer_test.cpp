@@ -924,7 +924,8 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
     for (int f = 0; f < 2; ++f) {
       a.update((f ? moved : m).positions());
       b.update((f ? rm_moved : rm).positions());
-      EXPECT_EQ(b.times().vertices_ms, 0.0);
+      // (one pass over the input: fused into the boxes, or alone with the boxes from the fill)
+      EXPECT_TRUE(b.times().vertices_ms == 0.0 || b.times().boxes_ms == 0.0);
       ASSERT_TRUE(std::ranges::equal(a.boxes(), b.boxes())) << "frame " << f;
       EXPECT_EQ(a.bvh().prim_order, b.bvh().prim_order);
       // The blocks (and the block trees' boxes, refitted from them) byte for byte.

@@ -211,17 +211,28 @@ TEST(VertexOrder, FusedPassOnRenumberedVerticesEqualsBruteForce) {
         }
       }
     }
+    // The streamed conversion (ClusterScene on one thread): the same floats, nothing past them.
+    for (const bool avx2 : {true, false}) {
+      AlignedVector<Vec3f> fp(V + 2, Vec3f{7.0f, 7.0f, 7.0f});
+      frame_positions_streamed(pos_new, origin, fp, avx2);
+      for (std::uint32_t v = 0; v < V; ++v) ASSERT_EQ(fp[v], plain[v]) << "trial " << trial << " vertex " << v;
+      EXPECT_EQ(fp[V], (Vec3f{7.0f, 7.0f, 7.0f})) << "wrote past the vertices";
+    }
     AlignedVector<Vec3f> fp2(V + 2), c2;
     AlignedVector<Box3f> b2;
-    // A position that is not finite in the frame (any vertex, grouped or not): refused on both paths.
+    // A position that is not finite in the frame (any vertex, grouped or not): refused on both
+    // paths, and by the streamed conversion.
     for (const bool avx2 : {true, false}) {
       std::vector<Vec3> bad = pos_new;
       bad[g() % V] = Vec3(0, std::nan(""), 0);
       EXPECT_THROW(frame_positions_and_boxes(bad, origin, *runs, fp2, b2, c2, avx2), std::invalid_argument);
+      EXPECT_THROW(frame_positions_streamed(bad, origin, fp2, avx2), std::invalid_argument);
       bad = pos_new;
       bad[V - 1] = Vec3(-std::numeric_limits<double>::infinity(), 0, 0);
       EXPECT_THROW(frame_positions_and_boxes(bad, origin, *runs, fp2, b2, c2, avx2), std::invalid_argument);
+      EXPECT_THROW(frame_positions_streamed(bad, origin, fp2, avx2), std::invalid_argument);
     }
+    EXPECT_THROW(frame_positions_streamed(pos_new, origin, std::span<Vec3f>(fp2).first(V - 1)), std::invalid_argument);
     EXPECT_THROW(frame_positions_and_boxes(std::span<const Vec3>(pos_new).first(V - 1), origin, *runs, fp2, b2, c2),
                  std::invalid_argument);
     EXPECT_THROW(frame_positions_and_boxes(pos_new, origin, *runs, std::span<Vec3f>(fp2).first(V - 1), b2, c2),
@@ -266,6 +277,11 @@ TEST(VertexOrder, FusedPassIsTheSameAtAnyThreadCount) {
     std::vector<Vec3> bad = pos;
     bad[V - 40] = Vec3(0, std::nan(""), 0);
     EXPECT_THROW(frame_positions_and_boxes(bad, origin, *runs, fp, boxes, centers), std::invalid_argument) << threads;
+    // The streamed conversion in chunks of vertices (more than one here): the same floats.
+    AlignedVector<Vec3f> fs(V + 2);
+    frame_positions_streamed(pos, origin, fs);
+    for (std::uint32_t v = 0; v < V; ++v) ASSERT_EQ(fs[v], plain[v]) << "threads " << threads << " vertex " << v;
+    EXPECT_THROW(frame_positions_streamed(bad, origin, fs), std::invalid_argument) << threads;
   }
 }
 
