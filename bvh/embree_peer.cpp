@@ -7,10 +7,14 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
+
+#include "bvh/scene_config.h"
 
 namespace ptc::bvh {
 
@@ -39,13 +43,16 @@ struct EmbreeScene::Impl {
   RTCGeometry geom = nullptr;
   float* vertices = nullptr;  // owned by the geometry (rtcSetNewGeometryBuffer)
   std::size_t vertex_count = 0;
-  Vec3 origin;
+  FrameMap frame;  // the trace frame of our scenes: origin and power-of-two scale (trace_frame_scale)
 };
 
 EmbreeScene::EmbreeScene(const Mesh& mesh, const Vec3& origin, const EmbreeConfig& cfg)
     : impl_(std::make_unique<Impl>()), clock_(cfg.clock) {
   Impl& im = *impl_;
-  im.origin = origin;
+  // Embree asserts (and aborts) on a ray whose origin or direction exceeds 1.8e18 and drops
+  // triangles beyond it: it gets the positions in our scenes' scaled frame, and the rays' t
+  // scaled with them (trace_packets).
+  im.frame = FrameMap(origin, trace_frame_scale(mesh, origin));
   std::string conf = cfg.threads ? "threads=" + std::to_string(cfg.threads) : std::string();
   if (!cfg.isa.empty()) conf += (conf.empty() ? "isa=" : ",isa=") + cfg.isa;
   im.device = rtcNewDevice(conf.empty() ? nullptr : conf.c_str());
@@ -82,7 +89,7 @@ void EmbreeScene::update(std::span<const Vec3> positions) {
   double t0 = clock_ms(clock_);
   const std::size_t n = std::min(positions.size(), im.vertex_count);
   for (std::size_t v = 0; v < n; ++v) {
-    const Vec3f p = to_frame(positions[v], im.origin);
+    const Vec3f p = to_frame(positions[v], im.frame);
     im.vertices[3 * v] = p[0], im.vertices[3 * v + 1] = p[1], im.vertices[3 * v + 2] = p[2];
   }
   rtcUpdateGeometryBuffer(im.geom, RTC_BUFFER_TYPE_VERTEX, 0);
@@ -104,18 +111,52 @@ inline void record(HitBatch& hits, std::size_t i, std::uint32_t tri, float t, fl
   tot.hits += tri != kNoTriangle;
 }
 
+// The largest coordinate of a ray origin Embree accepts (its FLT_LARGE, 1.844e18, with a margin;
+// beyond it rtcIntersect asserts), as the bits of a float: a NaN's bits are larger.
+constexpr std::uint32_t kEmbreeLargeBits = std::bit_cast<std::uint32_t>(1.0e18f);
+
+inline std::uint32_t abs_bits(float x) { return std::bit_cast<std::uint32_t>(x) & 0x7fffffffu; }
+
+// A ray's origin in Embree's frame and whether Embree takes the ray (each |coordinate| of the
+// origin and the direction <= 1e18, none NaN).
+inline bool embree_origin(const RayBatch& rays, std::size_t i, const FrameMap& frame, Vec3f& o) {
+  o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), frame);
+  const std::uint32_t a = std::max(abs_bits(o[0]), std::max(abs_bits(o[1]), abs_bits(o[2])));
+  const std::uint32_t d = std::max(abs_bits(rays.dx[i]), std::max(abs_bits(rays.dy[i]), abs_bits(rays.dz[i])));
+  return std::max(a, d) <= kEmbreeLargeBits;
+}
+
+[[noreturn]] void throw_out_of_reach(const RayBatch& rays, std::size_t i) {
+  std::ostringstream m;
+  m << "a ray from (" << rays.ox[i] << ", " << rays.oy[i] << ", " << rays.oz[i] << ") in direction (" << rays.dx[i]
+    << ", " << rays.dy[i] << ", " << rays.dz[i]
+    << ") is beyond what Embree accepts (1e18 units of the mesh's trace frame): move --eye or --light closer to the mesh";
+  throw std::invalid_argument(m.str());
+}
+
+// A ray's interval in Embree's frame: t times the frame's scale (the positions are scaled, the
+// direction is not), and a hit's t back; exact, the scale being a power of two in [2^-100,
+// 2^100] (a float), unless a product leaves the float range.
+struct TScale {
+  float to, back;
+  explicit TScale(double scale) : to(static_cast<float>(scale)), back(static_cast<float>(1.0 / scale)) {}
+};
+
 // Rays [begin, end) with rtcIntersect1 / rtcOccluded1.
-void trace_singles(RTCScene scene, const Vec3& origin, const RayBatch& rays, HitBatch& hits, HitMode mode,
+void trace_singles(RTCScene scene, const FrameMap& frame, const RayBatch& rays, HitBatch& hits, HitMode mode,
                    std::size_t begin, std::size_t end, TraceTotals& tot) {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
+  const TScale ts(frame.scale);
   for (std::size_t i = begin; i != end; ++i) {
     RTCRayHit rh;
-    const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), origin);
+    Vec3f o;
+    if (!embree_origin(rays, i, frame, o)) [[unlikely]]
+      throw_out_of_reach(rays, i);
     rh.ray.org_x = o[0], rh.ray.org_y = o[1], rh.ray.org_z = o[2];
     rh.ray.dir_x = rays.dx[i], rh.ray.dir_y = rays.dy[i], rh.ray.dir_z = rays.dz[i];
-    rh.ray.tnear = rays.tmin[i];
-    rh.ray.tfar = rays.tmax[i];
+    rh.ray.tnear = rays.tmin[i] * ts.to;
+    rh.ray.tfar = rays.tmax[i] * ts.to;
     rh.ray.time = 0.0f;
     rh.ray.mask = 0xffffffffu;
     rh.ray.id = 0;
@@ -126,7 +167,8 @@ void trace_singles(RTCScene scene, const Vec3& origin, const RayBatch& rays, Hit
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(scene, &ctx, &rh);
-      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) tri = rh.hit.primID, t = rh.ray.tfar, u = rh.hit.u, v = rh.hit.v;
+      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
+        tri = rh.hit.primID, t = rh.ray.tfar * ts.back, u = rh.hit.u, v = rh.hit.v;
     } else {
       rtcOccluded1(scene, &ctx, &rh.ray);
       if (rh.ray.tfar < 0.0f) tri = kUnknownTriangle, t = rays.tmax[i];  // occluded (rtcOccluded1 sets tfar = -inf)
@@ -138,23 +180,26 @@ void trace_singles(RTCScene scene, const Vec3& origin, const RayBatch& rays, Hit
 // Rays [begin, end) in packets of N consecutive rays (rtcIntersectN / rtcOccludedN, coherent);
 // the lanes past `end` of the last packet are invalid.
 template <int N, typename RayHitN, typename IntersectFn, typename OccludedFn>
-void trace_packets_of(RTCScene scene, const Vec3& origin, const RayBatch& rays, HitBatch& hits, HitMode mode,
+void trace_packets_of(RTCScene scene, const FrameMap& frame, const RayBatch& rays, HitBatch& hits, HitMode mode,
                       std::size_t begin, std::size_t end, TraceTotals& tot, IntersectFn intersect, OccludedFn occluded) {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  const TScale ts(frame.scale);
   for (std::size_t first = begin; first < end; first += N) {
     const int n = static_cast<int>(std::min<std::size_t>(N, end - first));
     alignas(64) int valid[N];
     alignas(64) RayHitN rh;
+    bool reach = true;
     for (int l = 0; l < N; ++l) {
       const std::size_t i = first + std::size_t(l < n ? l : 0);
       valid[l] = l < n ? -1 : 0;
-      const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), origin);
+      Vec3f o;
+      reach &= embree_origin(rays, i, frame, o);
       rh.ray.org_x[l] = o[0], rh.ray.org_y[l] = o[1], rh.ray.org_z[l] = o[2];
       rh.ray.dir_x[l] = rays.dx[i], rh.ray.dir_y[l] = rays.dy[i], rh.ray.dir_z[l] = rays.dz[i];
-      rh.ray.tnear[l] = rays.tmin[i];
-      rh.ray.tfar[l] = rays.tmax[i];
+      rh.ray.tnear[l] = rays.tmin[i] * ts.to;
+      rh.ray.tfar[l] = rays.tmax[i] * ts.to;
       rh.ray.time[l] = 0.0f;
       rh.ray.mask[l] = 0xffffffffu;
       rh.ray.id[l] = 0;
@@ -162,6 +207,11 @@ void trace_packets_of(RTCScene scene, const Vec3& origin, const RayBatch& rays, 
       rh.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
     }
+    if (!reach) [[unlikely]]
+      for (int l = 0; l < n; ++l) {
+        Vec3f o;
+        if (!embree_origin(rays, first + l, frame, o)) throw_out_of_reach(rays, first + l);
+      }
     if (mode == HitMode::Closest)
       intersect(valid, scene, &ctx, &rh);
     else
@@ -172,7 +222,7 @@ void trace_packets_of(RTCScene scene, const Vec3& origin, const RayBatch& rays, 
       float t = 0, u = 0, v = 0;
       if (mode == HitMode::Closest) {
         if (rh.hit.geomID[l] != RTC_INVALID_GEOMETRY_ID)
-          tri = rh.hit.primID[l], t = rh.ray.tfar[l], u = rh.hit.u[l], v = rh.hit.v[l];
+          tri = rh.hit.primID[l], t = rh.ray.tfar[l] * ts.back, u = rh.hit.u[l], v = rh.hit.v[l];
       } else if (rh.ray.tfar[l] < 0.0f) {
         tri = kUnknownTriangle, t = rays.tmax[i];
       }
@@ -200,11 +250,11 @@ TraceTotals EmbreeScene::trace_packets(const RayBatch& rays, HitBatch& hits, Hit
     TraceTotals& tot = totals.local();
     const std::size_t b = range.begin() * kTile, e = std::min(n, range.end() * kTile);
     switch (width) {
-      case 1: trace_singles(im.scene, im.origin, rays, hits, mode, b, e, tot); break;
-      case 4: trace_packets_of<4, RTCRayHit4>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect4, rtcOccluded4); break;
-      case 8: trace_packets_of<8, RTCRayHit8>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect8, rtcOccluded8); break;
+      case 1: trace_singles(im.scene, im.frame, rays, hits, mode, b, e, tot); break;
+      case 4: trace_packets_of<4, RTCRayHit4>(im.scene, im.frame, rays, hits, mode, b, e, tot, rtcIntersect4, rtcOccluded4); break;
+      case 8: trace_packets_of<8, RTCRayHit8>(im.scene, im.frame, rays, hits, mode, b, e, tot, rtcIntersect8, rtcOccluded8); break;
       default:
-        trace_packets_of<16, RTCRayHit16>(im.scene, im.origin, rays, hits, mode, b, e, tot, rtcIntersect16, rtcOccluded16);
+        trace_packets_of<16, RTCRayHit16>(im.scene, im.frame, rays, hits, mode, b, e, tot, rtcIntersect16, rtcOccluded16);
     }
   };
   const std::size_t tiles = (n + kTile - 1) / kTile;

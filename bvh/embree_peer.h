@@ -1,5 +1,9 @@
 // Embree 3 as the performance peer: the same mesh, the same trace frame (positions minus the
-// same origin, in float) and the same rays, traced with rtcIntersect1 / rtcOccluded1.
+// same origin, times the same power-of-two scale as our scenes', trace_frame_scale, in float) and
+// the same rays, traced with rtcIntersect1 / rtcOccluded1. The rays' directions are passed as
+// they are and their t (tmin, tmax, hits) scaled with the frame: exact, and Embree sees a mesh of
+// 1e30 or 1e-30 units at a size it can trace (beyond 1.8e18 it drops triangles and asserts on
+// rays). A ray whose origin lies beyond 1e18 in that frame is refused (std::invalid_argument).
 //
 // Modes (Embree's own names):
 //   - StaticMedium: RTC_BUILD_QUALITY_MEDIUM, static scene (Embree's default SAH build);

@@ -1,10 +1,12 @@
 #include "commands/cluster_files.h"
+#include "toolkit/core/cancel.h"
 
 #include <algorithm>
 #include <charconv>
 #include <cstring>
 #include <span>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -75,6 +77,7 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
   std::error_code ec;
   const std::filesystem::path file = std::filesystem::is_directory(dir, ec) ? dir / "triangles.csv" : dir;
   const std::string name = file.string();
+  std::optional<BlockingWaitFor> waiting(std::in_place, file);  // (a FIFO: a stop request ends the run at once meanwhile)
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(name, "", "", std::filesystem::exists(file, ec) ? "cannot be read" : "no such file");
 
@@ -132,6 +135,7 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
     ++rows;
     return true;
   });
+  waiting.reset();
   if (in.bad()) throw InputError(name, line_loc(line + 1), "", "cannot be read");
   if (line == 0) throw InputError(name, "", "", "empty file");
   if (rows != T) {

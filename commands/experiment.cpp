@@ -276,7 +276,7 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   MovingScene ms = open_moving_scene(opt.input, opt.scene_options, opt.deform, opt.frames, opt.extend_frames, manifest);
   setup.frames = ms.range;
   setup.camera = camera_for(opt.camera, ms.scene);
-  const Box3 bounds = ms.scene.rest().bounds();
+  const Box3 bounds = ms.scene.rest().referenced_bounds();  // (the camera's and the light's)
   const bvh::PinholeCamera cam = make_camera(setup.camera, bounds, setup.width, setup.height);
   const LightChoice light = light_for(opt.light, ms.scene, cam, bounds);
   setup.light = light.position;

@@ -38,6 +38,7 @@ std::string mesh_fnv1a64(const Mesh& mesh) {
 }
 
 std::string read_text(const std::filesystem::path& f, const char* why) {
+  const BlockingWaitFor waiting(f);  // (a FIFO: a stop request ends the run at once meanwhile)
   std::ifstream in(f, std::ios::binary);
   if (!in) throw InputError(f.string(), "", "", std::string("cannot read it (") + why + ")");
   std::stringstream ss;

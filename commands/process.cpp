@@ -27,14 +27,19 @@ namespace {
 std::atomic<int> g_stop_signals{0};
 static_assert(std::atomic<int>::is_always_lock_free);
 
+// The first signal stops at once too while the run waits in a blocking read of a FIFO or pipe
+// (BlockingWait, toolkit/core/cancel.h), which SA_RESTART would resume forever.
 extern "C" void on_stop_signal(int sig) {
-  if (g_stop_signals.fetch_add(1) == 0) {
+  const bool first = g_stop_signals.fetch_add(1) == 0;
+  if (first && !in_blocking_wait()) {
     request_cancel();
     return;
   }
   remove_temporaries_now();
-  static const char msg[] = "ptc: interrupted again: stopped at once (temporary files removed)\n";
-  (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
+  static const char again[] = "ptc: interrupted again: stopped at once (temporary files removed)\n";
+  static const char waiting[] = "ptc: interrupted while waiting for input: stopped\n";
+  if (first) (void)!::write(STDERR_FILENO, waiting, sizeof waiting - 1);
+  else (void)!::write(STDERR_FILENO, again, sizeof again - 1);
   struct sigaction dfl {};
   dfl.sa_handler = SIG_DFL;
   sigemptyset(&dfl.sa_mask);

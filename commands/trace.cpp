@@ -110,8 +110,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   Stopwatch sw;
   scene.positions(double(range.first), first_pos, true);
   manifest.add_timing_ms("first_positions", sw.ms());
-  Box3 first_bounds;
-  for (const Vec3& p : first_pos) first_bounds.extend(p);
+  // (the camera's and the light's: the vertices some triangle uses)
+  const Box3 first_bounds = referenced_bounds(scene.rest().triangles(), first_pos);
 
   // Camera and light: flags > the scene's own > framing the first frame (commands/scene_args.h).
   const CameraSpec spec = camera_for(opt.camera, scene);

@@ -85,7 +85,10 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
   }
   // A box that is a point (or a line along the view) needs no distance; keep the eye off it.
   const double diag = (bounds.hi - bounds.lo).norm();
-  const double scale = std::max({diag, look.cwiseAbs().maxCoeff() * 1e-6, 1e-30});
+  // (The floor relative to |look_at| keeps a point box far from the origin a few thousand ulps of
+  // a double away from the eye; 1e-6 of |look_at|, as before, pushed a small mesh at 1e11 back
+  // by 100 units, where it covered no pixel.)
+  const double scale = std::max({diag, look.cwiseAbs().maxCoeff() * 1e-12, 1e-30});
   dist = std::max(dist, 1e-3 * scale);
   c.eye = look - dist * forward;
   if (!finite(c.eye))  // (no --eye was given: the default camera's distance overflows)

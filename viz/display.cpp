@@ -40,8 +40,10 @@ std::string find_program(const std::string& name) {
     std::size_t end = dirs.find(':', start);
     if (end == std::string::npos) end = dirs.size();
     std::string dir = dirs.substr(start, end - start);
-    if (dir.empty()) dir = ".";
-    const std::string p = dir + "/" + name;
+    if (dir.empty()) dir.assign(1, '.');
+    std::string p = dir;  // (appended: `dir + "/" + name` trips GCC 12's -Wrestrict false positive)
+    p += '/';
+    p += name;
     if (access(p.c_str(), X_OK) == 0 && !std::filesystem::is_directory(p)) return p;
     start = end + 1;
   }

@@ -120,7 +120,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   setup.clusters = &*clusters;
   const Mesh& mesh = scene.rest();
 
-  const bvh::PinholeCamera cam = make_camera(cfg.camera, rest_bounds, cfg.width, cfg.height);
+  const bvh::PinholeCamera cam = make_camera(cfg.camera, scene.rest().referenced_bounds(), cfg.width, cfg.height);
   const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
   res.rays = rays.size();
 

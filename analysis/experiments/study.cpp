@@ -67,7 +67,7 @@ StudyRays study_rays(const Mesh& rest, const StudySetup& setup) {
   StudyRays r;
   const Box3 b = rest.bounds();
   r.origin = b.center();
-  r.camera = make_camera(setup.camera, b, setup.width, setup.height);
+  r.camera = make_camera(setup.camera, rest.referenced_bounds(), setup.width, setup.height);
   r.primary = camera_rays(r.camera, setup.width, setup.height);
   return r;
 }

@@ -718,7 +718,9 @@ TEST(Renumbering, InPlaceEqualsTheGatherAndLeavesSharersAlone) {
       c.renumber_vertices(bad);
       ADD_FAILURE() << "renumbered with a bad permutation";
     } catch (const std::invalid_argument& e) {
-      if (!want_msg.empty()) EXPECT_EQ(std::string(e.what()), want_msg);
+      if (!want_msg.empty()) {
+        EXPECT_EQ(std::string(e.what()), want_msg);
+      }
     }
     for (std::size_t i = 0; i < m.vertex_count(); ++i) EXPECT_EQ(c.position(i), m.position(i));
     for (std::size_t t = 0; t < m.triangle_count(); ++t) EXPECT_EQ(c.triangle(t), m.triangle(t));

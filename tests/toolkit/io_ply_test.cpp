@@ -447,7 +447,7 @@ std::string fmt_report(const ReadReport& r) {
                   std::to_string(r.triangles_from_polygons) + " short " + std::to_string(r.short_faces) + " " +
                   r.first_short_face + " surplus " + std::to_string(r.surplus_lines) + " " + r.first_surplus +
                   " binary " + std::to_string(r.binary) + " source";
-  for (std::uint32_t f : r.source_face) o += " " + std::to_string(f);
+  for (std::uint32_t f : r.source_face) (o += ' ') += std::to_string(f);  // (appended: GCC 12 -Wrestrict)
   return o;
 }
 
@@ -460,7 +460,7 @@ std::string outcome(const std::function<LoadedMesh()>& read) {
     std::string o = "ok " + std::to_string(lm.mesh.vertex_count()) + " " + std::to_string(lm.mesh.triangle_count());
     for (const Vec3& p : lm.mesh.positions()) o.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
     for (std::size_t t = 0; t < lm.mesh.triangle_count(); ++t)
-      for (std::uint32_t v : lm.mesh.triangle(t)) o += " " + std::to_string(v);
+      for (std::uint32_t v : lm.mesh.triangle(t)) (o += ' ') += std::to_string(v);  // (appended: GCC 12 -Wrestrict)
     const ReadReport& r = lm.report;
     o += fmt_report(r);
     return o;
@@ -556,7 +556,9 @@ TEST_F(IoPlyFile, AFileThatShrankAfterItsSizeWasTakenIsRefused) {
   for (std::size_t cut : {std::size_t{20}, data + 100, full.size() / 2}) {
     const std::string o = from_file(full.substr(0, cut), 4096, full.size());
     EXPECT_EQ(o.rfind("error t.ply", 0), 0u) << cut << ": " << o.substr(0, 200);
-    if (cut > data) EXPECT_NE(o.find("file ends after"), std::string::npos) << o;
+    if (cut > data) {
+      EXPECT_NE(o.find("file ends after"), std::string::npos) << o;
+    }
   }
 }
 

@@ -840,3 +840,43 @@ TEST(SubdivLoop, RealMeshMatchesOpenMesh) {
 
 }  // namespace
 }  // namespace ptc
+
+namespace ptc {
+namespace {
+
+// Corners near +-1.8e308 on both sides: the stencil's differences overflow, and the sum is taken
+// again on the positions scaled by 2^-8. Every new position is finite and, both schemes' weights
+// being powers of two here or close to them, equals the same mesh's subdivision at 2^-600 times
+// the size, scaled back, to a relative 1e-15 (an independent run at a harmless scale).
+TEST(SubdivOverflow, CornersNearTheDoubleRangeStayFinite) {
+  Soup ico = icosahedron();
+  const double big = 1.7e308;  // (differences of opposite corners overflow)
+  for (const SubdivisionScheme scheme : {SubdivisionScheme::Midpoint, SubdivisionScheme::Loop}) {
+    for (int levels : {1, 2}) {
+      const Subdivider s = Subdivider::build(ico.tris, ico.pos.size(), scheme, levels);
+      std::vector<Vec3> huge(ico.pos.size()), small(ico.pos.size());
+      double m = 0;
+      for (const Vec3& p : ico.pos) m = std::max(m, p.cwiseAbs().maxCoeff());
+      for (std::size_t i = 0; i < huge.size(); ++i) huge[i] = ico.pos[i] / m * big, small[i] = ico.pos[i] / m * 0x1p-600;
+      std::vector<Vec3> out_huge(s.vertex_count()), out_small(s.vertex_count());
+      s.apply(huge, out_huge);
+      s.apply(small, out_small);
+      for (std::size_t i = 0; i < out_huge.size(); ++i) {
+        ASSERT_TRUE(out_huge[i].allFinite()) << i;
+        const Vec3 want = (out_small[i] * 0x1p600) * big;
+        EXPECT_LE((out_huge[i] - want).cwiseAbs().maxCoeff(), 1e-15 * big) << i;
+      }
+    }
+  }
+  // The midpoint of -1.7e308 and 1.7e308 is 0.
+  const std::vector<Tri> tri{{0, 1, 2}};
+  const std::vector<Vec3> pos{{-1.7e308, 0, 0}, {1.7e308, 0, 0}, {0, 1.7e308, 0}};
+  const Subdivider mid = Subdivider::build(tri, 3, SubdivisionScheme::Midpoint, 1);
+  std::vector<Vec3> out(mid.vertex_count());
+  mid.apply(pos, out);
+  for (const Vec3& p : out) ASSERT_TRUE(p.allFinite());
+  EXPECT_TRUE(std::find(out.begin(), out.end(), Vec3(0, 0, 0)) != out.end());
+}
+
+}  // namespace
+}  // namespace ptc

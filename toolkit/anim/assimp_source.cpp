@@ -1,4 +1,5 @@
 #include "toolkit/anim/assimp_source.h"
+#include "toolkit/core/cancel.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/config.h>
@@ -39,6 +40,7 @@ std::string slurp(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path.string(), "", "", "no such file");
   if (fs::is_directory(path, ec)) throw InputError(path.string(), "", "", "is a directory, not a file");
+  const BlockingWaitFor waiting(path);  // (a FIFO: a stop request ends the run at once meanwhile)
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "", "", std::string("cannot open: ") + std::strerror(errno));
   std::stringstream ss;

@@ -1,4 +1,5 @@
 #include "toolkit/anim/md3.h"
+#include "toolkit/core/cancel.h"
 
 #include <cmath>
 #include <cstring>
@@ -164,6 +165,7 @@ Md3Model parse_md3(std::string_view bytes, const std::string& name) {
 }
 
 Md3Model read_md3(const std::filesystem::path& path) {
+  const BlockingWaitFor waiting(path);  // (a FIFO: a stop request ends the run at once meanwhile)
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "", "", std::string("cannot open: ") + std::strerror(errno));
   std::stringstream ss;

@@ -1,4 +1,5 @@
 #include "toolkit/anim/scene_file.h"
+#include "toolkit/core/cancel.h"
 
 #include "toolkit/anim/frame_sequence.h"
 
@@ -411,6 +412,7 @@ Scene load_scene_file(const fs::path& path, const SceneOptions& opt) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path.string(), "", "", "no such file");
   if (fs::is_directory(path, ec)) throw InputError(path.string(), "", "", "is a directory, not a scene file");
+  const BlockingWaitFor waiting(path);  // (a FIFO: a stop request ends the run at once meanwhile)
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "", "", "cannot open");
   std::stringstream ss;

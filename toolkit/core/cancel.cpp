@@ -28,6 +28,25 @@ void throw_if_cancelled() {
 }
 
 namespace {
+std::atomic<int> g_blocking{0};
+static_assert(std::atomic<int>::is_always_lock_free, "in_blocking_wait must be async-signal-safe");
+}  // namespace
+
+BlockingWait::BlockingWait() noexcept { g_blocking.fetch_add(1); }
+BlockingWait::~BlockingWait() { g_blocking.fetch_sub(1); }
+bool in_blocking_wait() noexcept { return g_blocking.load() > 0; }
+
+BlockingWaitFor::BlockingWaitFor(const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(path, ec);
+  held_ = ec || !std::filesystem::is_regular_file(st);
+  if (held_) g_blocking.fetch_add(1);
+}
+BlockingWaitFor::~BlockingWaitFor() {
+  if (held_) g_blocking.fetch_sub(1);
+}
+
+namespace {
 
 // A slot is Free, Filling (a thread is copying a path in), File or Dir; `gen` changes with every
 // registration, so that the handler, which copies a path and then checks that neither state nor

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/io/readers.h"
 #include "toolkit/core/input_log.h"
@@ -31,6 +32,16 @@ std::optional<MeshFormat> parse_mesh_format(std::string_view s) {
 }
 
 namespace {
+
+// Extensions of the animated assets other commands read (toolkit/anim: MD2, MD3 and Assimp's).
+bool is_animated_asset_extension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext)
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  for (const char* e : {".md2", ".md3", ".md5mesh", ".x", ".3ds", ".fbx", ".dae", ".gltf", ".glb", ".b3d", ".ms3d", ".smd", ".bvh"})
+    if (ext == e) return true;
+  return false;
+}
 
 struct OpenFile {
   int fd = -1;
@@ -113,15 +124,23 @@ LoadedMesh read_mesh(const std::filesystem::path& path) {
         path.string(), "", "",
         "unknown mesh format " +
             (path.extension().empty() ? std::string("(no extension)") : "'" + path.extension().string() + "'") +
-            " (use .off, .obj, .ply or .stl)");
-  OpenFile file;
-  open_input(path, file);
-  // A regular binary PLY file is read block by block (its body can be hundreds of MB); every
-  // other file whole.
-  // (A regular file that reports size 0, as procfs files do, is read to its end instead.)
-  LoadedMesh lm = *f == MeshFormat::Ply && S_ISREG(file.st.st_mode) && file.st.st_size > 0
-                      ? io::read_ply_file(file.fd, static_cast<std::uint64_t>(file.st.st_size), path.string())
-                      : read_mesh_from_memory(read_file(path.string(), file.fd, file.st), *f, path.string());
+            " (use .off, .obj, .ply or .stl" +
+            (is_animated_asset_extension(path) ? "; ptc trace, bench and animate read animated assets, and `ptc animate "
+                                                 "FILE --out DIR` writes their frames as .ply meshes)"
+                                               : ")"));
+  LoadedMesh lm;
+  {
+    // A FIFO or pipe may block its open and reads: a stop request ends the run at once meanwhile.
+    const BlockingWaitFor waiting(path);
+    OpenFile file;
+    open_input(path, file);
+    // A regular binary PLY file is read block by block (its body can be hundreds of MB); every
+    // other file whole.
+    // (A regular file that reports size 0, as procfs files do, is read to its end instead.)
+    lm = *f == MeshFormat::Ply && S_ISREG(file.st.st_mode) && file.st.st_size > 0
+             ? io::read_ply_file(file.fd, static_cast<std::uint64_t>(file.st.st_size), path.string())
+             : read_mesh_from_memory(read_file(path.string(), file.fd, file.st), *f, path.string());
+  }
   if (const ReadNoteHandler h = g_note_handler.load())
     for (const std::string& note : read_notes(lm.report)) h(path.string(), note);
   return lm;

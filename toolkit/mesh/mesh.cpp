@@ -101,4 +101,17 @@ Box3 Mesh::bounds() const {
   return b;
 }
 
+Box3 Mesh::referenced_bounds() const { return ptc::referenced_bounds(*tris_, pos_); }
+
+Box3 referenced_bounds(std::span<const Tri> triangles, std::span<const Vec3> positions) {
+  std::vector<std::uint8_t> used(positions.size(), 0);
+  for (const Tri& t : triangles)
+    for (const std::uint32_t v : t)
+      if (v < positions.size()) used[v] = 1;
+  Box3 b;
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (used[v]) b.extend(positions[v]);
+  return b;
+}
+
 }  // namespace ptc

@@ -55,6 +55,9 @@ class Mesh {
 
   /// Axis-aligned bounding box of the referenced and unreferenced vertices alike.
   [[nodiscard]] Box3 bounds() const;
+  /// Bounding box of the vertices some triangle uses: the shape the default camera and light
+  /// frame (an unreferenced vertex far away would leave the mesh a dot in the image).
+  [[nodiscard]] Box3 referenced_bounds() const;
 
  private:
   std::shared_ptr<std::vector<Tri>> tris_;  // never changed while shared (see renumber_vertices)
@@ -63,6 +66,9 @@ class Mesh {
 
 /// The inverse of a vertex renumbering: to_new[to_old[i]] = i. Throws std::invalid_argument
 /// unless to_old is a permutation of 0 .. n-1 (n = to_old.size()), naming the first bad entry.
+/// Mesh::referenced_bounds of these triangles over these positions (indices past the positions ignored).
+[[nodiscard]] Box3 referenced_bounds(std::span<const Tri> triangles, std::span<const Vec3> positions);
+
 [[nodiscard]] std::vector<std::uint32_t> inverse_permutation(std::span<const std::uint32_t> to_old);
 
 /// Throws the same std::invalid_argument as inverse_permutation unless to_old is a permutation

@@ -478,6 +478,15 @@ void Subdivider::apply(std::span<const Vec3> in, std::span<Vec3> out) const {
         z += ws[k] * (p.z() - a.z());
       }
       out[i] = Vec3(a.x() + x, a.y() + y, a.z() + z);
+      if (!out[i].allFinite()) [[unlikely]] {
+        // A difference p - a overflowed (corners near +-1.8e308 on both sides): the same sum on
+        // the positions times 2^-8, then back (the weights are convex, so the point is finite).
+        constexpr double kDown = 0x1p-8, kUp = 0x1p8;
+        const Vec3 as = a * kDown;
+        Vec3 d = Vec3::Zero();
+        for (std::size_t k = b + 1; k < e; ++k) d += ws[k] * (in[cols[k]] * kDown - as);
+        out[i] = (as + d) * kUp;
+      }
     }
   });
 }
