@@ -184,7 +184,13 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   p.scene = opt.input.string();
   p.cluster = opt.cluster;
   p.ao_samples = opt.ao_samples.value_or(1);
-  p.reference_rays = opt.reference_rays.value_or(512);
+  // Checked against the image: never more rays than its pixels (the default 512 takes them all
+  // in a smaller image, and the manifest records the count used).
+  const std::size_t pixels = static_cast<std::size_t>(opt.width) * static_cast<std::size_t>(opt.height);
+  if (opt.reference_rays && *opt.reference_rays > pixels)
+    throw UsageError("--reference-rays", fmt::format("asks for {} rays, but the {}x{} image has {} (give at most {})",
+                                                     *opt.reference_rays, opt.width, opt.height, pixels, pixels));
+  p.reference_rays = opt.reference_rays.value_or(std::min<std::size_t>(512, pixels));
   if (*kind == ExperimentKind::Sweep) {
     if (!opt.clusters.empty())
       throw UsageError("--clusters", "sweep makes its own clustering per --max-counts value (compare, drift and "
@@ -277,7 +283,7 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   setup.frames = ms.range;
   setup.camera = camera_for(opt.camera, ms.scene);
   const Box3 bounds = ms.scene.rest().referenced_bounds();  // (the camera's and the light's)
-  const bvh::PinholeCamera cam = make_camera(setup.camera, bounds, setup.width, setup.height);
+  const bvh::PinholeCamera cam = make_camera(setup.camera, bounds, setup.width, setup.height, opt.input.string());
   const LightChoice light = light_for(opt.light, ms.scene, cam, bounds);
   setup.light = light.position;
   OutputDir dir(opt.out_dir);  // a refused target fails before the (long) run

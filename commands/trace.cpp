@@ -115,7 +115,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
 
   // Camera and light: flags > the scene's own > framing the first frame (commands/scene_args.h).
   const CameraSpec spec = camera_for(opt.camera, scene);
-  const bvh::PinholeCamera cam = make_camera(spec, first_bounds, opt.render.width, opt.render.height);
+  const bvh::PinholeCamera cam = make_camera(spec, first_bounds, opt.render.width, opt.render.height, arg);
   RenderConfig rc = opt.render;
   const LightChoice light = light_for(rc.light, scene, cam, first_bounds);
   rc.light = light.position;

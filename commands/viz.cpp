@@ -152,7 +152,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   Mesh mesh = scene.rest();
   scene.positions(double(range.first), mesh.positions(), true);
   const Box3 first_bounds = mesh.referenced_bounds();  // (the camera's: unreferenced vertices are not framed)
-  const bvh::PinholeCamera cam = make_camera(camera_for(opt.camera, scene), first_bounds, opt.width, opt.height);
+  const bvh::PinholeCamera cam = make_camera(camera_for(opt.camera, scene), first_bounds, opt.width, opt.height, arg);
 
   const bool use_clusters = !opt.clusters.empty();
   Clustering clusters;

@@ -11,6 +11,12 @@ namespace {
 
 bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
 
+// v / |v| without overflow or underflow in the norm (v finite and not zero).
+Vec3 unit(const Vec3& v) {
+  const Vec3 s = v / v.cwiseAbs().maxCoeff();
+  return s / s.norm();
+}
+
 std::string fmt_vec(const Vec3& v) {
   char buf[96];
   std::snprintf(buf, sizeof buf, "%g,%g,%g", v.x(), v.y(), v.z());
@@ -19,28 +25,31 @@ std::string fmt_vec(const Vec3& v) {
 
 }  // namespace
 
-bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int width, int height) {
+bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int width, int height,
+                               std::string_view mesh_name) {
   if (width < 1 || height < 1) throw std::invalid_argument("make_camera: image size must be positive");
   const double fov = spec.fov_deg.value_or(kDefaultFovDeg);
   if (!(fov > 0.0 && fov < 180.0))
-    throw InputError("", "", "--fov", "the field of view must be in (0, 180) degrees, got " + std::to_string(fov));
+    throw UsageError("--fov", "the field of view must be in (0, 180) degrees, got " + std::to_string(fov));
   for (const auto& [name, v] : {std::pair{"--eye", spec.eye}, std::pair{"--look-at", spec.look_at}, std::pair{"--up", spec.up}})
-    if (v && !finite(*v)) throw InputError("", "", name, "not a finite vector");
+    if (v && !finite(*v)) throw UsageError(name, "not a finite vector");
   const bool box_ok = !bounds.empty() && finite(bounds.lo) && finite(bounds.hi);
-  if (!spec.look_at && !box_ok) throw InputError("", "", "--look-at", "the mesh has no finite bounds to look at");
+  if (!spec.look_at && !box_ok)
+    throw InputError(std::string(mesh_name), "", "--look-at", "the mesh has no finite bounds to look at");
   const Vec3 look = spec.look_at.value_or(box_ok ? bounds.center() : Vec3::Zero());
   const Vec3 up = spec.up.value_or(Vec3(0, 1, 0));
-  if (!(up.norm() > 0.0)) throw InputError("", "", "--up", "the up vector is zero");
-  const Vec3 upn = up.normalized();
+  if (!(up.cwiseAbs().maxCoeff() > 0.0)) throw UsageError("--up", "the up vector is zero");
+  const Vec3 upn = unit(up);
 
   Vec3 forward;
   if (spec.eye) {
     const Vec3 d = look - *spec.eye;
-    if (!(d.norm() > 0.0))
-      throw InputError("", "", "--eye", "eye and look-at are the same point " + fmt_vec(*spec.eye));
-    forward = d.normalized();
-    if (!std::isfinite(forward.x()))  // a difference that overflows
-      throw InputError("", "", "--eye", "eye and look-at are too far apart");
+    if (!finite(d))  // a difference that overflows
+      throw UsageError("--eye", "eye " + fmt_vec(*spec.eye) + " and look-at " + fmt_vec(look) +
+                                    " are too far apart (their difference overflows)");
+    if (!(d.cwiseAbs().maxCoeff() > 0.0))
+      throw UsageError("--eye", "eye and look-at are the same point " + fmt_vec(*spec.eye));
+    forward = unit(d);
   } else {
     forward = Vec3(0, 0, -1);
     if (upn.cross(forward).norm() < 1e-6) forward = Vec3(0, -1, 0);  // a z-up mesh: look along -y
@@ -60,7 +69,7 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
   }
   // sin of the angle between up and the view direction; below 1e-6 the image's up is undefined.
   if (upn.cross(forward).norm() < 1e-6)
-    throw InputError("", "", "--up", "the up vector " + fmt_vec(up) + " is parallel to the view direction " + fmt_vec(forward));
+    throw UsageError("--up", "the up vector " + fmt_vec(up) + " is parallel to the view direction " + fmt_vec(forward));
 
   bvh::PinholeCamera c;
   c.fov_y_deg = fov;
@@ -71,7 +80,7 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
     c.eye = *spec.eye;
     return c;
   }
-  if (!box_ok) throw InputError("", "", "--eye", "the mesh has no finite bounds to frame");
+  if (!box_ok) throw InputError(std::string(mesh_name), "", "--eye", "the mesh has no finite bounds to frame");
   // Distance d from look_at such that every corner q (relative to look_at) satisfies
   // |q.right| <= tw (d + q.fwd) / 1.05 and |q.up| <= th (d + q.fwd) / 1.05 (5% margin).
   const double th = std::tan(0.5 * fov * M_PI / 180.0);
@@ -92,8 +101,8 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
   dist = std::max(dist, 1e-3 * scale);
   c.eye = look - dist * forward;
   if (!finite(c.eye))  // (no --eye was given: the default camera's distance overflows)
-    throw InputError("", "", "", "the default camera cannot frame the mesh: its bounds are too large (give --eye, or "
-                                 "scale the mesh)");
+    throw InputError(std::string(mesh_name), "", "",
+                     "the default camera cannot frame the mesh: its bounds are too large (give --eye, or scale the mesh)");
   return c;
 }
 

@@ -35,10 +35,13 @@ inline constexpr double kDefaultFovDeg = 45.0;
 /// - without eye, the camera looks along -z (along -y when `up` is parallel to z, for z-up
 ///   meshes) at look_at and stands just far enough back that every corner of the bounds
 ///   projects inside the image with a 5% margin, for any aspect ratio.
-/// Throws InputError (element = the offending option: "--eye", "--up", "--fov") for: a
-/// non-finite value, fov outside (0, 180), eye == look_at, a zero up, an up parallel to the view
-/// direction; and for an empty or non-finite mesh bounds without an explicit eye.
-[[nodiscard]] bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int width, int height);
+/// Throws UsageError (exit 2; element = the offending option: "--eye", "--up", "--fov") for: a
+/// non-finite value, fov outside (0, 180), eye == look_at or so far apart that their difference
+/// overflows, a zero up, an up parallel to the view direction; and InputError naming
+/// `mesh_name` for a mesh whose bounds are empty or not finite without an explicit eye, or too
+/// large for the default camera to frame.
+[[nodiscard]] bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int width, int height,
+                                             std::string_view mesh_name = {});
 
 /// Primary rays of the camera (bvh::primary_rays; validates the image size: 1..kMaxImageSide per side,
 /// std::invalid_argument otherwise).
