@@ -30,7 +30,7 @@ std::vector<ClusterRow> cluster_rows(const Mesh& mesh, const Clustering& c, cons
     params.size_bound_mode = cfg.size_bound_mode;
     params.avg_sa = avg_sa ? *avg_sa : average_triangle_sphere_area(mesh.positions(), mesh.triangles());
   }
-  const bool usable = has_objective && params.avg_sa > 0;
+  const bool usable = has_objective && params.avg_sa > 0 && std::isfinite(params.avg_sa);  // (inf: coordinates near the double range)
   // The clustering's vertex lists, when it has them (offsets per cluster, ending at the list's
   // end); else each cluster's are made from its triangles.
   const bool lists = c.vertex_offsets.size() == c.triangle_offsets.size() && !c.vertex_offsets.empty() &&

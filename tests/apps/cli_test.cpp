@@ -513,6 +513,18 @@ TEST_F(Cli, ClusterOnMeshesWithoutASizeScale) {
   EXPECT_NE(r.err.find("huge.off: the mean bounding-sphere area of the triangles (AvgSA"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("AccObjective"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "h"));
+  // Methods without the Acc objective cluster it; the metrics' Acc columns are nan, with a note
+  // (before, an internal `size_bound: avg_sa` error without the file).
+  for (const char* method : {"sah-split", "meshopt"}) {
+    const fs::path out = dir_ / (std::string("h_") + method);
+    r = ptc({"cluster", huge.string(), "--method", method, "--out", out.string()});
+    EXPECT_EQ(r.code, 0) << method << " " << r.err;
+    EXPECT_NE(r.err.find("huge.off: the triangles' mean bounding-sphere area (AvgSA) overflows"), std::string::npos)
+        << r.err;
+    const auto rows = ptc::test::csv_rows(slurp(out / "clusters.csv"));
+    ASSERT_FALSE(rows.empty()) << method;
+    for (const char* col : {"acc", "reg_bound", "size_bound"}) EXPECT_EQ(rows[0].at(col), "nan") << method << " " << col;
+  }
 }
 
 TEST_F(Cli, ClusterRejectsBadArguments) {
