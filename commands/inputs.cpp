@@ -55,7 +55,11 @@ nlohmann::json read_experiment_manifest(const std::filesystem::path& dir) {
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(f.string(), "", "", std::string("not valid JSON: ") + e.what());
+    // nlohmann's message without its "[json.exception.parse_error.101] " prefix; the byte it stopped at.
+    std::string why = e.what();
+    if (const auto k = why.find("] "); k != std::string::npos) why = why.substr(k + 2);
+    const auto* pe = dynamic_cast<const nlohmann::json::parse_error*>(&e);
+    throw InputError(f.string(), pe ? byte_loc(pe->byte) : std::string(), "", "not valid JSON: " + why);
   }
 }
 

@@ -505,6 +505,13 @@ TEST_F(Experiment, MergeRefusesAnEditedManifestNamingIt) {
   EXPECT_NE(r.err.find("manifest.json"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("item_rows"), std::string::npos) << r.err;
   EXPECT_EQ(lines(r.err), 1u) << r.err;
+  // A manifest cut short: the file and the byte, without nlohmann's exception name.
+  spit(dir_ / "a" / "manifest.json", m.substr(0, 40));
+  const RunResult cut = ptc({"merge", (dir_ / "a").string(), "--out", (dir_ / "m").string()});
+  EXPECT_EQ(cut.code, 1);
+  EXPECT_NE(cut.err.find("manifest.json: byte 41: not valid JSON: parse error"), std::string::npos) << cut.err;
+  EXPECT_EQ(cut.err.find("json.exception"), std::string::npos) << cut.err;
+  EXPECT_EQ(lines(cut.err), 1u) << cut.err;
 }
 
 TEST_F(Experiment, UsageErrorsNameTheFlag) {
