@@ -80,6 +80,18 @@ TEST(IoStl, AsciiWeldsBitIdenticalCornersAcrossSolids) {
   EXPECT_FALSE(lm.report.binary);
 }
 
+// An ascii file that starts with "SOLID" (keywords are case-insensitive) or with a UTF-8 byte-order
+// mark is ascii too (both were read as binary and refused by its header's facet count).
+TEST(IoStl, AsciiStartingWithUpperCaseSolidOrAByteOrderMark) {
+  std::string upper = kAscii;
+  upper.replace(0, 5, "SOLID");
+  for (const std::string& text : {upper, "\xEF\xBB\xBF" + std::string(kAscii), "\xEF\xBB\xBF" + upper}) {
+    const auto lm = stl(text);
+    expect_square_and_facet(lm);
+    EXPECT_FALSE(lm.report.binary);
+  }
+}
+
 TEST(IoStl, Binary) {
   const auto lm = stl(binary_stl(kFacets));
   expect_square_and_facet(lm);

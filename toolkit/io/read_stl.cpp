@@ -81,10 +81,20 @@ class Welder {
   std::vector<Vec3> pos_;
 };
 
+bool iequals(std::string_view a, std::string_view b);
+
+// The text after a UTF-8 byte-order mark, if it starts with one.
+std::string_view without_bom(std::string_view bytes) {
+  return bytes.substr(0, 3) == "\xEF\xBB\xBF" ? bytes.substr(3) : bytes;
+}
+
+// "solid" in any case (the keywords are case-insensitive), after a UTF-8 byte-order mark and
+// white space.
 bool starts_with_solid(std::string_view bytes) {
+  bytes = without_bom(bytes);
   std::size_t i = 0;
   while (i < bytes.size() && is_space(bytes[i])) ++i;
-  return bytes.substr(i, 5) == "solid";
+  return iequals(bytes.substr(i, 5), "solid");
 }
 
 bool iequals(std::string_view a, std::string_view b) {
@@ -151,7 +161,8 @@ LoadedMesh read_binary(std::string_view bytes, const std::string& name) {
 // ---- ascii -------------------------------------------------------------------------------------
 class AsciiStl {
  public:
-  AsciiStl(std::string_view bytes, const std::string& name) : tr_(bytes, 1), bytes_(bytes), name_(name) {}
+  AsciiStl(std::string_view bytes, const std::string& name)
+      : tr_(without_bom(bytes), 1), bytes_(without_bom(bytes)), name_(name) {}
 
   LoadedMesh parse() {
     ReadReport report;
