@@ -1,6 +1,8 @@
 // OFF reader against hand-written files whose every coordinate and face is known.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <string>
 
 #include "toolkit/core/error.h"
@@ -58,6 +60,27 @@ TEST(IoOff, CommentsBeforeHeaderBlankLinesTrailingCommentsAndCrLf) {
   EXPECT_EQ(m.position(2), Vec3(7, 8, 9));
   ASSERT_EQ(m.triangle_count(), 1u);
   expect_tri(m, 0, 0, 1, 2);
+}
+
+// Lines that end in a carriage return alone (classic Mac OS text): each CR ends a line, in OFF
+// and in OBJ, with comments (which end at the line's end) in both. Text with any '\n' is read as
+// it is (a lone CR there stays a blank).
+TEST(IoOff, LinesEndingInACarriageReturnAlone) {
+  const std::string unix_off = "OFF # counts next\n4 4 6\n0 0 0 # a comment\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  std::string mac = unix_off;
+  std::replace(mac.begin(), mac.end(), '\n', '\r');
+  const auto a = off(unix_off), b = off(mac);
+  ASSERT_EQ(b.mesh.vertex_count(), 4u);
+  ASSERT_EQ(b.mesh.triangle_count(), 4u);
+  for (std::uint32_t v = 0; v < 4; ++v) EXPECT_EQ(b.mesh.position(v), a.mesh.position(v)) << v;
+  for (std::size_t t = 0; t < 4; ++t) EXPECT_EQ(b.mesh.triangle(t), a.mesh.triangle(t)) << t;
+  std::string obj = "# a comment\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\n";
+  const auto c = io_test::read(obj, MeshFormat::Obj);
+  std::replace(obj.begin(), obj.end(), '\n', '\r');
+  const auto d = io_test::read(obj, MeshFormat::Obj);
+  ASSERT_EQ(d.mesh.triangle_count(), 2u);
+  for (std::size_t t = 0; t < 2; ++t) EXPECT_EQ(d.mesh.triangle(t), c.mesh.triangle(t)) << t;
+  for (std::uint32_t v = 0; v < 4; ++v) EXPECT_EQ(d.mesh.position(v), c.mesh.position(v)) << v;
 }
 
 TEST(IoOff, CountsOnTheHeaderLineAndNoEdgeCount) {

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -107,6 +108,15 @@ void check_not_utf16(std::string_view first_bytes, const std::string& name) {
 
 LoadedMesh read_mesh_from_memory(std::string_view bytes, MeshFormat f, const std::string& name) {
   if (f != MeshFormat::Stl) io::check_not_utf16(bytes, name);  // (binary STL may begin with any bytes)
+  // OFF and OBJ text whose lines end in a carriage return alone (classic Mac OS): read with each
+  // CR as a line end, as other loaders do (text with any '\n' is read as it is).
+  std::string unix_lines;
+  if ((f == MeshFormat::Off || f == MeshFormat::Obj) && bytes.find('\n') == std::string_view::npos &&
+      bytes.find('\r') != std::string_view::npos) {
+    unix_lines.assign(bytes);
+    std::replace(unix_lines.begin(), unix_lines.end(), '\r', '\n');
+    bytes = unix_lines;
+  }
   switch (f) {
     case MeshFormat::Off: return io::read_off(bytes, name);
     case MeshFormat::Obj: return io::read_obj(bytes, name);
