@@ -1,6 +1,7 @@
 // `ptc bench`.
 #include "commands/bench.h"
 
+#include <iostream>
 #include <ostream>
 
 #include <fmt/format.h>
@@ -49,6 +50,14 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     throw InputError(arg, "", "", e.what());
   }
   manifest.add_timing_ms("bench", sw.ms());
+  {  // as `ptc trace` says it: a view where no ray meets the mesh measures the background only
+    std::uint64_t hits = 0, rays = 0;
+    for (const BenchRow& row : r.rows)
+      if (row.config == "ours_triangles") hits += row.hits, rays += row.rays;
+    if (rays > 0 && hits == 0)
+      std::cerr << "ptc: note: no primary ray hit the mesh in any frame (the camera sees past it or from inside it: "
+                   "give --eye and --look-at); the times measure empty rays\n";
+  }
   if (r.cluster_ms > 0) manifest.add_timing_ms("cluster", r.cluster_ms);
   manifest.add_timing_ms("cluster_scene_setup", r.cluster_scene_setup_ms);
   if (c.vertex_order == bvh::VertexOrder::Clusters) manifest.add_timing_ms("renumber_vertices", r.renumber_ms);

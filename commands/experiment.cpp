@@ -229,7 +229,10 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
       if (!seen.insert(i).second)
         throw UsageError(*kind == ExperimentKind::Sweep ? "--max-counts" : *kind == ExperimentKind::Compare ? "--configs"
                                                                                                            : "--clusterings",
-                         fmt::format("'{}' is listed twice", i));
+                         // (a sweep's items are named max_count=N: the user wrote N)
+                         fmt::format("'{}' is listed twice", *kind == ExperimentKind::Sweep && i.rfind("max_count=", 0) == 0
+                                                                 ? i.substr(10)
+                                                                 : i));
     if (!given && seen.count("given"))
       throw UsageError("--clusters", "configuration 'given' needs --clusters DIR (a `ptc cluster` output)");
     if (given && *kind != ExperimentKind::Accuracy && !seen.count("given"))

@@ -130,8 +130,9 @@ std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& 
   if (read.welded_vertices) line("welded vertices", std::to_string(read.welded_vertices));
   for (const std::string& note : read_notes(read)) line("note", note);
   if (!r.bounds.empty()) {
-    line("bbox min", fmt::format("{:.9g} {:.9g} {:.9g}", r.bounds.lo.x(), r.bounds.lo.y(), r.bounds.lo.z()));
-    line("bbox max", fmt::format("{:.9g} {:.9g} {:.9g}", r.bounds.hi.x(), r.bounds.hi.y(), r.bounds.hi.z()));
+    // (shortest round-trip digits: a small mesh far from the origin keeps its extent visible)
+    line("bbox min", fmt::format("{} {} {}", r.bounds.lo.x(), r.bounds.lo.y(), r.bounds.lo.z()));
+    line("bbox max", fmt::format("{} {} {}", r.bounds.hi.x(), r.bounds.hi.y(), r.bounds.hi.z()));
   }
   line("total area", std::isinf(r.total_area) ? std::string("inf (beyond double's range: areas are lengths squared)")
                                                : fmt::format("{:.9g}", r.total_area));

@@ -521,7 +521,7 @@ TEST_F(Experiment, UsageErrorsNameTheFlag) {
       {{"experiment", "sweep", "cloth-sphere-32", "--clusters", "somewhere"}, "--clusters"},
       {{"experiment", "sweep", "cloth-sphere-32", "--max-count", "20"}, "--max-count"},
       {{"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,x"}, "--max-counts"},
-      {{"experiment", "sweep", "cloth-sphere-32", "--max-counts", "10,10"}, "listed twice"},
+      {{"experiment", "sweep", "cloth-sphere-32", "--max-counts", "10,10"}, "--max-counts: '10' is listed twice"},
       {{"experiment", "compare", "cloth-sphere-32", "--configs", "acc_growth,bogus"}, "'bogus' is not a configuration"},
       {{"experiment", "compare", "cloth-sphere-32", "--configs", "given"}, "--clusters"},
       {{"experiment", "compare", "cloth-sphere-32", "--configs", "acc_growth", "--reference", "standard"}, "--reference"},

@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <unistd.h>
@@ -207,6 +208,30 @@ TEST_F(Interrupt, SigtermStopsTheSameWay) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// A mesh that is a FIFO nobody writes to: the open blocks, and the handlers' SA_RESTART would resume
+// it after the signal. The first SIGTERM (or Ctrl-C) stops the run at once, with one line, by the
+// signal (it hung until a second signal before), and no output is left.
+TEST_F(Interrupt, AFifoWithoutAWriterStopsOnTheFirstSignal) {
+  for (const int sig : {SIGTERM, SIGINT}) {
+    const fs::path fifo = dir_ / (sig == SIGTERM ? "term.off" : "int.off");
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    const fs::path out = dir_ / (sig == SIGTERM ? "out_term" : "out_int");
+    const pid_t pid = start({"cluster", fifo.string(), "--out", out.string()});
+    ASSERT_GT(pid, 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));  // (blocked in the open by then)
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, WNOHANG), 0) << "ptc ended without a writer: " << slurp(dir_ / "stderr.txt");
+    ASSERT_EQ(kill(pid, sig), 0);
+    const auto t0 = Clock::now();
+    const RunResult r = wait_for(pid, std::chrono::seconds(5));
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 2.0);
+    EXPECT_EQ(r.code, -sig) << r.err;
+    EXPECT_EQ(r.err, "ptc: interrupted while waiting for input: stopped\n");
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_EQ(temporaries_of(dir_), std::vector<std::string>{});
+  }
+}
+
 // `ptc experiment` stops the same way (its study loop is the frame loop; the clusterings before it
 // stop at their progress steps).
 TEST_F(Interrupt, AnExperimentStopsTheSameWay) {
@@ -356,7 +381,9 @@ TEST_P(InterruptAtMoments, StopsCleanlyOrFinishesWhole) {
       if (r.code == 0) {  // finished first: the output is whole (a new run's, so only its names)
         ++finished;
         EXPECT_TRUE(fs::exists(out));
-        if (fs::is_directory(out)) EXPECT_TRUE(fs::exists(out / "manifest.json"));
+        if (fs::is_directory(out)) {
+          EXPECT_TRUE(fs::exists(out / "manifest.json"));
+        }
         before = contents(out);  // the earlier output of the next runs
         continue;
       }

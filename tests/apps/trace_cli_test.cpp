@@ -196,6 +196,11 @@ TEST_F(TraceCli, FlatMeshIsSeenAndAnEmptyViewIsNoted) {
   EXPECT_NE(r.err.find("in frame 0 "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("nor in 3 later frame(s)"), std::string::npos) << r.err;
   EXPECT_EQ(lines(r.err), 2u) << r.err;
+  // The bench says it too (its times would measure empty rays).
+  r = ptc({"bench", plane, "--frames", "0:1", "--width", "8", "--height", "8", "--eye", "0,5,0", "--look-at", "0,10,0",
+           "--up", "1,0,0", "--out", (dir_ / "b").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ptc: note: no primary ray hit the mesh in any frame"), std::string::npos) << r.err;
   // The twist (about y) leaves a plane flat across y still, and says so.
   r = ptc({"trace", plane, "--deform", "twist", "--frames", "0:1", "--width", "8", "--height", "8", "--out",
            (dir_ / "t").string()});
@@ -203,6 +208,25 @@ TEST_F(TraceCli, FlatMeshIsSeenAndAnEmptyViewIsNoted) {
   EXPECT_NE(r.err.find("the twist deformer leaves"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("no extent along y"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(dir_ / "t" / "depth_0000.png"), slurp(dir_ / "t" / "depth_0001.png"));
+}
+
+// The default camera frames the triangles: a vertex no triangle uses, far away, does not shrink
+// the mesh to a dot (same image as without it); a small mesh far from the origin fills the view
+// (the eye stood 1e-6 of its distance back before, 100 units for a 2-unit quad at 1e11).
+TEST_F(TraceCli, TheDefaultCameraFramesTheTriangles) {
+  auto hits = [&](const std::string& mesh, const std::string& out) {
+    const CmdResult r = ptc({"trace", mesh, "--width", "32", "--height", "32", "--json", "--out", (dir_ / out).string()});
+    EXPECT_EQ(r.code, 0) << r.err;
+    return r.code == 0 ? nlohmann::json::parse(r.out)["rows"][0]["hits"].get<int>() : -1;
+  };
+  const std::string quad = "4 2 0\n-1 -1 0\n1 -1 0\n-1 1 0\n1 1 0\n3 0 1 2\n3 1 3 2\n";
+  const int plain = hits(write("q.off", "OFF\n" + quad).string(), "q");
+  EXPECT_GT(plain, 300);
+  const std::string lone = "OFF\n5 2 0\n-1 -1 0\n1 -1 0\n-1 1 0\n1 1 0\n1000 1000 1000\n3 0 1 2\n3 1 3 2\n";
+  EXPECT_EQ(hits(write("lone.off", lone).string(), "lone"), plain);
+  EXPECT_EQ(slurp(dir_ / "lone" / "depth_0000.png"), slurp(dir_ / "q" / "depth_0000.png"));
+  const std::string far = "OFF\n4 2 0\n1e11 -1 0\n100000000002 -1 0\n1e11 1 0\n100000000002 1 0\n3 0 1 2\n3 1 3 2\n";
+  EXPECT_GT(hits(write("far.off", far).string(), "far"), 300);
 }
 
 // --deform: a mesh file traced with the stand-in motion ptc bench measures (frames of a periodic
