@@ -22,6 +22,7 @@
 #include <vtkUnsignedCharArray.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "toolkit/core/cancel.h"
 #include <stdexcept>
@@ -145,6 +146,27 @@ void set_camera(vtkRenderer* r, const Mesh& mesh, const bvh::PinholeCamera& cam)
   r->ResetCameraClippingRange();
 }
 
+// The mesh and camera moved and scaled so that the mesh's box is centred at the origin with an
+// extent near 1 (a power-of-two scale: the picture is the same one): VTK's clipping range, depth
+// buffer and normals lose a mesh of 1e-30 or 1e20 units (an empty picture, or a black one).
+struct Normalised {
+  Mesh mesh;
+  bvh::PinholeCamera cam;
+};
+Normalised normalised(const Mesh& mesh, const bvh::PinholeCamera& cam) {
+  Normalised n{mesh, cam};
+  const Box3 b = mesh.referenced_bounds();
+  if (b.empty() || !b.lo.allFinite() || !b.hi.allFinite()) return n;
+  const Vec3 c = b.center();
+  const double e = b.extent().maxCoeff();
+  const double s = e > 0 && std::isfinite(e) ? std::ldexp(1.0, -std::ilogb(e)) : 1.0;
+  std::vector<Vec3> pos(mesh.positions().begin(), mesh.positions().end());
+  for (Vec3& p : pos) p = (p - c) * s;
+  n.mesh = mesh.with_positions(std::move(pos));
+  n.cam.eye = (cam.eye - c) * s;
+  return n;
+}
+
 RgbImage read_back(vtkRenderWindow* win, int w, int h) {
   vtkNew<vtkUnsignedCharArray> px;
   win->GetPixelData(0, 0, w - 1, h - 1, /*front=*/0, px, /*right=*/0);
@@ -179,8 +201,11 @@ Renderer::~Renderer() {
   if (impl_ && impl_->window) impl_->window->Finalize();
 }
 
-RgbImage Renderer::mesh(const Mesh& mesh, const MeshStyle& style, const bvh::PinholeCamera& cam, int width, int height) {
+RgbImage Renderer::mesh(const Mesh& in, const MeshStyle& style, const bvh::PinholeCamera& in_cam, int width, int height) {
   check_size(width, height);
+  const Normalised n = normalised(in, in_cam);
+  const Mesh& mesh = n.mesh;
+  const bvh::PinholeCamera& cam = n.cam;
   MeshActors a = make_actors(mesh, style, cam.eye);
   vtkRenderer* r = impl_->renderer;
   r->RemoveAllViewProps();
@@ -224,9 +249,12 @@ RgbImage Renderer::text(int width, int height, std::span<const TextItem> items, 
   return img;
 }
 
-void Renderer::interact(const Mesh& mesh, const MeshStyle& style, const bvh::PinholeCamera& cam, int width, int height,
+void Renderer::interact(const Mesh& in, const MeshStyle& style, const bvh::PinholeCamera& in_cam, int width, int height,
                         const std::string& title) {
   check_size(width, height);
+  const Normalised n = normalised(in, in_cam);
+  const Mesh& mesh = n.mesh;
+  const bvh::PinholeCamera& cam = n.cam;
   MeshActors a = make_actors(mesh, style, cam.eye);
   vtkNew<vtkRenderer> r;
   r->AddActor(a.surface);

@@ -247,6 +247,35 @@ TEST_F(RendererTest, LitPixelsKeepTheirTriangleHueAndBordersAreDrawn) {
   EXPECT_EQ(changed_elsewhere, 0);
 }
 
+// VTK draws a mesh of 1e-30 or 1e20 units as it draws the same mesh at unit size: the renderer
+// centres and scales mesh and camera first (by a power of two). Before, the small one drew an empty
+// picture and the large one a nearly black one. The pictures must be the same pixel for pixel.
+TEST_F(RendererTest, TinyAndHugeMeshesDrawAsAtUnitSize) {
+  const Mesh m = grid(4, 0.15);
+  const int w = 48, h = 48;
+  CameraSpec spec;
+  spec.eye = Vec3(2.0, 2.0, 6.0);
+  MeshStyle st;
+  for (std::uint32_t t = 0; t < m.triangle_count(); ++t) st.triangle_colours.push_back(palette_colour(t % 12));
+  st.lines.push_back({2, 7});
+  const RgbImage want = renderer_.mesh(m, st, make_camera(spec, m.bounds(), w, h), w, h);
+  int drawn = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) drawn += want.at(x, y) != kBackground;
+  ASSERT_GT(drawn, 500);
+  for (const int e : {-100, -33, 66}) {
+    const double s = std::ldexp(1.0, e);
+    std::vector<Vec3> pos(m.positions().begin(), m.positions().end());
+    for (Vec3& p : pos) p *= s;
+    const Mesh ms = m.with_positions(pos);
+    CameraSpec ss = spec;
+    ss.eye = *spec.eye * s;
+    const RgbImage got = renderer_.mesh(ms, st, make_camera(ss, ms.bounds(), w, h), w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) ASSERT_EQ(got.at(x, y), want.at(x, y)) << "2^" << e << " pixel (" << x << ", " << y << ")";
+  }
+}
+
 TEST_F(RendererTest, TextStripsHaveTextWhereTheItemsAreAndNothingElse) {
   TextItem a{"frame 12", 40, 20, 16, -1};
   TextItem b{"0.125", 150, 20, 16, 1};
