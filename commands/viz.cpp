@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <ostream>
 
@@ -468,7 +469,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
                        count(mesh.triangle_count(), "triangle", "triangles"),
                        count(clusters.cluster_count(), "cluster", "clusters"), count(colours_used, "colour", "colours"));
   }
-  if (!mp4_note.empty()) out << "note: " << mp4_note << "\n";
+  if (!mp4_note.empty()) std::cerr << "ptc: note: " << mp4_note << "\n";  // (as every note: on stderr)
   if (dir) {
     out << "wrote " << opt.out_dir.string() << "/";
     if (written.size() == 1) out << written[0];

@@ -182,8 +182,11 @@ def main():
                     base, now = med(threads[0], k), med(t, k)
                     scaling.append({"scene": s, "config": c, "measure": k, "threads_base": threads[0], "threads": t,
                                     "base_ms": base, "ms": now,
-                                    # (the overlap is time saved, not a stage: no speed-up)
-                                    "speedup": base / now if now > 0 and k != "overlap_ms" else float("nan")})
+                                    # (the overlap is time saved, not a stage: no speed-up; nor for a
+                                    # stage that is 0 on one side: on one thread the cluster scene's
+                                    # boxes are made in the leaf data, on more in the box pass)
+                                    "speedup": base / now if now > 0 and base > 0 and k != "overlap_ms"
+                                    else float("nan")})
     with open(os.path.join(tmp, "scaling.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["scene", "config", "measure", "threads_base", "threads", "base_ms", "ms", "speedup"],
                            lineterminator="\n")
