@@ -475,6 +475,12 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
   std::map<std::uint32_t, std::filesystem::path> seen;
   for (const auto& s : shards) {
     const nlohmann::json id = identity(s.manifest);
+    if (s.manifest["parameters"]["experiment"] != params["experiment"])  // (checked strings: check_shard_manifest)
+      throw InputError(s.dir.string(), "", "",
+                       fmt::format("a shard of `ptc experiment {}`, not of {} like {}: shards of different experiments "
+                                   "do not merge",
+                                   s.manifest["parameters"]["experiment"].get<std::string>(),
+                                   params["experiment"].get<std::string>(), shards[0].dir.string()));
     if (id != id0)
       throw InputError(s.dir.string(), "", "",
                        fmt::format("not a shard of the same study as {}: {}", shards[0].dir.string(),

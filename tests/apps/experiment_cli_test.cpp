@@ -248,6 +248,14 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   r = ptc({"merge", a, (dir_ / "third").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("split into 3"), std::string::npos) << r.err;
+  // A shard of another experiment: said in those words (a JSON path of the difference before).
+  ASSERT_EQ(ptc({"experiment", "compare", "cloth-sphere-32", "--configs", "acc_growth,naive", "--frames", "0:1", "--width", "16",
+                 "--height", "16", "--quiet", "--shard", "2/2", "--out", (dir_ / "cmp").string()})
+                .code,
+            0);
+  r = ptc({"merge", a, (dir_ / "cmp").string(), "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("cmp: a shard of `ptc experiment compare`, not of sweep like " + a), std::string::npos) << r.err;
   fs::create_directories(dir_ / "nothing");  // a directory without a manifest
   r = ptc({"merge", (dir_ / "nothing").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
