@@ -120,6 +120,11 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   if (!metric.empty() && !pixel_metric && !cmetric)
     throw UsageError("--metric", fmt::format("'{}' is not a metric ({}, {}, {})", metric, kPixelMetrics[0], kPixelMetrics[1],
                                              cluster_metric_names()));
+  if (opt.shadows && !(kind == VizKind::Panel || (kind == VizKind::Heatmap && pixel_metric)))  // (it would do nothing)
+    throw UsageError("--shadows", fmt::format("needs a traced picture: panel, or a heatmap of {} or {} (viz {}{} traces "
+                                              "no rays)",
+                                              kPixelMetrics[0], kPixelMetrics[1], to_string(kind),
+                                              kind == VizKind::Heatmap ? " of a per-cluster metric" : ""));
   if (opt.clusters.empty() && !(kind == VizKind::Heatmap && pixel_metric))
     throw UsageError("--clusters", fmt::format("viz {}{} needs --clusters DIR (a `ptc cluster` output)", to_string(kind),
                                                kind == VizKind::Heatmap ? " of a per-cluster metric" : ""));

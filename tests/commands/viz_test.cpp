@@ -522,6 +522,16 @@ TEST_F(Viz, UsageErrorsNameTheFlagAndComeBeforeAnyDisplay) {
   o.range.reset();
   o.clusters.clear();
   EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--clusters");  // a per-cluster metric needs clusters
+  // --shadows where no ray is traced (a per-cluster heatmap, a partition, an export): refused.
+  o.clusters = options(VizKind::Heatmap, "u").clusters;
+  o.shadows = true;
+  EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--shadows");
+  o.shadows = false;
+  for (const VizKind k : {VizKind::Partition, VizKind::Export}) {
+    VizCommandOptions e = options(k, "u");
+    e.shadows = true;
+    EXPECT_EQ(usage_flag([&] { cmd_viz(e, out); }), "--shadows") << to_string(k);
+  }
   VizCommandOptions p = options(VizKind::Partition, "u");
   p.metric = "reg";
   EXPECT_EQ(usage_flag([&] { cmd_viz(p, out); }), "--metric");
