@@ -150,9 +150,7 @@ void trace_singles(RTCScene scene, const FrameMap& frame, const RayBatch& rays, 
   const TScale ts(frame.scale);
   for (std::size_t i = begin; i != end; ++i) {
     RTCRayHit rh;
-    Vec3f o;
-    if (!embree_origin(rays, i, frame, o)) [[unlikely]]
-      throw_out_of_reach(rays, i);
+    const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), frame);  // (check_rays: within reach)
     rh.ray.org_x = o[0], rh.ray.org_y = o[1], rh.ray.org_z = o[2];
     rh.ray.dir_x = rays.dx[i], rh.ray.dir_y = rays.dy[i], rh.ray.dir_z = rays.dz[i];
     rh.ray.tnear = rays.tmin[i] * ts.to;
@@ -190,12 +188,10 @@ void trace_packets_of(RTCScene scene, const FrameMap& frame, const RayBatch& ray
     const int n = static_cast<int>(std::min<std::size_t>(N, end - first));
     alignas(64) int valid[N];
     alignas(64) RayHitN rh;
-    bool reach = true;
     for (int l = 0; l < N; ++l) {
       const std::size_t i = first + std::size_t(l < n ? l : 0);
       valid[l] = l < n ? -1 : 0;
-      Vec3f o;
-      reach &= embree_origin(rays, i, frame, o);
+      const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), frame);  // (check_rays: within reach)
       rh.ray.org_x[l] = o[0], rh.ray.org_y[l] = o[1], rh.ray.org_z[l] = o[2];
       rh.ray.dir_x[l] = rays.dx[i], rh.ray.dir_y[l] = rays.dy[i], rh.ray.dir_z[l] = rays.dz[i];
       rh.ray.tnear[l] = rays.tmin[i] * ts.to;
@@ -207,11 +203,6 @@ void trace_packets_of(RTCScene scene, const FrameMap& frame, const RayBatch& ray
       rh.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0][l] = RTC_INVALID_GEOMETRY_ID;
     }
-    if (!reach) [[unlikely]]
-      for (int l = 0; l < n; ++l) {
-        Vec3f o;
-        if (!embree_origin(rays, first + l, frame, o)) throw_out_of_reach(rays, first + l);
-      }
     if (mode == HitMode::Closest)
       intersect(valid, scene, &ctx, &rh);
     else
@@ -232,6 +223,14 @@ void trace_packets_of(RTCScene scene, const FrameMap& frame, const RayBatch& ray
 }
 
 }  // namespace
+
+void EmbreeScene::check_rays(const RayBatch& rays) const {
+  const FrameMap& frame = impl_->frame;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    Vec3f o;
+    if (!embree_origin(rays, i, frame, o)) throw_out_of_reach(rays, i);
+  }
+}
 
 TraceTotals EmbreeScene::trace(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads) const {
   return trace_packets(rays, hits, mode, threads, 1);

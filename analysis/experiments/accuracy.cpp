@@ -74,6 +74,7 @@ double trace_primary_ms(const loop::Accel& a, const bvh::RayBatch& rays, unsigne
   bvh::HitBatch h;
   bvh::HitBatch& hits = keep ? *keep : h;
   hits.resize(rays.size());  // allocated and touched outside the timed trace
+  a.check_rays(rays);        // (likewise)
   Stopwatch sw;
   (void)a.trace(rays, hits, o);
   return sw.ms();

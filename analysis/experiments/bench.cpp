@@ -167,6 +167,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
     row.times = fr.times;
     row.sah_cost = a.sah_cost().value_or(nan());
     bvh::HitBatch& h = fr.accel == 0 ? ref : hits;
+    if (fr.index == 0) a.check_rays(rays);  // (the same rays every frame; outside the timed trace)
     Stopwatch sw;
     const bvh::TraceTotals tt = a.trace(rays, h, opt);
     row.trace_ms = sw.ms();

@@ -81,6 +81,7 @@ Passes trace_passes(Prepared& p, const StudyRays& rays, const Vec3& light, const
   const bool counted = opt.counters && !loop::is_embree(p.spec.kind);
   bvh::HitBatch& hits = p.hits;
   hits.resize(rays.primary.size());  // allocated and touched outside the timed trace
+  a.check_rays(rays.primary);        // (likewise)
   Stopwatch sw;
   const bvh::TraceTotals tp = a.trace(rays.primary, hits, t);  // timed alone (argument order is unspecified)
   out.primary.add(tp, sw.ms());
@@ -135,6 +136,7 @@ class InOrder final : public loop::Accel {
   bvh::TraceTotals trace(const bvh::RayBatch& rays, bvh::HitBatch& hits, const bvh::TraceOptions& opt) const override {
     return p_.accel->trace(rays, hits, opt);
   }
+  void check_rays(const bvh::RayBatch& rays) const override { p_.accel->check_rays(rays); }
   [[nodiscard]] Vec3 origin() const override { return p_.accel->origin(); }
   [[nodiscard]] std::optional<double> sah_cost() const override { return p_.accel->sah_cost(); }
 

@@ -77,6 +77,7 @@ class EmbreeAccel final : public Accel {
     // Packets: Embree's packets (rtcIntersect4/8/16) with the coherent flag, the peer of ours.
     return scene_.trace_packets(rays, hits, opt.mode, threads_, opt.packets ? packet_width_ : 1);
   }
+  void check_rays(const bvh::RayBatch& rays) const override { scene_.check_rays(rays); }
   [[nodiscard]] Vec3 origin() const override { return origin_; }
 
  private:

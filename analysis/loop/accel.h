@@ -52,6 +52,9 @@ class Accel {
   [[nodiscard]] virtual UpdateTimes last_update() const = 0;
   /// Traces the batch (closest or any hit by opt.mode; Embree ignores opt.counters and opt.isa).
   virtual bvh::TraceTotals trace(const bvh::RayBatch& rays, bvh::HitBatch& hits, const bvh::TraceOptions& opt) const = 0;
+  /// Throws std::invalid_argument for rays the structure cannot take (Embree: origins beyond its
+  /// range, bvh::EmbreeScene::check_rays); ours take any. Callers run it before their timed trace.
+  virtual void check_rays(const bvh::RayBatch& rays) const { (void)rays; }
   /// The trace frame (ray offsets are measured in it).
   [[nodiscard]] virtual Vec3 origin() const = 0;
   /// SAH cost of the binary BVH of the last update (bvh/sah_cost.h); nullopt where the
