@@ -134,6 +134,18 @@ TEST_F(Cli, InfoOnAMeshWhoseAreasOverflowSaysSo) {
   EXPECT_NE(r.out.find("median 1e+160"), std::string::npos) << r.out;  // edge lengths stay finite
 }
 
+// The bounds in round-trip digits: a small mesh far from the origin keeps its extent (9 digits
+// printed 100000000 for both ends of z below, and 2e+18 for both ends of x).
+TEST_F(Cli, InfoPrintsTheBoundsInRoundTripDigits) {
+  const auto far = write("far.off", "OFF\n3 1 0\n2e18 100000000 100000000\n2000000000000001024 100000001 100000000.5\n"
+                                    "2e18 100000000 100000000.25\n3 0 1 2\n").string();
+  const auto r = ptc({"info", far});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("bbox min                  2e+18 100000000 100000000\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("bbox max                  2.000000000000001e+18 100000001 100000000.5\n"), std::string::npos)
+      << r.out;
+}
+
 TEST_F(Cli, SubdivideCountsAndAtomicOutput) {
   const auto cube = write("cube.off", kCube).string();
   const auto out = (dir_ / "fine.ply").string();

@@ -103,6 +103,10 @@ TEST(IoFiles, PathsThatDoNotWork) {
   EXPECT_EQ(error_of("/nonexistent/dir/mesh.off"), "cannot open: No such file or directory");
   EXPECT_EQ(error_of(kMeshes / "armadillo.xyz"), "unknown mesh format '.xyz' (use .off, .obj, .ply or .stl)");
   EXPECT_EQ(error_of("noextension"), "unknown mesh format (no extension) (use .off, .obj, .ply or .stl)");
+  // An animated asset: the hint says which commands read it (before the file is opened).
+  EXPECT_EQ(error_of("/nonexistent/faerie.MD2"),
+            "unknown mesh format '.MD2' (use .off, .obj, .ply or .stl; ptc trace, bench and animate read animated "
+            "assets, and `ptc animate FILE --out DIR` writes their frames as .ply meshes)");
   const fs::path dir = fs::temp_directory_path() / ("ptc_io_files_" + std::to_string(::getpid()) + ".off");
   fs::create_directories(dir);
   EXPECT_EQ(error_of(dir), "is a directory");
