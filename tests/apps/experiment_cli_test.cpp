@@ -544,6 +544,9 @@ TEST_F(Experiment, UsageErrorsNameTheFlag) {
       {{"experiment", "drift", "cloth-sphere-32", "--objective", "naive"}, "--objective"},
       {{"experiment", "sweep", "cloth-sphere-32", "--ao-samples", "2"}, "--ao-samples"},
       {{"experiment", "drift", "cloth-sphere-32", "--reference-rays", "10"}, "--reference-rays"},
+      // more rays than the image has pixels (it was clamped silently, the manifest saying 5000)
+      {{"experiment", "accuracy", "cloth-sphere-32", "--reference-rays", "5000", "--width", "32", "--height", "32"},
+       "--reference-rays: asks for 5000 rays, but the 32x32 image has 1024 (give at most 1024)"},
       {{"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,,10"}, "empty item"},
       {{"experiment", "sweep", "cloth-sphere-32", "--max-counts", "2000000"}, "--max-counts"},
       {{"experiment", "sweep", "cloth-sphere-32", "--method", "meshopt", "--max-counts", "0,1"}, "--max-counts"},
