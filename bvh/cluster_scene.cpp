@@ -680,12 +680,18 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
   auto leaf_data = [&] {
     const double tl = clock_ms(cfg_.clock);
     block_boxes_.resize(B ? data.blocks.size() : 0);
-    if (cfg_.built_once)  // (no corner indices: the lanes' triangles in the mesh's numbering; the sentinel last but one)
+    if (cfg_.built_once) {  // (no corner indices: the lanes' triangles in the mesh's numbering; the sentinel last but one)
       fill_blocks_from_lanes(data.triangle_ids, triangles(), f_.fpos[0].data(),
                              static_cast<std::uint32_t>(f_.fpos.size() - 2), data.blocks,
                              B ? block_boxes_.data() : nullptr);  // fenced
-    else
+    } else if (boxes_from_fill) {  // and the cluster boxes from the corners it writes
+      f_.boxes.resize(weights_.size());
+      f_.centroids.resize(weights_.size());
+      fill_blocks_and_cluster_boxes(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr,
+                                    cluster_ranges_, f_.boxes.data(), f_.centroids.data());  // fenced
+    } else {
       fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
+    }
     times.leaf_data_ms = clock_ms(cfg_.clock) - tl;
   };
   auto tree = [&] {
@@ -706,20 +712,9 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
   };
   times.overlap_ms = 0.0;
   if (boxes_from_fill) {  // the tree needs the boxes the fill makes: the fill first, then the tree
-    const double tl = clock_ms(cfg_.clock);
-    block_boxes_.resize(B ? data.blocks.size() : 0);
-    f_.boxes.resize(weights_.size());
-    f_.centroids.resize(weights_.size());
-    fill_blocks_and_cluster_boxes(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr,
-                                  cluster_ranges_, f_.boxes.data(), f_.centroids.data());  // fenced
-    times.leaf_data_ms = clock_ms(cfg_.clock) - tl;
+    leaf_data();
     tree();
-    const double t0 = clock_ms(cfg_.clock);
-    if (B) refit_subtrees();
-    times.refit_ms = clock_ms(cfg_.clock) - t0;
-    return;
-  }
-  if (overlap_possible()) {
+  } else if (overlap_possible()) {
     const double t0 = clock_ms(cfg_.clock);
     tbb::task_group tg;
     tg.run(leaf_data);

@@ -117,10 +117,10 @@ constexpr std::uint32_t kEmbreeLargeBits = std::bit_cast<std::uint32_t>(1.0e18f)
 
 inline std::uint32_t abs_bits(float x) { return std::bit_cast<std::uint32_t>(x) & 0x7fffffffu; }
 
-// A ray's origin in Embree's frame and whether Embree takes the ray (each |coordinate| of the
-// origin and the direction <= 1e18, none NaN).
-inline bool embree_origin(const RayBatch& rays, std::size_t i, const FrameMap& frame, Vec3f& o) {
-  o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), frame);
+// Whether Embree takes ray i: each |coordinate| of its origin in Embree's frame and of its
+// direction <= 1e18, none NaN.
+bool within_reach(const RayBatch& rays, std::size_t i, const FrameMap& frame) {
+  const Vec3f o = to_frame(Vec3(rays.ox[i], rays.oy[i], rays.oz[i]), frame);
   const std::uint32_t a = std::max(abs_bits(o[0]), std::max(abs_bits(o[1]), abs_bits(o[2])));
   const std::uint32_t d = std::max(abs_bits(rays.dx[i]), std::max(abs_bits(rays.dy[i]), abs_bits(rays.dz[i])));
   return std::max(a, d) <= kEmbreeLargeBits;
@@ -226,10 +226,8 @@ void trace_packets_of(RTCScene scene, const FrameMap& frame, const RayBatch& ray
 
 void EmbreeScene::check_rays(const RayBatch& rays) const {
   const FrameMap& frame = impl_->frame;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    Vec3f o;
-    if (!embree_origin(rays, i, frame, o)) throw_out_of_reach(rays, i);
-  }
+  for (std::size_t i = 0; i < rays.size(); ++i)
+    if (!within_reach(rays, i, frame)) throw_out_of_reach(rays, i);
 }
 
 TraceTotals EmbreeScene::trace(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads) const {

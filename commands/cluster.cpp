@@ -109,17 +109,15 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
     std::cerr << "ptc: note: " << opt.input.string()
               << ": every triangle collapses to a point (AvgSA = 0): one cluster per triangle; acc, reg_bound and "
                  "size_bound are nan\n";
-  std::optional<double> avg_sa =
+  const std::optional<double> avg_sa =
       c.max_count > 0 && c.max_size > 0
           ? std::optional<double>(!std::isnan(acc_avg_sa) ? acc_avg_sa
                                                           : average_triangle_sphere_area(lm.mesh.positions(), lm.mesh.triangles()))
           : std::nullopt;
-  if (avg_sa && std::isinf(*avg_sa)) {  // (a method without the Acc objective clustered the mesh anyway)
+  if (avg_sa && std::isinf(*avg_sa))  // (a method without the Acc objective clustered the mesh anyway; cluster_rows leaves them nan)
     std::cerr << "ptc: note: " << opt.input.string()
               << ": the triangles' mean bounding-sphere area (AvgSA) overflows in double precision: acc, reg_bound "
                  "and size_bound are nan\n";
-    avg_sa.reset();
-  }
   manifest.add_timing_ms("cluster", t0.ms());
 
   throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)

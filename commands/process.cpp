@@ -28,7 +28,7 @@ std::atomic<int> g_stop_signals{0};
 static_assert(std::atomic<int>::is_always_lock_free);
 
 // The first signal stops at once too while the run waits in a blocking read of a FIFO or pipe
-// (BlockingWait, toolkit/core/cancel.h), which SA_RESTART would resume forever.
+// (BlockingWaitFor, toolkit/core/cancel.h), which SA_RESTART would resume forever.
 extern "C" void on_stop_signal(int sig) {
   const bool first = g_stop_signals.fetch_add(1) == 0;
   if (first && !in_blocking_wait()) {

@@ -11,12 +11,6 @@ namespace {
 
 bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
 
-// v / |v| without overflow or underflow in the norm (v finite and not zero).
-Vec3 unit(const Vec3& v) {
-  const Vec3 s = v / v.cwiseAbs().maxCoeff();
-  return s / s.norm();
-}
-
 std::string fmt_vec(const Vec3& v) {
   char buf[96];
   std::snprintf(buf, sizeof buf, "%g,%g,%g", v.x(), v.y(), v.z());
@@ -39,7 +33,7 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
   const Vec3 look = spec.look_at.value_or(box_ok ? bounds.center() : Vec3::Zero());
   const Vec3 up = spec.up.value_or(Vec3(0, 1, 0));
   if (!(up.cwiseAbs().maxCoeff() > 0.0)) throw UsageError("--up", "the up vector is zero");
-  const Vec3 upn = unit(up);
+  const Vec3 upn = up.stableNormalized();  // (the norm of a finite vector may overflow)
 
   Vec3 forward;
   if (spec.eye) {
@@ -49,7 +43,7 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
                                     " are too far apart (their difference overflows)");
     if (!(d.cwiseAbs().maxCoeff() > 0.0))
       throw UsageError("--eye", "eye and look-at are the same point " + fmt_vec(*spec.eye));
-    forward = unit(d);
+    forward = d.stableNormalized();
   } else {
     forward = Vec3(0, 0, -1);
     if (upn.cross(forward).norm() < 1e-6) forward = Vec3(0, -1, 0);  // a z-up mesh: look along -y

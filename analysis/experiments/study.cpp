@@ -81,7 +81,7 @@ Passes trace_passes(Prepared& p, const StudyRays& rays, const Vec3& light, const
   const bool counted = opt.counters && !loop::is_embree(p.spec.kind);
   bvh::HitBatch& hits = p.hits;
   hits.resize(rays.primary.size());  // allocated and touched outside the timed trace
-  a.check_rays(rays.primary);        // (likewise)
+  if (!p.rays_checked) a.check_rays(rays.primary), p.rays_checked = true;  // (likewise; once: the same rays every frame)
   Stopwatch sw;
   const bvh::TraceTotals tp = a.trace(rays.primary, hits, t);  // timed alone (argument order is unspecified)
   out.primary.add(tp, sw.ms());

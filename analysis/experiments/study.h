@@ -100,6 +100,7 @@ struct Prepared {
   double cluster_ms = 0;               ///< making the clustering (0 when given)
   double setup_ms = 0;                 ///< renumbering and building the structure, once
   bvh::HitBatch hits;                  ///< the primary hits of the last trace_passes (kept: no allocation in the timed trace)
+  bool rays_checked = false;           ///< the study's primary rays passed accel->check_rays (the same every frame)
 };
 
 /// Clusters (when the configuration has them), renumbers (VertexOrder::Clusters) and builds

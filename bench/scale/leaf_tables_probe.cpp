@@ -61,25 +61,8 @@ int main(int argc, char** argv) {
   std::vector<u32> gverts, coff{0};
   std::size_t G = 0, slots_used = 0;
   for (u32 c = 0; c < C; ++c) {
-    std::vector<u32> rem = cl[c];
-    while (!rem.empty()) {
-      std::vector<u32> vs;
-      std::size_t ts = 0;
-      auto has = [&](u32 v) { return std::find(vs.begin(), vs.end(), v) != vs.end(); };
-      while (ts < 16) {
-        int best = -1, best_new = 4;
-        for (std::size_t i = 0; i < rem.size() && best_new > 0; ++i) {
-          int fresh = 0;
-          for (int k = 0; k < 3; ++k) fresh += !has(tri[3 * rem[i] + k]);
-          if (fresh < best_new && vs.size() + fresh <= 16) best_new = fresh, best = static_cast<int>(i);
-        }
-        if (best < 0) break;
-        const u32 t = rem[best];
-        rem.erase(rem.begin() + best);
-        ++ts;
-        for (int k = 0; k < 3; ++k)
-          if (!has(tri[3 * t + k])) vs.push_back(tri[3 * t + k]);
-      }
+    for (probe::Group& gr : probe::greedy_groups(cl[c], tri)) {
+      std::vector<u32>& vs = gr.verts;
       slots_used += vs.size();
       vs.resize(16, vs[0]);
       gverts.insert(gverts.end(), vs.begin(), vs.end());

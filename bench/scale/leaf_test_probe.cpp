@@ -155,24 +155,9 @@ int main(int argc, char** argv) {
   std::vector<u32> first_tri;  // a triangle of each group (the ray's target)
   const float nan = std::nanf("");
   for (u32 c = 0; c < C; ++c) {
-    std::vector<u32> rem = cl[c];
-    while (!rem.empty()) {
-      std::vector<u32> vs, ts;
+    for (const probe::Group& gr : probe::greedy_groups(cl[c], tri)) {
+      const std::vector<u32>&vs = gr.verts, &ts = gr.tris;
       auto slot = [&](u32 v) { return static_cast<int>(std::find(vs.begin(), vs.end(), v) - vs.begin()); };
-      while (ts.size() < 16) {
-        int best = -1, best_new = 4;
-        for (std::size_t i = 0; i < rem.size() && best_new > 0; ++i) {
-          int fresh = 0;
-          for (int k = 0; k < 3; ++k) fresh += slot(tri[3 * rem[i] + k]) == static_cast<int>(vs.size());
-          if (fresh < best_new && vs.size() + fresh <= 16) best_new = fresh, best = static_cast<int>(i);
-        }
-        if (best < 0) break;
-        const u32 t = rem[best];
-        rem.erase(rem.begin() + best);
-        ts.push_back(t);
-        for (int k = 0; k < 3; ++k)
-          if (slot(tri[3 * t + k]) == static_cast<int>(vs.size())) vs.push_back(tri[3 * t + k]);
-      }
       Table tb;
       for (int e = 0; e < 16; ++e)
         for (int a = 0; a < 3; ++a) tb.v[a][e] = e < static_cast<int>(vs.size()) ? fp[3 * vs[e] + a] : nan;

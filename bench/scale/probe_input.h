@@ -1,4 +1,4 @@
-// The inputs of the hand-built probes in bench/scale/ (leaf_tables_probe.cpp, leaf_test_probe.cpp;
+// The inputs of the hand-built probes in bench/scale/ and their grouping of a cluster's triangles (leaf_tables_probe.cpp, leaf_test_probe.cpp;
 // not part of the build): a binary little-endian PLY of double positions and triangles, as
 // `ptc subdivide` writes it, and a clustering's `triangles.csv` from `ptc cluster`.
 #pragma once
@@ -67,6 +67,37 @@ inline Input read_input(int argc, char** argv) {
   in.clusters.resize(in.C);
   for (u32 t = 0; t < in.T; ++t) in.clusters[label[t]].push_back(t);
   return in;
+}
+
+// One cluster's triangles split greedily into groups of at most 16 triangles on at most 16
+// distinct vertices: each step takes the remaining triangle that adds the fewest new vertices
+// (the first of equals). verts: the group's distinct vertices in first-use order; tris: its
+// triangles in the order taken.
+struct Group {
+  std::vector<std::uint32_t> verts, tris;
+};
+inline std::vector<Group> greedy_groups(std::vector<std::uint32_t> rem, const std::vector<std::uint32_t>& tri) {
+  std::vector<Group> out;
+  while (!rem.empty()) {
+    Group g;
+    auto has = [&](std::uint32_t v) { return std::find(g.verts.begin(), g.verts.end(), v) != g.verts.end(); };
+    while (g.tris.size() < 16) {
+      int best = -1, best_new = 4;
+      for (std::size_t i = 0; i < rem.size() && best_new > 0; ++i) {
+        int fresh = 0;
+        for (int k = 0; k < 3; ++k) fresh += !has(tri[3 * rem[i] + k]);
+        if (fresh < best_new && g.verts.size() + fresh <= 16) best_new = fresh, best = static_cast<int>(i);
+      }
+      if (best < 0) break;
+      const std::uint32_t t = rem[best];
+      rem.erase(rem.begin() + best);
+      g.tris.push_back(t);
+      for (int k = 0; k < 3; ++k)
+        if (!has(tri[3 * t + k])) g.verts.push_back(tri[3 * t + k]);
+    }
+    out.push_back(std::move(g));
+  }
+  return out;
 }
 
 }  // namespace probe

@@ -32,8 +32,6 @@ std::atomic<int> g_blocking{0};
 static_assert(std::atomic<int>::is_always_lock_free, "in_blocking_wait must be async-signal-safe");
 }  // namespace
 
-BlockingWait::BlockingWait() noexcept { g_blocking.fetch_add(1); }
-BlockingWait::~BlockingWait() { g_blocking.fetch_sub(1); }
 bool in_blocking_wait() noexcept { return g_blocking.load() > 0; }
 
 BlockingWaitFor::BlockingWaitFor(const std::filesystem::path& path) {

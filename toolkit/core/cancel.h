@@ -31,21 +31,11 @@ void reset_cancel() noexcept;
 /// call once per frame and configuration.
 void throw_if_cancelled();
 
-/// While one lives, a request to stop cannot wait for the next clean point: the thread may be
+/// While one lives for a file that is not a regular file (a FIFO, a pipe; or a path that cannot
+/// be examined), a request to stop cannot wait for the next clean point: the thread may be
 /// blocked in a system call that the handlers resume after the signal (SA_RESTART), such as
-/// opening a FIFO that nobody writes to or reading a pipe. apps/ptc's handler then stops at once,
-/// as for a second Ctrl-C. Readers hold one around the open and the reading of a file that is not
-/// a regular file (blocking_wait_for).
-class BlockingWait {
- public:
-  BlockingWait() noexcept;
-  ~BlockingWait();
-  BlockingWait(const BlockingWait&) = delete;
-  BlockingWait& operator=(const BlockingWait&) = delete;
-};
-/// Whether a BlockingWait lives (on any thread). Async-signal-safe.
-[[nodiscard]] bool in_blocking_wait() noexcept;
-/// A BlockingWait for reading `path` when it is not a regular file (or cannot be examined), else none.
+/// opening a FIFO that nobody writes to. apps/ptc's handler then stops at once, as for a second
+/// Ctrl-C. Readers hold one around the open and the reading of their input file.
 class BlockingWaitFor {
  public:
   explicit BlockingWaitFor(const std::filesystem::path& path);
@@ -56,6 +46,9 @@ class BlockingWaitFor {
  private:
   bool held_ = false;
 };
+/// Whether a BlockingWaitFor of a file that is not a regular file lives (on any thread).
+/// Async-signal-safe.
+[[nodiscard]] bool in_blocking_wait() noexcept;
 
 /// Temporaries that must not outlive a run stopped at once: a second Ctrl-C (or SIGTERM) does not
 /// wait for the unwinding, so the signal handler removes what is registered here before the

@@ -34,11 +34,17 @@ std::optional<MeshFormat> parse_mesh_format(std::string_view s) {
 
 namespace {
 
-// Extensions of the animated assets other commands read (toolkit/anim: MD2, MD3 and Assimp's).
-bool is_animated_asset_extension(const std::filesystem::path& path) {
+// A path's extension in lower case (".OFF" -> ".off").
+std::string lower_extension(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   for (char& c : ext)
     if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  return ext;
+}
+
+// Extensions of the animated assets other commands read (toolkit/anim: MD2, MD3 and Assimp's).
+bool is_animated_asset_extension(const std::filesystem::path& path) {
+  const std::string ext = lower_extension(path);
   for (const char* e : {".md2", ".md3", ".md5mesh", ".x", ".3ds", ".fbx", ".dae", ".gltf", ".glb", ".b3d", ".ms3d", ".smd", ".bvh"})
     if (ext == e) return true;
   return false;
@@ -86,9 +92,7 @@ std::atomic<ReadNoteHandler> g_note_handler{nullptr};
 }  // namespace
 
 std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  for (char& c : ext)
-    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  const std::string ext = lower_extension(path);
   if (ext == ".off") return MeshFormat::Off;
   if (ext == ".obj") return MeshFormat::Obj;
   if (ext == ".ply") return MeshFormat::Ply;
