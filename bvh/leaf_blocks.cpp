@@ -16,6 +16,16 @@ namespace {
 constexpr std::size_t kBlocksPerTask = 8192;  // 1.2 MB of blocks
 constexpr std::size_t kClustersPerTask = 1024;  // (fill_blocks_and_cluster_boxes) about 8k blocks
 
+// The per-frame fills prefetch the first corner of the block this many blocks ahead: one
+// prefetch a block took the one-thread fill at 832k from 2.46-2.54 to 2.31-2.42 ms (two a block
+// or all twelve were slower; docs/tracing.md, "The fill's corner gathers").
+constexpr std::size_t kPrefetchBlocks = 8;
+
+inline void prefetch_corner(std::span<const std::uint32_t> corners, const float* fp, std::size_t b) {
+  if (12 * (b + kPrefetchBlocks) < corners.size())
+    _mm_prefetch(reinterpret_cast<const char*>(fp + 3 * std::size_t{corners[12 * (b + kPrefetchBlocks)]}), _MM_HINT_T0);
+}
+
 // One block from its corner vertex indices v[corner][lane]: corners gathered with one 16-byte
 // load per vertex and transposed to SoA. When `box` is given it receives the block's exact
 // float box (NaN lanes ignored: _mm_min_ps(x, acc) returns acc for a NaN x).
@@ -97,6 +107,7 @@ void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> t
 void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
                               Box3f* boxes) {
   fill_in_chunks(blocks.size(), [&](std::size_t b) {
+    prefetch_corner(corners, fp, b);
     fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
                        boxes ? boxes + b : nullptr);
   });
@@ -111,9 +122,11 @@ void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const
       __m128 lo[3], hi[3];
       for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
       const LeafRange lr = ranges[c];
-      for (std::size_t b = lr.first_block; b < std::size_t{lr.first_block} + lr.block_count; ++b)
+      for (std::size_t b = lr.first_block; b < std::size_t{lr.first_block} + lr.block_count; ++b) {
+        prefetch_corner(corners, fp, b);
         fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
                            block_boxes ? block_boxes + b : nullptr, lo, hi);
+      }
       // The four lanes' minima and maxima folded into one (x y z .) row each.
       __m128 l = _mm_unpacklo_ps(lo[0], lo[1]), l2 = _mm_unpackhi_ps(lo[0], lo[1]);
       __m128 h = _mm_unpacklo_ps(hi[0], hi[1]), h2 = _mm_unpackhi_ps(hi[0], hi[1]);
