@@ -158,7 +158,10 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   Mesh mesh = scene.rest();
   scene.positions(double(range.first), mesh.positions(), true);
   const Box3 first_bounds = mesh.referenced_bounds();  // (the camera's: unreferenced vertices are not framed)
-  const bvh::PinholeCamera cam = make_camera(camera_for(opt.camera, scene), first_bounds, opt.width, opt.height, arg);
+  // The export writes data, not pictures: no camera (a mesh no camera can frame still exports).
+  const bvh::PinholeCamera cam = kind == VizKind::Export
+                                     ? bvh::PinholeCamera{}
+                                     : make_camera(camera_for(opt.camera, scene), first_bounds, opt.width, opt.height, arg);
 
   const bool use_clusters = !opt.clusters.empty();
   Clustering clusters;
@@ -198,7 +201,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   const bool needs_metrics = kind == VizKind::Export || cmetric.has_value();
   RenderConfig rc;
   rc.width = opt.width, rc.height = opt.height, rc.shadows = opt.shadows, rc.threads = opt.threads;
-  const LightChoice light = light_for(opt.light, scene, cam, first_bounds);
+  const LightChoice light = needs_trace ? light_for(opt.light, scene, cam, first_bounds) : LightChoice{};
   rc.light = light.position;
   std::unique_ptr<loop::SceneAccel> accel;
   if (needs_trace) {
@@ -445,12 +448,14 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     manifest.set_parameter("clustering", ci.title);
     manifest.set_parameter("metric_parameters_from", ci.from);
   }
-  manifest.set_parameter("width", opt.width);
-  manifest.set_parameter("height", opt.height);
-  manifest.set_parameter("borders", opt.borders);
-  manifest.set_parameter("lighting", opt.lighting ? "headlight, ambient 0.2, diffuse 0.8" : "none: flat colours");
-  manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)}, {"right", vec_json(cam.right)},
-                                    {"up", vec_json(cam.up)}, {"fov_y_deg", cam.fov_y_deg}});
+  if (kind != VizKind::Export) {  // (the export draws nothing)
+    manifest.set_parameter("width", opt.width);
+    manifest.set_parameter("height", opt.height);
+    manifest.set_parameter("borders", opt.borders);
+    manifest.set_parameter("lighting", opt.lighting ? "headlight, ambient 0.2, diffuse 0.8" : "none: flat colours");
+    manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)}, {"right", vec_json(cam.right)},
+                                      {"up", vec_json(cam.up)}, {"fov_y_deg", cam.fov_y_deg}});
+  }
   if (needs_trace) manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
   if (use_clusters) {
     manifest.set_result("clusters", clusters.cluster_count());

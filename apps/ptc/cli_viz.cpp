@@ -38,7 +38,8 @@ void register_viz(CLI::App& app, Context& ctx) {
                       o.borders = !a->no_borders;
                       o.lighting = !a->flat;
                       if (o.kind == VizKind::Export)  // (the .vtp files carry data, not pictures)
-                        for (const char* f : {"--no-borders", "--flat"})
+                        for (const char* f : {"--no-borders", "--flat", "--width", "--height", "--eye", "--look-at", "--up",
+                                              "--fov", "--light", "--xvfb"})
                           if (a->app->count(f)) throw UsageError(f, "not used by viz export (it writes .vtp files, not pictures)");
                       o.threads = static_cast<unsigned>(ctx.threads);
                       o.argv = ctx.args;

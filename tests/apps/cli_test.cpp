@@ -650,11 +650,20 @@ namespace {
 // new user: they were accepted silently).
 TEST_F(Cli, FlagsThatWouldDoNothingAreRefused) {
   const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
-  for (const char* flag : {"--flat", "--no-borders"}) {
-    const auto r = ptc({"viz", "export", mesh, "--clusters", (dir_ / "none").string(), flag, "--out", (dir_ / "v").string()});
+  // The export writes .vtp files: picture and camera flags draw nothing there.
+  const std::vector<std::vector<std::string>> flags = {{"--flat"},          {"--no-borders"},     {"--width", "100"},
+                                                       {"--height", "100"}, {"--eye", "1,2,3"},   {"--look-at", "0,0,0"},
+                                                       {"--up", "0,0,1"},   {"--fov", "30"},      {"--light", "1,1,1"},
+                                                       {"--xvfb"}};
+  for (const auto& f : flags) {
+    const std::string& flag = f[0];
+    std::vector<std::string> args = {"viz", "export", mesh, "--clusters", (dir_ / "none").string()};
+    args.insert(args.end(), f.begin(), f.end());
+    args.insert(args.end(), {"--out", (dir_ / "v").string()});
+    const auto r = ptc(args);
     EXPECT_EQ(r.code, 2) << flag << ": " << r.err;
     EXPECT_EQ(lines(r.err), 1u) << r.err;
-    EXPECT_NE(r.err.find(std::string(flag) + ": not used by viz export"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(flag + ": not used by viz export"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "v"));
   }
   const auto r = ptc({"notebook", (dir_ / "none").string(), "--execute", "--no-figures", "--out", (dir_ / "n").string()});

@@ -356,6 +356,10 @@ TEST_F(Viz, ExportReadsBackWithVtkCellByCell) {
     files.push_back((*it)[2]);
   }
   ASSERT_EQ(files.size(), 3u);
+  // It draws nothing, so its manifest records no camera and no picture size.
+  const nlohmann::json params = manifest("vtp")["parameters"];
+  EXPECT_FALSE(params.contains("camera")) << params.dump();
+  EXPECT_FALSE(params.contains("width")) << params.dump();
   std::vector<Vec3> first;
   for (std::size_t f = 0; f < files.size(); ++f) {
     const viz::VtpContents c = viz::read_vtp(dir_ / "vtp" / files[f]);
