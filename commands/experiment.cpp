@@ -393,6 +393,14 @@ nlohmann::json identity(const nlohmann::json& m) {
   for (const auto& i : m.value("inputs", nlohmann::json::array()))
     inputs.push_back({{"bytes", i.value("bytes", nlohmann::json())}, {"fnv1a64", i.value("fnv1a64", nlohmann::json())}});
   if (!inputs.empty()) p.erase("scene");
+  // Where the given clustering's parameters came from is a path (as typed, relative to where the
+  // shard ran); its files are among the inputs, compared by their bytes: only whether they came
+  // from a manifest.json is the study's.
+  if (p.contains("given_parameters_from") && p["given_parameters_from"].is_string() && !inputs.empty()) {
+    const std::string from = p["given_parameters_from"].get<std::string>();
+    if (from.size() >= 13 && from.compare(from.size() - 13, 13, "manifest.json") == 0)
+      p["given_parameters_from"] = "the clustering's manifest.json";
+  }
   id["parameters"] = p;
   id["inputs"] = inputs;
   id["rest_mesh_fnv1a64"] = m.value("results", nlohmann::json::object()).value("rest_mesh_fnv1a64", nlohmann::json());

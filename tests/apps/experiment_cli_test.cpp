@@ -320,6 +320,24 @@ TEST_F(Experiment, GivenClustersAreTheMethodByDefault) {
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.err.find("triangles.csv"), std::string::npos) << bad.err;
   EXPECT_EQ(lines(bad.err), 1u) << bad.err;
+
+  // Shards of one study whose --clusters were typed differently (as by a scheduler starting them
+  // from other directories) merge: the clustering's files are compared by their bytes. Shards
+  // with another clustering do not.
+  auto shard = [&](const std::string& dir, const std::string& k, const std::string& out) {
+    return ptc({"experiment", "compare", mesh, "--configs", "given,standard", "--clusters", dir, "--frames", "0:1",
+                "--width", "16", "--height", "16", "--quiet", "--shard", k, "--out", (dir_ / out).string()});
+  };
+  ASSERT_EQ(shard(c, "1/2", "sh1").code, 0);
+  ASSERT_EQ(shard(c + "/./", "2/2", "sh2").code, 0);
+  const RunResult m = ptc({"merge", (dir_ / "sh1").string(), (dir_ / "sh2").string(), "--out", (dir_ / "m").string()});
+  EXPECT_EQ(m.code, 0) << m.err;
+  const std::string c2 = (dir_ / "clusters2").string();
+  ASSERT_EQ(ptc({"cluster", mesh, "--method", "growth", "--max-count", "20", "--max-size", "20", "--out", c2}).code, 0);
+  ASSERT_EQ(shard(c2, "2/2", "sh3").code, 0);
+  const RunResult m2 = ptc({"merge", (dir_ / "sh1").string(), (dir_ / "sh3").string(), "--out", (dir_ / "m2").string()});
+  EXPECT_EQ(m2.code, 1) << m2.err;
+  EXPECT_NE(m2.err.find("not a shard of the same study"), std::string::npos) << m2.err;
 }
 
 // `ptc viz export` draws the drift study's values: every cluster's metrics in the .vtp of a frame
