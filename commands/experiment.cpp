@@ -258,6 +258,12 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
     }
     if (!used) throw UsageError(flag_of(g), fmt::format("not used by any clustering of this {}", k));
   }
+  // The cluster BVH's flags need a configuration that builds one (a clustering or 'given').
+  const bool cluster_bvh = !made.empty() || std::find(items.begin(), items.end(), "given") != items.end();
+  if (!cluster_bvh && !opt.structure_flags.empty())
+    throw UsageError(opt.structure_flags.front(),
+                     fmt::format("not used: no configuration of this {} builds a cluster BVH{}", k,
+                                 *kind == ExperimentKind::Sweep ? " (--max-counts 0 is the triangle BVH)" : ""));
   for (const ClusterConfig& c : made)
     if (const auto problem = check(c)) {
       // sweep's MaxCount and MaxSize come from --max-counts

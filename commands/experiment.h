@@ -24,6 +24,7 @@ struct ExperimentCommandOptions {
   std::filesystem::path clusters;   ///< --clusters DIR: the method's clustering (compare, drift, accuracy)
   ClusterConfig cluster;            ///< the clustering flags (as `ptc cluster` takes them)
   std::vector<std::string> given;   ///< the ClusterConfig parameters the user set (names of kClusterParameters)
+  std::vector<std::string> structure_flags;  ///< the cluster BVH's flags the user set (--cluster-leaf, --cluster-groups, ...)
   std::optional<std::string> max_counts;   ///< sweep: "0,10,50,100"
   std::optional<std::string> configs;      ///< compare: "acc_growth,standard,..."
   std::optional<std::string> reference;    ///< compare: perf_factor's denominator

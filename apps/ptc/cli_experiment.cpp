@@ -40,6 +40,8 @@ void register_experiment(CLI::App& app, Context& ctx) {
         if (given("--ao-samples")) o.ao_samples = a->ao_samples;
         if (given("--reference-rays")) o.reference_rays = a->reference_rays;
         o.method_given = given("--method") || given("--objective");
+        for (const char* f : {"--cluster-leaf", "--cluster-groups", "--group-trees", "--vertex-order"})
+          if (given(f)) o.structure_flags.push_back(f);
         a->flags.apply(o.cluster, o.given);
         o.cluster_leaf = *bvh::parse_cluster_leaf(a->cluster_leaf);
         o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);

@@ -579,5 +579,31 @@ TEST_F(Experiment, UsageErrorsNameTheFlag) {
   }
 }
 
+// The cluster BVH's flags need a configuration that builds one: refused, naming the flag, where
+// none does (found by a new user: they were recorded in the manifest as if used), and accepted
+// beside a clustering.
+TEST_F(Experiment, ClusterBvhFlagsWithoutAClusterBvhAreRefused) {
+  const std::vector<std::vector<std::string>> flags = {
+      {"--cluster-leaf", "block-tree"}, {"--cluster-groups", "4"}, {"--group-trees", "rebuild"}, {"--vertex-order", "input"}};
+  for (const auto& f : flags) {
+    for (const std::vector<std::string>& run :
+         {std::vector<std::string>{"experiment", "compare", "faerie", "--configs", "standard,embree_low"},
+          std::vector<std::string>{"experiment", "sweep", "faerie", "--max-counts", "0"}}) {
+      std::vector<std::string> args = run;
+      args.insert(args.end(), f.begin(), f.end());
+      args.insert(args.end(), {"--frames", "0:1", "--width", "8", "--height", "8", "--quiet", "--out", (dir_ / "x").string()});
+      const RunResult r = ptc(args);
+      EXPECT_EQ(r.code, 2) << f[0] << " " << run[1] << ": " << r.err;
+      EXPECT_EQ(lines(r.err), 1u) << r.err;
+      EXPECT_NE(r.err.find(f[0] + ": not used: no configuration of this " + run[1] + " builds a cluster BVH"), std::string::npos)
+          << r.err;
+      EXPECT_FALSE(fs::exists(dir_ / "x"));
+    }
+  }
+  const RunResult ok = ptc({"experiment", "sweep", "faerie", "--max-counts", "0,30", "--cluster-groups", "4", "--frames",
+                            "0:1", "--width", "8", "--height", "8", "--quiet", "--out", (dir_ / "ok").string()});
+  EXPECT_EQ(ok.code, 0) << ok.err;
+}
+
 }  // namespace
 }  // namespace ptc::test
