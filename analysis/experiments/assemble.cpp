@@ -300,11 +300,16 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
   }
   text += "spearman: rank correlation over clusters of connectivity (N_T/N_V) with box-area drift (mean |ln box area "
           "ratio| over the frames after the first); < 0: denser clusters deform less\n";
+  std::map<std::string, std::size_t> frame_count;  // clustering -> its frames
+  for (std::size_t i = 0; i < fg.keys.size(); ++i) frame_count[fg.keys[i][0]] = fg.rows[i].size();
   for (const auto& [name, rn] : rho) {
     const auto [r, n] = rn;
     if (!std::isfinite(r)) {  // say why there is no number
       text += fmt::format("paper: connectivity predicts drift ({}) -> no Spearman: {}\n", name,
-                          n < 3 ? fmt::format("{} cluster(s) with a finite drift (a box of zero area at some frame "
+                          frame_count[name] < 2
+                              ? std::string("one frame only: drift is measured over the frames after the first "
+                                            "(--frames A:B with B > A)")
+                          : n < 3 ? fmt::format("{} cluster(s) with a finite drift (a box of zero area at some frame "
                                               "makes |ln ratio| infinite or undefined)", n)
                                 : "no variance (every cluster drifts alike, e.g. not at all)");
       continue;

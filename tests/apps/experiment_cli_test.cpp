@@ -459,6 +459,12 @@ TEST_F(Experiment, RoundingIsNoDrift) {
   }
   // The summary says why there is no number.
   EXPECT_NE(slurp(dir_ / "d" / "summary.txt").find("no Spearman: no variance"), std::string::npos);
+  // One frame: no frame after the first to drift in, said as such (it blamed boxes of zero area).
+  const RunResult one = ptc({"experiment", "drift", scene.string(), "--clusterings", "acc_growth", "--frames", "2:2",
+                             "--width", "8", "--height", "8", "--quiet", "--out", (dir_ / "one").string()});
+  ASSERT_EQ(one.code, 0) << one.err;
+  EXPECT_NE(slurp(dir_ / "one" / "summary.txt").find("no Spearman: one frame only"), std::string::npos)
+      << slurp(dir_ / "one" / "summary.txt");
 }
 
 // configs.csv gives MaxSize only where the method reads it (Acc): nan for the others.
