@@ -133,6 +133,13 @@ LoadedMesh read_mesh_from_memory(std::string_view bytes, MeshFormat f, const std
 LoadedMesh read_mesh(const std::filesystem::path& path) {
   note_input_file(path);
   const std::optional<MeshFormat> f = format_from_extension(path);
+  {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+      throw InputError(path.string(), "", "",
+                       "is a directory, not a mesh file (a directory of frames is read by ptc trace, bench, viz and "
+                       "experiment; give one frame's file here)");
+  }
   if (!f)
     throw InputError(
         path.string(), "", "",
