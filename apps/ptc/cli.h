@@ -123,10 +123,10 @@ struct SceneArg {
   std::filesystem::path input;
   std::string data_dir;
   void add_to(CLI::App* cmd);
-  /// Fills the command's scene options (data directory of built-in scenes).
-  void apply(SceneOptions& o) const {
-    if (!data_dir.empty()) o.data_dir = data_dir;
-  }
+  /// Fills the command's scene options (data directory of built-in scenes). --data-dir with a
+  /// SCENE that is an existing mesh, asset or directory of frames (not a scene file, whose
+  /// "${data}/" paths read it) is bad usage: it would do nothing.
+  void apply(SceneOptions& o) const;
 };
 
 /// --eye, --look-at, --up, --fov and (with light = true) --light, as `ptc trace` and `ptc bench`

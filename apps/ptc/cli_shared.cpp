@@ -23,6 +23,19 @@ void SceneArg::add_to(CLI::App* cmd) {
   cmd->add_option("--data-dir", data_dir, "meshes of built-in scenes (default: $PTC_DATA_DIR or <ptc>/../data)");
 }
 
+void SceneArg::apply(SceneOptions& o) const {
+  if (data_dir.empty()) return;
+  std::string ext = input.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  std::error_code ec;
+  if (ext != ".json" && std::filesystem::exists(input, ec))
+    throw UsageError("--data-dir", "not used: '" + input.string() + "' is a " +
+                                       (std::filesystem::is_directory(input, ec) ? "directory of frames" : "file") +
+                                       " (--data-dir locates the meshes of built-in scenes and the ${data}/ paths of "
+                                       "scene files)");
+  o.data_dir = data_dir;
+}
+
 void GroupTreesArg::add_to(CLI::App* cmd) {
   opt = cmd->add_option("--group-trees", value,
                         "with the cluster BVH's two-level build (--cluster-groups N > 1): rebuild each group's tree "

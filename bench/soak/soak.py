@@ -44,10 +44,12 @@ def main():
     shutil.rmtree(tmp, ignore_errors=True)
     os.makedirs(tmp)
     last = a.frames - 1
+    # --data-dir locates built-in scenes' meshes; ptc refuses it for a mesh file or frame directory.
+    where = [] if os.path.exists(a.scene) and not a.scene.lower().endswith(".json") else ["--data-dir", data]
     runs = {
-        "bench": [ptc, "bench", a.scene, "--data-dir", data, "--frames", f"0:{last}", "--extend-frames", "--width", "256",
+        "bench": [ptc, "bench", a.scene, *where, "--frames", f"0:{last}", "--extend-frames", "--width", "256",
                   "--height", "256", "--out", os.path.join(tmp, "bench")],
-        "trace": [ptc, "trace", a.scene, "--data-dir", data, "--frames", f"0:{last}", "--extend-frames", "--width", "128",
+        "trace": [ptc, "trace", a.scene, *where, "--frames", f"0:{last}", "--extend-frames", "--width", "128",
                   "--height", "128", "--out", os.path.join(tmp, "trace")],
     }
     rows, results, ok = [], {}, True

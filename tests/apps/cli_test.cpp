@@ -666,6 +666,15 @@ TEST_F(Cli, FlagsThatWouldDoNothingAreRefused) {
     EXPECT_NE(r.err.find(flag + ": not used by viz export"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "v"));
   }
+  // --data-dir locates built-in scenes' meshes: with a mesh file or a directory of frames it does nothing.
+  fs::create_directories(dir_ / "frames");
+  for (const std::string& scene : {mesh, (dir_ / "frames").string()}) {
+    const auto d = ptc({"trace", scene, "--data-dir", "/nonexistent", "--out", (dir_ / "t").string()});
+    EXPECT_EQ(d.code, 2) << scene << ": " << d.err;
+    EXPECT_EQ(lines(d.err), 1u) << d.err;
+    EXPECT_NE(d.err.find("--data-dir: not used: '" + scene + "' is a "), std::string::npos) << d.err;
+    EXPECT_FALSE(fs::exists(dir_ / "t"));
+  }
   const auto r = ptc({"notebook", (dir_ / "none").string(), "--execute", "--no-figures", "--out", (dir_ / "n").string()});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--execute"), std::string::npos) << r.err;
