@@ -118,6 +118,14 @@ struct PreviousMarker {
   std::vector<std::string> listed;
 };
 
+// The `command` of a manifest.json ("" when there is none or it cannot be read).
+std::string manifest_command(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) return "";
+  const nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
+  return m.is_object() && m.contains("command") && m["command"].is_string() ? m["command"].get<std::string>() : "";
+}
+
 constexpr const char* kLegacyHeader = "written by ptc; a later run with the same --out replaces this directory";
 
 PreviousMarker read_marker(const fs::path& marker) {
@@ -175,9 +183,21 @@ void OutputDir::commit() {
     moved.clear();
   };
   fs::path old;
+  std::string replaced_note;  // said once the commit is done: the output of another command replaced
   try {
     if (fs::is_directory(target_, ec)) {
       const PreviousMarker prev = read_marker(target_ / kMarker);
+      const std::string before = manifest_command(target_ / "manifest.json"), now = manifest_command(tmp_ / "manifest.json");
+      if (prev.present && !before.empty() && !now.empty() && before != now) {
+        std::vector<std::string> gone;
+        for (const auto& name : prev.listed)
+          if (!std::binary_search(written.begin(), written.end(), name) && fs::exists(target_ / name, ec)) gone.push_back(name);
+        std::string list;
+        for (std::size_t i = 0; i < gone.size() && i < 6; ++i) list += (i ? ", " : "") + gone[i];
+        if (gone.size() > 6) list += ", ...";
+        replaced_note = "ptc: note: replaced the output of `ptc " + before + "` in " + target_.string() +
+                        (gone.empty() ? std::string() : " (its " + list + " are gone)") + "\n";
+      }
       if (!prev.present && !fs::is_empty(target_, ec))
         throw InputError(target_.string(), "", "",
                          "is no longer a ptc output directory (its .ptc-output marker is gone); nothing was replaced");
@@ -234,6 +254,7 @@ void OutputDir::commit() {
     slot_ = -1;
     if (ec) std::cerr << "ptc: note: could not remove the previous output, left as " << old.string() << "\n";
   }
+  std::cerr << replaced_note;
   if (!kept_.empty()) {
     std::string list;
     for (std::size_t i = 0; i < kept_.size() && i < 8; ++i) list += (i ? ", " : "") + kept_[i];

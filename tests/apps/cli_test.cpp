@@ -717,4 +717,26 @@ TEST_F(Cli, OutputInAMissingDirectoryIsNamedAsGiven) {
       << r.err;
   EXPECT_EQ(r.err.find(".tmp"), std::string::npos) << r.err;
 }
+
+// The output of another command replaced by a run with the same --out is said, naming the
+// command and the files that are gone (found by a new user: a `ptc cluster` output vanished
+// under an experiment without a word); the same command again replaces silently, as documented.
+TEST_F(Cli, ReplacingAnotherCommandsOutputIsSaid) {
+  const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  const std::string out = (dir_ / "o").string();
+  ASSERT_EQ(ptc({"cluster", mesh, "--out", out}).code, 0);
+  const std::vector<std::string> sweep = {"experiment", "sweep", mesh, "--frames", "0:1", "--width", "8", "--height",
+                                          "8", "--max-counts", "0,20", "--quiet", "--out", out};
+  const auto r = ptc(sweep);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ptc: note: replaced the output of `ptc cluster` in " + out +
+                       " (its clusters.csv, clusters.ply, summary.json, triangles.csv are gone)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "o" / "triangles.csv"));
+  const auto again = ptc(sweep);
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(again.err.find("replaced the output"), std::string::npos) << again.err;
+}
+
 }  // namespace
