@@ -118,7 +118,22 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
         "the stand-in motion ptc bench measures)\n",
         opt.scene, range.count());
   if (opt.json) {
-    out << dump_json(doc["results"]);
+    nlohmann::json results = doc["results"];
+    if (opt.stats) {  // what the text mode prints (stats.csv's rows; NaN as null)
+      nlohmann::json rows = nlohmann::json::array();
+      for (const FrameStats& st : stats)
+        rows.push_back({{"frame", st.frame},
+                        {"bbox_min", vec_json(st.bounds.lo)},
+                        {"bbox_max", vec_json(st.bounds.hi)},
+                        {"diagonal", st.bounds.extent().norm()},
+                        {"total_area", st.total_area},
+                        {"area_ratio_min", st.area_ratio_min},
+                        {"area_ratio_mean", st.area_ratio_mean},
+                        {"area_ratio_max", st.area_ratio_max},
+                        {"degenerate_at_first", st.degenerate_at_first}});
+      results["stats"] = std::move(rows);
+    }
+    out << dump_json(results);
     return;
   }
   out << fmt::format("{}: {} triangles, {} vertices, {} part(s); frames {}..{} -> {}/frame_*.{} in {:.0f} ms (animate {:.0f} ms)\n",

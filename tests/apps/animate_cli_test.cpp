@@ -108,6 +108,30 @@ TEST_F(Animate, StatsAgainstIndependentRecomputation) {
     ++rows;
   }
   EXPECT_EQ(rows, 5);
+  // --json carries the same rows (it left them out): every value of stats.csv, frame by frame.
+  const RunResult j = ptc({"animate", scene.string(), "--frames", "0:4", "--out", (dir_ / "js").string(), "--stats", "--json"});
+  ASSERT_EQ(j.code, 0) << j.err;
+  const nlohmann::json doc = nlohmann::json::parse(j.out);
+  ASSERT_EQ(doc["stats"].size(), 5u);
+  std::istringstream again(slurp(dir_ / "js" / "stats.csv"));
+  std::getline(again, line);
+  for (const auto& row : doc["stats"]) {
+    ASSERT_TRUE(std::getline(again, line));
+    std::vector<std::string> f;
+    std::stringstream ls(line);
+    for (std::string c; std::getline(ls, c, ',');) f.push_back(c);
+    EXPECT_EQ(row["frame"].get<int>(), std::stoi(f[0]));
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(row["bbox_min"][a].get<double>(), std::stod(f[1 + a]));
+      EXPECT_EQ(row["bbox_max"][a].get<double>(), std::stod(f[4 + a]));
+    }
+    EXPECT_EQ(row["diagonal"].get<double>(), std::stod(f[7]));
+    EXPECT_EQ(row["total_area"].get<double>(), std::stod(f[8]));
+    EXPECT_EQ(row["area_ratio_min"].get<double>(), std::stod(f[9]));
+    EXPECT_EQ(row["area_ratio_mean"].get<double>(), std::stod(f[10]));
+    EXPECT_EQ(row["area_ratio_max"].get<double>(), std::stod(f[11]));
+    EXPECT_EQ(row["degenerate_at_first"].get<int>(), std::stoi(f[12]));
+  }
 }
 
 TEST_F(Animate, DeformGivesAMeshFileTheStandInMotion) {
