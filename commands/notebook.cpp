@@ -2,6 +2,7 @@
 #include "commands/notebook.h"
 
 #include <fstream>
+#include <iostream>
 #include <ostream>
 #include <set>
 
@@ -53,7 +54,7 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
     if (j["parameters"].contains("shard") && j["parameters"]["shard"].is_object()) {
       const nlohmann::json& sh = j["parameters"]["shard"];
       const auto k = sh.value("index", 0), n = sh.value("count", 0);
-      if (n > 1) in.notes[kind] = fmt::format("shard {} of {}: part of the study", k, n);
+      if (n > 1) in.notes[kind] = fmt::format("shard {} of {}: part of the study (ptc merge joins the shards)", k, n);
     }
     record_input(manifest, m);
     // The tables the figures read, as the run wrote them: present, and (manifests since
@@ -142,6 +143,11 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
   manifest.set_result("figures", names);
   manifest.set_result("drawn", drawn);
   (void)commit_with_manifest(dir, manifest);
+  // What a figure could not draw (figures.json's notes: a shard, a missing reference, one frame).
+  if (drawn.is_object())
+    for (auto it = drawn.begin(); it != drawn.end(); ++it)
+      if (it->is_object() && it->contains("note") && (*it)["note"].is_string() && !(*it)["note"].get<std::string>().empty())
+        std::cerr << "ptc: note: " << it.key() << ": " << (*it)["note"].get<std::string>() << "\n";
   if (opt.json) {
     out << dump_json({{"schema", "ptc-notebook-summary/1"}, {"figures", names}, {"drawn", drawn}, {"outputs", written}});
     return;

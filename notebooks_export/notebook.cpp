@@ -14,6 +14,10 @@ std::string setup_code(const StudyInputs& in) {
   std::string study = "{";
   for (const auto& [k, d] : in.dirs) study += fmt::format("{}{}: {}", study.size() > 1 ? ", " : "", py_str(k), py_str(d));
   study += "}";
+  std::string notes = "{";
+  for (const auto& [k, n] : in.notes)
+    if (!n.empty()) notes += fmt::format("{}{}: {}", notes.size() > 1 ? ", " : "", py_str(k), py_str(n));
+  notes += "}";
   return fmt::format(R"PY(import json, math, os
 import numpy as np
 import pandas as pd
@@ -22,6 +26,7 @@ import matplotlib.pyplot as plt
 # The experiment outputs this notebook reads (written by `ptc experiment KIND ... --out DIR`),
 # relative to the notebook's own directory.
 STUDY = {}
+STUDY_NOTES = {}  # experiment -> what a figure from it should say (a shard: part of the study)
 FIGURES = {{}}  # name -> what the figure drew (figures.json)
 COLOURS = plt.get_cmap("tab10").colors
 STYLES = ["-", "--", ":", "-."]
@@ -36,14 +41,18 @@ def after_warmup(df):
 def line_style(i):
     return dict(color=COLOURS[i % 10], linestyle=STYLES[(i // 10) % 4])
 
-def save(fig, name, series, note=""):
+def save(fig, name, series, note="", kind=None):
+    note = "; ".join(n for n in (note, STUDY_NOTES.get(kind, "")) if n)
+    if note:
+        fig.suptitle(note, fontsize=8, color="darkred", y=1.02)
+        print(f"note: {{name}}: {{note}}")
     fig.savefig(name + ".png", dpi=100, bbox_inches="tight")
     fig.savefig(name + ".svg", bbox_inches="tight")
     FIGURES[name] = {{"series": int(series), "png": name + ".png", "svg": name + ".svg", "note": note}}
     with open("figures.json", "w") as f:
         json.dump(FIGURES, f, indent=1, sort_keys=True)
 )PY",
-                     study);
+                     study, notes);
 }
 
 const char* kFig6 = R"PY(s = study_csv("sweep", "sweep_summary.csv")
@@ -66,7 +75,7 @@ for ax, scene in zip(axes[0], scenes):
     ax.set_ylabel("median ms per frame")
     ax.set_title(f"Figure 6: {scene}")
     ax.legend()
-save(fig, "fig6_sweep", len(stages) + 1)
+save(fig, "fig6_sweep", len(stages) + 1, kind="sweep")
 plt.show()
 )PY";
 
@@ -74,19 +83,25 @@ const char* kFig7 = R"PY(c = after_warmup(study_csv("compare", "compare.csv"))
 summary = study_csv("compare", "compare_summary.csv")
 configs = list(dict.fromkeys(c["config"]))
 scenes = list(dict.fromkeys(c["scene"]))
+finite = set()  # configurations with a performance factor to draw
 fig, axes = plt.subplots(len(scenes), 1, figsize=(9, 4.5 * len(scenes)), squeeze=False)
 for ax, scene in zip(axes[:, 0], scenes):
     d = c[c["scene"] == scene]
     for i, cfg in enumerate(configs):
         e = d[d["config"] == cfg].sort_values("frame")
         ax.plot(e["frame"], e["perf_factor"], label=cfg, **line_style(i))
+        if e["perf_factor"].notna().any():
+            finite.add(cfg)
     ax.axhline(1.0, color="black", linestyle=":", linewidth=0.8)
     ref = summary[summary["scene"] == scene]["reference"].iloc[0]
     ax.set_xlabel("frame")
     ax.set_ylabel(f"whole-frame time / {ref}'s")
     ax.set_title(f"Figure 7: {scene} (performance factor, frames after the warm-up)")
     ax.legend(fontsize=8, ncol=2)
-save(fig, "fig7_compare", len(configs))
+missing = len(configs) - len(finite)
+save(fig, "fig7_compare", len(finite),
+     f"{missing} of {len(configs)} configuration(s) without a performance factor (the reference configuration is "
+     "not in this output: merge the shards first)" if missing else "", kind="compare")
 plt.show()
 )PY";
 
@@ -104,7 +119,7 @@ a.axhline(1.0, color="black", linestyle=":", linewidth=0.8)
 a.set_xlabel("frame"); a.set_ylabel("p95 over clusters of box area / the first frame's"); a.set_title("box-area drift per clustering (every frame)")
 b.set_xlabel("frame"); b.set_ylabel("SAH cost of the frame's BVH"); b.set_title("SAH cost per frame (triangles: the triangle BVH)")
 a.legend(fontsize=8); b.legend(fontsize=8)
-save(fig, "drift_frames", drawn)
+save(fig, "drift_frames", drawn, kind="drift")
 plt.show()
 )PY";
 
@@ -135,7 +150,8 @@ ax.set_xlabel("connectivity (triangles / vertices)")
 ax.set_ylabel("mean |ln(box area / the first frame's)| over the frames after it")
 ax.set_title("connectivity against box-area drift (up to 3000 clusters per clustering)")
 ax.legend(fontsize=8, markerscale=3)
-save(fig, "drift_correlation", len(clusterings))
+save(fig, "drift_correlation", len(clusterings),
+     "" if len(clusterings) else "no frame after the first: drift needs --frames A:B with B > A", kind="drift")
 plt.show()
 )PY";
 
@@ -161,7 +177,7 @@ for ax, col, model in zip(axes, ["sah_cost", "epo"], ["sah", "epo"]):
     ax.set_ylabel("measured cost per primary ray (nodes + weighted triangles)")
     ax.set_title(f"{model.upper()} against the measured cost (primary rays)")
     ax.legend(fontsize=8)
-save(fig, "cost_fit", len(clusterings) + fits)
+save(fig, "cost_fit", len(clusterings) + fits, kind="drift")
 plt.show()
 )PY";
 
@@ -194,7 +210,7 @@ for i, g in enumerate(groups):
     ax.set_title(f"speed against error: {g}")
 for j in range(len(groups), rows * cols):
     axes[j // cols][j % cols].axis("off")
-save(fig, "speed_vs_error", len(groups))
+save(fig, "speed_vs_error", len(groups), kind="accuracy")
 plt.show()
 )PY";
 

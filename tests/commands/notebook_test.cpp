@@ -120,6 +120,7 @@ TEST_F(Notebook, RedrawsEveryFigureFromTheStudyAndExecutesHeadless) {
   for (const auto& [name, series] : want) {
     ASSERT_TRUE(drawn.contains(name)) << name;
     EXPECT_EQ(drawn[name]["series"].get<std::size_t>(), series) << name;
+    EXPECT_EQ(drawn[name]["note"], "") << name << ": a whole study draws everything";
     const RgbImage img = viz::read_png(n.out_dir / (name + ".png"));
     EXPECT_GT(img.width, 300) << name;
     EXPECT_GT(img.height, 200) << name;
@@ -135,6 +136,38 @@ TEST_F(Notebook, RedrawsEveryFigureFromTheStudyAndExecutesHeadless) {
   const nlohmann::json m = nlohmann::json::parse(slurp(n.out_dir / "manifest.json"));
   EXPECT_EQ(m["results"]["figures"].size(), 6u);
   EXPECT_EQ(m["parameters"]["studies"]["compare"], "../compare") << "paths relative to the notebook";
+}
+
+// What a figure could not draw is said in figures.json and on stderr, and its series count only
+// what was drawn (found by a new user: a shard without the reference drew an empty Figure 7
+// with "series": 1 and no note): a compare shard without its reference configuration, and a
+// drift study of one frame.
+TEST_F(Notebook, FiguresSayWhatTheyCouldNotDraw) {
+  experiment("compare", [](ExperimentCommandOptions& o) {
+    o.configs = "standard,acc_growth";
+    o.reference = "standard";
+    o.shard = "2/2";  // acc_growth only
+  });
+  experiment("drift", [](ExperimentCommandOptions& o) {
+    o.frames = "2:2";
+    o.clusterings = "acc_growth";
+  });
+  NotebookCommandOptions n;
+  n.studies = {dir_ / "study" / "compare", dir_ / "study" / "drift"};
+  n.out_dir = dir_ / "nb";
+  std::ostringstream out;
+  testing::internal::CaptureStderr();
+  cmd_notebook(n, out);
+  const std::string err = testing::internal::GetCapturedStderr();
+  const nlohmann::json drawn = nlohmann::json::parse(slurp(n.out_dir / "figures.json"));
+  EXPECT_EQ(drawn["fig7_compare"]["series"], 0);
+  const std::string fig7 = drawn["fig7_compare"]["note"];
+  EXPECT_NE(fig7.find("1 of 1 configuration(s) without a performance factor"), std::string::npos) << fig7;
+  EXPECT_NE(fig7.find("shard 2 of 2"), std::string::npos) << fig7;
+  EXPECT_EQ(drawn["drift_correlation"]["series"], 0);
+  EXPECT_EQ(drawn["drift_correlation"]["note"], "no frame after the first: drift needs --frames A:B with B > A");
+  EXPECT_NE(err.find("ptc: note: fig7_compare: " + fig7), std::string::npos) << err;
+  EXPECT_NE(err.find("ptc: note: drift_correlation: no frame after the first"), std::string::npos) << err;
 }
 
 TEST_F(Notebook, RefusesWhatIsNotAStudyAndAPythonWithoutPandas) {
