@@ -372,7 +372,8 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
                                          : fmt::format(", shard {} ({} of {} items)", setup.shard.str(), run.done.size(),
                                                        items.size()));
   out << a.text;
-  out << "wrote " << opt.out_dir.string() << "/ (" << a.files.size() << " CSV files, summary.txt, manifest.json)\n";
+  out << "wrote " << opt.out_dir.string() << "/ (" << a.files.size() << (a.files.size() == 1 ? " CSV file" : " CSV files")
+      << ", summary.txt, manifest.json)\n";
 }
 
 // ---------------------------------------------------------------- merge
@@ -608,7 +609,8 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
   out << fmt::format("merged {} shards of {} {}\n", n, params["experiment"].get<std::string>(),
                      params["scene"].get<std::string>());
   out << a.text;
-  out << "wrote " << opt.out_dir.string() << "/ (" << a.files.size() << " CSV files, summary.txt, manifest.json)\n";
+  out << "wrote " << opt.out_dir.string() << "/ (" << a.files.size() << (a.files.size() == 1 ? " CSV file" : " CSV files")
+      << ", summary.txt, manifest.json)\n";
 }
 
 }  // namespace ptc

@@ -40,9 +40,15 @@ void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
   const double sub_ms = t0.ms();
   t0.restart();
   std::error_code ec;
-  const bool replaced = std::filesystem::is_regular_file(opt.output, ec);
+  // A symbolic link is replaced by the file (the rename replaces the link, not what it points to).
+  const bool link = std::filesystem::is_symlink(opt.output, ec);
+  const std::filesystem::path pointed = link ? std::filesystem::read_symlink(opt.output, ec) : std::filesystem::path();
+  const bool replaced = !link && std::filesystem::is_regular_file(opt.output, ec);
   write_mesh(opt.output, refined);  // whole or not at all (a temporary file renamed)
   if (replaced) std::cerr << "ptc: note: replaced the existing " << opt.output.string() << "\n";
+  if (link)
+    std::cerr << "ptc: note: replaced the symbolic link " << opt.output.string() << " (to " << pointed.string()
+              << ", which is untouched) by the file\n";
   const double write_ms = t0.ms();
   if (opt.json) {
     nlohmann::json j{{"input", opt.input.string()},       {"output", opt.output.string()},

@@ -121,7 +121,7 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
   c->add_option("--gwh-weight", gwh_weight, "GWH01 E_dir weights: area or sqrt-area")
       ->check(enum_validator("weight", parse_gwh_weight))
       ->capture_default_str();
-  c->add_option("--target-clusters", cfg.target_clusters, "GWH01 contraction: stop at this many clusters (0 = off)")
+  c->add_option("--target-clusters", cfg.target_clusters, "contraction (any objective): stop at this many clusters (0 = only --max-count stops)")
       ->capture_default_str();
   c->add_option("--max-triangles", cfg.max_triangles, "sah-split/meshopt triangle limit (0 = 2 x max-count)")
       ->capture_default_str();

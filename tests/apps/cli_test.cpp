@@ -173,6 +173,25 @@ TEST_F(Cli, SubdivideCountsAndAtomicOutput) {
   r = ptc({"subdivide", cube, "--out", out});
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("ptc: note: replaced the existing " + out), std::string::npos) << r.err;
+  // A symbolic link as --out (dangling or not) is replaced by the file, said; what it points to
+  // is untouched.
+  const fs::path kept = dir_ / "kept.off";
+  fs::copy_file(out, kept);
+  const std::string kept_bytes = slurp(kept);
+  for (const fs::path& to : {kept, dir_ / "nowhere" / "x.off"}) {
+    const fs::path link = dir_ / "link.off";
+    fs::remove(link);
+    fs::create_symlink(to, link);
+    r = ptc({"subdivide", cube, "--out", link.string()});
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("ptc: note: replaced the symbolic link " + link.string() + " (to " + to.string() +
+                         ", which is untouched) by the file"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::is_symlink(link));
+    EXPECT_TRUE(fs::is_regular_file(link));
+  }
+  EXPECT_EQ(slurp(kept), kept_bytes);
   // Loop refuses a non-manifold mesh with a clear error.
   const auto fan = write("fan.off", "OFF\n5 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n0 -1 0\n3 0 1 2\n3 1 0 3\n3 0 1 4\n").string();
   r = ptc({"subdivide", fan, "--scheme", "loop", "--out", (dir_ / "fan2.off").string()});
