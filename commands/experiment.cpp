@@ -496,10 +496,19 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
                                    "do not merge",
                                    s.manifest["parameters"]["experiment"].get<std::string>(),
                                    params["experiment"].get<std::string>(), shards[0].dir.string()));
-    if (id != id0)
+    if (id != id0) {
+      std::string diff = first_difference(id0, id);
+      // Inputs differ by bytes and hashes: name the scenes too, as the user gave them.
+      auto scene_of = [](const nlohmann::json& m) {
+        const auto& p = m["parameters"];
+        return p.contains("scene") && p["scene"].is_string() ? p["scene"].get<std::string>() : std::string();
+      };
+      const std::string a = scene_of(shards[0].manifest), b = scene_of(s.manifest);
+      if ((diff.rfind("inputs", 0) == 0 || diff.rfind("rest_mesh", 0) == 0) && a != b)
+        diff = fmt::format("the scene {} vs {} ({})", a, b, diff);
       throw InputError(s.dir.string(), "", "",
-                       fmt::format("not a shard of the same study as {}: {}", shards[0].dir.string(),
-                                   first_difference(id0, id)));
+                       fmt::format("not a shard of the same study as {}: {}", shards[0].dir.string(), diff));
+    }
     const auto& sh = s.manifest["parameters"]["shard"];
     const std::uint32_t k = sh["index"].get<std::uint32_t>(), nn = sh["count"].get<std::uint32_t>();
     if (nn != n)

@@ -65,10 +65,13 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
   if (leaf.empty() || leaf == "." || leaf == "..")
     throw UsageError("--out", "'" + target_.string() + "' is not usable as an output directory name");
   std::error_code ec;
-  if (fs::is_symlink(target_, ec))
+  if (fs::is_symlink(target_, ec)) {
+    const std::string to = fs::read_symlink(target_, ec).string();
     throw InputError(target_.string(), "", "",
-                     "is a symbolic link; give the directory it points to (" + fs::read_symlink(target_, ec).string() +
-                         ") instead");
+                     fs::is_directory(target_, ec)
+                         ? "is a symbolic link; give the directory it points to (" + to + ") instead"
+                         : "is a symbolic link to " + to + ", which is not a directory; give another output directory");
+  }
   if (fs::exists(target_, ec)) {
     if (!fs::is_directory(target_, ec)) throw InputError(target_.string(), "", "", "exists and is not a directory");
     if (!fs::is_empty(target_, ec) && !fs::exists(target_ / kMarker, ec))

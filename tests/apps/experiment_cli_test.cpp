@@ -13,6 +13,7 @@
 #include "viz/vtp.h"
 
 #include <nlohmann/json.hpp>
+#include <tuple>
 
 namespace ptc::test {
 namespace {
@@ -256,6 +257,20 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   r = ptc({"merge", a, (dir_ / "cmp").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("cmp: a shard of `ptc experiment compare`, not of sweep like " + a), std::string::npos) << r.err;
+  // Shards of two mesh files: the scenes are named beside their hashes.
+  const std::string bunny = std::string(PTC_TEST_DATA) + "/meshes/bunny00.off";
+  const std::string elephant = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
+  for (const auto& [mesh, k, d] : {std::tuple{bunny, "1/2", "m1"}, std::tuple{elephant, "2/2", "m2"}})
+    ASSERT_EQ(ptc({"experiment", "sweep", mesh, "--max-counts", "0,10", "--frames", "0:1", "--width", "8", "--height", "8",
+                   "--quiet", "--shard", k, "--out", (dir_ / d).string()})
+                  .code,
+              0);
+  r = ptc({"merge", (dir_ / "m1").string(), (dir_ / "m2").string(), "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("not a shard of the same study as " + (dir_ / "m1").string() + ": the scene " + bunny + " vs " +
+                       elephant + " (inputs"),
+            std::string::npos)
+      << r.err;
   fs::create_directories(dir_ / "nothing");  // a directory without a manifest
   r = ptc({"merge", (dir_ / "nothing").string(), "--out", out});
   EXPECT_EQ(r.code, 1);

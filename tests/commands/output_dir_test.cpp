@@ -194,7 +194,20 @@ TEST(OutputDir, KeptNamesNeverCollideAndOddTargetsAreRefused) {
   EXPECT_EQ(slurp(target / "b.csv.kept"), "user 1");
   // A symbolic link as the target is refused (a rename would move the link, not the directory).
   fs::create_directory_symlink(target, base / "link");
-  EXPECT_THROW(OutputDir(base / "link"), InputError);
+  auto reason = [](const fs::path& p) {
+    try {
+      OutputDir d(p);
+    } catch (const InputError& e) {
+      return e.reason();
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(reason(base / "link"), "is a symbolic link; give the directory it points to (" + target.string() + ") instead");
+  // A link to a file (or to nothing) has no directory to point to.
+  std::ofstream(base / "afile") << "x";
+  fs::create_symlink(base / "afile", base / "flink");
+  EXPECT_EQ(reason(base / "flink"),
+            "is a symbolic link to " + (base / "afile").string() + ", which is not a directory; give another output directory");
   // Outputs over inputs.
   std::ofstream(base / "in.off") << "OFF";
   fs::create_directories(base / "frames");
