@@ -685,6 +685,13 @@ TEST_F(Cli, FlagsThatWouldDoNothingAreRefused) {
     EXPECT_NE(r.err.find(flag + ": not used by viz export"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "v"));
   }
+  // --scheme with --levels 0: nothing is refined.
+  {
+    const auto s0 = ptc({"subdivide", mesh, "--levels", "0", "--scheme", "loop", "--out", (dir_ / "s.off").string()});
+    EXPECT_EQ(s0.code, 2) << s0.err;
+    EXPECT_NE(s0.err.find("--scheme: --levels 0 refines nothing"), std::string::npos) << s0.err;
+    EXPECT_FALSE(fs::exists(dir_ / "s.off"));
+  }
   // --data-dir locates built-in scenes' meshes: with a mesh file or a directory of frames it does nothing.
   fs::create_directories(dir_ / "frames");
   for (const std::string& scene : {mesh, (dir_ / "frames").string()}) {
