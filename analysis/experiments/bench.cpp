@@ -302,7 +302,7 @@ std::string bench_text(const PeerBenchResult& r) {
                                            "rtcIntersect{0}/rtcOccluded{0}, coherent)",
                                            r.embree_packet_width)
                              : std::string());
-  s += fmt::format("{:<16} {:>10}", "config", "frame_ms");
+  s += fmt::format("{:<16} {:>10}", "config", "whole_ms");  // (summary.csv's whole_frame_ms)
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>15}", "vs " + std::string(to_string(e)));
   s += "\n";
   for (const auto& x : r.summary) {
@@ -318,9 +318,13 @@ std::string bench_text(const PeerBenchResult& r) {
                    "update_ms", "build_ms", "upd+build_ms", "trace_ms", "Mrays/s", "hits", "mismatch", "ties",
                    "shadow_ms", "shadow_rays", "lit_diff");
   for (const auto& x : r.summary) {
-    std::uint64_t hits = 0, shadow_rays = 0;
+    // Medians over the frames of the other columns (the last frame's counts were printed before).
+    std::vector<double> hv, sv;
     for (const auto& row : r.rows)
-      if (row.config == x.config) hits = row.hits, shadow_rays = row.shadow_rays;
+      if (row.config == x.config && row.frame >= r.median_first_frame)
+        hv.push_back(static_cast<double>(row.hits)), sv.push_back(static_cast<double>(row.shadow_rays));
+    const std::string hits = hv.empty() ? "-" : fmt::format("{:g}", median(hv));
+    const std::string shadow_rays = sv.empty() ? "-" : fmt::format("{:g}", median(sv));
     s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>8} {:>8} {:>10.2f} {:>11} {:>10}\n",
                      x.config, x.update_ms, x.build_ms, x.update_build_ms, x.trace_ms, x.mrays_per_s, hits,
                      x.mismatches, x.ties, x.shadow_ms, shadow_rays, x.shadow_mismatches);

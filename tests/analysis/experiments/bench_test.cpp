@@ -8,6 +8,8 @@
 #include <set>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "analysis/experiments/bench.h"
 #include "toolkit/anim/deformers.h"
 #include "toolkit/core/stats.h"
@@ -105,6 +107,23 @@ TEST(PeerBench, SmallMeshAllConfigurationsNoMismatches) {
   EXPECT_NE(summary[0].find("trace_speed_vs_embree_refit"), std::string::npos);
   const std::string table = ptc::bench_text(r);
   for (const auto& n : names) EXPECT_NE(table.find(n), std::string::npos);
+  // The text table's hits and shadow_rays are medians over the frames, like its other columns
+  // (they were the last frame's counts): against the rows, config by config.
+  for (const auto& n : names) {
+    std::vector<double> h, sh;
+    for (const auto& row : r.rows)
+      if (row.config == n && row.frame >= r.median_first_frame)
+        h.push_back(static_cast<double>(row.hits)), sh.push_back(static_cast<double>(row.shadow_rays));
+    const std::string line_start = "\n" + n + " ";
+    const auto at = table.find(line_start, table.find("update_ms"));  // the stage table's line of the config
+    ASSERT_NE(at, std::string::npos) << n;
+    std::istringstream line(table.substr(at + 1, table.find('\n', at + 1) - at - 1));
+    std::vector<std::string> cells;
+    for (std::string c; line >> c;) cells.push_back(c);
+    ASSERT_EQ(cells.size(), 12u) << n;
+    EXPECT_EQ(cells[6], fmt::format("{:g}", ptc::median(h))) << n;
+    EXPECT_EQ(cells[10], fmt::format("{:g}", ptc::median(sh))) << n;
+  }
 }
 
 // The shadow pass. A convex ellipsoid under a rigid motion with the light outside it: a point
