@@ -525,6 +525,13 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
   const auto kind = parse_experiment_kind(params["experiment"].get<std::string>());
   if (!kind) throw InputError((shards[0].dir / "manifest.json").string(), "", "", "unknown experiment");
   const std::vector<std::string> primaries = shards[0].manifest["results"]["primary_files"].get<std::vector<std::string>>();
+  Stopwatch sw;
+  struct ReadFile {
+    std::filesystem::path path;
+    std::uint64_t bytes;
+    std::string fnv1a64;
+  };
+  std::vector<ReadFile> tables_read;  // the shards' tables, recorded as inputs
   std::vector<FileRows> files;
   for (const auto& name : primaries) {
     FileRows f;
@@ -545,7 +552,9 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
       CsvText t;
       try {
         const std::string text = read_text(path, "the shard's manifest lists it");
-        check_output_hash(s.manifest, name, bytes_fnv1a64(text), path);  // a shard's table as its run wrote it
+        const std::string hash = bytes_fnv1a64(text);
+        check_output_hash(s.manifest, name, hash, path);  // a shard's table as its run wrote it
+        tables_read.push_back({path, text.size(), hash});
         t = parse_csv(text);
       } catch (const std::invalid_argument& e) {
         throw InputError(path.string(), "", "", e.what());
@@ -572,13 +581,19 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
     }
     files.push_back(std::move(f));
   }
+  const double read_ms = sw.ms();
+  sw.restart();
   const nlohmann::json rows = item_rows_json(files);
   const std::string reference = params.value("reference", "");
   const Assembled a = assemble(*kind, std::move(files), reference);
+  const double assemble_ms = sw.ms();
 
   OutputDir dir(opt.out_dir);
   RunManifest manifest("merge", opt.argv, "ptc-merge/1");
   for (const auto& s : shards) record_input(manifest, s.dir / "manifest.json");
+  for (const ReadFile& f : tables_read) record_input(manifest, f.path, f.bytes, f.fnv1a64);
+  manifest.add_timing_ms("read", read_ms);
+  manifest.add_timing_ms("assemble", assemble_ms);
   for (auto it = params.begin(); it != params.end(); ++it)
     if (it.key() != "shard") manifest.set_parameter(it.key(), it.value());
   nlohmann::json from = nlohmann::json::array();

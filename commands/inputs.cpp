@@ -101,6 +101,16 @@ void record_input(RunManifest& manifest, const fs::path& path) {
   manifest.add_input(std::move(in));
 }
 
+void record_input(RunManifest& manifest, const fs::path& path, std::uint64_t bytes, const std::string& fnv1a64) {
+  std::error_code ec;
+  nlohmann::json in;
+  in["path"] = path.string();
+  in["absolute_path"] = fs::absolute(path, ec).string();
+  in["bytes"] = bytes;
+  in["fnv1a64"] = fnv1a64;
+  manifest.add_input(std::move(in));
+}
+
 LoadedMesh read_mesh_recorded(const fs::path& path, RunManifest& manifest) {
   Stopwatch sw;
   LoadedMesh lm = read_mesh(path);

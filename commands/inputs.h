@@ -36,6 +36,8 @@ void check_output_hash(const nlohmann::json& manifest, const std::string& name, 
 
 /// Adds {path, absolute_path, bytes, fnv1a64} of `path` to the manifest's inputs.
 void record_input(RunManifest& manifest, const std::filesystem::path& path);
+/// The same for a file already read whole: its size and hash (bytes_fnv1a64) as given.
+void record_input(RunManifest& manifest, const std::filesystem::path& path, std::uint64_t bytes, const std::string& fnv1a64);
 
 /// read_mesh(path), recording the read time ("read") and the input in the manifest.
 [[nodiscard]] LoadedMesh read_mesh_recorded(const std::filesystem::path& path, RunManifest& manifest);

@@ -149,6 +149,8 @@ ConfigRow config_row(const std::string& scene, const study::Prepared& p) {
     r.max_size = std::find(used.begin(), used.end(), "max_size") != used.end() ? c.max_size : kNaN;
   } else if (p.spec.given) {
     r.method = "given";
+  } else {
+    r.method = "none";  // a structure over triangles (standard, Embree's): as sweep's MaxCount 0
   }
   if (p.has_clusters) {
     r.clusters = p.clustering.cluster_count();

@@ -67,6 +67,23 @@ TEST_F(Experiment, SweepAsThreeShardsMergesToTheSingleRun) {
   const RunResult m = ptc(merge);
   ASSERT_EQ(m.code, 0) << m.err;
   for (const char* f : {"configs.csv", "sweep.csv", "sweep_summary.csv"}) expect_same_rows(dir_ / "one" / f, dir_ / "merged" / f);
+  // The merged manifest records every file merge read (the shards' manifests and tables), with
+  // their sizes and hashes, and its stages' times.
+  {
+    const auto mm = nlohmann::json::parse(slurp(dir_ / "merged" / "manifest.json"));
+    std::set<std::string> inputs;
+    for (const auto& in : mm["inputs"]) {
+      const fs::path p = in["path"].get<std::string>();
+      inputs.insert(p.filename().string() + "@" + p.parent_path().filename().string());
+      EXPECT_EQ(in["bytes"].get<std::uint64_t>(), fs::file_size(p)) << p;
+      EXPECT_EQ(in["fnv1a64"].get<std::string>(), test::fnv1a64_hex(slurp(p))) << p;
+    }
+    for (const char* d : {"1s", "2s", "3s"})
+      for (const char* f : {"manifest.json", "configs.csv", "sweep.csv"})
+        EXPECT_TRUE(inputs.count(std::string(f) + "@" + d)) << f << " of " << d;
+    EXPECT_TRUE(mm["timings_ms"].contains("read"));
+    EXPECT_TRUE(mm["timings_ms"].contains("assemble"));
+  }
   // The shards split the 4 items 2 + 1 + 1 (items 0 and 3 in shard 1).
   const auto s1 = csv_rows(slurp(dir_ / "1s" / "configs.csv"));
   ASSERT_EQ(s1.size(), 2u);
@@ -624,6 +641,19 @@ TEST_F(Experiment, ClusterBvhFlagsWithoutAClusterBvhAreRefused) {
   const RunResult ok = ptc({"experiment", "sweep", "faerie", "--max-counts", "0,30", "--cluster-groups", "4", "--frames",
                             "0:1", "--width", "8", "--height", "8", "--quiet", "--out", (dir_ / "ok").string()});
   EXPECT_EQ(ok.code, 0) << ok.err;
+  // configs.csv names the method of a structure over triangles `none`, in a sweep (MaxCount 0)
+  // and in a compare (standard, Embree) alike (the compare left it empty).
+  const RunResult cmp = ptc({"experiment", "compare", "faerie", "--configs", "standard,embree_low,acc_growth", "--frames",
+                             "0:1", "--width", "8", "--height", "8", "--quiet", "--out", (dir_ / "cmp").string()});
+  ASSERT_EQ(cmp.code, 0) << cmp.err;
+  std::map<std::string, std::string> method;
+  for (const auto& r : csv_rows(slurp(dir_ / "cmp" / "configs.csv"))) method[r.at("config")] = r.at("method");
+  for (const auto& r : csv_rows(slurp(dir_ / "ok" / "configs.csv"))) method[r.at("config")] = r.at("method");
+  EXPECT_EQ(method.at("standard"), "none");
+  EXPECT_EQ(method.at("embree_low"), "none");
+  EXPECT_EQ(method.at("max_count=0"), "none");
+  EXPECT_EQ(method.at("acc_growth"), "growth");
+  EXPECT_EQ(method.at("max_count=30"), "contraction");  // (the sweep clusters by contraction with Acc)
 }
 
 }  // namespace
