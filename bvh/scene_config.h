@@ -88,8 +88,9 @@ struct SceneConfig {
 [[nodiscard]] SceneConfig triangle_scene_defaults();
 /// Default build settings of a cluster scene: the same SAH constants, one cluster per leaf
 /// (leaves of several clusters cost the sum of their triangles and are rarely chosen), and the
-/// two-level build over groups of at most 8 clusters (cluster_group_size; measured on 27.6k Acc
-/// clusters of armadillo x2: build 3.6 -> 1.9 ms, SAH cost +2.6%, trace speed within 1-5%), each
+/// two-level build over groups of at most 16 clusters (cluster_group_size; groups of 8 measured
+/// first on 27.6k Acc clusters of armadillo x2: build 3.6 -> 1.9 ms, SAH cost +2.6%, trace speed
+/// within 1-5%; 16 against 8: update 0.3-0.8 ms less, nodes a ray +0.3-1%, docs/tracing.md), each
 /// group's tree fixed at the rest pose and refitted (GroupTrees::Refit: build and collapse
 /// 3.0 -> 1.0 ms, nodes per ray +1-8%; docs/tracing.md, "Fixed group trees").
 [[nodiscard]] SceneConfig cluster_scene_defaults();
