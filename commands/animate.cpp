@@ -119,13 +119,17 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
         opt.scene, range.count());
   if (opt.json) {
     nlohmann::json results = doc["results"];
-    if (opt.stats) {  // what the text mode prints (stats.csv's rows; NaN as null)
+    if (opt.stats) {  // what the text mode prints: stats.csv's rows, with its column names (NaN as null)
       nlohmann::json rows = nlohmann::json::array();
       for (const FrameStats& st : stats)
         rows.push_back({{"frame", st.frame},
-                        {"bbox_min", vec_json(st.bounds.lo)},
-                        {"bbox_max", vec_json(st.bounds.hi)},
-                        {"diagonal", st.bounds.extent().norm()},
+                        {"bbox_min_x", st.bounds.lo.x()},
+                        {"bbox_min_y", st.bounds.lo.y()},
+                        {"bbox_min_z", st.bounds.lo.z()},
+                        {"bbox_max_x", st.bounds.hi.x()},
+                        {"bbox_max_y", st.bounds.hi.y()},
+                        {"bbox_max_z", st.bounds.hi.z()},
+                        {"bbox_diagonal", st.bounds.extent().norm()},
                         {"total_area", st.total_area},
                         {"area_ratio_min", st.area_ratio_min},
                         {"area_ratio_mean", st.area_ratio_mean},

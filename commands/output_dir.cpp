@@ -66,11 +66,17 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
     throw UsageError("--out", "'" + target_.string() + "' is not usable as an output directory name");
   std::error_code ec;
   if (fs::is_symlink(target_, ec)) {
-    const std::string to = fs::read_symlink(target_, ec).string();
+    // (the link's text may be relative to its folder: the path it resolves to, as the user can type it)
+    const fs::path text = fs::read_symlink(target_, ec);
+    const std::string to = fs::exists(target_, ec) ? fs::weakly_canonical(target_, ec).string()
+                           : text.is_absolute()    ? text.lexically_normal().string()
+                                                   : (fs::absolute(target_.parent_path(), ec) / text).lexically_normal().string();
     throw InputError(target_.string(), "", "",
-                     fs::is_directory(target_, ec)
-                         ? "is a symbolic link; give the directory it points to (" + to + ") instead"
-                         : "is a symbolic link to " + to + ", which is not a directory; give another output directory");
+                     fs::is_directory(target_, ec) ? "is a symbolic link; give the directory it points to (" + to + ") instead"
+                     : fs::exists(target_, ec)     ? "is a symbolic link to " + to + ", which is not a directory; give "
+                                                     "another output directory"
+                                                   : "is a symbolic link to " + to + ", which does not exist; give "
+                                                     "another output directory");
   }
   if (fs::exists(target_, ec)) {
     if (!fs::is_directory(target_, ec)) throw InputError(target_.string(), "", "", "exists and is not a directory");
@@ -121,12 +127,23 @@ struct PreviousMarker {
   std::vector<std::string> listed;
 };
 
-// The `command` of a manifest.json ("" when there is none or it cannot be read).
+// What wrote a manifest.json, as a user would name it: the command and, for experiment and viz,
+// its kind ("experiment sweep", "viz export"); "" when there is none or it cannot be read.
 std::string manifest_command(const fs::path& file) {
   std::ifstream in(file);
   if (!in) return "";
   const nlohmann::json m = nlohmann::json::parse(in, nullptr, false);
-  return m.is_object() && m.contains("command") && m["command"].is_string() ? m["command"].get<std::string>() : "";
+  if (!m.is_object() || !m.contains("command") || !m["command"].is_string()) return "";
+  std::string c = m["command"].get<std::string>();
+  if (m.contains("parameters") && m["parameters"].is_object()) {
+    const nlohmann::json& p = m["parameters"];
+    for (const char* k : {"experiment", "kind"})
+      if (p.contains(k) && p[k].is_string()) {
+        c += " " + p[k].get<std::string>();
+        break;
+      }
+  }
+  return c;
 }
 
 constexpr const char* kLegacyHeader = "written by ptc; a later run with the same --out replaces this directory";
@@ -199,7 +216,8 @@ void OutputDir::commit() {
         for (std::size_t i = 0; i < gone.size() && i < 6; ++i) list += (i ? ", " : "") + gone[i];
         if (gone.size() > 6) list += ", ...";
         replaced_note = "ptc: note: replaced the output of `ptc " + before + "` in " + target_.string() +
-                        (gone.empty() ? std::string() : " (its " + list + " are gone)") + "\n";
+                        (gone.empty() ? std::string() : " (its " + list + (gone.size() == 1 ? " is" : " are") + " gone)") +
+                        "\n";
       }
       if (!prev.present && !fs::is_empty(target_, ec))
         throw InputError(target_.string(), "", "",

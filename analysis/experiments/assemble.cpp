@@ -306,7 +306,7 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
     const auto [r, n] = rn;
     if (!std::isfinite(r)) {  // say why there is no number
       text += fmt::format("paper: connectivity predicts drift ({}) -> no Spearman: {}\n", name,
-                          frame_count[name] < 2
+                          frame_count.count(name) && frame_count.at(name) < 2
                               ? std::string("one frame only: drift is measured over the frames after the first "
                                             "(--frames A:B with B > A)")
                           : n < 3 ? fmt::format("{} cluster(s) with a finite drift (a box of zero area at some frame "

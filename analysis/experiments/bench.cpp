@@ -323,8 +323,13 @@ std::string bench_text(const PeerBenchResult& r) {
     for (const auto& row : r.rows)
       if (row.config == x.config && row.frame >= r.median_first_frame)
         hv.push_back(static_cast<double>(row.hits)), sv.push_back(static_cast<double>(row.shadow_rays));
-    const std::string hits = hv.empty() ? "-" : fmt::format("{:g}", median(hv));
-    const std::string shadow_rays = sv.empty() ? "-" : fmt::format("{:g}", median(sv));
+    // (a count in full: "{:g}" would print 1048576 as 1.04858e+06; a median between two counts ends in .5)
+    auto count = [](const std::vector<double>& v) {
+      if (v.empty()) return std::string("-");
+      const double m = median(v);
+      return m == std::floor(m) ? fmt::format("{:.0f}", m) : fmt::format("{:.1f}", m);
+    };
+    const std::string hits = count(hv), shadow_rays = count(sv);
     s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>8} {:>8} {:>10.2f} {:>11} {:>10}\n",
                      x.config, x.update_ms, x.build_ms, x.update_build_ms, x.trace_ms, x.mrays_per_s, hits,
                      x.mismatches, x.ties, x.shadow_ms, shadow_rays, x.shadow_mismatches);

@@ -1,6 +1,7 @@
 // The flags several subcommands share, defined once (cli.h).
 #include "apps/ptc/cli.h"
 #include "commands/commands.h"
+#include "toolkit/anim/scene.h"
 
 namespace ptc::cli {
 
@@ -25,14 +26,25 @@ void SceneArg::add_to(CLI::App* cmd) {
 
 void SceneArg::apply(SceneOptions& o) const {
   if (data_dir.empty()) return;
+  // The scene opener's rule (open_scene): a .json file is a scene file, whose "${data}/" paths
+  // read the data directory; else an existing path wins over a built-in scene's name; a
+  // built-in scene reads its meshes from the data directory; anything else (a mesh, an asset, a
+  // directory of frames, a glob of frame files) reads none.
   std::string ext = input.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   std::error_code ec;
-  if (ext != ".json" && std::filesystem::exists(input, ec))
-    throw UsageError("--data-dir", "not used: '" + input.string() + "' is a " +
-                                       (std::filesystem::is_directory(input, ec) ? "directory of frames" : "file") +
+  const bool exists = std::filesystem::exists(input, ec);
+  if (ext != ".json" && (exists || !is_builtin_scene(input.string()))) {
+    const std::string what = !exists                                    ? "not a built-in scene"
+                             : std::filesystem::is_directory(input, ec) ? "a directory of frames"
+                                                                        : "a file";
+    throw UsageError("--data-dir", "not used: '" + input.string() + "' is " + what +
+                                       (exists && is_builtin_scene(input.string())
+                                            ? " (it also names a built-in scene; the path wins)"
+                                            : "") +
                                        " (--data-dir locates the meshes of built-in scenes and the ${data}/ paths of "
                                        "scene files)");
+  }
   o.data_dir = data_dir;
 }
 
@@ -121,7 +133,7 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
   c->add_option("--gwh-weight", gwh_weight, "GWH01 E_dir weights: area or sqrt-area")
       ->check(enum_validator("weight", parse_gwh_weight))
       ->capture_default_str();
-  c->add_option("--target-clusters", cfg.target_clusters, "contraction (any objective): stop at this many clusters (0 = only --max-count stops)")
+  c->add_option("--target-clusters", cfg.target_clusters, "contraction (any objective): stop at this many clusters (0 = off)")
       ->capture_default_str();
   c->add_option("--max-triangles", cfg.max_triangles, "sah-split/meshopt triangle limit (0 = 2 x max-count)")
       ->capture_default_str();

@@ -11,7 +11,7 @@ void register_subdivide(CLI::App& app, Context& ctx) {
   auto scheme_opt = std::make_shared<CLI::Option*>(nullptr);
   auto* c = ctx.add(app, "subdivide", "refine a mesh (1-to-4 midpoint split or Loop) keeping its shape", [opt, scheme, scheme_opt] {
     if (opt->levels == 0 && *scheme_opt && (*scheme_opt)->count() > 0)  // (it would do nothing)
-      throw UsageError("--scheme", "--levels 0 refines nothing: the mesh is written as read");
+      throw UsageError("--scheme", "not used with --levels 0 (nothing is refined)");
     opt->scheme = *parse_subdivision_scheme(*scheme);
     cmd_subdivide(*opt, std::cout);
   });

@@ -120,17 +120,14 @@ TEST_F(Animate, StatsAgainstIndependentRecomputation) {
     std::vector<std::string> f;
     std::stringstream ls(line);
     for (std::string c; std::getline(ls, c, ',');) f.push_back(c);
-    EXPECT_EQ(row["frame"].get<int>(), std::stoi(f[0]));
-    for (int a = 0; a < 3; ++a) {
-      EXPECT_EQ(row["bbox_min"][a].get<double>(), std::stod(f[1 + a]));
-      EXPECT_EQ(row["bbox_max"][a].get<double>(), std::stod(f[4 + a]));
-    }
-    EXPECT_EQ(row["diagonal"].get<double>(), std::stod(f[7]));
-    EXPECT_EQ(row["total_area"].get<double>(), std::stod(f[8]));
-    EXPECT_EQ(row["area_ratio_min"].get<double>(), std::stod(f[9]));
-    EXPECT_EQ(row["area_ratio_mean"].get<double>(), std::stod(f[10]));
-    EXPECT_EQ(row["area_ratio_max"].get<double>(), std::stod(f[11]));
-    EXPECT_EQ(row["degenerate_at_first"].get<int>(), std::stoi(f[12]));
+    // The CSV's columns by name, value by value.
+    const std::vector<std::string> names = {"frame", "bbox_min_x", "bbox_min_y", "bbox_min_z", "bbox_max_x",
+                                            "bbox_max_y", "bbox_max_z", "bbox_diagonal", "total_area",
+                                            "area_ratio_min", "area_ratio_mean", "area_ratio_max",
+                                            "degenerate_at_first"};
+    ASSERT_EQ(f.size(), names.size());
+    EXPECT_EQ(row.size(), names.size());
+    for (std::size_t c = 0; c < names.size(); ++c) EXPECT_EQ(row.at(names[c]).get<double>(), std::stod(f[c])) << names[c];
   }
 }
 

@@ -689,16 +689,16 @@ TEST_F(Cli, FlagsThatWouldDoNothingAreRefused) {
   {
     const auto s0 = ptc({"subdivide", mesh, "--levels", "0", "--scheme", "loop", "--out", (dir_ / "s.off").string()});
     EXPECT_EQ(s0.code, 2) << s0.err;
-    EXPECT_NE(s0.err.find("--scheme: --levels 0 refines nothing"), std::string::npos) << s0.err;
+    EXPECT_NE(s0.err.find("--scheme: not used with --levels 0 (nothing is refined)"), std::string::npos) << s0.err;
     EXPECT_FALSE(fs::exists(dir_ / "s.off"));
   }
   // --data-dir locates built-in scenes' meshes: with a mesh file or a directory of frames it does nothing.
   fs::create_directories(dir_ / "frames");
-  for (const std::string& scene : {mesh, (dir_ / "frames").string()}) {
+  for (const std::string& scene : {mesh, (dir_ / "frames").string(), (dir_ / "frames" / "*.ply").string()}) {
     const auto d = ptc({"trace", scene, "--data-dir", "/nonexistent", "--out", (dir_ / "t").string()});
     EXPECT_EQ(d.code, 2) << scene << ": " << d.err;
     EXPECT_EQ(lines(d.err), 1u) << d.err;
-    EXPECT_NE(d.err.find("--data-dir: not used: '" + scene + "' is a "), std::string::npos) << d.err;
+    EXPECT_NE(d.err.find("--data-dir: not used: '" + scene + "' is "), std::string::npos) << d.err;
     EXPECT_FALSE(fs::exists(dir_ / "t"));
   }
   const auto r = ptc({"notebook", (dir_ / "none").string(), "--execute", "--no-figures", "--out", (dir_ / "n").string()});
@@ -763,6 +763,14 @@ TEST_F(Cli, ReplacingAnotherCommandsOutputIsSaid) {
   const auto again = ptc(sweep);
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_EQ(again.err.find("replaced the output"), std::string::npos) << again.err;
+  // Another kind of experiment is another output too.
+  const auto cmp = ptc({"experiment", "compare", mesh, "--configs", "standard,acc_growth", "--frames", "0:1", "--width",
+                        "8", "--height", "8", "--quiet", "--out", out});
+  ASSERT_EQ(cmp.code, 0) << cmp.err;
+  EXPECT_NE(cmp.err.find("ptc: note: replaced the output of `ptc experiment sweep` in " + out + " (its sweep.csv, "
+                         "sweep_summary.csv are gone)"),
+            std::string::npos)
+      << cmp.err;
 }
 
 }  // namespace

@@ -202,12 +202,20 @@ TEST(OutputDir, KeptNamesNeverCollideAndOddTargetsAreRefused) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(reason(base / "link"), "is a symbolic link; give the directory it points to (" + target.string() + ") instead");
+  EXPECT_EQ(reason(base / "link"), "is a symbolic link; give the directory it points to (" +
+                                      fs::weakly_canonical(target).string() + ") instead");
+  // A relative link names what it resolves to, not its text.
+  fs::create_directory_symlink(fs::path("..") / base.filename() / target.filename(), base / "rel");
+  EXPECT_EQ(reason(base / "rel"), "is a symbolic link; give the directory it points to (" +
+                                     fs::weakly_canonical(target).string() + ") instead");
+  fs::create_symlink(base / "nothing", base / "dangling");
+  EXPECT_EQ(reason(base / "dangling"), "is a symbolic link to " + (fs::weakly_canonical(base) / "nothing").string() +
+                                          ", which does not exist; give another output directory");
   // A link to a file (or to nothing) has no directory to point to.
   std::ofstream(base / "afile") << "x";
   fs::create_symlink(base / "afile", base / "flink");
-  EXPECT_EQ(reason(base / "flink"),
-            "is a symbolic link to " + (base / "afile").string() + ", which is not a directory; give another output directory");
+  EXPECT_EQ(reason(base / "flink"), "is a symbolic link to " + fs::weakly_canonical(base / "afile").string() +
+                                       ", which is not a directory; give another output directory");
   // Outputs over inputs.
   std::ofstream(base / "in.off") << "OFF";
   fs::create_directories(base / "frames");

@@ -110,8 +110,8 @@ TEST(IoFiles, PathsThatDoNotWork) {
   const fs::path dir = fs::temp_directory_path() / ("ptc_io_files_" + std::to_string(::getpid()) + ".off");
   fs::create_directories(dir);
   const std::string is_dir =
-      "is a directory, not a mesh file (a directory of frames is read by ptc trace, bench, viz and experiment; give "
-      "one frame's file here)";
+      "is a directory, not a mesh file (a directory of frames is read by ptc trace, bench, viz, experiment and "
+      "animate; give one frame's file here)";
   EXPECT_EQ(error_of(dir), is_dir);
   fs::remove_all(dir);
   // A directory without an extension (a frame sequence given to a command that reads one mesh)

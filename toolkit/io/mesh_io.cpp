@@ -137,8 +137,8 @@ LoadedMesh read_mesh(const std::filesystem::path& path) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
       throw InputError(path.string(), "", "",
-                       "is a directory, not a mesh file (a directory of frames is read by ptc trace, bench, viz and "
-                       "experiment; give one frame's file here)");
+                       "is a directory, not a mesh file (a directory of frames is read by ptc trace, bench, viz, "
+                       "experiment and animate; give one frame's file here)");
   }
   if (!f)
     throw InputError(
