@@ -9,6 +9,7 @@
 #include "commands/inputs.h"
 #include "render/view.h"
 #include "toolkit/anim/deformers.h"
+#include "toolkit/anim/scene.h"
 #include "toolkit/anim/scene_file.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/input_log.h"
@@ -109,6 +110,23 @@ LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const
   if (flag) return {*flag, "--light"};
   if (scene.has_own_light()) return {scene.light().position, "scene"};
   return {default_light(cam, bounds), "default"};
+}
+
+void refuse_unused_data_dir(const std::filesystem::path& input) {
+  std::string ext = input.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  std::error_code ec;
+  const bool exists = std::filesystem::exists(input, ec);
+  if (ext == ".json" || (!exists && is_builtin_scene(input.string()))) return;
+  const std::string what = !exists                                    ? "not a built-in scene"
+                           : std::filesystem::is_directory(input, ec) ? "a directory of frames"
+                                                                      : "a file";
+  throw UsageError("--data-dir", "not used: '" + input.string() + "' is " + what +
+                                     (exists && is_builtin_scene(input.string())
+                                          ? " (it also names a built-in scene; the path wins)"
+                                          : "") +
+                                     " (--data-dir locates the meshes of built-in scenes and the ${data}/ paths of "
+                                     "scene files)");
 }
 
 }  // namespace ptc

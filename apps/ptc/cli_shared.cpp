@@ -1,7 +1,6 @@
 // The flags several subcommands share, defined once (cli.h).
 #include "apps/ptc/cli.h"
 #include "commands/commands.h"
-#include "toolkit/anim/scene.h"
 
 namespace ptc::cli {
 
@@ -26,25 +25,7 @@ void SceneArg::add_to(CLI::App* cmd) {
 
 void SceneArg::apply(SceneOptions& o) const {
   if (data_dir.empty()) return;
-  // The scene opener's rule (open_scene): a .json file is a scene file, whose "${data}/" paths
-  // read the data directory; else an existing path wins over a built-in scene's name; a
-  // built-in scene reads its meshes from the data directory; anything else (a mesh, an asset, a
-  // directory of frames, a glob of frame files) reads none.
-  std::string ext = input.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  std::error_code ec;
-  const bool exists = std::filesystem::exists(input, ec);
-  if (ext != ".json" && (exists || !is_builtin_scene(input.string()))) {
-    const std::string what = !exists                                    ? "not a built-in scene"
-                             : std::filesystem::is_directory(input, ec) ? "a directory of frames"
-                                                                        : "a file";
-    throw UsageError("--data-dir", "not used: '" + input.string() + "' is " + what +
-                                       (exists && is_builtin_scene(input.string())
-                                            ? " (it also names a built-in scene; the path wins)"
-                                            : "") +
-                                       " (--data-dir locates the meshes of built-in scenes and the ${data}/ paths of "
-                                       "scene files)");
-  }
+  refuse_unused_data_dir(input);  // (commands/scene_args.h: the scene opener's rule)
   o.data_dir = data_dir;
 }
 
