@@ -36,6 +36,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   // Bad vectors fail before any work; the light as `ptc trace` picks it (flag > scene > default).
   const Box3 shape = scene.rest().referenced_bounds();  // (unreferenced vertices are not framed)
   const bvh::PinholeCamera cam = make_camera(c.camera, shape, c.width, c.height, arg);
+  c.made_camera = cam;  // (the bench's rays: the same camera, framed once)
   const LightChoice light = light_for(opt.light, scene, cam, shape);
   if (opt.shadows) c.light = light.position;
   // The output directory is checked before the (long) run, so a refused target costs nothing.

@@ -404,8 +404,7 @@ nlohmann::json identity(const nlohmann::json& m) {
   // shard ran); its files are among the inputs, compared by their bytes: only whether they came
   // from a manifest.json is the study's.
   if (p.contains("given_parameters_from") && p["given_parameters_from"].is_string() && !inputs.empty()) {
-    const std::string from = p["given_parameters_from"].get<std::string>();
-    if (from.size() >= 13 && from.compare(from.size() - 13, 13, "manifest.json") == 0)
+    if (p["given_parameters_from"].get<std::string>().ends_with("manifest.json"))
       p["given_parameters_from"] = "the clustering's manifest.json";
   }
   id["parameters"] = p;

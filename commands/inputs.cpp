@@ -93,12 +93,7 @@ std::string file_fnv1a64(const fs::path& path) {
 
 void record_input(RunManifest& manifest, const fs::path& path) {
   std::error_code ec;
-  nlohmann::json in;
-  in["path"] = path.string();
-  in["absolute_path"] = fs::absolute(path, ec).string();
-  in["bytes"] = fs::file_size(path, ec);
-  in["fnv1a64"] = file_fnv1a64(path);
-  manifest.add_input(std::move(in));
+  record_input(manifest, path, fs::file_size(path, ec), file_fnv1a64(path));  // (size -1 when unknown, as before)
 }
 
 void record_input(RunManifest& manifest, const fs::path& path, std::uint64_t bytes, const std::string& fnv1a64) {

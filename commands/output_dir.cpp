@@ -67,16 +67,15 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
   std::error_code ec;
   if (fs::is_symlink(target_, ec)) {
     // (the link's text may be relative to its folder: the path it resolves to, as the user can type it)
+    const fs::file_status st = fs::status(target_, ec);  // (of what the link points to)
     const fs::path text = fs::read_symlink(target_, ec);
-    const std::string to = fs::exists(target_, ec) ? fs::weakly_canonical(target_, ec).string()
-                           : text.is_absolute()    ? text.lexically_normal().string()
-                                                   : (fs::absolute(target_.parent_path(), ec) / text).lexically_normal().string();
+    const std::string to = fs::exists(st) ? fs::weakly_canonical(target_, ec).string()
+                                          : (fs::absolute(target_.parent_path(), ec) / text).lexically_normal().string();
+    if (fs::is_directory(st))
+      throw InputError(target_.string(), "", "", "is a symbolic link; give the directory it points to (" + to + ") instead");
     throw InputError(target_.string(), "", "",
-                     fs::is_directory(target_, ec) ? "is a symbolic link; give the directory it points to (" + to + ") instead"
-                     : fs::exists(target_, ec)     ? "is a symbolic link to " + to + ", which is not a directory; give "
-                                                     "another output directory"
-                                                   : "is a symbolic link to " + to + ", which does not exist; give "
-                                                     "another output directory");
+                     "is a symbolic link to " + to + (fs::exists(st) ? ", which is not a directory" : ", which does not exist") +
+                         "; give another output directory");
   }
   if (fs::exists(target_, ec)) {
     if (!fs::is_directory(target_, ec)) throw InputError(target_.string(), "", "", "exists and is not a directory");

@@ -113,18 +113,15 @@ LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const
 }
 
 void refuse_unused_data_dir(const std::filesystem::path& input) {
-  std::string ext = input.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string arg = input.string();
+  if (scene_reads_data_dir(arg)) return;
   std::error_code ec;
   const bool exists = std::filesystem::exists(input, ec);
-  if (ext == ".json" || (!exists && is_builtin_scene(input.string()))) return;
   const std::string what = !exists                                    ? "not a built-in scene"
                            : std::filesystem::is_directory(input, ec) ? "a directory of frames"
                                                                       : "a file";
-  throw UsageError("--data-dir", "not used: '" + input.string() + "' is " + what +
-                                     (exists && is_builtin_scene(input.string())
-                                          ? " (it also names a built-in scene; the path wins)"
-                                          : "") +
+  throw UsageError("--data-dir", "not used: '" + arg + "' is " + what +
+                                     (exists && is_builtin_scene(arg) ? " (it also names a built-in scene; the path wins)" : "") +
                                      " (--data-dir locates the meshes of built-in scenes and the ${data}/ paths of "
                                      "scene files)");
 }

@@ -56,12 +56,11 @@ struct MovingScene {
 /// what is still unset is filled by make_camera's framing of the mesh.
 [[nodiscard]] CameraSpec camera_for(const CameraSpec& flags, const Scene& scene);
 
-/// The light: --light > the scene's own light > render's default_light(cam, bounds).
 /// --data-dir given with `input` as SCENE: a usage error (exit 2, naming the flag) unless the
-/// scene opener (open_scene) would read the data directory for it: a scene file (.json, whose
-/// "${data}/" paths read it) or a built-in scene's name that is no existing path (a path wins).
+/// scene opener would read the data directory for it (scene_reads_data_dir, toolkit/anim/scene_file.h).
 void refuse_unused_data_dir(const std::filesystem::path& input);
 
+/// The light: --light > the scene's own light > render's default_light(cam, bounds).
 struct LightChoice {
   Vec3 position = Vec3::Zero();
   const char* from = "default";  ///< "--light", "scene" or "default" (recorded in manifests)

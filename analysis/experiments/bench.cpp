@@ -120,7 +120,8 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   setup.clusters = &*clusters;
   const Mesh& mesh = scene.rest();
 
-  const bvh::PinholeCamera cam = make_camera(cfg.camera, scene.rest().referenced_bounds(), cfg.width, cfg.height);
+  const bvh::PinholeCamera cam =
+      cfg.made_camera ? *cfg.made_camera : make_camera(cfg.camera, scene.rest().referenced_bounds(), cfg.width, cfg.height);
   const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
   res.rays = rays.size();
 
@@ -317,18 +318,18 @@ std::string bench_text(const PeerBenchResult& r) {
   s += fmt::format("{:<16} {:>10} {:>10} {:>13} {:>10} {:>10} {:>10} {:>8} {:>8} {:>10} {:>11} {:>10}\n", "config",
                    "update_ms", "build_ms", "upd+build_ms", "trace_ms", "Mrays/s", "hits", "mismatch", "ties",
                    "shadow_ms", "shadow_rays", "lit_diff");
+  // A median count in full ("{:g}" would print 1048576 as 1.04858e+06; between two counts it ends in .5).
+  auto count = [](const std::vector<double>& v) {
+    if (v.empty()) return std::string("-");
+    const double m = median(v);
+    return m == std::floor(m) ? fmt::format("{:.0f}", m) : fmt::format("{:.1f}", m);
+  };
   for (const auto& x : r.summary) {
-    // Medians over the frames of the other columns (the last frame's counts were printed before).
+    // Medians over the frames, like the other columns.
     std::vector<double> hv, sv;
     for (const auto& row : r.rows)
       if (row.config == x.config && row.frame >= r.median_first_frame)
         hv.push_back(static_cast<double>(row.hits)), sv.push_back(static_cast<double>(row.shadow_rays));
-    // (a count in full: "{:g}" would print 1048576 as 1.04858e+06; a median between two counts ends in .5)
-    auto count = [](const std::vector<double>& v) {
-      if (v.empty()) return std::string("-");
-      const double m = median(v);
-      return m == std::floor(m) ? fmt::format("{:.0f}", m) : fmt::format("{:.1f}", m);
-    };
     const std::string hits = count(hv), shadow_rays = count(sv);
     s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>8} {:>8} {:>10.2f} {:>11} {:>10}\n",
                      x.config, x.update_ms, x.build_ms, x.update_build_ms, x.trace_ms, x.mrays_per_s, hits,

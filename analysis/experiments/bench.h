@@ -39,6 +39,9 @@ struct PeerBenchConfig {
   FrameRange frames{0, 4};                ///< scene frames (the first is left out of the medians)
   int width = 1024, height = 1024;        ///< primary rays of the camera (1..16384 each)
   CameraSpec camera;                      ///< the camera (unset fields: framing the rest pose)
+  /// The camera itself when the caller made it from `camera` (ptc bench does, for the light):
+  /// not made again (framing walks every triangle of the rest mesh).
+  std::optional<bvh::PinholeCamera> made_camera;
   unsigned threads = 1;                   ///< oneTBB and Embree threads (>= 1; 1 = one-thread figures)
   std::uint32_t max_count = 50;           ///< clustering when none is given: growth / Acc, MaxCount = MaxSize = this
   ClusterAdjacency adjacency = ClusterAdjacency::Auto;  ///< and its adjacency (cluster.h)

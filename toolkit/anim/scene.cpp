@@ -356,9 +356,14 @@ AnimationPtr open_animation_file(const fs::path& path) {
   return load_asset(path);
 }
 
+bool names_builtin_scene(const std::string& arg) {
+  std::error_code ec;
+  return !fs::exists(arg, ec) && is_builtin_scene(arg);
+}
+
 Scene open_scene_input(const std::string& arg, const SceneOptions& opt) {
   std::error_code ec;
-  if (!fs::exists(arg, ec) && is_builtin_scene(arg)) return make_builtin_scene(arg, opt);
+  if (names_builtin_scene(arg)) return make_builtin_scene(arg, opt);
   const fs::path p(arg);
   std::string label = p.filename().string();
   if (label.empty()) label = p.parent_path().filename().string();

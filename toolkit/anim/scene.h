@@ -161,6 +161,10 @@ struct BuiltinSceneInfo {
 /// InputError for a missing path or unreadable content.
 [[nodiscard]] AnimationPtr open_animation_file(const std::filesystem::path& path);
 
+/// Whether open_scene_input takes `arg` as a built-in scene: its name, and no existing path (a
+/// path wins).
+[[nodiscard]] bool names_builtin_scene(const std::string& arg);
+
 /// SCENE argument: built-in name, mesh file, asset file or frame directory (not .json; see the
 /// file comment). InputError naming the argument when it is none of them.
 [[nodiscard]] Scene open_scene_input(const std::string& arg, const SceneOptions& opt = {});

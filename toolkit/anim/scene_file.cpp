@@ -421,10 +421,16 @@ Scene load_scene_file(const fs::path& path, const SceneOptions& opt) {
   return parse_scene_json(ss.str(), path.string(), path.parent_path(), opt);
 }
 
-Scene open_scene(const std::string& arg, const SceneOptions& opt) {
+bool is_scene_file(const std::string& arg) {
   std::string ext = fs::path(arg).extension().string();
   std::ranges::transform(ext, ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext == ".json") return load_scene_file(arg, opt);
+  return ext == ".json";
+}
+
+bool scene_reads_data_dir(const std::string& arg) { return is_scene_file(arg) || names_builtin_scene(arg); }
+
+Scene open_scene(const std::string& arg, const SceneOptions& opt) {
+  if (is_scene_file(arg)) return load_scene_file(arg, opt);
   return open_scene_input(arg, opt);
 }
 

@@ -28,5 +28,10 @@ namespace ptc {
 /// A command's SCENE argument: a path ending in .json (any case) is a scene file; anything else
 /// goes to open_scene_input (built-in name, mesh file, asset file, frame directory).
 [[nodiscard]] Scene open_scene(const std::string& arg, const SceneOptions& opt = {});
+/// Whether open_scene(arg) takes `arg` as a scene file (.json, any case).
+[[nodiscard]] bool is_scene_file(const std::string& arg);
+/// Whether open_scene(arg) may read SceneOptions::data_dir: a scene file (its "${data}/" paths)
+/// or a built-in scene (names_builtin_scene); a mesh, an asset, frames or a glob never do.
+[[nodiscard]] bool scene_reads_data_dir(const std::string& arg);
 
 }  // namespace ptc
