@@ -65,9 +65,8 @@ inline float hmin8(__m256 x) {
   return _mm_cvtss_f32(m);
 }
 
-// Per lane, v0, v1 or v2 as the lane's axis k[l] is 0, 1 or 2.
-inline __m256 pick_axis(const std::int32_t* k, __m256 v0, __m256 v1, __m256 v2) {
-  const __m256i kk = _mm256_load_si256(reinterpret_cast<const __m256i*>(k));
+// Per lane, v0, v1 or v2 as the lane's axis kk is 0, 1 or 2.
+inline __m256 pick_axis(__m256i kk, __m256 v0, __m256 v1, __m256 v2) {
   const __m256 is1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kk, _mm256_set1_epi32(1)));
   const __m256 is2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kk, _mm256_set1_epi32(2)));
   return _mm256_blendv_ps(_mm256_blendv_ps(v0, v1, is1), v2, is2);
@@ -95,17 +94,23 @@ struct alignas(32) Packet {
     const __m256 y_wins = _mm256_cmp_ps(ay, ax, _CMP_GT_OQ);
     const __m256 z_wins = _mm256_cmp_ps(az, _mm256_blendv_ps(ax, ay, y_wins), _CMP_GT_OQ);
     const __m256 dkz = _mm256_blendv_ps(_mm256_blendv_ps(dx, dy, y_wins), dz, z_wins);
-    const auto ym = static_cast<std::uint32_t>(_mm256_movemask_ps(y_wins));
-    const auto zm = static_cast<std::uint32_t>(_mm256_movemask_ps(z_wins));
-    const auto neg = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(dkz, _mm256_setzero_ps(), _CMP_LT_OQ)));
-    alignas(32) std::int32_t kxv[kLanes], kyv[kLanes];
-    for (int l = 0; l < kLanes; ++l) {
-      kz[l] = zm >> l & 1 ? 2 : ym >> l & 1 ? 1 : 0;
-      int x = kz[l] == 2 ? 0 : kz[l] + 1;
-      int y = x == 2 ? 0 : x + 1;
-      if (neg >> l & 1) std::swap(x, y);  // keep the winding of the sheared triangle
-      kx[l] = kxv[l] = x, ky[l] = kyv[l] = y;
-      perm[2 * kz[l] + (neg >> l & 1)] |= 1u << l;
+    // Per lane, in integer lanes: kz = 2 where z wins, else 1 where y wins, else 0; x = kz + 1 and
+    // y = x + 1 (mod 3), swapped where d[kz] < 0 to keep the winding of the sheared triangle.
+    const __m256i one = _mm256_set1_epi32(1), two = _mm256_set1_epi32(2);
+    const __m256i yw = _mm256_castps_si256(y_wins), zw = _mm256_castps_si256(z_wins);
+    const __m256i negw = _mm256_castps_si256(_mm256_cmp_ps(dkz, _mm256_setzero_ps(), _CMP_LT_OQ));
+    const __m256i kzv = _mm256_blendv_epi8(_mm256_and_si256(yw, one), two, zw);
+    const __m256i xv = _mm256_andnot_si256(zw, _mm256_add_epi32(kzv, one));  // (kz is 2 exactly where z wins)
+    const __m256i yv = _mm256_andnot_si256(_mm256_cmpeq_epi32(xv, two), _mm256_add_epi32(xv, one));
+    const __m256i kxv = _mm256_blendv_epi8(xv, yv, negw), kyv = _mm256_blendv_epi8(yv, xv, negw);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(kx), kxv);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(ky), kyv);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(kz), kzv);
+    for (int k = 0; k < 3; ++k) {  // the lanes of each permutation (kz, sign of d[kz])
+      const __m256 on = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kzv, _mm256_set1_epi32(k)));
+      const __m256 n = _mm256_castsi256_ps(negw);
+      perm[2 * k] = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_andnot_ps(n, on)));
+      perm[2 * k + 1] = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(n, on)));
     }
     _mm256_store_ps(sx, _mm256_div_ps(pick_axis(kxv, dx, dy, dz), dkz));
     _mm256_store_ps(sy, _mm256_div_ps(pick_axis(kyv, dx, dy, dz), dkz));
