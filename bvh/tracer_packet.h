@@ -72,9 +72,17 @@ inline __m256 pick_axis(__m256i kk, __m256 v0, __m256 v1, __m256 v2) {
   return _mm256_blendv_ps(_mm256_blendv_ps(v0, v1, is1), v2, is2);
 }
 
+// A lane's result on 32 bytes, so that the eight make an 8 x 8 matrix of 32-bit values (rows:
+// lanes; columns: t, u, v, tri, nodes, tris and two unused), which store_results transposes.
+struct alignas(32) LaneResult : Result {
+  std::uint32_t unused[2] = {0, 0};
+};
+static_assert(sizeof(LaneResult) == 32 && offsetof(Result, t) == 0 && offsetof(Result, u) == 4 &&
+              offsetof(Result, v) == 8 && offsetof(Result, tri) == 12 && offsetof(Result, tris) == 20);
+
 struct alignas(32) Packet {
   RayState ray[kLanes];            // the single-ray leaf state of a lane, made at its first leaf
-  Result res[kLanes];
+  LaneResult res[kLanes];
   alignas(32) float tmax[kLanes];  // per lane: best hit so far (closest) or the ray's end
   std::uint32_t done = 0;          // any hit: lanes with a hit
   std::uint32_t ready = 0;         // lanes whose `ray` is made
@@ -427,6 +435,48 @@ inline __m256 load_frame(const double* a, std::size_t first, int n, double o, do
   return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
 
+inline std::uint32_t hsum8(__m256i x) {
+  __m128i v = _mm_add_epi32(_mm256_castsi256_si128(x), _mm256_extracti128_si256(x, 1));
+  v = _mm_add_epi32(v, _mm_unpackhi_epi64(v, v));
+  v = _mm_add_epi32(v, _mm_shuffle_epi32(v, 1));
+  return static_cast<std::uint32_t>(_mm_cvtsi128_si32(v));
+}
+
+// store_result for the eight lanes of a full packet at once: their results transposed (8 x 8),
+// each column stored with one 256-bit store; the same values (a miss's t is 0; nodes from
+// p.nodes) and the same totals.
+inline void store_results(HitBatch& hits, std::size_t first, const Packet& p, bool counters, TraceTotals& tot) {
+  __m256 r[kLanes];
+  for (int l = 0; l < kLanes; ++l) r[l] = _mm256_load_ps(&p.res[l].t);
+  // Rows 0-7 into columns: pairs, then quads, then the 128-bit halves.
+  const __m256 a0 = _mm256_unpacklo_ps(r[0], r[1]), a1 = _mm256_unpackhi_ps(r[0], r[1]);
+  const __m256 a2 = _mm256_unpacklo_ps(r[2], r[3]), a3 = _mm256_unpackhi_ps(r[2], r[3]);
+  const __m256 a4 = _mm256_unpacklo_ps(r[4], r[5]), a5 = _mm256_unpackhi_ps(r[4], r[5]);
+  const __m256 a6 = _mm256_unpacklo_ps(r[6], r[7]), a7 = _mm256_unpackhi_ps(r[6], r[7]);
+  const __m256 b0 = _mm256_shuffle_ps(a0, a2, _MM_SHUFFLE(1, 0, 1, 0)), b1 = _mm256_shuffle_ps(a0, a2, _MM_SHUFFLE(3, 2, 3, 2));
+  const __m256 b2 = _mm256_shuffle_ps(a1, a3, _MM_SHUFFLE(1, 0, 1, 0)), b3 = _mm256_shuffle_ps(a1, a3, _MM_SHUFFLE(3, 2, 3, 2));
+  const __m256 b4 = _mm256_shuffle_ps(a4, a6, _MM_SHUFFLE(1, 0, 1, 0)), b5 = _mm256_shuffle_ps(a4, a6, _MM_SHUFFLE(3, 2, 3, 2));
+  const __m256 b6 = _mm256_shuffle_ps(a5, a7, _MM_SHUFFLE(1, 0, 1, 0)), b7 = _mm256_shuffle_ps(a5, a7, _MM_SHUFFLE(3, 2, 3, 2));
+  // b0: t of lanes 0-3 | t of lanes 4-7 within each 128-bit half ... joined across the halves:
+  const __m256 t = _mm256_permute2f128_ps(b0, b4, 0x20), u = _mm256_permute2f128_ps(b1, b5, 0x20);
+  const __m256 v = _mm256_permute2f128_ps(b2, b6, 0x20), tri = _mm256_permute2f128_ps(b3, b7, 0x20);
+  const __m256i tris = _mm256_castps_si256(_mm256_permute2f128_ps(b1, b5, 0x31));
+  const __m256 hit = _mm256_castsi256_ps(_mm256_xor_si256(
+      _mm256_cmpeq_epi32(_mm256_castps_si256(tri), _mm256_set1_epi32(static_cast<int>(kNoTriangle))), _mm256_set1_epi32(-1)));
+  _mm256_storeu_ps(hits.t.data() + first, _mm256_and_ps(t, hit));
+  _mm256_storeu_ps(hits.u.data() + first, u);
+  _mm256_storeu_ps(hits.v.data() + first, v);
+  _mm256_storeu_ps(reinterpret_cast<float*>(hits.triangle.data() + first), tri);
+  if (counters) {
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(hits.nodes_visited.data() + first), p.nodes);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(hits.triangles_tested.data() + first), tris);
+  }
+  tot.rays += kLanes;
+  tot.hits += static_cast<std::uint64_t>(__builtin_popcount(static_cast<unsigned>(_mm256_movemask_ps(hit))));
+  tot.nodes_visited += hsum8(p.nodes);
+  tot.triangles_tested += hsum8(tris);
+}
+
 template <bool AnyHit>
 void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBatch& hits, std::size_t first, int n,
                   bool counters, TraceTotals& tot, PacketEntry* stack) {
@@ -477,6 +527,10 @@ void trace_packet(const TraceData& s, const Flat& f, const RayBatch& rays, HitBa
     g.nx = 8 * (0 + ax), g.ny = 8 * (2 + ay), g.nz = 8 * (4 + az);  // rows of eight floats (WideNode8)
     g.fx = 8 * (1 - ax), g.fy = 8 * (3 - ay), g.fz = 8 * (5 - az);
     traverse_packet<AnyHit>(f, g, group, p, stack);
+  }
+  if (n == kLanes) {
+    store_results(hits, first, p, counters, tot);
+    return;
   }
   alignas(32) std::uint32_t nodes[kLanes];
   _mm256_store_si256(reinterpret_cast<__m256i*>(nodes), p.nodes);

@@ -365,10 +365,11 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
       const TraceTotals tp = trace(s.data(), rays, packed, opt);
       EXPECT_EQ(tp.rays, ts.rays);
       EXPECT_EQ(tp.hits, ts.hits);
-      std::uint64_t nodes = 0;
+      std::uint64_t nodes = 0, tris = 0;
       for (std::size_t i = 0; i < rays.size(); ++i) {
         const std::string what = std::string(name(GetParam())) + " ray " + std::to_string(i);
         nodes += packed.nodes_visited[i];
+        tris += packed.triangles_tested[i];
         if (mode == HitMode::Closest) {
           ASSERT_EQ(packed.triangle[i], single.triangle[i]) << what;
           ASSERT_EQ(packed.t[i], single.t[i]) << what;
@@ -388,6 +389,7 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
         ASSERT_TRUE(h && h->t == packed.t[i]) << what;
       }
       EXPECT_EQ(nodes, tp.nodes_visited);
+      EXPECT_EQ(tris, tp.triangles_tested);  // (a full packet's totals come from its transposed results)
       // The packet path of the AVX2, AVX-512VL and AVX-512 variants: the same batch, field by field
       // (on a CPU without AVX-512 all three requests run the AVX2 code).
       HitBatch p2, p512, p512vl;
