@@ -382,7 +382,7 @@ template <bool AnyHit>
 }
 
 template <bool AnyHit>
-void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
+[[gnu::always_inline]] inline void traverse(const Flat& d, RayState& r, Result& res, StackEntry* stack) {
   if (d.empty) return;
   // The slab constants as locals: nothing the loop stores (stack entries, results) can alias
   // them, so they stay in registers (through `r` every store forced reloads and spills). A node's
@@ -539,11 +539,15 @@ Flat flat_of(const TraceData& s) {
 std::size_t stack_size(const TraceData& s) { return 7 * std::size_t(s.wide8.depth) + 8; }
 
 // The walk of one set-up ray, closest or any hit.
+template <bool AnyHit>
+[[gnu::noinline]] void traverse_one(const Flat& f, RayState& r, Result& res, StackEntry* stack) {
+  traverse<AnyHit>(f, r, res, stack);
+}
 inline void walk(const Flat& f, RayState& r, Result& res, HitMode mode, StackEntry* stack) {
   if (mode == HitMode::Closest)
-    traverse<false>(f, r, res, stack);
+    traverse_one<false>(f, r, res, stack);
   else
-    traverse<true>(f, r, res, stack);
+    traverse_one<true>(f, r, res, stack);
 }
 
 Result trace_single(const TraceData& s, const Flat& f, const Vec3& org, const Vec3f& dir, float tmin, float tmax,
@@ -633,6 +637,25 @@ inline void state_of(RayState& r, const Setup8& s, int l) {
 }
 #endif
 
+#if defined(PTC_TRACE_AVX2)
+// The eight rays of a set-up, each walking the tree alone, in one function: the closest-hit walk
+// inlined, so its prologue (the stack's alignment, the saved registers) is paid once for eight
+// rays (twist primary single rays 2-3% faster). The any-hit walk inlined the same way was 2%
+// slower on the twist's shadow rays, so it keeps its call per ray.
+[[gnu::noinline]] void walk8_closest(const Flat& f, const Setup8& s, HitBatch& hits, std::size_t first, bool counters,
+                                     TraceTotals& tot, StackEntry* stack) {
+  for (int l = 0; l < 8; ++l) {
+    Result res;
+    if (s.valid >> l & 1) {
+      RayState r;
+      state_of(r, s, l);
+      traverse<false>(f, r, res, stack);
+    }
+    store_result(hits, first + l, res, counters, tot);
+  }
+}
+#endif
+
 void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hits, std::size_t begin,
                       std::size_t end, HitMode mode, bool counters, TraceTotals& tot) {
   const Flat f = flat_of(scene);
@@ -645,6 +668,10 @@ void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hi
     Setup8 s;
     for (; begin + 8 <= end; begin += 8) {
       setup8(s, rays, begin, fm);
+      if (mode == HitMode::Closest) {
+        walk8_closest(f, s, hits, begin, counters, tot, stack);
+        continue;
+      }
       for (int l = 0; l < 8; ++l) {
         Result res;
         if (s.valid >> l & 1) {
