@@ -568,21 +568,6 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
         for (int c = 0; c < 3; ++c) corners_[12 * b + 4 * c + l] = corner(lane_ids[4 * b + l], c);
   });
   lists_are_corners_ = runs_ && lists_are_corners(mesh.vertex_count(), lane_ids);
-  if (lists_are_corners_) {
-    // A soup-like mesh: every vertex is some corner (so the fill sees, and checks, every position)
-    // and the corners number fewer than twice the vertices. There the fill's own conversion of
-    // each corner reads the input once, where a conversion pass would also write every float and
-    // the fill read it back (the explode scene: 2.5M vertices, each one corner).
-    std::vector<std::uint8_t> seen(mesh.vertex_count(), 0);
-    std::size_t real = 0;
-    for (const std::uint32_t id : lane_ids)
-      if (id != kNoTriangle) {
-        ++real;
-        for (const std::uint32_t v : tris[id]) seen[v] = 1;
-      }
-    soup_ = 3 * real < 2 * mesh.vertex_count() &&
-            std::find(seen.begin(), seen.end(), std::uint8_t{0}) == seen.end();
-  }
   if (runs_) {
     vorder_ = {};
     f_.fpos.resize(mesh.vertex_count());
@@ -647,16 +632,10 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   double t0 = clock_ms(cfg_.clock);
   if (runs_ && lists_are_corners_ && !overlap_possible()) {
     // One thread: the conversion streams over the input (f_.fpos keeps its size and sentinels),
-    // and the fill, which reads every corner anyway, takes the cluster boxes (build_frame). A
-    // soup's fill converts its corners itself.
-    times.boxes_ms = 0.0;
-    if (soup_) {
-      times.vertices_ms = 0.0;
-      build_frame(true, positions);
-      return;
-    }
+    // and the fill, which reads every corner anyway, takes the cluster boxes (build_frame).
     frame_positions_streamed(positions, data.frame(), std::span<Vec3f>(f_.fpos.data(), V));
     times.vertices_ms = clock_ms(cfg_.clock) - t0;
+    times.boxes_ms = 0.0;
     build_frame(true);
     return;
   }
@@ -689,7 +668,7 @@ bool ClusterScene::overlap_possible() const {
 // The frame after its cluster boxes (f_.boxes, f_.centroids) and frame positions (f_.fpos, then
 // add_sentinel's two entries): the leaf data, the tree over the clusters or groups, the link and
 // the refit of the fixed subtrees.
-void ClusterScene::build_frame(bool boxes_from_fill, std::span<const Vec3> from_input) {
+void ClusterScene::build_frame(bool boxes_from_fill) {
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
 
@@ -708,14 +687,8 @@ void ClusterScene::build_frame(bool boxes_from_fill, std::span<const Vec3> from_
     } else if (boxes_from_fill) {  // and the cluster boxes from the corners it writes
       f_.boxes.resize(weights_.size());
       f_.centroids.resize(weights_.size());
-      if (from_input.empty()) {
-        fill_blocks_and_cluster_boxes(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr,
-                                      cluster_ranges_, f_.boxes.data(), f_.centroids.data());  // fenced
-      } else if (!fill_blocks_and_cluster_boxes_from_doubles(corners_, from_input, data.frame(), f_.fpos[0].data(),
-                                                             data.blocks, B ? block_boxes_.data() : nullptr,
-                                                             cluster_ranges_, f_.boxes.data(), f_.centroids.data())) {
-        throw_not_finite(from_input, data.frame());
-      }
+      fill_blocks_and_cluster_boxes(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr,
+                                    cluster_ranges_, f_.boxes.data(), f_.centroids.data());  // fenced
     } else {
       fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
     }

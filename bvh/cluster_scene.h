@@ -98,10 +98,6 @@ class ClusterScene {
   /// (vertices_ms) before the boxes. False for a scene built once (SceneConfig::built_once),
   /// which has no per-frame pass.
   [[nodiscard]] bool fused_vertex_pass() const { return runs_.has_value(); }
-  /// Whether the one-thread update of this fused-pass scene converts each corner in the fill
-  /// (a soup-like mesh: every vertex a corner, fewer than two corners a vertex; vertices_ms = 0)
-  /// instead of converting every vertex first. The same blocks and boxes either way.
-  [[nodiscard]] bool fill_converts_corners() const { return soup_; }
 
  private:
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
@@ -111,7 +107,7 @@ class ClusterScene {
   void only_frame();
   /// boxes_from_fill: the cluster boxes are made by the fill of the blocks (update() on one
   /// thread), which then runs before the tree instead of beside it.
-  void build_frame(bool boxes_from_fill = false, std::span<const Vec3> from_input = {});
+  void build_frame(bool boxes_from_fill = false);
   [[nodiscard]] bool overlap_possible() const;
   [[nodiscard]] bool lists_are_corners(std::size_t vertex_count, std::span<const std::uint32_t> lane_ids) const;
   [[nodiscard]] std::span<const Tri> triangles() const {
@@ -174,10 +170,6 @@ class ClusterScene {
   GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)
   std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): f_.fpos in input order
   bool lists_are_corners_ = false;  // fused mode: the clusters' vertex lists are their corners (lists_are_corners)
-  // Fused mode, lists = corners, and a soup-like mesh (set_vertex_order: every vertex a corner,
-  // fewer than two corners a vertex on average): on one thread the fill converts each corner from
-  // the input (fill_blocks_and_cluster_boxes_from_doubles) and no conversion pass runs.
-  bool soup_ = false;
   AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel)
   SceneFrame f_;
 };

@@ -6,7 +6,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <atomic>
 #include <limits>
 
 namespace ptc::bvh {
@@ -31,14 +30,13 @@ inline void prefetch_corner(std::span<const std::uint32_t> corners, const float*
 // load per vertex and transposed to SoA. When `box` is given it receives the block's exact
 // float box (NaN lanes ignored: _mm_min_ps(x, acc) returns acc for a NaN x).
 // The rows' min and max are also taken into acc_lo / acc_hi (x y z rows of four lanes) when given.
-// `load(i)`: vertex i's (x y z .) in the trace frame (the fourth lane is not used).
-template <class Load>
-inline void fill_block_corners_with(const std::uint32_t (&v)[3][4], const Load& load, TriBlock& out, Box3f* box,
-                                    __m128* acc_lo = nullptr, __m128* acc_hi = nullptr) {
+inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, TriBlock& out, Box3f* box,
+                               __m128* acc_lo = nullptr, __m128* acc_hi = nullptr) {
   __m128 lo[3], hi[3];
   for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
   for (int c = 0; c < 3; ++c) {
-    __m128 r0 = load(v[c][0]), r1 = load(v[c][1]), r2 = load(v[c][2]), r3 = load(v[c][3]);
+    __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][0])), r1 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][1]));
+    __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][2])), r3 = _mm_loadu_ps(fp + 3 * std::size_t(v[c][3]));
     _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // r0 = x of the 4 lanes, r1 = y, r2 = z
     // Streaming stores: the blocks (tens of MB) are written once per frame and not read back by
     // this pass, so they bypass the caches instead of evicting the vertex data being gathered.
@@ -62,12 +60,6 @@ inline void fill_block_corners_with(const std::uint32_t (&v)[3][4], const Load& 
       box->lo[a] = _mm_cvtss_f32(l), box->hi[a] = _mm_cvtss_f32(h);
     }
   }
-}
-
-inline void fill_block_corners(const std::uint32_t (&v)[3][4], const float* fp, TriBlock& out, Box3f* box,
-                               __m128* acc_lo = nullptr, __m128* acc_hi = nullptr) {
-  fill_block_corners_with(v, [fp](std::uint32_t i) { return _mm_loadu_ps(fp + 3 * std::size_t{i}); }, out, box, acc_lo,
-                          acc_hi);
 }
 
 // One block from four triangle ids (kNoTriangle: padding, the sentinel's corners); its box as
@@ -121,13 +113,9 @@ void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const floa
   });
 }
 
-namespace {
-// fill_blocks_and_cluster_boxes with the corners' positions from `load` (fill_block_corners_with)
-// and `prefetch(b)` before block b.
-template <class Load, class Prefetch>
-void fill_clusters(std::span<const std::uint32_t> corners, const Load& load, const Prefetch& prefetch,
-                   std::span<TriBlock> blocks, Box3f* block_boxes, std::span<const LeafRange> ranges,
-                   Box3f* cluster_boxes, Vec3f* centres) {
+void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
+                                   Box3f* block_boxes, std::span<const LeafRange> ranges, Box3f* cluster_boxes,
+                                   Vec3f* centres) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ranges.size(), kClustersPerTask),
                     [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t c = r.begin(); c < r.end(); ++c) {
@@ -135,9 +123,9 @@ void fill_clusters(std::span<const std::uint32_t> corners, const Load& load, con
       for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
       const LeafRange lr = ranges[c];
       for (std::size_t b = lr.first_block; b < std::size_t{lr.first_block} + lr.block_count; ++b) {
-        prefetch(b);
-        fill_block_corners_with(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), load,
-                                blocks[b], block_boxes ? block_boxes + b : nullptr, lo, hi);
+        prefetch_corner(corners, fp, b);
+        fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
+                           block_boxes ? block_boxes + b : nullptr, lo, hi);
       }
       // The four lanes' minima and maxima folded into one (x y z .) row each.
       __m128 l = _mm_unpacklo_ps(lo[0], lo[1]), l2 = _mm_unpackhi_ps(lo[0], lo[1]);
@@ -155,46 +143,6 @@ void fill_clusters(std::span<const std::uint32_t> corners, const Load& load, con
     }
     _mm_sfence();
   });
-}
-}  // namespace
-
-void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
-                                   Box3f* block_boxes, std::span<const LeafRange> ranges, Box3f* cluster_boxes,
-                                   Vec3f* centres) {
-  fill_clusters(
-      corners, [fp](std::uint32_t i) { return _mm_loadu_ps(fp + 3 * std::size_t{i}); },
-      [&](std::size_t b) { prefetch_corner(corners, fp, b); }, blocks, block_boxes, ranges, cluster_boxes, centres);
-}
-
-bool fill_blocks_and_cluster_boxes_from_doubles(std::span<const std::uint32_t> corners, std::span<const Vec3> positions,
-                                                const FrameMap& frame, const float* fp, std::span<TriBlock> blocks,
-                                                Box3f* block_boxes, std::span<const LeafRange> ranges,
-                                                Box3f* cluster_boxes, Vec3f* centres) {
-  const double* in = positions.empty() ? nullptr : positions[0].data();
-  const std::size_t V = positions.size();
-  const __m128d oxy = _mm_setr_pd(frame.origin.x(), frame.origin.y()), oz = _mm_set_sd(frame.origin.z());
-  const __m128d s = _mm_set1_pd(frame.scale);
-  std::atomic<bool> any_bad{false};  // (stored only for a bad value: none in a good frame)
-  auto load = [&](std::uint32_t i) {
-    if (i >= V) return _mm_loadu_ps(fp + 3 * std::size_t{i});  // a padding lane's sentinel
-    // to_frame's operations (vertex_order.cpp, convert): the floats the conversion pass writes.
-    const double* d = in + 3 * std::size_t{i};
-    const __m128d xy = _mm_mul_pd(_mm_sub_pd(_mm_loadu_pd(d), oxy), s);
-    const __m128d z = _mm_mul_sd(_mm_sub_sd(_mm_load_sd(d + 2), oz), s);
-    const __m128 p = _mm_movelh_ps(_mm_cvtpd_ps(xy), _mm_cvtpd_ps(z));
-    const __m128 bad = _mm_sub_ps(p, p);  // NaN in a lane iff that value is not finite
-    if (_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7) [[unlikely]]
-      any_bad.store(true, std::memory_order_relaxed);
-    return p;
-  };
-  auto prefetch = [&](std::size_t b) {
-    if (12 * (b + kPrefetchBlocks) < corners.size()) {
-      const std::uint32_t i = corners[12 * (b + kPrefetchBlocks)];
-      if (i < V) _mm_prefetch(reinterpret_cast<const char*>(in + 3 * std::size_t{i}), _MM_HINT_T0);
-    }
-  };
-  fill_clusters(corners, load, prefetch, blocks, block_boxes, ranges, cluster_boxes, centres);
-  return !any_bad.load();
 }
 
 void fill_blocks_from_lanes(std::span<const std::uint32_t> lane_ids, std::span<const Tri> tris, const float* fp,

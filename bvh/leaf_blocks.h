@@ -44,19 +44,6 @@ void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const
                                    std::span<TriBlock> blocks, Box3f* block_boxes, std::span<const LeafRange> ranges,
                                    Box3f* cluster_boxes, Vec3f* centres);
 
-/// fill_blocks_and_cluster_boxes converting each corner from the input (to_frame's operations,
-/// so the floats of frame_positions_streamed) instead of reading converted positions: for meshes
-/// whose vertices each belong to about one corner (triangle soups), where a conversion pass would
-/// write every float only for the fill to read it back once. Corner indices >= positions.size()
-/// read frame_pos (add_sentinel's entries). The same bytes and boxes as converting first and
-/// calling fill_blocks_and_cluster_boxes. Returns false when a corner's converted position is
-/// not finite (the blocks are then not usable); positions no corner refers to are not looked at.
-bool fill_blocks_and_cluster_boxes_from_doubles(std::span<const std::uint32_t> corners, std::span<const Vec3> positions,
-                                                const FrameMap& frame, const float* frame_pos,
-                                                std::span<TriBlock> blocks, Box3f* block_boxes,
-                                                std::span<const LeafRange> ranges, Box3f* cluster_boxes,
-                                                Vec3f* centres);
-
 /// The same blocks and boxes from the lanes' triangle ids (lane_ids[4 b + l], kNoTriangle for
 /// padding) and the triangles' corners, for a scene filled once (no corner indices kept).
 void fill_blocks_from_lanes(std::span<const std::uint32_t> lane_ids, std::span<const Tri> triangles,

@@ -8,7 +8,6 @@
 #include <tbb/global_control.h>
 
 #include <chrono>
-#include <cmath>
 
 #include <algorithm>
 #include <limits>
@@ -149,99 +148,6 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
           continue;
         }
         expect_same_data(d, want[f], what);
-      }
-    }
-  }
-}
-
-// A triangle soup (every corner its own vertex, as the explode deformer makes): on one thread the
-// fill converts each corner from the input itself (no conversion pass), at two threads the fused
-// pass converts every vertex first. The same blocks, boxes and trace data byte for byte in every
-// frame; a welded mesh keeps the conversion pass; a position that is not finite in single
-// precision (NaN, inf, or beyond the float range once in the trace frame) is refused with the
-// conversion pass's message naming the vertex.
-TEST(ClusterScene, ASoupsFillConvertsItsCornersAsTheConversionPassWould) {
-  const Mesh welded = test::load_mesh("armadillo.off");
-  auto soup_of = [](const Mesh& m) {
-    std::vector<Tri> t;
-    std::vector<Vec3> p;
-    for (const Tri& tri : m.triangles()) {
-      const auto b = static_cast<std::uint32_t>(p.size());
-      for (const std::uint32_t v : tri) p.push_back(m.position(v));
-      t.push_back({b, b + 1, b + 2});
-    }
-    return Mesh(std::move(t), std::move(p));
-  };
-  const Mesh m = soup_of(welded);
-  const Clustering runs = ptc::morton_runs(m, 37);
-  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, cluster_scene_defaults());
-  const Mesh rm = renumber_vertices(m, to_old);
-  const Clustering rruns = renumber_vertices(runs, inverse_permutation(to_old));
-  const std::vector<Mesh> frames{renumber_vertices(soup_of(test::deformed(welded, 0.02)), to_old),
-                                 renumber_vertices(soup_of(test::deformed(welded, 0.06)), to_old)};
-  {
-    const Clustering wruns = ptc::morton_runs(welded, 37);
-    const std::vector<std::uint32_t> wo = cluster_vertex_order(welded, view_of(wruns), {}, cluster_scene_defaults());
-    const ClusterScene w(renumber_vertices(welded, wo), view_of(renumber_vertices(wruns, inverse_permutation(wo))),
-                         cluster_scene_defaults());
-    EXPECT_FALSE(w.fill_converts_corners());
-  }
-  for (ClusterLeaf leaf : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
-    std::vector<TraceData> want;
-    std::vector<std::vector<Box3f>> want_boxes;
-    for (int threads : {1, 2}) {
-      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-      SceneConfig cfg = cluster_scene_defaults();
-      cfg.cluster_leaf = leaf;
-      ClusterScene s(rm, view_of(rruns), cfg);
-      ASSERT_TRUE(s.fused_vertex_pass());
-      ASSERT_TRUE(s.fill_converts_corners());
-      for (std::size_t f = 0; f < frames.size(); ++f) {
-        s.update(frames[f].positions());
-        const std::string what =
-            std::string(to_string(leaf)) + " threads " + std::to_string(threads) + " frame " + std::to_string(f);
-        if (threads == 1) {
-          EXPECT_EQ(s.times().vertices_ms, 0.0) << what;  // no conversion pass
-          EXPECT_EQ(s.times().boxes_ms, 0.0) << what;
-          want_boxes.emplace_back(s.boxes().begin(), s.boxes().end());
-          want.push_back(s.data());
-          // The boxes are those of the clusters' corners converted one by one (brute force),
-          // widened by at most two units in the last place.
-          for (std::size_t c = 0; c < s.boxes().size(); c += 97) {
-            const std::uint32_t k = s.cluster_ids()[c];  // (scene clusters are in the visit order)
-            Box3f b;
-            for (std::uint32_t i = rruns.vertex_offsets[k]; i < rruns.vertex_offsets[k + 1]; ++i)
-              b.extend(to_frame(frames[f].position(rruns.vertices[i]), s.data().frame()));
-            const Box3f& got = s.boxes()[c];
-            ASSERT_TRUE(got.contains(b)) << what << " cluster " << c;
-            for (int a = 0; a < 3; ++a) {
-              EXPECT_GE(got.lo[a], std::nextafter(std::nextafter(b.lo[a], -kInf), -kInf)) << what << " cluster " << c;
-              EXPECT_LE(got.hi[a], std::nextafter(std::nextafter(b.hi[a], kInf), kInf)) << what << " cluster " << c;
-            }
-          }
-          continue;
-        }
-        EXPECT_GT(s.times().boxes_ms, 0.0) << what;  // the fused pass ran
-        ASSERT_EQ(s.boxes().size(), want_boxes[f].size()) << what;
-        for (std::size_t c = 0; c < want_boxes[f].size(); ++c) ASSERT_EQ(s.boxes()[c], want_boxes[f][c]) << what << " cluster " << c;
-        expect_same_data(s.data(), want[f], what);
-      }
-    }
-  }
-  // Not finite in single precision, at a corner of the last cluster: the same refusal at 1 and 2 threads.
-  const std::uint32_t bad_vertex = rruns.vertices[rruns.vertex_offsets[rruns.cluster_count() - 1]];
-  for (const double value : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), 1e300}) {
-    std::vector<Vec3> p(frames[0].positions().begin(), frames[0].positions().end());
-    p[bad_vertex].y() = value;
-    for (int threads : {1, 2}) {
-      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-      ClusterScene s(rm, view_of(rruns), cluster_scene_defaults());
-      try {
-        s.update(p);
-        ADD_FAILURE() << "value " << value << " threads " << threads << ": accepted";
-      } catch (const std::invalid_argument& e) {
-        EXPECT_NE(std::string(e.what()).find("vertex " + std::to_string(bad_vertex) + ":"), std::string::npos)
-            << e.what();
       }
     }
   }
