@@ -423,10 +423,10 @@ inline __m256 load_lanes(const float* a, std::size_t first, int n) {
 }
 // Eight doubles of the batch minus `o`, times `scale`, rounded to float (to_frame's operations).
 inline __m256 load_frame(const double* a, std::size_t first, int n, double o, double scale) {
-  alignas(32) double v[kLanes] = {};
+  alignas(32) double v[kLanes];  // (zeroed only for a short packet: the compiler zeroed it for every packet)
   const double* src = a + first;
   if (n < kLanes) {
-    for (int l = 0; l < n; ++l) v[l] = a[first + l];
+    for (int l = 0; l < kLanes; ++l) v[l] = l < n ? a[first + l] : 0.0;
     src = v;
   }
   const __m256d od = _mm256_set1_pd(o), sd = _mm256_set1_pd(scale);
