@@ -435,11 +435,12 @@ inline __m256 load_frame(const double* a, std::size_t first, int n, double o, do
   return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
 
-inline std::uint32_t hsum8(__m256i x) {
-  __m128i v = _mm_add_epi32(_mm256_castsi256_si128(x), _mm256_extracti128_si256(x, 1));
-  v = _mm_add_epi32(v, _mm_unpackhi_epi64(v, v));
-  v = _mm_add_epi32(v, _mm_shuffle_epi32(v, 1));
-  return static_cast<std::uint32_t>(_mm_cvtsi128_si32(v));
+// The sum of eight unsigned 32-bit lanes, in 64 bits (as the per-lane totals added one by one).
+inline std::uint64_t hsum8(__m256i x) {
+  const __m256i w = _mm256_add_epi64(_mm256_cvtepu32_epi64(_mm256_castsi256_si128(x)),
+                                     _mm256_cvtepu32_epi64(_mm256_extracti128_si256(x, 1)));
+  const __m128i v = _mm_add_epi64(_mm256_castsi256_si128(w), _mm256_extracti128_si256(w, 1));
+  return static_cast<std::uint64_t>(_mm_cvtsi128_si64(v)) + static_cast<std::uint64_t>(_mm_extract_epi64(v, 1));
 }
 
 // store_result for the eight lanes of a full packet at once: their results transposed (8 x 8),

@@ -338,6 +338,7 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
     const Vec3 d = m.position(v) - far;
     for (int k = 0; k < 8; ++k) add(far, {float(d.x()), float(d.y()), float(d.z())});
   }
+  const std::size_t same_lanes = org.size();  // rays [0, same_lanes): packets of eight equal rays
   for (std::size_t i = 0; i < cam.size(); ++i)
     add(Vec3(cam.ox[i], cam.oy[i], cam.oz[i]), {cam.dx[i], cam.dy[i], cam.dz[i]});
   for (std::size_t i = 0; i < rnd.org.size(); ++i) add(rnd.org[i], rnd.dir[i]);
@@ -389,7 +390,34 @@ TEST_P(TracerKinds, PacketsEqualSingleRays) {
         ASSERT_TRUE(h && h->t == packed.t[i]) << what;
       }
       EXPECT_EQ(nodes, tp.nodes_visited);
-      EXPECT_EQ(tris, tp.triangles_tested);  // (a full packet's totals come from its transposed results)
+      EXPECT_EQ(tris, tp.triangles_tested);
+      // A full packet stores its eight results at once (a transpose), a short one lane by lane:
+      // a packet of eight equal rays and the same ray seven times walk alike, so every field and
+      // counter of the seven must match, column by column.
+      for (std::size_t first = 0; first < same_lanes; first += 8) {
+        RayBatch eight, seven;
+        eight.resize(8), seven.resize(7);
+        for (std::size_t l = 0; l < 8; ++l) {
+          eight.set(l, org[first], dir[first], t0[first], t1[first]);
+          if (l < 7) seven.set(l, org[first], dir[first], t0[first], t1[first]);
+        }
+        HitBatch h8, h7;
+        opt.threads = 1;
+        const TraceTotals a8 = trace(s.data(), eight, h8, opt), a7 = trace(s.data(), seven, h7, opt);
+        opt.threads = threads;
+        const std::string what = std::string(name(GetParam())) + " packet of ray " + std::to_string(first);
+        for (std::size_t l = 0; l < 7; ++l) {
+          ASSERT_EQ(h8.triangle[l], h7.triangle[l]) << what;
+          ASSERT_EQ(h8.t[l], h7.t[l]) << what;
+          ASSERT_EQ(h8.u[l], h7.u[l]) << what;
+          ASSERT_EQ(h8.v[l], h7.v[l]) << what;
+          ASSERT_EQ(h8.nodes_visited[l], h7.nodes_visited[l]) << what;
+          ASSERT_EQ(h8.triangles_tested[l], h7.triangles_tested[l]) << what;
+        }
+        EXPECT_EQ(a8.hits, a7.hits + (h8.triangle[7] != kNoTriangle ? 1 : 0)) << what;
+        EXPECT_EQ(a8.triangles_tested, a7.triangles_tested + h8.triangles_tested[7]) << what;
+        EXPECT_EQ(a8.nodes_visited, a7.nodes_visited + h8.nodes_visited[7]) << what;
+      }
       // The packet path of the AVX2, AVX-512VL and AVX-512 variants: the same batch, field by field
       // (on a CPU without AVX-512 all three requests run the AVX2 code).
       HitBatch p2, p512, p512vl;
