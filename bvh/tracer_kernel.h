@@ -638,18 +638,22 @@ inline void state_of(RayState& r, const Setup8& s, int l) {
 #endif
 
 #if defined(PTC_TRACE_AVX2)
-// The eight rays of a set-up, each walking the tree alone, in one function: the closest-hit walk
-// inlined, so its prologue (the stack's alignment, the saved registers) is paid once for eight
-// rays (twist primary single rays 2-3% faster). The any-hit walk inlined the same way was 2%
-// slower on the twist's shadow rays, so it keeps its call per ray.
-[[gnu::noinline]] void walk8_closest(const Flat& f, const Setup8& s, HitBatch& hits, std::size_t first, bool counters,
-                                     TraceTotals& tot, StackEntry* stack) {
+// The eight rays of a set-up, each walking the tree alone, in one function. The closest-hit walk
+// is inlined, so its prologue (the stack's alignment, the saved registers) is paid once for eight
+// rays (twist primary single rays 2-3% faster); the any-hit walk inlined the same way was 2%
+// slower on the twist's shadow rays, so it keeps its call per ray (traverse_one).
+template <bool AnyHit>
+[[gnu::noinline]] void walk8(const Flat& f, const Setup8& s, HitBatch& hits, std::size_t first, bool counters,
+                             TraceTotals& tot, StackEntry* stack) {
   for (int l = 0; l < 8; ++l) {
     Result res;
     if (s.valid >> l & 1) {
       RayState r;
       state_of(r, s, l);
-      traverse<false>(f, r, res, stack);
+      if constexpr (AnyHit)
+        traverse_one<true>(f, r, res, stack);
+      else
+        traverse<false>(f, r, res, stack);
     }
     store_result(hits, first + l, res, counters, tot);
   }
@@ -668,19 +672,10 @@ void trace_range_impl(const TraceData& scene, const RayBatch& rays, HitBatch& hi
     Setup8 s;
     for (; begin + 8 <= end; begin += 8) {
       setup8(s, rays, begin, fm);
-      if (mode == HitMode::Closest) {
-        walk8_closest(f, s, hits, begin, counters, tot, stack);
-        continue;
-      }
-      for (int l = 0; l < 8; ++l) {
-        Result res;
-        if (s.valid >> l & 1) {
-          RayState r;
-          state_of(r, s, l);
-          walk(f, r, res, mode, stack);
-        }
-        store_result(hits, begin + l, res, counters, tot);
-      }
+      if (mode == HitMode::Closest)
+        walk8<false>(f, s, hits, begin, counters, tot, stack);
+      else
+        walk8<true>(f, s, hits, begin, counters, tot, stack);
     }
   }
 #endif

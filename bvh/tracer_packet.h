@@ -114,9 +114,9 @@ struct alignas(32) Packet {
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(kx), kxv);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(ky), kyv);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(kz), kzv);
+    const __m256 n = _mm256_castsi256_ps(negw);
     for (int k = 0; k < 3; ++k) {  // the lanes of each permutation (kz, sign of d[kz])
       const __m256 on = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kzv, _mm256_set1_epi32(k)));
-      const __m256 n = _mm256_castsi256_ps(negw);
       perm[2 * k] = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_andnot_ps(n, on)));
       perm[2 * k + 1] = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(n, on)));
     }
@@ -449,7 +449,10 @@ inline std::uint64_t hsum8(__m256i x) {
 inline void store_results(HitBatch& hits, std::size_t first, const Packet& p, bool counters, TraceTotals& tot) {
   __m256 r[kLanes];
   for (int l = 0; l < kLanes; ++l) r[l] = _mm256_load_ps(&p.res[l].t);
-  // Rows 0-7 into columns: pairs, then quads, then the 128-bit halves.
+  // Rows (lanes) into columns. Within each 128-bit half: a0 = (t0 t1 u0 u1 | nodes0 nodes1 tris0
+  // tris1), then b0 = (t0..t3 | nodes0..3), b1 = (u0..u3 | tris0..3), b2 = (v0..v3 | -), b3 =
+  // (tri0..3 | -); the low halves of b0 and b4 make t of the eight lanes, the high halves of b1
+  // and b5 their tris (their nodes are p.nodes).
   const __m256 a0 = _mm256_unpacklo_ps(r[0], r[1]), a1 = _mm256_unpackhi_ps(r[0], r[1]);
   const __m256 a2 = _mm256_unpacklo_ps(r[2], r[3]), a3 = _mm256_unpackhi_ps(r[2], r[3]);
   const __m256 a4 = _mm256_unpacklo_ps(r[4], r[5]), a5 = _mm256_unpackhi_ps(r[4], r[5]);
@@ -458,7 +461,6 @@ inline void store_results(HitBatch& hits, std::size_t first, const Packet& p, bo
   const __m256 b2 = _mm256_shuffle_ps(a1, a3, _MM_SHUFFLE(1, 0, 1, 0)), b3 = _mm256_shuffle_ps(a1, a3, _MM_SHUFFLE(3, 2, 3, 2));
   const __m256 b4 = _mm256_shuffle_ps(a4, a6, _MM_SHUFFLE(1, 0, 1, 0)), b5 = _mm256_shuffle_ps(a4, a6, _MM_SHUFFLE(3, 2, 3, 2));
   const __m256 b6 = _mm256_shuffle_ps(a5, a7, _MM_SHUFFLE(1, 0, 1, 0)), b7 = _mm256_shuffle_ps(a5, a7, _MM_SHUFFLE(3, 2, 3, 2));
-  // b0: t of lanes 0-3 | t of lanes 4-7 within each 128-bit half ... joined across the halves:
   const __m256 t = _mm256_permute2f128_ps(b0, b4, 0x20), u = _mm256_permute2f128_ps(b1, b5, 0x20);
   const __m256 v = _mm256_permute2f128_ps(b2, b6, 0x20), tri = _mm256_permute2f128_ps(b3, b7, 0x20);
   const __m256i tris = _mm256_castps_si256(_mm256_permute2f128_ps(b1, b5, 0x31));
