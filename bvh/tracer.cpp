@@ -1,5 +1,6 @@
 #include "bvh/tracer.h"
 
+#include <cpuid.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -40,19 +41,30 @@ std::optional<TraceIsa> parse_trace_isa(std::string_view s) {
   return std::nullopt;
 }
 
+unsigned amd_cpu_family() {
+  if (!__builtin_cpu_is("amd")) return 0;
+  unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+  if (!__get_cpuid(1, &eax, &ebx, &ecx, &edx)) return 0;
+  const unsigned base = (eax >> 8) & 0xf;
+  return base == 0xf ? base + ((eax >> 20) & 0xff) : base;
+}
+
 TraceIsa resolve(TraceIsa isa) {
   static const bool has_avx2 = __builtin_cpu_supports("avx2");
   static const bool has_avx512 = has_avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
                                  __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
-  // Auto takes the 512-bit variant on AMD CPUs only: on the Zen 5 host it was the faster one, on
-  // the Intel Xeon host (AVX-512 FP16, AMX) of 2026-12-05 the 256-bit ones were faster by 3-11%
-  // per frame, single rays and packets alike (docs/tracing.md, "The machine changed"). There the
-  // AVX-512VL variant (256-bit, EVEX) gave 0-8% faster whole frames than the AVX2 one at one
-  // thread, packets on both sides (docs/tracing.md, "The AVX-512VL variant").
-  static const bool amd = __builtin_cpu_is("amd");
+  // Auto takes the 512-bit variant only on AMD CPUs of family 1Ah and later (Zen 5, whose
+  // vector units are 512 bits wide): on the Zen 5 host it was the faster one. On the Intel Xeon
+  // host (AVX-512 FP16, AMX) of 2026-12-05 the 256-bit ones were faster by 3-11% per frame, and
+  // on the Zen 4 host of 2026-12-06 (family 19h, which splits a 512-bit operation in two 256-bit
+  // halves) the AVX-512VL variant was faster on every scene measured, single rays and packets
+  // alike (docs/tracing.md, "The machine changed" and "... again"). The AVX-512VL variant (256-bit, EVEX) gave 0-8%
+  // faster whole frames than the AVX2 one at one thread on the Intel host (docs/tracing.md, "The
+  // AVX-512VL variant").
+  static const bool wide512 = amd_cpu_family() >= 0x1a;
   if (isa == TraceIsa::Sse2) return TraceIsa::Sse2;
   if (has_avx512) {
-    if (isa == TraceIsa::Avx512 || (isa == TraceIsa::Auto && amd)) return TraceIsa::Avx512;
+    if (isa == TraceIsa::Avx512 || (isa == TraceIsa::Auto && wide512)) return TraceIsa::Avx512;
     if (isa == TraceIsa::Avx512Vl || isa == TraceIsa::Auto) return TraceIsa::Avx512Vl;
   }
   return has_avx2 ? TraceIsa::Avx2 : TraceIsa::Sse2;

@@ -62,8 +62,9 @@ struct HitBatch {
 enum class HitMode { Closest, Any };
 
 /// Instruction set of the traversal code (see tracer_isa.h). Auto, checked at run time: on a CPU
-/// with AVX-512 (F, VL, DQ, BW) the 512-bit variant on AMD, the AVX-512VL one elsewhere (on the
-/// Intel Xeon measured, 256-bit vectors were the faster; docs/tracing.md), else AVX2, else SSE2.
+/// with AVX-512 (F, VL, DQ, BW) the 512-bit variant on AMD Zen 5 and later (family 1Ah), the
+/// AVX-512VL one elsewhere (on the Intel Xeon and the AMD Zen 4 measured, 256-bit vectors were
+/// the faster; docs/tracing.md), else AVX2, else SSE2.
 /// All give bit-identical hits and counters; SSE2 tests the triangles of a leaf 4 at a time,
 /// AVX2 and AVX-512VL 8 (AVX-512VL: the AVX2 code in AVX-512's encoding, 32 registers) and
 /// AVX-512 16.
@@ -74,6 +75,9 @@ enum class TraceIsa { Auto, Sse2, Avx2, Avx512Vl, Avx512 };
 /// The variant a request resolves to on this CPU: a forced variant the CPU lacks falls back to
 /// the widest one below it.
 [[nodiscard]] TraceIsa resolve(TraceIsa isa);
+/// The CPU's family (CPUID leaf 1, base family plus extended family as AMD specifies it) on an AMD
+/// CPU, 0 on any other: resolve(Auto) takes the 512-bit variant from family 1Ah (Zen 5) on.
+[[nodiscard]] unsigned amd_cpu_family();
 
 struct TraceOptions {
   HitMode mode = HitMode::Closest;

@@ -155,8 +155,11 @@ struct alignas(32) Packet {
 // axis permutation when there are at least this many of them, else ray by ray. On the AMD host
 // (2026-12-03) 4 beat 2, 3, 5 and 8 on the cluster BVH (leaves of 30-50 triangles). On the Intel
 // host since (2026-12-05, docs/tracing.md, "The ray-parallel threshold on this host") 5-7 beat 4
-// and 8 on every built-in scene with AVX2 and AVX-512: 6.
-constexpr int kRayParallel = 6;
+// and 8 on every built-in scene with AVX2 and AVX-512: 6. On the AMD Zen 4 host (2026-12-06,
+// docs/tracing.md, "The machine changed again") 8 beat 6 and 7 on the cloth, the twist, the
+// explode scene and the faerie, with AVX-512 and AVX-512VL (by 1-3% a whole frame; the Intel
+// host's 8 had been within 1% of its 6): 8, so only full packets of one permutation.
+constexpr int kRayParallel = 8;
 
 #if defined(PTC_TRACE_AVX512)
 // x in both 256-bit halves (as _mm512_broadcast_f32x8, whose GCC 12 header reads an uninitialised

@@ -71,7 +71,7 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->needs(packets)
       ->capture_default_str();
   c->add_option("--isa", a->isa,
-                "our tracer's instruction set: auto (with AVX-512: avx512 on AMD CPUs, avx512vl on others; else the widest up to avx2), sse2, avx2, avx512vl (AVX2's 256-bit code in AVX-512's encoding) or avx512 (the same hits "
+                "our tracer's instruction set: auto (with AVX-512: avx512 on AMD Zen 5 and later, avx512vl on others; else the widest up to avx2), sse2, avx2, avx512vl (AVX2's 256-bit code in AVX-512's encoding) or avx512 (the same hits "
                 "and counters; Embree keeps its own)")
       ->check(enum_validator("instruction set", bvh::parse_trace_isa))
       ->capture_default_str();

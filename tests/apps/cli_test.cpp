@@ -476,8 +476,9 @@ TEST_F(Cli, ClusteringAndTracerInstructionSetsAreRecorded) {
   const auto machine = nlohmann::json::parse(slurp(dir_ / "isa" / "manifest.json"))["machine"];
   EXPECT_EQ(machine["clustering_isa"].get<std::string>(), std::string(v3 ? "x86-64-v3" : "x86-64"));
   // And the tracer's default variant (bvh/tracer.h): with AVX-512 F, DQ, BW and VL and the OS
-  // saving the opmask and ZMM state, avx512 on an AMD CPU (vendor string "AuthenticAMD") and
-  // avx512vl on others; else avx2 with AVX2 and the YMM state, else sse2.
+  // saving the opmask and ZMM state, avx512 on an AMD CPU (vendor string "AuthenticAMD") of
+  // family 1Ah or later (Zen 5) and avx512vl on others; else avx2 with AVX2 and the YMM state,
+  // else sse2.
   bool avx2 = bit(c1, 27) && bit(c1, 28) && leaf7 && bit(b7, 5);
   unsigned xlo = 0, xhi = 0;
   if (avx2) __asm__("xgetbv" : "=a"(xlo), "=d"(xhi) : "c"(0));
@@ -486,8 +487,11 @@ TEST_F(Cli, ClusteringAndTracerInstructionSetsAreRecorded) {
   unsigned v0 = 0, vb = 0, vc = 0, vd = 0;
   ASSERT_TRUE(__get_cpuid(0, &v0, &vb, &vc, &vd));
   const bool amd = vb == 0x68747541u && vd == 0x69746e65u && vc == 0x444d4163u;  // "Auth" "enti" "cAMD"
+  unsigned f1 = 0, fb = 0, fc = 0, fd = 0;
+  ASSERT_TRUE(__get_cpuid(1, &f1, &fb, &fc, &fd));
+  const unsigned family = ((f1 >> 8) & 0xfu) == 0xfu ? 0xfu + ((f1 >> 20) & 0xffu) : (f1 >> 8) & 0xfu;
   EXPECT_EQ(machine["trace_isa"].get<std::string>(),
-            std::string(avx512 ? (amd ? "avx512" : "avx512vl") : avx2 ? "avx2" : "sse2"));
+            std::string(avx512 ? (amd && family >= 0x1au ? "avx512" : "avx512vl") : avx2 ? "avx2" : "sse2"));
 }
 
 TEST_F(Cli, MallocOnHugePagesIsRecordedAndCanBeTurnedOff) {

@@ -5,9 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <limits>
 #include <memory>
 #include <random>
+#include <string>
 #include <variant>
 
 #include "toolkit/clustering/morton_runs.h"
@@ -675,6 +677,36 @@ TEST_P(TracerKinds, PowerOfTwoScaledScenesTraceTheSameHits) {
 
 // Beyond 2^100 (or below 2^-100) units the scaled directions would leave the float range: the
 // scene is refused with a message that says so.
+// The variant `auto` picks, against the kernel's own account of the CPU (/proc/cpuinfo: vendor,
+// family, flags), read independently of CPUID and the compiler's CPU checks.
+TEST(Tracer, AutoVariantFollowsTheCpu) {
+  std::ifstream in("/proc/cpuinfo");
+  if (!in) GTEST_SKIP() << "no /proc/cpuinfo";
+  std::string line, vendor, flags;
+  long family = -1;
+  while (std::getline(in, line) && !line.empty()) {  // the first processor's block
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string key = line.substr(0, colon);
+    key.erase(key.find_last_not_of(" \t") + 1);
+    const std::string value = colon + 2 <= line.size() ? line.substr(colon + 2) : "";
+    if (key == "vendor_id") vendor = value;
+    if (key == "cpu family") family = std::stol(value);
+    if (key == "flags") flags = " " + value + " ";
+  }
+  ASSERT_FALSE(vendor.empty());
+  ASSERT_GE(family, 0);
+  auto has = [&](const char* f) { return flags.find(std::string(" ") + f + " ") != std::string::npos; };
+  EXPECT_EQ(bvh::amd_cpu_family(), vendor == "AuthenticAMD" ? static_cast<unsigned>(family) : 0u);
+  const bool avx512 = has("avx2") && has("avx512f") && has("avx512vl") && has("avx512dq") && has("avx512bw");
+  const bvh::TraceIsa expected = avx512 ? (vendor == "AuthenticAMD" && family >= 0x1a ? bvh::TraceIsa::Avx512
+                                                                                       : bvh::TraceIsa::Avx512Vl)
+                                 : has("avx2") ? bvh::TraceIsa::Avx2
+                                               : bvh::TraceIsa::Sse2;
+  EXPECT_EQ(bvh::resolve(bvh::TraceIsa::Auto), expected) << vendor << " family " << family;
+  EXPECT_EQ(bvh::resolve(bvh::TraceIsa::Sse2), bvh::TraceIsa::Sse2);
+}
+
 TEST(Tracer, ScenesBeyondTheFloatRangeAreRefused) {
   const Mesh base = test::load_mesh("elephant.off");
   for (int j : {-110, 110}) {
