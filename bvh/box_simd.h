@@ -58,6 +58,23 @@ inline void store_widened(__m128 lo, __m128 hi, Box3f& box, Vec3f& center) {
   center = {c[0], c[1], c[2]};
 }
 
+// Rows of minima and maxima of four lanes each (lo[a], hi[a]: axis a) folded into one box,
+// stored widened (store_widened): the box of everything the rows took.
+inline void fold_rows_store_widened(const __m128 (&lo)[3], const __m128 (&hi)[3], Box3f& box, Vec3f& center) {
+  __m128 l = _mm_unpacklo_ps(lo[0], lo[1]), l2 = _mm_unpackhi_ps(lo[0], lo[1]);
+  __m128 h = _mm_unpacklo_ps(hi[0], hi[1]), h2 = _mm_unpackhi_ps(hi[0], hi[1]);
+  // lanes: l = (x0 y0 x1 y1), l2 = (x2 y2 x3 y3)
+  __m128 lxy = _mm_min_ps(l, l2);                  // (x02 y02 x13 y13)
+  lxy = _mm_min_ps(lxy, _mm_movehl_ps(lxy, lxy));  // (x y . .)
+  __m128 hxy = _mm_max_ps(h, h2);
+  hxy = _mm_max_ps(hxy, _mm_movehl_ps(hxy, hxy));
+  __m128 lz = _mm_min_ps(lo[2], _mm_movehl_ps(lo[2], lo[2]));
+  lz = _mm_min_ss(lz, _mm_shuffle_ps(lz, lz, 1));
+  __m128 hz = _mm_max_ps(hi[2], _mm_movehl_ps(hi[2], hi[2]));
+  hz = _mm_max_ss(hz, _mm_shuffle_ps(hz, hz, 1));
+  store_widened(_mm_movelh_ps(lxy, lz), _mm_movelh_ps(hxy, hz), box, center);
+}
+
 // An empty group: the empty box and its centre.
 inline void store_empty(Box3f& box, Vec3f& center) {
   box = Box3f{};

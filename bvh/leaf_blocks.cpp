@@ -127,19 +127,7 @@ void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const
         fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
                            block_boxes ? block_boxes + b : nullptr, lo, hi);
       }
-      // The four lanes' minima and maxima folded into one (x y z .) row each.
-      __m128 l = _mm_unpacklo_ps(lo[0], lo[1]), l2 = _mm_unpackhi_ps(lo[0], lo[1]);
-      __m128 h = _mm_unpacklo_ps(hi[0], hi[1]), h2 = _mm_unpackhi_ps(hi[0], hi[1]);
-      // lanes: l = (x0 y0 x1 y1), l2 = (x2 y2 x3 y3)
-      __m128 lxy = _mm_min_ps(l, l2);                       // (x02 y02 x13 y13)
-      lxy = _mm_min_ps(lxy, _mm_movehl_ps(lxy, lxy));       // (x y . .)
-      __m128 hxy = _mm_max_ps(h, h2);
-      hxy = _mm_max_ps(hxy, _mm_movehl_ps(hxy, hxy));
-      __m128 lz = _mm_min_ps(lo[2], _mm_movehl_ps(lo[2], lo[2]));
-      lz = _mm_min_ss(lz, _mm_shuffle_ps(lz, lz, 1));
-      __m128 hz = _mm_max_ps(hi[2], _mm_movehl_ps(hi[2], hi[2]));
-      hz = _mm_max_ss(hz, _mm_shuffle_ps(hz, hz, 1));
-      simd::store_widened(_mm_movelh_ps(lxy, lz), _mm_movelh_ps(hxy, hz), cluster_boxes[c], centres[c]);
+      simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);  // the four lanes' rows into one box
     }
     _mm_sfence();
   });
