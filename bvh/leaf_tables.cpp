@@ -122,7 +122,7 @@ void fill_tables_and_cluster_boxes(const TableLayout& layout, const float* fp, s
           hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
         }
       }
-      if (cluster_boxes) simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);
+      if (cluster_boxes && centres) simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);
     }
     _mm_sfence();
   });

@@ -61,7 +61,7 @@ struct TableLayout {
 /// Every group's table from the frame positions (x y z per vertex, with the sentinel and one more
 /// element after the last vertex, as add_sentinel leaves them), in chunks of clusters on the
 /// caller's threads, with streaming stores fenced per chunk. cluster_boxes[c] / centres[c]
-/// (null: not written) receive the box of the cluster's vertices widened one unit in the last
+/// (either null: neither written) receive the box of the cluster's vertices widened one unit in the last
 /// place and its centre: bit for bit fill_blocks_and_cluster_boxes' boxes of the same clusters.
 void fill_tables_and_cluster_boxes(const TableLayout& layout, const float* frame_pos, std::span<VertexTable> tables,
                                    Box3f* cluster_boxes, Vec3f* centres);

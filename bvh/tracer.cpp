@@ -49,25 +49,31 @@ unsigned amd_cpu_family() {
   return base == 0xf ? base + ((eax >> 20) & 0xff) : base;
 }
 
+TraceIsa choose_isa(TraceIsa isa, bool avx2, bool avx512, unsigned amd_family) {
+  // Auto takes the 512-bit variant only on AMD CPUs of family 1Ah and later (Zen 5): on the Zen 5
+  // host (a server part, 512-bit vector units) it was the faster one. On the Intel Xeon host
+  // (AVX-512 FP16, AMX) of 2026-12-05 the 256-bit ones were faster by 3-11% per frame, and on
+  // the Zen 4 host of 2026-12-06 (family 19h, which splits a 512-bit operation in two 256-bit
+  // halves) the AVX-512VL variant was faster on every scene measured, single rays and packets
+  // alike (docs/tracing.md, "The machine changed" and "... again"). Zen 5 parts that split
+  // 512-bit operations too (reportedly some mobile ones, also family 1Ah) were not measured. The
+  // AVX-512VL variant (256-bit, EVEX) gave 0-8% faster whole frames than the AVX2 one at one
+  // thread on the Intel host (docs/tracing.md, "The AVX-512VL variant").
+  if (isa == TraceIsa::Sse2) return TraceIsa::Sse2;
+  avx512 = avx512 && avx2;
+  if (avx512) {
+    if (isa == TraceIsa::Avx512 || (isa == TraceIsa::Auto && amd_family >= 0x1a)) return TraceIsa::Avx512;
+    if (isa == TraceIsa::Avx512Vl || isa == TraceIsa::Auto) return TraceIsa::Avx512Vl;
+  }
+  return avx2 ? TraceIsa::Avx2 : TraceIsa::Sse2;
+}
+
 TraceIsa resolve(TraceIsa isa) {
   static const bool has_avx2 = __builtin_cpu_supports("avx2");
   static const bool has_avx512 = has_avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
                                  __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
-  // Auto takes the 512-bit variant only on AMD CPUs of family 1Ah and later (Zen 5, whose
-  // vector units are 512 bits wide): on the Zen 5 host it was the faster one. On the Intel Xeon
-  // host (AVX-512 FP16, AMX) of 2026-12-05 the 256-bit ones were faster by 3-11% per frame, and
-  // on the Zen 4 host of 2026-12-06 (family 19h, which splits a 512-bit operation in two 256-bit
-  // halves) the AVX-512VL variant was faster on every scene measured, single rays and packets
-  // alike (docs/tracing.md, "The machine changed" and "... again"). The AVX-512VL variant (256-bit, EVEX) gave 0-8%
-  // faster whole frames than the AVX2 one at one thread on the Intel host (docs/tracing.md, "The
-  // AVX-512VL variant").
-  static const bool wide512 = amd_cpu_family() >= 0x1a;
-  if (isa == TraceIsa::Sse2) return TraceIsa::Sse2;
-  if (has_avx512) {
-    if (isa == TraceIsa::Avx512 || (isa == TraceIsa::Auto && wide512)) return TraceIsa::Avx512;
-    if (isa == TraceIsa::Avx512Vl || isa == TraceIsa::Auto) return TraceIsa::Avx512Vl;
-  }
-  return has_avx2 ? TraceIsa::Avx2 : TraceIsa::Sse2;
+  static const unsigned family = amd_cpu_family();
+  return choose_isa(isa, has_avx2, has_avx512, family);
 }
 
 namespace {

@@ -75,6 +75,10 @@ enum class TraceIsa { Auto, Sse2, Avx2, Avx512Vl, Avx512 };
 /// The variant a request resolves to on this CPU: a forced variant the CPU lacks falls back to
 /// the widest one below it.
 [[nodiscard]] TraceIsa resolve(TraceIsa isa);
+/// resolve's rule on a CPU with (or without) AVX2 and AVX-512 (F, VL, DQ, BW) and the given
+/// amd_cpu_family(): Sse2 stays; Avx512 and Avx512Vl need AVX-512 (and Avx2 AVX2), else the
+/// widest below; Auto is Avx512 from AMD family 1Ah on, else Avx512Vl, with AVX-512.
+[[nodiscard]] TraceIsa choose_isa(TraceIsa isa, bool avx2, bool avx512, unsigned amd_family);
 /// The CPU's family (CPUID leaf 1, base family plus extended family as AMD specifies it) on an AMD
 /// CPU, 0 on any other: resolve(Auto) takes the 512-bit variant from family 1Ah (Zen 5) on.
 [[nodiscard]] unsigned amd_cpu_family();

@@ -156,9 +156,10 @@ struct alignas(32) Packet {
 // (2026-12-03) 4 beat 2, 3, 5 and 8 on the cluster BVH (leaves of 30-50 triangles). On the Intel
 // host since (2026-12-05, docs/tracing.md, "The ray-parallel threshold on this host") 5-7 beat 4
 // and 8 on every built-in scene with AVX2 and AVX-512: 6. On the AMD Zen 4 host (2026-12-06,
-// docs/tracing.md, "The machine changed again") 8 beat 6 and 7 on the cloth, the twist, the
-// explode scene and the faerie, with AVX-512 and AVX-512VL (by 1-3% a whole frame; the Intel
-// host's 8 had been within 1% of its 6): 8, so only full packets of one permutation.
+// docs/tracing.md, "The machine changed again") 8 was clearly faster on the cloth (primary rays
+// 63 against 65-71 ms with AVX-512VL, the variant `auto` picks there) and within the noise of 6
+// on the twist, the explode scene and the faerie (the Intel host's 8 had been 1-3% slower than
+// its 6 on the twist): 8, so only full packets of one permutation.
 constexpr int kRayParallel = 8;
 
 #if defined(PTC_TRACE_AVX512)

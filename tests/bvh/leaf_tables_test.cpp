@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -140,6 +141,96 @@ TEST(LeafTables, EveryTriangleOnceWithItsCornersInGroupsOfSixteen) {
   for (std::size_t g = T.group_offsets[C - 1]; g < T.group_offsets[C]; ++g) EXPECT_EQ(T.triangle_count[g], 5);
   // 300 triangles on 20 vertices: at least 19 groups (16 triangles at most in each).
   EXPECT_GE(groups(C - 2), 19u);
+}
+
+// The documented grouping rule written plainly (a placed flag per triangle instead of the
+// library's in-place reordering, sets for the new vertices): the whole layout must be the same.
+TableLayout reference_layout(const Lanes& L, std::uint32_t sentinel) {
+  TableLayout T;
+  T.group_offsets.push_back(0);
+  for (const LeafRange& r : L.ranges) {
+    std::vector<std::array<std::uint32_t, 4>> tris;  // id, corners
+    for (std::uint32_t i = 0; i < r.triangle_count; ++i) {
+      const std::size_t b = r.first_block + i / 4, l = i % 4;
+      tris.push_back({L.ids[4 * b + l], L.corners[12 * b + l], L.corners[12 * b + 4 + l], L.corners[12 * b + 8 + l]});
+    }
+    std::vector<bool> placed(tris.size(), false);
+    std::size_t left = tris.size();
+    while (left > 0) {
+      std::vector<std::uint32_t> slots;
+      std::vector<std::size_t> members;
+      while (members.size() < 16) {
+        std::vector<std::size_t> window;
+        for (std::size_t i = 0; i < tris.size() && window.size() < 64; ++i)
+          if (!placed[i]) window.push_back(i);
+        std::size_t best = tris.size(), best_add = 4;
+        for (const std::size_t i : window) {
+          std::set<std::uint32_t> fresh;
+          for (int k = 1; k <= 3; ++k)
+            if (std::find(slots.begin(), slots.end(), tris[i][k]) == slots.end()) fresh.insert(tris[i][k]);
+          if (slots.size() + fresh.size() <= 16 && fresh.size() < best_add) best = i, best_add = fresh.size();
+        }
+        if (best == tris.size()) break;
+        placed[best] = true, --left;
+        members.push_back(best);
+        for (int k = 1; k <= 3; ++k)
+          if (std::find(slots.begin(), slots.end(), tris[best][k]) == slots.end()) slots.push_back(tris[best][k]);
+      }
+      for (std::size_t s = 0; s < 16; ++s) T.slot_vertices.push_back(s < slots.size() ? slots[s] : sentinel);
+      for (int k = 1; k <= 3; ++k)
+        for (std::size_t l = 0; l < 16; ++l) {
+          const auto pad = static_cast<std::uint8_t>(slots.size() < 16 ? slots.size() : 0);
+          T.corner_slots.push_back(
+              l < members.size()
+                  ? static_cast<std::uint8_t>(std::find(slots.begin(), slots.end(), tris[members[l]][k]) - slots.begin())
+                  : pad);
+        }
+      for (std::size_t l = 0; l < 16; ++l) T.triangle_ids.push_back(l < members.size() ? tris[members[l]][0] : kNoTriangle);
+      T.triangle_count.push_back(static_cast<std::uint8_t>(members.size()));
+    }
+    T.group_offsets.push_back(static_cast<std::uint32_t>(T.triangle_count.size()));
+  }
+  return T;
+}
+
+TEST(LeafTables, TheLayoutIsTheDocumentedGreedyRule) {
+  const std::uint32_t V = 2000;
+  Lanes L = hard_clusters(V, 11);
+  // Sixteen one-vertex triangles: one group of 16 slots (a corner counted once however often it
+  // repeats).
+  std::vector<std::array<std::uint32_t, 3>> points;
+  for (std::uint32_t i = 0; i < 16; ++i) points.push_back({700 + i, 700 + i, 700 + i});
+  L.add_cluster(points, V);
+  // The fewest new vertices over the next triangle: A, then C (one new), then B (three).
+  const std::uint32_t a = L.next_id;
+  L.add_cluster({{800, 801, 802}, {810, 811, 812}, {800, 801, 803}}, V);
+  // The look-ahead of 64: t0, then t1 .. t79 of fresh vertices but t75, a copy of t0 out of the
+  // first group's reach (its window ends at t68): the first group is t0 .. t4 (15 vertices).
+  const std::uint32_t w = L.next_id;
+  std::vector<std::array<std::uint32_t, 3>> far(80);
+  for (std::uint32_t i = 0; i < 80; ++i) far[i] = {1000 + 3 * i, 1001 + 3 * i, 1002 + 3 * i};
+  far[75] = far[0];
+  L.add_cluster(far, V);
+
+  const TableLayout T = make_table_layout(L.ranges, L.ids, L.corners, V);
+  const TableLayout R = reference_layout(L, V);
+  ASSERT_EQ(T.group_offsets, R.group_offsets);
+  ASSERT_EQ(T.triangle_count, R.triangle_count);
+  for (std::size_t g = 0; g < R.group_count(); ++g) {
+    for (int s = 0; s < 16; ++s) ASSERT_EQ(T.slot_vertices[16 * g + s], R.slot_vertices[16 * g + s]) << "group " << g;
+    for (int i = 0; i < 48; ++i) ASSERT_EQ(T.corner_slots[48 * g + i], R.corner_slots[48 * g + i]) << "group " << g;
+    for (int l = 0; l < 16; ++l) ASSERT_EQ(T.triangle_ids[16 * g + l], R.triangle_ids[16 * g + l]) << "group " << g;
+  }
+  const std::size_t C = L.ranges.size();
+  const std::size_t gp = T.group_offsets[C - 3], ga = T.group_offsets[C - 2], gw = T.group_offsets[C - 1];
+  EXPECT_EQ(T.group_offsets[C - 2] - gp, 1u);
+  EXPECT_EQ(T.triangle_count[gp], 16);
+  EXPECT_EQ(T.slot_vertices[16 * gp + 15], 715u);
+  EXPECT_EQ(T.triangle_ids[16 * ga], a);
+  EXPECT_EQ(T.triangle_ids[16 * ga + 1], a + 2);
+  EXPECT_EQ(T.triangle_ids[16 * ga + 2], a + 1);
+  ASSERT_EQ(T.triangle_count[gw], 5);
+  for (std::uint32_t l = 0; l < 5; ++l) EXPECT_EQ(T.triangle_ids[16 * gw + l], w + l);
 }
 
 TEST(LeafTables, TablesAreTheFramePositionsAndBoxesThoseOfTheBlocks) {

@@ -675,8 +675,6 @@ TEST_P(TracerKinds, PowerOfTwoScaledScenesTraceTheSameHits) {
   }
 }
 
-// Beyond 2^100 (or below 2^-100) units the scaled directions would leave the float range: the
-// scene is refused with a message that says so.
 // The variant `auto` picks, against the kernel's own account of the CPU (/proc/cpuinfo: vendor,
 // family, flags), read independently of CPUID and the compiler's CPU checks.
 TEST(Tracer, AutoVariantFollowsTheCpu) {
@@ -707,6 +705,36 @@ TEST(Tracer, AutoVariantFollowsTheCpu) {
   EXPECT_EQ(bvh::resolve(bvh::TraceIsa::Sse2), bvh::TraceIsa::Sse2);
 }
 
+// The rule on every kind of CPU, against the table of what each request gives (bvh/tracer.h).
+TEST(Tracer, VariantChoiceOnEveryKindOfCpu) {
+  using I = bvh::TraceIsa;
+  struct Cpu {
+    bool avx2, avx512;
+    unsigned family;
+    I auto_, sse2, avx2_, vl, w512;
+  };
+  const Cpu cpus[] = {
+      {false, false, 0, I::Sse2, I::Sse2, I::Sse2, I::Sse2, I::Sse2},                 // SSE2 only
+      {true, false, 0x17, I::Avx2, I::Sse2, I::Avx2, I::Avx2, I::Avx2},               // Zen 2
+      {true, true, 0, I::Avx512Vl, I::Sse2, I::Avx2, I::Avx512Vl, I::Avx512},         // Intel
+      {true, true, 0x19, I::Avx512Vl, I::Sse2, I::Avx2, I::Avx512Vl, I::Avx512},      // Zen 4
+      {true, true, 0x1a, I::Avx512, I::Sse2, I::Avx2, I::Avx512Vl, I::Avx512},        // Zen 5
+      {true, true, 0x1b, I::Avx512, I::Sse2, I::Avx2, I::Avx512Vl, I::Avx512},        // later
+      {false, true, 0x1a, I::Sse2, I::Sse2, I::Sse2, I::Sse2, I::Sse2},               // (AVX-512 without AVX2)
+  };
+  for (const Cpu& c : cpus) {
+    const std::string what = "avx2 " + std::to_string(c.avx2) + " avx512 " + std::to_string(c.avx512) + " family " +
+                             std::to_string(c.family);
+    EXPECT_EQ(bvh::choose_isa(I::Auto, c.avx2, c.avx512, c.family), c.auto_) << what;
+    EXPECT_EQ(bvh::choose_isa(I::Sse2, c.avx2, c.avx512, c.family), c.sse2) << what;
+    EXPECT_EQ(bvh::choose_isa(I::Avx2, c.avx2, c.avx512, c.family), c.avx2_) << what;
+    EXPECT_EQ(bvh::choose_isa(I::Avx512Vl, c.avx2, c.avx512, c.family), c.vl) << what;
+    EXPECT_EQ(bvh::choose_isa(I::Avx512, c.avx2, c.avx512, c.family), c.w512) << what;
+  }
+}
+
+// Beyond 2^100 (or below 2^-100) units the scaled directions would leave the float range: the
+// scene is refused with a message that says so.
 TEST(Tracer, ScenesBeyondTheFloatRangeAreRefused) {
   const Mesh base = test::load_mesh("elephant.off");
   for (int j : {-110, 110}) {
