@@ -43,13 +43,18 @@ struct LoopOptions {
   /// The buffer already holds the first frame (the caller needed it before the loop, e.g. to
   /// frame the camera): the loop does not make it again (its source_ms is 0).
   bool first_frame_given = false;
+  /// Every part is static (Scene::all_static()): each frame is the rest pose, so the loop makes
+  /// no frame and hands every configuration the scene's rest positions (source_ms 0; the
+  /// `positions` buffer is not used and may be empty). A caller saves the vertex-sized copy
+  /// (160 MB at 13.3M triangles). std::invalid_argument when a part moves.
+  bool rest_positions = false;
 };
 
 /// measure(record, configuration, positions it was updated with).
 using Measure = std::function<void(const FrameRecord&, Accel&, std::span<const Vec3>)>;
 
 /// Runs the loop. `positions` (the scene's vertex count) is the frame buffer: on return it
-/// holds the last frame. std::invalid_argument for a wrong buffer size or an empty range;
+/// holds the last frame (with LoopOptions::rest_positions it is left as it is). std::invalid_argument for a wrong buffer size or an empty range;
 /// ptc::Interrupted (toolkit/core/cancel.h) when cancel was requested, checked before each frame
 /// and before each configuration's update.
 void run_frame_loop(Scene& scene, std::span<Vec3> positions, std::span<Accel* const> accels, const LoopOptions& opt,

@@ -144,6 +144,65 @@ TEST(FrameLoop, BufferAndStaticParts) {
   EXPECT_THROW((void)make_accel(AccelKind::OursClusters, rest, setup), std::invalid_argument);
 }
 
+// A still scene handed its rest positions: every configuration sees the rest mesh's own array in
+// every frame, the caller's buffer (empty here) is not touched, the source takes no time, and a
+// scene with a moving part is refused.
+TEST(FrameLoop, RestPositionsOfAStillScene) {
+  std::vector<ScenePart> parts;
+  parts.push_back({"a", std::make_unique<StaticSource>(make_sphere_mesh(Vec3(0, -3, 0), 1.0, 1), "a")});
+  parts.push_back({"b", std::make_unique<StaticSource>(make_sphere_mesh(Vec3(2, 0, 0), 0.5, 2), "b")});
+  Scene scene("still", std::move(parts), std::nullopt, std::nullopt, FrameRange{0, 9});
+  ASSERT_TRUE(scene.all_static());
+  AccelSetup setup;
+  setup.origin = scene.rest().bounds().center();
+  auto tri = make_accel(AccelKind::OursTriangles, scene.rest(), setup);
+  Accel* accels[] = {tri.get()};
+  LoopOptions lo;
+  lo.frames = {2, 5};
+  lo.fresh_positions = false;
+  lo.update_static = false;
+  lo.rest_positions = true;
+  const bvh::RayBatch rays = rays_for(scene.rest(), 16, 16);
+  std::vector<std::int64_t> frames;
+  run_frame_loop(scene, {}, accels, lo, [&](const FrameRecord& r, Accel& a, std::span<const Vec3> p) {
+    frames.push_back(r.frame);
+    EXPECT_EQ(p.data(), scene.rest().positions().data());  // the rest's own array, no copy
+    EXPECT_EQ(p.size(), scene.rest().vertex_count());
+    EXPECT_LT(r.source_ms, 1.0);
+    // and the scene's own positions of that frame are the same values
+    std::vector<Vec3> want(p.size());
+    scene.positions(double(r.frame), want);
+    for (std::size_t v = 0; v < want.size(); ++v) ASSERT_EQ(p[v], want[v]) << "frame " << r.frame << " vertex " << v;
+    // the configuration traces the rest mesh: its hits are brute force's
+    bvh::HitBatch hits;
+    bvh::TraceOptions opt;
+    opt.threads = 1;
+    a.trace(rays, hits, opt);
+    std::size_t hit_count = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const bvh::Hit bf = bvh::test::brute_force(scene.rest(), a.origin(), Vec3(rays.ox[i], rays.oy[i], rays.oz[i]),
+                                                 {rays.dx[i], rays.dy[i], rays.dz[i]});
+      ASSERT_EQ(hits.triangle[i], bf.hit() ? bf.triangle : bvh::kNoTriangle) << "frame " << r.frame << " ray " << i;
+      hit_count += bf.hit();
+    }
+    EXPECT_GT(hit_count, rays.size() / 10);  // (the camera frames the mesh)
+  });
+  EXPECT_EQ(frames, (std::vector<std::int64_t>{2, 3, 4, 5}));
+  // With fresh copies the configuration reads a copy of the rest instead.
+  lo.fresh_positions = true;
+  run_frame_loop(scene, {}, accels, lo, [&](const FrameRecord&, Accel&, std::span<const Vec3> p) {
+    EXPECT_NE(p.data(), scene.rest().positions().data());
+    EXPECT_TRUE(std::equal(p.begin(), p.end(), scene.rest().positions().begin(), scene.rest().positions().end()));
+  });
+  Scene moving = twisting_ball(1);
+  AccelSetup ms;
+  ms.origin = moving.rest().bounds().center();
+  auto mt = make_accel(AccelKind::OursTriangles, moving.rest(), ms);
+  Accel* maccels[] = {mt.get()};
+  EXPECT_THROW(run_frame_loop(moving, {}, maccels, lo, [](const FrameRecord&, Accel&, std::span<const Vec3>) {}),
+               std::invalid_argument);
+}
+
 // An ours_triangles configuration that counts its updates, so that a test sees which updates the
 // loop made before it stopped.
 class CountingAccel final : public Accel {
