@@ -1,11 +1,11 @@
 // The side-by-side benchmark of `ptc bench` as a stand-alone program (the same code:
 // analysis/experiments/bench.h over the one frame loop), with the target setup as its
 // default: armadillo subdivided twice (832k triangles), 1024 x 1024 primary rays, ONE thread,
-// growth/Acc clusters with MaxCount = MaxSize = 50, frames 0..7 of the built-in scenes' twist
-// deformer (frame 0 out of the medians).
+// growth/Acc clusters with MaxCount = MaxSize = 32 (ptc bench's default), frames 0..7 of the
+// built-in scenes' twist deformer (frame 0 out of the medians).
 //
 //   build/bin/peer_bench [MESH] [--levels 2] [--frames 8] [--size 1024] [--threads 1]
-//                        [--max-count 50] [--deform twist|bend|wave|rigid|explode] [--csv FILE]
+//                        [--max-count 32] [--deform twist|bend|wave|rigid|explode] [--csv FILE]
 #include <cstdio>
 #include <cstring>
 #include <fstream>

@@ -194,13 +194,22 @@ TEST(FrameLoop, RestPositionsOfAStillScene) {
     EXPECT_NE(p.data(), scene.rest().positions().data());
     EXPECT_TRUE(std::equal(p.begin(), p.end(), scene.rest().positions().begin(), scene.rest().positions().end()));
   });
+  // A scene with a moving part is refused, also when its first part is static.
   Scene moving = twisting_ball(1);
-  AccelSetup ms;
-  ms.origin = moving.rest().bounds().center();
-  auto mt = make_accel(AccelKind::OursTriangles, moving.rest(), ms);
-  Accel* maccels[] = {mt.get()};
-  EXPECT_THROW(run_frame_loop(moving, {}, maccels, lo, [](const FrameRecord&, Accel&, std::span<const Vec3>) {}),
-               std::invalid_argument);
+  std::vector<ScenePart> mixed_parts;
+  mixed_parts.push_back({"floor", std::make_unique<StaticSource>(make_sphere_mesh(Vec3(0, -3, 0), 1.0, 1), "floor")});
+  mixed_parts.push_back({"ball", make_deformer(make_sphere_mesh(Vec3::Zero(), 1.0, 1), deform_preset(DeformKind::Wave))});
+  Scene mixed("mixed", std::move(mixed_parts), std::nullopt, std::nullopt, FrameRange{0, 9});
+  ASSERT_TRUE(mixed.is_static(0));
+  for (Scene* sc : {&moving, &mixed}) {
+    AccelSetup ms;
+    ms.origin = sc->rest().bounds().center();
+    auto mt = make_accel(AccelKind::OursTriangles, sc->rest(), ms);
+    Accel* maccels[] = {mt.get()};
+    EXPECT_THROW(run_frame_loop(*sc, {}, maccels, lo, [](const FrameRecord&, Accel&, std::span<const Vec3>) {}),
+                 std::invalid_argument)
+        << sc->name();
+  }
 }
 
 // An ours_triangles configuration that counts its updates, so that a test sees which updates the
@@ -292,6 +301,34 @@ TEST_F(FrameLoopCancel, StopsBeforeTheNextFrameAndTheNextConfiguration) {
   lo.frames = {0, 2};
   EXPECT_NO_THROW(run_frame_loop(scene, pos, accels, lo, record));
   EXPECT_EQ(order.size(), 6u);
+
+  // A still scene handed its rest positions stops the same way: before the next configuration
+  // and the next frame.
+  reset_cancel();
+  order.clear();
+  std::vector<ScenePart> parts;
+  parts.push_back({"a", std::make_unique<StaticSource>(make_sphere_mesh(Vec3::Zero(), 1.0, 1), "a")});
+  Scene still("still", std::move(parts), std::nullopt, std::nullopt, FrameRange{0, 9});
+  CountingAccel s0(make_accel(AccelKind::OursTriangles, still.rest(), setup)),
+      s1(make_accel(AccelKind::OursTriangles, still.rest(), setup));
+  Accel* still_accels[] = {&s0, &s1};
+  LoopOptions rest_lo;
+  rest_lo.frames = {0, 9};
+  rest_lo.fresh_positions = false;
+  rest_lo.rest_positions = true;
+  EXPECT_THROW(run_frame_loop(still, {}, still_accels, rest_lo,
+                              [&](const FrameRecord& r, Accel& a, std::span<const Vec3> p) {
+                                record(r, a, p);
+                                if (r.frame == 2 && r.accel == 0) request_cancel();
+                              }),
+               Interrupted);
+  EXPECT_EQ(order, (std::vector<Step>{{0, 0}, {0, 1}, {1, 0}, {1, 1}, {2, 0}}));
+  EXPECT_EQ(s0.updates, 3);
+  EXPECT_EQ(s1.updates, 2);
+  request_cancel();  // and before the loop: nothing runs
+  order.clear();
+  EXPECT_THROW(run_frame_loop(still, {}, still_accels, rest_lo, record), Interrupted);
+  EXPECT_TRUE(order.empty());
 }
 
 // `ptc trace`'s configuration (static parts built once + moving parts per frame) returns what a
