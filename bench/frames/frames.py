@@ -5,10 +5,12 @@ REFIT and LOW, per scene and thread count, from `ptc bench` runs made here.
 
     /usr/bin/python3 bench/frames/frames.py [--build build] [--threads 1,2] [--frames 0:5]
         [--min-triangles 500000] [--scenes A,B] [--repeat 1] [--single] [--width 1024 --height 1024]
-        --out DIR
+        [--max-count N] --out DIR
 
-Each (repeat, threads, scene) is one `ptc bench SCENE --threads T --frames A:B [--packets] --out
-DIR/runs/...` (packets on both sides unless --single). Repeats run one after the other over the
+Each (repeat, threads, scene) is one `ptc bench SCENE --threads T --frames A:B [--packets]
+[--max-count N] --out DIR/runs/...` (packets on both sides unless --single; --max-count N: the
+bench's own clustering at MaxCount = MaxSize = N instead of its default, e.g. 50 for the paper's
+value). Repeats run one after the other over the
 whole list, so a slow phase of the machine touches every scene a little rather than one scene a
 lot; the table gives, per scene and thread count, the median over the repeats of each
 configuration's whole frame (each run's own median over frames 1..B) and the ratios of those
@@ -77,6 +79,8 @@ def main():
     ap.add_argument("--single", action="store_true", help="single rays on both sides (default: packets on both)")
     ap.add_argument("--width", type=int, default=1024)
     ap.add_argument("--height", type=int, default=1024)
+    ap.add_argument("--max-count", default=None,
+                    help="ptc bench --max-count N for every run (default: the bench's own default)")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
     try:
@@ -87,6 +91,8 @@ def main():
         usage("--threads: every count must be >= 1")
     if a.repeat < 1:
         usage("--repeat must be >= 1")
+    if a.max_count is not None and not (a.max_count.isdigit() and int(a.max_count) <= 1 << 20):
+        usage(f"--max-count: '{a.max_count}' is not a whole number from 0 to {1 << 20}")
     if os.path.exists(a.out):
         usage(f"--out: '{a.out}' exists; give a new directory (nothing is overwritten)")
     ptc = os.path.join(a.build, "bin", "ptc")
@@ -127,6 +133,8 @@ def main():
                        "--width", str(a.width), "--height", str(a.height), "--out", d]
                 if not a.single:
                     cmd.append("--packets")
+                if a.max_count is not None:
+                    cmd += ["--max-count", a.max_count]
                 commands.append(cmd)
                 print(f"== {' '.join(cmd)}", file=sys.stderr, flush=True)
                 run = subprocess.run(cmd, capture_output=True, text=True)
@@ -195,7 +203,8 @@ def main():
     git = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
     json.dump({"schema": "ptc-frames/1", "argv": sys.argv, "commands": commands, "ptc_commit": git,
                "parameters": {"threads": threads, "frames": a.frames, "scenes": scenes, "repeat": a.repeat,
-                              "packets": not a.single, "width": a.width, "height": a.height},
+                              "packets": not a.single, "width": a.width, "height": a.height,
+                              "max_count": int(a.max_count) if a.max_count is not None else None},
                "outputs": ["runs.csv", "frames.csv", "scaling.csv"]},
               open(os.path.join(tmp, "manifest.json"), "w"), indent=2)
     os.rename(tmp, a.out)

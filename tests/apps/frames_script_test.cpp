@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "cli_harness.h"
 #include "common/csv_rows.h"
 
@@ -125,7 +127,8 @@ TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
   EXPECT_EQ(lines(again.err), 1u) << again.err;
   EXPECT_TRUE(fs::exists(out / "runs.csv"));
   for (const std::vector<std::string>& bad : {std::vector<std::string>{"--threads", "0"}, {"--threads", "a,b"},
-                                              {"--repeat", "0"}, {"--scenes", "no-such-scene"}}) {
+                                              {"--repeat", "0"}, {"--scenes", "no-such-scene"}, {"--max-count", "-1"},
+                                              {"--max-count", "x"}}) {
     std::vector<std::string> args = bad;
     args.insert(args.end(), {"--out", (dir_ / "new").string()});
     const auto e = frames(args);
@@ -133,6 +136,32 @@ TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
     EXPECT_EQ(lines(e.err), 1u) << e.err;
     EXPECT_FALSE(fs::exists(dir_ / "new"));
   }
+}
+
+// --max-count N reaches every ptc bench run (each run's manifest records it, and the clusters'
+// count follows it) and the script's own manifest; without it the bench's default is used.
+TEST_F(FramesScript, MaxCountReachesEveryRun) {
+  std::map<std::string, std::size_t> clusters;  // value -> ours_clusters' cluster count
+  for (const char* mc : {"4", "", "50"}) {
+    const fs::path out = dir_ / (std::string("mc") + mc);
+    std::vector<std::string> args{"--threads", "1", "--frames", "0:1", "--width", "8", "--height", "8", "--scenes",
+                                  "armadillo-twist", "--out", out.string()};
+    if (*mc) args.insert(args.end(), {"--max-count", mc});
+    const auto r = frames(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto m = nlohmann::json::parse(slurp(out / "manifest.json"));
+    const auto run = nlohmann::json::parse(slurp(out / "runs" / "r0_t1_armadillo-twist" / "manifest.json"));
+    if (*mc) {
+      EXPECT_EQ(m["parameters"]["max_count"], std::stoi(mc));
+      EXPECT_EQ(run["parameters"]["max_count"], std::stoi(mc));
+    } else {
+      EXPECT_TRUE(m["parameters"]["max_count"].is_null());
+      EXPECT_EQ(run["parameters"]["max_count"], 32);  // the bench's default
+    }
+    clusters[mc] = run["results"]["clusters"].get<std::size_t>();
+  }
+  EXPECT_GT(clusters["4"], clusters[""]);  // smaller clusters, more of them
+  EXPECT_GT(clusters[""], clusters["50"]);
 }
 
 }  // namespace
