@@ -409,28 +409,23 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
 }
 
 namespace {
-// One static mesh (the cube file) and one deformed mesh (a sphere moving rigidly down onto it),
-// with the scene's own camera.
-// kSceneJson with the ball at rest: a still scene of two static parts.
-const char* kStillSceneJson = R"({
+// The cube file and a sphere above it, with the scene's own camera: the sphere moving rigidly
+// down onto the cube (moving = true), or at rest (a still scene of two static parts).
+std::string box_and_ball_scene(bool moving) {
+  return std::string(R"({
   "schema": "ptc-scene/1",
   "frames": [0, 9],
   "camera": {"eye": [0.5, 1.5, 5], "look_at": [0.5, 1.0, 0.5], "fov": 50},
   "meshes": [
     {"name": "box", "file": "cube.off"},
-    {"name": "ball", "sphere": {"center": [0.5, 2.2, 0.5], "radius": 0.5, "levels": 2}}
+    {"name": "ball", "sphere": {"center": [0.5, 2.2, 0.5], "radius": 0.5, "levels": 2})") +
+         (moving ? R"(,
+     "deform": {"kind": "rigid", "amplitude": 0.1, "velocity": [0, -0.03, 0]})" : "") + R"(}
   ]
 })";
-const char* kSceneJson = R"({
-  "schema": "ptc-scene/1",
-  "frames": [0, 9],
-  "camera": {"eye": [0.5, 1.5, 5], "look_at": [0.5, 1.0, 0.5], "fov": 50},
-  "meshes": [
-    {"name": "box", "file": "cube.off"},
-    {"name": "ball", "sphere": {"center": [0.5, 2.2, 0.5], "radius": 0.5, "levels": 2},
-     "deform": {"kind": "rigid", "amplitude": 0.1, "velocity": [0, -0.03, 0]}}
-  ]
-})";
+}
+const std::string kSceneJson = box_and_ball_scene(true);
+const std::string kStillSceneJson = box_and_ball_scene(false);
 // Two clusters over kSceneJson's 332 combined triangles, the cube (0..11) and the sphere
 // (12..331), as DIR/triangles.csv.
 void write_box_and_ball_clusters(const fs::path& dir) {

@@ -169,7 +169,7 @@ TEST(FrameLoop, RestPositionsOfAStillScene) {
     EXPECT_EQ(p.data(), scene.rest().positions().data());  // the rest's own array, no copy
     EXPECT_EQ(p.size(), scene.rest().vertex_count());
     EXPECT_LT(r.source_ms, 1.0);
-    // and the scene's own positions of that frame are the same values
+    // (the option's premise: a still scene's positions at any frame are its rest positions)
     std::vector<Vec3> want(p.size());
     scene.positions(double(r.frame), want);
     for (std::size_t v = 0; v < want.size(); ++v) ASSERT_EQ(p[v], want[v]) << "frame " << r.frame << " vertex " << v;
