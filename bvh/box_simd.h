@@ -1,4 +1,5 @@
-// SSE2 pieces of the per-frame box passes (internal to bvh/: box.cpp and vertex_order.cpp).
+// SSE2 pieces of the per-frame box passes (internal to bvh/: box.cpp, vertex_order.cpp,
+// leaf_blocks.cpp and cluster_scene.cpp's rest boxes).
 #pragma once
 
 #include <immintrin.h>

@@ -3,6 +3,8 @@
 #include <emmintrin.h>
 
 #include <algorithm>
+#include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -13,6 +15,7 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
+#include "bvh/box_simd.h"
 #include "bvh/leaf_blocks.h"
 #include "bvh/refit.h"
 #include "bvh/stage_clock.h"
@@ -61,14 +64,26 @@ void check_view(const Mesh& mesh, const ClusterView& cv) {
 // The rest-pose BVH over the clusters (boxes over their vertex lists, or their triangles'
 // corners, in the scene's frame; the scene's build settings, plain build): its primitive order
 // is the order in which the scene keeps the clusters, and its subtrees of at most
-// cluster_group_size clusters are the groups of the two-level build. A checked view.
-Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, const FrameMap& origin) {
+// cluster_group_size clusters are the groups of the two-level build. Its boxes and centres (in
+// the view's cluster order) are those the per-frame pass makes at the rest pose (point_group_boxes
+// over the frame positions: each vertex rounded to its nearest float in the frame, the box
+// widened by one unit in the last place), bit for bit, so the tree is the plain build's tree of
+// that frame. `frame_pos`: the rest pose in the frame (to_frame of every position), or empty to
+// convert each vertex from the mesh's doubles here. A checked view.
+struct RestTree {
+  Bvh bvh;
+  AlignedVector<Box3f> boxes;
+  AlignedVector<Vec3f> centres;
+};
+RestTree rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, const FrameMap& frame,
+                   std::span<const Vec3f> frame_pos) {
   const std::size_t C = cv.triangle_offsets.size() - 1;
   std::vector<std::uint32_t> offs, idx;
   std::span<const std::uint32_t> o = cv.vertex_offsets, v = cv.vertices;
   if (cv.vertex_offsets.empty()) {
     const auto tris = mesh.triangles();
     offs.assign(1, 0);
+    idx.reserve(3 * cv.triangle_order.size());
     for (std::size_t c = 0; c < C; ++c) {
       for (std::uint32_t i = cv.triangle_offsets[c]; i < cv.triangle_offsets[c + 1]; ++i)
         for (std::uint32_t x : tris[cv.triangle_order[i]]) idx.push_back(x);
@@ -79,13 +94,42 @@ Bvh rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, c
   for (std::uint32_t x : v)
     if (x >= mesh.vertex_count())
       throw std::invalid_argument("ClusterScene: vertex " + std::to_string(x) + " of a cluster's list is not in the mesh");
-  const std::vector<Box3f> boxes = point_group_boxes(mesh.positions(), o, v, origin);
-  const std::vector<Vec3f> centres = box_centers(boxes);
+  // One cluster at a time, in chunks on the caller's threads (the same boxes at any count).
+  RestTree r;
+  r.boxes.resize(C), r.centres.resize(C);
+  auto boxes_of = [&](auto at) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kSetupClustersPerTask), [&](const tbb::blocked_range<std::size_t>& rg) {
+      constexpr float inf = std::numeric_limits<float>::infinity();
+      for (std::size_t c = rg.begin(); c < rg.end(); ++c) {
+        if (o[c] == o[c + 1]) {
+          simd::store_empty(r.boxes[c], r.centres[c]);
+          continue;
+        }
+        __m128 lo = _mm_set1_ps(inf), hi = _mm_set1_ps(-inf);
+        for (std::uint32_t i = o[c]; i < o[c + 1]; ++i) {
+          const __m128 p = at(v[i]);
+          lo = _mm_min_ps(lo, p), hi = _mm_max_ps(hi, p);
+        }
+        simd::store_widened(lo, hi, r.boxes[c], r.centres[c]);
+      }
+    });
+  };
+  if (!frame_pos.empty()) {
+    const simd::VertexLoader load(frame_pos);
+    boxes_of([&](std::uint32_t x) { return load(x); });
+  } else {
+    const auto P = mesh.positions();
+    boxes_of([&](std::uint32_t x) {
+      const Vec3f f = to_frame(P[x], frame);
+      return _mm_setr_ps(f[0], f[1], f[2], 0.0f);
+    });
+  }
   std::vector<std::uint32_t> weights(C);
   for (std::size_t c = 0; c < C; ++c) weights[c] = cv.triangle_offsets[c + 1] - cv.triangle_offsets[c];
   BuildConfig b = cfg.build;
   b.max_leaf_size = 1;
-  return build_binned_sah({boxes, centres, weights}, b);
+  r.bvh = build_binned_sah({r.boxes, r.centres, weights}, b);
+  return r;
 }
 
 // Group offsets (in prim_order positions) of a tree over single-primitive leaves: the maximal
@@ -191,8 +235,8 @@ void sort_clusters_by_morton(std::span<const Vec3> pos, std::span<const Tri> tri
 
 std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg) {
   check_view(mesh, clusters);
-  const Bvh rest = rest_tree(mesh, clusters, cfg, trace_frame(mesh, cfg));
-  return {rest.prim_order.begin(), rest.prim_order.end()};
+  const RestTree rest = rest_tree(mesh, clusters, cfg, trace_frame(mesh, cfg), {});
+  return {rest.bvh.prim_order.begin(), rest.bvh.prim_order.end()};
 }
 
 std::vector<std::uint32_t> cluster_vertex_order(const Mesh& mesh, const ClusterView& clusters,
@@ -224,11 +268,11 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
                                   std::to_string(cfg_.build.max_leaf_size) + " given)");
-    const Bvh rest = rest_tree(mesh, cv, cfg_, data.frame());
-    cluster_ids_.assign(rest.prim_order.begin(), rest.prim_order.end());
-    if (cfg_.cluster_group_size > 1 && !rest.nodes.empty()) group_offsets_ = subtree_groups(rest, cfg_.cluster_group_size);
-    if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
   }
+  RestTree rest = rest_tree(mesh, cv, cfg_, data.frame(), f_.fpos);
+  cluster_ids_.assign(rest.bvh.prim_order.begin(), rest.bvh.prim_order.end());
+  if (cfg_.cluster_group_size > 1 && !rest.bvh.nodes.empty()) group_offsets_ = subtree_groups(rest.bvh, cfg_.cluster_group_size);
+  if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
   reorder_clusters(mesh, cv, cluster_ids_, &order_, &offsets_, vertices_, vertex_offsets_);
   const std::size_t C = offsets_.size() - 1;
   sort_clusters_by_morton(mesh.positions(), mesh.triangles(), offsets_, order_);
@@ -244,7 +288,17 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   else layout_block_trees(lane_ids);
   block_nodes_ = static_cast<std::uint32_t>(sub_nodes_.size());
   refit_groups_ = cfg_.group_trees == GroupTrees::Refit && !group_offsets_.empty();
-  if (refit_groups_ || cfg_.built_once) rest_boxes();  // (read by the groups' trees and by only_frame)
+  if (refit_groups_ || cfg_.built_once) rest_boxes(rest.boxes, rest.centres);  // (read by the groups' trees and by only_frame)
+  // A scene built once with the plain build has one frame, the rest pose, whose tree is the rest
+  // tree: the same builder and settings over the same boxes (the clusters now numbered in its
+  // leaf order, so its primitive order becomes the identity).
+  rest_is_frame_tree_ = cfg_.built_once && group_offsets_.empty() && cfg_.builder == SahBuilder::Binned &&
+                        cfg_.build.max_leaf_size <= 1;
+  if (rest_is_frame_tree_) {
+    f_.bvh = std::move(rest.bvh);
+    std::iota(f_.bvh.prim_order.begin(), f_.bvh.prim_order.end(), 0u);
+  }
+  rest = {};
   if (refit_groups_) layout_group_trees();
   data.blocks.resize(lane_ids.size() / 4);
   if (!cfg_.built_once) set_vertex_order(mesh, lane_ids);
@@ -259,12 +313,14 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   release(order_), release(offsets_), release(vertices_), release(vertex_offsets_);
 }
 
-// The clusters' boxes and centres at the rest pose (f_.fpos, the mesh's numbering, checked finite
-// by the constructor, no sentinel yet) over their vertex lists, into f_.boxes and f_.centroids.
-void ClusterScene::rest_boxes() {
+// The clusters' boxes and centres at the rest pose, in the scene's cluster order, into f_.boxes
+// and f_.centroids: the rest tree's (rest_tree(), the same values point_group_boxes makes over
+// the reordered vertex lists), permuted.
+void ClusterScene::rest_boxes(std::span<const Box3f> boxes, std::span<const Vec3f> centres) {
   const double t0 = clock_ms(cfg_.clock);
-  point_group_boxes(std::span<const Vec3f>(f_.fpos.data(), f_.fpos.size()), vertex_offsets_, vertices_, f_.boxes,
-                    f_.centroids);
+  const std::size_t C = cluster_ids_.size();
+  f_.boxes.resize(C), f_.centroids.resize(C);
+  for (std::size_t c = 0; c < C; ++c) f_.boxes[c] = boxes[cluster_ids_[c]], f_.centroids[c] = centres[cluster_ids_[c]];
   f_.times.vertices_ms = 0.0;
   f_.times.boxes_ms = clock_ms(cfg_.clock) - t0;
 }
@@ -696,7 +752,8 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
   };
   auto tree = [&] {
     double tb = clock_ms(cfg_.clock);
-    if (refit_groups_) {  // the groups' trees refitted, then the build over one record per group
+    if (rest_is_frame_tree_) {  // (f_.bvh is the rest tree: the constructor kept it)
+    } else if (refit_groups_) {  // the groups' trees refitted, then the build over one record per group
       refit_group_trees();
       build_binned_sah({group_boxes_, group_centres_, group_weights_}, group_top_build_, f_.bvh, f_.ws);
     } else if (cfg_.builder == SahBuilder::Sweep) {

@@ -33,8 +33,8 @@ template <class C>
 }
 
 /// The order in which a ClusterScene keeps the clusters of `clusters` on `mesh`: the primitive
-/// order of the plain binned SAH BVH over the clusters' rest-pose boxes (cfg's frame and build
-/// settings, one cluster per leaf). It depends on positions, not on the vertex numbering.
+/// order of the plain binned SAH BVH over the clusters' rest-pose boxes (those of the per-frame
+/// pass at the rest pose; cfg's frame and build settings, one cluster per leaf). It depends on positions, not on the vertex numbering.
 /// Throws std::invalid_argument like ClusterScene.
 [[nodiscard]] std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters,
                                                              const SceneConfig& cfg);
@@ -103,7 +103,7 @@ class ClusterScene {
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
-  void rest_boxes();
+  void rest_boxes(std::span<const Box3f> boxes, std::span<const Vec3f> centres);
   void only_frame();
   /// boxes_from_fill: the cluster boxes are made by the fill of the blocks (update() on one
   /// thread), which then runs before the tree instead of beside it.
@@ -142,6 +142,7 @@ class ClusterScene {
   // GroupTrees::Refit: sub_nodes_[block_nodes_ ..) are the groups' fixed trees (after the block
   // trees), refitted from the cluster boxes; the per-frame build sees one record per group.
   bool refit_groups_ = false;
+  bool rest_is_frame_tree_ = false;  // built once, plain build: f_.bvh is the rest tree (no build in build_frame)
   std::uint32_t block_nodes_ = 0;
   std::uint32_t group_depth_ = 0;
   // The 8-wide nodes of the fixed subtrees, which the tracer walks (layout_wide8): their structure is

@@ -76,7 +76,9 @@ struct SceneConfig {
   /// static scene's one BVH, SceneTracer). It then keeps no per-frame state: no corner indices,
   /// no vertex order, no frame positions or block boxes after its one fill (at 13.3M triangles
   /// 160 MB, 50 MB and 80 MB, and their set-up time); its trace data is the same bytes as the
-  /// first frame of a scene made with built_once = false. update() throws std::logic_error;
+  /// first frame of a scene made with built_once = false, except that with the plain build its
+  /// tree is the rest tree (no second build), which may list the two clusters of a node of two
+  /// the other way round (docs/tracing.md, "A still scene"). update() throws std::logic_error;
   /// fused_vertex_pass() is false, and times() has vertices_ms 0 (the conversion is part of
   /// the constructor's layout).
   bool built_once = false;

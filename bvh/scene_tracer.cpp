@@ -126,6 +126,7 @@ SceneTracer::SceneTracer(const Mesh& first, const PartLayout& L, const SceneTrac
     if (whole) {
       SceneConfig c = ccfg;
       c.built_once = want;  // all static: never updated, so no per-frame state
+      if (want) c.cluster_group_size = cfg.still_cluster_group_size;  // (default: the plain build)
       *cs = std::make_unique<ClusterScene>(*m, view_of(*cfg.clusters), c);
       return;
     }

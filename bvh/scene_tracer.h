@@ -47,6 +47,10 @@ struct SceneTracerConfig {
   ClusterLeaf cluster_leaf = ClusterLeaf::Linear;
   std::uint32_t cluster_group_size = cluster_scene_defaults().cluster_group_size;  ///< SceneConfig (0: plain build)
   GroupTrees group_trees = cluster_scene_defaults().group_trees;                    ///< SceneConfig
+  /// Every part static, with clusters: the one cluster BVH is built once (SceneConfig::built_once)
+  /// with this group size instead. 0, the default: the plain build, whose tree is the rest tree
+  /// (the groups make a per-frame rebuild cheap, and this BVH is never rebuilt).
+  std::uint32_t still_cluster_group_size = 0;
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
 };
 

@@ -109,6 +109,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   // its rest pose in every frame: the rest mesh is traced and shown as it is, without a copy of
   // its positions (160 MB at 13.3M triangles, and the time to fill fresh memory with them).
   const bool still = scene.all_static();
+  if (still && !opt.clusters.empty() && opt.group_trees && !opt.cluster_group_size)
+    throw UsageError("--group-trees", "a still scene is built once with the plain build: give --cluster-groups N > 1 too");
   std::vector<Vec3> first_pos;
   Stopwatch sw;
   if (!still) {
@@ -134,8 +136,10 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   // The one configuration: the static BVH built once, the moving BVH updated per frame.
   bvh::SceneTracerConfig tcfg;
   tcfg.clusters = use_clusters ? &clusters : nullptr;
-  tcfg.cluster_group_size = opt.cluster_group_size;
-  tcfg.group_trees = opt.group_trees;
+  // --cluster-groups N applies to every cluster BVH; unset, a still scene takes the plain build.
+  const std::uint32_t groups = opt.cluster_group_size.value_or(still ? 0u : bvh::cluster_scene_defaults().cluster_group_size);
+  tcfg.cluster_group_size = tcfg.still_cluster_group_size = groups;
+  tcfg.group_trees = opt.group_trees.value_or(bvh::cluster_scene_defaults().group_trees);
   // Set up at the rest pose, as ptc bench and the experiments do, and updated to every frame in
   // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend
   // on which frame the run starts at, so a frame traces the same in any range (the camera frames
@@ -282,8 +286,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     return a;
   }());
   if (use_clusters) manifest.set_parameter("clusters", opt.clusters.string());
-  if (use_clusters) manifest.set_parameter("cluster_group_size", opt.cluster_group_size);
-  if (use_clusters && opt.cluster_group_size > 1) manifest.set_parameter("group_trees", bvh::to_string(opt.group_trees));
+  if (use_clusters) manifest.set_parameter("cluster_group_size", tcfg.cluster_group_size);
+  if (use_clusters && tcfg.cluster_group_size > 1) manifest.set_parameter("group_trees", bvh::to_string(tcfg.group_trees));
   manifest.set_parameter("width", rc.width);
   manifest.set_parameter("height", rc.height);
   manifest.set_parameter("threads", threads);

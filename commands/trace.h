@@ -25,8 +25,14 @@ struct TraceCommandOptions {
   /// default here, keeps it still); refused for an animated scene.
   std::optional<std::string> deform;
   std::filesystem::path clusters;      ///< directory of `ptc cluster` (triangles.csv); empty: triangle BVH
-  std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;  ///< two-level build (0: plain)
-  bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;  ///< what the two-level build does inside a group
+  /// --cluster-groups: the cluster BVH's two-level build over groups of at most N clusters (0:
+  /// the plain build). Unset: the scene's moving parts take cluster_scene_defaults() (16), and a
+  /// still scene (every part static, built once) the plain build: the groups make the per-frame
+  /// rebuild cheap, and its one tree is never rebuilt (docs/tracing.md, "A still scene").
+  std::optional<std::uint32_t> cluster_group_size;
+  /// --group-trees: what the two-level build does inside a group (unset: the default, refit).
+  /// Given for a still scene without --cluster-groups, it is a usage error (nothing to do).
+  std::optional<bvh::GroupTrees> group_trees;
   /// --vertex-order: with --clusters, Clusters renumbers the scene's vertices once so that each
   /// cluster's are consecutive (the method's precomputation, as in `ptc bench`: the cluster BVH's
   /// per-frame pass then streams instead of gathering, which pays over a sequence); Input, the

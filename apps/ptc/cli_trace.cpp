@@ -14,6 +14,7 @@ struct TraceArgs {
   CameraArgs camera;
   std::string frame, frames, cost_range, deform, vertex_order = "input";
   GroupTreesArg group_trees;
+  std::uint32_t cluster_groups = bvh::cluster_scene_defaults().cluster_group_size;  // (given: opt.cluster_group_size)
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -37,8 +38,11 @@ void register_trace(CLI::App& app, Context& ctx) {
     o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
     for (const char* f : {"--ao-distance", "--seed"})
       if (a->app->count(f) && o.render.ao_samples == 0) throw UsageError(f, "needs ambient occlusion (--ao N > 0)");
-    o.group_trees = a->group_trees.get(!o.clusters.empty() && o.cluster_group_size > 1,
-                                       "a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");
+    if (a->app->count("--cluster-groups")) o.cluster_group_size = a->cluster_groups;
+    const bvh::GroupTrees trees = a->group_trees.get(
+        !o.clusters.empty() && o.cluster_group_size.value_or(bvh::cluster_scene_defaults().cluster_group_size) > 1,
+        "a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");
+    if (a->app->count("--group-trees")) o.group_trees = trees;
     o.render.threads = static_cast<unsigned>(ctx.threads);
     o.argv = ctx.args;
     cmd_trace(o, std::cout);
@@ -54,8 +58,9 @@ void register_trace(CLI::App& app, Context& ctx) {
                 "ptc bench measures; none (the default) keeps it still")
       ->check(CLI::IsMember({"twist", "bend", "wave", "rigid", "explode", "none"}));
   c->add_option("--clusters", a->opt.clusters, "trace a cluster BVH over the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
-  c->add_option("--cluster-groups", a->opt.cluster_group_size,
-                "with --clusters: two-level BVH build over fixed groups of at most N clusters; 0 = plain build")
+  c->add_option("--cluster-groups", a->cluster_groups,
+                "with --clusters: two-level BVH build over fixed groups of at most N clusters; 0 = plain build "
+                "(default: 16 for moving parts; a still scene, built once, takes the plain build unless given)")
       ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);

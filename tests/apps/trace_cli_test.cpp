@@ -109,6 +109,36 @@ TEST_F(TraceCli, TraceWithClustersFromPtcCluster) {
   EXPECT_NE(slurp(dir_ / "out" / "trace.csv").find(",clusters,12,"), std::string::npos);
 }
 
+// A still scene's cluster BVH is built once: by default with the plain build (its tree is the
+// rest tree), since the groups of the two-level build only make a per-frame rebuild cheap. An
+// explicit --cluster-groups N still gives the two-level build (the same hits, so the same
+// images), a moving scene keeps the default groups, and --group-trees without --cluster-groups
+// on a still scene does nothing, so it is refused.
+TEST_F(TraceCli, AStillSceneTakesThePlainBuildUnlessGroupsAreGiven) {
+  const fs::path fine = clustered_fine_mesh();
+  auto trace = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> args{"trace", fine.string(), "--clusters", (dir_ / "cl").string(), "--width", "40",
+                                  "--height", "30", "--out", (dir_ / name).string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const CmdResult r = ptc(args);
+    EXPECT_EQ(r.code, 0) << name << ": " << r.err;
+    return nlohmann::json::parse(slurp(dir_ / name / "manifest.json"))["parameters"];
+  };
+  const auto plain = trace("plain", {});
+  EXPECT_EQ(plain["cluster_group_size"], 0);
+  EXPECT_FALSE(plain.contains("group_trees"));
+  const auto groups = trace("groups", {"--cluster-groups", "16"});
+  EXPECT_EQ(groups["cluster_group_size"], 16);
+  EXPECT_EQ(groups["group_trees"], "refit");
+  for (const char* img : {"shaded.png", "depth.png", "normal.png"})
+    EXPECT_EQ(slurp(dir_ / "plain" / img), slurp(dir_ / "groups" / img)) << img;
+  EXPECT_EQ(trace("twist", {"--deform", "twist"})["cluster_group_size"], 16);
+  EXPECT_EQ(trace("twist0", {"--deform", "twist", "--cluster-groups", "0"})["cluster_group_size"], 0);
+  expect_error({"trace", fine.string(), "--clusters", (dir_ / "cl").string(), "--group-trees", "rebuild", "--out",
+                (dir_ / "out").string()},
+               2, "--group-trees");
+}
+
 TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   const std::string out = (dir_ / "out").string(), mesh = cube_.string();
   expect_error({"trace", mesh, "--eye", "1,2", "--out", out}, 2, "--eye");
