@@ -352,6 +352,20 @@ struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: bot
   bool empty;
 };
 
+// Asks for the first two cache lines of what a pushed child is read from when it is popped: its
+// 8-wide node, or a direct leaf's first block (an indirect leaf reads its ranges first: not
+// prefetched). The packets' walk issues it for every child it pushes: on the Zen 4 host the
+// rays took 1-4% less (docs/tracing.md, "Prefetching the pushed children"); the hits do not
+// change. The single-ray walk does not: there the same prefetches made the rays slower.
+[[gnu::always_inline]] inline void prefetch_child(const Flat& d, std::uint32_t child, std::uint32_t count) {
+  const char* p = nullptr;
+  if (count == 0) p = reinterpret_cast<const char*>(d.nodes + child);
+  else if (!(count & kIndirectLeaf)) p = reinterpret_cast<const char*>(d.blocks + child);
+  if (!p) return;
+  _mm_prefetch(p, _MM_HINT_T0);
+  _mm_prefetch(p + 64, _MM_HINT_T0);
+}
+
 // Tests the triangles of one leaf child (direct: `count` triangles from block `ref`;
 // indirect: the ranges ranges[ref .. ref + n)). Returns true for an any-hit query's hit.
 template <bool AnyHit>

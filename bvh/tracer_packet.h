@@ -387,6 +387,7 @@ void traverse_packet(const Flat& d, const PacketGroup& g, std::uint32_t group, P
       for (int i = 0; i < k - 1; ++i) {
         const int c = order[i];
         sp->tn = tn[c], sp->ref = n.child[c], sp->count = n.count[c], sp->mask = lanes[c];
+        prefetch_child(d, n.child[c], n.count[c]);
         ++sp;
       }
       const int c = order[k - 1];
