@@ -32,30 +32,6 @@ std::vector<Box3f> triangle_boxes(std::span<const Vec3> positions, std::span<con
   return boxes;
 }
 
-std::vector<Box3f> point_group_boxes(std::span<const Vec3> positions, std::span<const std::uint32_t> offsets,
-                                     std::span<const std::uint32_t> indices, const FrameMap& f) {
-  const Vec3& origin = f.origin;
-  const double s = f.scale;
-  const std::size_t groups = offsets.empty() ? 0 : offsets.size() - 1;
-  std::vector<Box3f> boxes(groups);
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  // Groups are independent: chunks of them on the caller's threads (the same boxes at any count).
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t g = r.begin(); g < r.end(); ++g) {
-      double lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf;
-      for (std::uint32_t i = offsets[g]; i < offsets[g + 1]; ++i) {
-        const Vec3& p = positions[indices[i]];
-        lx = std::min(lx, p.x()), ly = std::min(ly, p.y()), lz = std::min(lz, p.z());
-        hx = std::max(hx, p.x()), hy = std::max(hy, p.y()), hz = std::max(hz, p.z());
-      }
-      if (offsets[g] == offsets[g + 1]) continue;  // empty group: empty box
-      boxes[g].lo = {round_down((lx - origin.x()) * s), round_down((ly - origin.y()) * s), round_down((lz - origin.z()) * s)};
-      boxes[g].hi = {round_up((hx - origin.x()) * s), round_up((hy - origin.y()) * s), round_up((hz - origin.z()) * s)};
-    }
-  });
-  return boxes;
-}
-
 std::vector<Vec3f> box_centers(std::span<const Box3f> boxes) {
   std::vector<Vec3f> c(boxes.size());
   for (std::size_t i = 0; i < boxes.size(); ++i) c[i] = boxes[i].center();
@@ -145,6 +121,30 @@ void point_group_boxes(std::span<const Vec3f> fp, std::span<const std::uint32_t>
     }
     simd::store_widened(_mm_min_ps(lo0, lo1), _mm_max_ps(hi0, hi1), out[g], centers[g]);
   }
+}
+
+void point_group_boxes(std::span<const Vec3> positions, const FrameMap& frame, std::span<const std::uint32_t> offsets,
+                       std::span<const std::uint32_t> indices, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers) {
+  const std::size_t groups = offsets.empty() ? 0 : offsets.size() - 1;
+  out.resize(groups);
+  centers.resize(groups);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t g = r.begin(); g < r.end(); ++g) {
+      if (offsets[g] == offsets[g + 1]) {
+        simd::store_empty(out[g], centers[g]);
+        continue;
+      }
+      // (min and max are exact, so their order does not matter; store_widened maps both zeros
+      // alike, so neither does a zero's sign)
+      __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf);
+      for (std::uint32_t i = offsets[g]; i < offsets[g + 1]; ++i) {
+        const Vec3f f = to_frame(positions[indices[i]], frame);
+        const __m128 p = _mm_setr_ps(f[0], f[1], f[2], 0.0f);
+        lo = _mm_min_ps(lo, p), hi = _mm_max_ps(hi, p);
+      }
+      simd::store_widened(lo, hi, out[g], centers[g]);
+    }
+  });
 }
 
 void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_pos, const FrameMap& origin) {

@@ -119,14 +119,6 @@ struct FrameMap {
 [[nodiscard]] std::vector<Box3f> triangle_boxes(std::span<const Vec3> positions, std::span<const Tri> triangles,
                                                 const FrameMap& origin = {});
 
-/// One box per point group g = indices[offsets[g] .. offsets[g+1]) (e.g. a clustering's
-/// vertex lists: the per-frame "cluster box update" of the method), rounded outward in the frame
-/// at `origin`. An empty group gets the empty box. offsets.size() = groups + 1 (empty offsets:
-/// no groups).
-[[nodiscard]] std::vector<Box3f> point_group_boxes(std::span<const Vec3> positions,
-                                                   std::span<const std::uint32_t> offsets,
-                                                   std::span<const std::uint32_t> indices,
-                                                   const FrameMap& origin = {});
 
 /// The centre of every box (the builders' centroids when none better is known).
 [[nodiscard]] std::vector<Vec3f> box_centers(std::span<const Box3f> boxes);
@@ -161,6 +153,12 @@ void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::ui
 /// The same boxes, and their centres (Box3f::center(), bit for bit) in one pass, reusing the
 /// storage of `out` and `centers` (the per-frame cluster box update).
 void point_group_boxes(std::span<const Vec3f> frame_pos, std::span<const std::uint32_t> offsets,
+                       std::span<const std::uint32_t> indices, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers);
+/// The boxes and centres of the overload above over frame_positions(positions, frame), bit for
+/// bit, without the frame positions: each point converted where it is read (a cluster scene's
+/// rest boxes, made once). Groups in chunks on the caller's threads (the same values at any
+/// count). Positions must be finite in the frame (check_finite).
+void point_group_boxes(std::span<const Vec3> positions, const FrameMap& frame, std::span<const std::uint32_t> offsets,
                        std::span<const std::uint32_t> indices, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers);
 
 /// Throws std::invalid_argument naming the first vertex whose position is not finite in the

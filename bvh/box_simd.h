@@ -1,5 +1,5 @@
-// SSE2 pieces of the per-frame box passes (internal to bvh/: box.cpp, vertex_order.cpp,
-// leaf_blocks.cpp and cluster_scene.cpp's rest boxes).
+// SSE2 pieces of the per-frame box passes (internal to bvh/: box.cpp, vertex_order.cpp and
+// leaf_blocks.cpp).
 #pragma once
 
 #include <immintrin.h>

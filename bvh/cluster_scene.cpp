@@ -3,7 +3,6 @@
 #include <emmintrin.h>
 
 #include <algorithm>
-#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -15,7 +14,6 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
-#include "bvh/box_simd.h"
 #include "bvh/leaf_blocks.h"
 #include "bvh/refit.h"
 #include "bvh/stage_clock.h"
@@ -66,17 +64,14 @@ void check_view(const Mesh& mesh, const ClusterView& cv) {
 // is the order in which the scene keeps the clusters, and its subtrees of at most
 // cluster_group_size clusters are the groups of the two-level build. Its boxes and centres (in
 // the view's cluster order) are those the per-frame pass makes at the rest pose (point_group_boxes
-// over the frame positions: each vertex rounded to its nearest float in the frame, the box
-// widened by one unit in the last place), bit for bit, so the tree is the plain build's tree of
-// that frame. `frame_pos`: the rest pose in the frame (to_frame of every position), or empty to
-// convert each vertex from the mesh's doubles here. A checked view.
+// in the frame: each vertex rounded to its nearest float, the box widened by one unit in the last
+// place), bit for bit, so the tree is the plain build's tree of that frame. A checked view.
 struct RestTree {
   Bvh bvh;
   AlignedVector<Box3f> boxes;
   AlignedVector<Vec3f> centres;
 };
-RestTree rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, const FrameMap& frame,
-                   std::span<const Vec3f> frame_pos) {
+RestTree rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& cfg, const FrameMap& frame) {
   const std::size_t C = cv.triangle_offsets.size() - 1;
   std::vector<std::uint32_t> offs, idx;
   std::span<const std::uint32_t> o = cv.vertex_offsets, v = cv.vertices;
@@ -94,36 +89,8 @@ RestTree rest_tree(const Mesh& mesh, const ClusterView& cv, const SceneConfig& c
   for (std::uint32_t x : v)
     if (x >= mesh.vertex_count())
       throw std::invalid_argument("ClusterScene: vertex " + std::to_string(x) + " of a cluster's list is not in the mesh");
-  // One cluster at a time, in chunks on the caller's threads (the same boxes at any count).
   RestTree r;
-  r.boxes.resize(C), r.centres.resize(C);
-  auto boxes_of = [&](auto at) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kSetupClustersPerTask), [&](const tbb::blocked_range<std::size_t>& rg) {
-      constexpr float inf = std::numeric_limits<float>::infinity();
-      for (std::size_t c = rg.begin(); c < rg.end(); ++c) {
-        if (o[c] == o[c + 1]) {
-          simd::store_empty(r.boxes[c], r.centres[c]);
-          continue;
-        }
-        __m128 lo = _mm_set1_ps(inf), hi = _mm_set1_ps(-inf);
-        for (std::uint32_t i = o[c]; i < o[c + 1]; ++i) {
-          const __m128 p = at(v[i]);
-          lo = _mm_min_ps(lo, p), hi = _mm_max_ps(hi, p);
-        }
-        simd::store_widened(lo, hi, r.boxes[c], r.centres[c]);
-      }
-    });
-  };
-  if (!frame_pos.empty()) {
-    const simd::VertexLoader load(frame_pos);
-    boxes_of([&](std::uint32_t x) { return load(x); });
-  } else {
-    const auto P = mesh.positions();
-    boxes_of([&](std::uint32_t x) {
-      const Vec3f f = to_frame(P[x], frame);
-      return _mm_setr_ps(f[0], f[1], f[2], 0.0f);
-    });
-  }
+  point_group_boxes(mesh.positions(), frame, o, v, r.boxes, r.centres);
   std::vector<std::uint32_t> weights(C);
   for (std::size_t c = 0; c < C; ++c) weights[c] = cv.triangle_offsets[c + 1] - cv.triangle_offsets[c];
   BuildConfig b = cfg.build;
@@ -235,7 +202,7 @@ void sort_clusters_by_morton(std::span<const Vec3> pos, std::span<const Tri> tri
 
 std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters, const SceneConfig& cfg) {
   check_view(mesh, clusters);
-  const RestTree rest = rest_tree(mesh, clusters, cfg, trace_frame(mesh, cfg), {});
+  const RestTree rest = rest_tree(mesh, clusters, cfg, trace_frame(mesh, cfg));
   return {rest.bvh.prim_order.begin(), rest.bvh.prim_order.end()};
 }
 
@@ -269,7 +236,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
                                   std::to_string(cfg_.build.max_leaf_size) + " given)");
   }
-  RestTree rest = rest_tree(mesh, cv, cfg_, data.frame(), f_.fpos);
+  RestTree rest = rest_tree(mesh, cv, cfg_, data.frame());
   cluster_ids_.assign(rest.bvh.prim_order.begin(), rest.bvh.prim_order.end());
   if (cfg_.cluster_group_size > 1 && !rest.bvh.nodes.empty()) group_offsets_ = subtree_groups(rest.bvh, cfg_.cluster_group_size);
   if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build

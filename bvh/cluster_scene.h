@@ -34,7 +34,8 @@ template <class C>
 
 /// The order in which a ClusterScene keeps the clusters of `clusters` on `mesh`: the primitive
 /// order of the plain binned SAH BVH over the clusters' rest-pose boxes (those of the per-frame
-/// pass at the rest pose; cfg's frame and build settings, one cluster per leaf). It depends on positions, not on the vertex numbering.
+/// pass at the rest pose; cfg's frame and build settings, one cluster per leaf). It depends on
+/// positions, not on the vertex numbering.
 /// Throws std::invalid_argument like ClusterScene.
 [[nodiscard]] std::vector<std::uint32_t> cluster_visit_order(const Mesh& mesh, const ClusterView& clusters,
                                                              const SceneConfig& cfg);

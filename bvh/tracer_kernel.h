@@ -352,12 +352,13 @@ struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: bot
   bool empty;
 };
 
-// Asks for the cache lines of what a pushed child is read from when it is popped: its 8-wide node
-// (four lines: the boxes' rows, then the children), or a direct leaf's first block (the three
-// lines it touches; the blocks after it follow in memory). An indirect leaf reads its ranges
-// first: not prefetched. The packets' walk issues it for every child it pushes: on the Zen 4 host the
-// rays took 1-4% less (docs/tracing.md, "Prefetching the pushed children"); the hits do not
-// change. The single-ray walk does not: there the same prefetches made the rays slower.
+// Asks for the cache lines of what a pushed child is read from when it is popped: its 8-wide
+// node (four lines: the boxes' rows, then the children), or a direct leaf's first block (the
+// three lines it touches; the blocks after it follow in memory). An indirect leaf reads its
+// ranges first: not prefetched. The packets' walk issues it for every child it pushes: on the
+// Zen 4 host the rays took 1-4% less (docs/tracing.md, "Prefetching the pushed children in the
+// packets' walk"); the hits do not change. The single-ray walk does not: there the same
+// prefetches made the rays slower.
 [[gnu::always_inline]] inline void prefetch_child(const Flat& d, std::uint32_t child, std::uint32_t count) {
   const char* p = nullptr;
   if (count == 0) p = reinterpret_cast<const char*>(d.nodes + child);

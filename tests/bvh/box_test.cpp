@@ -3,8 +3,10 @@
 #include "bvh/box.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <span>
@@ -136,6 +138,44 @@ TEST(Box, FusedGroupBoxesEqualThePlainOnes) {
         EXPECT_LT(fused[gi].lo[a], fp[indices[i]][a]);
         EXPECT_GT(fused[gi].hi[a], fp[indices[i]][a]);
       }
+}
+
+// The group boxes made from the doubles (each point converted where it is read, groups on the
+// caller's threads) equal those of the float overload over frame_positions, bit for bit, with
+// their centres: a far origin and a scale, zeros of both signs on one axis (the widening maps
+// both alike, whatever the order of min and max), repeated and empty groups, and more groups
+// than one chunk, at one and two threads.
+TEST(Box, GroupBoxesFromDoublesEqualThoseOverTheFramePositions) {
+  std::mt19937 g(23);
+  std::uniform_real_distribution<double> U(-3.0, 3.0);
+  const FrameMap frame(Vec3(0.0, -2.5e6, 1e7), 0.125);  // (x about 0: zeros in the frame)
+  std::vector<Vec3> pos(500);
+  for (Vec3& p : pos) p = frame.origin + Vec3(U(g), U(g), U(g));
+  pos[3].x() = 0.0;   // +0 in the frame
+  pos[4].x() = -0.0;  // -0 in the frame
+  std::vector<std::uint32_t> offsets{0}, indices;
+  std::uniform_int_distribution<std::uint32_t> V(0, static_cast<std::uint32_t>(pos.size() - 1)), N(0, 9);
+  for (int k = 0; k < 3000; ++k) {  // (3000 groups: three chunks of 1024)
+    const std::uint32_t n = k % 97 == 0 ? 0 : N(g);
+    for (std::uint32_t i = 0; i < n; ++i) indices.push_back(k % 5 == 0 ? (i % 2 ? 3u : 4u) : V(g));
+    offsets.push_back(static_cast<std::uint32_t>(indices.size()));
+  }
+  AlignedVector<Vec3f> fp;
+  frame_positions(pos, frame, fp);
+  AlignedVector<Box3f> want, got;
+  AlignedVector<Vec3f> want_c, got_c;
+  point_group_boxes(fp, offsets, indices, want, want_c);
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    point_group_boxes(pos, frame, offsets, indices, got, got_c);
+    ASSERT_EQ(got.size(), want.size());
+    ASSERT_EQ(got_c.size(), want.size());
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      ASSERT_EQ(std::memcmp(&got[i], &want[i], sizeof(Box3f)), 0) << "group " << i << " threads " << threads;
+      ASSERT_EQ(std::memcmp(&got_c[i], &want_c[i], sizeof(Vec3f)), 0) << "group " << i << " threads " << threads;
+    }
+  }
+  EXPECT_TRUE(got[0].empty());
 }
 
 }  // namespace

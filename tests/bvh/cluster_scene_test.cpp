@@ -57,6 +57,27 @@ std::vector<std::uint32_t> expected_cluster_order(const Mesh& m, std::vector<std
   return ids;
 }
 
+// `rays` rays from random points around the mesh's box towards random points inside it: each
+// closest hit of `d` is brute force's (triangle and t), and more than 100 hit.
+void expect_brute_force_hits(const TraceData& d, const Mesh& mesh, unsigned seed, int rays, const std::string& what) {
+  const Box3 box = mesh.bounds();
+  const Vec3 c = box.center(), e = box.extent();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int hits = 0;
+  for (int i = 0; i < rays; ++i) {
+    const Vec3 org = c + 1.5 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
+    const Vec3 to = c + 0.4 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
+    const Vec3f dir{float(to.x() - org.x()), float(to.y() - org.y()), float(to.z() - org.z())};
+    const Hit b = test::brute_force(mesh, d.frame(), org, dir);
+    const Hit h = trace_ray(d, org, dir);
+    ASSERT_EQ(h.triangle, b.triangle) << what << " ray " << i;
+    ASSERT_EQ(h.t, b.t) << what << " ray " << i;
+    hits += b.hit();
+  }
+  EXPECT_GT(hits, 100) << what;
+}
+
 TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
   const Mesh m = test::load_mesh("bunny00.off");
   const Mesh moved = test::deformed(m, 0.05);  // the order is the rest pose's, whatever the frame
@@ -226,22 +247,7 @@ TEST(ClusterScene, SetUpInChunksIsTheSameAtAnyThreadCountAndHitsLikeBruteForce) 
       if (threads == 1) {
         want.push_back(d);
         const Mesh& mesh = f == 0 ? m : moved;
-        const Box3 box = mesh.bounds();
-        const Vec3 c = box.center(), e = box.extent();
-        std::mt19937 rng(17u + static_cast<unsigned>(f));
-        std::uniform_real_distribution<double> u(-1.0, 1.0);
-        int hits = 0;
-        for (int i = 0; i < 300; ++i) {
-          const Vec3 org = c + 1.5 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
-          const Vec3 to = c + 0.4 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
-          const Vec3f dir{float(to.x() - org.x()), float(to.y() - org.y()), float(to.z() - org.z())};
-          const Hit b = test::brute_force(mesh, d.frame(), org, dir);
-          const Hit h = trace_ray(d, org, dir);
-          ASSERT_EQ(h.triangle, b.triangle) << what << " ray " << i;
-          ASSERT_EQ(h.t, b.t) << what << " ray " << i;
-          hits += b.hit();
-        }
-        EXPECT_GT(hits, 100) << what;
+        ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(d, mesh, 17u + static_cast<unsigned>(f), 300, what));
         continue;
       }
       expect_same_data(d, want[static_cast<std::size_t>(f)], what);
@@ -346,22 +352,7 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
           swapped += !same;
         }
         EXPECT_LT(swapped, 10) << w;
-        const Box3 box = k.mesh->bounds();
-        const Vec3 c = box.center(), e = box.extent();
-        std::mt19937 rng(5u);
-        std::uniform_real_distribution<double> u(-1.0, 1.0);
-        int hits = 0;
-        for (int i = 0; i < 400; ++i) {
-          const Vec3 org = c + 1.5 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
-          const Vec3 to = c + 0.4 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
-          const Vec3f dir{float(to.x() - org.x()), float(to.y() - org.y()), float(to.z() - org.z())};
-          const Hit b = test::brute_force(*k.mesh, d.frame(), org, dir);
-          const Hit h = trace_ray(d, org, dir);
-          ASSERT_EQ(h.triangle, b.triangle) << w << " ray " << i;
-          ASSERT_EQ(h.t, b.t) << w << " ray " << i;
-          hits += b.hit();
-        }
-        EXPECT_GT(hits, 100) << w;
+        ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(d, *k.mesh, 5u, 400, w));
       } else {
         expect_same_data(once.data(), animated.data(), w);
       }
