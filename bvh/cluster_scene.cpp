@@ -15,6 +15,7 @@
 #include <tbb/task_group.h>
 
 #include "bvh/leaf_blocks.h"
+#include "bvh/leaf_tables.h"
 #include "bvh/refit.h"
 #include "bvh/stage_clock.h"
 #include "bvh/sweep_sah_builder.h"
@@ -232,6 +233,8 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   {
     if (cfg_.builder == SahBuilder::Sweep && cfg_.cluster_group_size > 1)
       throw std::invalid_argument("the sweep builder has no two-level build: cluster_group_size must be 0 with it");
+    if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.leaf_format == LeafFormat::Tables)
+      throw std::invalid_argument("the tables leaf format needs linear cluster leaves (block trees keep blocks)");
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
                                   std::to_string(cfg_.build.max_leaf_size) + " given)");
@@ -266,10 +269,14 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
     std::iota(f_.bvh.prim_order.begin(), f_.bvh.prim_order.end(), 0u);
   }
   rest = {};
-  if (refit_groups_) layout_group_trees();
-  data.blocks.resize(lane_ids.size() / 4);
   if (!cfg_.built_once) set_vertex_order(mesh, lane_ids);
-  data.triangle_ids = std::move(lane_ids);
+  if (cfg_.leaf_format == LeafFormat::Tables) {
+    layout_tables(mesh, lane_ids);  // (the clusters' ranges become ranges of groups)
+  } else {
+    data.blocks.resize(lane_ids.size() / 4);
+    data.triangle_ids = std::move(lane_ids);
+  }
+  if (refit_groups_) layout_group_trees();
   sub_count_ = static_cast<std::uint32_t>(sub_nodes_.size());
   data.wide.nodes = std::move(sub_nodes_);  // kept from frame to frame; the top follows
   sub_nodes_ = {};
@@ -600,6 +607,35 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
   }
 }
 
+// LeafFormat::Tables: the groups of every cluster from its blocks' lanes and corners (those of
+// the per-frame pass, or for a scene built once the mesh's numbering with the sentinel after
+// the last vertex), the triangle ids per group slot, and each cluster's range of groups in
+// cluster_ranges_ (first group, group count, triangles). The blocks' corner indices and lanes
+// are freed.
+void ClusterScene::layout_tables(const Mesh& mesh, AlignedVector<std::uint32_t>& lane_ids) {
+  TraceData& data = f_.data;
+  const auto sentinel = static_cast<std::uint32_t>(mesh.vertex_count());
+  if (cfg_.built_once) {
+    const std::span<const Tri> tris = mesh.triangles();
+    corners_.resize(3 * lane_ids.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lane_ids.size() / 4, kSetupBlocksPerTask), [&](const auto& r) {
+      for (std::size_t b = r.begin(); b < r.end(); ++b)
+        for (int l = 0; l < 4; ++l)
+          for (int c = 0; c < 3; ++c) {
+            const std::uint32_t id = lane_ids[4 * b + l];
+            corners_[12 * b + 4 * c + l] = id == kNoTriangle ? sentinel : tris[id][c];
+          }
+    });
+  }
+  AlignedVector<std::uint32_t> ids;
+  tables_ = make_table_layout(cluster_ranges_, lane_ids, corners_, sentinel, data.tables, ids);
+  for (std::size_t c = 0; c < cluster_ranges_.size(); ++c)
+    cluster_ranges_[c] = {tables_.group_offsets[c], tables_.group_offsets[c + 1] - tables_.group_offsets[c], weights_[c]};
+  data.triangle_ids = std::move(ids);
+  data.format = LeafFormat::Tables;
+  release(corners_), release(lane_ids);
+}
+
 // Whether every cluster's vertex list (vertices_, the mesh's numbering) holds exactly the corners of
 // its triangles (the lanes of its blocks), as a Clustering's lists and the corner lists made
 // without them do: then boxes over the blocks' corners are the lists' boxes, bit for bit. A
@@ -703,7 +739,11 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
   auto leaf_data = [&] {
     const double tl = clock_ms(cfg_.clock);
     block_boxes_.resize(B ? data.blocks.size() : 0);
-    if (cfg_.built_once) {  // (no corner indices: the lanes' triangles in the mesh's numbering; the sentinel last but one)
+    if (data.format == LeafFormat::Tables) {  // (linear leaves: no block boxes)
+      if (boxes_from_fill) f_.boxes.resize(weights_.size()), f_.centroids.resize(weights_.size());
+      fill_tables(tables_, f_.fpos[0].data(), data.tables, boxes_from_fill ? f_.boxes.data() : nullptr,
+                  boxes_from_fill ? f_.centroids.data() : nullptr);  // fenced
+    } else if (cfg_.built_once) {  // (no corner indices: the lanes' triangles in the mesh's numbering; the sentinel last but one)
       fill_blocks_from_lanes(data.triangle_ids, triangles(), f_.fpos[0].data(),
                              static_cast<std::uint32_t>(f_.fpos.size() - 2), data.blocks,
                              B ? block_boxes_.data() : nullptr);  // fenced

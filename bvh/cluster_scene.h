@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bvh/aligned.h"
+#include "bvh/leaf_tables.h"
 #include "bvh/scene_config.h"
 #include "bvh/scene_frame.h"
 #include "bvh/vertex_order.h"
@@ -104,6 +105,7 @@ class ClusterScene {
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
+  void layout_tables(const Mesh& mesh, AlignedVector<std::uint32_t>& lane_ids);
   void rest_boxes(std::span<const Box3f> boxes, std::span<const Vec3f> centres);
   void only_frame();
   /// boxes_from_fill: the cluster boxes are made by the fill of the blocks (update() on one
@@ -172,7 +174,8 @@ class ClusterScene {
   GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)
   std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): f_.fpos in input order
   bool lists_are_corners_ = false;  // fused mode: the clusters' vertex lists are their corners (lists_are_corners)
-  AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel)
+  AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel; none with tables)
+  TableLayout tables_;  // LeafFormat::Tables: the groups per cluster and their slots' vertex indices
   SceneFrame f_;
 };
 

@@ -21,6 +21,14 @@ std::optional<GroupTrees> parse_group_trees(std::string_view s) {
   return std::nullopt;
 }
 
+const char* to_string(LeafFormat f) { return f == LeafFormat::Blocks ? "blocks" : "tables"; }
+
+std::optional<LeafFormat> parse_leaf_format(std::string_view s) {
+  if (s == "blocks") return LeafFormat::Blocks;
+  if (s == "tables") return LeafFormat::Tables;
+  return std::nullopt;
+}
+
 std::optional<ClusterLeaf> parse_cluster_leaf(std::string_view s) {
   if (s == "linear") return ClusterLeaf::Linear;
   if (s == "block-tree") return ClusterLeaf::BlockTree;

@@ -10,6 +10,7 @@
 #include "bvh/box.h"
 #include "bvh/build_config.h"
 #include "bvh/stage_clock.h"
+#include "bvh/trace_data.h"
 #include "toolkit/mesh/mesh.h"
 
 namespace ptc::bvh {
@@ -42,6 +43,10 @@ enum class ClusterLeaf { Linear, BlockTree };
 [[nodiscard]] const char* to_string(ClusterLeaf l);
 [[nodiscard]] std::optional<ClusterLeaf> parse_cluster_leaf(std::string_view s);
 
+/// "blocks", "tables" (LeafFormat, trace_data.h).
+[[nodiscard]] const char* to_string(LeafFormat f);
+[[nodiscard]] std::optional<LeafFormat> parse_leaf_format(std::string_view s);
+
 /// What the two-level build (SceneConfig::cluster_group_size) does inside a group per frame:
 /// Rebuild builds a binned SAH tree over the group's cluster boxes every frame; Refit keeps the
 /// tree built over the group's rest-pose boxes (a fixed 4-wide subtree, as the block trees of
@@ -64,6 +69,10 @@ struct SceneConfig {
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
   ClusterLeaf cluster_leaf = ClusterLeaf::Linear;  ///< ClusterScene only (Linear: the paper's leaves, and the faster with Acc clusters, bench/bvh_bench.cpp)
   StageClock clock = StageClock::Wall;  ///< clock of the StageTimes (see stage_clock.h)
+  /// ClusterScene with ClusterLeaf::Linear only: how the leaves hold their triangles (blocks of
+  /// four, or the per-group vertex tables; docs/tracing.md, "Vertex tables in the walk"). The
+  /// hits are the same bits either way; a triangle scene and block trees always use blocks.
+  LeafFormat leaf_format = LeafFormat::Blocks;
   /// ClusterScene only: two-level build (BuildInput::groups). The groups are fixed once per
   /// clustering: the maximal subtrees of at most this many clusters of the rest-pose BVH; per
   /// frame the top is built over the groups' boxes and each group's tree rebuilt over its

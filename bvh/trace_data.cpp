@@ -8,6 +8,62 @@ namespace ptc::bvh {
 
 namespace {
 
+// The checks of one leaf of a LeafFormat::Tables scene: its ranges of groups (every range whole
+// clusters: only its last group marked last), each group's counts, corner slots and ids, every
+// triangle once, its corners (finite) inside the leaf's box, unused slots NaN.
+template <class Fail>
+void validate_table_leaf(const TraceData& d, const std::vector<LeafRange>& leaf_ranges, const Box3f& box,
+                         std::size_t triangle_count, const std::string& where, std::vector<std::uint8_t>& tri_seen,
+                         std::vector<std::uint8_t>& slot_used, Fail&& fail) {
+  for (std::size_t r = 0; r < leaf_ranges.size(); ++r) {
+    const LeafRange lr = leaf_ranges[r];
+    const std::string rw = where + ": range " + std::to_string(r);
+    if (lr.block_count == 0 || std::uint64_t{lr.first_block} + lr.block_count > d.tables.size()) {
+      fail(rw + " empty or past the tables");
+      continue;
+    }
+    std::uint32_t real = 0;
+    for (std::uint32_t g = lr.first_block; g < lr.first_block + lr.block_count; ++g) {
+      const TableGroup& t = d.tables[g];
+      const std::string gw = rw + " group " + std::to_string(g);
+      if ((t.last != 0) != (g + 1 == lr.first_block + lr.block_count)) fail(gw + ": marked last " + std::to_string(t.last));
+      if (t.count < 1 || t.count > kTableSlots || t.vertices < 1 || t.vertices > kTableSlots) {
+        fail(gw + ": " + std::to_string(t.count) + " triangles on " + std::to_string(t.vertices) + " vertices");
+        continue;
+      }
+      for (std::uint32_t s = t.vertices; s < kTableSlots; ++s)
+        if (!std::isnan(t.v[0][s]) || !std::isnan(t.v[1][s]) || !std::isnan(t.v[2][s])) fail(gw + ": unused slot not NaN");
+      for (std::uint32_t i = 0; i < kTableSlots; ++i) {
+        const std::size_t slot = std::size_t{kTableSlots} * g + i;
+        if (slot_used[slot]++) fail(gw + ": slot " + std::to_string(i) + " referenced twice");
+        const std::uint32_t id = d.triangle_ids[slot];
+        if (i >= t.count) {
+          if (id != kNoTriangle) fail(gw + ": slot " + std::to_string(i) + " beyond the count holds a triangle");
+          continue;
+        }
+        ++real;
+        if (id >= triangle_count) {
+          fail(gw + ": triangle id " + std::to_string(id) + " out of range");
+          continue;
+        }
+        if (tri_seen[id]++) fail("triangle " + std::to_string(id) + " appears twice");
+        for (int c = 0; c < 3; ++c) {
+          const std::uint32_t v = t.corner[c][i];
+          if (v >= t.vertices) {
+            fail(gw + ": triangle " + std::to_string(id) + " corner slot " + std::to_string(v) + " unused");
+            continue;
+          }
+          Box3f pb;
+          pb.extend(Vec3f{t.v[0][v], t.v[1][v], t.v[2][v]});
+          if (!box.contains(pb)) fail(where + ": triangle " + std::to_string(id) + " corner outside the leaf box");
+        }
+      }
+    }
+    if (real != lr.triangle_count)
+      fail(rw + " holds " + std::to_string(real) + " triangles, not " + std::to_string(lr.triangle_count));
+  }
+}
+
 // The checks of validate() on one of the trees (WideBvh or WideBvh8); `tree_name` names it in
 // the messages ("" or "8-wide ").
 template <class Tree>
@@ -72,8 +128,20 @@ void validate_tree(const TraceData& d, const Tree& tree, std::size_t triangle_co
           continue;
         }
         leaf_ranges.assign(d.ranges.begin() + n.child[k], d.ranges.begin() + n.child[k] + nr);
+      } else if (d.format == LeafFormat::Tables) {  // the groups up to the first marked last
+        std::uint32_t g = n.child[k];
+        while (g < d.tables.size() && !d.tables[g].last) ++g;
+        if (g >= d.tables.size()) {
+          fail(where + ": a direct leaf's groups run past the tables");
+          continue;
+        }
+        leaf_ranges.push_back({n.child[k], g + 1 - n.child[k], n.count[k]});
       } else {
         leaf_ranges.push_back({n.child[k], (n.count[k] + 3) / 4, n.count[k]});
+      }
+      if (d.format == LeafFormat::Tables) {
+        validate_table_leaf(d, leaf_ranges, box, triangle_count, where, tri_seen, lane_used, fail);
+        continue;
       }
       for (std::size_t r = 0; r < leaf_ranges.size(); ++r) {
         const LeafRange lr = leaf_ranges[r];
@@ -125,7 +193,13 @@ void validate_tree(const TraceData& d, const Tree& tree, std::size_t triangle_co
 
 std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count, bool exact_unions) {
   std::vector<std::string> issues;
-  if (d.triangle_ids.size() != 4 * d.blocks.size()) issues.push_back("triangle_ids size is not 4 per block");
+  if (d.format == LeafFormat::Tables) {
+    if (!d.blocks.empty()) issues.push_back("blocks beside the tables");
+    if (d.triangle_ids.size() != std::size_t{kTableSlots} * d.tables.size())
+      issues.push_back("triangle_ids size is not " + std::to_string(kTableSlots) + " per group");
+  } else if (d.triangle_ids.size() != 4 * d.blocks.size()) {
+    issues.push_back("triangle_ids size is not 4 per block");
+  }
   validate_tree(d, d.wide, triangle_count, exact_unions, "", issues);
   if (d.wide8.nodes.empty() != d.wide.nodes.empty()) {
     issues.push_back(d.wide8.nodes.empty() ? "no 8-wide nodes beside the 4-wide tree"

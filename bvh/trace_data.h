@@ -30,6 +30,33 @@ struct LeafRange {
   std::uint32_t triangle_count = 0;
 };
 
+/// Slots of a TableGroup: vertices and triangles.
+inline constexpr int kTableSlots = 32;
+
+/// Up to 32 triangles of one cluster on up to 32 distinct vertices, 512 bytes (the "tables" leaf
+/// format, LeafFormat::Tables): the vertices in the trace frame as rows v[axis][slot], written
+/// every frame, and each triangle's corners as byte slots into them, fixed per clustering. A
+/// kernel takes a row of 8 or 16 triangles' corner coordinates with one permute of a table row
+/// by the slots (AVX-512 `vpermt2ps`), where blocks take two loads a row for four triangles.
+/// Unused vertex slots hold NaN; triangles at or beyond `count` point at a NaN slot when there
+/// is one, else at slot 0 (kernels mask them by `count`).
+struct alignas(64) TableGroup {
+  /// Uninitialised, as TriBlock (the layout writes the fixed part, the fills the rows).
+  TableGroup() {}  // NOLINT: not = default
+  float v[3][kTableSlots];
+  std::uint8_t corner[3][kTableSlots];
+  std::uint32_t count;     ///< triangles, 1 .. kTableSlots
+  std::uint32_t last;      ///< 1 on the last group of its cluster, else 0
+  std::uint32_t vertices;  ///< slots in use, 1 .. kTableSlots
+  std::uint32_t unused[5];
+};
+static_assert(sizeof(TableGroup) == 512);
+
+/// How a scene's leaves hold their triangles: SIMD blocks of four (TriBlock, 36 bytes a
+/// triangle, every scene) or per-group vertex tables (TableGroup: about 14 bytes a triangle on a
+/// cluster scene's linear leaves).
+enum class LeafFormat : std::uint8_t { Blocks, Tables };
+
 /// Marker of "no triangle" (padding lanes, misses).
 inline constexpr std::uint32_t kNoTriangle = 0xffffffffu;
 
@@ -43,6 +70,11 @@ inline constexpr std::uint32_t kIndirectLeaf = 0x80000000u;
 ///   indirect (count & kIndirectLeaf): the ranges ranges[child .. child + (count & ~kIndirectLeaf)).
 /// Triangle scenes have direct leaves only; cluster scenes direct leaves for single clusters (or
 /// single blocks) and indirect ones for leaves of several clusters.
+/// With LeafFormat::Tables (cluster scenes with linear leaves) `blocks` is empty and a leaf
+/// refers to whole clusters' table groups instead: a direct leaf to the groups from `child` up
+/// to the first one marked `last`, `count` being their triangles; a LeafRange reads as first
+/// group, group count and triangle count; triangle_ids holds kTableSlots ids per group (slot i:
+/// the group's triangle i, kNoTriangle at or beyond its count).
 struct TraceData {
   WideBvh wide;
   /// `wide` regrouped into 8-wide nodes (regroup_to_8), with the same leaf children: what the
@@ -50,7 +82,9 @@ struct TraceData {
   WideBvh8 wide8;
   std::vector<LeafRange> ranges;
   AlignedVector<TriBlock> blocks;
-  AlignedVector<std::uint32_t> triangle_ids;  ///< 4 per block: mesh triangle id or kNoTriangle
+  AlignedVector<std::uint32_t> triangle_ids;  ///< 4 per block (kTableSlots per group): mesh triangle id or kNoTriangle
+  LeafFormat format = LeafFormat::Blocks;
+  AlignedVector<TableGroup> tables;  ///< LeafFormat::Tables: the groups, cluster by cluster
   Vec3 origin = Vec3::Zero();                 ///< the trace frame's origin (box.h, FrameMap)
   double scale = 1.0;                         ///< the trace frame's scale, a power of two (FrameMap)
 

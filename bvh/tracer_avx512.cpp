@@ -17,6 +17,7 @@
 #pragma GCC target("avx2,avx512f,avx512vl,avx512dq,avx512bw")
 #define PTC_TRACE_AVX2 1
 #define PTC_TRACE_AVX512 1
+#define PTC_TRACE_EVEX 1
 #define PTC_TRACE_NS avx512
 #include "bvh/tracer_kernel.h"
 #include "bvh/tracer_packet.h"

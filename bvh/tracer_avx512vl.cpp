@@ -20,6 +20,7 @@
 
 #pragma GCC target("avx2,avx512f,avx512vl,avx512dq,avx512bw,prefer-vector-width=256")
 #define PTC_TRACE_AVX2 1
+#define PTC_TRACE_EVEX 1
 #define PTC_TRACE_NS avx512vl
 #include "bvh/tracer_kernel.h"
 #include "bvh/tracer_packet.h"

@@ -9,6 +9,7 @@
 #include <immintrin.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -42,7 +43,7 @@ struct RayState {
 #if defined(PTC_TRACE_AVX2)
   __m256 okx8, oky8, okz8, sx8, sy8, sz8;
 #endif
-#if defined(PTC_TRACE_AVX512)
+#if defined(PTC_TRACE_EVEX)
   __m512 okx16, oky16, okz16, sx16, sy16, sz16;
 #endif
   float tmin, tmax;  // tmax: the best hit so far (closest) or the ray's end
@@ -58,7 +59,7 @@ void prepare_watertight(RayState& r) {
   r.okx8 = _mm256_set1_ps(r.org[w.kx]), r.oky8 = _mm256_set1_ps(r.org[w.ky]), r.okz8 = _mm256_set1_ps(r.org[w.kz]);
   r.sx8 = _mm256_set1_ps(w.sx), r.sy8 = _mm256_set1_ps(w.sy), r.sz8 = _mm256_set1_ps(w.sz);
 #endif
-#if defined(PTC_TRACE_AVX512)
+#if defined(PTC_TRACE_EVEX)
   r.okx16 = _mm512_set1_ps(r.org[w.kx]), r.oky16 = _mm512_set1_ps(r.org[w.ky]), r.okz16 = _mm512_set1_ps(r.org[w.kz]);
   r.sx16 = _mm512_set1_ps(w.sx), r.sy16 = _mm512_set1_ps(w.sy), r.sz16 = _mm512_set1_ps(w.sz);
 #endif
@@ -343,13 +344,115 @@ template <bool AnyHit>
 }
 #endif
 
+// A table group's triangles as blocks (NaN corners in the lanes at or beyond its count): the
+// leaf tests of the variants without AVX-512 and the packets' ray-parallel test read tables this
+// way. The same floats as the group's rows, so the same hits as the permutes of intersect_group.
+inline void expand_group(const TableGroup& g, TriBlock* out) {
+  const std::uint32_t n = g.count, nb = (n + 3) / 4;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::uint32_t i = 0; i < 4 * nb; ++i)
+    for (int c = 0; c < 3; ++c)
+      for (int a = 0; a < 3; ++a) out[i / 4].v[c][a][i % 4] = i < n ? g.v[a][g.corner[c][i]] : nan;
+}
+
+#if defined(PTC_TRACE_EVEX)
+// The low half of x, by a copy that compiles to nothing (GCC 12's _mm512_castps512_ps256 reads
+// an undefined operand and warned at every use).
+[[gnu::always_inline]] inline __m256 low8(__m512 x) {
+  __m256 low;
+  std::memcpy(&low, &x, sizeof low);
+  return low;
+}
+// Eight lanes of a 32-entry table row (lo: entries 0-15, hi: 16-31) picked by the slots s.
+[[gnu::always_inline]] inline __m256 row(__m512 lo, __m512i s, __m512 hi) {
+  return low8(_mm512_permutex2var_ps(lo, s, hi));
+}
+
+// One table group against the ray: its rows relative to the ray origin (the single-ray test's
+// first subtraction, done once per vertex instead of once per corner: the same values), then per
+// test each corner row of 8 (AVX-512VL) or 16 (AVX-512) triangles by one permute of the two
+// halves of the table's row by the corner slots (AVX-512VL: a 512-bit permute, whose low half is
+// the row; a branch to 256-bit permutes for groups of at most 16 vertices made the cloth's
+// primary rays 40% slower: the branch is taken about half the time). Lanes at or beyond the
+// count are not live. The per-pair float operations are intersect_block's, and the closest hit is the
+// smallest (t, id), so the hits are the blocks' bits.
+template <bool AnyHit>
+[[gnu::always_inline]] inline bool intersect_group(const TableGroup& g, const std::uint32_t* ids, const RayState& r,
+                                                   float& tmax, Result& res) {
+  const float* tx = g.v[0] + 8 * r.kx4;  // v[kx] (kx4 = 4 kx, a row is 32 floats)
+  const float* ty = g.v[0] + 8 * r.ky4;
+  const float* tz = g.v[0] + 8 * r.kz4;
+#if defined(PTC_TRACE_AVX512)
+  const __m512 xl = _mm512_sub_ps(_mm512_load_ps(tx), r.okx16), xh = _mm512_sub_ps(_mm512_load_ps(tx + 16), r.okx16);
+  const __m512 yl = _mm512_sub_ps(_mm512_load_ps(ty), r.oky16), yh = _mm512_sub_ps(_mm512_load_ps(ty + 16), r.oky16);
+  const __m512 zl = _mm512_sub_ps(_mm512_load_ps(tz), r.okz16), zh = _mm512_sub_ps(_mm512_load_ps(tz + 16), r.okz16);
+  const int n = static_cast<int>(g.count);
+  bool found = false;
+  for (int i = 0; i < n; i += 16) {
+    auto slots = [&](int c) {
+      // (the maskz form: the plain one reads an undefined operand, which GCC 12 warns about)
+      return _mm512_maskz_cvtepu8_epi32(0xffff, _mm_load_si128(reinterpret_cast<const __m128i*>(g.corner[c] + i)));
+    };
+    const __m512i s0 = slots(0), s1 = slots(1), s2 = slots(2);
+    const __mmask16 live = static_cast<__mmask16>(n - i >= 16 ? 0xffffu : (1u << (n - i)) - 1u);
+    const Pairs16 h = watertight16(
+        _mm512_permutex2var_ps(xl, s0, xh), _mm512_permutex2var_ps(yl, s0, yh), _mm512_permutex2var_ps(zl, s0, zh),
+        _mm512_permutex2var_ps(xl, s1, xh), _mm512_permutex2var_ps(yl, s1, yh), _mm512_permutex2var_ps(zl, s1, zh),
+        _mm512_permutex2var_ps(xl, s2, xh), _mm512_permutex2var_ps(yl, s2, yh), _mm512_permutex2var_ps(zl, s2, zh),
+        r.sx16, r.sy16, r.sz16, live);
+    if (!h.valid) continue;
+    const int m = h.valid & _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(r.tmin), _CMP_GT_OQ) &
+                  _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(tmax), _CMP_LE_OQ);
+    if (!m) continue;
+    alignas(64) float ft[16], fv[16], fw[16], fd[16];
+    _mm512_store_ps(ft, h.t), _mm512_store_ps(fv, h.V), _mm512_store_ps(fw, h.W), _mm512_store_ps(fd, h.det);
+    if (take_hits<AnyHit>(m, ft, fv, fw, fd, ids + i, tmax, res)) {
+      if constexpr (AnyHit) return true;
+      found = true;
+    }
+  }
+  return found;
+#else
+  const __m512 xl = _mm512_sub_ps(_mm512_load_ps(tx), r.okx16), xh = _mm512_sub_ps(_mm512_load_ps(tx + 16), r.okx16);
+  const __m512 yl = _mm512_sub_ps(_mm512_load_ps(ty), r.oky16), yh = _mm512_sub_ps(_mm512_load_ps(ty + 16), r.oky16);
+  const __m512 zl = _mm512_sub_ps(_mm512_load_ps(tz), r.okz16), zh = _mm512_sub_ps(_mm512_load_ps(tz + 16), r.okz16);
+  const int n = static_cast<int>(g.count);
+  bool found = false;
+  for (int i = 0; i < n; i += 8) {
+    auto slots = [&](int c) {  // (upper eight lanes zero)
+      return _mm512_maskz_cvtepu8_epi32(0xff, _mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[c] + i)));
+    };
+    const __m512i s0 = slots(0), s1 = slots(1), s2 = slots(2);
+    const int live = n - i >= 8 ? 0xff : (1 << (n - i)) - 1;
+    const Pairs8 h = watertight8(row(xl, s0, xh), row(yl, s0, yh), row(zl, s0, zh), row(xl, s1, xh), row(yl, s1, yh),
+                                 row(zl, s1, zh), row(xl, s2, xh), row(yl, s2, yh), row(zl, s2, zh), r.sx8, r.sy8,
+                                 r.sz8, live);
+    if (!h.valid_bits) continue;
+    const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, _mm256_set1_ps(r.tmin), _CMP_GT_OQ),
+                                          _mm256_cmp_ps(h.t, _mm256_set1_ps(tmax), _CMP_LE_OQ));
+    const int m = _mm256_movemask_ps(_mm256_and_ps(h.valid, in_range)) & live;
+    if (!m) continue;
+    alignas(32) float ft[8], fv[8], fw[8], fd[8];
+    _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
+    if (take_hits<AnyHit>(m, ft, fv, fw, fd, ids + i, tmax, res)) {
+      if constexpr (AnyHit) return true;
+      found = true;
+    }
+  }
+  return found;
+#endif
+}
+#endif
+
 struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: both walks read those)
   const WideNode8* nodes;
   const LeafRange* ranges;
   const TriBlock* blocks;
+  const TableGroup* tables;  // LeafFormat::Tables (then `blocks` is empty)
   const std::uint32_t* ids;
   std::uint32_t root;
   bool empty;
+  bool use_tables;
 };
 
 // Asks for the cache lines of what a pushed child is read from when it is popped: its 8-wide
@@ -362,8 +465,14 @@ struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: bot
 [[gnu::always_inline]] inline void prefetch_child(const Flat& d, std::uint32_t child, std::uint32_t count) {
   const char* p = nullptr;
   if (count == 0) p = reinterpret_cast<const char*>(d.nodes + child);
-  else if (!(count & kIndirectLeaf)) p = reinterpret_cast<const char*>(d.blocks + child);
-  if (!p) return;
+  else if (count & kIndirectLeaf) return;
+  else if (d.use_tables) {  // a group's rows (six lines) and corner slots (two)
+    p = reinterpret_cast<const char*>(d.tables + child);
+    for (int k = 0; k < 8; ++k) _mm_prefetch(p + 64 * k, _MM_HINT_T0);
+    return;
+  } else {
+    p = reinterpret_cast<const char*>(d.blocks + child);
+  }
   _mm_prefetch(p, _MM_HINT_T0);
   _mm_prefetch(p + 64, _MM_HINT_T0);
   _mm_prefetch(p + 128, _MM_HINT_T0);
@@ -372,10 +481,70 @@ struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: bot
 
 // Tests the triangles of one leaf child (direct: `count` triangles from block `ref`;
 // indirect: the ranges ranges[ref .. ref + n)). Returns true for an any-hit query's hit.
+// The triangles of blocks [0, nb) (ids: 4 a block) against the ray, as many per test as the
+// variant takes.
+template <bool AnyHit>
+[[gnu::always_inline]] inline bool intersect_blocks(const TriBlock* blocks, const std::uint32_t* ids, std::uint32_t nb,
+                                                    RayState& r, float& tmax, Result& res) {
+  std::uint32_t bk = 0;
+  bool found = false;
+#if defined(PTC_TRACE_AVX512)
+  for (; bk + 3 < nb; bk += 4)
+    if (intersect_block_quad<AnyHit>(blocks + bk, ids + 4 * std::size_t(bk), r, tmax, res)) {
+      if constexpr (AnyHit) return true;
+      found = true;
+    }
+#endif
+#if defined(PTC_TRACE_AVX2)
+  for (; bk + 1 < nb; bk += 2)
+    if (intersect_block_pair<AnyHit>(blocks + bk, ids + 4 * std::size_t(bk), r, tmax, res)) {
+      if constexpr (AnyHit) return true;
+      found = true;
+    }
+#endif
+  for (; bk < nb; ++bk)
+    if (intersect_block<AnyHit>(blocks[bk], ids + 4 * std::size_t(bk), r, tmax, res)) {
+      if constexpr (AnyHit) return true;
+      found = true;
+    }
+  return found;
+}
+
+// Table group g against the ray: by permutes with AVX-512, else as blocks on the stack.
+template <bool AnyHit>
+[[gnu::always_inline]] inline bool intersect_table(const Flat& d, std::uint32_t g, RayState& r, float& tmax,
+                                                   Result& res) {
+#if defined(PTC_TRACE_EVEX)
+  return intersect_group<AnyHit>(d.tables[g], d.ids + std::size_t{kTableSlots} * g, r, tmax, res);
+#else
+  TriBlock blk[kTableSlots / 4];
+  expand_group(d.tables[g], blk);
+  return intersect_blocks<AnyHit>(blk, d.ids + std::size_t{kTableSlots} * g, (d.tables[g].count + 3) / 4, r, tmax, res);
+#endif
+}
+
 template <bool AnyHit>
 [[gnu::always_inline]] inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, RayState& r,
                                                   float& tmax, Result& res, std::uint32_t& tris) {
   if (!r.watertight_ready) [[unlikely]] prepare_watertight(r);
+  if (d.use_tables) {
+    if (count & kIndirectLeaf) {
+      const LeafRange* ranges = d.ranges + ref;
+      const std::uint32_t nr = count & ~kIndirectLeaf;
+      for (std::uint32_t i = 0; i < nr; ++i) {
+        const LeafRange lr = ranges[i];
+        tris += lr.triangle_count;
+        for (std::uint32_t g = lr.first_block; g < lr.first_block + lr.block_count; ++g)
+          if (intersect_table<AnyHit>(d, g, r, tmax, res) && AnyHit) return true;
+      }
+      return false;
+    }
+    tris += count;
+    for (std::uint32_t g = ref;; ++g) {  // the cluster's groups, up to its last
+      if (intersect_table<AnyHit>(d, g, r, tmax, res) && AnyHit) return true;
+      if (d.tables[g].last) return false;
+    }
+  }
   LeafRange one{ref, (count + 3) / 4, count};
   const LeafRange* ranges = &one;
   std::uint32_t nr = 1;
@@ -383,18 +552,10 @@ template <bool AnyHit>
   for (std::uint32_t i = 0; i < nr; ++i) {
     const LeafRange lr = ranges[i];
     tris += lr.triangle_count;
-    const std::uint32_t end = lr.first_block + lr.block_count;
-    std::uint32_t bk = lr.first_block;
-#if defined(PTC_TRACE_AVX512)
-    for (; bk + 3 < end; bk += 4)
-      if (intersect_block_quad<AnyHit>(d.blocks + bk, d.ids + 4 * std::size_t(bk), r, tmax, res) && AnyHit) return true;
-#endif
-#if defined(PTC_TRACE_AVX2)
-    for (; bk + 1 < end; bk += 2)
-      if (intersect_block_pair<AnyHit>(d.blocks + bk, d.ids + 4 * std::size_t(bk), r, tmax, res) && AnyHit) return true;
-#endif
-    for (; bk < end; ++bk)
-      if (intersect_block<AnyHit>(d.blocks[bk], d.ids + 4 * std::size_t(bk), r, tmax, res) && AnyHit) return true;
+    if (intersect_blocks<AnyHit>(d.blocks + lr.first_block, d.ids + 4 * std::size_t(lr.first_block), lr.block_count, r,
+                                 tmax, res) &&
+        AnyHit)
+      return true;
   }
   return false;
 }
@@ -550,8 +711,8 @@ template <bool AnyHit>
 }
 
 Flat flat_of(const TraceData& s) {
-  return {s.wide8.nodes.data(), s.ranges.data(), s.blocks.data(), s.triangle_ids.data(), s.wide8.root,
-          s.wide8.nodes.empty()};
+  return {s.wide8.nodes.data(), s.ranges.data(), s.blocks.data(), s.tables.data(), s.triangle_ids.data(), s.wide8.root,
+          s.wide8.nodes.empty(), s.format == LeafFormat::Tables};
 }
 
 std::size_t stack_size(const TraceData& s) { return 7 * std::size_t(s.wide8.depth) + 8; }

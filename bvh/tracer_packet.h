@@ -139,7 +139,7 @@ struct alignas(32) Packet {
       r.sx = _mm_set1_ps(sx[l]), r.sy = _mm_set1_ps(sy[l]), r.sz = _mm_set1_ps(sz[l]);
       r.okx8 = _mm256_set1_ps(okx[l]), r.oky8 = _mm256_set1_ps(oky[l]), r.okz8 = _mm256_set1_ps(okz[l]);
       r.sx8 = _mm256_set1_ps(sx[l]), r.sy8 = _mm256_set1_ps(sy[l]), r.sz8 = _mm256_set1_ps(sz[l]);
-#if defined(PTC_TRACE_AVX512)
+#if defined(PTC_TRACE_EVEX)
       r.okx16 = _mm512_set1_ps(okx[l]), r.oky16 = _mm512_set1_ps(oky[l]), r.okz16 = _mm512_set1_ps(okz[l]);
       r.sx16 = _mm512_set1_ps(sx[l]), r.sy16 = _mm512_set1_ps(sy[l]), r.sz16 = _mm512_set1_ps(sz[l]);
 #endif
@@ -244,13 +244,12 @@ template <bool AnyHit>
     pend = nullptr;
   };
 #endif
-  for (std::uint32_t i = 0; i < nr; ++i) {
-    const LeafRange lr = ranges[i];
-    for (std::uint32_t mm = lanes; mm; mm &= mm - 1) p.res[ctz(mm)].tris += lr.triangle_count;
-    const std::uint32_t end = lr.first_block + lr.block_count;
-    for (std::uint32_t bk = lr.first_block; bk < end; ++bk) {
-      const float* blk = &d.blocks[bk].v[0][0][0];
-      const std::uint32_t* ids = d.ids + 4 * std::size_t(bk);
+  // The triangles of blocks [0, nb) (ids from first_id, 4 a block); true when an any-hit packet
+  // is done.
+  auto test_blocks = [&](const TriBlock* blocks, const std::uint32_t* first_id, std::uint32_t nb) {
+    for (std::uint32_t bk = 0; bk < nb; ++bk) {
+      const float* blk = &blocks[bk].v[0][0][0];
+      const std::uint32_t* ids = first_id + 4 * std::size_t(bk);
       for (int j = 0; j < 4; ++j) {
         const std::uint32_t id = ids[j];
         if (id == kNoTriangle) continue;
@@ -263,7 +262,7 @@ template <bool AnyHit>
         test_pair(pend, pend_id, v, id, true);
         pend = nullptr;
         if constexpr (AnyHit)
-          if (!lanes) return found;
+          if (!lanes) return true;
 #else
         // The corner rows of the permuted axes from three bases and fixed offsets (with `v + 12 *
         // corner + axis` the compiler kept nine row pointers on the stack, three instructions a row).
@@ -283,18 +282,40 @@ template <bool AnyHit>
         take(m, id, ft, fv, fw, fd);
         if constexpr (AnyHit) {
           lanes &= ~found;
-          if (!lanes) return found;
+          if (!lanes) return true;
         } else {
           tmax = _mm256_load_ps(p.tmax);
         }
 #endif
       }
     }
+    return false;
+  };
+  // After a range (or a table group, whose blocks on the stack the next one overwrites): the
+  // last triangle without a partner; true when an any-hit packet is done.
+  auto end_run = [&] {
 #if defined(PTC_TRACE_AVX512)
     test_last();
-    if constexpr (AnyHit)
-      if (!lanes) return found;
 #endif
+    if constexpr (AnyHit) return lanes == 0;
+    return false;
+  };
+  for (std::uint32_t i = 0; i < nr; ++i) {
+    const LeafRange lr = ranges[i];
+    for (std::uint32_t mm = lanes; mm; mm &= mm - 1) p.res[ctz(mm)].tris += lr.triangle_count;
+    if (!d.use_tables) {
+      if (test_blocks(d.blocks + lr.first_block, d.ids + 4 * std::size_t(lr.first_block), lr.block_count) || end_run())
+        return found;
+      continue;
+    }
+    // Table groups: each as blocks on the stack (a direct leaf: its groups up to the last one).
+    const bool direct = !(count & kIndirectLeaf);
+    for (std::uint32_t g = lr.first_block; direct || g < lr.first_block + lr.block_count; ++g) {
+      TriBlock blk[kTableSlots / 4];
+      expand_group(d.tables[g], blk);
+      if (test_blocks(blk, d.ids + std::size_t{kTableSlots} * g, (d.tables[g].count + 3) / 4) || end_run()) return found;
+      if (direct && d.tables[g].last) break;
+    }
   }
   return found;
 }

@@ -81,6 +81,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     manifest.set_parameter("adjacency", to_string(c.adjacency));
   }
   manifest.set_parameter("cluster_leaf", bvh::to_string(c.cluster_leaf));
+  manifest.set_parameter("leaf_format", bvh::to_string(c.leaf_format));
   manifest.set_parameter("cluster_group_size", c.cluster_group_size);
   // (groups of 0 or 1 cluster: the plain build, which has no group trees)
   manifest.set_parameter("group_trees", c.cluster_group_size > 1 ? std::string(bvh::to_string(c.group_trees))

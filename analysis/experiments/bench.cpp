@@ -104,6 +104,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   loop::AccelSetup setup;
   setup.origin = rest_bounds.center();
   setup.cluster_leaf = cfg.cluster_leaf;
+  setup.leaf_format = cfg.leaf_format;
   setup.cluster_group_size = cfg.cluster_group_size;
   setup.group_trees = cfg.group_trees;
   setup.threads = cfg.threads;

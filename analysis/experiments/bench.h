@@ -50,6 +50,8 @@ struct PeerBenchConfig {
   std::uint32_t max_count = 32;
   ClusterAdjacency adjacency = ClusterAdjacency::Auto;  ///< and its adjacency (cluster.h)
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
+  /// How the cluster BVH's linear leaves hold their triangles (bvh::LeafFormat).
+  bvh::LeafFormat leaf_format = bvh::LeafFormat::Blocks;
   /// Two-level build of the cluster BVH over groups of at most this many clusters; 0: plain.
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
   /// With groups: each group's tree rebuilt per frame, or fixed and refitted (bvh::GroupTrees).

@@ -94,6 +94,7 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   bvh::SceneConfig cfg = bvh::cluster_scene_defaults();
   cfg.origin = s.origin;
   cfg.cluster_leaf = s.cluster_leaf;
+  cfg.leaf_format = s.leaf_format;
   cfg.cluster_group_size = s.cluster_group_size;
   cfg.group_trees = s.group_trees;
   cfg.clock = s.clock;

@@ -66,6 +66,8 @@ struct AccelSetup {
   Vec3 origin = Vec3::Zero();            ///< the trace frame shared by every configuration
   const Clustering* clusters = nullptr;  ///< ours_clusters: a clustering of the mesh (required)
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
+  /// ours_clusters with linear leaves: blocks or per-group vertex tables (bvh::LeafFormat).
+  bvh::LeafFormat leaf_format = bvh::LeafFormat::Blocks;
   /// ours_clusters: two-level build over groups of at most this many clusters (0: plain build).
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
   /// ours_clusters with groups: the groups' trees rebuilt or refitted per frame (bvh::GroupTrees).

@@ -13,7 +13,7 @@ struct BenchArgs {
   SceneArg scene;
   CameraArgs camera;
   GroupTreesArg group_trees;
-  std::string deform, cluster_leaf = "linear", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
+  std::string deform, cluster_leaf = "linear", leaf_format = "blocks", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -28,6 +28,9 @@ void register_bench(CLI::App& app, Context& ctx) {
                       if (a->app->count("--deform")) o.deform = a->deform;
                       o.config.cluster_leaf =
                           *bvh::parse_cluster_leaf(a->cluster_leaf);
+                      o.config.leaf_format = *bvh::parse_leaf_format(a->leaf_format);
+                      if (o.config.leaf_format == bvh::LeafFormat::Tables && o.config.cluster_leaf != bvh::ClusterLeaf::Linear)
+                        throw UsageError("--leaf-format", "tables needs linear cluster leaves (--cluster-leaf block-tree keeps blocks)");
                       o.config.group_trees = a->group_trees.get(o.config.cluster_group_size > 1,
                                                                 "the two-level build (--cluster-groups N, N > 1)");
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
@@ -101,6 +104,12 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->check(CLI::IsMember({"twist", "bend", "wave", "rigid", "explode", "none"}));
   c->add_option("--cluster-leaf", a->cluster_leaf, "cluster leaves: linear (the paper's, default) or block-tree")
       ->check(enum_validator("cluster leaf", bvh::parse_cluster_leaf))
+      ->capture_default_str();
+  c->add_option("--leaf-format", a->leaf_format,
+                "how the cluster BVH's linear leaves hold their triangles: blocks (four triangles' corners "
+                "each, 36 bytes a triangle) or tables (per-group vertex tables and corner slots, about 14; "
+                "the same hits)")
+      ->check(enum_validator("leaf format", bvh::parse_leaf_format))
       ->capture_default_str();
   c->add_option("--cluster-groups", cfg.cluster_group_size,
                 "two-level cluster BVH build over fixed groups of at most N clusters (subtrees of the rest-pose "

@@ -175,6 +175,32 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   expect_error({"bench", mesh, "--deform", "spin", "--out", out}, 2, "--deform");
   expect_error({"bench", mesh, "--vertex-order", "random", "--out", out}, 2, "--vertex-order");
   expect_error({"bench", mesh, "--light", "1,nan,2", "--out", out}, 2, "--light");
+  expect_error({"bench", mesh, "--leaf-format", "soup", "--out", out}, 2, "--leaf-format");
+  expect_error({"bench", mesh, "--leaf-format", "tables", "--cluster-leaf", "block-tree", "--out", out}, 2,
+               "--leaf-format: tables needs linear cluster leaves");
+}
+
+// `ptc bench --leaf-format tables`: the cluster BVH's leaves as vertex tables, recorded in the
+// manifest, with the blocks' hits and zero mismatches against brute force.
+TEST_F(TraceCli, BenchTracesTheTablesFormatLikeTheBlocks) {
+  std::vector<std::string> hits[2];
+  const char* formats[] = {"blocks", "tables"};
+  for (int f = 0; f < 2; ++f) {
+    const fs::path out = dir_ / (std::string("lf_") + formats[f]);
+    const CmdResult r = ptc({"bench", (fs::path(PTC_TEST_DATA) / "meshes" / "bunny00.off").string(), "--frames", "0:2", "--width", "32", "--height",
+                             "32", "--max-count", "40", "--leaf-format", formats[f], "--threads", "1", "--out",
+                             out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(slurp(out / "manifest.json").find(std::string("\"leaf_format\": \"") + formats[f] + "\""),
+              std::string::npos);
+    for (const auto& row : csv_rows(slurp(out / "bench.csv"))) {
+      if (row.at("config") != "ours_clusters") continue;
+      EXPECT_EQ(row.at("mismatches"), "0") << formats[f];
+      hits[f].push_back(row.at("hits") + " " + row.at("shadow_occluded"));
+    }
+  }
+  ASSERT_EQ(hits[0].size(), 3u);
+  EXPECT_EQ(hits[0], hits[1]);
 }
 
 // A mesh of 1e13 units: our tracer's float products overflowed there, every ray missed, and the

@@ -10,6 +10,8 @@
 #include <chrono>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <string>
@@ -381,6 +383,126 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
   const ClusterScene empty_once(empty, view_of(none), cfg);
   expect_same_data(empty_once.data(), empty_animated.data(), "empty mesh");
   EXPECT_TRUE(empty_once.data().blocks.empty());
+}
+
+// LeafFormat::Tables against the blocks (a second layout of the same triangles): on a mesh with
+// a degenerate triangle, a duplicated one and two fans of 40 triangles around one vertex (a
+// non-manifold vertex; clusters beyond 32 vertices, so several groups a cluster), clustered in
+// runs of 9 and of 60 triangles, in every per-frame mode (the input's vertex order, renumbered,
+// built once; plain, two-level, leaves of several clusters) and at two frames: validate() finds
+// nothing, the cluster boxes and trees are the blocks' scene's, and a batch of rays gives the
+// same closest hits bit for bit (t, u, v, triangle and the counters) with single rays and
+// packets at every instruction set, the same rays occluded, and brute force's hits.
+TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
+  const Mesh arm = test::load_mesh("armadillo.off");
+  std::vector<Tri> tris(arm.triangles().begin(), arm.triangles().end());
+  std::vector<Vec3> pos(arm.positions().begin(), arm.positions().end());
+  tris.push_back({tris[5][0], tris[5][0], tris[5][1]});
+  tris.push_back(tris[7]);
+  const Box3 b = arm.bounds();
+  const auto hub = static_cast<std::uint32_t>(pos.size());
+  pos.push_back(b.center() + Vec3(0.0, 0.0, 0.6 * b.extent().z()));
+  for (int fan = 0; fan < 2; ++fan) {
+    const auto first = static_cast<std::uint32_t>(pos.size());
+    for (int i = 0; i <= 40; ++i) {
+      const double a = 0.05 * i;
+      const Vec3 dir = fan == 0 ? Vec3(std::cos(a), std::sin(a), 0.1) : Vec3(0.1, std::cos(a), std::sin(a));
+      pos.push_back(pos[hub] + 0.2 * b.extent().norm() * dir);
+    }
+    for (std::uint32_t i = 0; i < 40; ++i) tris.push_back({hub, first + i, first + i + 1});
+  }
+  const Mesh m(std::move(tris), std::move(pos));
+  const Mesh moved = test::deformed(m, 0.04);
+  for (std::uint32_t run : {9u, 60u}) {
+    const Clustering runs = ptc::morton_runs(m, run);
+    const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, cluster_scene_defaults());
+    const Mesh rm = renumber_vertices(m, to_old), rmoved = renumber_vertices(moved, to_old);
+    const Clustering rruns = renumber_vertices(runs, inverse_permutation(to_old));
+    for (int mode = 0; mode < 3; ++mode)  // input order, renumbered (the fused pass), built once
+    for (int build = 0; build < 3; ++build) {  // plain, two-level with fixed group trees, leaves of several clusters
+      const bool renumbered = mode == 1;
+      const Mesh& mesh = renumbered ? rm : m;
+      const Mesh& next = renumbered ? rmoved : moved;
+      const ClusterView v = view_of(renumbered ? rruns : runs);
+      SceneConfig cfg = cluster_scene_defaults();
+      cfg.cluster_group_size = build == 1 ? 4 : 0;
+      if (build == 2) cfg.build.max_leaf_size = 4, cfg.build.cost.traversal = 50.0;
+      cfg.built_once = mode == 2;
+      ClusterScene blocks(mesh, v, cfg);
+      cfg.leaf_format = LeafFormat::Tables;
+      ClusterScene tables(mesh, v, cfg);
+      const std::string what = "runs of " + std::to_string(run) + " mode " + std::to_string(mode) + " build " +
+                               std::to_string(build);
+      EXPECT_EQ(blocks.fused_vertex_pass(), renumbered) << what;
+      for (int f = 0; f < (mode == 2 ? 1 : 2); ++f) {
+        if (f == 1) {
+          blocks.update(next.positions());
+          tables.update(next.positions());
+        }
+        const Mesh& now = f == 0 ? mesh : next;
+        const std::string w = what + " frame " + std::to_string(f);
+        const TraceData &dt = tables.data(), &db = blocks.data();
+        ASSERT_EQ(dt.format, LeafFormat::Tables) << w;
+        ASSERT_TRUE(dt.blocks.empty()) << w;
+        const auto issues = validate(dt, now.triangle_count(), false);
+        ASSERT_TRUE(issues.empty()) << w << ": " << issues.front();
+        if (run == 60) {
+          EXPECT_GT(dt.tables.size(), tables.boxes().size()) << w << ": clusters of several groups";
+        }
+        ASSERT_EQ(tables.boxes().size(), blocks.boxes().size()) << w;
+        for (std::size_t c = 0; c < tables.boxes().size(); ++c) ASSERT_EQ(tables.boxes()[c], blocks.boxes()[c]) << w;
+        ASSERT_EQ(dt.wide8.nodes.size(), db.wide8.nodes.size()) << w;
+        EXPECT_EQ(tables.sah_cost(), blocks.sah_cost()) << w;
+        if (mode == 0 && build == 0) {
+          ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(dt, now, 23u + static_cast<unsigned>(f), 300, w));
+        }
+        // Rays from around the mesh into it, and from the fans' hub through their rims.
+        RayBatch rays;
+        std::mt19937 rng(7u + static_cast<unsigned>(f));
+        std::uniform_real_distribution<double> u(-1.0, 1.0);
+        const Box3 box = now.bounds();
+        const Vec3 c = box.center(), e = box.extent();
+        rays.resize(2003);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          const Vec3 org = i % 3 == 0 ? c + 1.5 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z())
+                                      : c + 0.3 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
+          const Vec3 to = i % 7 == 0 ? now.position(static_cast<std::uint32_t>(now.vertex_count() - 1 - i % 80))
+                                     : c + 0.4 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
+          rays.set(i, org, {float(to.x() - org.x()), float(to.y() - org.y()), float(to.z() - org.z())});
+        }
+        for (HitMode hm : {HitMode::Closest, HitMode::Any})
+          for (TraceIsa isa : {TraceIsa::Sse2, TraceIsa::Avx2, TraceIsa::Avx512Vl, TraceIsa::Avx512})
+            for (bool packets : {false, true}) {
+              if (packets && isa == TraceIsa::Sse2) continue;
+              TraceOptions opt;
+              opt.mode = hm, opt.isa = isa, opt.packets = packets, opt.threads = 1;
+              HitBatch hb, ht;
+              const TraceTotals tb = trace(db, rays, hb, opt), tt = trace(dt, rays, ht, opt);
+              const std::string x = w + " " + to_string(isa) + (packets ? " packets" : " single") +
+                                    (hm == HitMode::Any ? " any" : " closest");
+              EXPECT_EQ(tt.hits, tb.hits) << x;
+              EXPECT_GT(tt.hits, 300u) << x;
+              for (std::size_t i = 0; i < rays.size(); ++i) {
+                ASSERT_EQ(ht.triangle[i] != kNoTriangle, hb.triangle[i] != kNoTriangle) << x << " ray " << i;
+                if (hm == HitMode::Any) continue;
+                ASSERT_EQ(ht.triangle[i], hb.triangle[i]) << x << " ray " << i;
+                ASSERT_EQ(std::memcmp(&ht.t[i], &hb.t[i], 4), 0) << x << " ray " << i;
+                ASSERT_EQ(std::memcmp(&ht.u[i], &hb.u[i], 4), 0) << x << " ray " << i;
+                ASSERT_EQ(std::memcmp(&ht.v[i], &hb.v[i], 4), 0) << x << " ray " << i;
+                ASSERT_EQ(ht.nodes_visited[i], hb.nodes_visited[i]) << x << " ray " << i;
+                ASSERT_EQ(ht.triangles_tested[i], hb.triangles_tested[i]) << x << " ray " << i;
+              }
+            }
+      }
+    }
+  }
+  // Block trees keep blocks: the tables are refused with them.
+  SceneConfig bad = cluster_scene_defaults();
+  bad.cluster_leaf = ClusterLeaf::BlockTree;
+  bad.build.max_leaf_size = 1;
+  bad.leaf_format = LeafFormat::Tables;
+  const Clustering runs = ptc::morton_runs(m, 9);
+  EXPECT_THROW(ClusterScene(m, view_of(runs), bad), std::invalid_argument);
 }
 
 // GroupTrees::Refit builds each group's tree once, over the rest-pose cluster boxes, with the

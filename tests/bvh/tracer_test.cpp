@@ -27,7 +27,7 @@ namespace {
 
 // *Sweep: the same scenes built per frame by the exact sweep builder (SceneConfig::builder).
 enum class Kind { Triangles, TrianglesLeaf1, TrianglesLeaf16, Clusters80, Clusters80Linear, Clusters80Leaf4, Clusters7,
-                  TrianglesSweep, Clusters80Sweep };
+                  TrianglesSweep, Clusters80Sweep, Clusters80Tables, Clusters7Tables };
 const char* name(Kind k) {
   switch (k) {
     case Kind::Triangles: return "triangles";
@@ -39,12 +39,14 @@ const char* name(Kind k) {
     case Kind::Clusters7: return "clusters7";
     case Kind::TrianglesSweep: return "triangles_sweep";
     case Kind::Clusters80Sweep: return "clusters80_sweep";
+    case Kind::Clusters80Tables: return "clusters80_tables";
+    case Kind::Clusters7Tables: return "clusters7_tables";
   }
   return "?";
 }
 const Kind kAllKinds[] = {Kind::Triangles,  Kind::TrianglesLeaf1,   Kind::TrianglesLeaf16, Kind::Clusters80,
                           Kind::Clusters80Linear, Kind::Clusters80Leaf4, Kind::Clusters7, Kind::TrianglesSweep,
-                          Kind::Clusters80Sweep};
+                          Kind::Clusters80Sweep, Kind::Clusters80Tables, Kind::Clusters7Tables};
 
 // Owns a scene of either flavour (and the clustering it was made from).
 struct AnyScene {
@@ -69,15 +71,27 @@ AnyScene make_scene(const Mesh& m, Kind k, std::optional<Vec3> origin = std::nul
     case Kind::Clusters80Linear:
     case Kind::Clusters80Leaf4:
     case Kind::Clusters7:
-      s.runs = std::make_unique<Clustering>(ptc::morton_runs(m, k == Kind::Clusters7 ? 7 : 80));
-      cfg.build.max_leaf_size = k == Kind::Clusters80 || k == Kind::Clusters80Linear || k == Kind::Clusters80Sweep ? 1 : 4;
+    case Kind::Clusters80Tables:  // (clusters of 80 triangles: two or three table groups each)
+    case Kind::Clusters7Tables: {
+      const bool seven = k == Kind::Clusters7 || k == Kind::Clusters7Tables;
+      const bool tables = k == Kind::Clusters80Tables || k == Kind::Clusters7Tables;
+      s.runs = std::make_unique<Clustering>(ptc::morton_runs(m, seven ? 7 : 80));
+      cfg.build.max_leaf_size =
+          k == Kind::Clusters80 || k == Kind::Clusters80Linear || k == Kind::Clusters80Sweep || k == Kind::Clusters80Tables ? 1 : 4;
       if (k == Kind::Clusters80Sweep) cfg.builder = SahBuilder::Sweep;
-      if (k == Kind::Clusters80Linear || k == Kind::Clusters7) cfg.cluster_leaf = ClusterLeaf::Linear;
-      if (k == Kind::Clusters7) cfg.build.cost.traversal = 50.0;  // leaves of several clusters (indirect)
+      if (k == Kind::Clusters80Linear || seven || tables) cfg.cluster_leaf = ClusterLeaf::Linear;
+      if (tables) cfg.leaf_format = LeafFormat::Tables;
+      if (seven) cfg.build.cost.traversal = 50.0;  // leaves of several clusters (indirect)
       s.scene.emplace<2>(m, view_of(*s.runs), cfg);
+      if (tables) {
+        EXPECT_EQ(s.data().format, LeafFormat::Tables);
+        EXPECT_TRUE(s.data().blocks.empty());
+        EXPECT_FALSE(s.data().tables.empty());
+      }
       break;
+    }
   }
-  if (k == Kind::Clusters7) {
+  if (k == Kind::Clusters7 || k == Kind::Clusters7Tables) {
     std::size_t indirect = 0;
     for (const WideNode& n : s.data().wide.nodes)
       for (int i = 0; i < 4; ++i) indirect += n.is_leaf(i) && (n.count[i] & kIndirectLeaf);

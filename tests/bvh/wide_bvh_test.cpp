@@ -127,6 +127,37 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
   d = cs4.data();
   d.ranges[3] = d.ranges[4];
   EXPECT_FALSE(validate(d, m.triangle_count()).empty());
+  // The tables format: each corruption of a group is found (validate's messages name it).
+  SceneConfig tables = linear;
+  tables.leaf_format = LeafFormat::Tables;
+  for (const SceneConfig& tc : {tables, [&] {
+         SceneConfig t4 = many;
+         t4.leaf_format = LeafFormat::Tables;
+         return t4;
+       }()}) {
+    ClusterScene ts(m, view_of(runs), tc);
+    const TraceData& good = ts.data();
+    ASSERT_TRUE(validate(good, m.triangle_count()).empty()) << test::joined(validate(good, m.triangle_count()));
+    ASSERT_GT(good.tables.size(), 20u);
+    std::size_t g = 0;  // a group of more than one triangle, not its cluster's last
+    while (g < good.tables.size() && (good.tables[g].last || good.tables[g].count < 2)) ++g;
+    ASSERT_LT(g, good.tables.size());
+    const std::size_t S = kTableSlots;
+    auto corrupt = [&](auto&& edit, const char* what) {
+      TraceData d2 = good;
+      edit(d2);
+      EXPECT_FALSE(validate(d2, m.triangle_count()).empty()) << what;
+    };
+    corrupt([&](TraceData& x) { x.tables[g].v[1][x.tables[g].corner[0][0]] += 1.0f; }, "a corner out of its leaf box");
+    corrupt([&](TraceData& x) { x.tables[g].last = 1; }, "a group marked last before its cluster's end");
+    corrupt([&](TraceData& x) { x.tables[g].count -= 1; }, "a triangle dropped");
+    corrupt([&](TraceData& x) { x.triangle_ids[S * g + 1] = x.triangle_ids[S * g]; }, "a triangle twice");
+    corrupt([&](TraceData& x) { x.tables[g].corner[2][0] = static_cast<std::uint8_t>(x.tables[g].vertices); },
+            "a corner on an unused slot");
+    corrupt([&](TraceData& x) { x.tables[g].v[0][S - 1] = 0.0f; }, "an unused slot not NaN");
+    corrupt([&](TraceData& x) { x.triangle_ids.pop_back(); }, "ids not 32 a group");
+    corrupt([&](TraceData& x) { x.blocks.resize(1); }, "blocks beside the tables");
+  }
   // Block trees: valid (boxes contain, not equal, their children's), and refitted per frame.
   SceneConfig block_tree = cluster_scene_defaults();
   block_tree.cluster_leaf = ClusterLeaf::BlockTree;

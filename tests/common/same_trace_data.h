@@ -19,13 +19,16 @@ bool same_bytes(const T* a, const T* b, std::size_t n) {
   return n == 0 || std::memcmp(a, b, n * sizeof(T)) == 0;
 }
 
-/// The flat data of two scenes, byte for byte: the 4-wide and 8-wide nodes, the blocks, the lane
-/// ids and the leaf ranges, and the roots and depth.
+/// The flat data of two scenes, byte for byte: the 4-wide and 8-wide nodes, the leaf format, the
+/// blocks or table groups, the lane ids and the leaf ranges, and the roots and depth.
 inline void expect_same_data(const TraceData& d, const TraceData& w, const std::string& what) {
   ASSERT_EQ(d.wide.nodes.size(), w.wide.nodes.size()) << what;
   EXPECT_TRUE(same_bytes(d.wide.nodes.data(), w.wide.nodes.data(), w.wide.nodes.size())) << what;
+  ASSERT_EQ(d.format, w.format) << what;
   ASSERT_EQ(d.blocks.size(), w.blocks.size()) << what;
   EXPECT_TRUE(same_bytes(d.blocks.data(), w.blocks.data(), w.blocks.size())) << what;
+  ASSERT_EQ(d.tables.size(), w.tables.size()) << what;
+  EXPECT_TRUE(same_bytes(d.tables.data(), w.tables.data(), w.tables.size())) << what;
   EXPECT_TRUE(std::equal(d.triangle_ids.begin(), d.triangle_ids.end(), w.triangle_ids.begin(), w.triangle_ids.end()))
       << what;
   ASSERT_EQ(d.ranges.size(), w.ranges.size()) << what;

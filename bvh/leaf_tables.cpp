@@ -1,0 +1,199 @@
+#include "bvh/leaf_tables.h"
+
+#include "bvh/box_simd.h"
+
+#include <emmintrin.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace ptc::bvh {
+
+namespace {
+
+constexpr std::size_t kLookAhead = 64;          // triangles a group chooses from (make_table_layout)
+constexpr std::size_t kClustersPerTask = 1024;  // the layout's and the fill's chunks
+
+struct Lane {
+  std::uint32_t id;
+  std::uint32_t v[3];
+};
+
+struct Group {
+  std::uint32_t slots[kTableSlots];
+  std::uint32_t ids[kTableSlots];
+  std::uint8_t corner[3][kTableSlots];
+  int nslots = 0, ntris = 0;
+
+  int slot_of(std::uint32_t v) const {
+    for (int s = 0; s < nslots; ++s)
+      if (slots[s] == v) return s;
+    return -1;
+  }
+  // Adds triangle t (its vertices must fit).
+  void add(const Lane& t) {
+    for (int k = 0; k < 3; ++k) {
+      int s = slot_of(t.v[k]);
+      if (s < 0) s = nslots, slots[nslots++] = t.v[k];
+      corner[k][ntris] = static_cast<std::uint8_t>(s);
+    }
+    ids[ntris++] = t.id;
+  }
+  // The vertices t would add.
+  int added_by(const Lane& t) const {
+    int added = 0;
+    for (int k = 0; k < 3; ++k) {
+      bool seen = slot_of(t.v[k]) >= 0;
+      for (int j = 0; j < k && !seen; ++j) seen = t.v[j] == t.v[k];  // a corner repeated in the triangle
+      added += seen ? 0 : 1;
+    }
+    return added;
+  }
+};
+
+// One cluster's groups, each passed to emit(const Group&, bool last) in order. `rest` is
+// reordered.
+template <class Emit>
+void group_cluster(std::vector<Lane>& rest, Emit&& emit) {
+  Group g;
+  if (rest.size() <= std::size_t{kTableSlots}) {  // the whole cluster in one group, if its vertices fit
+    bool fits = true;
+    for (const Lane& t : rest) {
+      if (g.nslots + g.added_by(t) > kTableSlots) {
+        fits = false;
+        break;
+      }
+      g.add(t);
+    }
+    if (fits) {
+      emit(g, true);
+      return;
+    }
+  }
+  std::size_t placed = 0;  // rest[0, placed) are placed; the others keep their order
+  while (placed < rest.size()) {
+    g = Group{};
+    while (g.ntris < kTableSlots && placed < rest.size()) {
+      std::size_t best = rest.size();
+      int best_new = 4;
+      const std::size_t end = std::min(rest.size(), placed + kLookAhead);
+      for (std::size_t i = placed; i < end && best_new > 0; ++i) {
+        const int added = g.added_by(rest[i]);
+        if (g.nslots + added <= kTableSlots && added < best_new) best = i, best_new = added;
+      }
+      if (best == rest.size()) break;  // none fits
+      const Lane t = rest[best];
+      std::rotate(rest.begin() + static_cast<std::ptrdiff_t>(placed), rest.begin() + static_cast<std::ptrdiff_t>(best),
+                  rest.begin() + static_cast<std::ptrdiff_t>(best) + 1);  // keeps the others' order
+      ++placed;
+      g.add(t);
+    }
+    emit(g, placed == rest.size());
+  }
+}
+
+void cluster_lanes(const LeafRange& r, std::span<const std::uint32_t> lane_ids, std::span<const std::uint32_t> corners,
+                   std::vector<Lane>& out) {
+  out.clear();
+  for (std::size_t b = r.first_block; b < std::size_t{r.first_block} + r.block_count; ++b)
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t id = lane_ids[4 * b + l];
+      if (id == kNoTriangle) continue;
+      out.push_back({id, {corners[12 * b + l], corners[12 * b + 4 + l], corners[12 * b + 8 + l]}});
+    }
+}
+
+}  // namespace
+
+TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const std::uint32_t> lane_ids,
+                              std::span<const std::uint32_t> corners, std::uint32_t sentinel,
+                              AlignedVector<TableGroup>& groups, AlignedVector<std::uint32_t>& ids) {
+  if (corners.size() != 3 * lane_ids.size() || lane_ids.size() % 4 != 0)
+    throw std::invalid_argument("make_table_layout: " + std::to_string(lane_ids.size()) + " lanes and " +
+                                std::to_string(corners.size()) + " corner indices (4 lanes and 12 corners a block)");
+  for (const LeafRange& r : ranges)
+    if ((std::size_t{r.first_block} + r.block_count) * 4 > lane_ids.size())
+      throw std::invalid_argument("make_table_layout: a cluster's blocks beyond the lanes");
+  const std::size_t C = ranges.size();
+  TableLayout out;
+  // Two passes over chunks of clusters: the groups per cluster, then (after their prefix sum)
+  // the groups written in place. The grouping is a function of the cluster alone.
+  out.group_offsets.assign(C + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Lane> lanes;
+    for (std::size_t c = r.begin(); c < r.end(); ++c) {
+      cluster_lanes(ranges[c], lane_ids, corners, lanes);
+      std::uint32_t n = 0;
+      group_cluster(lanes, [&](const Group&, bool) { ++n; });
+      out.group_offsets[c + 1] = n;
+    }
+  });
+  for (std::size_t c = 0; c < C; ++c) out.group_offsets[c + 1] += out.group_offsets[c];
+  const std::size_t G = out.group_offsets[C];
+  groups.resize(G);
+  ids.resize(G * kTableSlots);
+  out.slot_vertices.resize(G * kTableSlots);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Lane> lanes;
+    for (std::size_t c = r.begin(); c < r.end(); ++c) {
+      cluster_lanes(ranges[c], lane_ids, corners, lanes);
+      std::size_t gi = out.group_offsets[c];
+      group_cluster(lanes, [&](const Group& g, bool last) {
+        TableGroup& t = groups[gi];
+        const auto pad = static_cast<std::uint8_t>(g.nslots < kTableSlots ? g.nslots : 0);  // a NaN slot if there is one
+        for (int s = 0; s < kTableSlots; ++s) {
+          for (int a = 0; a < 3; ++a) t.v[a][s] = nan;
+          out.slot_vertices[gi * kTableSlots + s] = s < g.nslots ? g.slots[s] : sentinel;
+          ids[gi * kTableSlots + s] = s < g.ntris ? g.ids[s] : kNoTriangle;
+          for (int k = 0; k < 3; ++k) t.corner[k][s] = s < g.ntris ? g.corner[k][s] : pad;
+        }
+        t.count = static_cast<std::uint32_t>(g.ntris);
+        t.last = last ? 1 : 0;
+        t.vertices = static_cast<std::uint32_t>(g.nslots);
+        std::fill(std::begin(t.unused), std::end(t.unused), 0u);
+        ++gi;
+      });
+    }
+  });
+  return out;
+}
+
+void fill_tables(const TableLayout& layout, const float* fp, std::span<TableGroup> groups, Box3f* cluster_boxes,
+                 Vec3f* centres) {
+  if (groups.size() != layout.group_count())
+    throw std::invalid_argument("fill_tables: " + std::to_string(groups.size()) + " groups for a layout of " +
+                                std::to_string(layout.group_count()));
+  const std::size_t C = layout.group_offsets.empty() ? 0 : layout.group_offsets.size() - 1;
+  const bool boxes = cluster_boxes && centres;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t c = r.begin(); c < r.end(); ++c) {
+      __m128 lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
+      for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
+        const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
+        TableGroup& t = groups[g];
+        for (int q = 0; q < kTableSlots; q += 4) {
+          // Four slots' (x y z .) by 16-byte loads (add_sentinel's extra element keeps the last in
+          // the array), transposed to rows; the NaN sentinel's lanes drop out of the min and max
+          // (_mm_min_ps(x, acc) returns acc for a NaN x). Every row is written whole (full lines
+          // for the streaming stores).
+          __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q]}), r1 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 1]});
+          __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 2]}), r3 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 3]});
+          _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+          _mm_stream_ps(&t.v[0][q], r0), _mm_stream_ps(&t.v[1][q], r1), _mm_stream_ps(&t.v[2][q], r2);
+          lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
+          hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
+        }
+      }
+      if (boxes) simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);
+    }
+    _mm_sfence();
+  });
+}
+
+}  // namespace ptc::bvh
