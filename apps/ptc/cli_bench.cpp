@@ -107,8 +107,8 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->capture_default_str();
   c->add_option("--leaf-format", a->leaf_format,
                 "how the cluster BVH's linear leaves hold their triangles: blocks (four triangles' corners "
-                "each, 36 bytes a triangle) or tables (per-group vertex tables and corner slots, about 14; "
-                "the same hits)")
+                "each, 36 bytes a triangle) or tables (per-group vertex tables and corner slots, 512 bytes a "
+                "group of up to 32 triangles; the same hits)")
       ->check(enum_validator("leaf format", bvh::parse_leaf_format))
       ->capture_default_str();
   c->add_option("--cluster-groups", cfg.cluster_group_size,
