@@ -584,19 +584,10 @@ double ClusterScene::sah_cost() const { return refit_groups_ ? cluster_tree().co
 // conversion, fused with the box stage, streams over the input: no gather, no renumbering per
 // frame.
 void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids) {
-  const std::span<const Tri> tris = mesh.triangles();
   vorder_ = first_touch_order(mesh.vertex_count(), vertex_offsets_, vertices_);
   runs_ = group_runs(vorder_);
-  const auto sentinel = static_cast<std::uint32_t>(mesh.vertex_count());
-  corners_.resize(lane_ids.size() * 3);
-  auto corner = [&](std::uint32_t id, int c) {
-    return id == kNoTriangle ? sentinel : runs_ ? tris[id][c] : vorder_.to_new[tris[id][c]];
-  };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lane_ids.size() / 4, kSetupBlocksPerTask), [&](const auto& r) {
-    for (std::size_t b = r.begin(); b < r.end(); ++b)
-      for (int l = 0; l < 4; ++l)
-        for (int c = 0; c < 3; ++c) corners_[12 * b + 4 * c + l] = corner(lane_ids[4 * b + l], c);
-  });
+  fill_corners(mesh.triangles(), lane_ids, static_cast<std::uint32_t>(mesh.vertex_count()),
+               runs_ ? nullptr : vorder_.to_new.data());
   lists_are_corners_ = runs_ && lists_are_corners(mesh.vertex_count(), lane_ids);
   if (runs_) {
     vorder_ = {};
@@ -607,6 +598,21 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
   }
 }
 
+// corners_ from the lanes' triangles: corner c of lane l of block b at 12 b + 4 c + l, its vertex
+// renumbered by to_new (null: the mesh's numbering), the sentinel for padding lanes.
+void ClusterScene::fill_corners(std::span<const Tri> tris, std::span<const std::uint32_t> lane_ids,
+                                std::uint32_t sentinel, const std::uint32_t* to_new) {
+  corners_.resize(lane_ids.size() * 3);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lane_ids.size() / 4, kSetupBlocksPerTask), [&](const auto& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b)
+      for (int l = 0; l < 4; ++l) {
+        const std::uint32_t id = lane_ids[4 * b + l];
+        for (int c = 0; c < 3; ++c)
+          corners_[12 * b + 4 * c + l] = id == kNoTriangle ? sentinel : to_new ? to_new[tris[id][c]] : tris[id][c];
+      }
+  });
+}
+
 // LeafFormat::Tables: the groups of every cluster from its blocks' lanes and corners (those of
 // the per-frame pass, or for a scene built once the mesh's numbering with the sentinel after
 // the last vertex), the triangle ids per group slot, and each cluster's range of groups in
@@ -615,18 +621,7 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
 void ClusterScene::layout_tables(const Mesh& mesh, AlignedVector<std::uint32_t>& lane_ids) {
   TraceData& data = f_.data;
   const auto sentinel = static_cast<std::uint32_t>(mesh.vertex_count());
-  if (cfg_.built_once) {
-    const std::span<const Tri> tris = mesh.triangles();
-    corners_.resize(3 * lane_ids.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lane_ids.size() / 4, kSetupBlocksPerTask), [&](const auto& r) {
-      for (std::size_t b = r.begin(); b < r.end(); ++b)
-        for (int l = 0; l < 4; ++l)
-          for (int c = 0; c < 3; ++c) {
-            const std::uint32_t id = lane_ids[4 * b + l];
-            corners_[12 * b + 4 * c + l] = id == kNoTriangle ? sentinel : tris[id][c];
-          }
-    });
-  }
+  if (cfg_.built_once) fill_corners(mesh.triangles(), lane_ids, sentinel, nullptr);  // (no per-frame vertex order)
   AlignedVector<std::uint32_t> ids;
   tables_ = make_table_layout(cluster_ranges_, lane_ids, corners_, sentinel, data.tables, ids);
   for (std::size_t c = 0; c < cluster_ranges_.size(); ++c)

@@ -105,6 +105,8 @@ class ClusterScene {
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
+  void fill_corners(std::span<const Tri> tris, std::span<const std::uint32_t> lane_ids, std::uint32_t sentinel,
+                    const std::uint32_t* to_new);
   void layout_tables(const Mesh& mesh, AlignedVector<std::uint32_t>& lane_ids);
   void rest_boxes(std::span<const Box3f> boxes, std::span<const Vec3f> centres);
   void only_frame();

@@ -1,5 +1,6 @@
 #include "bvh/trace_data.h"
 
+#include <algorithm>
 #include <cmath>
 #include <type_traits>
 #include <utility>
@@ -190,6 +191,21 @@ void validate_tree(const TraceData& d, const Tree& tree, std::size_t triangle_co
 }
 
 }  // namespace
+
+LeafShape leaf_shape(const TraceData& d) {
+  LeafShape s;
+  s.format = d.format;
+  if (d.format == LeafFormat::Tables) {
+    s.units = d.tables.size();
+    for (const TableGroup& g : d.tables) s.triangles += g.count, s.vertices += g.vertices, s.lanes += 8 * ((g.count + 7) / 8);
+    return s;
+  }
+  s.units = d.blocks.size();
+  s.lanes = 4 * s.units;
+  s.triangles = static_cast<std::size_t>(
+      std::count_if(d.triangle_ids.begin(), d.triangle_ids.end(), [](std::uint32_t id) { return id != kNoTriangle; }));
+  return s;
+}
 
 std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count, bool exact_unions) {
   std::vector<std::string> issues;

@@ -91,6 +91,16 @@ struct TraceData {
   [[nodiscard]] FrameMap frame() const { return {origin, scale}; }
 };
 
+/// How full a scene's leaves are (ptc bench reports it for the cluster BVH): the format, its
+/// units (blocks, or table groups), the triangles in them, the groups' vertex slots in use (0
+/// for blocks), and the lanes their tests take: 4 a block, and a group's triangles in runs of 8
+/// (the AVX-512VL test).
+struct LeafShape {
+  LeafFormat format = LeafFormat::Blocks;
+  std::size_t units = 0, triangles = 0, vertices = 0, lanes = 0;
+};
+[[nodiscard]] LeafShape leaf_shape(const TraceData& d);
+
 /// Checks of the flat data (tests call it on every scene), of `wide` and of `wide8` alike (and
 /// `wide8` present whenever `wide` is): every node reachable from the root exactly once (a
 /// tree) and none deeper than the tree's `depth`, every leaf child's ranges inside `ranges` and

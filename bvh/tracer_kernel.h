@@ -43,7 +43,7 @@ struct RayState {
 #if defined(PTC_TRACE_AVX2)
   __m256 okx8, oky8, okz8, sx8, sy8, sz8;
 #endif
-#if defined(PTC_TRACE_EVEX)
+#if defined(PTC_TRACE_AVX512)
   __m512 okx16, oky16, okz16, sx16, sy16, sz16;
 #endif
   float tmin, tmax;  // tmax: the best hit so far (closest) or the ray's end
@@ -59,7 +59,7 @@ void prepare_watertight(RayState& r) {
   r.okx8 = _mm256_set1_ps(r.org[w.kx]), r.oky8 = _mm256_set1_ps(r.org[w.ky]), r.okz8 = _mm256_set1_ps(r.org[w.kz]);
   r.sx8 = _mm256_set1_ps(w.sx), r.sy8 = _mm256_set1_ps(w.sy), r.sz8 = _mm256_set1_ps(w.sz);
 #endif
-#if defined(PTC_TRACE_EVEX)
+#if defined(PTC_TRACE_AVX512)
   r.okx16 = _mm512_set1_ps(r.org[w.kx]), r.oky16 = _mm512_set1_ps(r.org[w.ky]), r.okz16 = _mm512_set1_ps(r.org[w.kz]);
   r.sx16 = _mm512_set1_ps(w.sx), r.sy16 = _mm512_set1_ps(w.sy), r.sz16 = _mm512_set1_ps(w.sz);
 #endif
@@ -240,6 +240,21 @@ inline Pairs8 watertight8(__m256 a_x, __m256 a_y, __m256 a_z, __m256 b_x, __m256
   return p;
 }
 
+// The hits of a test of eight (`live`: its real lanes) within the ray's interval, taken into the
+// best hit (take_hits). Returns true when a hit was recorded.
+template <bool AnyHit>
+[[gnu::always_inline]] inline bool take_pairs8(const Pairs8& h, int live, const std::uint32_t* ids, const RayState& r,
+                                               float& tmax, Result& res) {
+  if (!h.valid_bits) return false;
+  const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, _mm256_set1_ps(r.tmin), _CMP_GT_OQ),
+                                        _mm256_cmp_ps(h.t, _mm256_set1_ps(tmax), _CMP_LE_OQ));
+  const int m = _mm256_movemask_ps(_mm256_and_ps(h.valid, in_range)) & live;
+  if (!m) return false;
+  alignas(32) float ft[8], fv[8], fw[8], fd[8];
+  _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
+  return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
+}
+
 // Two consecutive blocks (8 triangles, ids[0..8)) in one 256-bit test: lane l < 4 is block 0's
 // lane l, lane l >= 4 block 1's lane l - 4. The same float operations per lane as
 // intersect_block, and lanes are taken in the same order (block 0 first), so hits and any-hit
@@ -257,14 +272,7 @@ template <bool AnyHit>
       _mm256_sub_ps(ld(12 + r.kx4), r.okx8), _mm256_sub_ps(ld(12 + r.ky4), r.oky8), _mm256_sub_ps(ld(12 + r.kz4), r.okz8),
       _mm256_sub_ps(ld(24 + r.kx4), r.okx8), _mm256_sub_ps(ld(24 + r.ky4), r.oky8), _mm256_sub_ps(ld(24 + r.kz4), r.okz8),
       r.sx8, r.sy8, r.sz8, 0xff);
-  if (!h.valid_bits) return false;
-  const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, _mm256_set1_ps(r.tmin), _CMP_GT_OQ),
-                                        _mm256_cmp_ps(h.t, _mm256_set1_ps(tmax), _CMP_LE_OQ));
-  int m = _mm256_movemask_ps(_mm256_and_ps(h.valid, in_range));
-  if (!m) return false;
-  alignas(32) float ft[8], fv[8], fw[8], fd[8];
-  _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
-  return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
+  return take_pairs8<AnyHit>(h, 0xff, ids, r, tmax, res);
 }
 #endif
 
@@ -312,6 +320,19 @@ inline Pairs16 watertight16(__m512 a_x, __m512 a_y, __m512 a_z, __m512 b_x, __m5
   return p;
 }
 
+// take_pairs8 for a test of sixteen (its valid lanes are live ones already).
+template <bool AnyHit>
+[[gnu::always_inline]] inline bool take_pairs16(const Pairs16& h, const std::uint32_t* ids, const RayState& r,
+                                                float& tmax, Result& res) {
+  if (!h.valid) return false;
+  const int m = h.valid & _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(r.tmin), _CMP_GT_OQ) &
+                _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(tmax), _CMP_LE_OQ);
+  if (!m) return false;
+  alignas(64) float ft[16], fv[16], fw[16], fd[16];
+  _mm512_store_ps(ft, h.t), _mm512_store_ps(fv, h.V), _mm512_store_ps(fw, h.W), _mm512_store_ps(fd, h.det);
+  return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
+}
+
 // Four consecutive blocks (16 triangles, ids[0..16)) in one 512-bit test: lane l is block l / 4's
 // lane l % 4. The float operations per lane are intersect_block's, and lanes are taken lowest
 // first, so hits and any-hit choices are identical to four calls of intersect_block (and to two
@@ -334,13 +355,7 @@ template <bool AnyHit>
       _mm512_sub_ps(ld(12 + r.kx4), r.okx16), _mm512_sub_ps(ld(12 + r.ky4), r.oky16),
       _mm512_sub_ps(ld(12 + r.kz4), r.okz16), _mm512_sub_ps(ld(24 + r.kx4), r.okx16),
       _mm512_sub_ps(ld(24 + r.ky4), r.oky16), _mm512_sub_ps(ld(24 + r.kz4), r.okz16), r.sx16, r.sy16, r.sz16, 0xffff);
-  if (!h.valid) return false;
-  const int m = h.valid & _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(r.tmin), _CMP_GT_OQ) &
-                _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(tmax), _CMP_LE_OQ);
-  if (!m) return false;
-  alignas(64) float ft[16], fv[16], fw[16], fd[16];
-  _mm512_store_ps(ft, h.t), _mm512_store_ps(fv, h.V), _mm512_store_ps(fw, h.W), _mm512_store_ps(fd, h.det);
-  return take_hits<AnyHit>(m, ft, fv, fw, fd, ids, tmax, res);
+  return take_pairs16<AnyHit>(h, ids, r, tmax, res);
 }
 #endif
 
@@ -383,11 +398,18 @@ template <bool AnyHit>
   const float* ty = g.v[0] + 8 * r.ky4;
   const float* tz = g.v[0] + 8 * r.kz4;
 #if defined(PTC_TRACE_AVX512)
-  const __m512 xl = _mm512_sub_ps(_mm512_load_ps(tx), r.okx16), xh = _mm512_sub_ps(_mm512_load_ps(tx + 16), r.okx16);
-  const __m512 yl = _mm512_sub_ps(_mm512_load_ps(ty), r.oky16), yh = _mm512_sub_ps(_mm512_load_ps(ty + 16), r.oky16);
-  const __m512 zl = _mm512_sub_ps(_mm512_load_ps(tz), r.okz16), zh = _mm512_sub_ps(_mm512_load_ps(tz + 16), r.okz16);
+  const __m512 okx = r.okx16, oky = r.oky16, okz = r.okz16;
+#else  // (AVX-512VL: broadcast here from the 256-bit constants, so that a ray's set-up for blocks does no more)
+  const __m512 okx = _mm512_set1_ps(_mm256_cvtss_f32(r.okx8));
+  const __m512 oky = _mm512_set1_ps(_mm256_cvtss_f32(r.oky8));
+  const __m512 okz = _mm512_set1_ps(_mm256_cvtss_f32(r.okz8));
+#endif
+  const __m512 xl = _mm512_sub_ps(_mm512_load_ps(tx), okx), xh = _mm512_sub_ps(_mm512_load_ps(tx + 16), okx);
+  const __m512 yl = _mm512_sub_ps(_mm512_load_ps(ty), oky), yh = _mm512_sub_ps(_mm512_load_ps(ty + 16), oky);
+  const __m512 zl = _mm512_sub_ps(_mm512_load_ps(tz), okz), zh = _mm512_sub_ps(_mm512_load_ps(tz + 16), okz);
   const int n = static_cast<int>(g.count);
   bool found = false;
+#if defined(PTC_TRACE_AVX512)
   for (int i = 0; i < n; i += 16) {
     auto slots = [&](int c) {
       // (the maskz form: the plain one reads an undefined operand, which GCC 12 warns about)
@@ -400,24 +422,12 @@ template <bool AnyHit>
         _mm512_permutex2var_ps(xl, s1, xh), _mm512_permutex2var_ps(yl, s1, yh), _mm512_permutex2var_ps(zl, s1, zh),
         _mm512_permutex2var_ps(xl, s2, xh), _mm512_permutex2var_ps(yl, s2, yh), _mm512_permutex2var_ps(zl, s2, zh),
         r.sx16, r.sy16, r.sz16, live);
-    if (!h.valid) continue;
-    const int m = h.valid & _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(r.tmin), _CMP_GT_OQ) &
-                  _mm512_cmp_ps_mask(h.t, _mm512_set1_ps(tmax), _CMP_LE_OQ);
-    if (!m) continue;
-    alignas(64) float ft[16], fv[16], fw[16], fd[16];
-    _mm512_store_ps(ft, h.t), _mm512_store_ps(fv, h.V), _mm512_store_ps(fw, h.W), _mm512_store_ps(fd, h.det);
-    if (take_hits<AnyHit>(m, ft, fv, fw, fd, ids + i, tmax, res)) {
+    if (take_pairs16<AnyHit>(h, ids + i, r, tmax, res)) {
       if constexpr (AnyHit) return true;
       found = true;
     }
   }
-  return found;
 #else
-  const __m512 xl = _mm512_sub_ps(_mm512_load_ps(tx), r.okx16), xh = _mm512_sub_ps(_mm512_load_ps(tx + 16), r.okx16);
-  const __m512 yl = _mm512_sub_ps(_mm512_load_ps(ty), r.oky16), yh = _mm512_sub_ps(_mm512_load_ps(ty + 16), r.oky16);
-  const __m512 zl = _mm512_sub_ps(_mm512_load_ps(tz), r.okz16), zh = _mm512_sub_ps(_mm512_load_ps(tz + 16), r.okz16);
-  const int n = static_cast<int>(g.count);
-  bool found = false;
   for (int i = 0; i < n; i += 8) {
     auto slots = [&](int c) {  // (upper eight lanes zero)
       return _mm512_maskz_cvtepu8_epi32(0xff, _mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[c] + i)));
@@ -427,20 +437,13 @@ template <bool AnyHit>
     const Pairs8 h = watertight8(row(xl, s0, xh), row(yl, s0, yh), row(zl, s0, zh), row(xl, s1, xh), row(yl, s1, yh),
                                  row(zl, s1, zh), row(xl, s2, xh), row(yl, s2, yh), row(zl, s2, zh), r.sx8, r.sy8,
                                  r.sz8, live);
-    if (!h.valid_bits) continue;
-    const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, _mm256_set1_ps(r.tmin), _CMP_GT_OQ),
-                                          _mm256_cmp_ps(h.t, _mm256_set1_ps(tmax), _CMP_LE_OQ));
-    const int m = _mm256_movemask_ps(_mm256_and_ps(h.valid, in_range)) & live;
-    if (!m) continue;
-    alignas(32) float ft[8], fv[8], fw[8], fd[8];
-    _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
-    if (take_hits<AnyHit>(m, ft, fv, fw, fd, ids + i, tmax, res)) {
+    if (take_pairs8<AnyHit>(h, live, ids + i, r, tmax, res)) {
       if constexpr (AnyHit) return true;
       found = true;
     }
   }
-  return found;
 #endif
+  return found;
 }
 #endif
 
@@ -479,8 +482,6 @@ struct Flat {  // raw views of TraceData for the hot loop (the 8-wide nodes: bot
   if (count == 0) _mm_prefetch(p + 192, _MM_HINT_T0);
 }
 
-// Tests the triangles of one leaf child (direct: `count` triangles from block `ref`;
-// indirect: the ranges ranges[ref .. ref + n)). Returns true for an any-hit query's hit.
 // The triangles of blocks [0, nb) (ids: 4 a block) against the ray, as many per test as the
 // variant takes.
 template <bool AnyHit>
@@ -523,6 +524,9 @@ template <bool AnyHit>
 #endif
 }
 
+// Tests the triangles of one leaf child (direct: `count` triangles from block `ref`, or with
+// tables from group `ref` up to the cluster's last group; indirect: the ranges ranges[ref .. ref
+// + n)). Returns true for an any-hit query's hit.
 template <bool AnyHit>
 [[gnu::always_inline]] inline bool intersect_leaf(const Flat& d, std::uint32_t ref, std::uint32_t count, RayState& r,
                                                   float& tmax, Result& res, std::uint32_t& tris) {

@@ -139,7 +139,7 @@ struct alignas(32) Packet {
       r.sx = _mm_set1_ps(sx[l]), r.sy = _mm_set1_ps(sy[l]), r.sz = _mm_set1_ps(sz[l]);
       r.okx8 = _mm256_set1_ps(okx[l]), r.oky8 = _mm256_set1_ps(oky[l]), r.okz8 = _mm256_set1_ps(okz[l]);
       r.sx8 = _mm256_set1_ps(sx[l]), r.sy8 = _mm256_set1_ps(sy[l]), r.sz8 = _mm256_set1_ps(sz[l]);
-#if defined(PTC_TRACE_EVEX)
+#if defined(PTC_TRACE_AVX512)
       r.okx16 = _mm512_set1_ps(okx[l]), r.oky16 = _mm512_set1_ps(oky[l]), r.okz16 = _mm512_set1_ps(okz[l]);
       r.sx16 = _mm512_set1_ps(sx[l]), r.sy16 = _mm512_set1_ps(sy[l]), r.sz16 = _mm512_set1_ps(sz[l]);
 #endif

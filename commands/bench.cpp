@@ -98,6 +98,11 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_result("clusters", r.clusters);
   manifest.set_result("rays", r.rays);
   manifest.set_result("fused_vertex_pass", r.fused_vertex_pass);
+  manifest.set_result("cluster_leaves", {{"format", bvh::to_string(r.cluster_leaves.format)},
+                                         {"units", r.cluster_leaves.units},
+                                         {"triangles", r.cluster_leaves.triangles},
+                                         {"vertices", r.cluster_leaves.vertices},
+                                         {"lanes", r.cluster_leaves.lanes}});
   manifest.set_result("scene_after_renumbering", scene.describe());
   manifest.set_result("median_frames",
                       nlohmann::json::array({r.median_first_frame, static_cast<int>(range.count()) - 1}));

@@ -133,6 +133,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
     if (k == loop::AccelKind::OursClusters) {
       res.cluster_scene_setup_ms = sw.ms();
       res.fused_vertex_pass = loop::cluster_scene_of(*accels.back())->fused_vertex_pass();
+      res.cluster_leaves = bvh::leaf_shape(loop::cluster_scene_of(*accels.back())->data());
     }
   }
   res.cluster_group_size = setup.cluster_group_size;
@@ -349,6 +350,16 @@ std::string bench_text(const PeerBenchResult& r) {
                                                                              ? "each group's tree fixed and refitted"
                                                                              : "each group's tree rebuilt")
                                             : std::string("plain SAH build over all cluster boxes"));
+  const bvh::LeafShape& ls = r.cluster_leaves;
+  if (ls.units > 0) {
+    const double u = static_cast<double>(ls.units);
+    s += ls.format == bvh::LeafFormat::Tables
+             ? fmt::format("cluster leaves: tables, {} groups of {:.2f} triangles on {:.2f} vertices ({:.1f}% of the "
+                           "tests' lanes used)\n",
+                           ls.units, ls.triangles / u, ls.vertices / u, 100.0 * ls.triangles / ls.lanes)
+             : fmt::format("cluster leaves: blocks, {} blocks of four lanes ({:.1f}% used)\n", ls.units,
+                           100.0 * ls.triangles / ls.lanes);
+  }
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>19}", "upd+build vs " + std::string(to_string(e).substr(7)));

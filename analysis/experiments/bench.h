@@ -117,6 +117,7 @@ struct PeerBenchResult {
   std::string clustering;              ///< how the clusters were made
   std::string vertex_order;            ///< "clusters" (renumbered once) or "input"
   bool fused_vertex_pass = false;      ///< the cluster scene converts and boxes in one pass (no gather)
+  bvh::LeafShape cluster_leaves;       ///< how full the cluster BVH's leaves are (bvh::leaf_shape)
   std::uint32_t cluster_group_size = 0;  ///< the cluster BVH's two-level build (0: plain)
   bvh::GroupTrees group_trees = bvh::GroupTrees::Rebuild;  ///< and what it does inside a group
   double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once

@@ -191,8 +191,13 @@ TEST_F(TraceCli, BenchTracesTheTablesFormatLikeTheBlocks) {
                              "32", "--max-count", "40", "--leaf-format", formats[f], "--threads", "1", "--out",
                              out.string()});
     ASSERT_EQ(r.code, 0) << r.err;
-    EXPECT_NE(slurp(out / "manifest.json").find(std::string("\"leaf_format\": \"") + formats[f] + "\""),
-              std::string::npos);
+    const std::string manifest = slurp(out / "manifest.json");
+    EXPECT_NE(manifest.find(std::string("\"leaf_format\": \"") + formats[f] + "\""), std::string::npos);
+    // The cluster leaves' shape, printed and in the manifest (every triangle in them once).
+    const auto j = nlohmann::json::parse(manifest);
+    EXPECT_EQ(j["results"]["cluster_leaves"]["format"], formats[f]);
+    EXPECT_EQ(j["results"]["cluster_leaves"]["triangles"], j["results"]["triangles"]);
+    EXPECT_NE(r.out.find(std::string("cluster leaves: ") + formats[f]), std::string::npos) << r.out;
     for (const auto& row : csv_rows(slurp(out / "bench.csv"))) {
       if (row.at("config") != "ours_clusters") continue;
       EXPECT_EQ(row.at("mismatches"), "0") << formats[f];

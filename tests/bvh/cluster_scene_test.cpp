@@ -273,6 +273,15 @@ std::vector<std::vector<std::uint32_t>> clusters_under(const Bvh& t) {
   return under;
 }
 
+// A mesh's triangles and positions with a degenerate triangle (a repeated corner) and a copy of
+// another triangle appended.
+std::pair<std::vector<Tri>, std::vector<Vec3>> with_bad_triangles(const Mesh& m) {
+  std::vector<Tri> tris(m.triangles().begin(), m.triangles().end());
+  tris.push_back({tris[5][0], tris[5][0], tris[5][1]});
+  tris.push_back(tris[7]);
+  return {std::move(tris), {m.positions().begin(), m.positions().end()}};
+}
+
 // A scene built once (SceneConfig::built_once, the one BVH of a static scene in ptc trace) keeps no
 // per-frame state: it fills its blocks from the lanes' triangles in the mesh's numbering, where a
 // scene made for animation gathers them through corner indices in its own vertex order. Its trace
@@ -290,10 +299,7 @@ std::vector<std::vector<std::uint32_t>> clusters_under(const Bvh& t) {
 // force then, ray by ray.
 TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
   const Mesh arm = test::load_mesh("armadillo.off");
-  std::vector<Tri> tris(arm.triangles().begin(), arm.triangles().end());
-  std::vector<Vec3> pos(arm.positions().begin(), arm.positions().end());
-  tris.push_back({tris[5][0], tris[5][0], tris[5][1]});
-  tris.push_back(tris[7]);
+  auto [tris, pos] = with_bad_triangles(arm);
   pos.push_back(arm.bounds().hi + Vec3(3.0, -1.0, 2.0));  // referenced by no triangle
   const Mesh m(std::move(tris), std::move(pos));
   const Clustering runs = ptc::morton_runs(m, 9);
@@ -395,10 +401,7 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
 // packets at every instruction set, the same rays occluded, and brute force's hits.
 TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
   const Mesh arm = test::load_mesh("armadillo.off");
-  std::vector<Tri> tris(arm.triangles().begin(), arm.triangles().end());
-  std::vector<Vec3> pos(arm.positions().begin(), arm.positions().end());
-  tris.push_back({tris[5][0], tris[5][0], tris[5][1]});
-  tris.push_back(tris[7]);
+  auto [tris, pos] = with_bad_triangles(arm);
   const Box3 b = arm.bounds();
   const auto hub = static_cast<std::uint32_t>(pos.size());
   pos.push_back(b.center() + Vec3(0.0, 0.0, 0.6 * b.extent().z()));
@@ -449,6 +452,33 @@ TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
         if (run == 60) {
           EXPECT_GT(dt.tables.size(), tables.boxes().size()) << w << ": clusters of several groups";
         }
+        // leaf_shape against counts made here: each group's distinct mesh vertices from its
+        // triangles' ids, its lanes in runs of eight; the blocks' lanes four a block.
+        const LeafShape st = leaf_shape(dt), sb = leaf_shape(db);
+        std::size_t vertices = 0, lanes = 0;
+        for (std::size_t g = 0; g < dt.tables.size(); ++g) {
+          std::vector<std::uint32_t> vs;
+          std::size_t n = 0;
+          for (std::size_t l = 0; l < kTableSlots; ++l) {
+            const std::uint32_t id = dt.triangle_ids[kTableSlots * g + l];
+            if (id == kNoTriangle) continue;
+            ++n;
+            for (const std::uint32_t x : now.triangles()[id]) vs.push_back(x);
+          }
+          std::sort(vs.begin(), vs.end());
+          vertices += static_cast<std::size_t>(std::unique(vs.begin(), vs.end()) - vs.begin());
+          lanes += 8 * ((n + 7) / 8);
+        }
+        EXPECT_EQ(st.format, LeafFormat::Tables) << w;
+        EXPECT_EQ(st.units, dt.tables.size()) << w;
+        EXPECT_EQ(st.triangles, now.triangle_count()) << w;
+        EXPECT_EQ(st.vertices, vertices) << w;
+        EXPECT_EQ(st.lanes, lanes) << w;
+        EXPECT_EQ(sb.format, LeafFormat::Blocks) << w;
+        EXPECT_EQ(sb.units, db.blocks.size()) << w;
+        EXPECT_EQ(sb.triangles, now.triangle_count()) << w;
+        EXPECT_EQ(sb.vertices, 0u) << w;
+        EXPECT_EQ(sb.lanes, 4 * db.blocks.size()) << w;
         ASSERT_EQ(tables.boxes().size(), blocks.boxes().size()) << w;
         for (std::size_t c = 0; c < tables.boxes().size(); ++c) ASSERT_EQ(tables.boxes()[c], blocks.boxes()[c]) << w;
         ASSERT_EQ(dt.wide8.nodes.size(), db.wide8.nodes.size()) << w;

@@ -12,16 +12,12 @@
 #include <random>
 #include <vector>
 
+#include "test_util.h"
+
 namespace ptc::bvh {
 namespace {
 
-AlignedVector<Vec3f> random_frame_positions(std::size_t n, std::uint32_t seed) {
-  std::mt19937 g(seed);
-  std::uniform_real_distribution<float> U(-10.0f, 10.0f);
-  AlignedVector<Vec3f> fp(n);
-  for (Vec3f& p : fp) p = {U(g), U(g), U(g)};
-  return fp;
-}
+using test::random_frame_positions;
 
 TEST(LeafBlocks, SentinelIsNanAndPadded) {
   AlignedVector<Vec3f> fp = random_frame_positions(5, 1);

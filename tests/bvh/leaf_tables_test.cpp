@@ -17,10 +17,14 @@
 #include <string>
 #include <vector>
 
+#include "test_util.h"
+
 #include "bvh/leaf_blocks.h"
 
 namespace ptc::bvh {
 namespace {
+
+using test::random_frame_positions;
 
 // Clusters as the scene lays them out: blocks of four lanes, padding lanes kNoTriangle with the
 // sentinel's corners.
@@ -41,14 +45,6 @@ struct Lanes {
     }
   }
 };
-
-AlignedVector<Vec3f> positions(std::size_t n, std::uint32_t seed) {
-  std::mt19937 g(seed);
-  std::uniform_real_distribution<float> U(-10.0f, 10.0f);
-  AlignedVector<Vec3f> fp(n);
-  for (Vec3f& p : fp) p = {U(g), U(g), U(g)};
-  return fp;
-}
 
 // Random clusters near each other's vertices (1-60 triangles on a window of 40 or 60 vertices),
 // and the hard cases: one triangle, triangles with repeated corners, the same triangle 40 times,
@@ -280,7 +276,7 @@ TEST(LeafTables, TheLayoutIsTheDocumentedRule) {
 
 TEST(LeafTables, RowsAreTheFramePositionsAndBoxesThoseOfTheBlocks) {
   const std::uint32_t V = 2000;
-  AlignedVector<Vec3f> fp = positions(V, 7);
+  AlignedVector<Vec3f> fp = random_frame_positions(V, 7);
   fp[1] = {0.0f, -0.0f, 0.0f}, fp[2] = {-0.0f, 0.0f, -0.0f};
   fp[3] = {3e38f, -3e38f, 1e-38f}, fp[4] = {-1e-45f, 1e-45f, 2e38f};
   add_sentinel(fp);

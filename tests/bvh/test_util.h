@@ -31,6 +31,15 @@ inline std::vector<Box3f> random_boxes(std::size_t n, std::uint32_t seed, float 
   return boxes;
 }
 
+/// n seeded random frame positions in [-10, 10]^3 (the fills' input, before add_sentinel).
+inline AlignedVector<Vec3f> random_frame_positions(std::size_t n, std::uint32_t seed) {
+  std::mt19937 g(seed);
+  std::uniform_real_distribution<float> U(-10.0f, 10.0f);
+  AlignedVector<Vec3f> fp(n);
+  for (Vec3f& p : fp) p = {U(g), U(g), U(g)};
+  return fp;
+}
+
 /// The mesh moved by a seeded, smooth, non-rigid deformation (for refit and animation tests).
 inline Mesh deformed(const Mesh& m, double amplitude, double freq = 3.0) {
   std::vector<Vec3> p(m.positions().begin(), m.positions().end());
