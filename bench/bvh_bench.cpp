@@ -3,7 +3,7 @@
 //
 //   build/bin/bvh_bench [MESH] [--levels 2] [--reps 5] [--size 1024] [--threads 1]
 //                       [--clusters acc,meshopt] [--max-count 50] [--max-size 50]
-//                       [--leaves linear,block-tree] [--leaf 8] [--ct 1] [--ci 0.3]
+//                       [--leaves linear,block-tree] [--leaf-formats blocks,tables] [--leaf 8] [--ct 1] [--ci 0.3]
 //                       [--isa auto|sse2|avx2|avx512vl|avx512] [--embree all|none] [--deform twist] [--amplitude A]
 //                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--median 4]
 //                       [--vertex-order clusters|input] [--groups 8]
@@ -19,6 +19,8 @@
 // pass (stage 2; stage 1 is 0); input keeps the file's order and the cluster scenes gather
 // (stage 1) before the boxes. Each clustering is traced with one cluster per leaf, tested
 // linearly (the paper) or through a refitted block tree per cluster (bvh/cluster_scene.h).
+// --leaf-formats blocks,tables: the linear leaves' formats (bvh::LeafFormat; default blocks),
+// each its own configuration (ours_NAME_linear for blocks, ours_NAME_tables).
 //
 // Motion: frames 0 .. reps-1 of a deformer of the rest pose (toolkit/anim/deformers.h, as the
 // one part of a Scene): --deform twist (default), bend, wave or rigid with deform_preset's
@@ -110,6 +112,7 @@ struct Options {
   DeformParams deform = deform_preset(DeformKind::Twist);
   std::vector<std::string> clusterings{"acc", "meshopt"};
   std::vector<ClusterLeaf> leaves{ClusterLeaf::Linear, ClusterLeaf::BlockTree};
+  std::vector<bvh::LeafFormat> formats{bvh::LeafFormat::Blocks};  // of the linear leaves
   VertexOrder vertex_order = VertexOrder::Clusters;
   TraceIsa isa = TraceIsa::Auto;
   bool embree = true;
@@ -172,6 +175,9 @@ Options parse_options(int argc, char** argv) {
     } else if (a == "--leaves") {
       o.leaves = parse_list<ClusterLeaf>(text(), "--leaves", "linear, block-tree",
                                          [](const std::string& s) { return parse_cluster_leaf(s); });
+    } else if (a == "--leaf-formats") {
+      o.formats = parse_list<bvh::LeafFormat>(text(), "--leaf-formats", "blocks, tables",
+                                              [](const std::string& s) { return bvh::parse_leaf_format(s); });
     } else if (a == "--isa") {
       const std::string s = text();
       const auto isa = parse_trace_isa(s);
@@ -511,12 +517,16 @@ int main(int argc, char** argv) {
     configs.push_back(
         {"ours_triangles", AccelKind::OursTriangles, make_config(AccelKind::OursTriangles, mesh, setup, o)});
     for (const auto& [cname, cl] : clusterings)
-      for (ClusterLeaf mode : o.leaves) {
-        setup.clusters = &cl;
-        setup.cluster_leaf = mode;
-        configs.push_back({"ours_" + cname + "_" + to_string(mode), AccelKind::OursClusters,
-                           make_config(AccelKind::OursClusters, mesh, setup, o)});
-      }
+      for (ClusterLeaf mode : o.leaves)
+        for (bvh::LeafFormat f : o.formats) {
+          if (mode != ClusterLeaf::Linear && f != bvh::LeafFormat::Blocks) continue;  // (tables: linear leaves only)
+          setup.clusters = &cl;
+          setup.cluster_leaf = mode;
+          setup.leaf_format = f;
+          const bool tables = f == bvh::LeafFormat::Tables;
+          configs.push_back({"ours_" + cname + "_" + (tables ? std::string("tables") : to_string(mode)),
+                             AccelKind::OursClusters, make_config(AccelKind::OursClusters, mesh, setup, o)});
+        }
     if (o.embree)
       for (AccelKind k : {AccelKind::EmbreeMedium, AccelKind::EmbreeLow, AccelKind::EmbreeRefit}) {
         configs.push_back({std::string(loop::to_string(k)), k, make_config(k, mesh, setup, o)});
@@ -557,10 +567,12 @@ int main(int argc, char** argv) {
       const Table table = tabulate(Schema{"ptc-bvh-bench", 2}, rows, visit_row);
       std::vector<std::string> leaf_names;
       for (ClusterLeaf l : o.leaves) leaf_names.push_back(to_string(l));
+      std::vector<std::string> format_names;
+      for (bvh::LeafFormat f : o.formats) format_names.push_back(std::string(to_string(f)));
       const nlohmann::json params = {
           {"levels", o.levels}, {"frames", o.reps}, {"size", o.size}, {"threads", o.threads},
           {"clusters", o.clusterings}, {"max_count", o.max_count}, {"max_size", o.max_size},
-          {"leaves", leaf_names}, {"deform", to_string(o.deform.kind)}, {"amplitude", o.deform.amplitude},
+          {"leaves", leaf_names}, {"leaf_formats", format_names}, {"deform", to_string(o.deform.kind)}, {"amplitude", o.deform.amplitude},
           {"period", o.deform.period}, {"vertex_order", to_string(o.vertex_order)},
           {"cluster_group_size", o.ccfg.cluster_group_size}, {"group_trees", to_string(o.ccfg.group_trees)}, {"isa", to_string(resolve(o.isa))},
           {"clock", o.clock == StageClock::ThreadCpu ? "cpu" : "wall"},

@@ -278,7 +278,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   }
   if (refit_groups_) layout_group_trees();
   sub_count_ = static_cast<std::uint32_t>(sub_nodes_.size());
-  data.wide.nodes = std::move(sub_nodes_);  // kept from frame to frame; the top follows
+  wide4_.nodes = std::move(sub_nodes_);  // kept from frame to frame; the top follows
   sub_nodes_ = {};
   layout_wide8();
   if (cfg_.built_once) only_frame();
@@ -311,22 +311,39 @@ void ClusterScene::only_frame() {
 }
 
 // The fixed subtrees (block trees, then the groups' trees, which link to them) regrouped into
-// 8-wide nodes once, at the rest pose. Per frame the refits of the 4-wide subtrees write each box
-// into its 8-wide slot too (set_box8: every 8-wide slot of the fixed part comes from one 4-wide
-// slot), and only the top is regrouped (make_wide8).
+// 8-wide nodes once, at the rest pose, and where each of their slots takes its box from per frame
+// (src8_): a block's box (a block tree's leaf), the union of clusters' boxes (a group tree's
+// leaf, or its link to a cluster's block tree), or an 8-wide child's box (box8_). The refits
+// (refit8) then write the 8-wide nodes directly; the fixed 4-wide nodes are never refitted (only
+// their structure is read, by this function): per frame only the top is regrouped (make_wide8).
 void ClusterScene::layout_wide8() {
-  const std::span<const WideNode> fixed(f_.data.wide.nodes.data(), sub_count_);
+  const std::span<const WideNode> fixed(wide4_.nodes.data(), sub_count_);
   link8_.assign(sub_count_, kNoTriangle);
   std::vector<SlotSource> sources;
   for (const std::uint32_t r : sub_root_)
     if (r != kNoTriangle) link8_[r] = regroup_subtree(fixed, r, sub8_, sub_depth8_, 0, {}, &sources);
+  group8_begin_ = sub8_.size();
   for (const std::uint32_t r : group_root_)
     if (r != kNoTriangle)
       link8_[r] = regroup_subtree(fixed, r, sub8_, group_depth8_, block_nodes_, link8_, &sources);
-  slot8_.assign(4 * std::size_t{sub_count_}, kNoTriangle);
-  for (std::size_t i = 0; i < 8 * sub8_.size(); ++i)
-    if (sources[i].node != WideNode::kEmptySlot)
-      slot8_[4 * std::size_t{sources[i].node} + sources[i].slot] = static_cast<std::uint32_t>(i);
+  src8_.resize(8 * sub8_.size());
+  for (std::size_t i = 0; i < 8 * sub8_.size(); ++i) {
+    const WideNode8& n = sub8_[i / 8];
+    const int j = static_cast<int>(i % 8);
+    const SlotSource& so = sources[i];
+    Src8& d = src8_[i];
+    if (n.is_empty(j)) {
+      d = {WideNode8::kEmptySlot, 0};
+    } else if (so.node >= block_nodes_ && group_slots_[so.node - block_nodes_].count[so.slot]) {  // a group tree's leaf
+      const GroupSlots& gs = group_slots_[so.node - block_nodes_];
+      d = {gs.first[so.slot], gs.count[so.slot]};
+    } else if (n.is_leaf(j)) {  // a block tree's leaf: one block
+      d = {n.child[j], Src8::kBlock};
+    } else {
+      d = {n.child[j], 0};
+    }
+  }
+  box8_.assign(8 * sub8_.size(), 0.0f);
   sub8_count_ = sub8_.size();
   f_.data.wide8.nodes = std::move(sub8_);
   sub8_ = {};
@@ -342,13 +359,13 @@ void ClusterScene::make_wide8() {
   // when there is no fixed part.)
   if (w8.nodes.size() < S8) throw std::logic_error("ClusterScene: the fixed 8-wide nodes were lost");
   w8.nodes.resize(S8);
-  if (data.wide.nodes.empty()) {
+  if (wide4_.nodes.empty()) {
     w8.nodes.clear(), w8.root = 0, w8.depth = 0;
     return;
   }
-  w8.nodes.reserve(S8 + (data.wide.nodes.size() - sub_count_));
+  w8.nodes.reserve(S8 + (wide4_.nodes.size() - sub_count_));
   std::uint32_t depth = 0;
-  w8.root = regroup_subtree(data.wide.nodes, data.wide.root, w8.nodes, depth,
+  w8.root = regroup_subtree(wide4_.nodes, wide4_.root, w8.nodes, depth,
                             sub_count_, link8_, nullptr);
   w8.depth = depth + group_depth8_ + sub_depth8_;
 }
@@ -513,30 +530,75 @@ inline Box3f node_union(const WideNode& c) {
 }
 }  // namespace
 
-// GroupTrees::Refit, per frame: the groups' trees refitted from the cluster boxes (children after
-// parents: one reverse sweep), then one record per group for the build (its box and centre).
-void ClusterScene::refit_group_trees() {
-  WideNode* nodes = f_.data.wide.nodes.data();
+namespace {
+// (lo, hi) of a Box3f as (x y z .) rows, without reading past it.
+inline void load_box(const Box3f& b, __m128& lo, __m128& hi) {
+  const float* f = b.lo.data();
+  lo = _mm_loadu_ps(f);        // lo xyz, hi x
+  hi = _mm_loadu_ps(f + 2);    // lo z, hi xyz
+  hi = _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(0, 3, 2, 1));
+}
+}  // namespace
+
+// The fixed 8-wide nodes [begin, end) refitted, children after parents (one reverse sweep; a
+// group tree's links to block trees read src8_'s cluster boxes, not the block trees'): each
+// slot's box from its source (src8_), the node's eight boxes transposed into its rows, and its
+// union kept in box8_ for its parent.
+void ClusterScene::refit8(std::size_t begin, std::size_t end) {
+  WideNode8* nodes = f_.data.wide8.nodes.data();
   const Box3f* cb = f_.boxes.data();
-  for (std::size_t i = sub_count_; i-- > block_nodes_;) {
-    WideNode& n = nodes[i];
-    const GroupSlots& gs = group_slots_[i - block_nodes_];
-    for (int k = 0; k < 4; ++k) {
-      if (gs.count[k]) {
-        const std::uint32_t* c = group_leaf_clusters_.data() + gs.first[k];
-        Box3f b = cb[c[0]];
-        for (std::uint32_t j = 1; j < gs.count[k]; ++j) b.extend(cb[c[j]]);
-        n.set_child_box(k, b);
-        set_box8(i, k, b);
-      } else if (!n.is_empty(k)) {
-        const Box3f b = node_union(nodes[n.child[k]]);
-        n.set_child_box(k, b);
-        set_box8(i, k, b);
+  const Box3f* bb = block_boxes_.data();
+  const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
+  for (std::size_t d = end; d-- > begin;) {
+    WideNode8& n = nodes[d];
+    const Src8* src = src8_.data() + 8 * d;
+    __m128 lo[8], hi[8];
+    __m128 alo = inf, ahi = ninf;
+    for (int j = 0; j < 8; ++j) {
+      __m128 l = inf, h = ninf;
+      const std::uint32_t first = src[j].first, count = src[j].count;
+      if (count == Src8::kBlock) {
+        load_box(bb[first], l, h);
+      } else if (count) {
+        const std::uint32_t* c = group_leaf_clusters_.data() + first;
+        for (std::uint32_t k = 0; k < count; ++k) {
+          __m128 bl, bh;
+          load_box(cb[c[k]], bl, bh);
+          l = _mm_min_ps(l, bl), h = _mm_max_ps(h, bh);
+        }
+      } else if (first != WideNode8::kEmptySlot) {
+        const float* b = box8_.data() + 8 * std::size_t{first};
+        l = _mm_load_ps(b), h = _mm_load_ps(b + 4);
       }
+      lo[j] = l, hi[j] = h;
+      alo = _mm_min_ps(alo, l), ahi = _mm_max_ps(ahi, h);
     }
+    _MM_TRANSPOSE4_PS(lo[0], lo[1], lo[2], lo[3]);
+    _MM_TRANSPOSE4_PS(lo[4], lo[5], lo[6], lo[7]);
+    _MM_TRANSPOSE4_PS(hi[0], hi[1], hi[2], hi[3]);
+    _MM_TRANSPOSE4_PS(hi[4], hi[5], hi[6], hi[7]);
+    for (int a = 0; a < 3; ++a) {
+      _mm_store_ps(&n.bounds[2 * a][0], lo[a]), _mm_store_ps(&n.bounds[2 * a][4], lo[4 + a]);
+      _mm_store_ps(&n.bounds[2 * a + 1][0], hi[a]), _mm_store_ps(&n.bounds[2 * a + 1][4], hi[4 + a]);
+    }
+    float* bx = box8_.data() + 8 * d;
+    _mm_store_ps(bx, alo), _mm_store_ps(bx + 4, ahi);
   }
+}
+
+// GroupTrees::Refit, per frame: the groups' 8-wide trees refitted from the cluster boxes, then
+// one record per group for the build (its box and centre).
+void ClusterScene::refit_group_trees() {
+  refit8(group8_begin_, sub8_count_);
+  const Box3f* cb = f_.boxes.data();
   for (std::size_t g = 0; g + 1 < group_offsets_.size(); ++g) {
-    const Box3f b = group_root_[g] == kNoTriangle ? cb[group_offsets_[g]] : node_union(nodes[group_root_[g]]);
+    Box3f b;
+    if (group_root_[g] == kNoTriangle) {
+      b = cb[group_offsets_[g]];
+    } else {
+      const float* bx = box8_.data() + 8 * std::size_t{link8_[group_root_[g]]};
+      b = {{bx[0], bx[1], bx[2]}, {bx[4], bx[5], bx[6]}};
+    }
     group_boxes_[g] = b;
     group_centres_[g] = b.center();
   }
@@ -657,23 +719,6 @@ bool ClusterScene::lists_are_corners(std::size_t vertex_count, std::span<const s
   return true;
 }
 
-void ClusterScene::refit_subtrees() {
-  WideNode* nodes = f_.data.wide.nodes.data();
-  for (std::size_t i = block_nodes_; i-- > 0;) {
-    WideNode& n = nodes[i];
-    for (int k = 0; k < 4; ++k) {
-      if (n.is_leaf(k)) {
-        n.set_child_box(k, block_boxes_[n.child[k]]);
-        set_box8(i, k, block_boxes_[n.child[k]]);
-      } else if (!n.is_empty(k)) {
-        const Box3f b = node_union(nodes[n.child[k]]);
-        n.set_child_box(k, b);
-        set_box8(i, k, b);
-      }
-    }
-  }
-}
-
 void ClusterScene::update(std::span<const Vec3> positions) {
   if (cfg_.built_once)
     throw std::logic_error("ClusterScene::update: the scene was built once (SceneConfig::built_once) and keeps no per-frame state");
@@ -766,7 +811,7 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
     times.build_ms = clock_ms(cfg_.clock) - tb;
     tb = clock_ms(cfg_.clock);
     link_top_tree();
-    make_wide8();  // (the fixed subtrees' 8-wide boxes are written by their refits: set_box8)
+    make_wide8();  // (the fixed subtrees' 8-wide boxes are written by their refits: refit8)
     times.collapse_ms = clock_ms(cfg_.clock) - tb;
   };
   times.overlap_ms = 0.0;
@@ -787,7 +832,7 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
   }
 
   const double t0 = clock_ms(cfg_.clock);
-  if (B) refit_subtrees();
+  if (B) refit8(0, group8_begin_);  // the block trees
   times.refit_ms = clock_ms(cfg_.clock) - t0;
 }
 
@@ -807,7 +852,7 @@ void ClusterScene::link_top_tree() {
   collapse_to_wide(bvh, top_);
   const WideBvh& top = top_;
   const std::uint32_t S = sub_count_;
-  data.wide.nodes.resize(S + top.nodes.size());  // ([0, S) since the constructor)
+  wide4_.nodes.resize(S + top.nodes.size());  // ([0, S) since the constructor)
   if (refit_groups_) {  // the top's leaves are single groups; the groups' trees keep fixed ranges
     if (data.ranges.size() != group_ranges_.size()) data.ranges = group_ranges_;
   } else {
@@ -835,13 +880,13 @@ void ClusterScene::link_top_tree() {
         n.child[k] += S;
       }
     }
-    data.wide.nodes[S + i] = n;
+    wide4_.nodes[S + i] = n;
   }
-  data.wide.root = S;
-  data.wide.bounds = top.bounds;
-  data.wide.depth = top.depth + group_depth_ + sub_depth_;
-  data.wide.leaves = top.leaves;
-  if (top.nodes.empty()) data.wide.nodes.clear();
+  wide4_.root = S;
+  wide4_.bounds = top.bounds;
+  wide4_.depth = top.depth + group_depth_ + sub_depth_;
+  wide4_.leaves = top.leaves;
+  if (top.nodes.empty()) wide4_.nodes.clear();
 }
 
 }  // namespace ptc::bvh

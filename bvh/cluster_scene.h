@@ -86,9 +86,9 @@ class ClusterScene {
   /// The two-level build's groups (BuildInput::groups, in scene cluster order); empty: plain build.
   [[nodiscard]] const std::vector<std::uint32_t>& group_offsets() const { return group_offsets_; }
   [[nodiscard]] const StageTimes& times() const { return f_.times; }
-  /// Wide nodes kept from frame to frame (the block trees, then the fixed group trees): nodes
-  /// [0, subtree_nodes()) of data().wide.nodes; only their boxes change per frame.
-  [[nodiscard]] std::size_t subtree_nodes() const { return sub_count_; }
+  /// 8-wide nodes kept from frame to frame (the block trees, then the fixed group trees): nodes
+  /// [0, subtree_nodes()) of data().wide8.nodes; only their boxes change per frame.
+  [[nodiscard]] std::size_t subtree_nodes() const { return sub8_count_; }
   /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with
   /// cluster_vertex_order()): the conversion then reads the input once, in order. On more than
   /// one thread it is fused into the box stage (StageTimes::vertices_ms = 0, boxes_ms = both) and
@@ -121,13 +121,8 @@ class ClusterScene {
   void layout_group_trees();
   void append_group_tree(std::size_t g, const WideBvh& w);
   void link_top_tree();
-  void refit_subtrees();
+  void refit8(std::size_t begin, std::size_t end);
   void layout_wide8();
-  /// The refitted box of 4-wide slot k of fixed node n into its 8-wide slot, if it has one.
-  void set_box8(std::size_t n, int k, const Box3f& b) {
-    const std::uint32_t d = slot8_[4 * n + static_cast<std::size_t>(k)];
-    if (d != kNoTriangle) f_.data.wide8.nodes[d >> 3].set_child_box(static_cast<int>(d & 7), b);
-  }
   void make_wide8();
   void refit_group_trees();
   void set_cluster_slot(WideNode& n, int k, std::uint32_t c) const;
@@ -140,8 +135,8 @@ class ClusterScene {
   std::vector<LeafRange> cluster_ranges_;  // blocks of cluster c (fixed layout)
   // BlockTree: the per-cluster trees (child indices relative to the start of sub_nodes_, which
   // become absolute because the subtrees occupy nodes [0, sub_count_) of every frame).
-  AlignedVector<WideNode> sub_nodes_;  // (moved into data().wide.nodes by the constructor; sub_count_ stays)
-  std::uint32_t sub_count_ = 0;        // fixed nodes [0, sub_count_) of data().wide.nodes
+  AlignedVector<WideNode> sub_nodes_;  // (moved into wide4_.nodes by the constructor; sub_count_ stays)
+  std::uint32_t sub_count_ = 0;        // fixed nodes [0, sub_count_) of wide4_.nodes
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
   std::uint32_t sub_depth_ = 0;
   // GroupTrees::Refit: sub_nodes_[block_nodes_ ..) are the groups' fixed trees (after the block
@@ -151,13 +146,18 @@ class ClusterScene {
   std::uint32_t block_nodes_ = 0;
   std::uint32_t group_depth_ = 0;
   // The 8-wide nodes of the fixed subtrees, which the tracer walks (layout_wide8): their structure is
-  // fixed, the refits write their boxes (slot8_: 4-wide slot 4 n + k of the fixed part -> its
-  // 8-wide slot 8 m + i in data().wide8, or kNoTriangle for a slot opened by the regrouping);
-  // link8_ maps a 4-wide subtree root to its 8-wide one.
+  // fixed, refit8 writes their boxes. Nodes [0, group8_begin_) are the block trees', then the
+  // groups' trees'. link8_ maps a 4-wide subtree root to its 8-wide one.
   AlignedVector<WideNode8> sub8_;  // (moved into data().wide8.nodes by layout_wide8; sub8_count_ stays)
-  std::size_t sub8_count_ = 0;
-  std::vector<std::uint32_t> slot8_;
+  std::size_t sub8_count_ = 0, group8_begin_ = 0;
   std::vector<std::uint32_t> link8_;
+  struct Src8 {  // where fixed 8-wide slot 8 d + j takes its box from per frame
+    static constexpr std::uint32_t kBlock = 0xffffffffu;
+    std::uint32_t first, count;  // count kBlock: block_boxes_[first]; count > 0: the boxes of the clusters
+                                 // group_leaf_clusters_[first, first + count); 0: 8-wide node first's box (kEmptySlot: none)
+  };
+  std::vector<Src8> src8_;
+  AlignedVector<float> box8_;  // per fixed 8-wide node, refit8's union of its slots: lo x y z . hi x y z .
   std::uint32_t sub_depth8_ = 0, group_depth8_ = 0;
   std::vector<Bvh> group_bvh_;             // per group: its rest-pose tree over its clusters (local ids)
   std::vector<std::uint32_t> group_root_;  // per group: the wide node of its tree, or kNoTriangle (one cluster)
@@ -178,6 +178,11 @@ class ClusterScene {
   bool lists_are_corners_ = false;  // fused mode: the clusters' vertex lists are their corners (lists_are_corners)
   AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel; none with tables)
   TableLayout tables_;  // LeafFormat::Tables: the groups per cluster and their slots' vertex indices
+  // The 4-wide tree (nodes [0, sub_count_) the fixed subtrees, whose boxes stay the rest pose's:
+  // only their structure is read, by layout_wide8; the top after them, linked per frame), from
+  // which make_wide8 regroups the top into the 8-wide tree the tracer walks. Not in data(): its
+  // fixed part's boxes are not refitted.
+  WideBvh wide4_;
   SceneFrame f_;
 };
 

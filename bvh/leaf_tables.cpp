@@ -120,6 +120,7 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
       throw std::invalid_argument("make_table_layout: a cluster's blocks beyond the lanes");
   const std::size_t C = ranges.size();
   TableLayout out;
+  out.sentinel = sentinel;
   // Two passes over chunks of clusters: the groups per cluster, then (after their prefix sum)
   // the groups written in place. The grouping is a function of the cluster alone.
   out.group_offsets.assign(C + 1, 0);
@@ -177,7 +178,10 @@ void fill_tables(const TableLayout& layout, const float* fp, std::span<TableGrou
       for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
         const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
         TableGroup& t = groups[g];
-        for (int q = 0; q < kTableSlots; q += 4) {
+        // A group of at most 16 vertices: only the rows' first cache lines (slots 16-31 stay the
+        // NaN make_table_layout wrote).
+        const int end = sv[kTableSlots / 2] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
+        for (int q = 0; q < end; q += 4) {
           // Four slots' (x y z .) by 16-byte loads (add_sentinel's extra element keeps the last in
           // the array), transposed to rows; the NaN sentinel's lanes drop out of the min and max
           // (_mm_min_ps(x, acc) returns acc for a NaN x). Every row is written whole (full lines

@@ -21,6 +21,8 @@ struct TableLayout {
   /// kTableSlots per group: the frame-position index of each vertex slot (the NaN sentinel's
   /// index for unused slots).
   AlignedVector<std::uint32_t> slot_vertices;
+  /// The NaN sentinel's index (make_table_layout's `sentinel`).
+  std::uint32_t sentinel = 0;
 
   [[nodiscard]] std::size_t group_count() const { return slot_vertices.size() / kTableSlots; }
 };
@@ -41,7 +43,8 @@ struct TableLayout {
                                             AlignedVector<TableGroup>& groups, AlignedVector<std::uint32_t>& ids);
 
 /// Every group's vertex rows from the frame positions (x y z per vertex, with the sentinel and
-/// one more element after the last vertex, as add_sentinel leaves them), in chunks of clusters
+/// one more element after the last vertex, as add_sentinel leaves them; a group of at most 16
+/// vertices has only the rows' first halves written, the rest keeping the layout's NaN), in chunks of clusters
 /// on the caller's threads, with streaming stores fenced per chunk; the same bytes at any thread
 /// count. cluster_boxes[c] / centres[c] (either null: neither written) receive the box of the
 /// cluster's vertices widened one unit in the last place and its centre: bit for bit

@@ -63,7 +63,7 @@ inline constexpr std::uint32_t kNoTriangle = 0xffffffffu;
 /// Flag in WideNode::count of a leaf child that refers to several ranges (see TraceData).
 inline constexpr std::uint32_t kIndirectLeaf = 0x80000000u;
 
-/// The flat data of a scene, as traversal sees it. Traversal starts at wide.root. A leaf child
+/// The flat data of a scene, as traversal sees it. Traversal starts at wide8.root. A leaf child
 /// of a wide node is either
 ///   direct   (count < kIndirectLeaf): `count` triangles packed in the ceil(count / 4) blocks
 ///            starting at block `child` (padding only in the last block);
@@ -76,9 +76,11 @@ inline constexpr std::uint32_t kIndirectLeaf = 0x80000000u;
 /// group, group count and triangle count; triangle_ids holds kTableSlots ids per group (slot i:
 /// the group's triangle i, kNoTriangle at or beyond its count).
 struct TraceData {
+  /// The 4-wide tree a TriangleScene builds and collapses; empty for a ClusterScene, which keeps
+  /// its 4-wide tree to itself (its fixed subtrees are refitted in `wide8` only).
   WideBvh wide;
-  /// `wide` regrouped into 8-wide nodes (regroup_to_8), with the same leaf children: what the
-  /// tracer walks (single rays and packets). The scenes make it with every update.
+  /// The 4-wide tree regrouped into 8-wide nodes (regroup_to_8), with the same leaf children:
+  /// what the tracer walks (single rays and packets). The scenes make it with every update.
   WideBvh8 wide8;
   std::vector<LeafRange> ranges;
   AlignedVector<TriBlock> blocks;
@@ -101,8 +103,8 @@ struct LeafShape {
 };
 [[nodiscard]] LeafShape leaf_shape(const TraceData& d);
 
-/// Checks of the flat data (tests call it on every scene), of `wide` and of `wide8` alike (and
-/// `wide8` present whenever `wide` is): every node reachable from the root exactly once (a
+/// Checks of the flat data (tests call it on every scene), of `wide` (when not empty) and of
+/// `wide8` alike (`wide8` present whenever `wide` is): every node reachable from the root exactly once (a
 /// tree) and none deeper than the tree's `depth`, every leaf child's ranges inside `ranges` and
 /// blocks inside `blocks`,
 /// every mesh triangle id 0 .. triangle_count-1 in exactly one used lane (padding lanes:

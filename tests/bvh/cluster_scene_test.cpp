@@ -339,7 +339,6 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
         ASSERT_EQ(d.blocks.size(), a.blocks.size()) << w;
         EXPECT_TRUE(test::same_bytes(d.blocks.data(), a.blocks.data(), a.blocks.size())) << w;
         EXPECT_TRUE(std::equal(d.triangle_ids.begin(), d.triangle_ids.end(), a.triangle_ids.begin(), a.triangle_ids.end())) << w;
-        ASSERT_EQ(d.wide.nodes.size(), a.wide.nodes.size()) << w;
         ASSERT_EQ(d.wide8.nodes.size(), a.wide8.nodes.size()) << w;
         const Bvh &tb = once.bvh(), &ta = animated.bvh();
         ASSERT_EQ(tb.nodes.size(), ta.nodes.size()) << w;
@@ -582,7 +581,7 @@ TEST(ClusterScene, FixedGroupTreesAreRefittedExactly) {
   ClusterScene s(m, view_of(runs), cfg);
   const std::size_t S = s.subtree_nodes();
   ASSERT_GT(S, 100u);
-  const std::vector<WideNode> rest(s.data().wide.nodes.begin(), s.data().wide.nodes.begin() + S);
+  const std::vector<WideNode8> rest(s.data().wide8.nodes.begin(), s.data().wide8.nodes.begin() + S);
   // The scene cluster whose blocks start at a block: the clustering's cluster of its first lane.
   std::vector<std::uint32_t> scene_of(runs.cluster_count());
   for (std::size_t i = 0; i < s.cluster_ids().size(); ++i) scene_of[s.cluster_ids()[i]] = static_cast<std::uint32_t>(i);
@@ -598,8 +597,8 @@ TEST(ClusterScene, FixedGroupTreesAreRefittedExactly) {
     ASSERT_TRUE(issues.empty()) << what << test::joined(issues);
     std::size_t leaves = 0;
     for (std::size_t i = 0; i < S; ++i) {
-      const WideNode& n = d.wide.nodes[i];
-      for (int k = 0; k < 4; ++k) {
+      const WideNode8& n = d.wide8.nodes[i];
+      for (int k = 0; k < 8; ++k) {
         ASSERT_TRUE(n.child[k] == rest[i].child[k] && n.count[k] == rest[i].count[k]) << what << " node " << i;
         if (!n.is_leaf(k) || (n.count[k] & kIndirectLeaf)) continue;
         const std::uint32_t c = scene_of[cluster_of_triangle[d.triangle_ids[4 * std::size_t(n.child[k])]]];

@@ -93,8 +93,8 @@ AnyScene make_scene(const Mesh& m, Kind k, std::optional<Vec3> origin = std::nul
   }
   if (k == Kind::Clusters7 || k == Kind::Clusters7Tables) {
     std::size_t indirect = 0;
-    for (const WideNode& n : s.data().wide.nodes)
-      for (int i = 0; i < 4; ++i) indirect += n.is_leaf(i) && (n.count[i] & kIndirectLeaf);
+    for (const WideNode8& n : s.data().wide8.nodes)
+      for (int i = 0; i < 8; ++i) indirect += n.is_leaf(i) && (n.count[i] & kIndirectLeaf);
     EXPECT_GT(indirect, 0u);
   }
   if (k == Kind::TrianglesSweep || k == Kind::Clusters80Sweep) {
