@@ -352,13 +352,13 @@ std::string bench_text(const PeerBenchResult& r) {
                                             : std::string("plain SAH build over all cluster boxes"));
   const bvh::LeafShape& ls = r.cluster_leaves;
   if (ls.units > 0) {
-    const double u = static_cast<double>(ls.units);
+    const double u = static_cast<double>(ls.units), tris = static_cast<double>(ls.triangles);
+    const double used = 100.0 * tris / static_cast<double>(ls.lanes);
     s += ls.format == bvh::LeafFormat::Tables
              ? fmt::format("cluster leaves: tables, {} groups of {:.2f} triangles on {:.2f} vertices ({:.1f}% of the "
                            "tests' lanes used)\n",
-                           ls.units, ls.triangles / u, ls.vertices / u, 100.0 * ls.triangles / ls.lanes)
-             : fmt::format("cluster leaves: blocks, {} blocks of four lanes ({:.1f}% used)\n", ls.units,
-                           100.0 * ls.triangles / ls.lanes);
+                           ls.units, tris / u, static_cast<double>(ls.vertices) / u, used)
+             : fmt::format("cluster leaves: blocks, {} blocks of four lanes ({:.1f}% used)\n", ls.units, used);
   }
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");
