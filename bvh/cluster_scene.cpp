@@ -278,9 +278,10 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   }
   if (refit_groups_) layout_group_trees();
   sub_count_ = static_cast<std::uint32_t>(sub_nodes_.size());
-  wide4_.nodes = std::move(sub_nodes_);  // kept from frame to frame; the top follows
-  sub_nodes_ = {};
   layout_wide8();
+  // The fixed 4-wide nodes served the regrouping only (refit8 writes the 8-wide ones; the top
+  // collapses straight into 8-wide nodes), and the groups' slot lists that of refit8's sources.
+  release(sub_nodes_), release(group_slots_);
   if (cfg_.built_once) only_frame();
   else update(mesh.positions());
   // Needed only to lay the clusters out (the per-frame pass has its own vertex order).
@@ -317,7 +318,7 @@ void ClusterScene::only_frame() {
 // (refit8) then write the 8-wide nodes directly; the fixed 4-wide nodes are never refitted (only
 // their structure is read, by this function): per frame only the top is regrouped (make_wide8).
 void ClusterScene::layout_wide8() {
-  const std::span<const WideNode> fixed(wide4_.nodes.data(), sub_count_);
+  const std::span<const WideNode> fixed(sub_nodes_.data(), sub_count_);
   link8_.assign(sub_count_, kNoTriangle);
   std::vector<SlotSource> sources;
   for (const std::uint32_t r : sub_root_)
@@ -347,27 +348,6 @@ void ClusterScene::layout_wide8() {
   sub8_count_ = sub8_.size();
   f_.data.wide8.nodes = std::move(sub8_);
   sub8_ = {};
-}
-
-// Per frame, after the top is linked: the 8-wide tree the tracer walks (nodes [0, sub8_.size())
-// the fixed subtrees, whose boxes their refits write, the top's regrouping after).
-void ClusterScene::make_wide8() {
-  TraceData& data = f_.data;
-  WideBvh8& w8 = data.wide8;
-  const std::size_t S8 = sub8_count_;
-  // (The fixed part [0, S8) stays from frame to frame; w8 is cleared only without clusters,
-  // when there is no fixed part.)
-  if (w8.nodes.size() < S8) throw std::logic_error("ClusterScene: the fixed 8-wide nodes were lost");
-  w8.nodes.resize(S8);
-  if (wide4_.nodes.empty()) {
-    w8.nodes.clear(), w8.root = 0, w8.depth = 0;
-    return;
-  }
-  w8.nodes.reserve(S8 + (wide4_.nodes.size() - sub_count_));
-  std::uint32_t depth = 0;
-  w8.root = regroup_subtree(wide4_.nodes, wide4_.root, w8.nodes, depth,
-                            sub_count_, link8_, nullptr);
-  w8.depth = depth + group_depth8_ + sub_depth8_;
 }
 
 // Linear: each cluster's triangles packed in blocks of four, in the (Morton) order above.
@@ -810,8 +790,7 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
     }
     times.build_ms = clock_ms(cfg_.clock) - tb;
     tb = clock_ms(cfg_.clock);
-    link_top_tree();
-    make_wide8();  // (the fixed subtrees' 8-wide boxes are written by their refits: refit8)
+    collapse_top8();  // (the fixed subtrees' 8-wide boxes are written by their refits: refit8)
     times.collapse_ms = clock_ms(cfg_.clock) - tb;
   };
   times.overlap_ms = 0.0;
@@ -842,51 +821,97 @@ void ClusterScene::set_cluster_slot(WideNode& n, int k, std::uint32_t c) const {
   else n.child[k] = cluster_ranges_[c].first_block, n.count[k] = cluster_ranges_[c].triangle_count;  // packed
 }
 
-// Collapse, then link: nodes [0, S) are the per-cluster trees and the fixed group trees (kept
-// from frame to frame), the top tree follows; a leaf of one cluster becomes a link to its tree
-// (BlockTree) or a direct leaf, a leaf of several clusters an indirect one; with fixed group
-// trees a leaf (one group) becomes a link to the group's tree (or its one cluster's leaf).
-void ClusterScene::link_top_tree() {
+// Per frame: the binary tree over the groups (or clusters) collapsed straight into the 8-wide
+// nodes the tracer walks, after the fixed ones [0, sub8_count_). An 8-wide node starts with its
+// binary node's two children and opens the inner child of largest surface area until it has
+// eight (or only leaves); children after parents. A leaf of one group becomes a link to the
+// group's fixed 8-wide tree (or its one cluster's leaf), a leaf of one cluster a link to its block
+// tree or a direct leaf of its blocks (or table groups), a leaf of several clusters an indirect
+// one over `ranges`.
+void ClusterScene::collapse_top8() {
   TraceData& data = f_.data;
   const Bvh& bvh = f_.bvh;
-  collapse_to_wide(bvh, top_);
-  const WideBvh& top = top_;
-  const std::uint32_t S = sub_count_;
-  wide4_.nodes.resize(S + top.nodes.size());  // ([0, S) since the constructor)
+  WideBvh8& w8 = data.wide8;
+  const std::size_t S8 = sub8_count_;
+  if (w8.nodes.size() < S8) throw std::logic_error("ClusterScene: the fixed 8-wide nodes were lost");
+  w8.nodes.resize(S8);
   if (refit_groups_) {  // the top's leaves are single groups; the groups' trees keep fixed ranges
     if (data.ranges.size() != group_ranges_.size()) data.ranges = group_ranges_;
   } else {
     data.ranges.resize(weights_.size());
     for (std::size_t i = 0; i < bvh.prim_order.size(); ++i) data.ranges[i] = cluster_ranges_[bvh.prim_order[i]];
   }
-  for (std::size_t i = 0; i < top.nodes.size(); ++i) {
-    WideNode n = top.nodes[i];
-    for (int k = 0; k < 4; ++k) {
-      if (n.is_leaf(k) && refit_groups_) {
-        if (n.count[k] != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
-        const std::uint32_t g = bvh.prim_order[n.child[k]];
-        if (group_root_[g] != kNoTriangle) {
-          n.child[k] = group_root_[g], n.count[k] = 0;
-          continue;
-        }
-        set_cluster_slot(n, k, group_offsets_[g]);  // a group of one cluster
-      } else if (n.is_leaf(k)) {
-        if (n.count[k] == 1) {
-          set_cluster_slot(n, k, bvh.prim_order[n.child[k]]);
-        } else {
-          n.count[k] |= kIndirectLeaf;
-        }
-      } else if (!n.is_empty(k)) {
-        n.child[k] += S;
-      }
-    }
-    wide4_.nodes[S + i] = n;
+  if (bvh.nodes.empty()) {  // (no clusters: no fixed part either)
+    w8.nodes.clear(), w8.root = 0, w8.depth = 0;
+    return;
   }
-  wide4_.root = S;
-  wide4_.bounds = top.bounds;
-  wide4_.depth = top.depth + group_depth_ + sub_depth_;
-  wide4_.leaves = top.leaves;
-  if (top.nodes.empty()) wide4_.nodes.clear();
+  auto area = [&](std::uint32_t i) {
+    const Box3f& b = bvh.nodes[i].bounds;
+    const float x = b.hi[0] - b.lo[0], y = b.hi[1] - b.lo[1], z = b.hi[2] - b.lo[2];
+    return x * y + y * z + z * x;
+  };
+  // A leaf of one cluster (8-wide): a link to its block tree, or a direct leaf of its blocks.
+  auto cluster_slot = [&](std::uint32_t c, std::uint32_t& child, std::uint32_t& count) {
+    if (sub_root_[c] != kNoTriangle) child = link8_[sub_root_[c]], count = 0;
+    else child = cluster_ranges_[c].first_block, count = cluster_ranges_[c].triangle_count;  // packed
+  };
+  using Item = Top8Item;
+  std::vector<Item>& stack = top8_stack_;
+  stack.clear();
+  w8.nodes.reserve(S8 + bvh.nodes.size() / 2);  // (no 8-wide node has fewer than two children but a root leaf)
+  w8.root = static_cast<std::uint32_t>(S8);
+  w8.nodes.emplace_back();
+  stack.push_back({0, w8.root, 1});
+  std::uint32_t depth = 0;
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    depth = std::max(depth, it.depth);
+    std::uint32_t s[8];
+    float a[8];  // an inner slot's area, -1 for a leaf
+    int ns = 0;
+    auto put = [&](int i, std::uint32_t b) { s[i] = b, a[i] = bvh.nodes[b].is_leaf() ? -1.0f : area(b); };
+    const BvhNode& n = bvh.nodes[it.bin];
+    if (n.is_leaf()) {
+      s[ns] = it.bin, a[ns++] = -1.0f;  // (a root that is a leaf)
+    } else {
+      put(ns++, it.bin + 1), put(ns++, n.index);
+    }
+    while (ns < 8) {
+      int best = 0;
+      for (int i = 1; i < ns; ++i)
+        if (a[i] > a[best]) best = i;
+      if (a[best] < 0.0f) break;
+      const std::uint32_t c = s[best];
+      put(best, c + 1), put(ns++, bvh.nodes[c].index);
+    }
+    for (int i = 0; i < 8; ++i) {
+      std::uint32_t child = WideNode8::kEmptySlot, count = 0;
+      Box3f box;
+      if (i < ns) {
+        const BvhNode& m = bvh.nodes[s[i]];
+        box = m.bounds;
+        if (!m.is_leaf()) {
+          child = static_cast<std::uint32_t>(w8.nodes.size());
+          w8.nodes.emplace_back();
+          stack.push_back({s[i], child, it.depth + 1});
+        } else if (refit_groups_) {
+          if (m.count != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
+          const std::uint32_t g = bvh.prim_order[m.index];
+          if (group_root_[g] != kNoTriangle) child = link8_[group_root_[g]], count = 0;
+          else cluster_slot(group_offsets_[g], child, count);  // a group of one cluster
+        } else if (m.count == 1) {
+          cluster_slot(bvh.prim_order[m.index], child, count);
+        } else {
+          child = m.index, count = m.count | kIndirectLeaf;  // ranges [index, index + count)
+        }
+      }
+      WideNode8& dst = w8.nodes[it.node8];
+      dst.set_child_box(i, box);
+      dst.child[i] = child, dst.count[i] = count;
+    }
+  }
+  w8.depth = depth + group_depth8_ + sub_depth8_;
 }
 
 }  // namespace ptc::bvh

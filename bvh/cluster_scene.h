@@ -120,10 +120,9 @@ class ClusterScene {
   }
   void layout_group_trees();
   void append_group_tree(std::size_t g, const WideBvh& w);
-  void link_top_tree();
+  void collapse_top8();
   void refit8(std::size_t begin, std::size_t end);
   void layout_wide8();
-  void make_wide8();
   void refit_group_trees();
   void set_cluster_slot(WideNode& n, int k, std::uint32_t c) const;
   std::shared_ptr<const std::vector<Tri>> tris_;
@@ -135,8 +134,8 @@ class ClusterScene {
   std::vector<LeafRange> cluster_ranges_;  // blocks of cluster c (fixed layout)
   // BlockTree: the per-cluster trees (child indices relative to the start of sub_nodes_, which
   // become absolute because the subtrees occupy nodes [0, sub_count_) of every frame).
-  AlignedVector<WideNode> sub_nodes_;  // (moved into wide4_.nodes by the constructor; sub_count_ stays)
-  std::uint32_t sub_count_ = 0;        // fixed nodes [0, sub_count_) of wide4_.nodes
+  AlignedVector<WideNode> sub_nodes_;  // (read by layout_wide8, then released; sub_count_ stays)
+  std::uint32_t sub_count_ = 0;        // fixed 4-wide nodes [0, sub_count_) = sub_nodes_ until then
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
   std::uint32_t sub_depth_ = 0;
   // GroupTrees::Refit: sub_nodes_[block_nodes_ ..) are the groups' fixed trees (after the block
@@ -171,18 +170,16 @@ class ClusterScene {
   BuildConfig group_top_build_;             // the per-frame build over the groups: the scene's, one group a leaf
   AlignedVector<Box3f> group_boxes_;
   AlignedVector<Vec3f> group_centres_;
-  WideBvh top_;  // the collapsed top tree of the last update (kept: its nodes' memory is reused)
+  struct Top8Item {
+    std::uint32_t bin, node8, depth;
+  };
+  std::vector<Top8Item> top8_stack_;  // collapse_top8's work stack (kept: no allocation per frame)
   std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill (none kept when built once)
   GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)
   std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): f_.fpos in input order
   bool lists_are_corners_ = false;  // fused mode: the clusters' vertex lists are their corners (lists_are_corners)
   AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel; none with tables)
   TableLayout tables_;  // LeafFormat::Tables: the groups per cluster and their slots' vertex indices
-  // The 4-wide tree (nodes [0, sub_count_) the fixed subtrees, whose boxes stay the rest pose's:
-  // only their structure is read, by layout_wide8; the top after them, linked per frame), from
-  // which make_wide8 regroups the top into the 8-wide tree the tracer walks. Not in data(): its
-  // fixed part's boxes are not refitted.
-  WideBvh wide4_;
   SceneFrame f_;
 };
 
