@@ -822,12 +822,12 @@ void ClusterScene::set_cluster_slot(WideNode& n, int k, std::uint32_t c) const {
 }
 
 // Per frame: the binary tree over the groups (or clusters) collapsed straight into the 8-wide
-// nodes the tracer walks, after the fixed ones [0, sub8_count_). An 8-wide node starts with its
-// binary node's two children and opens the inner child of largest surface area until it has
-// eight (or only leaves); children after parents. A leaf of one group becomes a link to the
-// group's fixed 8-wide tree (or its one cluster's leaf), a leaf of one cluster a link to its block
-// tree or a direct leaf of its blocks (or table groups), a leaf of several clusters an indirect
-// one over `ranges`.
+// nodes the tracer walks, after the fixed ones [0, sub8_count_): node for node the tree
+// regroup_to_8(collapse_to_wide(bvh)) makes (each 4-wide node is expanded on the fly from its
+// binary node, nothing 4-wide is stored); children after parents. A leaf of one group becomes a
+// link to the group's fixed 8-wide tree (or its one cluster's leaf), a leaf of one cluster a
+// link to its block tree or a direct leaf of its blocks (or table groups), a leaf of several
+// clusters an indirect one over `ranges`.
 void ClusterScene::collapse_top8() {
   TraceData& data = f_.data;
   const Bvh& bvh = f_.bvh;
@@ -845,10 +845,35 @@ void ClusterScene::collapse_top8() {
     w8.nodes.clear(), w8.root = 0, w8.depth = 0;
     return;
   }
-  auto area = [&](std::uint32_t i) {
-    const Box3f& b = bvh.nodes[i].bounds;
-    const float x = b.hi[0] - b.lo[0], y = b.hi[1] - b.lo[1], z = b.hi[2] - b.lo[2];
-    return x * y + y * z + z * x;
+  // The 4-wide node collapse_to_wide makes from binary inner node b: its children, greedily
+  // opened by largest surface area up to four, the first child kept in place.
+  auto expand4 = [&](std::uint32_t b, std::uint32_t (&kids)[4]) {
+    kids[0] = b + 1, kids[1] = bvh.nodes[b].index;
+    int nk = 2;
+    while (nk < 4) {
+      int best = -1;
+      double best_area = -1.0;
+      for (int i = 0; i < nk; ++i) {
+        const BvhNode& c = bvh.nodes[kids[i]];
+        if (!c.is_leaf() && c.bounds.surface_area() > best_area) best = i, best_area = c.bounds.surface_area();
+      }
+      if (best < 0) break;
+      const std::uint32_t c = kids[best];
+      kids[best] = c + 1, kids[nk++] = bvh.nodes[c].index;
+    }
+    return nk;
+  };
+  // A slot: a binary node; an inner one remembers its 4-wide node's child count and its area.
+  struct Slot {
+    std::uint32_t bin;
+    int live;  // 9: a leaf (never opened)
+    float area;
+  };
+  auto slot = [&](std::uint32_t b) {
+    const BvhNode& m = bvh.nodes[b];
+    if (m.is_leaf()) return Slot{b, 9, 0.0f};
+    std::uint32_t kids[4];
+    return Slot{b, expand4(b, kids), static_cast<float>(m.bounds.surface_area())};
   };
   // A leaf of one cluster (8-wide): a link to its block tree, or a direct leaf of its blocks.
   auto cluster_slot = [&](std::uint32_t c, std::uint32_t& child, std::uint32_t& count) {
@@ -867,34 +892,36 @@ void ClusterScene::collapse_top8() {
     const Item it = stack.back();
     stack.pop_back();
     depth = std::max(depth, it.depth);
-    std::uint32_t s[8];
-    float a[8];  // an inner slot's area, -1 for a leaf
+    Slot s[8];
     int ns = 0;
-    auto put = [&](int i, std::uint32_t b) { s[i] = b, a[i] = bvh.nodes[b].is_leaf() ? -1.0f : area(b); };
-    const BvhNode& n = bvh.nodes[it.bin];
-    if (n.is_leaf()) {
-      s[ns] = it.bin, a[ns++] = -1.0f;  // (a root that is a leaf)
+    if (bvh.nodes[it.bin].is_leaf()) {
+      s[ns++] = Slot{it.bin, 9, 0.0f};  // (a root that is a leaf: collapse_to_wide's one-slot node)
     } else {
-      put(ns++, it.bin + 1), put(ns++, n.index);
+      std::uint32_t kids[4];
+      const int nk = expand4(it.bin, kids);
+      for (int i = 0; i < nk; ++i) s[ns++] = slot(kids[i]);
     }
-    while (ns < 8) {
-      int best = 0;
-      for (int i = 1; i < ns; ++i)
-        if (a[i] > a[best]) best = i;
-      if (a[best] < 0.0f) break;
-      const std::uint32_t c = s[best];
-      put(best, c + 1), put(ns++, bvh.nodes[c].index);
+    for (;;) {  // regroup_to_8: open the inner child of largest area whose children fit
+      int best = -1;
+      float best_area = -1.0f;
+      for (int i = 0; i < ns; ++i)
+        if (ns - 1 + s[i].live <= 8 && s[i].area > best_area) best = i, best_area = s[i].area;
+      if (best < 0) break;
+      std::uint32_t kids[4];
+      const int nk = expand4(s[best].bin, kids);
+      s[best] = slot(kids[0]);  // the first child takes the opened slot, the others go last
+      for (int j = 1; j < nk; ++j) s[ns++] = slot(kids[j]);
     }
     for (int i = 0; i < 8; ++i) {
       std::uint32_t child = WideNode8::kEmptySlot, count = 0;
       Box3f box;
       if (i < ns) {
-        const BvhNode& m = bvh.nodes[s[i]];
+        const BvhNode& m = bvh.nodes[s[i].bin];
         box = m.bounds;
         if (!m.is_leaf()) {
           child = static_cast<std::uint32_t>(w8.nodes.size());
           w8.nodes.emplace_back();
-          stack.push_back({s[i], child, it.depth + 1});
+          stack.push_back({s[i].bin, child, it.depth + 1});
         } else if (refit_groups_) {
           if (m.count != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
           const std::uint32_t g = bvh.prim_order[m.index];

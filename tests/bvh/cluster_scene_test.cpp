@@ -25,6 +25,7 @@
 #include "bvh/scene_config.h"
 #include "bvh/tracer.h"
 #include "bvh/validate.h"
+#include "bvh/wide_bvh.h"
 #include "test_util.h"
 #include "common/brute_force.h"
 #include "common/same_trace_data.h"
@@ -565,6 +566,57 @@ TEST(ClusterScene, FixedGroupTreesAtTheRestPoseAreTheRebuiltTree) {
           ASSERT_EQ(a.prim_order[x.index + k], b.prim_order[y.index + k]) << what << " node " << i;
       }
       EXPECT_NEAR(fixed.sah_cost(), rebuilt.sah_cost(), 1e-9 * rebuilt.sah_cost()) << what;
+    }
+}
+
+// The top's 8-wide nodes are collapsed straight from the binary tree (collapse_top8); they must
+// be, node for node, what the two passes it replaced make: regroup_to_8(collapse_to_wide(bvh)),
+// with the leaves mapped to the clusters' blocks (one cluster) or ranges (several). Plain build
+// (the top is the whole tree), leaves of one or several clusters, a single-cluster tree (a root
+// that is a leaf), after motion.
+TEST(ClusterScene, TheTopIsTheRegroupedCollapseOfTheBinaryTree) {
+  const Mesh m = test::load_mesh("armadillo.off");
+  for (std::uint32_t run : {7u, 23u, 1000000u})
+    for (std::uint32_t leaf : {1u, 4u}) {
+      SceneConfig cfg = cluster_scene_defaults();
+      cfg.cluster_group_size = 0;
+      cfg.build.max_leaf_size = leaf;
+      if (leaf > 1) cfg.build.cost.traversal = 1000.0;  // leaves as large as allowed
+      const Clustering runs = ptc::morton_runs(m, run);
+      ClusterScene s(m, view_of(runs), cfg);
+      for (double amp : {0.0, 0.1}) {
+        if (amp > 0) s.update(test::deformed(m, amp).positions());
+        const std::string what = "runs of " + std::to_string(run) + " leaf " + std::to_string(leaf) + " amplitude " +
+                                 std::to_string(amp);
+        const TraceData& d = s.data();
+        ASSERT_EQ(s.subtree_nodes(), 0u) << what;
+        WideBvh8 want;
+        regroup_to_8(collapse_to_wide(s.bvh()), want);
+        ASSERT_EQ(d.wide8.nodes.size(), want.nodes.size()) << what;
+        ASSERT_EQ(d.wide8.root, want.root) << what;
+        ASSERT_EQ(d.wide8.depth, want.depth) << what;
+        std::size_t several = 0;
+        for (std::size_t i = 0; i < want.nodes.size(); ++i) {
+          const WideNode8 &a = d.wide8.nodes[i], &b = want.nodes[i];
+          ASSERT_EQ(std::memcmp(a.bounds, b.bounds, sizeof a.bounds), 0) << what << " node " << i;
+          for (int k = 0; k < 8; ++k) {
+            const std::string at = what + " node " + std::to_string(i) + " slot " + std::to_string(k);
+            if (b.is_empty(k)) {
+              ASSERT_TRUE(a.is_empty(k)) << at;
+            } else if (!b.is_leaf(k)) {
+              ASSERT_TRUE(a.count[k] == 0 && a.child[k] == b.child[k]) << at;
+            } else if (b.count[k] == 1) {  // one cluster: a direct leaf of its blocks
+              const LeafRange& r = d.ranges[b.child[k]];
+              ASSERT_TRUE(a.child[k] == r.first_block && a.count[k] == r.triangle_count) << at;
+            } else {
+              ++several;
+              ASSERT_TRUE(a.child[k] == b.child[k] && a.count[k] == (b.count[k] | kIndirectLeaf)) << at;
+            }
+          }
+        }
+        if (leaf > 1 && run < 1000000u) EXPECT_GT(several, 0u) << what;
+        if (run == 1000000u) EXPECT_EQ(want.nodes.size(), 1u) << what;  // (one cluster: the root is a leaf)
+      }
     }
 }
 
