@@ -139,7 +139,8 @@ class ClusterScene {
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
   std::uint32_t sub_depth_ = 0;
   // GroupTrees::Refit: sub_nodes_[block_nodes_ ..) are the groups' fixed trees (after the block
-  // trees), refitted from the cluster boxes; the per-frame build sees one record per group.
+  // trees), whose 8-wide nodes are refitted from the cluster boxes; the per-frame build sees one
+  // record per group.
   bool refit_groups_ = false;
   bool rest_is_frame_tree_ = false;  // built once, plain build: f_.bvh is the rest tree (no build in build_frame)
   std::uint32_t block_nodes_ = 0;
@@ -159,11 +160,11 @@ class ClusterScene {
   AlignedVector<float> box8_;  // per fixed 8-wide node, refit8's union of its slots: lo x y z . hi x y z .
   std::uint32_t sub_depth8_ = 0, group_depth8_ = 0;
   std::vector<Bvh> group_bvh_;             // per group: its rest-pose tree over its clusters (local ids)
-  std::vector<std::uint32_t> group_root_;  // per group: the wide node of its tree, or kNoTriangle (one cluster)
+  std::vector<std::uint32_t> group_root_;  // per group: the 4-wide root of its tree (link8_: the 8-wide one), or kNoTriangle (one cluster)
   struct GroupSlots {  // per node of a group's tree: the scene clusters whose boxes a child slot unites
     std::uint32_t first[4], count[4];      // into group_leaf_clusters_; count 0: an inner child (or empty)
   };
-  std::vector<GroupSlots> group_slots_;
+  std::vector<GroupSlots> group_slots_;  // (set-up only: layout_wide8 turns them into src8_, then they are released)
   std::vector<std::uint32_t> group_leaf_clusters_;
   std::vector<LeafRange> group_ranges_;     // the indirect leaves of the groups' trees (fixed)
   std::vector<std::uint32_t> group_weights_;

@@ -216,7 +216,7 @@ std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count
   } else if (d.triangle_ids.size() != 4 * d.blocks.size()) {
     issues.push_back("triangle_ids size is not 4 per block");
   }
-  // (A cluster scene keeps its 4-wide tree to itself: `wide` is then empty.)
+  // (A cluster scene's data has no 4-wide tree: `wide` is then empty.)
   if (!d.wide.nodes.empty()) validate_tree(d, d.wide, triangle_count, exact_unions, "", issues);
   if (d.wide8.nodes.empty() && !d.wide.nodes.empty()) issues.push_back("no 8-wide nodes beside the 4-wide tree");
   else validate_tree(d, d.wide8, triangle_count, exact_unions, "8-wide ", issues);

@@ -76,8 +76,9 @@ inline constexpr std::uint32_t kIndirectLeaf = 0x80000000u;
 /// group, group count and triangle count; triangle_ids holds kTableSlots ids per group (slot i:
 /// the group's triangle i, kNoTriangle at or beyond its count).
 struct TraceData {
-  /// The 4-wide tree a TriangleScene builds and collapses; empty for a ClusterScene, which keeps
-  /// its 4-wide tree to itself (its fixed subtrees are refitted in `wide8` only).
+  /// The 4-wide tree a TriangleScene builds and collapses; empty for a ClusterScene, which makes
+  /// its 8-wide nodes without one per frame (its fixed subtrees are refitted in `wide8`, its top
+  /// collapsed straight into it).
   WideBvh wide;
   /// The 4-wide tree regrouped into 8-wide nodes (regroup_to_8), with the same leaf children:
   /// what the tracer walks (single rays and packets). The scenes make it with every update.

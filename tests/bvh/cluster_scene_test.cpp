@@ -614,8 +614,12 @@ TEST(ClusterScene, TheTopIsTheRegroupedCollapseOfTheBinaryTree) {
             }
           }
         }
-        if (leaf > 1 && run < 1000000u) EXPECT_GT(several, 0u) << what;
-        if (run == 1000000u) EXPECT_EQ(want.nodes.size(), 1u) << what;  // (one cluster: the root is a leaf)
+        if (leaf > 1 && run < 1000000u) {
+          EXPECT_GT(several, 0u) << what;
+        }
+        if (run == 1000000u) {
+          EXPECT_EQ(want.nodes.size(), 1u) << what;  // (one cluster: the root is a leaf)
+        }
       }
     }
 }
