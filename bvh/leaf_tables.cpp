@@ -2,7 +2,7 @@
 
 #include "bvh/box_simd.h"
 
-#include <immintrin.h>
+#include <emmintrin.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -164,83 +164,36 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
   return out;
 }
 
-namespace {
-
-// Cluster c's groups (fill_tables), SSE2: four slots' (x y z .) by 16-byte loads (add_sentinel's
-// extra element keeps the last in the array), transposed to rows; the NaN sentinel's lanes drop
-// out of the min and max (_mm_min_ps(x, acc) returns acc for a NaN x). A group of at most 16
-// vertices has only the rows' first cache lines written (slots 16-31 stay the NaN
-// make_table_layout wrote); every written line is whole (streaming stores).
-void fill_cluster_sse2(const TableLayout& layout, const float* fp, TableGroup* groups, std::size_t c, __m128 (&lo)[3],
-                       __m128 (&hi)[3]) {
-  for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
-    const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
-    TableGroup& t = groups[g];
-    const int end = sv[kTableSlots / 2] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
-    for (int q = 0; q < end; q += 4) {
-      __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q]}), r1 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 1]});
-      __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 2]}), r3 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 3]});
-      _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-      _mm_stream_ps(&t.v[0][q], r0), _mm_stream_ps(&t.v[1][q], r1), _mm_stream_ps(&t.v[2][q], r2);
-      lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
-      hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
-    }
-  }
-}
-
-// The same with AVX2: eight slots a step, slot k and k + 4 in the two halves of a register (one
-// 16-byte load and one insert), one in-lane transpose for the eight, 32-byte rows; the halves'
-// min and max folded at the end (the same values: min and max do not depend on the order).
-// Slots v0 and v4 as (x y z . | x y z .).
-__attribute__((target("avx2"))) inline __m256 slot_pair(const float* fp, std::uint32_t v0, std::uint32_t v4) {
-  return _mm256_set_m128(_mm_loadu_ps(fp + 3 * std::size_t{v4}), _mm_loadu_ps(fp + 3 * std::size_t{v0}));
-}
-
-__attribute__((target("avx2"))) void fill_cluster_avx2(const TableLayout& layout, const float* fp, TableGroup* groups,
-                                                       std::size_t c, __m128 (&lo)[3], __m128 (&hi)[3]) {
-  __m256 l[3], h[3];
-  for (int a = 0; a < 3; ++a) l[a] = _mm256_set_m128(lo[a], lo[a]), h[a] = _mm256_set_m128(hi[a], hi[a]);
-  for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
-    const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
-    TableGroup& t = groups[g];
-    const int end = sv[kTableSlots / 2] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
-    for (int q = 0; q < end; q += 8) {
-      const __m256 r0 = slot_pair(fp, sv[q], sv[q + 4]), r1 = slot_pair(fp, sv[q + 1], sv[q + 5]);
-      const __m256 r2 = slot_pair(fp, sv[q + 2], sv[q + 6]), r3 = slot_pair(fp, sv[q + 3], sv[q + 7]);
-      const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);  // x0 x1 y0 y1, z0 z1 . .
-      const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
-      const __m256 x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-      const __m256 y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-      const __m256 z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-      _mm256_stream_ps(&t.v[0][q], x), _mm256_stream_ps(&t.v[1][q], y), _mm256_stream_ps(&t.v[2][q], z);
-      l[0] = _mm256_min_ps(x, l[0]), l[1] = _mm256_min_ps(y, l[1]), l[2] = _mm256_min_ps(z, l[2]);
-      h[0] = _mm256_max_ps(x, h[0]), h[1] = _mm256_max_ps(y, h[1]), h[2] = _mm256_max_ps(z, h[2]);
-    }
-  }
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = _mm_min_ps(_mm256_castps256_ps128(l[a]), _mm256_extractf128_ps(l[a], 1));
-    hi[a] = _mm_max_ps(_mm256_castps256_ps128(h[a]), _mm256_extractf128_ps(h[a], 1));
-  }
-}
-
-using FillClusterFn = void (*)(const TableLayout&, const float*, TableGroup*, std::size_t, __m128 (&)[3], __m128 (&)[3]);
-
-}  // namespace
-
 void fill_tables(const TableLayout& layout, const float* fp, std::span<TableGroup> groups, Box3f* cluster_boxes,
-                 Vec3f* centres, bool allow_avx2) {
+                 Vec3f* centres) {
   if (groups.size() != layout.group_count())
     throw std::invalid_argument("fill_tables: " + std::to_string(groups.size()) + " groups for a layout of " +
                                 std::to_string(layout.group_count()));
-  static const FillClusterFn best = __builtin_cpu_supports("avx2") ? &fill_cluster_avx2 : &fill_cluster_sse2;
-  const FillClusterFn fill = allow_avx2 ? best : &fill_cluster_sse2;
   const std::size_t C = layout.group_offsets.empty() ? 0 : layout.group_offsets.size() - 1;
   const bool boxes = cluster_boxes && centres;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t c = r.begin(); c < r.end(); ++c) {
       __m128 lo[3], hi[3];
       for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
-      fill(layout, fp, groups.data(), c, lo, hi);
+      for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
+        const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
+        TableGroup& t = groups[g];
+        // A group of at most 16 vertices: only the rows' first cache lines (slots 16-31 stay the
+        // NaN make_table_layout wrote).
+        const int end = sv[kTableSlots / 2] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
+        for (int q = 0; q < end; q += 4) {
+          // Four slots' (x y z .) by 16-byte loads (add_sentinel's extra element keeps the last in
+          // the array), transposed to rows; the NaN sentinel's lanes drop out of the min and max
+          // (_mm_min_ps(x, acc) returns acc for a NaN x). Every row is written whole (full lines
+          // for the streaming stores).
+          __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q]}), r1 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 1]});
+          __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 2]}), r3 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 3]});
+          _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+          _mm_stream_ps(&t.v[0][q], r0), _mm_stream_ps(&t.v[1][q], r1), _mm_stream_ps(&t.v[2][q], r2);
+          lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
+          hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
+        }
+      }
       if (boxes) simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);
     }
     _mm_sfence();

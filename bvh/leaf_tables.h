@@ -50,9 +50,7 @@ struct TableLayout {
 /// cluster's vertices widened one unit in the last place and its centre: bit for bit
 /// fill_blocks_and_cluster_boxes' boxes of the same clusters (the same vertices, and min and max
 /// do not depend on their order).
-/// allow_avx2: the AVX2 loop when the CPU has it (eight slots a step; the same bytes, tests
-/// compare them), else SSE2.
 void fill_tables(const TableLayout& layout, const float* frame_pos, std::span<TableGroup> groups, Box3f* cluster_boxes,
-                 Vec3f* centres, bool allow_avx2 = true);
+                 Vec3f* centres);
 
 }  // namespace ptc::bvh

@@ -274,9 +274,6 @@ TEST(LeafTables, TheLayoutIsTheDocumentedRule) {
   for (std::uint32_t l = 0; l < 10; ++l) EXPECT_EQ(M.ids[S * gw + l], w + l);
 }
 
-// The fill's rows are the frame positions of the slots' vertices (NaN past the group's
-// vertices) and its cluster boxes those of the blocks' fill and of brute force, in both loops
-// (AVX2 where the CPU has it, and SSE2) at 1, 2 and 4 threads: the same bytes every time.
 TEST(LeafTables, RowsAreTheFramePositionsAndBoxesThoseOfTheBlocks) {
   const std::uint32_t V = 2000;
   AlignedVector<Vec3f> fp = random_frame_positions(V, 7);
@@ -294,14 +291,13 @@ TEST(LeafTables, RowsAreTheFramePositionsAndBoxesThoseOfTheBlocks) {
   fill_blocks_and_cluster_boxes(L.corners, fp[0].data(), blocks, nullptr, L.ranges, want_boxes.data(),
                                 want_centres.data());
   AlignedVector<TableGroup> first;
-  for (bool avx2 : {true, false})
   for (int threads : {1, 2, 4}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     AlignedVector<TableGroup> groups = M.groups;
     AlignedVector<Box3f> boxes(L.ranges.size());
     AlignedVector<Vec3f> centres(L.ranges.size());
-    fill_tables(T, fp[0].data(), groups, boxes.data(), centres.data(), avx2);
-    const std::string what = "threads " + std::to_string(threads) + (avx2 ? " avx2 (if the CPU has it)" : " sse2");
+    fill_tables(T, fp[0].data(), groups, boxes.data(), centres.data());
+    const std::string what = "threads " + std::to_string(threads);
     for (std::size_t g = 0; g < T.group_count(); ++g) {
       ASSERT_EQ(std::memcmp(groups[g].corner, M.groups[g].corner, sizeof groups[g].corner), 0) << what;
       ASSERT_EQ(groups[g].count, M.groups[g].count);
