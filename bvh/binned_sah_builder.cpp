@@ -10,6 +10,7 @@
 
 #include "bvh/aligned.h"
 #include "bvh/binning.h"
+#include "bvh/box_simd.h"
 #include "bvh/top_down_builder.h"
 
 // The binned builder on the top-down skeleton (top_down_builder.h). Its steps:
@@ -86,16 +87,14 @@ struct RootBounds {
 RootBounds make_records(const BuildInput& in, Ref* refs) {
   const auto n = static_cast<std::uint32_t>(in.boxes.size());
   static_assert(sizeof(Box3f) == 24 && sizeof(Vec3f) == 12);
-  const float* bf = in.boxes.empty() ? nullptr : in.boxes[0].lo.data();
   const float* cf = in.centroids.empty() ? nullptr : in.centroids[0].data();
   const __m128 mask = xyz_mask();
   RootBounds rb{_mm_set1_ps(kInf), _mm_set1_ps(-kInf), _mm_set1_ps(kInf), _mm_set1_ps(-kInf)};
   __m128 nan = _mm_setzero_ps();
   for (std::uint32_t i = 0; i < n; ++i) {
-    const __m128 l = _mm_and_ps(_mm_loadu_ps(bf + 6 * std::size_t(i)), mask);  // lo.xyz, (hi.x cleared)
-    __m128 h = _mm_loadu_ps(bf + 6 * std::size_t(i) + 2);                      // lo.z, hi.xyz
-    h = _mm_shuffle_ps(h, h, _MM_SHUFFLE(0, 3, 2, 1));                          // hi.xyz, lo.z
-    h = _mm_and_ps(h, mask);
+    __m128 l, h;
+    simd::load_box(in.boxes[i], l, h);
+    l = _mm_and_ps(l, mask), h = _mm_and_ps(h, mask);  // (lane 3 cleared)
     // Centroid: a 16-byte load reads one float past the element, allowed but for the last one.
     __m128 c;
     if (i + 1 < n) {

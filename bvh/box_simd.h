@@ -1,5 +1,5 @@
-// SSE2 pieces of the per-frame box passes (internal to bvh/: box.cpp, vertex_order.cpp and
-// leaf_blocks.cpp).
+// SSE2 pieces of the per-frame box passes (internal to bvh/: box.cpp, vertex_order.cpp,
+// leaf_blocks.cpp, leaf_tables.cpp, cluster_scene.cpp's refit and the binned builder's records).
 #pragma once
 
 #include <immintrin.h>
@@ -11,6 +11,15 @@
 #include "bvh/box.h"
 
 namespace ptc::bvh::simd {
+
+// A box's lo and hi as (x y z .) rows by two 16-byte loads, reading no byte past it (lane 3 of
+// lo holds hi.x, of hi lo.z).
+inline void load_box(const Box3f& b, __m128& lo, __m128& hi) {
+  const float* f = b.lo.data();
+  lo = _mm_loadu_ps(f);      // lo xyz, hi x
+  hi = _mm_loadu_ps(f + 2);  // lo z, hi xyz
+  hi = _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(0, 3, 2, 1));
+}
 
 // (x, y, z, 0) from a float triple, reading exactly 12 bytes.
 inline __m128 load3(const Vec3f& p) {

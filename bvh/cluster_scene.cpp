@@ -6,6 +6,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include <tbb/blocked_range.h>
@@ -14,6 +15,7 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
+#include "bvh/box_simd.h"
 #include "bvh/leaf_blocks.h"
 #include "bvh/leaf_tables.h"
 #include "bvh/refit.h"
@@ -316,7 +318,8 @@ void ClusterScene::only_frame() {
 // (src8_): a block's box (a block tree's leaf), the union of clusters' boxes (a group tree's
 // leaf, or its link to a cluster's block tree), or an 8-wide child's box (box8_). The refits
 // (refit8) then write the 8-wide nodes directly; the fixed 4-wide nodes are never refitted (only
-// their structure is read, by this function): per frame only the top is regrouped (make_wide8).
+// their structure is read, by this function), and the top is collapsed into 8-wide nodes per frame
+// (collapse_top8).
 void ClusterScene::layout_wide8() {
   const std::span<const WideNode> fixed(sub_nodes_.data(), sub_count_);
   link8_.assign(sub_count_, kNoTriangle);
@@ -401,7 +404,6 @@ void ClusterScene::layout_block_trees(AlignedVector<std::uint32_t>& lane_ids) {
     const WideBvh w = collapse_to_wide(b);
     const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
     sub_root_[c] = base + w.root;
-    sub_depth_ = std::max(sub_depth_, w.depth);
     for (WideNode n : w.nodes) {
       for (int k = 0; k < 4; ++k) {
         if (n.is_leaf(k)) {
@@ -466,7 +468,6 @@ void ClusterScene::append_group_tree(std::size_t g, const WideBvh& w) {
   const Bvh& gb = group_bvh_[g];
   const auto base = static_cast<std::uint32_t>(sub_nodes_.size());
   group_root_[g] = base + w.root;
-  group_depth_ = std::max(group_depth_, w.depth);
   for (WideNode nd : w.nodes) {
     GroupSlots gs{};
     for (int k = 0; k < 4; ++k) {
@@ -476,7 +477,7 @@ void ClusterScene::append_group_tree(std::size_t g, const WideBvh& w) {
         gs.count[k] = cnt;
         for (std::uint32_t i = 0; i < cnt; ++i) group_leaf_clusters_.push_back(first + gb.prim_order[nd.child[k] + i]);
         if (cnt == 1) {
-          set_cluster_slot(nd, k, group_leaf_clusters_.back());
+          std::tie(nd.child[k], nd.count[k]) = cluster_slot(group_leaf_clusters_.back());
         } else {
           nd.child[k] = static_cast<std::uint32_t>(group_ranges_.size());
           nd.count[k] = cnt | kIndirectLeaf;
@@ -491,34 +492,7 @@ void ClusterScene::append_group_tree(std::size_t g, const WideBvh& w) {
   }
 }
 
-namespace {
-// The union of a wide node's four child boxes, as rows of min (lo) and max (hi).
-inline Box3f node_union(const WideNode& c) {
-  float r[6];
-  for (int row = 0; row < 6; ++row) {
-    __m128 x = _mm_load_ps(c.bounds[row]);
-    if (row % 2 == 0) {
-      x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
-      x = _mm_min_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
-    } else {
-      x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
-      x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
-    }
-    r[row] = _mm_cvtss_f32(x);
-  }
-  return {{r[0], r[2], r[4]}, {r[1], r[3], r[5]}};
-}
-}  // namespace
 
-namespace {
-// (lo, hi) of a Box3f as (x y z .) rows, without reading past it.
-inline void load_box(const Box3f& b, __m128& lo, __m128& hi) {
-  const float* f = b.lo.data();
-  lo = _mm_loadu_ps(f);        // lo xyz, hi x
-  hi = _mm_loadu_ps(f + 2);    // lo z, hi xyz
-  hi = _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(0, 3, 2, 1));
-}
-}  // namespace
 
 // The fixed 8-wide nodes [begin, end) refitted, children after parents (one reverse sweep; a
 // group tree's links to block trees read src8_'s cluster boxes, not the block trees'): each
@@ -538,12 +512,12 @@ void ClusterScene::refit8(std::size_t begin, std::size_t end) {
       __m128 l = inf, h = ninf;
       const std::uint32_t first = src[j].first, count = src[j].count;
       if (count == Src8::kBlock) {
-        load_box(bb[first], l, h);
+        simd::load_box(bb[first], l, h);
       } else if (count) {
         const std::uint32_t* c = group_leaf_clusters_.data() + first;
         for (std::uint32_t k = 0; k < count; ++k) {
           __m128 bl, bh;
-          load_box(cb[c[k]], bl, bh);
+          simd::load_box(cb[c[k]], bl, bh);
           l = _mm_min_ps(l, bl), h = _mm_max_ps(h, bh);
         }
       } else if (first != WideNode8::kEmptySlot) {
@@ -815,10 +789,11 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
   times.refit_ms = clock_ms(cfg_.clock) - t0;
 }
 
-// Slot k of n holds cluster c alone: a link to its block tree, or a direct leaf of its blocks.
-void ClusterScene::set_cluster_slot(WideNode& n, int k, std::uint32_t c) const {
-  if (sub_root_[c] != kNoTriangle) n.child[k] = sub_root_[c], n.count[k] = 0;
-  else n.child[k] = cluster_ranges_[c].first_block, n.count[k] = cluster_ranges_[c].triangle_count;  // packed
+// A leaf slot that holds cluster c alone (child, count): a link to its block tree (its 4-wide
+// root, count 0), or a direct leaf of its blocks (or table groups).
+std::pair<std::uint32_t, std::uint32_t> ClusterScene::cluster_slot(std::uint32_t c) const {
+  if (sub_root_[c] != kNoTriangle) return {sub_root_[c], 0};
+  return {cluster_ranges_[c].first_block, cluster_ranges_[c].triangle_count};  // packed
 }
 
 // Per frame: the binary tree over the groups (or clusters) collapsed straight into the 8-wide
@@ -845,24 +820,6 @@ void ClusterScene::collapse_top8() {
     w8.nodes.clear(), w8.root = 0, w8.depth = 0;
     return;
   }
-  // The 4-wide node collapse_to_wide makes from binary inner node b: its children, greedily
-  // opened by largest surface area up to four, the first child kept in place.
-  auto expand4 = [&](std::uint32_t b, std::uint32_t (&kids)[4]) {
-    kids[0] = b + 1, kids[1] = bvh.nodes[b].index;
-    int nk = 2;
-    while (nk < 4) {
-      int best = -1;
-      double best_area = -1.0;
-      for (int i = 0; i < nk; ++i) {
-        const BvhNode& c = bvh.nodes[kids[i]];
-        if (!c.is_leaf() && c.bounds.surface_area() > best_area) best = i, best_area = c.bounds.surface_area();
-      }
-      if (best < 0) break;
-      const std::uint32_t c = kids[best];
-      kids[best] = c + 1, kids[nk++] = bvh.nodes[c].index;
-    }
-    return nk;
-  };
   // A slot: a binary node; an inner one remembers its 4-wide node's child count and its area.
   struct Slot {
     std::uint32_t bin;
@@ -873,12 +830,12 @@ void ClusterScene::collapse_top8() {
     const BvhNode& m = bvh.nodes[b];
     if (m.is_leaf()) return Slot{b, 9, 0.0f};
     std::uint32_t kids[4];
-    return Slot{b, expand4(b, kids), static_cast<float>(m.bounds.surface_area())};
+    return Slot{b, wide_children(bvh, b, kids), static_cast<float>(m.bounds.surface_area())};
   };
-  // A leaf of one cluster (8-wide): a link to its block tree, or a direct leaf of its blocks.
-  auto cluster_slot = [&](std::uint32_t c, std::uint32_t& child, std::uint32_t& count) {
-    if (sub_root_[c] != kNoTriangle) child = link8_[sub_root_[c]], count = 0;
-    else child = cluster_ranges_[c].first_block, count = cluster_ranges_[c].triangle_count;  // packed
+  // A leaf of one cluster: a link to its block tree's 8-wide root, or a direct leaf.
+  auto cluster_slot8 = [&](std::uint32_t c, std::uint32_t& child, std::uint32_t& count) {
+    std::tie(child, count) = cluster_slot(c);
+    if (count == 0) child = link8_[child];
   };
   using Item = Top8Item;
   std::vector<Item>& stack = top8_stack_;
@@ -898,7 +855,7 @@ void ClusterScene::collapse_top8() {
       s[ns++] = Slot{it.bin, 9, 0.0f};  // (a root that is a leaf: collapse_to_wide's one-slot node)
     } else {
       std::uint32_t kids[4];
-      const int nk = expand4(it.bin, kids);
+      const int nk = wide_children(bvh, it.bin, kids);
       for (int i = 0; i < nk; ++i) s[ns++] = slot(kids[i]);
     }
     for (;;) {  // regroup_to_8: open the inner child of largest area whose children fit
@@ -908,7 +865,7 @@ void ClusterScene::collapse_top8() {
         if (ns - 1 + s[i].live <= 8 && s[i].area > best_area) best = i, best_area = s[i].area;
       if (best < 0) break;
       std::uint32_t kids[4];
-      const int nk = expand4(s[best].bin, kids);
+      const int nk = wide_children(bvh, s[best].bin, kids);
       s[best] = slot(kids[0]);  // the first child takes the opened slot, the others go last
       for (int j = 1; j < nk; ++j) s[ns++] = slot(kids[j]);
     }
@@ -926,9 +883,9 @@ void ClusterScene::collapse_top8() {
           if (m.count != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
           const std::uint32_t g = bvh.prim_order[m.index];
           if (group_root_[g] != kNoTriangle) child = link8_[group_root_[g]], count = 0;
-          else cluster_slot(group_offsets_[g], child, count);  // a group of one cluster
+          else cluster_slot8(group_offsets_[g], child, count);  // a group of one cluster
         } else if (m.count == 1) {
-          cluster_slot(bvh.prim_order[m.index], child, count);
+          cluster_slot8(bvh.prim_order[m.index], child, count);
         } else {
           child = m.index, count = m.count | kIndirectLeaf;  // ranges [index, index + count)
         }

@@ -124,7 +124,7 @@ class ClusterScene {
   void refit8(std::size_t begin, std::size_t end);
   void layout_wide8();
   void refit_group_trees();
-  void set_cluster_slot(WideNode& n, int k, std::uint32_t c) const;
+  [[nodiscard]] std::pair<std::uint32_t, std::uint32_t> cluster_slot(std::uint32_t c) const;
   std::shared_ptr<const std::vector<Tri>> tris_;
   SceneConfig cfg_;
   std::vector<std::uint32_t> cluster_ids_;  // scene cluster -> the clustering's cluster
@@ -137,14 +137,12 @@ class ClusterScene {
   AlignedVector<WideNode> sub_nodes_;  // (read by layout_wide8, then released; sub_count_ stays)
   std::uint32_t sub_count_ = 0;        // fixed 4-wide nodes [0, sub_count_) = sub_nodes_ until then
   std::vector<std::uint32_t> sub_root_;  // per cluster: subtree root, or kNoTriangle (one block)
-  std::uint32_t sub_depth_ = 0;
   // GroupTrees::Refit: sub_nodes_[block_nodes_ ..) are the groups' fixed trees (after the block
   // trees), whose 8-wide nodes are refitted from the cluster boxes; the per-frame build sees one
   // record per group.
   bool refit_groups_ = false;
   bool rest_is_frame_tree_ = false;  // built once, plain build: f_.bvh is the rest tree (no build in build_frame)
   std::uint32_t block_nodes_ = 0;
-  std::uint32_t group_depth_ = 0;
   // The 8-wide nodes of the fixed subtrees, which the tracer walks (layout_wide8): their structure is
   // fixed, refit8 writes their boxes. Nodes [0, group8_begin_) are the block trees', then the
   // groups' trees'. link8_ maps a 4-wide subtree root to its 8-wide one.

@@ -80,8 +80,9 @@ struct TraceData {
   /// its 8-wide nodes without one per frame (its fixed subtrees are refitted in `wide8`, its top
   /// collapsed straight into it).
   WideBvh wide;
-  /// The 4-wide tree regrouped into 8-wide nodes (regroup_to_8), with the same leaf children:
-  /// what the tracer walks (single rays and packets). The scenes make it with every update.
+  /// The 4-wide tree regrouped into 8-wide nodes (regroup_to_8), with the same leaf children
+  /// (a ClusterScene makes the same nodes without storing the 4-wide tree): what the tracer
+  /// walks (single rays and packets). The scenes make it with every update.
   WideBvh8 wide8;
   std::vector<LeafRange> ranges;
   AlignedVector<TriBlock> blocks;

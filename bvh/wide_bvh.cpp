@@ -52,20 +52,8 @@ void collapse_to_wide(const Bvh& bvh, WideBvh& w) {
     const Item it = stack.back();
     stack.pop_back();
     w.depth = std::max(w.depth, it.depth);
-    std::uint32_t kids[4] = {it.binary + 1, bvh.nodes[it.binary].index, 0, 0};
-    int nk = 2;
-    while (nk < 4) {
-      int best = -1;
-      double best_area = -1.0;
-      for (int i = 0; i < nk; ++i) {
-        const BvhNode& c = bvh.nodes[kids[i]];
-        if (!c.is_leaf() && c.bounds.surface_area() > best_area) best = i, best_area = c.bounds.surface_area();
-      }
-      if (best < 0) break;
-      const std::uint32_t b = kids[best];
-      kids[best] = b + 1;  // keep the first child in place, the second at the end: order stays spatial
-      kids[nk++] = bvh.nodes[b].index;
-    }
+    std::uint32_t kids[4];
+    const int nk = wide_children(bvh, it.binary, kids);
     for (int i = 0; i < nk; ++i) {
       const BvhNode& c = bvh.nodes[kids[i]];
       WideNode& dst = w.nodes[it.wide];

@@ -98,6 +98,28 @@ std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4,
                               std::uint32_t& depth, std::uint32_t linked_below, std::span<const std::uint32_t> linked8,
                               std::vector<SlotSource>* sources);
 
+/// The children of binary inner node `b` that its 4-wide node gets (collapse_to_wide, in slot
+/// order): b's two children, then the inner one of largest surface area replaced by its two (the
+/// first in place, the second at the end) until there are four or only leaves. Returns their
+/// number, 2 to 4.
+inline int wide_children(const Bvh& bvh, std::uint32_t b, std::uint32_t (&kids)[4]) {
+  kids[0] = b + 1, kids[1] = bvh.nodes[b].index;
+  int nk = 2;
+  while (nk < 4) {
+    int best = -1;
+    double best_area = -1.0;
+    for (int i = 0; i < nk; ++i) {
+      const BvhNode& c = bvh.nodes[kids[i]];
+      if (!c.is_leaf() && c.bounds.surface_area() > best_area) best = i, best_area = c.bounds.surface_area();
+    }
+    if (best < 0) break;
+    const std::uint32_t c = kids[best];
+    kids[best] = c + 1;  // keep the first child in place, the second at the end: order stays spatial
+    kids[nk++] = bvh.nodes[c].index;
+  }
+  return nk;
+}
+
 /// Collapses a binary tree (validate()d) into a 4-wide one with the same leaves. A binary tree
 /// that is a single leaf becomes one wide node with one leaf child. O(nodes).
 [[nodiscard]] WideBvh collapse_to_wide(const Bvh& bvh);
