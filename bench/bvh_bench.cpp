@@ -5,7 +5,7 @@
 //                       [--clusters acc,meshopt] [--max-count 50] [--max-size 50]
 //                       [--leaves linear,block-tree] [--leaf-formats blocks,tables] [--leaf 8] [--ct 1] [--ci 0.3]
 //                       [--isa auto|sse2|avx2|avx512vl|avx512] [--embree all|none] [--deform twist] [--amplitude A]
-//                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--median 4]
+//                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--update-loop N] [--median 4]
 //                       [--vertex-order clusters|input] [--groups 8]
 //
 // MESH (default: armadillo) is subdivided `levels` times (midpoint; 2 -> 832k triangles for
@@ -50,6 +50,8 @@
 // groups of at most N clusters; 0 = the plain build; default: cluster_scene_defaults()).
 // --group-trees rebuild|refit: SceneConfig::group_trees (default: cluster_scene_defaults()).
 // --median N: BuildConfig::median_split_below of the cluster BVHs (default: cluster_scene_defaults()).
+// --update-loop N: only the first cluster configuration's update, N times over frames 1 ..
+// reps - 1 (positions made once), and exit: the median per stage; a target for perf.
 // --build-loop N: only the cluster build, N times over the first clustering's rest-pose boxes
 // (median, and the tree's SAH cost; the two-level build as --group-trees rebuild runs it, whatever
 // --group-trees says), then the box passes alone, and exit; a target for perf (use
@@ -106,7 +108,7 @@ void row(const std::string& config, const std::string& what, const std::vector<d
 
 struct Options {
   std::string mesh_path = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
-  int levels = 2, reps = 5, size = 1024, build_loop = 0;
+  int levels = 2, reps = 5, size = 1024, build_loop = 0, update_loop = 0;
   unsigned threads = 1, max_count = 50;
   double max_size = 50;
   DeformParams deform = deform_preset(DeformKind::Twist);
@@ -154,6 +156,7 @@ Options parse_options(int argc, char** argv) {
     if (a == "--levels") o.levels = static_cast<int>(value());
     else if (a == "--reps") o.reps = static_cast<int>(value());
     else if (a == "--build-loop") o.build_loop = static_cast<int>(value());
+    else if (a == "--update-loop") o.update_loop = static_cast<int>(value());
     else if (a == "--size") o.size = static_cast<int>(value());
     else if (a == "--leaf") o.tcfg.build.max_leaf_size = static_cast<unsigned>(value());
     else if (a == "--threads") o.threads = static_cast<unsigned>(value());
@@ -288,6 +291,28 @@ std::vector<double> series(const std::vector<Row>& rows, std::size_t config, F f
 
 // --build-loop N: the binned SAH build alone, N times over the first cluster scene's rest-pose
 // boxes (centroids = box centres, as in the scene), then the box passes alone: a profiling target.
+// --update-loop N: the first cluster configuration (first clustering, leaf mode and format)
+// updated N times from frames 1 .. reps - 1 in turn (positions made once, outside the timing):
+// the median of every stage and of the whole update. A target for perf: no Embree, no triangle
+// BVH, no trace.
+int run_update_loop(loop::Accel& accel, Scene& scene, const Options& o) {
+  const std::size_t F = o.reps > 1 ? static_cast<std::size_t>(o.reps - 1) : 1;
+  std::vector<AlignedVector<Vec3>> frames(F, AlignedVector<Vec3>(scene.rest().vertex_count()));
+  for (std::size_t f = 0; f < F; ++f) scene.positions(static_cast<double>(o.reps > 1 ? f + 1 : 0), frames[f]);
+  std::vector<double> st[7];
+  for (int i = 0; i < o.update_loop; ++i) {
+    accel.update(frames[static_cast<std::size_t>(i) % F]);
+    const bvh::StageTimes t = accel.last_update().stages;
+    const double v[7] = {t.vertices_ms, t.boxes_ms, t.build_ms, t.collapse_ms, t.leaf_data_ms, t.refit_ms, t.total_ms()};
+    for (int k = 0; k < 7; ++k) st[k].push_back(v[k]);
+  }
+  const char* names[7] = {"1 vertices to frame", "2 boxes", "3 SAH build", "4 collapse+link", "5 leaf data",
+                          "6 block-tree refit", "= per-frame total"};
+  const std::string label = "update loop " + std::string(accel.name());
+  for (int k = 0; k < 7; ++k) row(label, names[k], st[k]);
+  return 0;
+}
+
 int run_build_loop(const ClusterScene& cs, const Mesh& mesh, const ClusterView& v0, const Vec3& origin,
                    const Options& o) {
   const StageClock clock = o.clock;
@@ -508,6 +533,14 @@ int main(int argc, char** argv) {
     c.cluster_leaf = o.leaves.front();
     const ClusterView v0 = view_of(clusterings.front().second);
     return run_build_loop(ClusterScene(mesh, v0, c), mesh, v0, setup.origin, o);
+  }
+
+  if (o.update_loop > 0) {  // the first cluster configuration's whole update, nothing else
+    if (clusterings.empty() || o.leaves.empty() || o.formats.empty()) usage("--update-loop needs a clustering");
+    setup.clusters = &clusterings.front().second;
+    setup.cluster_leaf = o.leaves.front();
+    setup.leaf_format = o.leaves.front() == ClusterLeaf::Linear ? o.formats.front() : bvh::LeafFormat::Blocks;
+    return run_update_loop(*make_config(AccelKind::OursClusters, mesh, setup, o), scene, o);
   }
 
   // Configurations: ours_triangles first (the reference of the mismatches), then every clustering
