@@ -3,7 +3,6 @@
 #include <emmintrin.h>
 
 #include <algorithm>
-#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -610,23 +609,6 @@ void ClusterScene::set_vertex_order(const Mesh& mesh, std::span<const std::uint3
     vorder_ = {};
     f_.fpos.resize(mesh.vertex_count());
     add_sentinel(f_.fpos);
-    // The ranges the converting fill converts per run of clusters (begin, end), and the gaps.
-    const std::size_t C = runs_->own_begin.size();
-    prep_offsets_.assign(1, 0);
-    prep_ranges_.clear();
-    for (std::size_t c0 = 0; c0 < C; c0 += kPrepareClusters) {
-      for (std::size_t c = c0; c < std::min(C, c0 + kPrepareClusters); ++c) {
-        const std::uint32_t b = runs_->own_begin[c], e = b + runs_->own_count[c];
-        if (b == e) continue;
-        if (prep_ranges_.size() > prep_offsets_.back() && prep_ranges_.back().second == b)
-          prep_ranges_.back().second = e;
-        else
-          prep_ranges_.emplace_back(b, e);
-      }
-      prep_offsets_.push_back(static_cast<std::uint32_t>(prep_ranges_.size()));
-    }
-    for (const auto& [b, e] : runs_->gaps) prep_ranges_.emplace_back(b, e);
-    prep_offsets_.push_back(static_cast<std::uint32_t>(prep_ranges_.size()));
   } else {
     release(vorder_.to_new);  // only needed for the corners
   }
@@ -701,14 +683,6 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     throw std::invalid_argument("ClusterScene::update: " + std::to_string(positions.size()) + " positions for " +
                                 std::to_string(V) + " vertices");
   double t0 = clock_ms(cfg_.clock);
-  if (runs_ && lists_are_corners_ && !overlap_possible() && data.format == LeafFormat::Tables) {
-    // One thread, tables: the fill converts each run of clusters' own vertices just before it
-    // reads them back (from the cache), and takes the cluster boxes (build_frame).
-    times.vertices_ms = 0.0;
-    times.boxes_ms = 0.0;
-    build_frame(true, positions);
-    return;
-  }
   if (runs_ && lists_are_corners_ && !overlap_possible()) {
     // One thread: the conversion streams over the input (f_.fpos keeps its size and sentinels),
     // and the fill, which reads every corner anyway, takes the cluster boxes (build_frame).
@@ -747,36 +721,7 @@ bool ClusterScene::overlap_possible() const {
 // The frame after its cluster boxes (f_.boxes, f_.centroids) and frame positions (f_.fpos, then
 // add_sentinel's two entries): the leaf data, the tree over the clusters or groups, the link and
 // the refit of the fixed subtrees.
-// The tables' fill with the conversion of the input positions folded in (one thread, fused
-// mode): before each run of clusters is filled, the run's own vertices are converted into f_.fpos
-// (prep_ranges_), so that the fill reads them back from the cache; the vertices no cluster lists
-// are converted last. A position that is not finite throws after the fill, and every row is then
-// NaN (the scene holds no triangle until the next accepted frame; the tree is the previous one).
-void ClusterScene::fill_tables_converting(std::span<const Vec3> positions) {
-  TraceData& data = f_.data;
-  f_.boxes.resize(weights_.size());
-  f_.centroids.resize(weights_.size());
-  const FrameMap frame = data.frame();
-  Vec3f* out = f_.fpos.data();
-  bool good = true;
-  fill_tables_in_order(tables_, f_.fpos[0].data(), data.tables, f_.boxes.data(), f_.centroids.data(),
-                       [&](std::size_t c0, std::size_t) {
-                         const std::size_t r = c0 / kPrepareClusters;
-                         for (std::uint32_t k = prep_offsets_[r]; k < prep_offsets_[r + 1]; ++k)
-                           good &= frame_positions_range(positions.data(), frame, out, prep_ranges_[k].first,
-                                                         prep_ranges_[k].second);
-                       });
-  const std::size_t last = prep_offsets_.size() - 2;  // the gaps
-  for (std::uint32_t k = prep_offsets_[last]; k < prep_offsets_[last + 1]; ++k)
-    good &= frame_positions_range(positions.data(), frame, out, prep_ranges_[k].first, prep_ranges_[k].second);
-  if (!good) {
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (TableGroup& t : data.tables) std::fill(&t.v[0][0], &t.v[0][0] + 3 * kTableSlots, nan);
-    throw_not_finite(positions, frame);
-  }
-}
-
-void ClusterScene::build_frame(bool boxes_from_fill, std::span<const Vec3> convert) {
+void ClusterScene::build_frame(bool boxes_from_fill) {
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
 
@@ -788,9 +733,7 @@ void ClusterScene::build_frame(bool boxes_from_fill, std::span<const Vec3> conve
   auto leaf_data = [&] {
     const double tl = clock_ms(cfg_.clock);
     block_boxes_.resize(B ? data.blocks.size() : 0);
-    if (data.format == LeafFormat::Tables && !convert.empty()) {
-      fill_tables_converting(convert);
-    } else if (data.format == LeafFormat::Tables) {  // (linear leaves: no block boxes)
+    if (data.format == LeafFormat::Tables) {  // (linear leaves: no block boxes)
       if (boxes_from_fill) f_.boxes.resize(weights_.size()), f_.centroids.resize(weights_.size());
       fill_tables(tables_, f_.fpos[0].data(), data.tables, boxes_from_fill ? f_.boxes.data() : nullptr,
                   boxes_from_fill ? f_.centroids.data() : nullptr);  // fenced

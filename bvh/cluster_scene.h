@@ -112,10 +112,7 @@ class ClusterScene {
   void only_frame();
   /// boxes_from_fill: the cluster boxes are made by the fill of the blocks (update() on one
   /// thread), which then runs before the tree instead of beside it.
-  /// convert: the tables' fill converts the input positions itself, a run of clusters' own
-  /// vertices before it fills them (fill_tables_in_order; one thread, tables, fused mode).
-  void build_frame(bool boxes_from_fill = false, std::span<const Vec3> convert = {});
-  void fill_tables_converting(std::span<const Vec3> positions);
+  void build_frame(bool boxes_from_fill = false);
   [[nodiscard]] bool overlap_possible() const;
   [[nodiscard]] bool lists_are_corners(std::size_t vertex_count, std::span<const std::uint32_t> lane_ids) const;
   [[nodiscard]] std::span<const Tri> triangles() const {
@@ -180,12 +177,6 @@ class ClusterScene {
   GroupVertexOrder vorder_;  // gather mode: vertices renumbered in first-touch order over the clusters (f_.fpos is in it)
   std::optional<GroupRuns> runs_;  // fused mode (the input is in that order already): f_.fpos in input order
   bool lists_are_corners_ = false;  // fused mode: the clusters' vertex lists are their corners (lists_are_corners)
-  // Fused mode: the input ranges fill_tables_converting converts before the run of clusters
-  // [kPrepareClusters r, kPrepareClusters (r + 1)) is filled: prep_ranges_[prep_offsets_[r] ..
-  // prep_offsets_[r + 1]) (the runs' own vertices, adjacent ranges merged); the vertices no
-  // cluster lists (GroupRuns::gaps) after the last run.
-  std::vector<std::uint32_t> prep_offsets_;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> prep_ranges_;
   AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel; none with tables)
   TableLayout tables_;  // LeafFormat::Tables: the groups per cluster and their slots' vertex indices
   SceneFrame f_;

@@ -7,7 +7,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <span>
 #include <vector>
 
@@ -26,7 +25,6 @@ struct TableLayout {
   std::uint32_t sentinel = 0;
 
   [[nodiscard]] std::size_t group_count() const { return slot_vertices.size() / kTableSlots; }
-  [[nodiscard]] std::size_t cluster_count() const { return group_offsets.empty() ? 0 : group_offsets.size() - 1; }
 };
 
 /// The groups of every cluster, from the block layout: cluster c's triangles are the used lanes
@@ -54,16 +52,5 @@ struct TableLayout {
 /// do not depend on their order).
 void fill_tables(const TableLayout& layout, const float* frame_pos, std::span<TableGroup> groups, Box3f* cluster_boxes,
                  Vec3f* centres);
-
-/// Clusters fill_tables_in_order prepares at a time.
-inline constexpr std::size_t kPrepareClusters = 512;
-
-/// fill_tables (the same bytes, boxes and centres) on the calling thread alone, in cluster order,
-/// with prepare(c0, c1) called before clusters [c0, c1) are filled, for consecutive runs of at
-/// most kPrepareClusters clusters: a caller that writes the frame positions of those clusters
-/// there (ClusterScene: the conversion of their own vertices) has them read back from the cache.
-void fill_tables_in_order(const TableLayout& layout, const float* frame_pos, std::span<TableGroup> groups,
-                          Box3f* cluster_boxes, Vec3f* centres,
-                          const std::function<void(std::size_t, std::size_t)>& prepare);
 
 }  // namespace ptc::bvh

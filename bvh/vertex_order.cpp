@@ -5,7 +5,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <algorithm>
 #include <atomic>
 #include <limits>
 #include <stdexcept>
@@ -313,18 +312,6 @@ void frame_positions_streamed(std::span<const Vec3> positions, const FrameMap& f
     if (_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7) any_bad.store(true, std::memory_order_relaxed);
   });
   if (any_bad.load()) throw_not_finite(positions, frame);
-}
-
-bool frame_positions_range(const Vec3* positions, const FrameMap& frame, Vec3f* out, std::size_t begin,
-                           std::size_t end, bool allow_avx2) {
-  static const OwnRangeFn best = pick_own_range();
-  const OwnRangeFn own_range = allow_avx2 ? best : &own_range_sse2;
-  __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf), bad = _mm_setzero_ps();
-  for (std::size_t b = begin; b < end; b += kVerticesPerTask) {  // (own_range counts in 32 bits)
-    const std::size_t e = std::min(end, b + kVerticesPerTask);
-    own_range(positions[b].data(), out[b].data(), static_cast<std::uint32_t>(e - b), frame, lo, hi, bad);
-  }
-  return !(_mm_movemask_ps(_mm_cmpunord_ps(bad, bad)) & 7);
 }
 
 void frame_positions_and_boxes(std::span<const Vec3> positions, const FrameMap& frame, const GroupRuns& runs,

@@ -86,12 +86,6 @@ struct GroupRuns {
 void frame_positions_streamed(std::span<const Vec3> positions, const FrameMap& frame, std::span<Vec3f> out_pos,
                               bool allow_avx2 = true);
 
-/// frame_positions_streamed's loop over positions [begin, end) alone, on the calling thread, into
-/// out[begin, end) (the caller checks the bounds): false when one of them is not finite in the
-/// trace frame (the caller then reports it, throw_not_finite). The same bits.
-[[nodiscard]] bool frame_positions_range(const Vec3* positions, const FrameMap& frame, Vec3f* out, std::size_t begin,
-                                         std::size_t end, bool allow_avx2 = true);
-
 /// One pass per frame: out_pos[v] = to_frame(positions[v], origin) for every input vertex v
 /// (positions.size() == runs.vertex_count <= out_pos.size(), else std::invalid_argument; entries
 /// past it are not touched), and the boxes and
