@@ -37,8 +37,10 @@ struct BuildConfig {
   /// SAH-best position). Meant for single-cluster leaves (cluster_scene_defaults() sets 4):
   /// measured on 27.6k Acc clusters of armadillo x2, build 6% faster, SAH cost 0.3% higher.
   std::uint32_t median_split_below = 0;
-  /// Binned builder: use the AVX2 binning loop when the CPU has it (runtime check). Both loops
-  /// compute the same bins, so the tree is the same either way (tests compare them).
+  /// Use the AVX2 loops when the CPU has them (runtime check): the binned builder's binning, and a
+  /// scene's per-frame loops built on this config (conversion, fills, the cluster scene's 8-wide
+  /// refit). Both variants of each compute the same bits, so the tree and the trace data are the
+  /// same either way (tests compare them).
   bool allow_avx2 = true;
 };
 

@@ -494,34 +494,42 @@ void ClusterScene::append_group_tree(std::size_t g, const WideBvh& w) {
 
 
 
-// The fixed 8-wide nodes [begin, end) refitted, children after parents (one reverse sweep; a
-// group tree's links to block trees read src8_'s cluster boxes, not the block trees'): each
-// slot's box from its source (src8_), the node's eight boxes transposed into its rows, and its
-// union kept in box8_ for its parent.
-void ClusterScene::refit8(std::size_t begin, std::size_t end) {
-  WideNode8* nodes = f_.data.wide8.nodes.data();
-  const Box3f* cb = f_.boxes.data();
-  const Box3f* bb = block_boxes_.data();
+namespace {
+
+// refit8's sweep (see there) over nodes [begin, end): compiled twice, SSE2 (the x86-64 baseline)
+// and the same instructions in their VEX forms (three operands, no register copies), picked at
+// run time; the same bits either way.
+struct Refit8Args {
+  WideNode8* nodes;
+  const std::uint32_t* src;  // Src8 pairs: first, count
+  const Box3f* cluster_boxes;
+  const Box3f* block_boxes;
+  const std::uint32_t* leaf_clusters;
+  float* box8;
+};
+constexpr std::uint32_t kSrcBlock = 0xffffffffu;  // (ClusterScene::Src8::kBlock)
+
+[[gnu::always_inline]] inline void refit8_sweep(const Refit8Args& x, std::size_t begin, std::size_t end) {
   const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
   for (std::size_t d = end; d-- > begin;) {
-    WideNode8& n = nodes[d];
-    const Src8* src = src8_.data() + 8 * d;
+    WideNode8& n = x.nodes[d];
+    const std::uint32_t* src = x.src + 16 * d;
     __m128 lo[8], hi[8];
     __m128 alo = inf, ahi = ninf;
     for (int j = 0; j < 8; ++j) {
       __m128 l = inf, h = ninf;
-      const std::uint32_t first = src[j].first, count = src[j].count;
-      if (count == Src8::kBlock) {
-        simd::load_box(bb[first], l, h);
+      const std::uint32_t first = src[2 * j], count = src[2 * j + 1];
+      if (count == kSrcBlock) {
+        simd::load_box(x.block_boxes[first], l, h);
       } else if (count) {
-        const std::uint32_t* c = group_leaf_clusters_.data() + first;
+        const std::uint32_t* c = x.leaf_clusters + first;
         for (std::uint32_t k = 0; k < count; ++k) {
           __m128 bl, bh;
-          simd::load_box(cb[c[k]], bl, bh);
+          simd::load_box(x.cluster_boxes[c[k]], bl, bh);
           l = _mm_min_ps(l, bl), h = _mm_max_ps(h, bh);
         }
       } else if (first != WideNode8::kEmptySlot) {
-        const float* b = box8_.data() + 8 * std::size_t{first};
+        const float* b = x.box8 + 8 * std::size_t{first};
         l = _mm_load_ps(b), h = _mm_load_ps(b + 4);
       }
       lo[j] = l, hi[j] = h;
@@ -535,9 +543,32 @@ void ClusterScene::refit8(std::size_t begin, std::size_t end) {
       _mm_store_ps(&n.bounds[2 * a][0], lo[a]), _mm_store_ps(&n.bounds[2 * a][4], lo[4 + a]);
       _mm_store_ps(&n.bounds[2 * a + 1][0], hi[a]), _mm_store_ps(&n.bounds[2 * a + 1][4], hi[4 + a]);
     }
-    float* bx = box8_.data() + 8 * d;
+    float* bx = x.box8 + 8 * d;
     _mm_store_ps(bx, alo), _mm_store_ps(bx + 4, ahi);
   }
+}
+
+void refit8_sse2(const Refit8Args& x, std::size_t begin, std::size_t end) { refit8_sweep(x, begin, end); }
+__attribute__((target("avx2"))) void refit8_avx2(const Refit8Args& x, std::size_t begin, std::size_t end) {
+  refit8_sweep(x, begin, end);
+}
+bool cpu_has_avx2() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+}
+
+}  // namespace
+
+// The fixed 8-wide nodes [begin, end) refitted, children after parents (one reverse sweep; a
+// group tree's links to block trees read src8_'s cluster boxes, not the block trees'): each
+// slot's box from its source (src8_), the node's eight boxes transposed into its rows, and its
+// union kept in box8_ for its parent.
+void ClusterScene::refit8(std::size_t begin, std::size_t end) {
+  static_assert(sizeof(Src8) == 8 && Src8::kBlock == kSrcBlock);
+  static const bool avx2 = cpu_has_avx2();
+  const Refit8Args x{f_.data.wide8.nodes.data(), reinterpret_cast<const std::uint32_t*>(src8_.data()), f_.boxes.data(),
+                     block_boxes_.data(), group_leaf_clusters_.data(), box8_.data()};
+  (avx2 && cfg_.build.allow_avx2 ? refit8_avx2 : refit8_sse2)(x, begin, end);
 }
 
 // GroupTrees::Refit, per frame: the groups' 8-wide trees refitted from the cluster boxes, then
@@ -686,7 +717,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   if (runs_ && lists_are_corners_ && !overlap_possible()) {
     // One thread: the conversion streams over the input (f_.fpos keeps its size and sentinels),
     // and the fill, which reads every corner anyway, takes the cluster boxes (build_frame).
-    frame_positions_streamed(positions, data.frame(), std::span<Vec3f>(f_.fpos.data(), V));
+    frame_positions_streamed(positions, data.frame(), std::span<Vec3f>(f_.fpos.data(), V), cfg_.build.allow_avx2);
     times.vertices_ms = clock_ms(cfg_.clock) - t0;
     times.boxes_ms = 0.0;
     build_frame(true);
@@ -694,7 +725,7 @@ void ClusterScene::update(std::span<const Vec3> positions) {
   }
   if (runs_) {  // one pass: conversion and boxes (f_.fpos keeps its size and sentinels)
     frame_positions_and_boxes(positions, data.frame(), *runs_, std::span<Vec3f>(f_.fpos.data(), V), f_.boxes,
-                              f_.centroids);
+                              f_.centroids, cfg_.build.allow_avx2);
     times.vertices_ms = 0.0;
     times.boxes_ms = clock_ms(cfg_.clock) - t0;
   } else {
@@ -730,13 +761,14 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
   // chunks run on the other threads. Each stage keeps its own time; overlap_ms is what they
   // shared, so total_ms() stays the update's wall time.
   const std::size_t B = block_nodes_;
+  const bool avx2 = cfg_.build.allow_avx2;  // (the AVX2 loops when the CPU has them; the same bytes)
   auto leaf_data = [&] {
     const double tl = clock_ms(cfg_.clock);
     block_boxes_.resize(B ? data.blocks.size() : 0);
     if (data.format == LeafFormat::Tables) {  // (linear leaves: no block boxes)
       if (boxes_from_fill) f_.boxes.resize(weights_.size()), f_.centroids.resize(weights_.size());
       fill_tables(tables_, f_.fpos[0].data(), data.tables, boxes_from_fill ? f_.boxes.data() : nullptr,
-                  boxes_from_fill ? f_.centroids.data() : nullptr);  // fenced
+                  boxes_from_fill ? f_.centroids.data() : nullptr, avx2);  // fenced
     } else if (cfg_.built_once) {  // (no corner indices: the lanes' triangles in the mesh's numbering; the sentinel last but one)
       fill_blocks_from_lanes(data.triangle_ids, triangles(), f_.fpos[0].data(),
                              static_cast<std::uint32_t>(f_.fpos.size() - 2), data.blocks,
@@ -745,9 +777,10 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
       f_.boxes.resize(weights_.size());
       f_.centroids.resize(weights_.size());
       fill_blocks_and_cluster_boxes(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr,
-                                    cluster_ranges_, f_.boxes.data(), f_.centroids.data());  // fenced
+                                    cluster_ranges_, f_.boxes.data(), f_.centroids.data(), avx2);  // fenced
     } else {
-      fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr);  // fenced
+      fill_blocks_from_corners(corners_, f_.fpos[0].data(), data.blocks, B ? block_boxes_.data() : nullptr,
+                               avx2);  // fenced
     }
     times.leaf_data_ms = clock_ms(cfg_.clock) - tl;
   };
@@ -869,6 +902,10 @@ void ClusterScene::collapse_top8() {
       s[best] = slot(kids[0]);  // the first child takes the opened slot, the others go last
       for (int j = 1; j < nk; ++j) s[ns++] = slot(kids[j]);
     }
+    // The node is assembled here and then streamed out whole: its lines, last written a frame ago
+    // and evicted since by the fill, are not read for ownership first (slot-by-slot stores into
+    // them stalled on those reads).
+    alignas(64) WideNode8 dst;
     for (int i = 0; i < 8; ++i) {
       std::uint32_t child = WideNode8::kEmptySlot, count = 0;
       Box3f box;
@@ -890,11 +927,15 @@ void ClusterScene::collapse_top8() {
           child = m.index, count = m.count | kIndirectLeaf;  // ranges [index, index + count)
         }
       }
-      WideNode8& dst = w8.nodes[it.node8];
       dst.set_child_box(i, box);
       dst.child[i] = child, dst.count[i] = count;
     }
+    static_assert(sizeof(WideNode8) % 16 == 0);
+    float* out = reinterpret_cast<float*>(&w8.nodes[it.node8]);
+    const float* in = reinterpret_cast<const float*>(&dst);
+    for (std::size_t k = 0; k < sizeof(WideNode8) / sizeof(float); k += 4) _mm_stream_ps(out + k, _mm_load_ps(in + k));
   }
+  _mm_sfence();
   w8.depth = depth + group_depth8_ + sub_depth8_;
 }
 

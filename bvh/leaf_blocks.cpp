@@ -104,31 +104,88 @@ void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> t
   for (std::uint32_t j = 0; j < blocks_for(n); ++j) fill_block(lane_ids + 4 * j, tris, fp, sentinel, blocks[j]);
 }
 
-void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
-                              Box3f* boxes) {
-  fill_in_chunks(blocks.size(), [&](std::size_t b) {
-    prefetch_corner(corners, fp, b);
-    fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
+namespace {
+
+// The two per-frame fills from corner indices, each over its own chunk ([b0, b1) blocks, or
+// [c0, c1) clusters), compiled twice: SSE2 (the x86-64 baseline) and the same instructions in
+// their VEX forms (three operands: none of the register copies of the two-operand forms), picked
+// at run time. The same bytes either way (a test compares them).
+[[gnu::always_inline]] inline void corner_blocks(const std::uint32_t* corners, std::size_t ncorners, const float* fp,
+                                                 TriBlock* blocks, Box3f* boxes, std::size_t b0, std::size_t b1) {
+  const std::span<const std::uint32_t> cs(corners, ncorners);
+  for (std::size_t b = b0; b < b1; ++b) {
+    prefetch_corner(cs, fp, b);
+    fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners + 12 * b), fp, blocks[b],
                        boxes ? boxes + b : nullptr);
+  }
+}
+[[gnu::always_inline]] inline void corner_clusters(const std::uint32_t* corners, std::size_t ncorners, const float* fp,
+                                                   TriBlock* blocks, Box3f* block_boxes, const LeafRange* ranges,
+                                                   Box3f* cluster_boxes, Vec3f* centres, std::size_t c0, std::size_t c1) {
+  const std::span<const std::uint32_t> cs(corners, ncorners);
+  for (std::size_t c = c0; c < c1; ++c) {
+    __m128 lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
+    const LeafRange lr = ranges[c];
+    for (std::size_t b = lr.first_block; b < std::size_t{lr.first_block} + lr.block_count; ++b) {
+      prefetch_corner(cs, fp, b);
+      fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners + 12 * b), fp, blocks[b],
+                         block_boxes ? block_boxes + b : nullptr, lo, hi);
+    }
+    simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);  // the four lanes' rows into one box
+  }
+}
+
+using CornerBlocksFn = void (*)(const std::uint32_t*, std::size_t, const float*, TriBlock*, Box3f*, std::size_t,
+                                std::size_t);
+using CornerClustersFn = void (*)(const std::uint32_t*, std::size_t, const float*, TriBlock*, Box3f*, const LeafRange*,
+                                  Box3f*, Vec3f*, std::size_t, std::size_t);
+void corner_blocks_sse2(const std::uint32_t* corners, std::size_t n, const float* fp, TriBlock* blocks, Box3f* boxes,
+                        std::size_t b0, std::size_t b1) {
+  corner_blocks(corners, n, fp, blocks, boxes, b0, b1);
+}
+__attribute__((target("avx2"))) void corner_blocks_avx2(const std::uint32_t* corners, std::size_t n, const float* fp,
+                                                        TriBlock* blocks, Box3f* boxes, std::size_t b0, std::size_t b1) {
+  corner_blocks(corners, n, fp, blocks, boxes, b0, b1);
+}
+void corner_clusters_sse2(const std::uint32_t* corners, std::size_t n, const float* fp, TriBlock* blocks,
+                          Box3f* block_boxes, const LeafRange* ranges, Box3f* cluster_boxes, Vec3f* centres,
+                          std::size_t c0, std::size_t c1) {
+  corner_clusters(corners, n, fp, blocks, block_boxes, ranges, cluster_boxes, centres, c0, c1);
+}
+__attribute__((target("avx2"))) void corner_clusters_avx2(const std::uint32_t* corners, std::size_t n, const float* fp,
+                                                          TriBlock* blocks, Box3f* block_boxes, const LeafRange* ranges,
+                                                          Box3f* cluster_boxes, Vec3f* centres, std::size_t c0,
+                                                          std::size_t c1) {
+  corner_clusters(corners, n, fp, blocks, block_boxes, ranges, cluster_boxes, centres, c0, c1);
+}
+bool has_avx2() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+}
+
+}  // namespace
+
+void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
+                              Box3f* boxes, bool allow_avx2) {
+  static const bool avx2 = has_avx2();
+  const CornerBlocksFn fill = allow_avx2 && avx2 ? &corner_blocks_avx2 : &corner_blocks_sse2;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), kBlocksPerTask),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+    fill(corners.data(), corners.size(), fp, blocks.data(), boxes, r.begin(), r.end());
+    _mm_sfence();
   });
 }
 
 void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
                                    Box3f* block_boxes, std::span<const LeafRange> ranges, Box3f* cluster_boxes,
-                                   Vec3f* centres) {
+                                   Vec3f* centres, bool allow_avx2) {
+  static const bool avx2 = has_avx2();
+  const CornerClustersFn fill = allow_avx2 && avx2 ? &corner_clusters_avx2 : &corner_clusters_sse2;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ranges.size(), kClustersPerTask),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t c = r.begin(); c < r.end(); ++c) {
-      __m128 lo[3], hi[3];
-      for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
-      const LeafRange lr = ranges[c];
-      for (std::size_t b = lr.first_block; b < std::size_t{lr.first_block} + lr.block_count; ++b) {
-        prefetch_corner(corners, fp, b);
-        fill_block_corners(*reinterpret_cast<const std::uint32_t(*)[3][4]>(corners.data() + 12 * b), fp, blocks[b],
-                           block_boxes ? block_boxes + b : nullptr, lo, hi);
-      }
-      simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);  // the four lanes' rows into one box
-    }
+    fill(corners.data(), corners.size(), fp, blocks.data(), block_boxes, ranges.data(), cluster_boxes, centres,
+         r.begin(), r.end());
     _mm_sfence();
   });
 }

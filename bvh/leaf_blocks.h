@@ -30,19 +30,20 @@ void fill_leaf_blocks(std::span<const std::uint32_t> ids, std::span<const Tri> t
 /// the sentinel's index for padding lanes), gathered from frame_pos. boxes: null, or one entry
 /// per block receiving the block's exact float box (padding lanes ignored). Runs in chunks on
 /// the caller's threads (oneTBB), each fencing its own streaming stores; the same bytes at any
-/// thread count.
+/// thread count. The loop runs in its VEX (AVX2) encoding when allow_avx2 and the CPU has AVX2:
+/// the same instructions, hence the same bytes (a test compares them).
 void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* frame_pos, std::span<TriBlock> blocks,
-                              Box3f* boxes);
+                              Box3f* boxes, bool allow_avx2 = true);
 
 /// fill_blocks_from_corners, cluster by cluster: cluster c's blocks are ranges[c] (consecutive,
 /// first_block .. + block_count), and cluster_boxes[c] / centres[c] receive the box of all its
 /// blocks' corners widened one unit in the last place and its centre: bit for bit
 /// point_group_boxes over the clusters' corner vertices (padding lanes ignored). block_boxes:
 /// null or one entry per block, as in fill_blocks_from_corners. Chunks of clusters run on the
-/// caller's threads; the same bytes at any count.
+/// caller's threads; the same bytes at any count. allow_avx2 as in fill_blocks_from_corners.
 void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const float* frame_pos,
                                    std::span<TriBlock> blocks, Box3f* block_boxes, std::span<const LeafRange> ranges,
-                                   Box3f* cluster_boxes, Vec3f* centres);
+                                   Box3f* cluster_boxes, Vec3f* centres, bool allow_avx2 = true);
 
 /// The same blocks and boxes from the lanes' triangle ids (lane_ids[4 b + l], kNoTriangle for
 /// padding) and the triangles' corners, for a scene filled once (no corner indices kept).

@@ -164,38 +164,68 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
   return out;
 }
 
+namespace {
+
+// Clusters [c0, c1): their groups' rows, and (boxes) their boxes and centres.
+[[gnu::always_inline]] inline void fill_clusters(const TableLayout& layout, const float* fp, TableGroup* groups,
+                                                 std::size_t c0, std::size_t c1, Box3f* cluster_boxes, Vec3f* centres) {
+  const bool boxes = cluster_boxes && centres;
+  for (std::size_t c = c0; c < c1; ++c) {
+    __m128 lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
+    for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
+      const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
+      TableGroup& t = groups[g];
+      // A group of at most 16 vertices: only the rows' first cache lines (slots 16-31 stay the
+      // NaN make_table_layout wrote).
+      const int end = sv[kTableSlots / 2] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
+      for (int q = 0; q < end; q += 4) {
+        // Four slots' (x y z .) by 16-byte loads (add_sentinel's extra element keeps the last in
+        // the array), transposed to rows; the NaN sentinel's lanes drop out of the min and max
+        // (_mm_min_ps(x, acc) returns acc for a NaN x). Every row is written whole (full lines
+        // for the streaming stores).
+        __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q]}), r1 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 1]});
+        __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 2]}), r3 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 3]});
+        _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+        _mm_stream_ps(&t.v[0][q], r0), _mm_stream_ps(&t.v[1][q], r1), _mm_stream_ps(&t.v[2][q], r2);
+        lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
+        hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
+      }
+    }
+    if (boxes) simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);
+  }
+}
+
+// The same loop twice: SSE2 (the x86-64 baseline), and the same instructions in their VEX
+// forms, which take three operands and so need none of the register copies the two-operand
+// forms do (measured: the fill 15% faster).
+using FillFn = void (*)(const TableLayout&, const float*, TableGroup*, std::size_t, std::size_t, Box3f*, Vec3f*);
+void fill_clusters_sse2(const TableLayout& layout, const float* fp, TableGroup* groups, std::size_t c0, std::size_t c1,
+                        Box3f* cluster_boxes, Vec3f* centres) {
+  fill_clusters(layout, fp, groups, c0, c1, cluster_boxes, centres);
+}
+__attribute__((target("avx2"))) void fill_clusters_avx2(const TableLayout& layout, const float* fp, TableGroup* groups,
+                                                        std::size_t c0, std::size_t c1, Box3f* cluster_boxes,
+                                                        Vec3f* centres) {
+  fill_clusters(layout, fp, groups, c0, c1, cluster_boxes, centres);
+}
+FillFn pick_fill() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") ? &fill_clusters_avx2 : &fill_clusters_sse2;
+}
+
+}  // namespace
+
 void fill_tables(const TableLayout& layout, const float* fp, std::span<TableGroup> groups, Box3f* cluster_boxes,
-                 Vec3f* centres) {
+                 Vec3f* centres, bool allow_avx2) {
   if (groups.size() != layout.group_count())
     throw std::invalid_argument("fill_tables: " + std::to_string(groups.size()) + " groups for a layout of " +
                                 std::to_string(layout.group_count()));
+  static const FillFn best = pick_fill();
+  const FillFn fill = allow_avx2 ? best : &fill_clusters_sse2;
   const std::size_t C = layout.group_offsets.empty() ? 0 : layout.group_offsets.size() - 1;
-  const bool boxes = cluster_boxes && centres;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t c = r.begin(); c < r.end(); ++c) {
-      __m128 lo[3], hi[3];
-      for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_ps(kInf), hi[a] = _mm_set1_ps(-kInf);
-      for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
-        const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
-        TableGroup& t = groups[g];
-        // A group of at most 16 vertices: only the rows' first cache lines (slots 16-31 stay the
-        // NaN make_table_layout wrote).
-        const int end = sv[kTableSlots / 2] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
-        for (int q = 0; q < end; q += 4) {
-          // Four slots' (x y z .) by 16-byte loads (add_sentinel's extra element keeps the last in
-          // the array), transposed to rows; the NaN sentinel's lanes drop out of the min and max
-          // (_mm_min_ps(x, acc) returns acc for a NaN x). Every row is written whole (full lines
-          // for the streaming stores).
-          __m128 r0 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q]}), r1 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 1]});
-          __m128 r2 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 2]}), r3 = _mm_loadu_ps(fp + 3 * std::size_t{sv[q + 3]});
-          _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-          _mm_stream_ps(&t.v[0][q], r0), _mm_stream_ps(&t.v[1][q], r1), _mm_stream_ps(&t.v[2][q], r2);
-          lo[0] = _mm_min_ps(r0, lo[0]), lo[1] = _mm_min_ps(r1, lo[1]), lo[2] = _mm_min_ps(r2, lo[2]);
-          hi[0] = _mm_max_ps(r0, hi[0]), hi[1] = _mm_max_ps(r1, hi[1]), hi[2] = _mm_max_ps(r2, hi[2]);
-        }
-      }
-      if (boxes) simd::fold_rows_store_widened(lo, hi, cluster_boxes[c], centres[c]);
-    }
+    fill(layout, fp, groups.data(), r.begin(), r.end(), cluster_boxes, centres);
     _mm_sfence();
   });
 }

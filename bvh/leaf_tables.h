@@ -49,8 +49,9 @@ struct TableLayout {
 /// count. cluster_boxes[c] / centres[c] (either null: neither written) receive the box of the
 /// cluster's vertices widened one unit in the last place and its centre: bit for bit
 /// fill_blocks_and_cluster_boxes' boxes of the same clusters (the same vertices, and min and max
-/// do not depend on their order).
+/// do not depend on their order). The loop runs in its VEX (AVX2) encoding when allow_avx2 and the
+/// CPU has AVX2: the same instructions, hence the same bytes (a test compares them).
 void fill_tables(const TableLayout& layout, const float* frame_pos, std::span<TableGroup> groups, Box3f* cluster_boxes,
-                 Vec3f* centres);
+                 Vec3f* centres, bool allow_avx2 = true);
 
 }  // namespace ptc::bvh

@@ -117,15 +117,17 @@ TEST(LeafBlocks, CornerFillIsTheSameAtAnyThreadCount) {
       const bool pad = b % 7 == 0 && l == 3;
       for (int c = 0; c < 3; ++c) corners[12 * b + 4 * c + l] = pad ? V : static_cast<std::uint32_t>(g() % V);
     }
-  for (int threads : {1, 2, 4}) {
+  // (and both encodings of the loop: allow_avx2 false is the SSE2 one)
+  for (const auto& [threads, avx2] : {std::pair{1, true}, {2, true}, {4, true}, {1, false}, {2, false}}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     AlignedVector<TriBlock> blocks(nb);
     AlignedVector<Box3f> boxes(nb);
-    fill_blocks_from_corners(corners, fp[0].data(), blocks, boxes.data());
+    fill_blocks_from_corners(corners, fp[0].data(), blocks, boxes.data(), avx2);
+    const std::string what = "threads " + std::to_string(threads) + (avx2 ? "" : " sse2");
     for (std::size_t b = 0; b < nb; ++b) {
       Box3f want;
-      ASSERT_TRUE(block_matches(corners, fp, V, blocks[b], b, want)) << "threads " << threads;
-      ASSERT_EQ(boxes[b], want) << "threads " << threads << " block " << b;
+      ASSERT_TRUE(block_matches(corners, fp, V, blocks[b], b, want)) << what;
+      ASSERT_EQ(boxes[b], want) << what << " block " << b;
     }
   }
 }
@@ -134,7 +136,7 @@ TEST(LeafBlocks, CornerFillIsTheSameAtAnyThreadCount) {
 // boxes as fill_blocks_from_corners, and per cluster the box of its corners widened one ulp
 // outwards and its centre, against a brute-force box of the corners read back (padding lanes
 // ignored); clusters of one block, of padded blocks, of many blocks, with +-0, huge and tiny
-// coordinates; several chunks of clusters, at 1, 2 and 4 threads.
+// coordinates; several chunks of clusters, at 1, 2 and 4 threads, in both encodings of the loop.
 TEST(LeafBlocks, ClusterBoxesFromTheFillAreTheCornersBoxes) {
   const std::uint32_t V = 3000;
   AlignedVector<Vec3f> fp = random_frame_positions(V, 17);
@@ -162,14 +164,14 @@ TEST(LeafBlocks, ClusterBoxesFromTheFillAreTheCornersBoxes) {
   fill_blocks_from_corners(corners, fp[0].data(), want_blocks, want_block_boxes.data());
   for (int threads : {1, 2, 4}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    for (const bool with_block_boxes : {true, false}) {
+    for (const auto& [with_block_boxes, avx2] : {std::pair{true, true}, {false, true}, {true, false}}) {
       AlignedVector<TriBlock> blocks(nb);
       AlignedVector<Box3f> block_boxes(with_block_boxes ? nb : 0), boxes(ranges.size());
       AlignedVector<Vec3f> centres(ranges.size());
       fill_blocks_and_cluster_boxes(corners, fp[0].data(), blocks, with_block_boxes ? block_boxes.data() : nullptr,
-                                    ranges, boxes.data(), centres.data());
+                                    ranges, boxes.data(), centres.data(), avx2);
       const std::string what = "threads " + std::to_string(threads) + (with_block_boxes ? " with" : " without") +
-                               " block boxes";
+                               " block boxes" + (avx2 ? "" : " sse2");
       for (std::uint32_t b = 0; b < nb; ++b) {
         ASSERT_EQ(std::memcmp(&blocks[b], &want_blocks[b], sizeof(TriBlock)), 0) << what << " block " << b;
         if (with_block_boxes) {

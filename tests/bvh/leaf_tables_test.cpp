@@ -291,13 +291,13 @@ TEST(LeafTables, RowsAreTheFramePositionsAndBoxesThoseOfTheBlocks) {
   fill_blocks_and_cluster_boxes(L.corners, fp[0].data(), blocks, nullptr, L.ranges, want_boxes.data(),
                                 want_centres.data());
   AlignedVector<TableGroup> first;
-  for (int threads : {1, 2, 4}) {
+  for (const auto& [threads, avx2] : {std::pair{1, true}, {2, true}, {4, true}, {1, false}, {2, false}}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     AlignedVector<TableGroup> groups = M.groups;
     AlignedVector<Box3f> boxes(L.ranges.size());
     AlignedVector<Vec3f> centres(L.ranges.size());
-    fill_tables(T, fp[0].data(), groups, boxes.data(), centres.data());
-    const std::string what = "threads " + std::to_string(threads);
+    fill_tables(T, fp[0].data(), groups, boxes.data(), centres.data(), avx2);
+    const std::string what = "threads " + std::to_string(threads) + (avx2 ? "" : " sse2");
     for (std::size_t g = 0; g < T.group_count(); ++g) {
       ASSERT_EQ(std::memcmp(groups[g].corner, M.groups[g].corner, sizeof groups[g].corner), 0) << what;
       ASSERT_EQ(groups[g].count, M.groups[g].count);
