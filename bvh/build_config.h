@@ -37,9 +37,6 @@ struct BuildConfig {
   /// SAH-best position). Meant for single-cluster leaves (cluster_scene_defaults() sets 4):
   /// measured on 27.6k Acc clusters of armadillo x2, build 6% faster, SAH cost 0.3% higher.
   std::uint32_t median_split_below = 0;
-  /// Both builders: a node of at most this many primitives (and at most max_leaf_size) becomes a
-  /// leaf without evaluating any split (0, the default: the SAH decides).
-  std::uint32_t leaf_at_most = 0;
   /// Use the AVX2 loops when the CPU has them (runtime check): the binned builder's binning, and a
   /// scene's per-frame loops built on this config (conversion, fills, the cluster scene's 8-wide
   /// refit). Both variants of each compute the same bits, so the tree and the trace data are the

@@ -3,7 +3,6 @@
 #include <emmintrin.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -34,7 +33,6 @@ namespace {
 constexpr std::size_t kSetupClustersPerTask = 1024;
 constexpr std::size_t kSetupBlocksPerTask = 8192;
 constexpr std::size_t kSetupGroupsPerChunk = 512;  // groups' trees built before they are appended
-static const std::uint32_t kTopLeafGroups = std::getenv("PTC_TOP_LEAF") ? std::atoi(std::getenv("PTC_TOP_LEAF")) : 8;  // XXX experiment
 
 // Frees a vector's storage (`v = {}` would pick the initializer-list assignment and keep it).
 template <class V>
@@ -434,8 +432,7 @@ void ClusterScene::layout_group_trees() {
   const AlignedVector<Vec3f>& centres = f_.centroids;
   const std::size_t G = group_offsets_.size() - 1;
   group_top_build_ = cfg_.build;
-  group_top_build_.max_leaf_size = kTopLeafGroups;  // a leaf of the tree over the groups: at most 8 groups (collapse_top8 opens it)
-  group_top_build_.leaf_at_most = kTopLeafGroups;
+  group_top_build_.max_leaf_size = 1;  // a leaf of the tree over the groups is one group (its tree)
   group_bvh_.resize(G);
   group_root_.assign(G, kNoTriangle);
   group_weights_.assign(G, 0);
@@ -856,50 +853,27 @@ void ClusterScene::collapse_top8() {
     w8.nodes.clear(), w8.root = 0, w8.depth = 0;
     return;
   }
-  // A slot: a binary node; an inner one remembers its 4-wide node's child count and its area. A
-  // leaf of several groups (the top build stops at kTopLeafGroups) opens like an inner node into
-  // one slot per group (member: its position in prim_order; kNoTriangle for a binary node).
+  // A slot: a binary node; an inner one remembers its 4-wide node's child count and its area.
   struct Slot {
     std::uint32_t bin;
-    int live;  // 9: never opened (a leaf of one group or cluster, or a group of an opened leaf)
+    int live;  // 9: a leaf (never opened)
     float area;
-    std::uint32_t member;
   };
-  const bool group_leaves = refit_groups_;
   auto slot = [&](std::uint32_t b) {
     const BvhNode& m = bvh.nodes[b];
-    if (m.is_leaf())
-      return Slot{b, group_leaves && m.count > 1 ? static_cast<int>(m.count) : 9,
-                  group_leaves && m.count > 1 ? static_cast<float>(m.bounds.surface_area()) : 0.0f, kNoTriangle};
+    if (m.is_leaf()) return Slot{b, 9, 0.0f};
     std::uint32_t kids[4];
-    return Slot{b, wide_children(bvh, b, kids), static_cast<float>(m.bounds.surface_area()), kNoTriangle};
-  };
-  // The slots an opened slot becomes (at most 8).
-  auto open = [&](const Slot& o, Slot* out) {
-    const BvhNode& m = bvh.nodes[o.bin];
-    if (m.is_leaf()) {
-      for (std::uint32_t i = 0; i < m.count; ++i) out[i] = Slot{o.bin, 9, 0.0f, m.index + i};
-      return static_cast<int>(m.count);
-    }
-    std::uint32_t kids[4];
-    const int nk = wide_children(bvh, o.bin, kids);
-    for (int i = 0; i < nk; ++i) out[i] = slot(kids[i]);
-    return nk;
+    return Slot{b, wide_children(bvh, b, kids), static_cast<float>(m.bounds.surface_area())};
   };
   // A leaf of one cluster: a link to its block tree's 8-wide root, or a direct leaf.
   auto cluster_slot8 = [&](std::uint32_t c, std::uint32_t& child, std::uint32_t& count) {
     std::tie(child, count) = cluster_slot(c);
     if (count == 0) child = link8_[child];
   };
-  // Group g as a child: a link to its tree's 8-wide root, or its one cluster.
-  auto group_slot8 = [&](std::uint32_t g, std::uint32_t& child, std::uint32_t& count) {
-    if (group_root_[g] != kNoTriangle) child = link8_[group_root_[g]], count = 0;
-    else cluster_slot8(group_offsets_[g], child, count);
-  };
   using Item = Top8Item;
   std::vector<Item>& stack = top8_stack_;
   stack.clear();
-  w8.nodes.reserve(S8 + bvh.prim_order.size());  // (no 8-wide node has fewer than two children but a root leaf)
+  w8.nodes.reserve(S8 + bvh.nodes.size() / 2);  // (no 8-wide node has fewer than two children but a root leaf)
   w8.root = static_cast<std::uint32_t>(S8);
   w8.nodes.emplace_back();
   stack.push_back({0, w8.root, 1});
@@ -910,11 +884,12 @@ void ClusterScene::collapse_top8() {
     depth = std::max(depth, it.depth);
     Slot s[8];
     int ns = 0;
-    const BvhNode& top = bvh.nodes[it.bin];
-    if (top.is_leaf() && !(group_leaves && top.count > 1)) {
-      s[ns++] = Slot{it.bin, 9, 0.0f, kNoTriangle};  // (a root that is a leaf: collapse_to_wide's one-slot node)
+    if (bvh.nodes[it.bin].is_leaf()) {
+      s[ns++] = Slot{it.bin, 9, 0.0f};  // (a root that is a leaf: collapse_to_wide's one-slot node)
     } else {
-      ns = open(slot(it.bin), s);
+      std::uint32_t kids[4];
+      const int nk = wide_children(bvh, it.bin, kids);
+      for (int i = 0; i < nk; ++i) s[ns++] = slot(kids[i]);
     }
     for (;;) {  // regroup_to_8: open the inner child of largest area whose children fit
       int best = -1;
@@ -922,10 +897,10 @@ void ClusterScene::collapse_top8() {
       for (int i = 0; i < ns; ++i)
         if (ns - 1 + s[i].live <= 8 && s[i].area > best_area) best = i, best_area = s[i].area;
       if (best < 0) break;
-      Slot kids[8];
-      const int nk = open(s[best], kids);
-      s[best] = kids[0];  // the first child takes the opened slot, the others go last
-      for (int j = 1; j < nk; ++j) s[ns++] = kids[j];
+      std::uint32_t kids[4];
+      const int nk = wide_children(bvh, s[best].bin, kids);
+      s[best] = slot(kids[0]);  // the first child takes the opened slot, the others go last
+      for (int j = 1; j < nk; ++j) s[ns++] = slot(kids[j]);
     }
     // The node is assembled here and then streamed out whole: its lines, last written a frame ago
     // and evicted since by the fill, are not read for ownership first (slot-by-slot stores into
@@ -936,23 +911,19 @@ void ClusterScene::collapse_top8() {
       Box3f box;
       if (i < ns) {
         const BvhNode& m = bvh.nodes[s[i].bin];
-        if (s[i].member != kNoTriangle) {  // one group of an opened leaf
-          const std::uint32_t g = bvh.prim_order[s[i].member];
-          box = group_boxes_[g];
-          group_slot8(g, child, count);
-        } else if (!m.is_leaf() || (group_leaves && m.count > 1)) {
-          box = m.bounds;
+        box = m.bounds;
+        if (!m.is_leaf()) {
           child = static_cast<std::uint32_t>(w8.nodes.size());
           w8.nodes.emplace_back();
           stack.push_back({s[i].bin, child, it.depth + 1});
-        } else if (group_leaves) {
-          box = m.bounds;
-          group_slot8(bvh.prim_order[m.index], child, count);
+        } else if (refit_groups_) {
+          if (m.count != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
+          const std::uint32_t g = bvh.prim_order[m.index];
+          if (group_root_[g] != kNoTriangle) child = link8_[group_root_[g]], count = 0;
+          else cluster_slot8(group_offsets_[g], child, count);  // a group of one cluster
         } else if (m.count == 1) {
-          box = m.bounds;
           cluster_slot8(bvh.prim_order[m.index], child, count);
         } else {
-          box = m.bounds;
           child = m.index, count = m.count | kIndirectLeaf;  // ranges [index, index + count)
         }
       }

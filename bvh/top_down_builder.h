@@ -132,10 +132,6 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
       continue;
     }
     const bool must_split = task.size() > cfg.max_leaf_size || builder.must_split(task);
-    if (!must_split && task.size() <= cfg.leaf_at_most) {
-      make_leaf(idx, task, area, builder.leaf_weight(task));
-      continue;
-    }
     if (!must_split && builder.leaf_by_bound(task, area)) {
       make_leaf(idx, task, area, builder.leaf_weight(task));
       continue;
