@@ -33,6 +33,7 @@ namespace {
 constexpr std::size_t kSetupClustersPerTask = 1024;
 constexpr std::size_t kSetupBlocksPerTask = 8192;
 constexpr std::size_t kSetupGroupsPerChunk = 512;  // groups' trees built before they are appended
+constexpr std::uint32_t kSrcIndexLimit = 1u << 30;  // a fixed slot's box record: (kind << 30) | index
 
 // Frees a vector's storage (`v = {}` would pick the initializer-list assignment and keep it).
 template <class V>
@@ -330,24 +331,35 @@ void ClusterScene::layout_wide8() {
   for (const std::uint32_t r : group_root_)
     if (r != kNoTriangle)
       link8_[r] = regroup_subtree(fixed, r, sub8_, group_depth8_, block_nodes_, link8_, &sources);
+  // Per slot one box record, (kind << 30) | index: kind 0 a cluster's box (f_.boxes), 1 a
+  // block's (block_boxes_), 2 an 8-wide child's (box8_), 3 multi_boxes_ (0: the empty box; the
+  // others: the unions of a group tree's leaves of several clusters, multi_src_).
   src8_.resize(8 * sub8_.size());
+  multi_src_.clear();
   for (std::size_t i = 0; i < 8 * sub8_.size(); ++i) {
     const WideNode8& n = sub8_[i / 8];
     const int j = static_cast<int>(i % 8);
     const SlotSource& so = sources[i];
-    Src8& d = src8_[i];
+    std::uint32_t kind = 3, index = 0;
     if (n.is_empty(j)) {
-      d = {WideNode8::kEmptySlot, 0};
     } else if (so.node >= block_nodes_ && group_slots_[so.node - block_nodes_].count[so.slot]) {  // a group tree's leaf
       const GroupSlots& gs = group_slots_[so.node - block_nodes_];
-      d = {gs.first[so.slot], gs.count[so.slot]};
+      if (gs.count[so.slot] == 1) {
+        kind = 0, index = group_leaf_clusters_[gs.first[so.slot]];
+      } else {
+        multi_src_.push_back({gs.first[so.slot], gs.count[so.slot]});
+        index = static_cast<std::uint32_t>(multi_src_.size());
+      }
     } else if (n.is_leaf(j)) {  // a block tree's leaf: one block
-      d = {n.child[j], Src8::kBlock};
+      kind = 1, index = n.child[j];
     } else {
-      d = {n.child[j], 0};
+      kind = 2, index = n.child[j];
     }
+    if (index >= kSrcIndexLimit) throw std::length_error("ClusterScene: too many fixed nodes, blocks or clusters");
+    src8_[i] = kind << 30 | index;
   }
-  box8_.assign(8 * sub8_.size(), 0.0f);
+  multi_boxes_.assign(multi_src_.size() + 1, Box3f{});
+  box8_.assign(6 * sub8_.size(), 0.0f);
   sub8_count_ = sub8_.size();
   f_.data.wide8.nodes = std::move(sub8_);
   sub8_ = {};
@@ -498,43 +510,31 @@ namespace {
 
 // refit8's sweep (see there) over nodes [begin, end): compiled twice, SSE2 (the x86-64 baseline)
 // and the same instructions in their VEX forms (three operands, no register copies), picked at
-// run time; the same bits either way.
+// run time; the same bits either way. Branch-free: every slot reads one box record (Box3f
+// layout), at bases[kind] + 6 index floats.
 struct Refit8Args {
   WideNode8* nodes;
-  const std::uint32_t* src;  // Src8 pairs: first, count
-  const Box3f* cluster_boxes;
-  const Box3f* block_boxes;
-  const std::uint32_t* leaf_clusters;
+  const std::uint32_t* src;
+  const float* bases[4];
   float* box8;
 };
-constexpr std::uint32_t kSrcBlock = 0xffffffffu;  // (ClusterScene::Src8::kBlock)
 
 [[gnu::always_inline]] inline void refit8_sweep(const Refit8Args& x, std::size_t begin, std::size_t end) {
-  const __m128 inf = _mm_set1_ps(kInf), ninf = _mm_set1_ps(-kInf);
   for (std::size_t d = end; d-- > begin;) {
     WideNode8& n = x.nodes[d];
-    const std::uint32_t* src = x.src + 16 * d;
+    const std::uint32_t* src = x.src + 8 * d;
     __m128 lo[8], hi[8];
-    __m128 alo = inf, ahi = ninf;
     for (int j = 0; j < 8; ++j) {
-      __m128 l = inf, h = ninf;
-      const std::uint32_t first = src[2 * j], count = src[2 * j + 1];
-      if (count == kSrcBlock) {
-        simd::load_box(x.block_boxes[first], l, h);
-      } else if (count) {
-        const std::uint32_t* c = x.leaf_clusters + first;
-        for (std::uint32_t k = 0; k < count; ++k) {
-          __m128 bl, bh;
-          simd::load_box(x.cluster_boxes[c[k]], bl, bh);
-          l = _mm_min_ps(l, bl), h = _mm_max_ps(h, bh);
-        }
-      } else if (first != WideNode8::kEmptySlot) {
-        const float* b = x.box8 + 8 * std::size_t{first};
-        l = _mm_load_ps(b), h = _mm_load_ps(b + 4);
-      }
-      lo[j] = l, hi[j] = h;
-      alo = _mm_min_ps(alo, l), ahi = _mm_max_ps(ahi, h);
+      const std::uint32_t e = src[j];
+      const float* p = x.bases[e >> 30] + 6 * std::size_t{e & (kSrcIndexLimit - 1)};
+      lo[j] = _mm_loadu_ps(p);  // lo x y z, hi x
+      const __m128 h = _mm_loadu_ps(p + 2);  // lo z, hi x y z
+      hi[j] = _mm_shuffle_ps(h, h, _MM_SHUFFLE(0, 3, 2, 1));
     }
+    const __m128 alo = _mm_min_ps(_mm_min_ps(_mm_min_ps(lo[0], lo[1]), _mm_min_ps(lo[2], lo[3])),
+                                  _mm_min_ps(_mm_min_ps(lo[4], lo[5]), _mm_min_ps(lo[6], lo[7])));
+    const __m128 ahi = _mm_max_ps(_mm_max_ps(_mm_max_ps(hi[0], hi[1]), _mm_max_ps(hi[2], hi[3])),
+                                  _mm_max_ps(_mm_max_ps(hi[4], hi[5]), _mm_max_ps(hi[6], hi[7])));
     _MM_TRANSPOSE4_PS(lo[0], lo[1], lo[2], lo[3]);
     _MM_TRANSPOSE4_PS(lo[4], lo[5], lo[6], lo[7]);
     _MM_TRANSPOSE4_PS(hi[0], hi[1], hi[2], hi[3]);
@@ -543,8 +543,11 @@ constexpr std::uint32_t kSrcBlock = 0xffffffffu;  // (ClusterScene::Src8::kBlock
       _mm_store_ps(&n.bounds[2 * a][0], lo[a]), _mm_store_ps(&n.bounds[2 * a][4], lo[4 + a]);
       _mm_store_ps(&n.bounds[2 * a + 1][0], hi[a]), _mm_store_ps(&n.bounds[2 * a + 1][4], hi[4 + a]);
     }
-    float* bx = x.box8 + 8 * d;
-    _mm_store_ps(bx, alo), _mm_store_ps(bx + 4, ahi);
+    // The node's union as a Box3f record: (lo x y z, hi x), then (lo z, hi x y z) over it.
+    float* bx = x.box8 + 6 * d;
+    const __m128 zx = _mm_shuffle_ps(alo, ahi, _MM_SHUFFLE(0, 0, 2, 2));  // lo z, lo z, hi x, hi x
+    _mm_storeu_ps(bx, _mm_shuffle_ps(alo, zx, _MM_SHUFFLE(2, 0, 1, 0)));
+    _mm_storeu_ps(bx + 2, _mm_shuffle_ps(zx, ahi, _MM_SHUFFLE(2, 1, 2, 0)));
   }
 }
 
@@ -560,14 +563,23 @@ bool cpu_has_avx2() {
 }  // namespace
 
 // The fixed 8-wide nodes [begin, end) refitted, children after parents (one reverse sweep; a
-// group tree's links to block trees read src8_'s cluster boxes, not the block trees'): each
-// slot's box from its source (src8_), the node's eight boxes transposed into its rows, and its
-// union kept in box8_ for its parent.
+// group tree's links to block trees read the clusters' boxes, not the block trees'): each slot's
+// box from its record (src8_), the node's eight boxes transposed into its rows, and its union
+// kept in box8_ for its parent. The unions of a group tree's leaves of several clusters are made
+// first (multi_boxes_).
 void ClusterScene::refit8(std::size_t begin, std::size_t end) {
-  static_assert(sizeof(Src8) == 8 && Src8::kBlock == kSrcBlock);
   static const bool avx2 = cpu_has_avx2();
-  const Refit8Args x{f_.data.wide8.nodes.data(), reinterpret_cast<const std::uint32_t*>(src8_.data()), f_.boxes.data(),
-                     block_boxes_.data(), group_leaf_clusters_.data(), box8_.data()};
+  for (std::size_t k = 0; k < multi_src_.size(); ++k) {
+    Box3f b;
+    for (std::uint32_t i = 0; i < multi_src_[k].second; ++i) b.extend(f_.boxes[group_leaf_clusters_[multi_src_[k].first + i]]);
+    multi_boxes_[k + 1] = b;
+  }
+  const Refit8Args x{f_.data.wide8.nodes.data(),
+                     src8_.data(),
+                     {f_.boxes.empty() ? nullptr : f_.boxes[0].lo.data(),
+                      block_boxes_.empty() ? nullptr : block_boxes_[0].lo.data(), box8_.data(),
+                      multi_boxes_[0].lo.data()},
+                     box8_.data()};
   (avx2 && cfg_.build.allow_avx2 ? refit8_avx2 : refit8_sse2)(x, begin, end);
 }
 
@@ -581,8 +593,8 @@ void ClusterScene::refit_group_trees() {
     if (group_root_[g] == kNoTriangle) {
       b = cb[group_offsets_[g]];
     } else {
-      const float* bx = box8_.data() + 8 * std::size_t{link8_[group_root_[g]]};
-      b = {{bx[0], bx[1], bx[2]}, {bx[4], bx[5], bx[6]}};
+      const float* bx = box8_.data() + 6 * std::size_t{link8_[group_root_[g]]};
+      b = {{bx[0], bx[1], bx[2]}, {bx[3], bx[4], bx[5]}};
     }
     group_boxes_[g] = b;
     group_centres_[g] = b.center();

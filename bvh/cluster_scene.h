@@ -149,13 +149,11 @@ class ClusterScene {
   AlignedVector<WideNode8> sub8_;  // (moved into data().wide8.nodes by layout_wide8; sub8_count_ stays)
   std::size_t sub8_count_ = 0, group8_begin_ = 0;
   std::vector<std::uint32_t> link8_;
-  struct Src8 {  // where fixed 8-wide slot 8 d + j takes its box from per frame
-    static constexpr std::uint32_t kBlock = 0xffffffffu;
-    std::uint32_t first, count;  // count kBlock: block_boxes_[first]; count > 0: the boxes of the clusters
-                                 // group_leaf_clusters_[first, first + count); 0: 8-wide node first's box (kEmptySlot: none)
-  };
-  std::vector<Src8> src8_;
-  AlignedVector<float> box8_;  // per fixed 8-wide node, refit8's union of its slots: lo x y z . hi x y z .
+  // Per fixed 8-wide slot 8 d + j, the box record it takes its box from per frame (layout_wide8).
+  std::vector<std::uint32_t> src8_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> multi_src_;  // per leaf of several clusters: group_leaf_clusters_ range
+  std::vector<Box3f> multi_boxes_;  // [0] empty; [k + 1] the union of multi_src_[k]'s clusters' boxes
+  AlignedVector<float> box8_;  // per fixed 8-wide node, refit8's union of its slots (a Box3f: lo x y z hi x y z)
   std::uint32_t sub_depth8_ = 0, group_depth8_ = 0;
   std::vector<Bvh> group_bvh_;             // per group: its rest-pose tree over its clusters (local ids)
   std::vector<std::uint32_t> group_root_;  // per group: the 4-wide root of its tree (link8_: the 8-wide one), or kNoTriangle (one cluster)
