@@ -361,6 +361,20 @@ void ClusterScene::layout_wide8() {
   multi_boxes_.assign(multi_src_.size() + 1, Box3f{});
   box8_.assign(6 * sub8_.size(), 0.0f);
   sub8_count_ = sub8_.size();
+  // Each group as an 8-wide child, for collapse_top8 (one load where the chain group -> 4-wide
+  // root -> 8-wide root missed the cache): a link to its tree's 8-wide root, or its one cluster's
+  // slot (a link to its block tree's 8-wide root, or its direct leaf).
+  group_slot8_.clear();
+  for (std::size_t g = 0; g < group_root_.size(); ++g) {
+    std::pair<std::uint32_t, std::uint32_t> cs{0, 0};
+    if (group_root_[g] != kNoTriangle) {
+      cs = {link8_[group_root_[g]], 0};
+    } else {
+      cs = cluster_slot(group_offsets_[g]);
+      if (cs.second == 0) cs.first = link8_[cs.first];
+    }
+    group_slot8_.push_back(cs);
+  }
   f_.data.wide8.nodes = std::move(sub8_);
   sub8_ = {};
 }
@@ -930,9 +944,7 @@ void ClusterScene::collapse_top8() {
           stack.push_back({s[i].bin, child, it.depth + 1});
         } else if (refit_groups_) {
           if (m.count != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
-          const std::uint32_t g = bvh.prim_order[m.index];
-          if (group_root_[g] != kNoTriangle) child = link8_[group_root_[g]], count = 0;
-          else cluster_slot8(group_offsets_[g], child, count);  // a group of one cluster
+          std::tie(child, count) = group_slot8_[bvh.prim_order[m.index]];
         } else if (m.count == 1) {
           cluster_slot8(bvh.prim_order[m.index], child, count);
         } else {

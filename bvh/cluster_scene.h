@@ -156,6 +156,7 @@ class ClusterScene {
   AlignedVector<float> box8_;  // per fixed 8-wide node, refit8's union of its slots (a Box3f: lo x y z hi x y z)
   std::uint32_t sub_depth8_ = 0, group_depth8_ = 0;
   std::vector<Bvh> group_bvh_;             // per group: its rest-pose tree over its clusters (local ids)
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> group_slot8_;  // per group: its (child, count) as an 8-wide slot
   std::vector<std::uint32_t> group_root_;  // per group: the 4-wide root of its tree (link8_: the 8-wide one), or kNoTriangle (one cluster)
   struct GroupSlots {  // per node of a group's tree: the scene clusters whose boxes a child slot unites
     std::uint32_t first[4], count[4];      // into group_leaf_clusters_; count 0: an inner child (or empty)
