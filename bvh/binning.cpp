@@ -1,5 +1,7 @@
 #include "bvh/binning.h"
 
+#include "bvh/box_simd.h"
+
 namespace ptc::bvh::binned {
 
 namespace {
@@ -59,16 +61,11 @@ __attribute__((target("avx2"))) std::uint64_t bin_range_avx2(Ref* r, std::uint32
   return total;
 }
 
-BinRangeFn pick_bin_range() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2") ? &bin_range_avx2 : &bin_range_sse2;
-}
 
 }  // namespace
 
 BinRangeFn bin_range_for(bool allow_avx2) {
-  static const BinRangeFn best = pick_bin_range();
-  return allow_avx2 ? best : &bin_range_sse2;
+  return allow_avx2 && simd::cpu_has_avx2() ? &bin_range_avx2 : &bin_range_sse2;
 }
 
 }  // namespace ptc::bvh::binned

@@ -1,5 +1,6 @@
 // SSE2 pieces of the per-frame box passes (internal to bvh/: box.cpp, vertex_order.cpp,
-// leaf_blocks.cpp, leaf_tables.cpp, cluster_scene.cpp's refit and the binned builder's records).
+// leaf_blocks.cpp, leaf_tables.cpp, cluster_scene.cpp's refit and the binned builder's records),
+// and the one AVX2 check of the loops that keep an AVX2 copy (those and binning.cpp).
 #pragma once
 
 #include <immintrin.h>
@@ -11,6 +12,16 @@
 #include "bvh/box.h"
 
 namespace ptc::bvh::simd {
+
+// Whether the CPU runs AVX2 code (asked once): the per-frame loops and the binning keep an AVX2
+// (or VEX-encoded) copy beside their SSE2 one and pick it with this.
+inline bool cpu_has_avx2() {
+  static const bool yes = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
+  return yes;
+}
 
 // A box's lo and hi as (x y z .) rows by two 16-byte loads, reading no byte past it (lane 3 of
 // lo holds hi.x, of hi lo.z).

@@ -569,11 +569,6 @@ void refit8_sse2(const Refit8Args& x, std::size_t begin, std::size_t end) { refi
 __attribute__((target("avx2"))) void refit8_avx2(const Refit8Args& x, std::size_t begin, std::size_t end) {
   refit8_sweep(x, begin, end);
 }
-bool cpu_has_avx2() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");
-}
-
 }  // namespace
 
 // The fixed 8-wide nodes [begin, end) refitted, children after parents (one reverse sweep; a
@@ -582,7 +577,6 @@ bool cpu_has_avx2() {
 // kept in box8_ for its parent. The unions of a group tree's leaves of several clusters are made
 // first (multi_boxes_).
 void ClusterScene::refit8(std::size_t begin, std::size_t end) {
-  static const bool avx2 = cpu_has_avx2();
   for (std::size_t k = 0; k < multi_src_.size(); ++k) {
     Box3f b;
     for (std::uint32_t i = 0; i < multi_src_[k].second; ++i) b.extend(f_.boxes[group_leaf_clusters_[multi_src_[k].first + i]]);
@@ -594,7 +588,7 @@ void ClusterScene::refit8(std::size_t begin, std::size_t end) {
                       block_boxes_.empty() ? nullptr : block_boxes_[0].lo.data(), box8_.data(),
                       multi_boxes_[0].lo.data()},
                      box8_.data()};
-  (avx2 && cfg_.build.allow_avx2 ? refit8_avx2 : refit8_sse2)(x, begin, end);
+  (simd::cpu_has_avx2() && cfg_.build.allow_avx2 ? refit8_avx2 : refit8_sse2)(x, begin, end);
 }
 
 // GroupTrees::Refit, per frame: the groups' 8-wide trees refitted from the cluster boxes, then

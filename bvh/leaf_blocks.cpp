@@ -159,17 +159,12 @@ __attribute__((target("avx2"))) void corner_clusters_avx2(const std::uint32_t* c
                                                           std::size_t c1) {
   corner_clusters(corners, n, fp, blocks, block_boxes, ranges, cluster_boxes, centres, c0, c1);
 }
-bool has_avx2() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");
-}
 
 }  // namespace
 
 void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
                               Box3f* boxes, bool allow_avx2) {
-  static const bool avx2 = has_avx2();
-  const CornerBlocksFn fill = allow_avx2 && avx2 ? &corner_blocks_avx2 : &corner_blocks_sse2;
+  const CornerBlocksFn fill = allow_avx2 && simd::cpu_has_avx2() ? &corner_blocks_avx2 : &corner_blocks_sse2;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), kBlocksPerTask),
                     [&](const tbb::blocked_range<std::size_t>& r) {
     fill(corners.data(), corners.size(), fp, blocks.data(), boxes, r.begin(), r.end());
@@ -180,8 +175,7 @@ void fill_blocks_from_corners(std::span<const std::uint32_t> corners, const floa
 void fill_blocks_and_cluster_boxes(std::span<const std::uint32_t> corners, const float* fp, std::span<TriBlock> blocks,
                                    Box3f* block_boxes, std::span<const LeafRange> ranges, Box3f* cluster_boxes,
                                    Vec3f* centres, bool allow_avx2) {
-  static const bool avx2 = has_avx2();
-  const CornerClustersFn fill = allow_avx2 && avx2 ? &corner_clusters_avx2 : &corner_clusters_sse2;
+  const CornerClustersFn fill = allow_avx2 && simd::cpu_has_avx2() ? &corner_clusters_avx2 : &corner_clusters_sse2;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ranges.size(), kClustersPerTask),
                     [&](const tbb::blocked_range<std::size_t>& r) {
     fill(corners.data(), corners.size(), fp, blocks.data(), block_boxes, ranges.data(), cluster_boxes, centres,

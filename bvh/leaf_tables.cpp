@@ -209,10 +209,6 @@ __attribute__((target("avx2"))) void fill_clusters_avx2(const TableLayout& layou
                                                         Vec3f* centres) {
   fill_clusters(layout, fp, groups, c0, c1, cluster_boxes, centres);
 }
-FillFn pick_fill() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2") ? &fill_clusters_avx2 : &fill_clusters_sse2;
-}
 
 }  // namespace
 
@@ -221,8 +217,7 @@ void fill_tables(const TableLayout& layout, const float* fp, std::span<TableGrou
   if (groups.size() != layout.group_count())
     throw std::invalid_argument("fill_tables: " + std::to_string(groups.size()) + " groups for a layout of " +
                                 std::to_string(layout.group_count()));
-  static const FillFn best = pick_fill();
-  const FillFn fill = allow_avx2 ? best : &fill_clusters_sse2;
+  const FillFn fill = allow_avx2 && simd::cpu_has_avx2() ? &fill_clusters_avx2 : &fill_clusters_sse2;
   const std::size_t C = layout.group_offsets.empty() ? 0 : layout.group_offsets.size() - 1;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
     fill(layout, fp, groups.data(), r.begin(), r.end(), cluster_boxes, centres);

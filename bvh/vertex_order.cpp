@@ -285,17 +285,12 @@ __attribute__((target("avx2"))) void own_range_avx2(const double* in, float* q, 
   bad = _mm_or_ps(r.bad, _mm_shuffle_ps(r.bad, r.bad, _MM_SHUFFLE(0, 0, 0, 3)));
 }
 
-OwnRangeFn pick_own_range() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2") ? &own_range_avx2 : &own_range_sse2;
-}
 
 }  // namespace
 
 void frame_positions_streamed(std::span<const Vec3> positions, const FrameMap& frame, std::span<Vec3f> out_pos,
                               bool allow_avx2) {
-  static const OwnRangeFn best = pick_own_range();
-  const OwnRangeFn own_range = allow_avx2 ? best : &own_range_sse2;
+  const OwnRangeFn own_range = allow_avx2 && simd::cpu_has_avx2() ? &own_range_avx2 : &own_range_sse2;
   if (out_pos.size() < positions.size())
     throw std::invalid_argument("frame_positions_streamed: " + std::to_string(positions.size()) + " positions for " +
                                 std::to_string(out_pos.size()) + " outputs");
@@ -317,8 +312,7 @@ void frame_positions_streamed(std::span<const Vec3> positions, const FrameMap& f
 void frame_positions_and_boxes(std::span<const Vec3> positions, const FrameMap& frame, const GroupRuns& runs,
                                std::span<Vec3f> out_pos, AlignedVector<Box3f>& out, AlignedVector<Vec3f>& centers,
                                bool allow_avx2) {
-  static const OwnRangeFn best = pick_own_range();
-  const OwnRangeFn own_range = allow_avx2 ? best : &own_range_sse2;
+  const OwnRangeFn own_range = allow_avx2 && simd::cpu_has_avx2() ? &own_range_avx2 : &own_range_sse2;
   if (positions.size() != runs.vertex_count || out_pos.size() < positions.size())
     throw std::invalid_argument("frame_positions_and_boxes: " + std::to_string(positions.size()) + " positions for " +
                                 std::to_string(runs.vertex_count) + " vertices (" + std::to_string(out_pos.size()) +
