@@ -574,14 +574,9 @@ __attribute__((target("avx2"))) void refit8_avx2(const Refit8Args& x, std::size_
 // The fixed 8-wide nodes [begin, end) refitted, children after parents (one reverse sweep; a
 // group tree's links to block trees read the clusters' boxes, not the block trees'): each slot's
 // box from its record (src8_), the node's eight boxes transposed into its rows, and its union
-// kept in box8_ for its parent. The unions of a group tree's leaves of several clusters are made
-// first (multi_boxes_).
+// kept in box8_ for its parent (the group trees' leaves of several clusters read their unions
+// from multi_boxes_, which refit_group_trees makes first).
 void ClusterScene::refit8(std::size_t begin, std::size_t end) {
-  for (std::size_t k = 0; k < multi_src_.size(); ++k) {
-    Box3f b;
-    for (std::uint32_t i = 0; i < multi_src_[k].second; ++i) b.extend(f_.boxes[group_leaf_clusters_[multi_src_[k].first + i]]);
-    multi_boxes_[k + 1] = b;
-  }
   const Refit8Args x{f_.data.wide8.nodes.data(),
                      src8_.data(),
                      {f_.boxes.empty() ? nullptr : f_.boxes[0].lo.data(),
@@ -594,6 +589,11 @@ void ClusterScene::refit8(std::size_t begin, std::size_t end) {
 // GroupTrees::Refit, per frame: the groups' 8-wide trees refitted from the cluster boxes, then
 // one record per group for the build (its box and centre).
 void ClusterScene::refit_group_trees() {
+  for (std::size_t k = 0; k < multi_src_.size(); ++k) {  // (none with single-cluster leaves, the default)
+    Box3f b;
+    for (std::uint32_t i = 0; i < multi_src_[k].second; ++i) b.extend(f_.boxes[group_leaf_clusters_[multi_src_[k].first + i]]);
+    multi_boxes_[k + 1] = b;
+  }
   refit8(group8_begin_, sub8_count_);
   const Box3f* cb = f_.boxes.data();
   for (std::size_t g = 0; g + 1 < group_offsets_.size(); ++g) {
