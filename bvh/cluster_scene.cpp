@@ -365,16 +365,9 @@ void ClusterScene::layout_wide8() {
   // root -> 8-wide root missed the cache): a link to its tree's 8-wide root, or its one cluster's
   // slot (a link to its block tree's 8-wide root, or its direct leaf).
   group_slot8_.clear();
-  for (std::size_t g = 0; g < group_root_.size(); ++g) {
-    std::pair<std::uint32_t, std::uint32_t> cs{0, 0};
-    if (group_root_[g] != kNoTriangle) {
-      cs = {link8_[group_root_[g]], 0};
-    } else {
-      cs = cluster_slot(group_offsets_[g]);
-      if (cs.second == 0) cs.first = link8_[cs.first];
-    }
-    group_slot8_.push_back(cs);
-  }
+  for (std::size_t g = 0; g < group_root_.size(); ++g)
+    group_slot8_.push_back(group_root_[g] != kNoTriangle ? std::pair{link8_[group_root_[g]], 0u}
+                                                         : cluster_slot8(group_offsets_[g]));
   f_.data.wide8.nodes = std::move(sub8_);
   sub8_ = {};
 }
@@ -517,8 +510,6 @@ void ClusterScene::append_group_tree(std::size_t g, const WideBvh& w) {
     group_slots_.push_back(gs);
   }
 }
-
-
 
 namespace {
 
@@ -849,6 +840,12 @@ std::pair<std::uint32_t, std::uint32_t> ClusterScene::cluster_slot(std::uint32_t
   return {cluster_ranges_[c].first_block, cluster_ranges_[c].triangle_count};  // packed
 }
 
+// The same as an 8-wide slot: the link goes to the block tree's 8-wide root (layout_wide8).
+std::pair<std::uint32_t, std::uint32_t> ClusterScene::cluster_slot8(std::uint32_t c) const {
+  if (sub_root_[c] != kNoTriangle) return {link8_[sub_root_[c]], 0};
+  return cluster_slot(c);
+}
+
 // Per frame: the binary tree over the groups (or clusters) collapsed straight into the 8-wide
 // nodes the tracer walks, after the fixed ones [0, sub8_count_): node for node the tree
 // regroup_to_8(collapse_to_wide(bvh)) makes (each 4-wide node is expanded on the fly from its
@@ -873,22 +870,19 @@ void ClusterScene::collapse_top8() {
     w8.nodes.clear(), w8.root = 0, w8.depth = 0;
     return;
   }
-  // A slot: a binary node; an inner one remembers its 4-wide node's child count and its area.
+  // A slot: a binary node; an inner one keeps its 4-wide node's children (wide_children, made
+  // once per node) and its area.
   struct Slot {
     std::uint32_t bin;
-    int live;  // 9: a leaf (never opened)
+    int live;  // the children it opens into; 9: a leaf (never opened)
     float area;
+    std::uint32_t kids[4];
   };
   auto slot = [&](std::uint32_t b) {
+    Slot s{b, 9, 0.0f, {}};
     const BvhNode& m = bvh.nodes[b];
-    if (m.is_leaf()) return Slot{b, 9, 0.0f};
-    std::uint32_t kids[4];
-    return Slot{b, wide_children(bvh, b, kids), static_cast<float>(m.bounds.surface_area())};
-  };
-  // A leaf of one cluster: a link to its block tree's 8-wide root, or a direct leaf.
-  auto cluster_slot8 = [&](std::uint32_t c, std::uint32_t& child, std::uint32_t& count) {
-    std::tie(child, count) = cluster_slot(c);
-    if (count == 0) child = link8_[child];
+    if (!m.is_leaf()) s.live = wide_children(bvh, b, s.kids), s.area = static_cast<float>(m.bounds.surface_area());
+    return s;
   };
   using Item = Top8Item;
   std::vector<Item>& stack = top8_stack_;
@@ -896,7 +890,8 @@ void ClusterScene::collapse_top8() {
   w8.nodes.reserve(S8 + bvh.nodes.size() / 2);  // (no 8-wide node has fewer than two children but a root leaf)
   w8.root = static_cast<std::uint32_t>(S8);
   w8.nodes.emplace_back();
-  stack.push_back({0, w8.root, 1});
+  const Slot root = slot(0);
+  stack.push_back({0, w8.root, 1, {root.kids[0], root.kids[1], root.kids[2], root.kids[3]}, root.live});
   std::uint32_t depth = 0;
   while (!stack.empty()) {
     const Item it = stack.back();
@@ -904,12 +899,10 @@ void ClusterScene::collapse_top8() {
     depth = std::max(depth, it.depth);
     Slot s[8];
     int ns = 0;
-    if (bvh.nodes[it.bin].is_leaf()) {
-      s[ns++] = Slot{it.bin, 9, 0.0f};  // (a root that is a leaf: collapse_to_wide's one-slot node)
+    if (it.nk == 9) {
+      s[ns++] = slot(it.bin);  // (a root that is a leaf: collapse_to_wide's one-slot node)
     } else {
-      std::uint32_t kids[4];
-      const int nk = wide_children(bvh, it.bin, kids);
-      for (int i = 0; i < nk; ++i) s[ns++] = slot(kids[i]);
+      for (int i = 0; i < it.nk; ++i) s[ns++] = slot(it.kids[i]);
     }
     for (;;) {  // regroup_to_8: open the inner child of largest area whose children fit
       int best = -1;
@@ -917,10 +910,9 @@ void ClusterScene::collapse_top8() {
       for (int i = 0; i < ns; ++i)
         if (ns - 1 + s[i].live <= 8 && s[i].area > best_area) best = i, best_area = s[i].area;
       if (best < 0) break;
-      std::uint32_t kids[4];
-      const int nk = wide_children(bvh, s[best].bin, kids);
-      s[best] = slot(kids[0]);  // the first child takes the opened slot, the others go last
-      for (int j = 1; j < nk; ++j) s[ns++] = slot(kids[j]);
+      const Slot opened = s[best];
+      s[best] = slot(opened.kids[0]);  // the first child takes the opened slot, the others go last
+      for (int j = 1; j < opened.live; ++j) s[ns++] = slot(opened.kids[j]);
     }
     // The node is assembled here and then streamed out whole: its lines, last written a frame ago
     // and evicted since by the fill, are not read for ownership first (slot-by-slot stores into
@@ -935,12 +927,13 @@ void ClusterScene::collapse_top8() {
         if (!m.is_leaf()) {
           child = static_cast<std::uint32_t>(w8.nodes.size());
           w8.nodes.emplace_back();
-          stack.push_back({s[i].bin, child, it.depth + 1});
+          const Slot& c = s[i];
+          stack.push_back({c.bin, child, it.depth + 1, {c.kids[0], c.kids[1], c.kids[2], c.kids[3]}, c.live});
         } else if (refit_groups_) {
           if (m.count != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
           std::tie(child, count) = group_slot8_[bvh.prim_order[m.index]];
         } else if (m.count == 1) {
-          cluster_slot8(bvh.prim_order[m.index], child, count);
+          std::tie(child, count) = cluster_slot8(bvh.prim_order[m.index]);
         } else {
           child = m.index, count = m.count | kIndirectLeaf;  // ranges [index, index + count)
         }

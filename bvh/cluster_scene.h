@@ -125,6 +125,7 @@ class ClusterScene {
   void layout_wide8();
   void refit_group_trees();
   [[nodiscard]] std::pair<std::uint32_t, std::uint32_t> cluster_slot(std::uint32_t c) const;
+  [[nodiscard]] std::pair<std::uint32_t, std::uint32_t> cluster_slot8(std::uint32_t c) const;
   std::shared_ptr<const std::vector<Tri>> tris_;
   SceneConfig cfg_;
   std::vector<std::uint32_t> cluster_ids_;  // scene cluster -> the clustering's cluster
@@ -168,8 +169,10 @@ class ClusterScene {
   BuildConfig group_top_build_;             // the per-frame build over the groups: the scene's, one group a leaf
   AlignedVector<Box3f> group_boxes_;
   AlignedVector<Vec3f> group_centres_;
-  struct Top8Item {
+  struct Top8Item {  // an inner binary node to become 8-wide node node8, with its 4-wide children
     std::uint32_t bin, node8, depth;
+    std::uint32_t kids[4];
+    int nk;
   };
   std::vector<Top8Item> top8_stack_;  // collapse_top8's work stack (kept: no allocation per frame)
   std::vector<Box3f> block_boxes_;  // exact box of every block, from the last fill (none kept when built once)

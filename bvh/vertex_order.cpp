@@ -285,7 +285,6 @@ __attribute__((target("avx2"))) void own_range_avx2(const double* in, float* q, 
   bad = _mm_or_ps(r.bad, _mm_shuffle_ps(r.bad, r.bad, _MM_SHUFFLE(0, 0, 0, 3)));
 }
 
-
 }  // namespace
 
 void frame_positions_streamed(std::span<const Vec3> positions, const FrameMap& frame, std::span<Vec3f> out_pos,
