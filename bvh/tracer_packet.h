@@ -211,18 +211,26 @@ template <bool AnyHit>
   const __m512 okz2 = dup8(okz), sx2 = dup8(sx);
   const __m512 sy2 = dup8(sy), sz2 = dup8(sz);
   const __m512 tmin2 = dup8(tmin);
-  const float* pend = nullptr;  // a triangle waiting for its partner (corner rows at pend + 4 c + axis)
+  // A triangle's corners: corner c's coordinate on axis a at c[k] + off[a] (blocks: rows 12
+  // floats apart and axes 4 apart; table groups: a slot in rows 32 floats apart).
+  struct Corners {
+    const float* c[3];
+  };
+  Corners pend{};  // a triangle waiting for its partner (pend.c[0] null: none)
   std::uint32_t pend_id = kNoTriangle;
-  // `both` false: the first triangle alone (lanes 8-15 not live; v1 may be v0).
-  auto test_pair = [&](const float* v0, std::uint32_t id0, const float* v1, std::uint32_t id1, bool both) {
-    auto at = [&](int off, __m512 o) {
-      return _mm512_sub_ps(
-          _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_broadcast_ss(v0 + off)), _mm256_broadcast_ss(v1 + off), 1), o);
+  int pend_ox = 0, pend_oy = 0, pend_oz = 0;
+  // `both` false: the first triangle alone (lanes 8-15 not live; b may be a).
+  auto test_pair = [&](const Corners& a, std::uint32_t id0, const Corners& b, std::uint32_t id1, bool both, int ox,
+                       int oy, int oz) {
+    auto at = [&](int k, int off, __m512 o) {
+      return _mm512_sub_ps(_mm512_insertf32x8(_mm512_castps256_ps512(_mm256_broadcast_ss(a.c[k] + off)),
+                                              _mm256_broadcast_ss(b.c[k] + off), 1),
+                           o);
     };
     const __mmask16 live = static_cast<__mmask16>(lanes | (both ? lanes << 8 : 0u));
-    const Pairs16 h = watertight16(at(kx4, okx2), at(ky4, oky2), at(kz4, okz2), at(12 + kx4, okx2), at(12 + ky4, oky2),
-                                   at(12 + kz4, okz2), at(24 + kx4, okx2), at(24 + ky4, oky2), at(24 + kz4, okz2), sx2,
-                                   sy2, sz2, live);
+    const Pairs16 h = watertight16(at(0, ox, okx2), at(0, oy, oky2), at(0, oz, okz2), at(1, ox, okx2), at(1, oy, oky2),
+                                   at(1, oz, okz2), at(2, ox, okx2), at(2, oy, oky2), at(2, oz, okz2), sx2, sy2, sz2,
+                                   live);
     if (!h.valid) return;
     const __m512 tmax2 = dup8(tmax);
     const std::uint32_t m =
@@ -239,9 +247,44 @@ template <bool AnyHit>
   // A range's last triangle without a partner, alone. Pairs never span two ranges: an any-hit
   // packet done in one range is not charged the next one's triangles.
   auto test_last = [&] {
-    if (!pend) return;
-    test_pair(pend, pend_id, pend, pend_id, false);
-    pend = nullptr;
+    if (!pend.c[0]) return;
+    test_pair(pend, pend_id, pend, pend_id, false, pend_ox, pend_oy, pend_oz);
+    pend.c[0] = nullptr;
+  };
+  // Triangle `id` with corners `t`: kept until its partner comes, then the pair tested; true
+  // when an any-hit packet is done.
+  auto add_pair = [&](const Corners& t, std::uint32_t id, int ox, int oy, int oz) {
+    if (!pend.c[0]) {
+      pend = t, pend_id = id, pend_ox = ox, pend_oy = oy, pend_oz = oz;
+      return false;
+    }
+    test_pair(pend, pend_id, t, id, true, ox, oy, oz);
+    pend.c[0] = nullptr;
+    if constexpr (AnyHit) return lanes == 0;
+    return false;
+  };
+#else
+  // One triangle (corner c's coordinate on axis a at c_k + o_a) against the lanes; true when an
+  // any-hit packet is done.
+  auto test_one = [&](const float* c0, const float* c1, const float* c2, int ox, int oy, int oz, std::uint32_t id) {
+    auto at = [&](const float* row, __m256 o) { return _mm256_sub_ps(_mm256_broadcast_ss(row), o); };
+    const Pairs8 h = watertight8(at(c0 + ox, okx), at(c0 + oy, oky), at(c0 + oz, okz), at(c1 + ox, okx),
+                                 at(c1 + oy, oky), at(c1 + oz, okz), at(c2 + ox, okx), at(c2 + oy, oky), at(c2 + oz, okz),
+                                 sx, sy, sz, static_cast<int>(lanes));
+    if (!h.valid_bits) return false;
+    const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, tmin, _CMP_GT_OQ), _mm256_cmp_ps(h.t, tmax, _CMP_LE_OQ));
+    const std::uint32_t m = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(h.valid, in_range))) & lanes;
+    if (!m) return false;
+    alignas(32) float ft[8], fv[8], fw[8], fd[8];
+    _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
+    take(m, id, ft, fv, fw, fd);
+    if constexpr (AnyHit) {
+      lanes &= ~found;
+      return lanes == 0;
+    } else {
+      tmax = _mm256_load_ps(p.tmax);
+      return false;
+    }
   };
 #endif
   // The triangles of blocks [0, nb) (ids from first_id, 4 a block); true when an any-hit packet
@@ -255,44 +298,35 @@ template <bool AnyHit>
         if (id == kNoTriangle) continue;
         const float* v = blk + j;
 #if defined(PTC_TRACE_AVX512)
-        if (!pend) {
-          pend = v, pend_id = id;
-          continue;
-        }
-        test_pair(pend, pend_id, v, id, true);
-        pend = nullptr;
-        if constexpr (AnyHit)
-          if (!lanes) return true;
+        if (add_pair({{v, v + 12, v + 24}}, id, kx4, ky4, kz4)) return true;
 #else
-        // The corner rows of the permuted axes from three bases and fixed offsets (with `v + 12 *
-        // corner + axis` the compiler kept nine row pointers on the stack, three instructions a row).
-        const float* px = v + kx4;
-        const float* py = v + ky4;
-        const float* pz = v + kz4;
-        auto at = [&](const float* row, __m256 o) { return _mm256_sub_ps(_mm256_broadcast_ss(row), o); };
-        const Pairs8 h = watertight8(at(px, okx), at(py, oky), at(pz, okz), at(px + 12, okx), at(py + 12, oky),
-                                     at(pz + 12, okz), at(px + 24, okx), at(py + 24, oky), at(pz + 24, okz), sx, sy, sz,
-                                     static_cast<int>(lanes));
-        if (!h.valid_bits) continue;
-        const __m256 in_range = _mm256_and_ps(_mm256_cmp_ps(h.t, tmin, _CMP_GT_OQ), _mm256_cmp_ps(h.t, tmax, _CMP_LE_OQ));
-        const std::uint32_t m = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_and_ps(h.valid, in_range))) & lanes;
-        if (!m) continue;
-        alignas(32) float ft[8], fv[8], fw[8], fd[8];
-        _mm256_store_ps(ft, h.t), _mm256_store_ps(fv, h.V), _mm256_store_ps(fw, h.W), _mm256_store_ps(fd, h.det);
-        take(m, id, ft, fv, fw, fd);
-        if constexpr (AnyHit) {
-          lanes &= ~found;
-          if (!lanes) return true;
-        } else {
-          tmax = _mm256_load_ps(p.tmax);
-        }
+        // (With the corner rows as `v + 12 * corner + axis` inline here the compiler kept nine
+        // row pointers on the stack, three instructions a row.)
+        if (test_one(v, v + 12, v + 24, kx4, ky4, kz4, id)) return true;
 #endif
       }
     }
     return false;
   };
-  // After a range (or a table group, whose blocks on the stack the next one overwrites): the
-  // last triangle without a partner; true when an any-hit packet is done.
+  // The triangles of a table group (ids[j] for triangle j < count): true when an any-hit packet
+  // is done.
+  auto test_group = [&](const TableGroup& tg, const std::uint32_t* ids) {
+    const float* base = tg.v[0];
+    const int ox = 8 * kx4, oy = 8 * ky4, oz = 8 * kz4;
+    for (std::uint32_t j = 0; j < tg.count; ++j) {
+      const float* c0 = base + tg.corner[0][j];
+      const float* c1 = base + tg.corner[1][j];
+      const float* c2 = base + tg.corner[2][j];
+#if defined(PTC_TRACE_AVX512)
+      if (add_pair({{c0, c1, c2}}, ids[j], ox, oy, oz)) return true;
+#else
+      if (test_one(c0, c1, c2, ox, oy, oz, ids[j])) return true;
+#endif
+    }
+    return false;
+  };
+  // After a range or a table group: the last triangle without a partner; true when an any-hit
+  // packet is done.
   auto end_run = [&] {
 #if defined(PTC_TRACE_AVX512)
     test_last();
@@ -308,12 +342,11 @@ template <bool AnyHit>
         return found;
       continue;
     }
-    // Table groups: each as blocks on the stack (a direct leaf: its groups up to the last one).
+    // Table groups (a direct leaf: its groups up to the last one), each triangle's corners read
+    // from the group's rows through its slots (rows 32 floats apart).
     const bool direct = !(count & kIndirectLeaf);
     for (std::uint32_t g = lr.first_block; direct || g < lr.first_block + lr.block_count; ++g) {
-      TriBlock blk[kTableSlots / 4];
-      expand_group(d.tables[g], blk);
-      if (test_blocks(blk, d.ids + std::size_t{kTableSlots} * g, (d.tables[g].count + 3) / 4) || end_run()) return found;
+      if (test_group(d.tables[g], d.ids + std::size_t{kTableSlots} * g) || end_run()) return found;
       if (direct && d.tables[g].last) break;
     }
   }
