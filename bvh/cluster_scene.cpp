@@ -244,8 +244,9 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   }
   RestTree rest = rest_tree(mesh, cv, cfg_, data.frame());
   cluster_ids_.assign(rest.bvh.prim_order.begin(), rest.bvh.prim_order.end());
-  if (cfg_.cluster_group_size > 1 && !rest.bvh.nodes.empty()) group_offsets_ = subtree_groups(rest.bvh, cfg_.cluster_group_size);
-  if (group_offsets_.size() <= 2) group_offsets_.clear();  // one group: the plain build
+  group_size_ = cluster_group_size_used(cluster_ids_.size(), cfg_);
+  if (group_size_ > 1 && !rest.bvh.nodes.empty()) group_offsets_ = subtree_groups(rest.bvh, group_size_);
+  if (group_offsets_.size() <= 2) group_offsets_.clear(), group_size_ = 0;  // one group: the plain build
   reorder_clusters(mesh, cv, cluster_ids_, &order_, &offsets_, vertices_, vertex_offsets_);
   const std::size_t C = offsets_.size() - 1;
   sort_clusters_by_morton(mesh.positions(), mesh.triangles(), offsets_, order_);

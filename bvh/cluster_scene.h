@@ -85,6 +85,9 @@ class ClusterScene {
   [[nodiscard]] const std::vector<std::uint32_t>& weights() const { return weights_; }
   /// The two-level build's groups (BuildInput::groups, in scene cluster order); empty: plain build.
   [[nodiscard]] const std::vector<std::uint32_t>& group_offsets() const { return group_offsets_; }
+  /// The two-level build's largest group, cluster_group_size_used (0: the plain build, also when
+  /// that size makes one group only).
+  [[nodiscard]] std::uint32_t group_size() const { return group_size_; }
   [[nodiscard]] const StageTimes& times() const { return f_.times; }
   /// 8-wide nodes kept from frame to frame (the block trees, then the fixed group trees): nodes
   /// [0, subtree_nodes()) of data().wide8.nodes; only their boxes change per frame.
@@ -131,7 +134,8 @@ class ClusterScene {
   std::vector<std::uint32_t> cluster_ids_;  // scene cluster -> the clustering's cluster
   std::vector<std::uint32_t> order_, offsets_, vertices_, vertex_offsets_;  // in the scene's cluster order (set-up only: freed)
   std::vector<std::uint32_t> weights_;
-  std::vector<std::uint32_t> group_offsets_;  // SceneConfig::cluster_group_size: runs of clusters
+  std::uint32_t group_size_ = 0;              // cluster_group_size_used
+  std::vector<std::uint32_t> group_offsets_;  // groups of at most group_size_ clusters: runs of clusters
   std::vector<LeafRange> cluster_ranges_;  // blocks of cluster c (fixed layout)
   // BlockTree: the per-cluster trees (child indices relative to the start of sub_nodes_, which
   // become absolute because the subtrees occupy nodes [0, sub_count_) of every frame).

@@ -79,6 +79,12 @@ struct SceneConfig {
   /// clusters' boxes or refitted (group_trees).
   /// 0 (or 1): the plain build over all cluster boxes (the paper's).
   std::uint32_t cluster_group_size = 0;
+  /// ClusterScene only: with the two-level build, groups are made no larger than needed for at
+  /// least this many groups, so a small scene keeps most of its tree rebuilt per frame (the
+  /// fixed group trees cost node visits, the per-frame build over few clusters little time):
+  /// cluster_group_size_used. 0: groups of at most cluster_group_size clusters, whatever the
+  /// scene's size (the commands' explicit --cluster-groups N).
+  std::uint32_t min_cluster_groups = 0;
   GroupTrees group_trees = GroupTrees::Refit;  ///< ClusterScene with groups only (see GroupTrees)
   SahBuilder builder = SahBuilder::Binned;  ///< the per-frame SAH builder (see SahBuilder)
   /// ClusterScene only: built once, at the positions it is made with, and never updated (a
@@ -99,12 +105,19 @@ struct SceneConfig {
 [[nodiscard]] SceneConfig triangle_scene_defaults();
 /// Default build settings of a cluster scene: the same SAH constants, one cluster per leaf
 /// (leaves of several clusters cost the sum of their triangles and are rarely chosen), and the
-/// two-level build over groups of at most 16 clusters (cluster_group_size; groups of 8 measured
+/// two-level build over groups of at most 32 clusters (cluster_group_size; groups of 8 measured
 /// first on 27.6k Acc clusters of armadillo x2: build 3.6 -> 1.9 ms, SAH cost +2.6%, trace speed
-/// within 1-5%; 16 against 8: update 0.3-0.8 ms less, nodes a ray +0.3-1%, docs/tracing.md), each
+/// within 1-5%; 16 against 8: update 0.3-0.8 ms less, nodes a ray +0.3-1%; 32 against 16 on the
+/// built-in scenes: update 0.3-1.4 ms less, nodes a primary ray -1.9% to +0.7%, docs/tracing.md), each
 /// group's tree fixed at the rest pose and refitted (GroupTrees::Refit: build and collapse
 /// 3.0 -> 1.0 ms, nodes per ray +1-8%; docs/tracing.md, "Fixed group trees").
 [[nodiscard]] SceneConfig cluster_scene_defaults();
+
+/// The group size a ClusterScene with `cfg` uses over `clusters` clusters: cfg.cluster_group_size,
+/// but with cfg.min_cluster_groups = M > 0 at most clusters / M; 0 (the plain build) when that is
+/// 1 or less (with the defaults, 32 clusters a group from 32,768 clusters up, fewer below, and the
+/// plain build under 2,048 clusters).
+[[nodiscard]] std::uint32_t cluster_group_size_used(std::size_t clusters, const SceneConfig& cfg);
 
 /// The trace frame of a scene over `mesh`: cfg.origin, or the centre of the mesh's bounds (the
 /// world origin for an empty mesh). A scene's rest positions and origin must be finite (they fix

@@ -81,9 +81,12 @@ SceneConfig cluster_config(const SceneTracerConfig& cfg, const Vec3& origin) {
   c.origin = cfg.origin ? *cfg.origin : origin;
   c.cluster_leaf = cfg.cluster_leaf;
   c.cluster_group_size = cfg.cluster_group_size;
+  c.min_cluster_groups = cfg.min_cluster_groups;
   c.group_trees = cfg.group_trees;
   return c;
 }
+
+std::uint32_t SceneTracer::cluster_group_size() const { return moving_cs_ ? moving_cs_->group_size() : 0u; }
 
 SceneTracer::SceneTracer(const Mesh& first, const PartLayout& L, const SceneTracerConfig& cfg) {
   const std::size_t np = L.part_count();

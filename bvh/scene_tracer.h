@@ -51,6 +51,8 @@ struct SceneTracerConfig {
   /// with this group size instead. 0, the default: the plain build, whose tree is the rest tree
   /// (the groups make a per-frame rebuild cheap, and this BVH is never rebuilt).
   std::uint32_t still_cluster_group_size = 0;
+  /// SceneConfig::min_cluster_groups (0: groups of exactly up to cluster_group_size clusters).
+  std::uint32_t min_cluster_groups = cluster_scene_defaults().min_cluster_groups;
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
 };
 
@@ -90,6 +92,8 @@ class SceneTracer {
   [[nodiscard]] std::size_t static_triangles() const { return static_n_; }
   [[nodiscard]] std::size_t moving_triangles() const { return moving_n_; }
   [[nodiscard]] bool moving_is_clusters() const { return bool(moving_cs_); }
+  /// The cluster BVH's group size (ClusterScene::group_size; 0: the plain build or no cluster BVH).
+  [[nodiscard]] std::uint32_t cluster_group_size() const;
   /// Construction time of the static BVH (all parts static: of the one BVH), milliseconds.
   [[nodiscard]] double static_build_ms() const { return static_build_ms_; }
   /// Construction time of the moving BVH (including its first build), milliseconds.

@@ -82,9 +82,11 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   }
   manifest.set_parameter("cluster_leaf", bvh::to_string(c.cluster_leaf));
   manifest.set_parameter("leaf_format", bvh::to_string(c.leaf_format));
-  manifest.set_parameter("cluster_group_size", c.cluster_group_size);
-  // (groups of 0 or 1 cluster: the plain build, which has no group trees)
-  manifest.set_parameter("group_trees", c.cluster_group_size > 1 ? std::string(bvh::to_string(c.group_trees))
+  // The group size used (0: the plain build; --cluster-groups N unset, the default N = 32 shrinks
+  // for a scene of under 32 x 1024 clusters, bvh::cluster_group_size_used), and the minimum of groups.
+  manifest.set_parameter("cluster_group_size", r.cluster_group_size);
+  manifest.set_parameter("min_cluster_groups", c.min_cluster_groups);
+  manifest.set_parameter("group_trees", r.cluster_group_size > 1 ? std::string(bvh::to_string(c.group_trees))
                                                                   : std::string("none (plain build)"));
   manifest.set_parameter("vertex_order", r.vertex_order);
   manifest.set_parameter("tie_rel", c.tie.rel_t);

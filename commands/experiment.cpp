@@ -282,6 +282,7 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   setup.threads = resolve_threads(opt.threads);
   setup.cluster_leaf = opt.cluster_leaf;
   setup.cluster_group_size = opt.cluster_group_size;
+  setup.min_cluster_groups = opt.min_cluster_groups;
   setup.group_trees = opt.group_trees;
   setup.vertex_order = opt.vertex_order;
 
@@ -341,7 +342,8 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("cluster", cp);
   manifest.set_parameter("clusters_given", given);
   manifest.set_parameter("cluster_leaf", bvh::to_string(setup.cluster_leaf));
-  manifest.set_parameter("cluster_group_size", setup.cluster_group_size);
+  manifest.set_parameter("cluster_group_size", setup.cluster_group_size);  // (at most: see min_cluster_groups)
+  manifest.set_parameter("min_cluster_groups", setup.min_cluster_groups);
   manifest.set_parameter("group_trees", bvh::to_string(setup.group_trees));
   manifest.set_parameter("vertex_order", bvh::to_string(setup.vertex_order));
   const bvh::SahCostModel model = bvh::cluster_scene_defaults().build.cost;

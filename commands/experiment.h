@@ -38,6 +38,8 @@ struct ExperimentCommandOptions {
   unsigned threads = 0;             ///< 0: all cores
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  /// bvh::SceneConfig::min_cluster_groups (0 when --cluster-groups is given: groups of exactly up to N).
+  std::uint32_t min_cluster_groups = bvh::cluster_scene_defaults().min_cluster_groups;
   bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;
   bvh::VertexOrder vertex_order = bvh::VertexOrder::Clusters;
   std::optional<std::string> shard;  ///< --shard K/N

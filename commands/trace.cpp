@@ -139,6 +139,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   // --cluster-groups N applies to every cluster BVH; unset, a still scene takes the plain build.
   const std::uint32_t groups = opt.cluster_group_size.value_or(still ? 0u : bvh::cluster_scene_defaults().cluster_group_size);
   tcfg.cluster_group_size = tcfg.still_cluster_group_size = groups;
+  if (opt.cluster_group_size) tcfg.min_cluster_groups = 0;  // (given: groups of exactly up to N)
   tcfg.group_trees = opt.group_trees.value_or(bvh::cluster_scene_defaults().group_trees);
   // Set up at the rest pose, as ptc bench and the experiments do, and updated to every frame in
   // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend
@@ -286,8 +287,12 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     return a;
   }());
   if (use_clusters) manifest.set_parameter("clusters", opt.clusters.string());
-  if (use_clusters) manifest.set_parameter("cluster_group_size", tcfg.cluster_group_size);
-  if (use_clusters && tcfg.cluster_group_size > 1) manifest.set_parameter("group_trees", bvh::to_string(tcfg.group_trees));
+  // The group size used (0: the plain build; unset, the default N shrinks for a small scene:
+  // bvh::cluster_group_size_used).
+  const std::uint32_t groups_used = made->tracer().cluster_group_size();
+  if (use_clusters) manifest.set_parameter("cluster_group_size", groups_used);
+  if (use_clusters) manifest.set_parameter("min_cluster_groups", tcfg.min_cluster_groups);
+  if (use_clusters && groups_used > 1) manifest.set_parameter("group_trees", bvh::to_string(tcfg.group_trees));
   manifest.set_parameter("width", rc.width);
   manifest.set_parameter("height", rc.height);
   manifest.set_parameter("threads", threads);

@@ -118,6 +118,7 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
   as.origin = rays.origin;
   as.cluster_leaf = setup.cluster_leaf;
   as.cluster_group_size = setup.cluster_group_size;
+  as.min_cluster_groups = setup.min_cluster_groups;
   as.group_trees = setup.group_trees;
   as.threads = setup.threads;
   as.clusters = &method;
@@ -244,6 +245,7 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
         plain.cluster_group_size = 0;
         loop::AccelSetup two = as;
         if (two.cluster_group_size == 0) two.cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+        two.min_cluster_groups = 0;  // (the groups this row measures, whatever the mesh's size)
         auto a2 = loop::make_accel(loop::AccelKind::OursClusters, posed, two);
         auto a1 = loop::make_accel(loop::AccelKind::OursClusters, posed, plain);
         // Timed on a second update at the same positions (the first builds the layout).

@@ -106,6 +106,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   setup.cluster_leaf = cfg.cluster_leaf;
   setup.leaf_format = cfg.leaf_format;
   setup.cluster_group_size = cfg.cluster_group_size;
+  setup.min_cluster_groups = cfg.min_cluster_groups;
   setup.group_trees = cfg.group_trees;
   setup.threads = cfg.threads;
   setup.embree_packet_width = cfg.embree_packet_width;
@@ -134,9 +135,9 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
       res.cluster_scene_setup_ms = sw.ms();
       res.fused_vertex_pass = loop::cluster_scene_of(*accels.back())->fused_vertex_pass();
       res.cluster_leaves = bvh::leaf_shape(loop::cluster_scene_of(*accels.back())->data());
+      res.cluster_group_size = loop::cluster_scene_of(*accels.back())->group_size();
     }
   }
-  res.cluster_group_size = setup.cluster_group_size;
   res.group_trees = setup.group_trees;
   std::vector<loop::Accel*> order;
   for (auto& a : accels) order.push_back(a.get());

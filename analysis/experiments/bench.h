@@ -54,6 +54,9 @@ struct PeerBenchConfig {
   bvh::LeafFormat leaf_format = bvh::LeafFormat::Blocks;
   /// Two-level build of the cluster BVH over groups of at most this many clusters; 0: plain.
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  /// bvh::SceneConfig::min_cluster_groups (0: groups of exactly up to cluster_group_size; the
+  /// command's --cluster-groups N given).
+  std::uint32_t min_cluster_groups = bvh::cluster_scene_defaults().min_cluster_groups;
   /// With groups: each group's tree rebuilt per frame, or fixed and refitted (bvh::GroupTrees).
   bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;
   TieRule tie;                            ///< what counts as a tie in the hit agreement

@@ -714,6 +714,7 @@ ExperimentRun run_experiment(Scene& scene, const ExperimentParams& p, const stud
   as.origin = rays.origin;
   as.cluster_leaf = setup.cluster_leaf;
   as.cluster_group_size = setup.cluster_group_size;
+  as.min_cluster_groups = setup.min_cluster_groups;
   as.group_trees = setup.group_trees;
   as.threads = setup.threads;
 

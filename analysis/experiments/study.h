@@ -76,6 +76,7 @@ struct StudySetup {
   unsigned threads = 1;              ///< oneTBB and Embree threads for the whole run
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  std::uint32_t min_cluster_groups = bvh::cluster_scene_defaults().min_cluster_groups;  ///< bvh::SceneConfig's
   bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;
   bvh::VertexOrder vertex_order = bvh::VertexOrder::Clusters;
   Shard shard;

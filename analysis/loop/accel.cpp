@@ -96,6 +96,7 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   cfg.cluster_leaf = s.cluster_leaf;
   cfg.leaf_format = s.leaf_format;
   cfg.cluster_group_size = s.cluster_group_size;
+  cfg.min_cluster_groups = s.min_cluster_groups;
   cfg.group_trees = s.group_trees;
   cfg.clock = s.clock;
   cfg.builder = s.builder;

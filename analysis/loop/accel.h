@@ -70,6 +70,8 @@ struct AccelSetup {
   bvh::LeafFormat leaf_format = bvh::LeafFormat::Blocks;
   /// ours_clusters: two-level build over groups of at most this many clusters (0: plain build).
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
+  /// ours_clusters: bvh::SceneConfig::min_cluster_groups (0: groups of exactly up to cluster_group_size).
+  std::uint32_t min_cluster_groups = bvh::cluster_scene_defaults().min_cluster_groups;
   /// ours_clusters with groups: the groups' trees rebuilt or refitted per frame (bvh::GroupTrees).
   bvh::GroupTrees group_trees = bvh::cluster_scene_defaults().group_trees;
   unsigned threads = 1;                  ///< Embree's device threads (ours: the caller's oneTBB limit)

@@ -31,6 +31,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.leaf_format = *bvh::parse_leaf_format(a->leaf_format);
                       if (o.config.leaf_format == bvh::LeafFormat::Tables && o.config.cluster_leaf != bvh::ClusterLeaf::Linear)
                         throw UsageError("--leaf-format", "tables needs linear cluster leaves (--cluster-leaf block-tree keeps blocks)");
+                      if (a->app->count("--cluster-groups")) o.config.min_cluster_groups = 0;  // (given: exact)
                       o.config.group_trees = a->group_trees.get(o.config.cluster_group_size > 1,
                                                                 "the two-level build (--cluster-groups N, N > 1)");
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
@@ -113,7 +114,8 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->capture_default_str();
   c->add_option("--cluster-groups", cfg.cluster_group_size,
                 "two-level cluster BVH build over fixed groups of at most N clusters (subtrees of the rest-pose "
-                "BVH); 0 = the plain build over all cluster boxes")
+                "BVH); 0 = the plain build over all cluster boxes; unset: N = 32, but at least 1024 groups (smaller "
+                "groups under 32,768 clusters, the plain build under 2,048)")
       ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);

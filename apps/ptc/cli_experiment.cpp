@@ -45,6 +45,7 @@ void register_experiment(CLI::App& app, Context& ctx) {
         a->flags.apply(o.cluster, o.given);
         o.cluster_leaf = *bvh::parse_cluster_leaf(a->cluster_leaf);
         o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
+        if (given("--cluster-groups")) o.min_cluster_groups = 0;  // (given: exact)
         o.group_trees = a->group_trees.get(o.cluster_group_size > 1, "the two-level build (--cluster-groups N, N > 1)");
         o.threads = static_cast<unsigned>(ctx.threads);
         o.input = a->scene.input;
@@ -90,7 +91,8 @@ void register_experiment(CLI::App& app, Context& ctx) {
       ->check(enum_validator("cluster leaf", bvh::parse_cluster_leaf))
       ->capture_default_str();
   c->add_option("--cluster-groups", a->opt.cluster_group_size,
-                "two-level cluster BVH build over groups of at most N clusters; 0 = the plain build")
+                "two-level cluster BVH build over groups of at most N clusters; 0 = the plain build; unset: N = 32, "
+                "but at least 1024 groups (smaller groups under 32,768 clusters, the plain build under 2,048)")
       ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);

@@ -87,7 +87,7 @@ TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
   for (std::uint32_t run : {7u, 37u, 200u}) {
     const Clustering runs = ptc::morton_runs(m, run);
     for (std::uint32_t groups : {0u, 8u}) {
-      SceneConfig cfg = cluster_scene_defaults();
+      SceneConfig cfg = test::two_level_defaults();
       cfg.cluster_group_size = groups;
       cfg.group_trees = GroupTrees::Rebuild;  // (the primitives of bvh() are the clusters)
       ClusterScene s(m, view_of(runs), cfg);
@@ -126,7 +126,7 @@ using test::expect_same_data;
 TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
   const Mesh m = test::load_mesh("armadillo.off");  // 13k blocks: more than one fill chunk
   const Clustering runs = ptc::morton_runs(m, 37);
-  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, cluster_scene_defaults());
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, test::two_level_defaults());
   const Mesh rm = renumber_vertices(m, to_old);
   const Clustering rruns = renumber_vertices(runs, inverse_permutation(to_old));
   const std::vector<Mesh> frames{test::deformed(m, 0.02), test::deformed(m, 0.06)};
@@ -139,7 +139,7 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
     std::vector<std::vector<Box3f>> want_boxes;
     for (const auto& [threads, avx2] : {std::pair{1, true}, {2, true}, {4, true}, {1, false}, {2, false}}) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-      SceneConfig cfg = cluster_scene_defaults();
+      SceneConfig cfg = test::two_level_defaults();
       cfg.cluster_leaf = leaf;
       cfg.leaf_format = format;
       cfg.group_trees = trees;
@@ -199,7 +199,7 @@ TEST(ClusterScene, VertexListsBeyondTheCornersKeepTheListsBoxes) {
     voffs.push_back(static_cast<std::uint32_t>(verts.size()));
   }
   const ClusterView plus{runs.triangle_order, runs.triangle_offsets, verts, voffs};
-  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, plus, {}, cluster_scene_defaults());
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, plus, {}, test::two_level_defaults());
   const Mesh rm = renumber_vertices(m, to_old);
   const std::vector<std::uint32_t> to_new = inverse_permutation(to_old);
   std::vector<std::uint32_t> rverts(verts.size());
@@ -210,7 +210,7 @@ TEST(ClusterScene, VertexListsBeyondTheCornersKeepTheListsBoxes) {
   std::vector<Box3f> want;
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    ClusterScene s(rm, rplus, cluster_scene_defaults());
+    ClusterScene s(rm, rplus, test::two_level_defaults());
     ASSERT_TRUE(s.fused_vertex_pass());
     s.update(moved.positions());
     EXPECT_GT(s.times().boxes_ms, 0.0) << threads;  // the boxes were made over the lists
@@ -241,7 +241,7 @@ TEST(ClusterScene, SetUpInChunksIsTheSameAtAnyThreadCountAndHitsLikeBruteForce) 
   const Clustering runs = ptc::morton_runs(m, 9);
   ASSERT_GT(runs.cluster_count(), 4u * 1024u);
   const Mesh moved = test::deformed(m, 0.04);
-  SceneConfig cfg = cluster_scene_defaults();
+  SceneConfig cfg = test::two_level_defaults();
   cfg.cluster_group_size = 2;
   cfg.group_trees = GroupTrees::Refit;
   std::vector<TraceData> want;
@@ -311,7 +311,7 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
   pos.push_back(arm.bounds().hi + Vec3(3.0, -1.0, 2.0));  // referenced by no triangle
   const Mesh m(std::move(tris), std::move(pos));
   const Clustering runs = ptc::morton_runs(m, 9);
-  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, cluster_scene_defaults());
+  const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, test::two_level_defaults());
   const Mesh rm = renumber_vertices(m, to_old);
   const Clustering rruns = renumber_vertices(runs, inverse_permutation(to_old));
   struct Case {
@@ -326,7 +326,7 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
   for (std::uint32_t group : {0u, 4u})
   for (GroupTrees trees : {GroupTrees::Rebuild, GroupTrees::Refit}) {
     if (group == 0 && trees == GroupTrees::Rebuild) continue;  // (the plain build has no group trees)
-    SceneConfig cfg = cluster_scene_defaults();
+    SceneConfig cfg = test::two_level_defaults();
     cfg.cluster_leaf = leaf;
     cfg.cluster_group_size = group;
     cfg.group_trees = trees;
@@ -382,7 +382,7 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
     }
   }
   // The sweep builder (plain build), and an empty mesh.
-  SceneConfig sweep = cluster_scene_defaults();
+  SceneConfig sweep = test::two_level_defaults();
   sweep.builder = SahBuilder::Sweep;
   sweep.cluster_group_size = 0;
   const ClusterScene animated(m, view_of(runs), sweep);
@@ -390,7 +390,7 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
   expect_same_data(ClusterScene(m, view_of(runs), sweep).data(), animated.data(), "sweep");
   const Mesh empty;
   const Clustering none;
-  SceneConfig cfg = cluster_scene_defaults();
+  SceneConfig cfg = test::two_level_defaults();
   const ClusterScene empty_animated(empty, view_of(none), cfg);
   cfg.built_once = true;
   const ClusterScene empty_once(empty, view_of(none), cfg);
@@ -425,7 +425,7 @@ TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
   const Mesh moved = test::deformed(m, 0.04);
   for (std::uint32_t run : {9u, 60u}) {
     const Clustering runs = ptc::morton_runs(m, run);
-    const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, cluster_scene_defaults());
+    const std::vector<std::uint32_t> to_old = cluster_vertex_order(m, view_of(runs), {}, test::two_level_defaults());
     const Mesh rm = renumber_vertices(m, to_old), rmoved = renumber_vertices(moved, to_old);
     const Clustering rruns = renumber_vertices(runs, inverse_permutation(to_old));
     for (int mode = 0; mode < 3; ++mode)  // input order, renumbered (the fused pass), built once
@@ -434,7 +434,7 @@ TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
       const Mesh& mesh = renumbered ? rm : m;
       const Mesh& next = renumbered ? rmoved : moved;
       const ClusterView v = view_of(renumbered ? rruns : runs);
-      SceneConfig cfg = cluster_scene_defaults();
+      SceneConfig cfg = test::two_level_defaults();
       cfg.cluster_group_size = build == 1 ? 4 : 0;
       if (build == 2) cfg.build.max_leaf_size = 4, cfg.build.cost.traversal = 50.0;
       cfg.built_once = mode == 2;
@@ -534,7 +534,7 @@ TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
     }
   }
   // Block trees keep blocks: the tables are refused with them.
-  SceneConfig bad = cluster_scene_defaults();
+  SceneConfig bad = test::two_level_defaults();
   bad.cluster_leaf = ClusterLeaf::BlockTree;
   bad.build.max_leaf_size = 1;
   bad.leaf_format = LeafFormat::Tables;
@@ -553,7 +553,7 @@ TEST(ClusterScene, FixedGroupTreesAtTheRestPoseAreTheRebuiltTree) {
     for (std::uint32_t groups : {2u, 3u, 8u, 16u}) {
       const std::string what = "run " + std::to_string(run) + " groups " + std::to_string(groups);
       const Clustering runs = ptc::morton_runs(m, run);
-      SceneConfig cfg = cluster_scene_defaults();
+      SceneConfig cfg = test::two_level_defaults();
       cfg.cluster_group_size = groups;
       cfg.group_trees = GroupTrees::Rebuild;
       const ClusterScene rebuilt(m, view_of(runs), cfg);
@@ -585,7 +585,7 @@ TEST(ClusterScene, TheTopIsTheRegroupedCollapseOfTheBinaryTree) {
   const Mesh m = test::load_mesh("armadillo.off");
   for (std::uint32_t run : {7u, 23u, 1000000u})
     for (std::uint32_t leaf : {1u, 4u}) {
-      SceneConfig cfg = cluster_scene_defaults();
+      SceneConfig cfg = test::two_level_defaults();
       cfg.cluster_group_size = 0;
       cfg.build.max_leaf_size = leaf;
       if (leaf > 1) cfg.build.cost.traversal = 1000.0;  // leaves as large as allowed
@@ -639,7 +639,7 @@ TEST(ClusterScene, TheTopIsTheRegroupedCollapseOfTheBinaryTree) {
 TEST(ClusterScene, FixedGroupTreesAreRefittedExactly) {
   const Mesh m = test::load_mesh("armadillo.off");
   const Clustering runs = ptc::morton_runs(m, 23);
-  SceneConfig cfg = cluster_scene_defaults();
+  SceneConfig cfg = test::two_level_defaults();
   cfg.group_trees = GroupTrees::Refit;
   ClusterScene s(m, view_of(runs), cfg);
   const std::size_t S = s.subtree_nodes();
@@ -686,7 +686,7 @@ TEST(ClusterScene, FixedGroupTreesAreRefittedExactly) {
 TEST(ClusterScene, TheSweepBuilderHasNoTwoLevelBuild) {
   const Mesh m = test::load_mesh("bunny00.off");
   const Clustering runs = ptc::morton_runs(m, 20);
-  SceneConfig cfg = cluster_scene_defaults();
+  SceneConfig cfg = test::two_level_defaults();
   cfg.builder = SahBuilder::Sweep;
   cfg.cluster_group_size = 8;
   EXPECT_THROW(ClusterScene(m, view_of(runs), cfg), std::invalid_argument);
@@ -714,6 +714,51 @@ TEST(SceneConfig, TraceFrameOrigin) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("vertex 5"), std::string::npos) << e.what();
   }
+}
+
+// The group size used: the configured N, but (min_cluster_groups M > 0) at most clusters / M, and
+// the plain build (0) when that is 1 or less. Hand values around the defaults' thresholds, then
+// scenes: a small one takes the plain build with the defaults and groups of exactly 16 with
+// min_cluster_groups 0; one of more than 2,048 clusters gets groups of at most clusters / 1024,
+// at least 1024 of them.
+TEST(SceneConfig, GroupSizeUsedKeepsAtLeastTheMinimumOfGroups) {
+  const SceneConfig d = cluster_scene_defaults();
+  EXPECT_EQ(d.cluster_group_size, 32u);
+  EXPECT_EQ(d.min_cluster_groups, 1024u);
+  const std::pair<std::size_t, std::uint32_t> want[] = {{0, 0},      {1, 0},      {2047, 0},   {2048, 2},
+                                                        {3071, 2},   {3072, 3},   {32767, 31}, {32768, 32},
+                                                        {100000, 32}, {1u << 30, 32}};
+  for (const auto& [clusters, g] : want) EXPECT_EQ(cluster_group_size_used(clusters, d), g) << clusters;
+  SceneConfig exact = d;
+  exact.min_cluster_groups = 0;
+  for (const std::size_t clusters : {std::size_t{0}, std::size_t{5}, std::size_t{100000}})
+    EXPECT_EQ(cluster_group_size_used(clusters, exact), 32u) << clusters;
+  exact.cluster_group_size = 1;
+  EXPECT_EQ(cluster_group_size_used(100000, exact), 0u);
+  SceneConfig plain = d;
+  plain.cluster_group_size = 0;
+  EXPECT_EQ(cluster_group_size_used(100000, plain), 0u);
+
+  const Mesh m = test::load_mesh("bunny00.off");
+  const Clustering runs = ptc::morton_runs(m, 50);
+  ASSERT_LT(runs.cluster_count(), 2048u);
+  const ClusterScene small(m, view_of(runs), d);
+  EXPECT_EQ(small.group_size(), 0u);
+  EXPECT_TRUE(small.group_offsets().empty());
+  const ClusterScene grouped(m, view_of(runs), test::two_level_defaults());
+  EXPECT_EQ(grouped.group_size(), 16u);
+  EXPECT_FALSE(grouped.group_offsets().empty());
+
+  const Mesh cube = test::grid_cube(30);  // 10,800 triangles
+  const Clustering pairs = ptc::morton_runs(cube, 2);
+  const std::size_t C = pairs.cluster_count();
+  ASSERT_GE(C, 3 * 1024u);
+  const ClusterScene big(cube, view_of(pairs), d);
+  EXPECT_EQ(big.group_size(), C / 1024);
+  const auto& go = big.group_offsets();
+  ASSERT_GE(go.size(), 1025u);
+  for (std::size_t g = 0; g + 1 < go.size(); ++g) EXPECT_LE(go[g + 1] - go[g], big.group_size()) << g;
+  EXPECT_EQ(go.back(), C);
 }
 
 }  // namespace

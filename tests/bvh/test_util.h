@@ -9,10 +9,22 @@
 #include <vector>
 
 #include "bvh/box.h"
+#include "bvh/scene_config.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/mesh.h"
 
 namespace ptc::bvh::test {
+
+/// cluster_scene_defaults() with groups of exactly up to 16 clusters (min_cluster_groups 0, the
+/// group size of the defaults before the thirty-first session): the test meshes have a few
+/// hundred clusters, which the defaults would build plainly, and these tests exercise the
+/// two-level build.
+inline SceneConfig two_level_defaults() {
+  SceneConfig c = cluster_scene_defaults();
+  c.cluster_group_size = 16;
+  c.min_cluster_groups = 0;
+  return c;
+}
 
 inline Mesh load_mesh(const std::string& name) {
   return read_mesh(std::string(PTC_TEST_DATA) + "/meshes/" + name).mesh;

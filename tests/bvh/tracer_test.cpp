@@ -784,10 +784,10 @@ TEST(Tracer, EmptyMeshAndDegenerateRays) {
   EXPECT_EQ(trace(s1.data(), rays, hits).rays, 0u);
   // Cluster scenes (default settings: two-level build) on no clusters and on one.
   const std::vector<std::uint32_t> none, zero{0}, t0{0}, o01{0, 1};
-  ClusterScene ce(empty, ClusterView{none, zero, none, {}}, cluster_scene_defaults());
+  ClusterScene ce(empty, ClusterView{none, zero, none, {}}, test::two_level_defaults());
   EXPECT_TRUE(validate(ce.data(), 0).empty());
   EXPECT_FALSE(trace_ray(ce.data(), Vec3::Zero(), {1, 0, 0}).hit());
-  ClusterScene c1(one, ClusterView{t0, o01, {}, {}}, cluster_scene_defaults());
+  ClusterScene c1(one, ClusterView{t0, o01, {}, {}}, test::two_level_defaults());
   EXPECT_TRUE(c1.fused_vertex_pass());
   c1.update(one.positions());
   EXPECT_TRUE(validate(c1.data(), 1).empty());
@@ -875,7 +875,7 @@ struct Renumbered {
   explicit Renumbered(Mesh mesh)
       : m(std::move(mesh)),
         cl(acc50(m)),
-        to_old(cluster_vertex_order(m, view_of(cl), {}, cluster_scene_defaults())),
+        to_old(cluster_vertex_order(m, view_of(cl), {}, test::two_level_defaults())),
         rm(renumber_vertices(m, to_old)),
         rcl(renumber_vertices(cl, inverse_permutation(to_old))) {}
   Mesh m;
@@ -898,7 +898,7 @@ TEST(Tracer, AccClustersMatchBruteForce) {
   for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
     if (group == 0 && trees == GroupTrees::Refit) continue;  // (no groups: the same plain build)
     SCOPED_TRACE("cluster_group_size " + std::to_string(group) + ", group trees " + to_string(trees));
-    SceneConfig cfg = cluster_scene_defaults();
+    SceneConfig cfg = test::two_level_defaults();
     cfg.cluster_leaf = mode;
     cfg.cluster_group_size = group;
     cfg.group_trees = trees;
@@ -928,7 +928,7 @@ TEST(Tracer, FixedGroupTreesWithLeavesOfSeveralClusters) {
   const Mesh m = test::load_mesh("bunny00.off");
   const Clustering runs = ptc::morton_runs(m, 6);
   const Mesh moved = test::deformed(m, 0.08);
-  SceneConfig cfg = cluster_scene_defaults();
+  SceneConfig cfg = test::two_level_defaults();
   cfg.group_trees = GroupTrees::Refit;
   cfg.cluster_group_size = 16;
   cfg.build.max_leaf_size = 4;
@@ -1019,7 +1019,7 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
   for (std::size_t i = 0; i < to_old.size(); ++i) rmoved[i] = moved.positions()[to_old[i]];
   const Mesh rm_moved = rm.with_positions(rmoved);
   for (ClusterLeaf mode : {ClusterLeaf::Linear, ClusterLeaf::BlockTree}) {
-    SceneConfig cfg = cluster_scene_defaults();
+    SceneConfig cfg = test::two_level_defaults();
     cfg.cluster_leaf = mode;
     ClusterScene a(m, view_of(cl), cfg), b(rm, view_of(rcl), cfg);
     EXPECT_FALSE(a.fused_vertex_pass()) << "the file's order happens to be the clusters' (the test needs both paths)";
@@ -1055,7 +1055,7 @@ TEST(Tracer, RenumberedMeshTakesTheFusedPassAndTracesTheSame) {
   // fused pass when the mesh was renumbered over those corner lists.
   const Clustering runs = ptc::morton_runs(m, 37);
   const ClusterView no_lists{runs.triangle_order, runs.triangle_offsets, {}, {}};
-  const Mesh rr = renumber_vertices(m, cluster_vertex_order(m, no_lists, {}, cluster_scene_defaults()));
+  const Mesh rr = renumber_vertices(m, cluster_vertex_order(m, no_lists, {}, test::two_level_defaults()));
   ClusterScene c(rr, no_lists), c_old(m, no_lists);
   EXPECT_TRUE(c.fused_vertex_pass());
   EXPECT_FALSE(c_old.fused_vertex_pass());
@@ -1092,7 +1092,7 @@ TEST(Tracer, NonFinitePositionsAreRefusedNamingTheVertex) {
         // finite in double, beyond the float range: at construction the frame's origin (the
         // bounds' centre) moves out with the vertex, and the mesh's extent is refused.
         try {
-          ClusterScene s(m.with_positions(p), view_of(cl), cluster_scene_defaults());
+          ClusterScene s(m.with_positions(p), view_of(cl), test::two_level_defaults());
           ADD_FAILURE() << what << ": accepted";
         } catch (const std::invalid_argument& e) {
           EXPECT_NE(std::string(e.what()).find("beyond the single-precision tracer's range"), std::string::npos)
@@ -1100,15 +1100,15 @@ TEST(Tracer, NonFinitePositionsAreRefusedNamingTheVertex) {
         }
       } else {
         expect_names([&] { TriangleScene s(m.with_positions(p)); }, v, what + " triangle ctor");
-        expect_names([&] { ClusterScene s(m.with_positions(p), view_of(cl), cluster_scene_defaults()); }, v,
+        expect_names([&] { ClusterScene s(m.with_positions(p), view_of(cl), test::two_level_defaults()); }, v,
                      what + " cluster ctor");
       }
       TriangleScene ts(m);
       expect_names([&] { ts.update(p); }, v, what + " triangle update");
-      ClusterScene gather(m, view_of(cl), cluster_scene_defaults());
+      ClusterScene gather(m, view_of(cl), test::two_level_defaults());
       ASSERT_FALSE(gather.fused_vertex_pass());
       expect_names([&] { gather.update(p); }, v, what + " gathering update");
-      ClusterScene fused(rm, view_of(rcl), cluster_scene_defaults());
+      ClusterScene fused(rm, view_of(rcl), test::two_level_defaults());
       ASSERT_TRUE(fused.fused_vertex_pass());
       std::vector<Vec3> rp(m.vertex_count());
       for (std::size_t i = 0; i < rp.size(); ++i) rp[i] = p[to_old[i]];

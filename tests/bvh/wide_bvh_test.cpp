@@ -102,7 +102,7 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
   EXPECT_FALSE(validate(d, m.triangle_count()).empty());
 
   const Clustering runs = ptc::morton_runs(m, 80);
-  SceneConfig linear = cluster_scene_defaults();
+  SceneConfig linear = test::two_level_defaults();
   linear.cluster_leaf = ClusterLeaf::Linear;
   ClusterScene cs(m, view_of(runs), linear);
   ASSERT_TRUE(validate(cs.data(), m.triangle_count()).empty()) << test::joined(validate(cs.data(), m.triangle_count()));
@@ -158,7 +158,7 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
     corrupt([&](TraceData& x) { x.blocks.resize(1); }, "blocks beside the tables");
   }
   // Block trees: valid (boxes contain, not equal, their children's), and refitted per frame.
-  SceneConfig block_tree = cluster_scene_defaults();
+  SceneConfig block_tree = test::two_level_defaults();
   block_tree.cluster_leaf = ClusterLeaf::BlockTree;
   ClusterScene bt(m, view_of(runs), block_tree);
   EXPECT_GT(bt.subtree_nodes(), ClusterScene(m, view_of(runs)).subtree_nodes());  // (the group trees count there too)
@@ -333,7 +333,7 @@ std::size_t slot_boxes_are_tight(const TraceData& d, std::size_t& loose, std::si
 TEST(WideBvh8, ScenesKeepTheirEightWideTreesValid) {
   const Mesh m = test::load_mesh("bunny00.off");
   const Clustering runs = ptc::morton_runs(m, 24);
-  std::vector<SceneConfig> configs(3, cluster_scene_defaults());
+  std::vector<SceneConfig> configs(3, test::two_level_defaults());
   configs[1].cluster_leaf = ClusterLeaf::BlockTree;
   configs[2].group_trees = GroupTrees::Rebuild;
   for (std::size_t c = 0; c < configs.size(); ++c) {
