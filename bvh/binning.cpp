@@ -61,7 +61,6 @@ __attribute__((target("avx2"))) std::uint64_t bin_range_avx2(Ref* r, std::uint32
   return total;
 }
 
-
 }  // namespace
 
 BinRangeFn bin_range_for(bool allow_avx2) {

@@ -887,12 +887,14 @@ void ClusterScene::collapse_top8() {
   };
   using Item = Top8Item;
   std::vector<Item>& stack = top8_stack_;
+  auto push = [&](const Slot& c, std::uint32_t node8, std::uint32_t depth) {
+    stack.push_back({c.bin, node8, depth, {c.kids[0], c.kids[1], c.kids[2], c.kids[3]}, c.live});
+  };
   stack.clear();
   w8.nodes.reserve(S8 + bvh.nodes.size() / 2);  // (no 8-wide node has fewer than two children but a root leaf)
   w8.root = static_cast<std::uint32_t>(S8);
   w8.nodes.emplace_back();
-  const Slot root = slot(0);
-  stack.push_back({0, w8.root, 1, {root.kids[0], root.kids[1], root.kids[2], root.kids[3]}, root.live});
+  push(slot(0), w8.root, 1);
   std::uint32_t depth = 0;
   while (!stack.empty()) {
     const Item it = stack.back();
@@ -928,8 +930,7 @@ void ClusterScene::collapse_top8() {
         if (!m.is_leaf()) {
           child = static_cast<std::uint32_t>(w8.nodes.size());
           w8.nodes.emplace_back();
-          const Slot& c = s[i];
-          stack.push_back({c.bin, child, it.depth + 1, {c.kids[0], c.kids[1], c.kids[2], c.kids[3]}, c.live});
+          push(s[i], child, it.depth + 1);
         } else if (refit_groups_) {
           if (m.count != 1) throw std::logic_error("ClusterScene: a leaf of the tree over the groups holds several groups");
           std::tie(child, count) = group_slot8_[bvh.prim_order[m.index]];
