@@ -80,9 +80,9 @@ struct GroupRuns {
                                                               std::span<const std::size_t> part_offsets = {});
 
 /// out_pos[v] = to_frame(positions[v], frame) for every vertex v (out_pos.size() >= positions.size(),
-/// else std::invalid_argument), in one streaming pass (AVX2 when allow_avx2 and the CPU has it;
-/// the same bits either way); a position that is not finite in the trace frame throws
-/// std::invalid_argument (check_finite's message) after the pass.
+/// else std::invalid_argument), in one streaming pass (AVX2 when allow_avx2 and the CPU has it,
+/// writing with streaming stores, fenced; the same bits either way); a position that is not
+/// finite in the trace frame throws std::invalid_argument (check_finite's message) after the pass.
 void frame_positions_streamed(std::span<const Vec3> positions, const FrameMap& frame, std::span<Vec3f> out_pos,
                               bool allow_avx2 = true);
 

@@ -218,6 +218,15 @@ TEST(VertexOrder, FusedPassOnRenumberedVerticesEqualsBruteForce) {
       for (std::uint32_t v = 0; v < V; ++v) ASSERT_EQ(fp[v], plain[v]) << "trial " << trial << " vertex " << v;
       EXPECT_EQ(fp[V], (Vec3f{7.0f, 7.0f, 7.0f})) << "wrote past the vertices";
     }
+    // Outputs that start off a 16-byte boundary (the AVX2 path streams from the first one on):
+    // the same floats, nothing before or past them.
+    for (std::size_t shift = 1; shift < 4; ++shift) {
+      AlignedVector<Vec3f> big(V + 2 + shift, Vec3f{7.0f, 7.0f, 7.0f});
+      frame_positions_streamed(pos_new, origin, std::span<Vec3f>(big).subspan(shift));
+      for (std::uint32_t v = 0; v < V; ++v) ASSERT_EQ(big[shift + v], plain[v]) << "shift " << shift << " vertex " << v;
+      EXPECT_EQ(big[shift - 1], (Vec3f{7.0f, 7.0f, 7.0f})) << "wrote before the vertices, shift " << shift;
+      EXPECT_EQ(big[shift + V], (Vec3f{7.0f, 7.0f, 7.0f})) << "wrote past the vertices, shift " << shift;
+    }
     AlignedVector<Vec3f> fp2(V + 2), c2;
     AlignedVector<Box3f> b2;
     // A position that is not finite in the frame (any vertex, grouped or not): refused on both
