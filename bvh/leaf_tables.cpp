@@ -21,6 +21,7 @@ constexpr std::size_t kClustersPerTask = 1024;  // the layout's and the fill's c
 struct Lane {
   std::uint32_t id;
   std::uint32_t v[3];
+  std::uint32_t order;  // the lane's place in its cluster
 };
 
 struct Group {
@@ -55,11 +56,100 @@ struct Group {
   }
 };
 
-// One cluster's groups, each passed to emit(const Group&, bool last) in order. `rest` is
-// reordered.
+// Where a group's vertices go among the four chunks of eight slots (TableGroup::pair): per
+// test of eight triangles a pair of chunks, and the slot of the group's vertex i (i in the order
+// the vertices were first taken).
+struct ChunkFit {
+  std::uint8_t pair[kTableTests];
+  std::uint8_t slot[kTableSlots];
+};
+
+// The chunks (bits 0-3) a pair code names.
+constexpr unsigned chunks_of(unsigned code) { return 1u << (code & 1 ? 2 : 0) | 1u << (code & 2 ? 3 : 1); }
+
+// Whether the group's tests of eight fit chunk pairs, and how (into f): a group of at most 16
+// vertices takes slots 0 .. V-1 in order (every test on chunks 0 and 1). Otherwise the first
+// combination of pairs that admits an assignment of the vertices to chunks (test 0 on chunks 0
+// and 1, which loses nothing: the pairs' labels are symmetric; then test 1's code lowest, in
+// increasing order): a vertex may go to a chunk that every test using it has in its pair, at
+// most 8 a chunk. Such an assignment exists iff every set of chunks has room for the vertices
+// confined to it (Hall's condition); it is then found by augmenting paths, and each chunk's
+// vertices take its first slots in the order they were taken.
+bool chunk_fit(const Group& g, ChunkFit& f) {
+  const int V = g.nslots, T = (g.ntris + 7) / 8;
+  std::fill(std::begin(f.pair), std::end(f.pair), std::uint8_t{0});
+  if (V <= 16) {
+    for (int v = 0; v < V; ++v) f.slot[v] = static_cast<std::uint8_t>(v);
+    return true;
+  }
+  std::uint8_t tests_of[kTableSlots] = {};  // bit j: test j uses the vertex
+  for (int t = 0; t < g.ntris; ++t)
+    for (int k = 0; k < 3; ++k) tests_of[g.corner[k][t]] |= static_cast<std::uint8_t>(1u << (t / 8));
+  for (int j = 0; j < T; ++j) {  // (two chunks hold 16 vertices)
+    int n = 0;
+    for (int v = 0; v < V; ++v) n += tests_of[v] >> j & 1;
+    if (n > 16) return false;
+  }
+  std::uint8_t allowed[kTableSlots];
+  for (unsigned c = 0; c < 1u << (2 * (T - 1)); ++c) {
+    unsigned pair_chunks[kTableTests] = {chunks_of(0), 0, 0, 0};
+    for (int j = 1; j < T; ++j) pair_chunks[j] = chunks_of(c >> (2 * (j - 1)) & 3u);
+    int hist[16] = {};
+    bool ok = true;
+    for (int v = 0; v < V && ok; ++v) {
+      unsigned a = 15;
+      for (int j = 0; j < T; ++j)
+        if (tests_of[v] >> j & 1) a &= pair_chunks[j];
+      allowed[v] = static_cast<std::uint8_t>(a);
+      ok = a != 0;
+      ++hist[a];
+    }
+    for (unsigned S = 1; S < 16 && ok; ++S) {  // Hall's condition
+      int confined = 0;
+      for (unsigned a = 1; a < 16; ++a)
+        if ((a & ~S) == 0) confined += hist[a];
+      ok = confined <= 8 * __builtin_popcount(S);
+    }
+    if (!ok) continue;
+    // The assignment, by augmenting paths (each search visits a chunk once).
+    int members[4][8], size[4] = {};
+    auto augment = [&](auto&& self, int v, unsigned& visited) -> bool {
+      for (int k = 0; k < 4; ++k) {
+        if (!(allowed[v] >> k & 1) || (visited >> k & 1)) continue;
+        visited |= 1u << k;
+        if (size[k] < 8) {
+          members[k][size[k]++] = v;
+          return true;
+        }
+        for (int i = 0; i < 8; ++i)
+          if (self(self, members[k][i], visited)) {
+            members[k][i] = v;
+            return true;
+          }
+      }
+      return false;
+    };
+    for (int v = 0; v < V; ++v) {
+      unsigned visited = 0;
+      if (!augment(augment, v, visited)) throw std::logic_error("make_table_layout: no assignment under Hall's condition");
+    }
+    std::uint8_t chunk[kTableSlots];
+    for (int k = 0; k < 4; ++k)
+      for (int i = 0; i < size[k]; ++i) chunk[members[k][i]] = static_cast<std::uint8_t>(k);
+    int next[4] = {0, 8, 16, 24};
+    for (int v = 0; v < V; ++v) f.slot[v] = static_cast<std::uint8_t>(next[chunk[v]]++);
+    for (int j = 1; j < T; ++j) f.pair[j] = static_cast<std::uint8_t>(c >> (2 * (j - 1)) & 3u);
+    return true;
+  }
+  return false;
+}
+
+// One cluster's groups, each passed to emit(const Group&, const ChunkFit&, bool last) in order.
+// `rest` is reordered.
 template <class Emit>
 void group_cluster(std::vector<Lane>& rest, Emit&& emit) {
   Group g;
+  ChunkFit f;
   if (rest.size() <= std::size_t{kTableSlots}) {  // the whole cluster in one group, if its vertices fit
     bool fits = true;
     for (const Lane& t : rest) {
@@ -69,13 +159,14 @@ void group_cluster(std::vector<Lane>& rest, Emit&& emit) {
       }
       g.add(t);
     }
-    if (fits) {
-      emit(g, true);
+    if (fits && chunk_fit(g, f)) {
+      emit(g, f, true);
       return;
     }
   }
   std::size_t placed = 0;  // rest[0, placed) are placed; the others keep their order
   while (placed < rest.size()) {
+    const std::size_t start = placed;  // the group: rest[start, placed), in the order taken
     g = Group{};
     while (g.ntris < kTableSlots && placed < rest.size()) {
       std::size_t best = rest.size();
@@ -92,7 +183,18 @@ void group_cluster(std::vector<Lane>& rest, Emit&& emit) {
       ++placed;
       g.add(t);
     }
-    emit(g, placed == rest.size());
+    // The triangles taken last go back to their places in the rest (lane order) until the tests
+    // of eight fit chunk pairs; a group of one triangle always does.
+    while (!chunk_fit(g, f)) {
+      --placed;
+      const auto back = std::lower_bound(rest.begin() + static_cast<std::ptrdiff_t>(placed) + 1, rest.end(), rest[placed],
+                                         [](const Lane& a, const Lane& b) { return a.order < b.order; });
+      std::rotate(rest.begin() + static_cast<std::ptrdiff_t>(placed), rest.begin() + static_cast<std::ptrdiff_t>(placed) + 1,
+                  back);
+      g = Group{};
+      for (std::size_t i = start; i < placed; ++i) g.add(rest[i]);
+    }
+    emit(g, f, placed == rest.size());
   }
 }
 
@@ -103,7 +205,8 @@ void cluster_lanes(const LeafRange& r, std::span<const std::uint32_t> lane_ids, 
     for (int l = 0; l < 4; ++l) {
       const std::uint32_t id = lane_ids[4 * b + l];
       if (id == kNoTriangle) continue;
-      out.push_back({id, {corners[12 * b + l], corners[12 * b + 4 + l], corners[12 * b + 8 + l]}});
+      out.push_back({id, {corners[12 * b + l], corners[12 * b + 4 + l], corners[12 * b + 8 + l]},
+                     static_cast<std::uint32_t>(out.size())});
     }
 }
 
@@ -129,7 +232,7 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
     for (std::size_t c = r.begin(); c < r.end(); ++c) {
       cluster_lanes(ranges[c], lane_ids, corners, lanes);
       std::uint32_t n = 0;
-      group_cluster(lanes, [&](const Group&, bool) { ++n; });
+      group_cluster(lanes, [&](const Group&, const ChunkFit&, bool) { ++n; });
       out.group_offsets[c + 1] = n;
     }
   });
@@ -144,18 +247,24 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
     for (std::size_t c = r.begin(); c < r.end(); ++c) {
       cluster_lanes(ranges[c], lane_ids, corners, lanes);
       std::size_t gi = out.group_offsets[c];
-      group_cluster(lanes, [&](const Group& g, bool last) {
+      group_cluster(lanes, [&](const Group& g, const ChunkFit& f, bool last) {
         TableGroup& t = groups[gi];
-        const auto pad = static_cast<std::uint8_t>(g.nslots < kTableSlots ? g.nslots : 0);  // a NaN slot if there is one
+        std::uint32_t* sv = out.slot_vertices.data() + gi * kTableSlots;
+        std::uint32_t mask = 0;
+        for (int s = 0; s < kTableSlots; ++s) sv[s] = sentinel;
+        for (int i = 0; i < g.nslots; ++i) sv[f.slot[i]] = g.slots[i], mask |= 1u << f.slot[i];
+        // (an unused slot, NaN, if there is one)
+        const auto pad = static_cast<std::uint8_t>(~mask ? __builtin_ctz(~mask) : 0);
         for (int s = 0; s < kTableSlots; ++s) {
           for (int a = 0; a < 3; ++a) t.v[a][s] = nan;
-          out.slot_vertices[gi * kTableSlots + s] = s < g.nslots ? g.slots[s] : sentinel;
           ids[gi * kTableSlots + s] = s < g.ntris ? g.ids[s] : kNoTriangle;
-          for (int k = 0; k < 3; ++k) t.corner[k][s] = s < g.ntris ? g.corner[k][s] : pad;
+          for (int k = 0; k < 3; ++k) t.corner[k][s] = s < g.ntris ? f.slot[g.corner[k][s]] : pad;
         }
         t.count = static_cast<std::uint32_t>(g.ntris);
         t.last = last ? 1 : 0;
         t.vertices = static_cast<std::uint32_t>(g.nslots);
+        t.slot_mask = mask;
+        std::copy(std::begin(f.pair), std::end(f.pair), t.pair);
         std::fill(std::begin(t.unused), std::end(t.unused), 0u);
         ++gi;
       });
@@ -176,9 +285,9 @@ namespace {
     for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
       const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
       TableGroup& t = groups[g];
-      // A group of at most 16 vertices: only the rows' first cache lines (slots 16-31 stay the
-      // NaN make_table_layout wrote).
-      const int end = sv[kTableSlots / 2] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
+      // Slots 16-31 unused (chunks 2 and 3 empty, so their first slots): only the rows' first
+      // cache lines (the others keep the NaN make_table_layout wrote).
+      const int end = sv[16] == layout.sentinel && sv[24] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
       for (int q = 0; q < end; q += 4) {
         // Four slots' (x y z .) by 16-byte loads (add_sentinel's extra element keeps the last in
         // the array), transposed to rows; the NaN sentinel's lanes drop out of the min and max

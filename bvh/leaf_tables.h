@@ -30,14 +30,20 @@ struct TableLayout {
 /// The groups of every cluster, from the block layout: cluster c's triangles are the used lanes
 /// of its blocks ranges[c] (lane_ids[4 b + l], kNoTriangle for padding) in lane order, with
 /// corner vertex indices corners[12 b + 4 k + l] (frame-position indices, as
-/// fill_blocks_from_corners reads them); `sentinel` is the NaN vertex's index. A cluster of at
-/// most 32 triangles on at most 32 vertices is one group in lane order. Otherwise greedy, in lane
-/// order: a group takes, among the next 64 triangles of its cluster not yet placed, the one that
-/// adds the fewest vertices it does not hold yet (the earliest on ties), until it has 32
-/// triangles or none fits in 32 vertices. Slots are numbered in the order the vertices are first
-/// taken. Writes the groups' fixed parts (corner slots, count, last, vertices; the rows NaN) into
+/// fill_blocks_from_corners reads them); `sentinel` is the NaN vertex's index. A group must fit
+/// its chunks (TableGroup): at most 32 triangles on at most 32 vertices, and the vertices of each
+/// test of eight in one even and one odd chunk of eight slots. A cluster that fits is one group
+/// in lane order. Otherwise greedy, in lane order: a group takes, among the next 64 triangles of
+/// its cluster not yet placed, the one that adds the fewest vertices it does not hold yet (the
+/// earliest on ties), until it has 32 triangles or none fits in 32 vertices; then the triangles
+/// it took last go back, one at a time, until its tests fit their chunks. A group of at most 16
+/// vertices numbers its slots in the order the vertices were first taken; a larger one takes
+/// the first combination of chunk pairs that admits its vertices (chunk_fit in leaf_tables.cpp),
+/// each chunk's vertices in that order from the chunk's first slot. Writes the groups' fixed
+/// parts (corner slots, count, last, vertices, slot mask, chunk pairs; the rows NaN) into
 /// `groups` and their triangle ids (kTableSlots a group) into `ids`. Deterministic: the same
-/// layout at any thread count. Throws std::invalid_argument when the spans disagree in size.
+/// layout at any thread count. Throws std::invalid_argument when the spans disagree in size. A
+/// triangle soup (no shared vertices) gets groups of five triangles: eight would need 24 slots.
 [[nodiscard]] TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const std::uint32_t> lane_ids,
                                             std::span<const std::uint32_t> corners, std::uint32_t sentinel,
                                             AlignedVector<TableGroup>& groups, AlignedVector<std::uint32_t>& ids);

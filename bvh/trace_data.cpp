@@ -28,12 +28,15 @@ void validate_table_leaf(const TraceData& d, const std::vector<LeafRange>& leaf_
       const TableGroup& t = d.tables[g];
       const std::string gw = rw + " group " + std::to_string(g);
       if ((t.last != 0) != (g + 1 == lr.first_block + lr.block_count)) fail(gw + ": marked last " + std::to_string(t.last));
-      if (t.count < 1 || t.count > kTableSlots || t.vertices < 1 || t.vertices > kTableSlots) {
-        fail(gw + ": " + std::to_string(t.count) + " triangles on " + std::to_string(t.vertices) + " vertices");
+      if (t.count < 1 || t.count > kTableSlots || t.vertices < 1 || t.vertices > kTableSlots ||
+          static_cast<std::uint32_t>(__builtin_popcount(t.slot_mask)) != t.vertices) {
+        fail(gw + ": " + std::to_string(t.count) + " triangles on " + std::to_string(t.vertices) + " vertices (" +
+             std::to_string(__builtin_popcount(t.slot_mask)) + " slots marked)");
         continue;
       }
-      for (std::uint32_t s = t.vertices; s < kTableSlots; ++s)
-        if (!std::isnan(t.v[0][s]) || !std::isnan(t.v[1][s]) || !std::isnan(t.v[2][s])) fail(gw + ": unused slot not NaN");
+      for (std::uint32_t s = 0; s < kTableSlots; ++s)
+        if (!(t.slot_mask >> s & 1) && (!std::isnan(t.v[0][s]) || !std::isnan(t.v[1][s]) || !std::isnan(t.v[2][s])))
+          fail(gw + ": unused slot " + std::to_string(s) + " not NaN");
       for (std::uint32_t i = 0; i < kTableSlots; ++i) {
         const std::size_t slot = std::size_t{kTableSlots} * g + i;
         if (slot_used[slot]++) fail(gw + ": slot " + std::to_string(i) + " referenced twice");
@@ -48,12 +51,16 @@ void validate_table_leaf(const TraceData& d, const std::vector<LeafRange>& leaf_
           continue;
         }
         if (tri_seen[id]++) fail("triangle " + std::to_string(id) + " appears twice");
+        const std::uint8_t pair = t.pair[i / 8];
         for (int c = 0; c < 3; ++c) {
           const std::uint32_t v = t.corner[c][i];
-          if (v >= t.vertices) {
+          if (v >= kTableSlots || !(t.slot_mask >> v & 1)) {
             fail(gw + ": triangle " + std::to_string(id) + " corner slot " + std::to_string(v) + " unused");
             continue;
           }
+          const int chunk = static_cast<int>(v) & ~7;
+          if (pair > 3 || (chunk != table_even_chunk(pair) && chunk != table_odd_chunk(pair)))
+            fail(gw + ": triangle " + std::to_string(id) + " corner slot " + std::to_string(v) + " outside its test's chunks");
           Box3f pb;
           pb.extend(Vec3f{t.v[0][v], t.v[1][v], t.v[2][v]});
           if (!box.contains(pb)) fail(where + ": triangle " + std::to_string(id) + " corner outside the leaf box");

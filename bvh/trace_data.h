@@ -32,14 +32,26 @@ struct LeafRange {
 
 /// Slots of a TableGroup: vertices and triangles.
 inline constexpr int kTableSlots = 32;
+/// Tests of eight triangles in a TableGroup (the AVX-512VL kernel's unit).
+inline constexpr int kTableTests = kTableSlots / 8;
+
+/// The chunks of slots a TableGroup's test of eight reads (TableGroup::pair): the even chunk
+/// [0, 8) or [16, 24) and the odd chunk [8, 16) or [24, 32), as first slots.
+[[nodiscard]] constexpr int table_even_chunk(std::uint8_t pair) { return pair & 1 ? 16 : 0; }
+[[nodiscard]] constexpr int table_odd_chunk(std::uint8_t pair) { return pair & 2 ? 24 : 8; }
 
 /// Up to 32 triangles of one cluster on up to 32 distinct vertices, 512 bytes (the "tables" leaf
 /// format, LeafFormat::Tables): the vertices in the trace frame as rows v[axis][slot], written
 /// every frame, and each triangle's corners as byte slots into them, fixed per clustering. A
 /// kernel takes a row of 8 or 16 triangles' corner coordinates with one permute of a table row
-/// by the slots (AVX-512 `vpermt2ps`), where blocks take two loads a row for four triangles.
-/// Unused vertex slots hold NaN; triangles at or beyond `count` point at a NaN slot when there
-/// is one, else at slot 0 (kernels mask them by `count`).
+/// by the slots (`vpermt2ps`), where blocks take two loads a row for four triangles. The slots
+/// come in four chunks of eight; the corners of each test of eight triangles (triangles
+/// 8j .. 8j + 7) lie in one even and one odd chunk, `pair[j]`, so that the AVX-512VL kernel
+/// permutes two 256-bit pieces of a row (the slot's bit 3 picks the piece: even chunk or odd)
+/// instead of the whole 512-bit row. A group of at most 16 vertices uses slots 0 .. vertices - 1;
+/// in a larger one each chunk's slots in use come first in the chunk. Unused slots hold NaN;
+/// triangles at or beyond `count` point at an unused slot when there is one, else at slot 0
+/// (kernels mask them by `count`).
 struct alignas(64) TableGroup {
   /// Uninitialised, as TriBlock (the layout writes the fixed part, the fills the rows).
   TableGroup() {}  // NOLINT: not = default
@@ -48,7 +60,9 @@ struct alignas(64) TableGroup {
   std::uint32_t count;     ///< triangles, 1 .. kTableSlots
   std::uint32_t last;      ///< 1 on the last group of its cluster, else 0
   std::uint32_t vertices;  ///< slots in use, 1 .. kTableSlots
-  std::uint32_t unused[5];
+  std::uint32_t slot_mask;           ///< bit s: slot s in use
+  std::uint8_t pair[kTableTests];    ///< per test of eight: bit 0, the even chunk is [16, 24); bit 1, the odd one [24, 32)
+  std::uint32_t unused[3];
 };
 static_assert(sizeof(TableGroup) == 512);
 

@@ -371,25 +371,15 @@ inline void expand_group(const TableGroup& g, TriBlock* out) {
 }
 
 #if defined(PTC_TRACE_EVEX)
-// The low half of x, by a copy that compiles to nothing (GCC 12's _mm512_castps512_ps256 reads
-// an undefined operand and warned at every use).
-[[gnu::always_inline]] inline __m256 low8(__m512 x) {
-  __m256 low;
-  std::memcpy(&low, &x, sizeof low);
-  return low;
-}
-// Eight lanes of a 32-entry table row (lo: entries 0-15, hi: 16-31) picked by the slots s.
-[[gnu::always_inline]] inline __m256 row(__m512 lo, __m512i s, __m512 hi) {
-  return low8(_mm512_permutex2var_ps(lo, s, hi));
-}
-
-// One table group against the ray: its rows relative to the ray origin (the single-ray test's
+// One table group against the ray: the rows relative to the ray origin (the single-ray test's
 // first subtraction, done once per vertex instead of once per corner: the same values), then per
-// test each corner row of 8 (AVX-512VL) or 16 (AVX-512) triangles by one permute of the two
-// halves of the table's row by the corner slots (AVX-512VL: a 512-bit permute, whose low half is
-// the row; a branch to 256-bit permutes for groups of at most 16 vertices made the cloth's
-// primary rays 40% slower: the branch is taken about half the time). Lanes at or beyond the
-// count are not live. The per-pair float operations are intersect_block's, and the closest hit is the
+// test each corner row of 16 (AVX-512) or 8 (AVX-512VL) triangles by one permute of two pieces
+// of the table's row by the corner slots. AVX-512: the row's two 512-bit halves, loaded once per
+// group. AVX-512VL: the two 256-bit chunks of the test's pair (TableGroup::pair), loaded per
+// test, and a 256-bit permute, which costs half a 512-bit one on the Zen 4 host (a branch to
+// 256-bit permutes for groups of at most 16 vertices, before the chunks, made the cloth's
+// primary rays 40% slower: the branch is taken about half the time). Lanes at or beyond the count
+// are not live. The per-pair float operations are intersect_block's, and the closest hit is the
 // smallest (t, id), so the hits are the blocks' bits.
 template <bool AnyHit>
 [[gnu::always_inline]] inline bool intersect_group(const TableGroup& g, const std::uint32_t* ids, const RayState& r,
@@ -397,19 +387,13 @@ template <bool AnyHit>
   const float* tx = g.v[0] + 8 * r.kx4;  // v[kx] (kx4 = 4 kx, a row is 32 floats)
   const float* ty = g.v[0] + 8 * r.ky4;
   const float* tz = g.v[0] + 8 * r.kz4;
-#if defined(PTC_TRACE_AVX512)
-  const __m512 okx = r.okx16, oky = r.oky16, okz = r.okz16;
-#else  // (AVX-512VL: broadcast here from the 256-bit constants, so that a ray's set-up for blocks does no more)
-  const __m512 okx = _mm512_set1_ps(_mm256_cvtss_f32(r.okx8));
-  const __m512 oky = _mm512_set1_ps(_mm256_cvtss_f32(r.oky8));
-  const __m512 okz = _mm512_set1_ps(_mm256_cvtss_f32(r.okz8));
-#endif
-  const __m512 xl = _mm512_sub_ps(_mm512_load_ps(tx), okx), xh = _mm512_sub_ps(_mm512_load_ps(tx + 16), okx);
-  const __m512 yl = _mm512_sub_ps(_mm512_load_ps(ty), oky), yh = _mm512_sub_ps(_mm512_load_ps(ty + 16), oky);
-  const __m512 zl = _mm512_sub_ps(_mm512_load_ps(tz), okz), zh = _mm512_sub_ps(_mm512_load_ps(tz + 16), okz);
   const int n = static_cast<int>(g.count);
   bool found = false;
 #if defined(PTC_TRACE_AVX512)
+  const __m512 okx = r.okx16, oky = r.oky16, okz = r.okz16;
+  const __m512 xl = _mm512_sub_ps(_mm512_load_ps(tx), okx), xh = _mm512_sub_ps(_mm512_load_ps(tx + 16), okx);
+  const __m512 yl = _mm512_sub_ps(_mm512_load_ps(ty), oky), yh = _mm512_sub_ps(_mm512_load_ps(ty + 16), oky);
+  const __m512 zl = _mm512_sub_ps(_mm512_load_ps(tz), okz), zh = _mm512_sub_ps(_mm512_load_ps(tz + 16), okz);
   for (int i = 0; i < n; i += 16) {
     auto slots = [&](int c) {
       // (the maskz form: the plain one reads an undefined operand, which GCC 12 warns about)
@@ -429,14 +413,22 @@ template <bool AnyHit>
   }
 #else
   for (int i = 0; i < n; i += 8) {
-    auto slots = [&](int c) {  // (upper eight lanes zero)
-      return _mm512_maskz_cvtepu8_epi32(0xff, _mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[c] + i)));
-    };
-    const __m512i s0 = slots(0), s1 = slots(1), s2 = slots(2);
+    const std::uint8_t pair = g.pair[i / 8];
+    const int e = table_even_chunk(pair), o = table_odd_chunk(pair);
+    const __m256 xe = _mm256_sub_ps(_mm256_load_ps(tx + e), r.okx8), xo = _mm256_sub_ps(_mm256_load_ps(tx + o), r.okx8);
+    const __m256 ye = _mm256_sub_ps(_mm256_load_ps(ty + e), r.oky8), yo = _mm256_sub_ps(_mm256_load_ps(ty + o), r.oky8);
+    const __m256 ze = _mm256_sub_ps(_mm256_load_ps(tz + e), r.okz8), zo = _mm256_sub_ps(_mm256_load_ps(tz + o), r.okz8);
+    // The slots (bit 3 picks the odd chunk; the higher bits are not read). (No lambdas: they would
+    // not carry the variant's target, and returned vectors change the ABI.)
+    const __m256i s0 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[0] + i)));
+    const __m256i s1 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[1] + i)));
+    const __m256i s2 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[2] + i)));
     const int live = n - i >= 8 ? 0xff : (1 << (n - i)) - 1;
-    const Pairs8 h = watertight8(row(xl, s0, xh), row(yl, s0, yh), row(zl, s0, zh), row(xl, s1, xh), row(yl, s1, yh),
-                                 row(zl, s1, zh), row(xl, s2, xh), row(yl, s2, yh), row(zl, s2, zh), r.sx8, r.sy8,
-                                 r.sz8, live);
+    const Pairs8 h = watertight8(
+        _mm256_permutex2var_ps(xe, s0, xo), _mm256_permutex2var_ps(ye, s0, yo), _mm256_permutex2var_ps(ze, s0, zo),
+        _mm256_permutex2var_ps(xe, s1, xo), _mm256_permutex2var_ps(ye, s1, yo), _mm256_permutex2var_ps(ze, s1, zo),
+        _mm256_permutex2var_ps(xe, s2, xo), _mm256_permutex2var_ps(ye, s2, yo), _mm256_permutex2var_ps(ze, s2, zo),
+        r.sx8, r.sy8, r.sz8, live);
     if (take_pairs8<AnyHit>(h, live, ids + i, r, tmax, res)) {
       if constexpr (AnyHit) return true;
       found = true;

@@ -112,31 +112,46 @@ TEST(LeafTables, EveryTriangleOnceWithItsCornersInGroupsOfThirtyTwo) {
       ASSERT_LE(n, S);
       EXPECT_EQ(G.last, g + 1 == T.group_offsets[c + 1] ? 1u : 0u) << "group " << g;
       const std::uint32_t* sv = &T.slot_vertices[S * g];
-      std::size_t used = 0;
-      while (used < S && sv[used] != V) ++used;
+      // Slots in use: the mask, the count, and each chunk's slots in use first in the chunk; a
+      // group of at most 16 vertices on slots 0 .. vertices - 1.
+      std::uint32_t mask = 0;
+      for (std::size_t s = 0; s < S; ++s) mask |= sv[s] != V ? 1u << s : 0u;
+      ASSERT_EQ(G.slot_mask, mask) << "group " << g;
+      const auto used = static_cast<std::size_t>(__builtin_popcount(mask));
       EXPECT_EQ(G.vertices, used) << "group " << g;
-      for (std::size_t s = used; s < S; ++s) {
-        ASSERT_EQ(sv[s], V) << "group " << g << ": used slots first, then the sentinel";
-        for (int a = 0; a < 3; ++a) EXPECT_TRUE(std::isnan(G.v[a][s])) << "group " << g << ": an unused slot not NaN";
-      }
-      for (std::size_t s = 0; s < used; ++s)
-        for (std::size_t s2 = 0; s2 < s; ++s2) ASSERT_NE(sv[s], sv[s2]) << "group " << g << ": a vertex in two slots";
+      for (std::size_t s = 1; s < S; ++s)
+        if (s % 8 != 0 && (mask >> s & 1)) ASSERT_TRUE(mask >> (s - 1) & 1) << "group " << g << ": a gap before slot " << s;
+      if (used <= 16) EXPECT_EQ(mask, (std::uint32_t{1} << used) - 1) << "group " << g;
+      for (std::size_t s = 0; s < S; ++s)
+        if (!(mask >> s & 1))
+          for (int a = 0; a < 3; ++a) EXPECT_TRUE(std::isnan(G.v[a][s])) << "group " << g << ": an unused slot not NaN";
+      for (std::size_t s = 0; s < S; ++s)
+        for (std::size_t s2 = 0; s2 < s; ++s2)
+          if (sv[s] != V) ASSERT_NE(sv[s], sv[s2]) << "group " << g << ": a vertex in two slots";
+      const std::uint8_t pad = mask == ~0u ? 0 : static_cast<std::uint8_t>(__builtin_ctz(~mask));
       std::vector<bool> referenced(S, false);
       for (std::size_t l = 0; l < S; ++l) {
         if (l >= n) {
           EXPECT_EQ(M.ids[S * g + l], kNoTriangle);
-          for (int k = 0; k < 3; ++k) EXPECT_EQ(G.corner[k][l], used < S ? used : 0) << "padding lane of group " << g;
+          for (int k = 0; k < 3; ++k) EXPECT_EQ(G.corner[k][l], pad) << "padding lane of group " << g;
           continue;
         }
         std::array<std::uint32_t, 4> t{M.ids[S * g + l], 0, 0, 0};
+        const std::uint8_t pair = G.pair[l / 8];
+        ASSERT_LE(pair, 3) << "group " << g;
         for (int k = 0; k < 3; ++k) {
-          ASSERT_LT(G.corner[k][l], used) << "group " << g << " lane " << l;
-          t[1 + k] = sv[G.corner[k][l]];
-          referenced[G.corner[k][l]] = true;
+          const std::uint8_t slot = G.corner[k][l];
+          ASSERT_TRUE(slot < S && (mask >> slot & 1)) << "group " << g << " lane " << l;
+          const int chunk = slot & ~7;
+          ASSERT_TRUE(chunk == table_even_chunk(pair) || chunk == table_odd_chunk(pair))
+              << "group " << g << " lane " << l << ": slot " << int(slot) << " outside its test's chunks";
+          t[1 + k] = sv[slot];
+          referenced[slot] = true;
         }
         got.push_back(t);
       }
-      for (std::size_t s = 0; s < used; ++s) EXPECT_TRUE(referenced[s]) << "group " << g << ": slot " << s << " unused";
+      for (std::size_t s = 0; s < S; ++s)
+        EXPECT_EQ(referenced[s], (mask >> s & 1) != 0) << "group " << g << ": slot " << s << " in use but unreferenced";
     }
     std::sort(want.begin(), want.end());
     std::sort(got.begin(), got.end());
@@ -144,7 +159,8 @@ TEST(LeafTables, EveryTriangleOnceWithItsCornersInGroupsOfThirtyTwo) {
   }
   // The hard clusters with a known grouping (the last five): one triangle; three degenerate ones
   // on four vertices; forty copies of one triangle (32 + 8 on three slots each); 100 triangles of
-  // distinct vertices (ten a group: 30 vertices, the 11th would need 33).
+  // distinct vertices (five a group: six would put 18 vertices in one test of eight, which two
+  // chunks cannot hold).
   const std::size_t C = L.ranges.size();
   auto groups = [&](std::size_t c) { return T.group_offsets[c + 1] - T.group_offsets[c]; };
   EXPECT_EQ(groups(C - 5), 1u);
@@ -155,14 +171,81 @@ TEST(LeafTables, EveryTriangleOnceWithItsCornersInGroupsOfThirtyTwo) {
     EXPECT_EQ(M.count(g), i == 0 ? 32u : 8u);
     EXPECT_EQ(M.groups[g].vertices, 3u);
   }
-  ASSERT_EQ(groups(C - 1), 10u);
-  for (std::size_t g = T.group_offsets[C - 1]; g < T.group_offsets[C]; ++g) EXPECT_EQ(M.count(g), 10u);
+  ASSERT_EQ(groups(C - 1), 20u);
+  for (std::size_t g = T.group_offsets[C - 1]; g < T.group_offsets[C]; ++g) EXPECT_EQ(M.count(g), 5u);
   // 300 triangles on 20 vertices: at least 10 groups (32 triangles at most in each).
   EXPECT_GE(groups(C - 2), 10u);
 }
 
+// Whether a group's tests of eight fit chunk pairs (TableGroup), written plainly: every
+// combination of pairs (the first test's too), and for each a maximum flow (augmenting paths
+// found by breadth-first search) from the vertices to the chunks their tests share, eight a
+// chunk. `tris`: (id, corners); `members`: the group's triangles in order.
+bool fits_chunks(const std::vector<std::array<std::uint32_t, 4>>& tris, const std::vector<std::size_t>& members) {
+  std::vector<std::uint32_t> verts;
+  for (const std::size_t m : members)
+    for (int k = 1; k <= 3; ++k)
+      if (std::find(verts.begin(), verts.end(), tris[m][k]) == verts.end()) verts.push_back(tris[m][k]);
+  const std::size_t V = verts.size(), T = (members.size() + 7) / 8;
+  if (V > S) return false;
+  if (V <= 16) return true;
+  std::vector<unsigned> tests_of(V, 0);
+  for (std::size_t i = 0; i < members.size(); ++i)
+    for (int k = 1; k <= 3; ++k)
+      tests_of[std::find(verts.begin(), verts.end(), tris[members[i]][k]) - verts.begin()] |= 1u << (i / 8);
+  for (std::size_t j = 0; j < T; ++j) {  // (a test of more than 16 vertices fits no two chunks)
+    std::size_t n = 0;
+    for (std::size_t v = 0; v < V; ++v) n += tests_of[v] >> j & 1;
+    if (n > 16) return false;
+  }
+  for (unsigned c = 0; c < 1u << (2 * T); ++c) {
+    // nodes: 0 source, 1 .. V vertices, V + 1 .. V + 4 chunks, V + 5 sink
+    const std::size_t N = V + 6, src = 0, sink = V + 5;
+    std::array<std::array<int, S + 6>, S + 6> cap{};
+    bool every_vertex_has_a_chunk = true;
+    for (std::size_t v = 0; v < V; ++v) {
+      cap[src][1 + v] = 1;
+      bool any = false;
+      for (int k = 0; k < 4; ++k) {
+        bool ok = true;
+        for (std::size_t j = 0; j < T; ++j) {
+          if (!(tests_of[v] >> j & 1)) continue;
+          const std::uint8_t code = static_cast<std::uint8_t>(c >> (2 * j) & 3u);
+          ok = ok && (8 * k == table_even_chunk(code) || 8 * k == table_odd_chunk(code));
+        }
+        if (ok) cap[1 + v][V + 1 + k] = 1, any = true;
+      }
+      every_vertex_has_a_chunk = every_vertex_has_a_chunk && any;
+    }
+    if (!every_vertex_has_a_chunk) continue;
+    for (int k = 0; k < 4; ++k) cap[V + 1 + k][sink] = 8;
+    std::vector<std::vector<std::size_t>> adj(N);  // both directions of every edge
+    for (std::size_t a = 0; a < N; ++a)
+      for (std::size_t b = 0; b < N; ++b)
+        if (cap[a][b] > 0) adj[a].push_back(b), adj[b].push_back(a);
+    std::size_t flow = 0;
+    for (;;) {
+      std::array<int, S + 6> from;
+      from.fill(-1);
+      from[src] = static_cast<int>(src);
+      std::array<std::size_t, S + 6> queue{src};
+      std::size_t queued = 1;
+      for (std::size_t q = 0; q < queued && from[sink] < 0; ++q)
+        for (const std::size_t w : adj[queue[q]])
+          if (from[w] < 0 && cap[queue[q]][w] > 0) from[w] = static_cast<int>(queue[q]), queue[queued++] = w;
+      if (from[sink] < 0) break;
+      for (std::size_t w = sink; w != src; w = static_cast<std::size_t>(from[w])) --cap[from[w]][w], ++cap[w][from[w]];
+      ++flow;
+    }
+    if (flow == V) return true;
+  }
+  return false;
+}
+
 // The documented grouping rule written plainly (a placed flag per triangle instead of the
-// library's in-place reordering, sets for the new vertices): the whole layout must be the same.
+// library's in-place reordering, sets for the new vertices, fits_chunks): the groups, their
+// triangles in order and the vertices they hold must be the library's; the slots of a group of
+// at most 16 vertices too.
 struct Reference {
   std::vector<std::uint32_t> group_offsets, slot_vertices, ids, count;
   std::vector<std::uint8_t> corner;  // 3 S per group, [k][l]
@@ -191,12 +274,10 @@ Reference reference_layout(const Lanes& L, std::uint32_t sentinel) {
       const std::size_t b = r.first_block + i / 4, l = i % 4;
       tris.push_back({L.ids[4 * b + l], L.corners[12 * b + l], L.corners[12 * b + 4 + l], L.corners[12 * b + 8 + l]});
     }
-    std::set<std::uint32_t> all;
-    for (const auto& t : tris) all.insert({t[1], t[2], t[3]});
-    if (tris.size() <= S && all.size() <= S) {  // the whole cluster, in lane order
-      std::vector<std::size_t> members(tris.size());
-      std::iota(members.begin(), members.end(), std::size_t{0});
-      emit(tris, members);
+    std::vector<std::size_t> everything(tris.size());
+    std::iota(everything.begin(), everything.end(), std::size_t{0});
+    if (tris.size() <= S && fits_chunks(tris, everything)) {  // the whole cluster, in lane order
+      emit(tris, everything);
       T.group_offsets.push_back(static_cast<std::uint32_t>(T.count.size()));
       continue;
     }
@@ -221,6 +302,7 @@ Reference reference_layout(const Lanes& L, std::uint32_t sentinel) {
         members.push_back(best);
         for (int k = 1; k <= 3; ++k) slots.insert(tris[best][k]);
       }
+      while (!fits_chunks(tris, members)) placed[members.back()] = false, ++left, members.pop_back();
       emit(tris, members);
     }
     T.group_offsets.push_back(static_cast<std::uint32_t>(T.count.size()));
@@ -243,7 +325,8 @@ TEST(LeafTables, TheLayoutIsTheDocumentedRule) {
   for (std::uint32_t i = 0; i < 31; ++i) fewest.push_back({820 + 3 * i, 821 + 3 * i, 822 + 3 * i});
   L.add_cluster(fewest, V);
   // The look-ahead of 64: t0, then t1 .. t79 of fresh vertices but t75, a copy of t0 out of the
-  // first group's reach (its window ends at t73): the first group is t0 .. t9 (30 vertices).
+  // first group's reach (its window ends at t73): the first group takes t0 .. t9 (30 vertices),
+  // then gives back t5 .. t9 (six triangles of fresh vertices would need 18 slots in one test).
   const std::uint32_t w = L.next_id;
   std::vector<std::array<std::uint32_t, 3>> far(80);
   for (std::uint32_t i = 0; i < 80; ++i) far[i] = {1100 + 3 * i, 1101 + 3 * i, 1102 + 3 * i};
@@ -255,23 +338,40 @@ TEST(LeafTables, TheLayoutIsTheDocumentedRule) {
   const Reference R = reference_layout(L, V);
   ASSERT_EQ(T.group_offsets, R.group_offsets);
   ASSERT_EQ(T.group_count(), R.count.size());
+  std::size_t chunked = 0;  // groups of more than 16 vertices
   for (std::size_t g = 0; g < R.count.size(); ++g) {
     ASSERT_EQ(M.count(g), R.count[g]) << "group " << g;
-    for (std::size_t s = 0; s < S; ++s) ASSERT_EQ(T.slot_vertices[S * g + s], R.slot_vertices[S * g + s]) << "group " << g;
-    for (int k = 0; k < 3; ++k)
-      for (std::size_t l = 0; l < S; ++l) ASSERT_EQ(M.groups[g].corner[k][l], R.corner[3 * S * g + S * k + l]) << "group " << g;
     for (std::size_t l = 0; l < S; ++l) ASSERT_EQ(M.ids[S * g + l], R.ids[S * g + l]) << "group " << g;
+    if (M.groups[g].vertices <= 16) {  // the slots in the order taken
+      for (std::size_t s = 0; s < S; ++s) ASSERT_EQ(T.slot_vertices[S * g + s], R.slot_vertices[S * g + s]) << "group " << g;
+      for (int k = 0; k < 3; ++k)
+        for (std::size_t l = 0; l < S; ++l)
+          ASSERT_EQ(M.groups[g].corner[k][l], R.corner[3 * S * g + S * k + l]) << "group " << g;
+      continue;
+    }
+    ++chunked;  // the same vertices, and each corner on its vertex (the slots are the library's choice)
+    std::vector<std::uint32_t> got(T.slot_vertices.begin() + S * g, T.slot_vertices.begin() + S * (g + 1));
+    std::vector<std::uint32_t> want(R.slot_vertices.begin() + S * g, R.slot_vertices.begin() + S * (g + 1));
+    std::sort(got.begin(), got.end()), std::sort(want.begin(), want.end());
+    ASSERT_EQ(got, want) << "group " << g;
+    for (int k = 0; k < 3; ++k)
+      for (std::size_t l = 0; l < M.count(g); ++l)
+        ASSERT_EQ(T.slot_vertices[S * g + M.groups[g].corner[k][l]], R.slot_vertices[S * g + R.corner[3 * S * g + S * k + l]])
+            << "group " << g << " lane " << l;
   }
+  EXPECT_GT(chunked, 50u) << "too few groups of more than 16 vertices to test their chunks";
   const std::size_t C = L.ranges.size();
   const std::size_t gp = T.group_offsets[C - 3], ga = T.group_offsets[C - 2], gw = T.group_offsets[C - 1];
   EXPECT_EQ(T.group_offsets[C - 2] - gp, 1u);
   EXPECT_EQ(M.count(gp), 32u);
-  EXPECT_EQ(T.slot_vertices[S * gp + 31], 731u);
+  EXPECT_EQ(M.groups[gp].vertices, 32u);
+  EXPECT_EQ(M.groups[gp].slot_mask, ~0u);
   EXPECT_EQ(M.ids[S * ga], a);
   EXPECT_EQ(M.ids[S * ga + 1], a + 2);
   EXPECT_EQ(M.ids[S * ga + 2], a + 1);
-  ASSERT_EQ(M.count(gw), 10u);
-  for (std::uint32_t l = 0; l < 10; ++l) EXPECT_EQ(M.ids[S * gw + l], w + l);
+  ASSERT_EQ(M.count(gw), 5u);
+  for (std::uint32_t l = 0; l < 5; ++l) EXPECT_EQ(M.ids[S * gw + l], w + l);
+  EXPECT_EQ(M.ids[S * (gw + 1)], w + 5) << "the triangles given back come first again";
 }
 
 TEST(LeafTables, RowsAreTheFramePositionsAndBoxesThoseOfTheBlocks) {

@@ -151,9 +151,13 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
     corrupt([&](TraceData& x) { x.tables[g].last = 1; }, "a group marked last before its cluster's end");
     corrupt([&](TraceData& x) { x.tables[g].count -= 1; }, "a triangle dropped");
     corrupt([&](TraceData& x) { x.triangle_ids[S * g + 1] = x.triangle_ids[S * g]; }, "a triangle twice");
-    corrupt([&](TraceData& x) { x.tables[g].corner[2][0] = static_cast<std::uint8_t>(x.tables[g].vertices); },
-            "a corner on an unused slot");
-    corrupt([&](TraceData& x) { x.tables[g].v[0][S - 1] = 0.0f; }, "an unused slot not NaN");
+    ASSERT_NE(good.tables[g].slot_mask, ~0u) << "a group with an unused slot";
+    const auto unused = static_cast<std::uint8_t>(__builtin_ctz(~good.tables[g].slot_mask));
+    corrupt([&](TraceData& x) { x.tables[g].corner[2][0] = unused; }, "a corner on an unused slot");
+    corrupt([&](TraceData& x) { x.tables[g].v[0][unused] = 0.0f; }, "an unused slot not NaN");
+    corrupt([&](TraceData& x) { x.tables[g].slot_mask |= 1u << unused; }, "a slot marked in use beyond the vertex count");
+    corrupt([&](TraceData& x) { x.tables[g].pair[0] ^= 3; }, "the first test's corners outside its chunks");
+    corrupt([&](TraceData& x) { x.tables[g].pair[0] = 4; }, "a chunk pair code beyond 3");
     corrupt([&](TraceData& x) { x.triangle_ids.pop_back(); }, "ids not 32 a group");
     corrupt([&](TraceData& x) { x.blocks.resize(1); }, "blocks beside the tables");
   }
