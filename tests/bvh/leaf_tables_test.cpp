@@ -119,15 +119,26 @@ TEST(LeafTables, EveryTriangleOnceWithItsCornersInGroupsOfThirtyTwo) {
       ASSERT_EQ(G.slot_mask, mask) << "group " << g;
       const auto used = static_cast<std::size_t>(__builtin_popcount(mask));
       EXPECT_EQ(G.vertices, used) << "group " << g;
-      for (std::size_t s = 1; s < S; ++s)
-        if (s % 8 != 0 && (mask >> s & 1)) ASSERT_TRUE(mask >> (s - 1) & 1) << "group " << g << ": a gap before slot " << s;
-      if (used <= 16) EXPECT_EQ(mask, (std::uint32_t{1} << used) - 1) << "group " << g;
-      for (std::size_t s = 0; s < S; ++s)
-        if (!(mask >> s & 1))
+      for (std::size_t s = 1; s < S; ++s) {
+        if (s % 8 != 0 && (mask >> s & 1)) {
+          ASSERT_TRUE(mask >> (s - 1) & 1) << "group " << g << ": a gap before slot " << s;
+        }
+      }
+      if (used <= 16) {
+        EXPECT_EQ(mask, (std::uint32_t{1} << used) - 1) << "group " << g;
+      }
+      for (std::size_t s = 0; s < S; ++s) {
+        if (!(mask >> s & 1)) {
           for (int a = 0; a < 3; ++a) EXPECT_TRUE(std::isnan(G.v[a][s])) << "group " << g << ": an unused slot not NaN";
-      for (std::size_t s = 0; s < S; ++s)
-        for (std::size_t s2 = 0; s2 < s; ++s2)
-          if (sv[s] != V) ASSERT_NE(sv[s], sv[s2]) << "group " << g << ": a vertex in two slots";
+        }
+      }
+      for (std::size_t s = 0; s < S; ++s) {
+        for (std::size_t s2 = 0; s2 < s; ++s2) {
+          if (sv[s] != V) {
+            ASSERT_NE(sv[s], sv[s2]) << "group " << g << ": a vertex in two slots";
+          }
+        }
+      }
       const std::uint8_t pad = mask == ~0u ? 0 : static_cast<std::uint8_t>(__builtin_ctz(~mask));
       std::vector<bool> referenced(S, false);
       for (std::size_t l = 0; l < S; ++l) {
