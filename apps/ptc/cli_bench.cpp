@@ -109,7 +109,8 @@ void register_bench(CLI::App& app, Context& ctx) {
   c->add_option("--leaf-format", a->leaf_format,
                 "how the cluster BVH's linear leaves hold their triangles: blocks (four triangles' corners "
                 "each, 36 bytes a triangle) or tables (per-group vertex tables and corner slots, 512 bytes a "
-                "group of up to 32 triangles; the same hits)")
+                "group of up to 32 triangles on up to 32 vertices; the same hits; for meshes that share "
+                "vertices: a triangle soup gets groups of five triangles)")
       ->check(enum_validator("leaf format", bvh::parse_leaf_format))
       ->capture_default_str();
   c->add_option("--cluster-groups", cfg.cluster_group_size,
