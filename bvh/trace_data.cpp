@@ -10,8 +10,9 @@ namespace ptc::bvh {
 namespace {
 
 // The checks of one leaf of a LeafFormat::Tables scene: its ranges of groups (every range whole
-// clusters: only its last group marked last), each group's counts, corner slots and ids, every
-// triangle once, its corners (finite) inside the leaf's box, unused slots NaN.
+// clusters: only its last group marked last), each group's counts and slot mask, corner slots
+// (in use, and in their test's chunk pair) and ids, every triangle once, its corners (finite)
+// inside the leaf's box, unused slots NaN.
 template <class Fail>
 void validate_table_leaf(const TraceData& d, const std::vector<LeafRange>& leaf_ranges, const Box3f& box,
                          std::size_t triangle_count, const std::string& where, std::vector<std::uint8_t>& tri_seen,

@@ -4,9 +4,9 @@
 // EVEX encoding, with 32 vector registers instead of 16 (the packet walk's slab constants no
 // longer spill) and a plane broadcast from memory inside the subtraction of the packets' node
 // test. No 512-bit vectors (prefer-vector-width=256): on the Intel Xeon host the 512-bit leaf
-// tests of tracer_avx512.cpp were the slower ones. The one exception is the tables leaf format
-// (LeafFormat::Tables): its rows of 32 entries are permuted as 512-bit registers, of which the
-// tests use the low 256 bits (PTC_TRACE_EVEX, tracer_kernel.h's intersect_group). No FMA
+// tests of tracer_avx512.cpp were the slower ones. The tables leaf format (LeafFormat::Tables)
+// takes its corner rows with 256-bit permutes of two 8-slot chunks of the rows (AVX-512VL's
+// two-source vpermt2ps; PTC_TRACE_EVEX, tracer_kernel.h's intersect_group). No FMA
 // (-ffp-contract=off), so the hits and counters are the other variants' bits. As tracer_avx2.cpp:
 // every header first, compiled for the baseline, then the kernel code after the target pragma.
 #include <immintrin.h>

@@ -286,8 +286,9 @@ __attribute__((target("avx2"))) void own_range_avx2(const double* in, float* q, 
 }
 
 // frame_positions_streamed's AVX2 loop: own_step_avx2's conversion of four vertices, stored as
-// three 16-byte streaming stores (the vertices before the first 16-byte boundary and the last
-// n % 4 take the SSE2 path's ordinary stores), without the min / max nobody reads. The output is
+// three 16-byte streaming stores (the vertices before the first 16-byte boundary, and those
+// after the last whole step of four, take the SSE2 path's ordinary stores), without the min /
+// max nobody reads. The output is
 // read next by the fill, which finds it in memory as fast as in the cache while the input stays
 // there: ordinary stores read every line for ownership first (twist at one thread: the stage
 // 0.39-0.49 -> 0.27-0.31 ms, docs/tracing.md). Fenced at the end, so the caller's next reads see it.

@@ -343,6 +343,16 @@ TEST(LeafTables, TheLayoutIsTheDocumentedRule) {
   for (std::uint32_t i = 0; i < 80; ++i) far[i] = {1100 + 3 * i, 1101 + 3 * i, 1102 + 3 * i};
   far[75] = far[0];
   L.add_cluster(far, V);
+  // A triangle given back after it was taken out of lane order returns to its lane's place: t0 ..
+  // t79 of fresh vertices but t70, which shares two with t5. The first group takes t0 .. t6, then
+  // t70 (one new vertex; t6's placing brought it into the window of 64), t7, t8, t9, and gives
+  // back t9 .. t5. The second then takes t5, t6 (t70 is beyond its window until t6 is placed),
+  // t70, t7, t8, t9: had t70 come back beside t5, it would have followed t5 at once.
+  const std::uint32_t kb = L.next_id;
+  std::vector<std::array<std::uint32_t, 3>> back(80);
+  for (std::uint32_t i = 0; i < 80; ++i) back[i] = {1400 + 3 * i, 1401 + 3 * i, 1402 + 3 * i};
+  back[70] = {back[5][0], back[5][1], 1399};
+  L.add_cluster(back, V);
 
   const Made M = make(L, V);
   const TableLayout& T = M.layout;
@@ -371,7 +381,7 @@ TEST(LeafTables, TheLayoutIsTheDocumentedRule) {
             << "group " << g << " lane " << l;
   }
   EXPECT_GT(chunked, 50u) << "too few groups of more than 16 vertices to test their chunks";
-  const std::size_t C = L.ranges.size();
+  const std::size_t C = L.ranges.size() - 1;  // (the last cluster, `back`, is checked below)
   const std::size_t gp = T.group_offsets[C - 3], ga = T.group_offsets[C - 2], gw = T.group_offsets[C - 1];
   EXPECT_EQ(T.group_offsets[C - 2] - gp, 1u);
   EXPECT_EQ(M.count(gp), 32u);
@@ -383,6 +393,12 @@ TEST(LeafTables, TheLayoutIsTheDocumentedRule) {
   ASSERT_EQ(M.count(gw), 5u);
   for (std::uint32_t l = 0; l < 5; ++l) EXPECT_EQ(M.ids[S * gw + l], w + l);
   EXPECT_EQ(M.ids[S * (gw + 1)], w + 5) << "the triangles given back come first again";
+  const std::size_t gk = T.group_offsets[C];
+  ASSERT_EQ(M.count(gk), 5u);
+  for (std::uint32_t l = 0; l < 5; ++l) EXPECT_EQ(M.ids[S * gk + l], kb + l);
+  ASSERT_EQ(M.count(gk + 1), 6u);
+  const std::uint32_t second[6] = {kb + 5, kb + 6, kb + 70, kb + 7, kb + 8, kb + 9};
+  for (std::uint32_t l = 0; l < 6; ++l) EXPECT_EQ(M.ids[S * (gk + 1) + l], second[l]) << "lane " << l;
 }
 
 TEST(LeafTables, RowsAreTheFramePositionsAndBoxesThoseOfTheBlocks) {
