@@ -726,9 +726,11 @@ void ClusterScene::update(std::span<const Vec3> positions) {
     throw std::invalid_argument("ClusterScene::update: " + std::to_string(positions.size()) + " positions for " +
                                 std::to_string(V) + " vertices");
   double t0 = clock_ms(cfg_.clock);
-  if (runs_ && lists_are_corners_ && !overlap_possible()) {
-    // One thread: the conversion streams over the input (f_.fpos keeps its size and sentinels),
-    // and the fill, which reads every corner anyway, takes the cluster boxes (build_frame).
+  if (runs_ && lists_are_corners_) {
+    // The conversion streams over the input (f_.fpos keeps its size and sentinels), and the
+    // fill, which reads every corner anyway, takes the cluster boxes (build_frame), before the
+    // tree. At two threads this beat the fused conversion and boxes with the fill beside the
+    // tree (docs/tracing.md, thirty-second session).
     frame_positions_streamed(positions, data.frame(), std::span<Vec3f>(f_.fpos.data(), V), cfg_.build.allow_avx2);
     times.vertices_ms = clock_ms(cfg_.clock) - t0;
     times.boxes_ms = 0.0;

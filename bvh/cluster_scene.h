@@ -93,15 +93,17 @@ class ClusterScene {
   /// [0, subtree_nodes()) of data().wide8.nodes; only their boxes change per frame.
   [[nodiscard]] std::size_t subtree_nodes() const { return sub8_count_; }
   /// Whether the positions arrive in the clusters' vertex order (the mesh was renumbered with
-  /// cluster_vertex_order()): the conversion then reads the input once, in order. On more than
-  /// one thread it is fused into the box stage (StageTimes::vertices_ms = 0, boxes_ms = both) and
-  /// the blocks are filled beside the tree's build; on one thread (and clusters whose vertex
-  /// lists are their triangles' corners, as a Clustering's are) it streams alone (vertices_ms)
-  /// and the fill of the blocks takes the cluster boxes from the corners it writes (boxes_ms =
-  /// 0, leaf_data_ms = both): the same boxes, bit for bit, without a second read of the
-  /// vertices the clusters share. Otherwise the conversion gathers the positions in that order
-  /// (vertices_ms) before the boxes. False for a scene built once (SceneConfig::built_once),
-  /// which has no per-frame pass.
+  /// cluster_vertex_order()): the conversion then reads the input once, in order. For clusters
+  /// whose vertex lists are their triangles' corners (as a Clustering's are) it streams alone
+  /// (vertices_ms) and the fill of the leaf data takes the cluster boxes from the corners it
+  /// writes (boxes_ms = 0, leaf_data_ms = both; the same boxes, bit for bit, without a second
+  /// read of the vertices the clusters share), then the tree is built, at any thread count (at
+  /// two threads this beat the fill beside the tree's build: docs/tracing.md, thirty-second
+  /// session). Other lists: the conversion is fused into the box stage (StageTimes::vertices_ms =
+  /// 0, boxes_ms = both), and on more than one thread the leaf data is filled beside the tree's
+  /// build. Otherwise (not renumbered) the conversion gathers the positions in that order
+  /// (vertices_ms) before the boxes. False for a scene built once (SceneConfig::built_once), which
+  /// has no per-frame pass.
   [[nodiscard]] bool fused_vertex_pass() const { return runs_.has_value(); }
 
  private:
