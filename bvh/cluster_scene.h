@@ -85,8 +85,8 @@ class ClusterScene {
   [[nodiscard]] const std::vector<std::uint32_t>& weights() const { return weights_; }
   /// The two-level build's groups (BuildInput::groups, in scene cluster order); empty: plain build.
   [[nodiscard]] const std::vector<std::uint32_t>& group_offsets() const { return group_offsets_; }
-  /// The two-level build's largest group, cluster_group_size_used (0: the plain build, also when
-  /// that size makes one group only).
+  /// The two-level build's group size, cluster_group_size_used: at most this many clusters a
+  /// group (0: the plain build, also when that size makes one group only).
   [[nodiscard]] std::uint32_t group_size() const { return group_size_; }
   [[nodiscard]] const StageTimes& times() const { return f_.times; }
   /// 8-wide nodes kept from frame to frame (the block trees, then the fixed group trees): nodes

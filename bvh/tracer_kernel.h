@@ -9,7 +9,6 @@
 #include <immintrin.h>
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -373,10 +372,9 @@ inline void expand_group(const TableGroup& g, TriBlock* out) {
 #if defined(PTC_TRACE_EVEX)
 // One table group against the ray: the rows relative to the ray origin (the single-ray test's
 // first subtraction, done per vertex, AVX-512VL: per chunk and test, instead of once per corner:
-// the same values), then per
-// test each corner row of 16 (AVX-512) or 8 (AVX-512VL) triangles by one permute of two pieces
-// of the table's row by the corner slots. AVX-512: the row's two 512-bit halves, loaded once per
-// group. AVX-512VL: the two 256-bit chunks of the test's pair (TableGroup::pair), loaded per
+// the same values), then per test each corner row of 16 (AVX-512) or 8 (AVX-512VL) triangles by
+// one permute of two pieces of the table's row by the corner slots. AVX-512: the row's two
+// 512-bit halves, loaded once per group. AVX-512VL: the two 256-bit chunks of the test's pair (TableGroup::pair), loaded per
 // test, and a 256-bit permute, which costs half a 512-bit one on the Zen 4 host (a branch to
 // 256-bit permutes for groups of at most 16 vertices, before the chunks, made the cloth's
 // primary rays 40% slower: the branch is taken about half the time). Lanes at or beyond the count

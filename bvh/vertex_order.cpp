@@ -249,72 +249,87 @@ void own_range_sse2(const double* in, float* q, std::uint32_t n, const FrameMap&
   lo = _mm_min_ps(lo, lo1), hi = _mm_max_ps(hi, hi1);
 }
 
-// The same with AVX: four vertices (12 doubles) per step in three 4-wide conversions, which land
-// as three (x y z x)(y z x y)(z x y z) float rows stored as 48 contiguous bytes. The last step
-// ends at the range's end and may overlap the previous one (same values stored again; min and
-// max are idempotent). Ranges of fewer than four take the SSE2 path. Same roundings, same bits.
+// The same with AVX: four vertices (12 doubles) per step in three 4-wide conversions
+// (convert4_avx2), which land as three (x y z x)(y z x y)(z x y z) float rows stored as 48
+// contiguous bytes. The last step ends at the range's end and may overlap the previous one (same
+// values stored again; min and max are idempotent). Ranges of fewer than four take the SSE2
+// path. Same roundings, same bits.
 struct Rows3 {
   __m128 la, lb, lc, ha, hb, hc, bad;
 };
-__attribute__((target("avx2"))) inline void own_step_avx2(const double* p, float* d, __m256d o0, __m256d o1, __m256d o2,
-                                                           __m256d s, Rows3& r) {
-  const __m128 a = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p), o0), s));
-  const __m128 b = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 4), o1), s));
-  const __m128 c = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 8), o2), s));
+// The origin as the three rows of four doubles that four vertices' 12 coordinates meet, and the scale.
+struct FrameRows4 {
+  __m256d o0, o1, o2, s;
+};
+__attribute__((target("avx2"))) inline void frame_rows4(const FrameMap& frame, FrameRows4& f) {
+  const Vec3& o = frame.origin;
+  f.o0 = _mm256_setr_pd(o.x(), o.y(), o.z(), o.x());
+  f.o1 = _mm256_setr_pd(o.y(), o.z(), o.x(), o.y());
+  f.o2 = _mm256_setr_pd(o.z(), o.x(), o.y(), o.z());
+  f.s = _mm256_set1_pd(frame.scale);
+}
+// Four vertices (12 doubles at p) converted into the rows a, b, c.
+__attribute__((target("avx2"))) inline void convert4_avx2(const double* p, const FrameRows4& f, __m128& a, __m128& b,
+                                                           __m128& c) {
+  a = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p), f.o0), f.s));
+  b = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 4), f.o1), f.s));
+  c = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 8), f.o2), f.s));
+}
+// x - x of every value of the rows into bad (NaN in some lane iff a value is not finite).
+inline void collect_bad(__m128 a, __m128 b, __m128 c, __m128& bad) {
+  bad = _mm_or_ps(bad, _mm_or_ps(_mm_sub_ps(a, a), _mm_or_ps(_mm_sub_ps(b, b), _mm_sub_ps(c, c))));
+}
+// (every lane of the rows is data: fold lane 3 into lane 0, since the callers test lanes 0-2)
+inline __m128 fold_bad(__m128 rows_bad) {
+  return _mm_or_ps(rows_bad, _mm_shuffle_ps(rows_bad, rows_bad, _MM_SHUFFLE(0, 0, 0, 3)));
+}
+__attribute__((target("avx2"))) inline void own_step_avx2(const double* p, float* d, const FrameRows4& f, Rows3& r) {
+  __m128 a, b, c;
+  convert4_avx2(p, f, a, b, c);
   _mm_storeu_ps(d, a), _mm_storeu_ps(d + 4, b), _mm_storeu_ps(d + 8, c);
   r.la = _mm_min_ps(r.la, a), r.lb = _mm_min_ps(r.lb, b), r.lc = _mm_min_ps(r.lc, c);
   r.ha = _mm_max_ps(r.ha, a), r.hb = _mm_max_ps(r.hb, b), r.hc = _mm_max_ps(r.hc, c);
-  r.bad = _mm_or_ps(r.bad, _mm_or_ps(_mm_sub_ps(a, a), _mm_or_ps(_mm_sub_ps(b, b), _mm_sub_ps(c, c))));
+  collect_bad(a, b, c, r.bad);
 }
 
 __attribute__((target("avx2"))) void own_range_avx2(const double* in, float* q, std::uint32_t n, const FrameMap& frame,
                                                      __m128& lo, __m128& hi, __m128& bad) {
   if (n < 4) return own_range_sse2(in, q, n, frame, lo, hi, bad);
-  const Vec3& origin = frame.origin;
-  const __m256d s = _mm256_set1_pd(frame.scale);
-  const __m256d o0 = _mm256_setr_pd(origin.x(), origin.y(), origin.z(), origin.x());
-  const __m256d o1 = _mm256_setr_pd(origin.y(), origin.z(), origin.x(), origin.y());
-  const __m256d o2 = _mm256_setr_pd(origin.z(), origin.x(), origin.y(), origin.z());
+  FrameRows4 f;
+  frame_rows4(frame, f);
   Rows3 r{_mm_set1_ps(kInf),  _mm_set1_ps(kInf),  _mm_set1_ps(kInf), _mm_set1_ps(-kInf),
           _mm_set1_ps(-kInf), _mm_set1_ps(-kInf), bad};
   std::uint32_t i = 0;
-  for (; i + 4 < n; i += 4) own_step_avx2(in + 3 * std::size_t(i), q + 3 * std::size_t(i), o0, o1, o2, s, r);
-  own_step_avx2(in + 3 * std::size_t(n - 4), q + 3 * std::size_t(n - 4), o0, o1, o2, s, r);
+  for (; i + 4 < n; i += 4) own_step_avx2(in + 3 * std::size_t(i), q + 3 * std::size_t(i), f, r);
+  own_step_avx2(in + 3 * std::size_t(n - 4), q + 3 * std::size_t(n - 4), f, r);
   lo = _mm_min_ps(lo, fold_rows(r.la, r.lb, r.lc, min_ps)), hi = _mm_max_ps(hi, fold_rows(r.ha, r.hb, r.hc, max_ps));
-  // (every lane of the rows is data: fold lane 3 into lane 0, since the caller tests lanes 0-2)
-  bad = _mm_or_ps(r.bad, _mm_shuffle_ps(r.bad, r.bad, _MM_SHUFFLE(0, 0, 0, 3)));
+  bad = fold_bad(r.bad);
 }
 
-// frame_positions_streamed's AVX2 loop: own_step_avx2's conversion of four vertices, stored as
-// three 16-byte streaming stores (the vertices before the first 16-byte boundary, and those
-// after the last whole step of four, take the SSE2 path's ordinary stores), without the min /
-// max nobody reads. The output is
-// read next by the fill, which finds it in memory as fast as in the cache while the input stays
-// there: ordinary stores read every line for ownership first (twist at one thread: the stage
-// 0.39-0.49 -> 0.27-0.31 ms, docs/tracing.md). Fenced at the end, so the caller's next reads see it.
+// frame_positions_streamed's AVX2 loop: convert4_avx2's four vertices stored as three 16-byte
+// streaming stores (the vertices before the first 16-byte boundary, and those after the last
+// whole step of four, take the SSE2 path's ordinary stores), without the min / max nobody
+// reads. The output is read next by the fill, which finds it in memory as fast as in the cache
+// while the input stays there: ordinary stores read every line for ownership first (twist at one
+// thread: the stage 0.39-0.49 -> 0.27-0.31 ms, docs/tracing.md). Fenced at the end, so the
+// caller's next reads see it.
 __attribute__((target("avx2"))) void stream_range_avx2(const double* in, float* q, std::uint32_t n,
                                                         const FrameMap& frame, __m128& bad) {
-  const Vec3& origin = frame.origin;
-  const __m256d s = _mm256_set1_pd(frame.scale);
-  const __m256d o0 = _mm256_setr_pd(origin.x(), origin.y(), origin.z(), origin.x());
-  const __m256d o1 = _mm256_setr_pd(origin.y(), origin.z(), origin.x(), origin.y());
-  const __m256d o2 = _mm256_setr_pd(origin.z(), origin.x(), origin.y(), origin.z());
+  FrameRows4 f;
+  frame_rows4(frame, f);
   __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf);  // (the SSE2 path's, not read)
   std::uint32_t i = 0;
   while (i < n && (reinterpret_cast<std::uintptr_t>(q + 3 * std::size_t(i)) & 15)) ++i;
   if (i) own_range_sse2(in, q, i, frame, lo, hi, bad);
-  __m128 b = _mm_setzero_ps();
+  __m128 rows_bad = _mm_setzero_ps();
   for (; i + 4 <= n; i += 4) {
-    const double* p = in + 3 * std::size_t(i);
     float* d = q + 3 * std::size_t(i);
-    const __m128 x = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p), o0), s));
-    const __m128 y = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 4), o1), s));
-    const __m128 z = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(p + 8), o2), s));
-    _mm_stream_ps(d, x), _mm_stream_ps(d + 4, y), _mm_stream_ps(d + 8, z);
-    b = _mm_or_ps(b, _mm_or_ps(_mm_sub_ps(x, x), _mm_or_ps(_mm_sub_ps(y, y), _mm_sub_ps(z, z))));
+    __m128 a, b, c;
+    convert4_avx2(in + 3 * std::size_t(i), f, a, b, c);
+    _mm_stream_ps(d, a), _mm_stream_ps(d + 4, b), _mm_stream_ps(d + 8, c);
+    collect_bad(a, b, c, rows_bad);
   }
-  // (every lane of the rows is data: fold lane 3 into lane 0, since the caller tests lanes 0-2)
-  bad = _mm_or_ps(bad, _mm_or_ps(b, _mm_shuffle_ps(b, b, _MM_SHUFFLE(0, 0, 0, 3))));
+  bad = _mm_or_ps(bad, fold_bad(rows_bad));
   if (i < n) own_range_sse2(in + 3 * std::size_t(i), q + 3 * std::size_t(i), n - i, frame, lo, hi, bad);
   _mm_sfence();
 }
