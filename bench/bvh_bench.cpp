@@ -6,7 +6,7 @@
 //                       [--leaves linear,block-tree] [--leaf-formats blocks,tables] [--leaf 8] [--ct 1] [--ci 0.3]
 //                       [--isa auto|sse2|avx2|avx512vl|avx512] [--embree all|none] [--deform twist] [--amplitude A]
 //                       [--clock wall|cpu] [--out DIR] [--build-loop N] [--update-loop N] [--median 4]
-//                       [--vertex-order clusters|input] [--groups 8]
+//                       [--vertex-order clusters|input] [--groups 8] [--packets] [--no-counters]
 //
 // MESH (default: armadillo) is subdivided `levels` times (midpoint; 2 -> 832k triangles for
 // armadillo). Clusterings (comma list, made once from the rest pose):
@@ -57,6 +57,11 @@
 // --group-trees says), then the box passes alone, and exit; a target for perf (use
 // with --embree none). It stays outside the frame loop: it times the builder and the box passes
 // in isolation, with no frames, update() or trace, which whole per-frame updates cannot give.
+// --packets: the rays traced in packets of eight (TraceOptions::packets; Embree's rtcIntersect of
+// its packet width, coherent) instead of one by one, still interleaved within each frame: the
+// in-process ratio of two leaf formats' packet walks (--leaf-formats blocks,tables).
+// --no-counters: no per-ray node and triangle counts (TraceOptions::counters off, as `ptc bench`
+// traces); the tables then print 0 nodes and triangles a ray.
 // --out DIR writes DIR/bvh_bench.csv (schema ptc-bvh-bench/2, columns in visit_row: one row per
 // frame and configuration) and DIR/manifest.json (analysis/schema/manifest.h).
 #include <tbb/global_control.h>
@@ -118,6 +123,7 @@ struct Options {
   VertexOrder vertex_order = VertexOrder::Clusters;
   TraceIsa isa = TraceIsa::Auto;
   bool embree = true;
+  bool packets = false, counters = true;
   StageClock clock = StageClock::Wall;
   std::string out_dir;
   SceneConfig tcfg = triangle_scene_defaults(), ccfg = cluster_scene_defaults();
@@ -191,6 +197,8 @@ Options parse_options(int argc, char** argv) {
       if (s != "all" && s != "none") usage("--embree must be all or none");
       o.embree = s == "all";
     } else if (a == "--out") o.out_dir = text();
+    else if (a == "--packets") o.packets = true;
+    else if (a == "--no-counters") o.counters = false;
     else if (a == "--clock") clock_arg = text();
     else if (a == "--ci") o.tcfg.build.cost.intersection = o.ccfg.build.cost.intersection = value();
     else if (a == "--groups") o.ccfg.cluster_group_size = static_cast<unsigned>(value());
@@ -516,11 +524,11 @@ int main(int argc, char** argv) {
   const RayBatch rays = primary_rays(frame_box(mesh.bounds()), o.size, o.size);
   std::printf("mesh %s, %d subdivision levels: %zu triangles, %zu vertices; %zu rays; %u thread(s); %d frames "
               "of the %s deformer (amplitude %.3g, period %.3g); SAH traversal %.2f intersection %.2f, triangle "
-              "leaves <= %u; tracer isa %s; %s clock\n",
+              "leaves <= %u; tracer isa %s%s; %s clock\n",
               o.mesh_path.c_str(), o.levels, mesh.triangle_count(), mesh.vertex_count(), rays.size(), o.threads, o.reps,
               std::string(to_string(o.deform.kind)).c_str(), o.deform.amplitude, o.deform.period,
               o.tcfg.build.cost.traversal, o.tcfg.build.cost.intersection, o.tcfg.build.max_leaf_size,
-              to_string(resolve(o.isa)), o.clock == StageClock::ThreadCpu ? "cpu" : "wall");
+              to_string(resolve(o.isa)), o.packets ? ", packets" : "", o.clock == StageClock::ThreadCpu ? "cpu" : "wall");
   for (const auto& [name, cl] : clusterings)
     std::printf("  clustering %s: %zu clusters, mean %.1f triangles\n", name.c_str(), cl.cluster_count(),
                 double(mesh.triangle_count()) / double(cl.cluster_count()));
@@ -578,6 +586,8 @@ int main(int argc, char** argv) {
   TraceOptions opt;
   opt.threads = o.threads;
   opt.isa = o.isa;
+  opt.packets = o.packets;
+  opt.counters = o.counters;
   std::vector<Row> rows;
   HitBatch ref, hits;
   AlignedVector<Vec3> pos(mesh.vertex_count());
