@@ -547,7 +547,9 @@ int main(int argc, char** argv) {
     if (clusterings.empty() || o.leaves.empty() || o.formats.empty()) usage("--update-loop needs a clustering");
     setup.clusters = &clusterings.front().second;
     setup.cluster_leaf = o.leaves.front();
-    setup.leaf_format = o.leaves.front() == ClusterLeaf::Linear ? o.formats.front() : bvh::LeafFormat::Blocks;
+    setup.leaf_format = o.leaves.front() == ClusterLeaf::Linear && o.formats.front() == bvh::LeafFormat::Tables
+                            ? bvh::LeafFormatChoice::Tables
+                            : bvh::LeafFormatChoice::Blocks;
     return run_update_loop(*make_config(AccelKind::OursClusters, mesh, setup, o), scene, o);
   }
 
@@ -563,7 +565,7 @@ int main(int argc, char** argv) {
           if (mode != ClusterLeaf::Linear && f != bvh::LeafFormat::Blocks) continue;  // (tables: linear leaves only)
           setup.clusters = &cl;
           setup.cluster_leaf = mode;
-          setup.leaf_format = f;
+          setup.leaf_format = f == bvh::LeafFormat::Tables ? bvh::LeafFormatChoice::Tables : bvh::LeafFormatChoice::Blocks;
           const bool tables = f == bvh::LeafFormat::Tables;
           configs.push_back({"ours_" + cname + "_" + (tables ? std::string("tables") : to_string(mode)),
                              AccelKind::OursClusters, make_config(AccelKind::OursClusters, mesh, setup, o)});

@@ -236,7 +236,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   {
     if (cfg_.builder == SahBuilder::Sweep && cfg_.cluster_group_size > 1)
       throw std::invalid_argument("the sweep builder has no two-level build: cluster_group_size must be 0 with it");
-    if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.leaf_format == LeafFormat::Tables)
+    if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.leaf_format == LeafFormatChoice::Tables)
       throw std::invalid_argument("the tables leaf format needs linear cluster leaves (block trees keep blocks)");
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
@@ -274,7 +274,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   }
   rest = {};
   if (!cfg_.built_once) set_vertex_order(mesh, lane_ids);
-  if (cfg_.leaf_format == LeafFormat::Tables) {
+  if (use_tables()) {
     layout_tables(mesh, lane_ids);  // (the clusters' ranges become ranges of groups)
   } else {
     data.blocks.resize(lane_ids.size() / 4);
@@ -290,6 +290,19 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   else update(mesh.positions());
   // Needed only to lay the clusters out (the per-frame pass has its own vertex order).
   release(order_), release(offsets_), release(vertices_), release(vertex_offsets_);
+}
+
+// The leaf format the scene uses (SceneConfig::leaf_format; set-up, while offsets_ and
+// vertex_offsets_ hold the clusters' triangles and vertices, whose estimated bytes it keeps):
+// Auto takes the tables for linear leaves of a scene that is updated when tables_suit them.
+bool ClusterScene::use_tables() {
+  leaf_estimate_ = estimate_leaf_bytes(offsets_, vertex_offsets_);
+  switch (cfg_.leaf_format) {
+    case LeafFormatChoice::Tables: return true;
+    case LeafFormatChoice::Blocks: return false;
+    case LeafFormatChoice::Auto: break;
+  }
+  return cfg_.cluster_leaf == ClusterLeaf::Linear && !cfg_.built_once && tables_suit(leaf_estimate_);
 }
 
 // The clusters' boxes and centres at the rest pose, in the scene's cluster order, into f_.boxes

@@ -89,6 +89,9 @@ class ClusterScene {
   /// group (0: the plain build, also when that size makes one group only).
   [[nodiscard]] std::uint32_t group_size() const { return group_size_; }
   [[nodiscard]] const StageTimes& times() const { return f_.times; }
+  /// The clusters' linear-leaf bytes as LeafFormatChoice::Auto estimates them (estimate_leaf_bytes),
+  /// whatever the format used (data().format).
+  [[nodiscard]] const LeafBytes& leaf_bytes_estimate() const { return leaf_estimate_; }
   /// 8-wide nodes kept from frame to frame (the block trees, then the fixed group trees): nodes
   /// [0, subtree_nodes()) of data().wide8.nodes; only their boxes change per frame.
   [[nodiscard]] std::size_t subtree_nodes() const { return sub8_count_; }
@@ -118,6 +121,7 @@ class ClusterScene {
   /// boxes_from_fill: the cluster boxes are made by the fill of the blocks (update() on one
   /// thread), which then runs before the tree instead of beside it.
   void build_frame(bool boxes_from_fill = false);
+  [[nodiscard]] bool use_tables();
   [[nodiscard]] bool overlap_possible() const;
   [[nodiscard]] bool lists_are_corners(std::size_t vertex_count, std::span<const std::uint32_t> lane_ids) const;
   [[nodiscard]] std::span<const Tri> triangles() const {
@@ -187,6 +191,7 @@ class ClusterScene {
   bool lists_are_corners_ = false;  // fused mode: the clusters' vertex lists are their corners (lists_are_corners)
   AlignedVector<std::uint32_t> corners_;  // per block [corner][lane] renumbered vertex indices (V: NaN sentinel; none with tables)
   TableLayout tables_;  // LeafFormat::Tables: the groups per cluster and their slots' vertex indices
+  LeafBytes leaf_estimate_;  // leaf_bytes_estimate()
   SceneFrame f_;
 };
 

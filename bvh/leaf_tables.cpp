@@ -1,6 +1,7 @@
 #include "bvh/leaf_tables.h"
 
 #include "bvh/box_simd.h"
+#include "bvh/scene_config.h"
 
 #include <emmintrin.h>
 #include <tbb/blocked_range.h>
@@ -332,6 +333,25 @@ void fill_tables(const TableLayout& layout, const float* fp, std::span<TableGrou
     fill(layout, fp, groups.data(), r.begin(), r.end(), cluster_boxes, centres);
     _mm_sfence();
   });
+}
+
+LeafBytes estimate_leaf_bytes(std::span<const std::uint32_t> tri_offsets, std::span<const std::uint32_t> vertex_offsets) {
+  if (tri_offsets.size() != vertex_offsets.size())
+    throw std::invalid_argument("estimate_leaf_bytes: " + std::to_string(tri_offsets.size()) + " triangle offsets, " +
+                                std::to_string(vertex_offsets.size()) + " vertex offsets");
+  LeafBytes b;
+  for (std::size_t c = 0; c + 1 < tri_offsets.size(); ++c) {
+    if (tri_offsets[c + 1] < tri_offsets[c] || vertex_offsets[c + 1] < vertex_offsets[c])
+      throw std::invalid_argument("estimate_leaf_bytes: offsets decrease at cluster " + std::to_string(c));
+    const std::uint64_t n = tri_offsets[c + 1] - tri_offsets[c], v = vertex_offsets[c + 1] - vertex_offsets[c];
+    b.blocks += sizeof(TriBlock) * ((n + 3) / 4);
+    b.tables += sizeof(TableGroup) * ((std::max(n, v) + kTableSlots - 1) / kTableSlots);
+  }
+  return b;
+}
+
+bool tables_suit(const LeafBytes& b) {
+  return b.blocks > 0 && static_cast<double>(b.tables) <= kAutoTablesMaxShare * static_cast<double>(b.blocks);
 }
 
 }  // namespace ptc::bvh

@@ -48,6 +48,15 @@ struct TableLayout {
                                             std::span<const std::uint32_t> corners, std::uint32_t sentinel,
                                             AlignedVector<TableGroup>& groups, AlignedVector<std::uint32_t>& ids);
 
+/// LeafBytes (trace_data.h) of clusters: cluster c has triangles [tri_offsets[c], tri_offsets[c + 1]) and vertices [vertex_offsets[c],
+/// vertex_offsets[c + 1]) (its distinct vertices); both lists of offsets have clusters + 1
+/// entries (std::invalid_argument otherwise, or when they decrease).
+[[nodiscard]] LeafBytes estimate_leaf_bytes(std::span<const std::uint32_t> tri_offsets,
+                                            std::span<const std::uint32_t> vertex_offsets);
+/// Whether Auto picks the tables for these bytes: at most kAutoTablesMaxShare (scene_config.h)
+/// of the blocks' (and some triangles at all).
+[[nodiscard]] bool tables_suit(const LeafBytes& b);
+
 /// Every group's vertex rows from the frame positions (x y z per vertex, with the sentinel and
 /// one more element after the last vertex, as add_sentinel leaves them; a group of at most 16
 /// vertices has only the rows' first halves written, the rest keeping the layout's NaN), in chunks of clusters

@@ -29,6 +29,17 @@ std::optional<LeafFormat> parse_leaf_format(std::string_view s) {
   return std::nullopt;
 }
 
+const char* to_string(LeafFormatChoice f) {
+  return f == LeafFormatChoice::Auto ? "auto" : f == LeafFormatChoice::Blocks ? "blocks" : "tables";
+}
+
+std::optional<LeafFormatChoice> parse_leaf_format_choice(std::string_view s) {
+  if (s == "auto") return LeafFormatChoice::Auto;
+  if (s == "blocks") return LeafFormatChoice::Blocks;
+  if (s == "tables") return LeafFormatChoice::Tables;
+  return std::nullopt;
+}
+
 std::optional<ClusterLeaf> parse_cluster_leaf(std::string_view s) {
   if (s == "linear") return ClusterLeaf::Linear;
   if (s == "block-tree") return ClusterLeaf::BlockTree;

@@ -47,6 +47,21 @@ enum class ClusterLeaf { Linear, BlockTree };
 [[nodiscard]] const char* to_string(LeafFormat f);
 [[nodiscard]] std::optional<LeafFormat> parse_leaf_format(std::string_view s);
 
+/// Which LeafFormat a cluster scene's linear leaves use (SceneConfig::leaf_format): one of the
+/// two, or Auto, the scene's own choice from its clusters (ClusterScene, tables_suit in
+/// leaf_tables.h): the vertex tables when the clusters share enough vertices for them to be
+/// clearly smaller than the blocks, blocks otherwise (triangle soups, small clusters, block
+/// trees) and for a scene built once (whose rays alone count; the blocks' are as fast or faster).
+enum class LeafFormatChoice : std::uint8_t { Auto, Blocks, Tables };
+/// "auto", "blocks", "tables".
+[[nodiscard]] const char* to_string(LeafFormatChoice f);
+/// Auto picks the tables when their estimated bytes (LeafBytes) are at most this share of the
+/// blocks'. On the built-in scenes at the bench's clusters (MaxCount 32): the cloth 0.71,
+/// the armadillo's 0.76, the epileptic 0.99 and the faerie 1.11 (their meshes split vertices at
+/// seams), the explode scene's triangle soup 1.63.
+inline constexpr double kAutoTablesMaxShare = 0.85;
+[[nodiscard]] std::optional<LeafFormatChoice> parse_leaf_format_choice(std::string_view s);
+
 /// What the two-level build (SceneConfig::cluster_group_size) does inside a group per frame:
 /// Rebuild builds a binned SAH tree over the group's cluster boxes every frame; Refit keeps the
 /// tree built over the group's rest-pose boxes (a fixed 4-wide subtree, as the block trees of
@@ -70,9 +85,10 @@ struct SceneConfig {
   ClusterLeaf cluster_leaf = ClusterLeaf::Linear;  ///< ClusterScene only (Linear: the paper's leaves, and the faster with Acc clusters, bench/bvh_bench.cpp)
   StageClock clock = StageClock::Wall;  ///< clock of the StageTimes (see stage_clock.h)
   /// ClusterScene with ClusterLeaf::Linear only: how the leaves hold their triangles (blocks of
-  /// four, or the per-group vertex tables; docs/tracing.md, "Vertex tables in the walk"). The
-  /// hits are the same bits either way; a triangle scene and block trees always use blocks.
-  LeafFormat leaf_format = LeafFormat::Blocks;
+  /// four, or the per-group vertex tables; docs/tracing.md, "Vertex tables in the walk"), or
+  /// Auto: the scene picks (LeafFormatChoice; the format used is data().format). The hits are
+  /// the same bits either way; a triangle scene and block trees always use blocks.
+  LeafFormatChoice leaf_format = LeafFormatChoice::Auto;
   /// ClusterScene only: two-level build (BuildInput::groups). The groups are fixed once per
   /// clustering: the maximal subtrees of at most this many clusters of the rest-pose BVH; per
   /// frame the top is built over the groups' boxes and each group's tree rebuilt over its

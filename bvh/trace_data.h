@@ -119,6 +119,15 @@ struct LeafShape {
 };
 [[nodiscard]] LeafShape leaf_shape(const TraceData& d);
 
+/// Bytes of a clustering's linear leaves in either format, as LeafFormatChoice::Auto estimates
+/// them before any layout (estimate_leaf_bytes, leaf_tables.h): blocks exactly (144 bytes per
+/// four triangles of a cluster, rounded up), tables at their least (512 bytes per group, a
+/// cluster taking at least ceil(max(triangles, distinct vertices) / 32) groups; the layout may
+/// need more).
+struct LeafBytes {
+  std::uint64_t blocks = 0, tables = 0;
+};
+
 /// Checks of the flat data (tests call it on every scene), of `wide` (when not empty) and of
 /// `wide8` alike (`wide8` present whenever `wide` is): every node reachable from the root exactly once (a
 /// tree) and none deeper than the tree's `depth`, every leaf child's ranges inside `ranges` and

@@ -104,7 +104,9 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
                                          {"units", r.cluster_leaves.units},
                                          {"triangles", r.cluster_leaves.triangles},
                                          {"vertices", r.cluster_leaves.vertices},
-                                         {"lanes", r.cluster_leaves.lanes}});
+                                         {"lanes", r.cluster_leaves.lanes},
+                                         {"estimated_blocks_bytes", r.cluster_leaf_estimate.blocks},
+                                         {"estimated_tables_bytes", r.cluster_leaf_estimate.tables}});
   manifest.set_result("scene_after_renumbering", scene.describe());
   manifest.set_result("median_frames",
                       nlohmann::json::array({r.median_first_frame, static_cast<int>(range.count()) - 1}));

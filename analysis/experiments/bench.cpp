@@ -135,6 +135,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
       res.cluster_scene_setup_ms = sw.ms();
       res.fused_vertex_pass = loop::cluster_scene_of(*accels.back())->fused_vertex_pass();
       res.cluster_leaves = bvh::leaf_shape(loop::cluster_scene_of(*accels.back())->data());
+      res.cluster_leaf_estimate = loop::cluster_scene_of(*accels.back())->leaf_bytes_estimate();
       res.cluster_group_size = loop::cluster_scene_of(*accels.back())->group_size();
     }
   }
@@ -360,6 +361,12 @@ std::string bench_text(const PeerBenchResult& r) {
                            "tests' lanes used)\n",
                            ls.units, tris / u, static_cast<double>(ls.vertices) / u, used)
              : fmt::format("cluster leaves: blocks, {} blocks of four lanes ({:.1f}% used)\n", ls.units, used);
+    const bvh::LeafBytes& e = r.cluster_leaf_estimate;
+    if (e.blocks > 0)
+      s += fmt::format("  (estimated bytes: tables {:.2f} of the blocks' {:.1f} MB; --leaf-format auto takes the tables "
+                       "at {:.2f} or less)\n",
+                       static_cast<double>(e.tables) / static_cast<double>(e.blocks), static_cast<double>(e.blocks) / 1e6,
+                       bvh::kAutoTablesMaxShare);
   }
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");

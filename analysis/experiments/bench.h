@@ -50,8 +50,9 @@ struct PeerBenchConfig {
   std::uint32_t max_count = 32;
   ClusterAdjacency adjacency = ClusterAdjacency::Auto;  ///< and its adjacency (cluster.h)
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
-  /// How the cluster BVH's linear leaves hold their triangles (bvh::LeafFormat).
-  bvh::LeafFormat leaf_format = bvh::LeafFormat::Blocks;
+  /// How the cluster BVH's linear leaves hold their triangles (bvh::LeafFormatChoice; the format
+  /// used is PeerBenchResult::cluster_leaves.format).
+  bvh::LeafFormatChoice leaf_format = bvh::LeafFormatChoice::Auto;
   /// Two-level build of the cluster BVH over groups of at most this many clusters; 0: plain.
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
   /// bvh::SceneConfig::min_cluster_groups (0: groups of exactly up to cluster_group_size; the
@@ -121,6 +122,7 @@ struct PeerBenchResult {
   std::string vertex_order;            ///< "clusters" (renumbered once) or "input"
   bool fused_vertex_pass = false;      ///< the cluster scene converts and boxes in one pass (no gather)
   bvh::LeafShape cluster_leaves;       ///< how full the cluster BVH's leaves are (bvh::leaf_shape)
+  bvh::LeafBytes cluster_leaf_estimate;  ///< both formats' bytes as LeafFormatChoice::Auto estimates them
   std::uint32_t cluster_group_size = 0;  ///< the cluster BVH's two-level build (0: plain)
   bvh::GroupTrees group_trees = bvh::GroupTrees::Rebuild;  ///< and what it does inside a group
   double renumber_ms = 0;              ///< the renumbering (mesh, clustering, frame source), once

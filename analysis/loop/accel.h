@@ -66,8 +66,9 @@ struct AccelSetup {
   Vec3 origin = Vec3::Zero();            ///< the trace frame shared by every configuration
   const Clustering* clusters = nullptr;  ///< ours_clusters: a clustering of the mesh (required)
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
-  /// ours_clusters with linear leaves: blocks or per-group vertex tables (bvh::LeafFormat).
-  bvh::LeafFormat leaf_format = bvh::LeafFormat::Blocks;
+  /// ours_clusters with linear leaves: blocks, per-group vertex tables or the scene's choice
+  /// (bvh::LeafFormatChoice).
+  bvh::LeafFormatChoice leaf_format = bvh::LeafFormatChoice::Auto;
   /// ours_clusters: two-level build over groups of at most this many clusters (0: plain build).
   std::uint32_t cluster_group_size = bvh::cluster_scene_defaults().cluster_group_size;
   /// ours_clusters: bvh::SceneConfig::min_cluster_groups (0: groups of exactly up to cluster_group_size).

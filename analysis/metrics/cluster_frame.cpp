@@ -69,7 +69,9 @@ ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& cl
   if (n > 0) {
     std::optional<bvh::ClusterScene> own;
     if (!tree) {
-      own.emplace(mesh, bvh::view_of(clustering));
+      bvh::SceneConfig sc = bvh::cluster_scene_defaults();
+      sc.leaf_format = bvh::LeafFormatChoice::Blocks;  // (only the tree is read: no table layout)
+      own.emplace(mesh, bvh::view_of(clustering), sc);
       own->update(mesh.positions());
     }
     const bvh::ClusterScene& cs = tree ? *tree : *own;
@@ -112,6 +114,7 @@ ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& cl
 std::unique_ptr<bvh::ClusterScene> cluster_bvh_at_rest(const Mesh& rest, const Clustering& clustering) {
   bvh::SceneConfig cfg = bvh::cluster_scene_defaults();
   cfg.origin = rest.bounds().center();  // the study's trace frame (study_rays)
+  cfg.leaf_format = bvh::LeafFormatChoice::Blocks;  // (its tree and boxes are read, and the set-up of blocks is the shorter)
   return std::make_unique<bvh::ClusterScene>(rest, bvh::view_of(clustering), cfg);
 }
 

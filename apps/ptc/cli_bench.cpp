@@ -13,7 +13,7 @@ struct BenchArgs {
   SceneArg scene;
   CameraArgs camera;
   GroupTreesArg group_trees;
-  std::string deform, cluster_leaf = "linear", leaf_format = "blocks", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
+  std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -28,8 +28,9 @@ void register_bench(CLI::App& app, Context& ctx) {
                       if (a->app->count("--deform")) o.deform = a->deform;
                       o.config.cluster_leaf =
                           *bvh::parse_cluster_leaf(a->cluster_leaf);
-                      o.config.leaf_format = *bvh::parse_leaf_format(a->leaf_format);
-                      if (o.config.leaf_format == bvh::LeafFormat::Tables && o.config.cluster_leaf != bvh::ClusterLeaf::Linear)
+                      o.config.leaf_format = *bvh::parse_leaf_format_choice(a->leaf_format);
+                      if (o.config.leaf_format == bvh::LeafFormatChoice::Tables &&
+                          o.config.cluster_leaf != bvh::ClusterLeaf::Linear)
                         throw UsageError("--leaf-format", "tables needs linear cluster leaves (--cluster-leaf block-tree keeps blocks)");
                       if (a->app->count("--cluster-groups")) o.config.min_cluster_groups = 0;  // (given: exact)
                       o.config.group_trees = a->group_trees.get(o.config.cluster_group_size > 1,
@@ -108,10 +109,12 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->capture_default_str();
   c->add_option("--leaf-format", a->leaf_format,
                 "how the cluster BVH's linear leaves hold their triangles: blocks (four triangles' corners "
-                "each, 36 bytes a triangle) or tables (per-group vertex tables and corner slots, 512 bytes a "
+                "each, 36 bytes a triangle), tables (per-group vertex tables and corner slots, 512 bytes a "
                 "group of up to 32 triangles on up to 32 vertices; the same hits; for meshes that share "
-                "vertices: a triangle soup gets groups of five triangles)")
-      ->check(enum_validator("leaf format", bvh::parse_leaf_format))
+                "vertices: a triangle soup gets groups of five triangles) or auto (tables when their estimated "
+                "bytes are at most 0.85 of the blocks' and the scene is animated, else blocks; the summary's "
+                "\"cluster leaves\" line and the manifest's results.cluster_leaves.format say which)")
+      ->check(enum_validator("leaf format", bvh::parse_leaf_format_choice))
       ->capture_default_str();
   c->add_option("--cluster-groups", cfg.cluster_group_size,
                 "two-level cluster BVH build over fixed groups of at most N clusters (subtrees of the rest-pose "

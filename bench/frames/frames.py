@@ -5,12 +5,13 @@ REFIT and LOW, per scene and thread count, from `ptc bench` runs made here.
 
     /usr/bin/python3 bench/frames/frames.py [--build build] [--threads 1,2] [--frames 0:5]
         [--min-triangles 500000] [--scenes A,B] [--repeat 1] [--single] [--width 1024 --height 1024]
-        [--max-count N] --out DIR
+        [--max-count N] [--leaf-format auto|blocks|tables] --out DIR
 
 Each (repeat, threads, scene) is one `ptc bench SCENE --threads T --frames A:B [--packets]
-[--max-count N] --out DIR/runs/...` (packets on both sides unless --single; --max-count N: the
-bench's own clustering at MaxCount = MaxSize = N instead of its default, e.g. 50 for the paper's
-value). Repeats run one after the other over the
+[--max-count N] [--leaf-format F] --out DIR/runs/...` (packets on both sides unless --single;
+--max-count N: the bench's own clustering at MaxCount = MaxSize = N instead of its default, e.g.
+50 for the paper's value; --leaf-format F: the cluster leaves' format, default the bench's own,
+auto). Repeats run one after the other over the
 whole list, so a slow phase of the machine touches every scene a little rather than one scene a
 lot; the table gives, per scene and thread count, the median over the repeats of each
 configuration's whole frame (each run's own median over frames 1..B) and the ratios of those
@@ -79,6 +80,8 @@ def main():
     ap.add_argument("--single", action="store_true", help="single rays on both sides (default: packets on both)")
     ap.add_argument("--width", type=int, default=1024)
     ap.add_argument("--height", type=int, default=1024)
+    ap.add_argument("--leaf-format", default=None, choices=("auto", "blocks", "tables"),
+                    help="ptc bench --leaf-format F for every run (default: the bench's own, auto)")
     ap.add_argument("--max-count", default=None,
                     help="ptc bench --max-count N for every run (default: the bench's own default)")
     ap.add_argument("--out", required=True)
@@ -135,6 +138,8 @@ def main():
                     cmd.append("--packets")
                 if a.max_count is not None:
                     cmd += ["--max-count", a.max_count]
+                if a.leaf_format is not None:
+                    cmd += ["--leaf-format", a.leaf_format]
                 commands.append(cmd)
                 print(f"== {' '.join(cmd)}", file=sys.stderr, flush=True)
                 run = subprocess.run(cmd, capture_output=True, text=True)
@@ -204,7 +209,8 @@ def main():
     json.dump({"schema": "ptc-frames/1", "argv": sys.argv, "commands": commands, "ptc_commit": git,
                "parameters": {"threads": threads, "frames": a.frames, "scenes": scenes, "repeat": a.repeat,
                               "packets": not a.single, "width": a.width, "height": a.height,
-                              "max_count": int(a.max_count) if a.max_count is not None else None},
+                              "max_count": int(a.max_count) if a.max_count is not None else None,
+                              "leaf_format": a.leaf_format},
                "outputs": ["runs.csv", "frames.csv", "scaling.csv"]},
               open(os.path.join(tmp, "manifest.json"), "w"), indent=2)
     os.rename(tmp, a.out)

@@ -190,24 +190,34 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
                "--leaf-format: tables needs linear cluster leaves");
 }
 
-// `ptc bench --leaf-format tables`: the cluster BVH's leaves as vertex tables, recorded in the
-// manifest, with the blocks' hits and zero mismatches against brute force.
+// `ptc bench --leaf-format blocks|tables|auto` (and auto by default): the cluster BVH's leaves as
+// blocks or vertex tables, recorded in the manifest with the estimate auto chose by, with the same
+// hits and zero mismatches against brute force.
 TEST_F(TraceCli, BenchTracesTheTablesFormatLikeTheBlocks) {
-  std::vector<std::string> hits[2];
-  const char* formats[] = {"blocks", "tables"};
-  for (int f = 0; f < 2; ++f) {
-    const fs::path out = dir_ / (std::string("lf_") + formats[f]);
-    const CmdResult r = ptc({"bench", (fs::path(PTC_TEST_DATA) / "meshes" / "bunny00.off").string(), "--frames", "0:2", "--width", "32", "--height",
-                             "32", "--max-count", "40", "--leaf-format", formats[f], "--threads", "1", "--out",
-                             out.string()});
+  std::vector<std::string> hits[4];
+  // (the last: no --leaf-format, which is auto)
+  const char* formats[] = {"blocks", "tables", "auto", "auto"};
+  for (int f = 0; f < 4; ++f) {
+    const fs::path out = dir_ / ("lf_" + std::to_string(f));
+    std::vector<std::string> args{"bench", (fs::path(PTC_TEST_DATA) / "meshes" / "bunny00.off").string(), "--frames",
+                                  "0:2", "--width", "32", "--height", "32", "--max-count", "40", "--threads", "1",
+                                  "--out", out.string()};
+    if (f < 3) args.insert(args.end(), {"--leaf-format", formats[f]});
+    const CmdResult r = ptc(args);
     ASSERT_EQ(r.code, 0) << r.err;
     const std::string manifest = slurp(out / "manifest.json");
     EXPECT_NE(manifest.find(std::string("\"leaf_format\": \"") + formats[f] + "\""), std::string::npos);
-    // The cluster leaves' shape, printed and in the manifest (every triangle in them once).
+    // The cluster leaves' shape, printed and in the manifest (every triangle in them once); auto
+    // takes the tables when the estimated bytes in the manifest say so (this mesh: it does).
     const auto j = nlohmann::json::parse(manifest);
-    EXPECT_EQ(j["results"]["cluster_leaves"]["format"], formats[f]);
+    const auto& leaves = j["results"]["cluster_leaves"];
+    const double est_blocks = leaves["estimated_blocks_bytes"], est_tables = leaves["estimated_tables_bytes"];
+    EXPECT_GT(est_blocks, 0.0);
+    const std::string used = f < 2 ? formats[f] : est_tables <= 0.85 * est_blocks ? "tables" : "blocks";
+    if (f >= 2) EXPECT_EQ(used, "tables") << est_tables << " " << est_blocks;
+    EXPECT_EQ(leaves["format"], used);
     EXPECT_EQ(j["results"]["cluster_leaves"]["triangles"], j["results"]["triangles"]);
-    EXPECT_NE(r.out.find(std::string("cluster leaves: ") + formats[f]), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("cluster leaves: " + used), std::string::npos) << r.out;
     for (const auto& row : csv_rows(slurp(out / "bench.csv"))) {
       if (row.at("config") != "ours_clusters") continue;
       EXPECT_EQ(row.at("mismatches"), "0") << formats[f];
@@ -215,7 +225,7 @@ TEST_F(TraceCli, BenchTracesTheTablesFormatLikeTheBlocks) {
     }
   }
   ASSERT_EQ(hits[0].size(), 3u);
-  EXPECT_EQ(hits[0], hits[1]);
+  for (int f = 1; f < 4; ++f) EXPECT_EQ(hits[0], hits[f]) << formats[f];
 }
 
 // A mesh of 1e13 units: our tracer's float products overflowed there, every ray missed, and the

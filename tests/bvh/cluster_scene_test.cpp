@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "bvh/leaf_tables.h"
+#include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/morton_runs.h"
 #include "toolkit/clustering/clustering.h"
 #include "toolkit/mesh/mesh.h"
@@ -90,6 +92,7 @@ TEST(ClusterScene, LinearLeavesAreInMortonOrderOfRestCentroids) {
       SceneConfig cfg = test::two_level_defaults();
       cfg.cluster_group_size = groups;
       cfg.group_trees = GroupTrees::Rebuild;  // (the primitives of bvh() are the clusters)
+      cfg.leaf_format = LeafFormatChoice::Blocks;  // (the blocks' lanes are read below)
       ClusterScene s(m, view_of(runs), cfg);
       s.update(moved.positions());
       const std::vector<std::uint32_t> visit = cluster_visit_order(m, view_of(runs), cfg);
@@ -132,9 +135,9 @@ TEST(ClusterScene, SameDataAtAnyThreadCountAndStagesAddUpToTheWallTime) {
   const std::vector<Mesh> frames{test::deformed(m, 0.02), test::deformed(m, 0.06)};
   for (const bool renumbered : {false, true})
   for (GroupTrees trees : {GroupTrees::Rebuild, GroupTrees::Refit})
-  for (const auto& [leaf, format] : {std::pair{ClusterLeaf::Linear, LeafFormat::Blocks},
-                                     {ClusterLeaf::BlockTree, LeafFormat::Blocks},
-                                     {ClusterLeaf::Linear, LeafFormat::Tables}}) {
+  for (const auto& [leaf, format] : {std::pair{ClusterLeaf::Linear, LeafFormatChoice::Blocks},
+                                     {ClusterLeaf::BlockTree, LeafFormatChoice::Blocks},
+                                     {ClusterLeaf::Linear, LeafFormatChoice::Tables}}) {
     std::vector<TraceData> want;
     std::vector<std::vector<Box3f>> want_boxes;
     for (const auto& [threads, avx2] : {std::pair{1, true}, {2, true}, {4, true}, {1, false}, {2, false}}) {
@@ -437,8 +440,9 @@ TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
       cfg.cluster_group_size = build == 1 ? 4 : 0;
       if (build == 2) cfg.build.max_leaf_size = 4, cfg.build.cost.traversal = 50.0;
       cfg.built_once = mode == 2;
+      cfg.leaf_format = LeafFormatChoice::Blocks;
       ClusterScene blocks(mesh, v, cfg);
-      cfg.leaf_format = LeafFormat::Tables;
+      cfg.leaf_format = LeafFormatChoice::Tables;
       ClusterScene tables(mesh, v, cfg);
       const std::string what = "runs of " + std::to_string(run) + " mode " + std::to_string(mode) + " build " +
                                std::to_string(build);
@@ -541,7 +545,7 @@ TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
   SceneConfig bad = test::two_level_defaults();
   bad.cluster_leaf = ClusterLeaf::BlockTree;
   bad.build.max_leaf_size = 1;
-  bad.leaf_format = LeafFormat::Tables;
+  bad.leaf_format = LeafFormatChoice::Tables;
   const Clustering runs = ptc::morton_runs(m, 9);
   EXPECT_THROW(ClusterScene(m, view_of(runs), bad), std::invalid_argument);
 }
@@ -551,6 +555,75 @@ TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
 // same group records: at the rest pose its tree over the clusters (cluster_tree(): the top with
 // the groups' trees spliced in) must be the rebuilt one, node for node and leaf for leaf, with
 // the same cost.
+// LeafFormatChoice::Auto against bytes counted here from each clustering (per cluster its
+// triangles and its triangles' distinct corners): the blocks' count must be the bytes of the
+// blocks a scene lays out, the tables' count at most those of its table groups, and Auto must
+// take the tables exactly when they count at most kAutoTablesMaxShare of the blocks, with the
+// same data as the explicit format. The cases fall on both sides: connected clusters of a mesh
+// (tables), runs of four triangles and a triangle soup (blocks); a scene built once and block
+// trees keep blocks whatever the bytes.
+TEST(ClusterScene, AutoLeafFormatFollowsTheEstimatedBytes) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  std::vector<Tri> st;
+  std::vector<Vec3> sp;
+  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+    const auto c = m.corners(t);
+    const auto b = static_cast<std::uint32_t>(sp.size());
+    st.push_back({b, b + 1, b + 2});
+    for (int k = 0; k < 3; ++k) sp.push_back(c[k]);
+  }
+  const Mesh soup(st, sp);
+  ClusterConfig cc;
+  cc.method = ClusterMethod::Growth;
+  cc.objective = ObjectiveKind::Acc;
+  cc.max_count = cc.max_size = 32;
+  struct Case {
+    const Mesh* mesh;
+    Clustering cl;
+    bool tables;
+    const char* what;
+  };
+  std::vector<Case> cases;
+  cases.push_back({&m, cluster_mesh(m, cc), true, "growth 32"});
+  cc.max_count = cc.max_size = 50;
+  cases.push_back({&m, cluster_mesh(m, cc), true, "growth 50"});
+  cases.push_back({&m, ptc::morton_runs(m, 4), false, "runs of 4"});
+  cases.push_back({&soup, ptc::morton_runs(soup, 32), false, "soup, runs of 32"});
+  for (const Case& k : cases) {
+    std::uint64_t blocks = 0, tables = 0;
+    for (std::size_t c = 0; c < k.cl.cluster_count(); ++c) {
+      std::vector<std::uint32_t> corners;
+      for (const std::uint32_t t : k.cl.triangles_of(c))
+        for (const std::uint32_t v : k.mesh->triangles()[t]) corners.push_back(v);
+      std::sort(corners.begin(), corners.end());
+      const std::uint64_t n = k.cl.triangles_of(c).size();
+      const auto v = static_cast<std::uint64_t>(std::unique(corners.begin(), corners.end()) - corners.begin());
+      blocks += 144 * ((n + 3) / 4);
+      tables += 512 * ((std::max(n, v) + 31) / 32);
+    }
+    SceneConfig cfg = test::two_level_defaults();
+    cfg.leaf_format = LeafFormatChoice::Blocks;
+    const ClusterScene b(*k.mesh, view_of(k.cl), cfg);
+    cfg.leaf_format = LeafFormatChoice::Tables;
+    const ClusterScene t(*k.mesh, view_of(k.cl), cfg);
+    cfg.leaf_format = LeafFormatChoice::Auto;
+    const ClusterScene a(*k.mesh, view_of(k.cl), cfg);
+    EXPECT_EQ(blocks, b.data().blocks.size() * sizeof(TriBlock)) << k.what;
+    EXPECT_LE(tables, t.data().tables.size() * sizeof(TableGroup)) << k.what;
+    const bool want = static_cast<double>(tables) <= kAutoTablesMaxShare * static_cast<double>(blocks);
+    EXPECT_EQ(want, k.tables) << k.what << ": " << tables << " against " << blocks << " bytes";
+    ASSERT_EQ(a.data().format, want ? LeafFormat::Tables : LeafFormat::Blocks) << k.what;
+    test::expect_same_data(a.data(), want ? t.data() : b.data(), k.what);
+    // Built once, or block trees: blocks.
+    cfg.built_once = true;
+    EXPECT_EQ(ClusterScene(*k.mesh, view_of(k.cl), cfg).data().format, LeafFormat::Blocks) << k.what;
+    cfg.built_once = false;
+    cfg.cluster_leaf = ClusterLeaf::BlockTree;
+    cfg.build.max_leaf_size = 1;
+    EXPECT_EQ(ClusterScene(*k.mesh, view_of(k.cl), cfg).data().format, LeafFormat::Blocks) << k.what;
+  }
+}
+
 TEST(ClusterScene, FixedGroupTreesAtTheRestPoseAreTheRebuiltTree) {
   const Mesh m = test::load_mesh("armadillo.off");
   for (std::uint32_t run : {9u, 37u})
@@ -645,6 +718,7 @@ TEST(ClusterScene, FixedGroupTreesAreRefittedExactly) {
   const Clustering runs = ptc::morton_runs(m, 23);
   SceneConfig cfg = test::two_level_defaults();
   cfg.group_trees = GroupTrees::Refit;
+  cfg.leaf_format = LeafFormatChoice::Blocks;  // (block boxes are compared below)
   ClusterScene s(m, view_of(runs), cfg);
   const std::size_t S = s.subtree_nodes();
   ASSERT_GT(S, 100u);

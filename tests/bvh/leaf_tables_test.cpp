@@ -475,6 +475,15 @@ TEST(LeafTables, MismatchedSizesAreRefused) {
   const TableLayout T = make_table_layout(ranges, ids, std::vector<std::uint32_t>(12, 0), 9, groups, tids);
   AlignedVector<TableGroup> none;
   EXPECT_THROW(fill_tables(T, nullptr, none, nullptr, nullptr), std::invalid_argument);
+  // The estimate of LeafFormatChoice::Auto: offset lists of different lengths, or decreasing.
+  const std::vector<std::uint32_t> two{0, 5}, three{0, 5, 9}, down{0, 5, 3};
+  EXPECT_THROW((void)estimate_leaf_bytes(two, three), std::invalid_argument);
+  EXPECT_THROW((void)estimate_leaf_bytes(down, three), std::invalid_argument);
+  EXPECT_THROW((void)estimate_leaf_bytes(three, down), std::invalid_argument);
+  // (no clusters: no bytes, and no tables)
+  const std::vector<std::uint32_t> zero{0};
+  EXPECT_EQ(estimate_leaf_bytes(zero, zero).blocks, 0u);
+  EXPECT_FALSE(tables_suit(estimate_leaf_bytes(zero, zero)));
 }
 
 }  // namespace

@@ -80,7 +80,7 @@ AnyScene make_scene(const Mesh& m, Kind k, std::optional<Vec3> origin = std::nul
           k == Kind::Clusters80 || k == Kind::Clusters80Linear || k == Kind::Clusters80Sweep || k == Kind::Clusters80Tables ? 1 : 4;
       if (k == Kind::Clusters80Sweep) cfg.builder = SahBuilder::Sweep;
       if (k == Kind::Clusters80Linear || seven || tables) cfg.cluster_leaf = ClusterLeaf::Linear;
-      if (tables) cfg.leaf_format = LeafFormat::Tables;
+      if (tables) cfg.leaf_format = LeafFormatChoice::Tables;
       if (seven) cfg.build.cost.traversal = 50.0;  // leaves of several clusters (indirect)
       s.scene.emplace<2>(m, view_of(*s.runs), cfg);
       if (tables) {

@@ -128,10 +128,10 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
   EXPECT_FALSE(validate(d, m.triangle_count()).empty());
   // The tables format: each corruption of a group is found (validate's messages name it).
   SceneConfig tables = linear;
-  tables.leaf_format = LeafFormat::Tables;
+  tables.leaf_format = LeafFormatChoice::Tables;
   for (const SceneConfig& tc : {tables, [&] {
          SceneConfig t4 = many;
-         t4.leaf_format = LeafFormat::Tables;
+         t4.leaf_format = LeafFormatChoice::Tables;
          return t4;
        }()}) {
     ClusterScene ts(m, view_of(runs), tc);
@@ -293,8 +293,24 @@ std::size_t block_corners_box(const TraceData& d, std::uint32_t first, std::uint
   return tris;
 }
 
-// Walks the 8-wide tree of a blocks-format scene: for every non-empty slot, the exact box of the
-// corners under it (brute force over its leaves' blocks) against the slot's box, counting in
+// The same for table groups [first, first + n) (n 0: up to the first one marked last, a direct
+// leaf), each triangle's corners read through its slots.
+std::size_t group_corners_box(const TraceData& d, std::uint32_t first, std::uint32_t n, Box3f& box) {
+  std::size_t tris = 0;
+  for (std::uint32_t g = first; n == 0 || g < first + n; ++g) {
+    const TableGroup& tg = d.tables[g];
+    for (std::uint32_t j = 0; j < tg.count; ++j, ++tris)
+      for (int c = 0; c < 3; ++c) {
+        const int s = tg.corner[c][j];
+        box.extend(Vec3f{tg.v[0][s], tg.v[1][s], tg.v[2][s]});
+      }
+    if (n == 0 && tg.last) break;
+  }
+  return tris;
+}
+
+// Walks the 8-wide tree of a scene: for every non-empty slot, the exact box of the
+// corners under it (brute force over its leaves' blocks or table groups) against the slot's box, counting in
 // `loose` the slots whose box is wider than that box widened by one unit in the last place on
 // some face (or does not hold it). Returns the triangles reached.
 std::size_t slot_boxes_are_tight(const TraceData& d, std::size_t& loose, std::size_t& slots) {
@@ -316,9 +332,12 @@ std::size_t slot_boxes_are_tight(const TraceData& d, std::size_t& loose, std::si
         box = self(self, n.child[k]);
       } else if (n.count[k] & kIndirectLeaf) {
         for (std::uint32_t r = n.child[k]; r < n.child[k] + (n.count[k] & ~kIndirectLeaf); ++r)
-          tris += block_corners_box(d, d.ranges[r].first_block, d.ranges[r].block_count, box);
+          tris += d.format == LeafFormat::Tables
+                      ? group_corners_box(d, d.ranges[r].first_block, d.ranges[r].block_count, box)
+                      : block_corners_box(d, d.ranges[r].first_block, d.ranges[r].block_count, box);
       } else {
-        tris += block_corners_box(d, n.child[k], (n.count[k] + 3) / 4, box);
+        tris += d.format == LeafFormat::Tables ? group_corners_box(d, n.child[k], 0, box)
+                                               : block_corners_box(d, n.child[k], (n.count[k] + 3) / 4, box);
       }
       ++slots;
       if (!widened_ok(n.child_box(k), box)) ++loose;
@@ -337,11 +356,15 @@ std::size_t slot_boxes_are_tight(const TraceData& d, std::size_t& loose, std::si
 TEST(WideBvh8, ScenesKeepTheirEightWideTreesValid) {
   const Mesh m = test::load_mesh("bunny00.off");
   const Clustering runs = ptc::morton_runs(m, 24);
-  std::vector<SceneConfig> configs(3, test::two_level_defaults());
+  std::vector<SceneConfig> configs(5, test::two_level_defaults());
+  configs[0].leaf_format = configs[2].leaf_format = LeafFormatChoice::Blocks;
   configs[1].cluster_leaf = ClusterLeaf::BlockTree;
   configs[2].group_trees = GroupTrees::Rebuild;
+  configs[3].leaf_format = configs[4].leaf_format = LeafFormatChoice::Tables;
+  configs[4].group_trees = GroupTrees::Rebuild;
   for (std::size_t c = 0; c < configs.size(); ++c) {
     ClusterScene cs(m, view_of(runs), configs[c]);
+    ASSERT_EQ(cs.data().format, c >= 3 ? LeafFormat::Tables : LeafFormat::Blocks) << "config " << c;
     const bool exact = configs[c].cluster_leaf == ClusterLeaf::Linear;
     for (double amount : {0.0, 0.05, 0.2}) {
       cs.update(test::deformed(m, amount).positions());
