@@ -53,6 +53,7 @@ void validate_table_leaf(const TraceData& d, const std::vector<LeafRange>& leaf_
         }
         if (tri_seen[id]++) fail("triangle " + std::to_string(id) + " appears twice");
         const std::uint8_t pair = t.pair[i / 8];
+        if (i == 0 && pair != 0) fail(gw + ": test 0 not on chunks 0 and 1 (pair code " + std::to_string(pair) + ")");
         for (int c = 0; c < 3; ++c) {
           const std::uint32_t v = t.corner[c][i];
           if (v >= kTableSlots || !(t.slot_mask >> v & 1)) {

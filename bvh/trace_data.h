@@ -48,7 +48,9 @@ inline constexpr int kTableTests = kTableSlots / 8;
 /// come in four chunks of eight; the corners of each test of eight triangles (triangles
 /// 8j .. 8j + 7) lie in one even and one odd chunk, `pair[j]`, so that the AVX-512VL kernel
 /// permutes two 256-bit pieces of a row (the slot's bit 3 picks the piece: even chunk or odd)
-/// instead of the whole 512-bit row. A group of at most 16 vertices uses slots 0 .. vertices - 1;
+/// instead of the whole 512-bit row. Test 0 always reads chunks 0 and 1 (`pair[0]` is 0, which
+/// loses nothing: the chunks' labels are symmetric), so a kernel starts its loads without
+/// reading the pair codes. A group of at most 16 vertices uses slots 0 .. vertices - 1;
 /// in a larger one each chunk's slots in use come first in the chunk. Unused slots hold NaN;
 /// triangles at or beyond `count` point at an unused slot when there is one, else at slot 0
 /// (kernels mask them by `count`).

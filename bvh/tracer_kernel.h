@@ -369,6 +369,31 @@ inline void expand_group(const TableGroup& g, TriBlock* out) {
       for (int a = 0; a < 3; ++a) out[i / 4].v[c][a][i % 4] = i < n ? g.v[a][g.corner[c][i]] : nan;
 }
 
+#if defined(PTC_TRACE_EVEX) && !defined(PTC_TRACE_AVX512)
+// intersect_group's test of the eight triangles i .. i + 7 (AVX-512VL): the chunks at slots e
+// (even) and o (odd) of the rows tx, ty, tz, each corner row by a 256-bit permute.
+template <bool AnyHit>
+[[gnu::always_inline]] inline bool group_test8(const TableGroup& g, const float* tx, const float* ty, const float* tz,
+                                               int i, int e, int o, int n, const std::uint32_t* ids, const RayState& r,
+                                               float& tmax, Result& res) {
+  const __m256 xe = _mm256_sub_ps(_mm256_load_ps(tx + e), r.okx8), xo = _mm256_sub_ps(_mm256_load_ps(tx + o), r.okx8);
+  const __m256 ye = _mm256_sub_ps(_mm256_load_ps(ty + e), r.oky8), yo = _mm256_sub_ps(_mm256_load_ps(ty + o), r.oky8);
+  const __m256 ze = _mm256_sub_ps(_mm256_load_ps(tz + e), r.okz8), zo = _mm256_sub_ps(_mm256_load_ps(tz + o), r.okz8);
+  // The slots (bit 3 picks the odd chunk; the higher bits are not read). (No lambdas: they would
+  // not carry the variant's target, and returned vectors change the ABI.)
+  const __m256i s0 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[0] + i)));
+  const __m256i s1 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[1] + i)));
+  const __m256i s2 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[2] + i)));
+  const int live = n - i >= 8 ? 0xff : (1 << (n - i)) - 1;
+  const Pairs8 h = watertight8(
+      _mm256_permutex2var_ps(xe, s0, xo), _mm256_permutex2var_ps(ye, s0, yo), _mm256_permutex2var_ps(ze, s0, zo),
+      _mm256_permutex2var_ps(xe, s1, xo), _mm256_permutex2var_ps(ye, s1, yo), _mm256_permutex2var_ps(ze, s1, zo),
+      _mm256_permutex2var_ps(xe, s2, xo), _mm256_permutex2var_ps(ye, s2, yo), _mm256_permutex2var_ps(ze, s2, zo),
+      r.sx8, r.sy8, r.sz8, live);
+  return take_pairs8<AnyHit>(h, live, ids + i, r, tmax, res);
+}
+#endif
+
 #if defined(PTC_TRACE_EVEX)
 // One table group against the ray: the rows relative to the ray origin (the single-ray test's
 // first subtraction, done per vertex, AVX-512VL: per chunk and test, instead of once per corner:
@@ -411,24 +436,15 @@ template <bool AnyHit>
     }
   }
 #else
-  for (int i = 0; i < n; i += 8) {
+  // Test 0 reads chunks 0 and 1 in every group (TableGroup::pair[0] is 0): its loads do not wait
+  // for the group's pair codes, which share a cache line with its count.
+  if (group_test8<AnyHit>(g, tx, ty, tz, 0, 0, 8, n, ids, r, tmax, res)) {
+    if constexpr (AnyHit) return true;
+    found = true;
+  }
+  for (int i = 8; i < n; i += 8) {
     const std::uint8_t pair = g.pair[i / 8];
-    const int e = table_even_chunk(pair), o = table_odd_chunk(pair);
-    const __m256 xe = _mm256_sub_ps(_mm256_load_ps(tx + e), r.okx8), xo = _mm256_sub_ps(_mm256_load_ps(tx + o), r.okx8);
-    const __m256 ye = _mm256_sub_ps(_mm256_load_ps(ty + e), r.oky8), yo = _mm256_sub_ps(_mm256_load_ps(ty + o), r.oky8);
-    const __m256 ze = _mm256_sub_ps(_mm256_load_ps(tz + e), r.okz8), zo = _mm256_sub_ps(_mm256_load_ps(tz + o), r.okz8);
-    // The slots (bit 3 picks the odd chunk; the higher bits are not read). (No lambdas: they would
-    // not carry the variant's target, and returned vectors change the ABI.)
-    const __m256i s0 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[0] + i)));
-    const __m256i s1 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[1] + i)));
-    const __m256i s2 = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(g.corner[2] + i)));
-    const int live = n - i >= 8 ? 0xff : (1 << (n - i)) - 1;
-    const Pairs8 h = watertight8(
-        _mm256_permutex2var_ps(xe, s0, xo), _mm256_permutex2var_ps(ye, s0, yo), _mm256_permutex2var_ps(ze, s0, zo),
-        _mm256_permutex2var_ps(xe, s1, xo), _mm256_permutex2var_ps(ye, s1, yo), _mm256_permutex2var_ps(ze, s1, zo),
-        _mm256_permutex2var_ps(xe, s2, xo), _mm256_permutex2var_ps(ye, s2, yo), _mm256_permutex2var_ps(ze, s2, zo),
-        r.sx8, r.sy8, r.sz8, live);
-    if (take_pairs8<AnyHit>(h, live, ids + i, r, tmax, res)) {
+    if (group_test8<AnyHit>(g, tx, ty, tz, i, table_even_chunk(pair), table_odd_chunk(pair), n, ids, r, tmax, res)) {
       if constexpr (AnyHit) return true;
       found = true;
     }

@@ -576,7 +576,8 @@ TEST(ClusterScene, AutoLeafFormatFollowsTheEstimatedBytes) {
   ClusterConfig cc;
   cc.method = ClusterMethod::Growth;
   cc.objective = ObjectiveKind::Acc;
-  cc.max_count = cc.max_size = 32;
+  cc.max_count = 32;
+  cc.max_size = 32;
   struct Case {
     const Mesh* mesh;
     Clustering cl;
@@ -585,7 +586,8 @@ TEST(ClusterScene, AutoLeafFormatFollowsTheEstimatedBytes) {
   };
   std::vector<Case> cases;
   cases.push_back({&m, cluster_mesh(m, cc), true, "growth 32"});
-  cc.max_count = cc.max_size = 50;
+  cc.max_count = 50;
+  cc.max_size = 50;
   cases.push_back({&m, cluster_mesh(m, cc), true, "growth 50"});
   cases.push_back({&m, ptc::morton_runs(m, 4), false, "runs of 4"});
   cases.push_back({&soup, ptc::morton_runs(soup, 32), false, "soup, runs of 32"});

@@ -158,6 +158,23 @@ TEST(WideBvh, ValidatorsRejectCorruption) {
     corrupt([&](TraceData& x) { x.tables[g].slot_mask |= 1u << unused; }, "a slot marked in use beyond the vertex count");
     corrupt([&](TraceData& x) { x.tables[g].pair[0] ^= 3; }, "the first test's corners outside its chunks");
     corrupt([&](TraceData& x) { x.tables[g].pair[0] = 4; }, "a chunk pair code beyond 3");
+    {  // A group of at most 16 vertices moved from chunks 0 and 1 to chunks 2 and 3, its tests'
+       // pairs with it: consistent but for test 0, which the kernels read from chunks 0 and 1.
+      std::size_t h = 0;
+      while (h < good.tables.size() && good.tables[h].vertices > 16) ++h;
+      ASSERT_LT(h, good.tables.size());
+      TraceData d2 = good;
+      TableGroup& t = d2.tables[h];
+      for (int a = 0; a < 3; ++a)
+        for (int q = 0; q < 16; ++q) t.v[a][q + 16] = t.v[a][q], t.v[a][q] = std::numeric_limits<float>::quiet_NaN();
+      for (int c = 0; c < 3; ++c)
+        for (int j = 0; j < kTableSlots; ++j) t.corner[c][j] = static_cast<std::uint8_t>(t.corner[c][j] + 16);
+      t.slot_mask <<= 16;
+      for (std::uint8_t& q : t.pair) q = 3;
+      const std::string issues = test::joined(validate(d2, m.triangle_count()));
+      EXPECT_NE(issues.find("test 0 not on chunks 0 and 1"), std::string::npos) << issues;
+      EXPECT_EQ(issues.find("outside"), std::string::npos) << issues;
+    }
     corrupt([&](TraceData& x) { x.triangle_ids.pop_back(); }, "ids not 32 a group");
     corrupt([&](TraceData& x) { x.blocks.resize(1); }, "blocks beside the tables");
   }
