@@ -23,6 +23,7 @@ struct Lane {
   std::uint32_t id;
   std::uint32_t v[3];
   std::uint32_t order;  // the lane's place in its cluster
+  std::uint32_t lv[3];  // v as the cluster's local vertex indices (cluster_lanes)
 };
 
 struct Group {
@@ -30,17 +31,21 @@ struct Group {
   std::uint32_t ids[kTableSlots];
   std::uint8_t corner[3][kTableSlots];
   int nslots = 0, ntris = 0;
+  std::uint32_t local[kTableSlots];  // the slots' vertices as local indices
+  // Per local vertex of the cluster: its slot in this group, or -1 (all -1 between groups: the
+  // group's membership test without a search of its slots).
+  std::int8_t* where = nullptr;
 
-  int slot_of(std::uint32_t v) const {
-    for (int s = 0; s < nslots; ++s)
-      if (slots[s] == v) return s;
-    return -1;
+  // Empties the group (and its entries in `where`).
+  void reset() {
+    for (int s = 0; s < nslots; ++s) where[local[s]] = -1;
+    nslots = ntris = 0;
   }
   // Adds triangle t (its vertices must fit).
   void add(const Lane& t) {
     for (int k = 0; k < 3; ++k) {
-      int s = slot_of(t.v[k]);
-      if (s < 0) s = nslots, slots[nslots++] = t.v[k];
+      int s = where[t.lv[k]];
+      if (s < 0) s = nslots, slots[nslots] = t.v[k], local[nslots] = t.lv[k], where[t.lv[k]] = static_cast<std::int8_t>(s), ++nslots;
       corner[k][ntris] = static_cast<std::uint8_t>(s);
     }
     ids[ntris++] = t.id;
@@ -49,8 +54,8 @@ struct Group {
   int added_by(const Lane& t) const {
     int added = 0;
     for (int k = 0; k < 3; ++k) {
-      bool seen = slot_of(t.v[k]) >= 0;
-      for (int j = 0; j < k && !seen; ++j) seen = t.v[j] == t.v[k];  // a corner repeated in the triangle
+      bool seen = where[t.lv[k]] >= 0;
+      for (int j = 0; j < k && !seen; ++j) seen = t.lv[j] == t.lv[k];  // a corner repeated in the triangle
       added += seen ? 0 : 1;
     }
     return added;
@@ -147,9 +152,11 @@ bool chunk_fit(const Group& g, ChunkFit& f) {
 
 // One cluster's groups, each passed to emit(const Group&, const ChunkFit&, bool last) in order.
 // `rest` is reordered.
+// `where`: one entry per local vertex of the cluster, all -1 (and so again on return).
 template <class Emit>
-void group_cluster(std::vector<Lane>& rest, Emit&& emit) {
+void group_cluster(std::vector<Lane>& rest, std::int8_t* where, Emit&& emit) {
   Group g;
+  g.where = where;
   ChunkFit f;
   if (rest.size() <= std::size_t{kTableSlots}) {  // the whole cluster in one group, if its vertices fit
     bool fits = true;
@@ -162,13 +169,15 @@ void group_cluster(std::vector<Lane>& rest, Emit&& emit) {
     }
     if (fits && chunk_fit(g, f)) {
       emit(g, f, true);
+      g.reset();
       return;
     }
+    g.reset();
   }
   std::size_t placed = 0;  // rest[0, placed) are placed; the others keep their order
   while (placed < rest.size()) {
     const std::size_t start = placed;  // the group: rest[start, placed), in the order taken
-    g = Group{};
+    g.reset();
     while (g.ntris < kTableSlots && placed < rest.size()) {
       std::size_t best = rest.size();
       int best_new = 4;
@@ -192,23 +201,36 @@ void group_cluster(std::vector<Lane>& rest, Emit&& emit) {
                                          [](const Lane& a, const Lane& b) { return a.order < b.order; });
       std::rotate(rest.begin() + static_cast<std::ptrdiff_t>(placed), rest.begin() + static_cast<std::ptrdiff_t>(placed) + 1,
                   back);
-      g = Group{};
+      g.reset();
       for (std::size_t i = start; i < placed; ++i) g.add(rest[i]);
     }
     emit(g, f, placed == rest.size());
   }
+  g.reset();
 }
 
+// A cluster's triangles (its blocks' used lanes) in lane order, with local vertex indices (the
+// rank of each corner among the cluster's distinct corners, from `verts`), and `where` sized to
+// them, all -1.
 void cluster_lanes(const LeafRange& r, std::span<const std::uint32_t> lane_ids, std::span<const std::uint32_t> corners,
-                   std::vector<Lane>& out) {
+                   std::vector<Lane>& out, std::vector<std::uint32_t>& verts, std::vector<std::int8_t>& where) {
   out.clear();
+  verts.clear();
   for (std::size_t b = r.first_block; b < std::size_t{r.first_block} + r.block_count; ++b)
     for (int l = 0; l < 4; ++l) {
       const std::uint32_t id = lane_ids[4 * b + l];
       if (id == kNoTriangle) continue;
-      out.push_back({id, {corners[12 * b + l], corners[12 * b + 4 + l], corners[12 * b + 8 + l]},
-                     static_cast<std::uint32_t>(out.size())});
+      const Lane t{id, {corners[12 * b + l], corners[12 * b + 4 + l], corners[12 * b + 8 + l]},
+                   static_cast<std::uint32_t>(out.size()), {}};
+      out.push_back(t);
+      verts.insert(verts.end(), std::begin(t.v), std::end(t.v));
     }
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  for (Lane& t : out)
+    for (int k = 0; k < 3; ++k)
+      t.lv[k] = static_cast<std::uint32_t>(std::lower_bound(verts.begin(), verts.end(), t.v[k]) - verts.begin());
+  where.assign(verts.size(), -1);
 }
 
 }  // namespace
@@ -225,17 +247,29 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
   const std::size_t C = ranges.size();
   TableLayout out;
   out.sentinel = sentinel;
-  // Two passes over chunks of clusters: the groups per cluster, then (after their prefix sum)
-  // the groups written in place. The grouping is a function of the cluster alone.
+  // One pass over chunks of clusters groups them (the grouping is a function of the cluster
+  // alone) and keeps each chunk's groups; after the prefix sum of their counts a second pass
+  // writes them in place. (Grouping twice, once to count and once to write, took twice as long:
+  // the grouping is most of the set-up of a scene with tables.)
+  struct Made {
+    Group g;
+    ChunkFit f;
+    bool last;
+  };
+  const std::size_t chunks = (C + kClustersPerTask - 1) / kClustersPerTask;
+  std::vector<std::vector<Made>> made(chunks);
   out.group_offsets.assign(C + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<Lane> lanes;
-    for (std::size_t c = r.begin(); c < r.end(); ++c) {
-      cluster_lanes(ranges[c], lane_ids, corners, lanes);
-      std::uint32_t n = 0;
-      group_cluster(lanes, [&](const Group&, const ChunkFit&, bool) { ++n; });
-      out.group_offsets[c + 1] = n;
-    }
+    std::vector<std::uint32_t> verts;
+    std::vector<std::int8_t> where;
+    for (std::size_t k = r.begin(); k < r.end(); ++k)
+      for (std::size_t c = k * kClustersPerTask; c < std::min(C, (k + 1) * kClustersPerTask); ++c) {
+        cluster_lanes(ranges[c], lane_ids, corners, lanes, verts, where);
+        const std::size_t before = made[k].size();
+        group_cluster(lanes, where.data(), [&](const Group& g, const ChunkFit& f, bool last) { made[k].push_back({g, f, last}); });
+        out.group_offsets[c + 1] = static_cast<std::uint32_t>(made[k].size() - before);
+      }
   });
   for (std::size_t c = 0; c < C; ++c) out.group_offsets[c + 1] += out.group_offsets[c];
   const std::size_t G = out.group_offsets[C];
@@ -243,12 +277,12 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
   ids.resize(G * kTableSlots);
   out.slot_vertices.resize(G * kTableSlots);
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<Lane> lanes;
-    for (std::size_t c = r.begin(); c < r.end(); ++c) {
-      cluster_lanes(ranges[c], lane_ids, corners, lanes);
-      std::size_t gi = out.group_offsets[c];
-      group_cluster(lanes, [&](const Group& g, const ChunkFit& f, bool last) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      std::size_t gi = out.group_offsets[k * kClustersPerTask];
+      for (const Made& m : made[k]) {
+        const Group& g = m.g;
+        const ChunkFit& f = m.f;
         TableGroup& t = groups[gi];
         std::uint32_t* sv = out.slot_vertices.data() + gi * kTableSlots;
         std::uint32_t mask = 0;
@@ -259,16 +293,17 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
         for (int s = 0; s < kTableSlots; ++s) {
           for (int a = 0; a < 3; ++a) t.v[a][s] = nan;
           ids[gi * kTableSlots + s] = s < g.ntris ? g.ids[s] : kNoTriangle;
-          for (int k = 0; k < 3; ++k) t.corner[k][s] = s < g.ntris ? f.slot[g.corner[k][s]] : pad;
+          for (int c = 0; c < 3; ++c) t.corner[c][s] = s < g.ntris ? f.slot[g.corner[c][s]] : pad;
         }
         t.count = static_cast<std::uint32_t>(g.ntris);
-        t.last = last ? 1 : 0;
+        t.last = m.last ? 1 : 0;
         t.vertices = static_cast<std::uint32_t>(g.nslots);
         t.slot_mask = mask;
         std::copy(std::begin(f.pair), std::end(f.pair), t.pair);
         std::fill(std::begin(t.unused), std::end(t.unused), 0u);
         ++gi;
-      });
+      }
+      std::vector<Made>().swap(made[k]);  // (freed as it goes)
     }
   });
   return out;
