@@ -57,7 +57,9 @@ int main(int argc, char** argv) {
     const Clustering c = cluster_mesh(mesh, cc);
     const double cluster_ms = sw.lap_ms();
     const bvh::TriangleScene ts(mesh);
-    const bvh::ClusterScene cs(mesh, bvh::view_of(c));
+    bvh::SceneConfig csc = bvh::cluster_scene_defaults();
+    csc.leaf_format = bvh::LeafFormatChoice::Blocks;  // (as the metrics' own trees: only the tree is read)
+    const bvh::ClusterScene cs(mesh, bvh::view_of(c), csc);
     const double scenes_ms = sw.lap_ms();
     std::printf("%s, %d levels: %zu triangles, %zu clusters (clustered in %.0f ms, BVHs %.0f ms), one thread\n",
                 path.c_str(), levels, mesh.triangle_count(), c.cluster_count(), cluster_ms, scenes_ms);

@@ -274,7 +274,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   }
   rest = {};
   if (!cfg_.built_once) set_vertex_order(mesh, lane_ids);
-  if (use_tables()) {
+  if (use_tables(cv.vertex_offsets.empty())) {
     layout_tables(mesh, lane_ids);  // (the clusters' ranges become ranges of groups)
   } else {
     data.blocks.resize(lane_ids.size() / 4);
@@ -295,8 +295,20 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
 // The leaf format the scene uses (SceneConfig::leaf_format; set-up, while offsets_ and
 // vertex_offsets_ hold the clusters' triangles and vertices, whose estimated bytes it keeps):
 // Auto takes the tables for linear leaves of a scene that is updated when tables_suit them.
-bool ClusterScene::use_tables() {
-  leaf_estimate_ = estimate_leaf_bytes(offsets_, vertex_offsets_);
+// corner_lists: the view had no vertex lists, so each cluster's list is its triangles' corners
+// with repeats, and its distinct ones are counted here.
+bool ClusterScene::use_tables(bool corner_lists) {
+  if (corner_lists) {
+    std::vector<std::uint32_t> distinct(vertex_offsets_.size(), 0), tmp;
+    for (std::size_t c = 0; c + 1 < vertex_offsets_.size(); ++c) {
+      tmp.assign(vertices_.begin() + vertex_offsets_[c], vertices_.begin() + vertex_offsets_[c + 1]);
+      std::sort(tmp.begin(), tmp.end());
+      distinct[c + 1] = distinct[c] + static_cast<std::uint32_t>(std::unique(tmp.begin(), tmp.end()) - tmp.begin());
+    }
+    leaf_estimate_ = estimate_leaf_bytes(offsets_, distinct);
+  } else {
+    leaf_estimate_ = estimate_leaf_bytes(offsets_, vertex_offsets_);
+  }
   switch (cfg_.leaf_format) {
     case LeafFormatChoice::Tables: return true;
     case LeafFormatChoice::Blocks: return false;

@@ -121,7 +121,7 @@ class ClusterScene {
   /// boxes_from_fill: the cluster boxes are made by the fill of the blocks (update() on one
   /// thread), which then runs before the tree instead of beside it.
   void build_frame(bool boxes_from_fill = false);
-  [[nodiscard]] bool use_tables();
+  [[nodiscard]] bool use_tables(bool corner_lists);
   [[nodiscard]] bool overlap_possible() const;
   [[nodiscard]] bool lists_are_corners(std::size_t vertex_count, std::span<const std::uint32_t> lane_ids) const;
   [[nodiscard]] std::span<const Tri> triangles() const {

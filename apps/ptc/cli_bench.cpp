@@ -112,7 +112,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "each, 36 bytes a triangle), tables (per-group vertex tables and corner slots, 512 bytes a "
                 "group of up to 32 triangles on up to 32 vertices; the same hits; for meshes that share "
                 "vertices: a triangle soup gets groups of five triangles) or auto (tables when their estimated "
-                "bytes are at most 0.85 of the blocks' and the scene is animated, else blocks; the summary's "
+                "bytes are at most 0.85 of the blocks', else blocks; the summary's "
                 "\"cluster leaves\" line and the manifest's results.cluster_leaves.format say which)")
       ->check(enum_validator("leaf format", bvh::parse_leaf_format_choice))
       ->capture_default_str();

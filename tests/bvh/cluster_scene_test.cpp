@@ -332,6 +332,7 @@ TEST(ClusterScene, ASceneBuiltOnceIsTheFirstFrameOfAnAnimatedOne) {
     cfg.cluster_leaf = leaf;
     cfg.cluster_group_size = group;
     cfg.group_trees = trees;
+    cfg.leaf_format = LeafFormatChoice::Blocks;  // (a scene built once keeps blocks: its animated twin too)
     ClusterView v = view_of(*k.cl);
     if (!k.vertex_lists) v.vertices = {}, v.vertex_offsets = {};
     const std::string what = std::string(k.name) + " " + to_string(leaf) + " groups " + std::to_string(group) + " " +
@@ -550,18 +551,14 @@ TEST(ClusterScene, TheTablesFormatTracesTheBlocksHits) {
   EXPECT_THROW(ClusterScene(m, view_of(runs), bad), std::invalid_argument);
 }
 
-// GroupTrees::Refit builds each group's tree once, over the rest-pose cluster boxes, with the
-// same builder settings the two-level rebuild uses inside a group, and builds the top over the
-// same group records: at the rest pose its tree over the clusters (cluster_tree(): the top with
-// the groups' trees spliced in) must be the rebuilt one, node for node and leaf for leaf, with
-// the same cost.
 // LeafFormatChoice::Auto against bytes counted here from each clustering (per cluster its
 // triangles and its triangles' distinct corners): the blocks' count must be the bytes of the
 // blocks a scene lays out, the tables' count at most those of its table groups, and Auto must
 // take the tables exactly when they count at most kAutoTablesMaxShare of the blocks, with the
 // same data as the explicit format. The cases fall on both sides: connected clusters of a mesh
 // (tables), runs of four triangles and a triangle soup (blocks); a scene built once and block
-// trees keep blocks whatever the bytes.
+// trees keep blocks whatever the bytes. The scene's own estimate must be these counts, also from
+// a view without vertex lists (whose corners it then counts once each).
 TEST(ClusterScene, AutoLeafFormatFollowsTheEstimatedBytes) {
   const Mesh m = test::load_mesh("bunny00.off");
   std::vector<Tri> st;
@@ -611,6 +608,16 @@ TEST(ClusterScene, AutoLeafFormatFollowsTheEstimatedBytes) {
     cfg.leaf_format = LeafFormatChoice::Auto;
     const ClusterScene a(*k.mesh, view_of(k.cl), cfg);
     EXPECT_EQ(blocks, b.data().blocks.size() * sizeof(TriBlock)) << k.what;
+    EXPECT_EQ(a.leaf_bytes_estimate().blocks, blocks) << k.what;
+    EXPECT_EQ(a.leaf_bytes_estimate().tables, tables) << k.what;
+    {  // a view without vertex lists (the corners serve): the same estimate and choice
+      ClusterView bare = view_of(k.cl);
+      bare.vertices = {}, bare.vertex_offsets = {};
+      const ClusterScene nl(*k.mesh, bare, cfg);
+      EXPECT_EQ(nl.leaf_bytes_estimate().blocks, blocks) << k.what;
+      EXPECT_EQ(nl.leaf_bytes_estimate().tables, tables) << k.what;
+      EXPECT_EQ(nl.data().format, a.data().format) << k.what;
+    }
     EXPECT_LE(tables, t.data().tables.size() * sizeof(TableGroup)) << k.what;
     const bool want = static_cast<double>(tables) <= kAutoTablesMaxShare * static_cast<double>(blocks);
     EXPECT_EQ(want, k.tables) << k.what << ": " << tables << " against " << blocks << " bytes";
@@ -626,6 +633,11 @@ TEST(ClusterScene, AutoLeafFormatFollowsTheEstimatedBytes) {
   }
 }
 
+// GroupTrees::Refit builds each group's tree once, over the rest-pose cluster boxes, with the
+// same builder settings the two-level rebuild uses inside a group, and builds the top over the
+// same group records: at the rest pose its tree over the clusters (cluster_tree(): the top with
+// the groups' trees spliced in) must be the rebuilt one, node for node and leaf for leaf, with
+// the same cost.
 TEST(ClusterScene, FixedGroupTreesAtTheRestPoseAreTheRebuiltTree) {
   const Mesh m = test::load_mesh("armadillo.off");
   for (std::uint32_t run : {9u, 37u})

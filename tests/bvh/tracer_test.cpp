@@ -80,11 +80,12 @@ AnyScene make_scene(const Mesh& m, Kind k, std::optional<Vec3> origin = std::nul
           k == Kind::Clusters80 || k == Kind::Clusters80Linear || k == Kind::Clusters80Sweep || k == Kind::Clusters80Tables ? 1 : 4;
       if (k == Kind::Clusters80Sweep) cfg.builder = SahBuilder::Sweep;
       if (k == Kind::Clusters80Linear || seven || tables) cfg.cluster_leaf = ClusterLeaf::Linear;
-      if (tables) cfg.leaf_format = LeafFormatChoice::Tables;
+      // (explicit: auto would take the tables for the runs of 80 too)
+      cfg.leaf_format = tables ? LeafFormatChoice::Tables : LeafFormatChoice::Blocks;
       if (seven) cfg.build.cost.traversal = 50.0;  // leaves of several clusters (indirect)
       s.scene.emplace<2>(m, view_of(*s.runs), cfg);
+      EXPECT_EQ(s.data().format, tables ? LeafFormat::Tables : LeafFormat::Blocks);
       if (tables) {
-        EXPECT_EQ(s.data().format, LeafFormat::Tables);
         EXPECT_TRUE(s.data().blocks.empty());
         EXPECT_FALSE(s.data().tables.empty());
       }
