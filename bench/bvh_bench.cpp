@@ -226,6 +226,11 @@ Options parse_options(int argc, char** argv) {
   return o;
 }
 
+// The scene setting that asks for format f (never auto: each configuration is one format).
+bvh::LeafFormatChoice explicit_format(bvh::LeafFormat f) {
+  return f == bvh::LeafFormat::Tables ? bvh::LeafFormatChoice::Tables : bvh::LeafFormatChoice::Blocks;
+}
+
 // Every configuration through loop::make_accel, with the bench's own builder settings and clock.
 std::unique_ptr<loop::Accel> make_config(AccelKind kind, const Mesh& mesh, loop::AccelSetup s, const Options& o) {
   s.clock = o.clock;
@@ -547,9 +552,7 @@ int main(int argc, char** argv) {
     if (clusterings.empty() || o.leaves.empty() || o.formats.empty()) usage("--update-loop needs a clustering");
     setup.clusters = &clusterings.front().second;
     setup.cluster_leaf = o.leaves.front();
-    setup.leaf_format = o.leaves.front() == ClusterLeaf::Linear && o.formats.front() == bvh::LeafFormat::Tables
-                            ? bvh::LeafFormatChoice::Tables
-                            : bvh::LeafFormatChoice::Blocks;
+    setup.leaf_format = explicit_format(o.leaves.front() == ClusterLeaf::Linear ? o.formats.front() : bvh::LeafFormat::Blocks);
     return run_update_loop(*make_config(AccelKind::OursClusters, mesh, setup, o), scene, o);
   }
 
@@ -565,7 +568,7 @@ int main(int argc, char** argv) {
           if (mode != ClusterLeaf::Linear && f != bvh::LeafFormat::Blocks) continue;  // (tables: linear leaves only)
           setup.clusters = &cl;
           setup.cluster_leaf = mode;
-          setup.leaf_format = f == bvh::LeafFormat::Tables ? bvh::LeafFormatChoice::Tables : bvh::LeafFormatChoice::Blocks;
+          setup.leaf_format = explicit_format(f);
           const bool tables = f == bvh::LeafFormat::Tables;
           configs.push_back({"ours_" + cname + "_" + (tables ? std::string("tables") : to_string(mode)),
                              AccelKind::OursClusters, make_config(AccelKind::OursClusters, mesh, setup, o)});

@@ -114,16 +114,7 @@ AccuracyRun run_accuracy(Scene& scene, const ExperimentParams& p, const study::S
   if (p.given) method = *p.given;
   else method = cluster_mesh(rest, mc, cancel);
 
-  loop::AccelSetup as;
-  as.origin = rays.origin;
-  as.cluster_leaf = setup.cluster_leaf;
-  // Blocks in every configuration: the studies compare clusterings and sizes, and auto would
-  // switch to the vertex tables part of the way along a sweep (docs/experiments.md).
-  as.leaf_format = bvh::LeafFormatChoice::Blocks;
-  as.cluster_group_size = setup.cluster_group_size;
-  as.min_cluster_groups = setup.min_cluster_groups;
-  as.group_trees = setup.group_trees;
-  as.threads = setup.threads;
+  loop::AccelSetup as = study::accel_setup(setup, rays.origin);
   as.clusters = &method;
 
   // Made once for the items that need them (they are updated per frame).

@@ -710,16 +710,7 @@ ExperimentRun run_experiment(Scene& scene, const ExperimentParams& p, const stud
 
   const study::StudyRays rays = study::study_rays(scene.rest(), setup);
   run.rays = rays.primary.size();
-  loop::AccelSetup as;
-  as.origin = rays.origin;
-  as.cluster_leaf = setup.cluster_leaf;
-  // Blocks in every configuration: the studies compare clusterings and sizes, and auto would
-  // switch to the vertex tables part of the way along a sweep (docs/experiments.md).
-  as.leaf_format = bvh::LeafFormatChoice::Blocks;
-  as.cluster_group_size = setup.cluster_group_size;
-  as.min_cluster_groups = setup.min_cluster_groups;
-  as.group_trees = setup.group_trees;
-  as.threads = setup.threads;
+  const loop::AccelSetup as = study::accel_setup(setup, rays.origin);
 
   // The shard's configurations.
   std::vector<study::ConfigSpec> specs;

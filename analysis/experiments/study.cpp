@@ -63,6 +63,18 @@ Prepared prepare(const Mesh& rest, const ConfigSpec& spec, const StudySetup& set
   return p;
 }
 
+loop::AccelSetup accel_setup(const StudySetup& setup, const Vec3& origin) {
+  loop::AccelSetup as;
+  as.origin = origin;
+  as.cluster_leaf = setup.cluster_leaf;
+  as.leaf_format = bvh::LeafFormatChoice::Blocks;
+  as.cluster_group_size = setup.cluster_group_size;
+  as.min_cluster_groups = setup.min_cluster_groups;
+  as.group_trees = setup.group_trees;
+  as.threads = setup.threads;
+  return as;
+}
+
 StudyRays study_rays(const Mesh& rest, const StudySetup& setup) {
   StudyRays r;
   const Box3 b = rest.bounds();

@@ -118,6 +118,12 @@ struct StudyRays {
 };
 [[nodiscard]] StudyRays study_rays(const Mesh& rest, const StudySetup& setup);
 
+/// What every structure of a study is built with: the trace frame `origin` (StudyRays::origin)
+/// and the setup's cluster BVH settings, its linear leaves in blocks (bvh::LeafFormatChoice::
+/// Blocks, the paper's layout: the studies compare clusterings and sizes, and auto would switch
+/// to the vertex tables part of the way along a sweep; docs/experiments.md). No clustering.
+[[nodiscard]] loop::AccelSetup accel_setup(const StudySetup& setup, const Vec3& origin);
+
 /// Totals of the passes of one configuration and frame.
 struct Passes {
   PassStats primary, shadow, ao;

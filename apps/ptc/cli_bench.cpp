@@ -107,6 +107,7 @@ void register_bench(CLI::App& app, Context& ctx) {
   c->add_option("--cluster-leaf", a->cluster_leaf, "cluster leaves: linear (the paper's, default) or block-tree")
       ->check(enum_validator("cluster leaf", bvh::parse_cluster_leaf))
       ->capture_default_str();
+  static_assert(bvh::kAutoTablesMaxShare == 0.85, "the --leaf-format help quotes the share");
   c->add_option("--leaf-format", a->leaf_format,
                 "how the cluster BVH's linear leaves hold their triangles: blocks (four triangles' corners "
                 "each, 36 bytes a triangle), tables (per-group vertex tables and corner slots, 512 bytes a "
