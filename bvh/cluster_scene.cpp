@@ -571,8 +571,8 @@ struct Refit8Args {
     _MM_TRANSPOSE4_PS(hi[0], hi[1], hi[2], hi[3]);
     _MM_TRANSPOSE4_PS(hi[4], hi[5], hi[6], hi[7]);
     for (int a = 0; a < 3; ++a) {
-      _mm_store_ps(&n.bounds[2 * a][0], lo[a]), _mm_store_ps(&n.bounds[2 * a][4], lo[4 + a]);
-      _mm_store_ps(&n.bounds[2 * a + 1][0], hi[a]), _mm_store_ps(&n.bounds[2 * a + 1][4], hi[4 + a]);
+      _mm_stream_ps(&n.bounds[2 * a][0], lo[a]), _mm_stream_ps(&n.bounds[2 * a][4], lo[4 + a]);
+      _mm_stream_ps(&n.bounds[2 * a + 1][0], hi[a]), _mm_stream_ps(&n.bounds[2 * a + 1][4], hi[4 + a]);
     }
     // The node's union as a Box3f record: (lo x y z, hi x), then (lo z, hi x y z) over it.
     float* bx = x.box8 + 6 * d;
@@ -592,7 +592,11 @@ __attribute__((target("avx2"))) void refit8_avx2(const Refit8Args& x, std::size_
 // group tree's links to block trees read the clusters' boxes, not the block trees'): each slot's
 // box from its record (src8_), the node's eight boxes transposed into its rows, and its union
 // kept in box8_ for its parent (the group trees' leaves of several clusters read their unions
-// from multi_boxes_, which refit_group_trees makes first).
+// from multi_boxes_, which refit_group_trees makes first). The rows (the node's first three cache
+// lines, written whole) are streamed: the lines, last written a frame ago and evicted since by
+// the fill, are not read for ownership first (twist at one thread, `ptc bench ... --threads 1
+// --packets`, three alternated rounds: sah_build_ms 0.52-0.57 -> 0.46; docs/tracing.md). Fenced
+// at the end, so the walks that follow see them.
 void ClusterScene::refit8(std::size_t begin, std::size_t end) {
   const Refit8Args x{f_.data.wide8.nodes.data(),
                      src8_.data(),
@@ -601,6 +605,7 @@ void ClusterScene::refit8(std::size_t begin, std::size_t end) {
                       multi_boxes_[0].lo.data()},
                      box8_.data()};
   (simd::cpu_has_avx2() && cfg_.build.allow_avx2 ? refit8_avx2 : refit8_sse2)(x, begin, end);
+  _mm_sfence();
 }
 
 // GroupTrees::Refit, per frame: the groups' 8-wide trees refitted from the cluster boxes, then
