@@ -251,6 +251,24 @@ Table bench_table(const PeerBenchResult& r) {
   });
 }
 
+FrameRatioRange whole_frame_ratio_range(const PeerBenchResult& r, std::string_view config, std::string_view peer) {
+  std::map<int, double> ours, theirs;  // frame -> whole frame ms
+  for (const auto& row : r.rows) {
+    if (row.frame < r.median_first_frame) continue;
+    if (row.config == config) ours[row.frame] = row.whole_frame_ms();
+    if (row.config == peer) theirs[row.frame] = row.whole_frame_ms();
+  }
+  FrameRatioRange out;
+  for (const auto& [f, ms] : ours) {
+    const auto it = theirs.find(f);
+    if (it == theirs.end() || !(ms > 0.0)) continue;
+    const double q = it->second / ms;
+    if (out.lowest_frame < 0 || q < out.lowest) out.lowest = q, out.lowest_frame = f;
+    if (!(q <= out.highest)) out.highest = q;  // (NaN at first)
+  }
+  return out;
+}
+
 namespace {
 struct SummaryRow {
   const BenchSummary* s = nullptr;
@@ -262,7 +280,7 @@ Table bench_summary_table(const PeerBenchResult& r) {
   std::vector<SummaryRow> rows;
   for (const auto& s : r.summary) rows.push_back({&s, &r});
   const int frames = r.rows.empty() ? 0 : r.rows.back().frame + 1;
-  return tabulate(Schema{"ptc-bench-summary", 2}, rows, [frames](const SummaryRow& x, Columns& col) {
+  return tabulate(Schema{"ptc-bench-summary", 3}, rows, [frames](const SummaryRow& x, Columns& col) {
     static const BenchSummary none;
     const BenchSummary& s = x.s ? *x.s : none;
     col("config", s.config);
@@ -281,6 +299,13 @@ Table bench_summary_table(const PeerBenchResult& r) {
       const BenchSummary* p = x.r ? find(x.r->summary, to_string(e)) : nullptr;
       col(std::string("whole_frame_speedup_vs_") + std::string(to_string(e)),
           p && s.whole_frame_ms > 0 ? p->whole_frame_ms / s.whole_frame_ms : nan());
+    }
+    for (loop::AccelKind e : kEmbree) {  // the range of the per-frame ratios behind the median
+      const FrameRatioRange q = x.r ? whole_frame_ratio_range(*x.r, s.config, to_string(e)) : FrameRatioRange{};
+      const std::string peer(to_string(e));
+      col("whole_frame_speedup_lowest_vs_" + peer, q.lowest);
+      col("whole_frame_speedup_lowest_frame_vs_" + peer, q.lowest_frame);
+      col("whole_frame_speedup_highest_vs_" + peer, q.highest);
     }
     for (loop::AccelKind e : kEmbree) {
       const BenchSummary* p = x.r ? find(x.r->summary, to_string(e)) : nullptr;
@@ -315,6 +340,22 @@ std::string bench_text(const PeerBenchResult& r) {
     for (loop::AccelKind e : kEmbree) {
       const BenchSummary* p = find(r.summary, to_string(e));
       s += fmt::format(" {:>14.2f}x", p && x.whole_frame_ms > 0 ? p->whole_frame_ms / x.whole_frame_ms : 0.0);
+    }
+    s += "\n";
+  }
+  // The medians hide how the ratio moves over the animation (clusters swell, a scene drapes): the
+  // lowest and highest per-frame ratio, and the lowest's benchmark frame.
+  s += fmt::format("per frame (frames {}..{}): the lowest and highest of those ratios, the lowest's frame after '@'\n",
+                   r.median_first_frame, frames - 1);
+  s += fmt::format("{:<16}", "config");
+  for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>22}", "vs " + std::string(to_string(e)));
+  s += "\n";
+  for (const auto& x : r.summary) {
+    s += fmt::format("{:<16}", x.config);
+    for (loop::AccelKind e : kEmbree) {
+      const FrameRatioRange q = whole_frame_ratio_range(r, x.config, to_string(e));
+      s += q.lowest_frame < 0 ? fmt::format(" {:>22}", "-")
+                              : fmt::format(" {:>22}", fmt::format("{:.2f}-{:.2f}x @{}", q.lowest, q.highest, q.lowest_frame));
     }
     s += "\n";
   }

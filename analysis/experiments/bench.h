@@ -20,8 +20,10 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "analysis/loop/accel.h"
@@ -131,6 +133,17 @@ struct PeerBenchResult {
   int embree_packet_width = 8;         ///< and Embree's packet width
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
 };
+
+/// The per-frame ratio of a peer's whole frame to a configuration's (> 1: the configuration is
+/// faster), over the frames of the medians on which both have a row: the lowest, its frame
+/// (the first such when several tie) and the highest. NaN and frame -1 when no frame has both
+/// (or a whole frame of 0 ms).
+struct FrameRatioRange {
+  double lowest = std::numeric_limits<double>::quiet_NaN(), highest = std::numeric_limits<double>::quiet_NaN();
+  int lowest_frame = -1;  ///< benchmark frame
+};
+[[nodiscard]] FrameRatioRange whole_frame_ratio_range(const PeerBenchResult& r, std::string_view config,
+                                                      std::string_view peer);
 
 /// Runs the benchmark over scene frames cfg.frames. `clusters`: a clustering of scene.rest()
 /// (validated by the caller; taken over, renumbered with the vertices without a copy), or
