@@ -3,6 +3,7 @@
 #include <emmintrin.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -597,11 +598,16 @@ __attribute__((target("avx2"))) void refit8_avx2(const Refit8Args& x, std::size_
 // the fill, are not read for ownership first (twist at one thread, `ptc bench ... --threads 1
 // --packets`, three alternated rounds: sah_build_ms 0.52-0.57 -> 0.46; docs/tracing.md). Fenced
 // at the end, so the walks that follow see them.
-void ClusterScene::refit8(std::size_t begin, std::size_t end) {
+// The block boxes are read by the block trees' nodes only (block_trees): the groups' trees
+// never take a slot from them, and their refit may run while the fill, which sizes block_boxes_,
+// runs on another thread.
+void ClusterScene::refit8(std::size_t begin, std::size_t end, bool block_trees) {
+  static_assert(offsetof(WideNode8, bounds) == 0 && alignof(WideNode8) >= 64 && sizeof(WideNode8::bounds) == 192,
+                "the streamed rows are the node's first three cache lines");
   const Refit8Args x{f_.data.wide8.nodes.data(),
                      src8_.data(),
                      {f_.boxes.empty() ? nullptr : f_.boxes[0].lo.data(),
-                      block_boxes_.empty() ? nullptr : block_boxes_[0].lo.data(), box8_.data(),
+                      block_trees && !block_boxes_.empty() ? block_boxes_[0].lo.data() : nullptr, box8_.data(),
                       multi_boxes_[0].lo.data()},
                      box8_.data()};
   (simd::cpu_has_avx2() && cfg_.build.allow_avx2 ? refit8_avx2 : refit8_sse2)(x, begin, end);
@@ -616,7 +622,7 @@ void ClusterScene::refit_group_trees() {
     for (std::uint32_t i = 0; i < multi_src_[k].second; ++i) b.extend(f_.boxes[group_leaf_clusters_[multi_src_[k].first + i]]);
     multi_boxes_[k + 1] = b;
   }
-  refit8(group8_begin_, sub8_count_);
+  refit8(group8_begin_, sub8_count_, false);
   const Box3f* cb = f_.boxes.data();
   for (std::size_t g = 0; g + 1 < group_offsets_.size(); ++g) {
     Box3f b;
@@ -862,7 +868,7 @@ void ClusterScene::build_frame(bool boxes_from_fill) {
   }
 
   const double t0 = clock_ms(cfg_.clock);
-  if (B) refit8(0, group8_begin_);  // the block trees
+  if (B) refit8(0, group8_begin_, true);  // the block trees
   times.refit_ms = clock_ms(cfg_.clock) - t0;
 }
 

@@ -130,7 +130,7 @@ class ClusterScene {
   void layout_group_trees();
   void append_group_tree(std::size_t g, const WideBvh& w);
   void collapse_top8();
-  void refit8(std::size_t begin, std::size_t end);
+  void refit8(std::size_t begin, std::size_t end, bool block_trees);
   void layout_wide8();
   void refit_group_trees();
   [[nodiscard]] std::pair<std::uint32_t, std::uint32_t> cluster_slot(std::uint32_t c) const;

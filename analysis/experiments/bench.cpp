@@ -4,6 +4,7 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -252,19 +253,26 @@ Table bench_table(const PeerBenchResult& r) {
 }
 
 FrameRatioRange whole_frame_ratio_range(const PeerBenchResult& r, std::string_view config, std::string_view peer) {
-  std::map<int, double> ours, theirs;  // frame -> whole frame ms
+  struct At {
+    double ms;
+    std::int64_t scene_frame;
+  };
+  std::map<int, At> ours;
+  std::map<int, double> theirs;  // benchmark frame -> whole frame ms
   for (const auto& row : r.rows) {
     if (row.frame < r.median_first_frame) continue;
-    if (row.config == config) ours[row.frame] = row.whole_frame_ms();
+    if (row.config == config) ours[row.frame] = {row.whole_frame_ms(), row.scene_frame};
     if (row.config == peer) theirs[row.frame] = row.whole_frame_ms();
   }
   FrameRatioRange out;
-  for (const auto& [f, ms] : ours) {
+  for (const auto& [f, at] : ours) {
     const auto it = theirs.find(f);
-    if (it == theirs.end() || !(ms > 0.0)) continue;
-    const double q = it->second / ms;
-    if (out.lowest_frame < 0 || q < out.lowest) out.lowest = q, out.lowest_frame = f;
-    if (!(q <= out.highest)) out.highest = q;  // (NaN at first)
+    if (it == theirs.end() || !(at.ms > 0.0) || !(it->second > 0.0)) continue;  // (NaN too)
+    const double q = it->second / at.ms;
+    if (!std::isfinite(q)) continue;
+    const bool first = out.lowest_frame < 0;
+    if (first || q < out.lowest) out.lowest = q, out.lowest_frame = f, out.lowest_scene_frame = at.scene_frame;
+    out.highest = first ? q : std::max(out.highest, q);
   }
   return out;
 }
@@ -304,7 +312,7 @@ Table bench_summary_table(const PeerBenchResult& r) {
       const FrameRatioRange q = x.r ? whole_frame_ratio_range(*x.r, s.config, to_string(e)) : FrameRatioRange{};
       const std::string peer(to_string(e));
       col("whole_frame_speedup_lowest_vs_" + peer, q.lowest);
-      col("whole_frame_speedup_lowest_frame_vs_" + peer, q.lowest_frame);
+      col("whole_frame_speedup_lowest_scene_frame_vs_" + peer, q.lowest_scene_frame);
       col("whole_frame_speedup_highest_vs_" + peer, q.highest);
     }
     for (loop::AccelKind e : kEmbree) {
@@ -343,10 +351,10 @@ std::string bench_text(const PeerBenchResult& r) {
     }
     s += "\n";
   }
-  // The medians hide how the ratio moves over the animation (clusters swell, a scene drapes): the
-  // lowest and highest per-frame ratio, and the lowest's benchmark frame.
-  s += fmt::format("per frame (frames {}..{}): the lowest and highest of those ratios, the lowest's frame after '@'\n",
-                   r.median_first_frame, frames - 1);
+  // The medians hide how the ratio moves over the animation (clusters swell, a scene drapes): per
+  // frame, the lowest and highest ratio, and the scene frame of the lowest.
+  s += fmt::format("per frame (the same frames): lowest-highest of Embree's whole frame / the row's, @ the scene frame of "
+                   "the lowest\n");
   s += fmt::format("{:<16}", "config");
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>22}", "vs " + std::string(to_string(e)));
   s += "\n";
@@ -354,8 +362,9 @@ std::string bench_text(const PeerBenchResult& r) {
     s += fmt::format("{:<16}", x.config);
     for (loop::AccelKind e : kEmbree) {
       const FrameRatioRange q = whole_frame_ratio_range(r, x.config, to_string(e));
-      s += q.lowest_frame < 0 ? fmt::format(" {:>22}", "-")
-                              : fmt::format(" {:>22}", fmt::format("{:.2f}-{:.2f}x @{}", q.lowest, q.highest, q.lowest_frame));
+      s += x.config == to_string(e) || q.lowest_frame < 0
+               ? fmt::format(" {:>22}", "-")
+               : fmt::format(" {:>22}", fmt::format("{:.2f}-{:.2f}x @{}", q.lowest, q.highest, q.lowest_scene_frame));
     }
     s += "\n";
   }

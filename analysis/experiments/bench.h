@@ -135,12 +135,13 @@ struct PeerBenchResult {
 };
 
 /// The per-frame ratio of a peer's whole frame to a configuration's (> 1: the configuration is
-/// faster), over the frames of the medians on which both have a row: the lowest, its frame
-/// (the first such when several tie) and the highest. NaN and frame -1 when no frame has both
-/// (or a whole frame of 0 ms).
+/// faster), over the frames of the medians on which both have a row with a finite whole frame
+/// above 0 ms: the lowest, its frame (benchmark frame and scene frame; the first such when
+/// several tie) and the highest. NaN and frames -1 when no frame has both.
 struct FrameRatioRange {
   double lowest = std::numeric_limits<double>::quiet_NaN(), highest = std::numeric_limits<double>::quiet_NaN();
-  int lowest_frame = -1;  ///< benchmark frame
+  int lowest_frame = -1;                ///< benchmark frame of the lowest
+  std::int64_t lowest_scene_frame = -1;  ///< and its scene frame
 };
 [[nodiscard]] FrameRatioRange whole_frame_ratio_range(const PeerBenchResult& r, std::string_view config,
                                                       std::string_view peer);
@@ -159,7 +160,7 @@ struct FrameRatioRange {
 
 /// bench.csv (schema ptc-bench/5, docs/tracing.md): one row per frame and configuration.
 [[nodiscard]] Table bench_table(const PeerBenchResult& r);
-/// summary.csv (schema ptc-bench-summary/2): medians per configuration and ratios against each Embree mode.
+/// summary.csv (schema ptc-bench-summary/3): medians per configuration and ratios against each Embree mode.
 [[nodiscard]] Table bench_summary_table(const PeerBenchResult& r);
 /// The printed tables: the whole frame against each Embree mode first, then the medians, then
 /// the ratios of each part (> 1: the row is faster).

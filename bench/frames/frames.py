@@ -17,7 +17,9 @@ lot; the table gives, per scene and thread count, the median over the repeats of
 configuration's whole frame (each run's own median over frames 1..B) and the ratios of those
 medians, plus the smallest and largest ratio of single runs, and the lowest ratio of a single
 frame in any run (Embree's whole frame / ours on that frame: where along the animation the
-method stops paying, which a median over frames hides). With more than one thread count, a
+method stops paying, which a median over frames hides; runs.csv keeps each run's lowest for
+every configuration: 1 for an Embree mode against itself, nan from a build that does not report
+it). With more than one thread count, a
 second table says how each stage scales: per scene and configuration, the median over the
 repeats of every stage (update + build and, for ours_clusters, its conversion, boxes, SAH build, collapse +
 link, leaf data and the time two of them overlapped; primary rays, shadow rays, the whole frame)
@@ -63,6 +65,16 @@ def stage_medians(path):
         use = rs[1:] if len(rs) > 1 else rs
         out[c] = {k: statistics.median(float(r[k]) for r in use) for k in STAGES}
     return out
+
+
+def lowest(values):
+    """The smallest of the values that are not NaN (NaN when none is)."""
+    return min((v for v in values if v == v), default=float("nan"))
+
+
+def ratio_cell(v):
+    """A ratio for the printed table ('-' for NaN)."""
+    return "-" if v != v else f"{v:.2f}x"
 
 
 def read_summary(path):
@@ -161,8 +173,9 @@ def main():
                                  "shadow_mismatches": int(r["shadow_mismatches"]),
                                  # the run's lowest per-frame ratio of Embree's whole frame to this
                                  # configuration's (ptc-bench-summary/3)
-                                 "lowest_frame_vs_refit": float(r["whole_frame_speedup_lowest_vs_embree_refit"]),
-                                 "lowest_frame_vs_low": float(r["whole_frame_speedup_lowest_vs_embree_low"]),
+                                 # (nan from a build before ptc-bench-summary/3, or for Embree against itself)
+                                 "lowest_frame_vs_refit": float(r.get("whole_frame_speedup_lowest_vs_embree_refit", "nan")),
+                                 "lowest_frame_vs_low": float(r.get("whole_frame_speedup_lowest_vs_embree_low", "nan")),
                                  **stages[c]})
     with open(os.path.join(tmp, "runs.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()), lineterminator="\n")
@@ -184,8 +197,8 @@ def main():
                 "vs_refit_min": min(per_run["embree_refit"]), "vs_refit_max": max(per_run["embree_refit"]),
                 "vs_low_min": min(per_run["embree_low"]), "vs_low_max": max(per_run["embree_low"]),
                 # the lowest single frame of any run (the medians above are over frames)
-                "vs_refit_lowest_frame": min(r["lowest_frame_vs_refit"] for r in by["ours_clusters"]),
-                "vs_low_lowest_frame": min(r["lowest_frame_vs_low"] for r in by["ours_clusters"]),
+                "vs_refit_lowest_frame": lowest(r["lowest_frame_vs_refit"] for r in by["ours_clusters"]),
+                "vs_low_lowest_frame": lowest(r["lowest_frame_vs_low"] for r in by["ours_clusters"]),
                 "ours_mismatches": sum(r["mismatches"] + r["shadow_mismatches"] for r in by["ours_clusters"]),
             })
     with open(os.path.join(tmp, "frames.csv"), "w", newline="") as f:
@@ -233,7 +246,7 @@ def main():
         print(f"| {r['threads']} | {r['scene']} | {r['ours_ms']:.1f} / {r['refit_ms']:.1f} / {r['low_ms']:.1f} | "
               f"{r['vs_refit']:.2f}x ({r['vs_refit_min']:.2f}-{r['vs_refit_max']:.2f}) | "
               f"{r['vs_low']:.2f}x ({r['vs_low_min']:.2f}-{r['vs_low_max']:.2f}) | "
-              f"{r['vs_refit_lowest_frame']:.2f}x / {r['vs_low_lowest_frame']:.2f}x | {r['ours_mismatches']} |")
+              f"{ratio_cell(r['vs_refit_lowest_frame'])} / {ratio_cell(r['vs_low_lowest_frame'])} | {r['ours_mismatches']} |")
     if scaling:
         print(f"\nhow each stage scales (medians of {a.repeat} run(s), ms at T={threads[0]} -> T; speed-up in brackets)")
         cols = [(k, k.removesuffix("_ms")) for k in MEASURES]

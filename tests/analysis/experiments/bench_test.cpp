@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -299,29 +300,35 @@ TEST(PeerBench, ScenePositionsDriveTheFrames) {
 
 // The per-frame range behind the whole-frame medians, on rows made by hand: the ratio of the
 // peer's whole frame to the row's, frame by frame, over the frames of the medians only, skipping
-// frames where either side is missing or the row's whole frame is 0 ms; the lowest's frame is the
-// first of equal lowest ratios. The summary table and the text carry the same values.
+// frames where either side is missing, 0 ms or not finite; the lowest's frame (benchmark and
+// scene frame) is the first of equal lowest ratios. The summary table and the text carry the
+// same values, each in its peer's column.
 TEST(PeerBench, WholeFrameRatioRangeOverTheFrames) {
   ptc::PeerBenchResult r;
   r.median_first_frame = 1;
   auto row = [&](int frame, const std::string& config, double update, double build, double trace, double shadow) {
     ptc::BenchRow b;
-    b.frame = frame, b.config = config;
+    b.frame = frame, b.scene_frame = 40 + frame, b.config = config;
     b.times.update_ms = update, b.times.build_ms = build, b.trace_ms = trace, b.shadow_ms = shadow;
     r.rows.push_back(b);
   };
-  // ours: whole frames 10, 20, 10, 40, 8 (frame 0 is left out of the medians; frame 4 has no
-  // Embree row); refit: 100, 30, 40, 20, -.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // ours: whole frames 10, 20, 10, 40, 8, ... (frame 0 is left out of the medians; frame 4 has no
+  // Embree row); refit: 100, 30, 40, 20; frames 5-8 are skipped (0 ms, NaN, Embree's 0 ms and NaN).
   row(0, "ours_clusters", 1, 2, 3, 4), row(0, "embree_refit", 50, 0, 50, 0);
   row(1, "ours_clusters", 1, 1, 10, 8), row(1, "embree_refit", 10, 0, 20, 0);
   row(2, "ours_clusters", 0, 2, 5, 3), row(2, "embree_refit", 20, 0, 20, 0);
   row(3, "ours_clusters", 10, 10, 10, 10), row(3, "embree_refit", 10, 0, 10, 0);
   row(4, "ours_clusters", 2, 2, 2, 2);
-  row(5, "ours_clusters", 0, 0, 0, 0), row(5, "embree_refit", 10, 0, 0, 0);  // (0 ms: skipped)
+  row(5, "ours_clusters", 0, 0, 0, 0), row(5, "embree_refit", 10, 0, 0, 0);
+  row(6, "ours_clusters", nan, 0, 1, 0), row(6, "embree_refit", 1000, 0, 0, 0);
+  row(7, "ours_clusters", 1, 0, 0, 0), row(7, "embree_refit", 0, 0, 0, 0);
+  row(8, "ours_clusters", 1, 0, 0, 0), row(8, "embree_refit", nan, 0, 0, 0);
   r.summary = ptc::summarize(r.rows, r.median_first_frame);
   const ptc::FrameRatioRange q = ptc::whole_frame_ratio_range(r, "ours_clusters", "embree_refit");
   EXPECT_DOUBLE_EQ(q.lowest, 0.5);  // frame 3: 20 / 40
   EXPECT_EQ(q.lowest_frame, 3);
+  EXPECT_EQ(q.lowest_scene_frame, 43);
   EXPECT_DOUBLE_EQ(q.highest, 4.0);  // frame 2: 40 / 10 (frame 0's 100 / 10 is not a median frame)
   const ptc::FrameRatioRange self = ptc::whole_frame_ratio_range(r, "embree_refit", "embree_refit");
   EXPECT_DOUBLE_EQ(self.lowest, 1.0);
@@ -330,34 +337,56 @@ TEST(PeerBench, WholeFrameRatioRangeOverTheFrames) {
   const ptc::FrameRatioRange none = ptc::whole_frame_ratio_range(r, "ours_clusters", "embree_low");
   EXPECT_TRUE(std::isnan(none.lowest) && std::isnan(none.highest));
   EXPECT_EQ(none.lowest_frame, -1);
-  // Ties at the lowest: the earlier frame.
+  EXPECT_EQ(none.lowest_scene_frame, -1);
+  // Ties at the lowest: the earlier frame; the highest may come first or after a skipped frame.
   ptc::PeerBenchResult t;
-  for (int f = 0; f < 3; ++f) {
+  for (int f = 0; f < 4; ++f) {
     ptc::BenchRow a, b;
-    a.frame = b.frame = f, a.config = "ours_clusters", b.config = "embree_low";
-    a.trace_ms = 10, b.trace_ms = f == 0 ? 30 : 20;
+    a.frame = b.frame = f, a.scene_frame = b.scene_frame = f, a.config = "ours_clusters", b.config = "embree_low";
+    a.trace_ms = 10, b.trace_ms = f == 0 ? 30 : f == 1 ? nan : 20;
     t.rows.push_back(a), t.rows.push_back(b);
   }
   const ptc::FrameRatioRange tie = ptc::whole_frame_ratio_range(t, "ours_clusters", "embree_low");
-  EXPECT_EQ(tie.lowest_frame, 1);
+  EXPECT_EQ(tie.lowest_frame, 2);
   EXPECT_DOUBLE_EQ(tie.lowest, 2.0);
   EXPECT_DOUBLE_EQ(tie.highest, 3.0);
 
   const auto lines = split_lines(ptc::bench_summary_table(r).csv.str());
   ASSERT_GE(lines.size(), 3u);
-  std::vector<std::string> head, ours;
-  for (std::istringstream in(lines[0]); in.good();) head.emplace_back(), std::getline(in, head.back(), ',');
-  for (std::istringstream in(lines[1]); in.good();) ours.emplace_back(), std::getline(in, ours.back(), ',');
+  auto fields = [](const std::string& line) {
+    std::vector<std::string> out;
+    for (std::istringstream in(line); in.good();) out.emplace_back(), std::getline(in, out.back(), ',');
+    return out;
+  };
+  const std::vector<std::string> head = fields(lines[0]), ours = fields(lines[1]);
   auto cell = [&](const std::string& name) {
     const auto it = std::find(head.begin(), head.end(), name);
     return it == head.end() ? std::string("missing") : ours.at(static_cast<std::size_t>(it - head.begin()));
   };
   EXPECT_EQ(ours.at(0), "ours_clusters");
   EXPECT_EQ(cell("whole_frame_speedup_lowest_vs_embree_refit"), "0.5");
-  EXPECT_EQ(cell("whole_frame_speedup_lowest_frame_vs_embree_refit"), "3");
+  EXPECT_EQ(cell("whole_frame_speedup_lowest_scene_frame_vs_embree_refit"), "43");
   EXPECT_EQ(cell("whole_frame_speedup_highest_vs_embree_refit"), "4");
-  EXPECT_EQ(cell("whole_frame_speedup_lowest_frame_vs_embree_low"), "-1");
+  EXPECT_EQ(cell("whole_frame_speedup_lowest_scene_frame_vs_embree_low"), "-1");
+  EXPECT_EQ(cell("whole_frame_speedup_highest_vs_embree_low"), "nan");
+  // The text: the block after the whole-frame table, ours' line, its cell under each peer.
   const std::string text = ptc::bench_text(r);
-  EXPECT_NE(text.find("0.50-4.00x @3"), std::string::npos) << text;
-  EXPECT_LT(text.find("per frame (frames 1..5)"), text.find("update_ms")) << text;
+  const auto block = text.find("per frame (the same frames)");
+  ASSERT_NE(block, std::string::npos) << text;
+  EXPECT_LT(block, text.find("update_ms")) << text;
+  const auto at = text.find("\nours_clusters", block);
+  ASSERT_NE(at, std::string::npos) << text;
+  std::istringstream line(text.substr(at + 1, text.find('\n', at + 1) - at - 1));
+  std::vector<std::string> cells;
+  for (std::string c; line >> c;) cells.push_back(c);
+  // config, then per peer (medium, low, refit) "-" or "lo-hix" "@frame"
+  ASSERT_EQ(cells.size(), 5u) << text;
+  EXPECT_EQ(cells[1], "-");  // no medium rows
+  EXPECT_EQ(cells[2], "-");  // no low rows
+  EXPECT_EQ(cells[3], "0.50-4.00x");
+  EXPECT_EQ(cells[4], "@43");
+  const auto self_at = text.find("\nembree_refit", block);
+  ASSERT_NE(self_at, std::string::npos);
+  EXPECT_EQ(text.substr(self_at + 1, text.find('\n', self_at + 1) - self_at - 1).find("1.00-1.00x"), std::string::npos)
+      << "a configuration against itself prints -";
 }
