@@ -3,11 +3,14 @@
 table of ours_clusters' whole frame (update + build + primary rays + shadow rays) against Embree
 REFIT and LOW, per scene and thread count, from `ptc bench` runs made here.
 
-    /usr/bin/python3 bench/frames/frames.py [--build build] [--threads 1,2] [--frames 0:5]
+    /usr/bin/python3 bench/frames/frames.py [--build build] [--threads 1,2] [--frames 0:5 | --frames all]
         [--min-triangles 500000] [--scenes A,B] [--repeat 1] [--single] [--width 1024 --height 1024]
         [--max-count N] [--leaf-format auto|blocks|tables] --out DIR
 
 Each (repeat, threads, scene) is one `ptc bench SCENE --threads T --frames A:B [--packets]
+(`--frames all`: no --frames, so each scene's whole animation, which is what `ptc bench SCENE`
+measures by default; the default 0:5 takes the first frames only, where clusters have not yet
+swollen or a cloth not yet draped: docs/tracing.md, "Later frames")
 [--max-count N] [--leaf-format F] --out DIR/runs/...` (packets on both sides unless --single;
 --max-count N: the bench's own clustering at MaxCount = MaxSize = N instead of its default, e.g.
 50 for the paper's value; --leaf-format F: the cluster leaves' format, default the bench's own,
@@ -87,7 +90,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--threads", default="1,2", help="thread counts, comma-separated")
-    ap.add_argument("--frames", default="0:5", help="ptc bench --frames A:B (frame A is left out of the medians)")
+    ap.add_argument("--frames", default="0:5",
+                    help="ptc bench --frames A:B (frame A is left out of the medians), or all: each scene's whole "
+                         "animation, as ptc bench runs it without --frames")
     ap.add_argument("--min-triangles", type=int, default=500000)
     ap.add_argument("--scenes", default="", help="only these built-in scenes, comma-separated (default: all of the size)")
     ap.add_argument("--repeat", type=int, default=1)
@@ -146,7 +151,8 @@ def main():
         for t in threads:
             for s in scenes:
                 d = os.path.join(tmp, "runs", f"r{rep}_t{t}_{s}")
-                cmd = [ptc, "bench", s, "--data-dir", data, "--threads", str(t), "--frames", a.frames,
+                cmd = [ptc, "bench", s, "--data-dir", data, "--threads", str(t),
+                       *([] if a.frames == "all" else ["--frames", a.frames]),
                        "--width", str(a.width), "--height", str(a.height), "--out", d]
                 if not a.single:
                     cmd.append("--packets")

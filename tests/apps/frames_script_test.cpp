@@ -184,4 +184,19 @@ TEST_F(FramesScript, MaxCountReachesEveryRun) {
   EXPECT_GT(clusters[""], clusters["50"]);
 }
 
+// --frames all: no --frames for ptc bench, so each scene's whole animation (the run's manifest
+// records the scene's own range), and the table's medians over all of it.
+TEST_F(FramesScript, AllFramesRunTheWholeAnimation) {
+  const fs::path out = dir_ / "all";
+  const auto r = frames({"--threads", "1", "--frames", "all", "--width", "8", "--height", "8", "--scenes",
+                         "cloth-sphere-32", "--out", out.string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("--frames"), std::string::npos) << r.err;  // (the commands are echoed on stderr)
+  const auto run = nlohmann::json::parse(slurp(out / "runs" / "r0_t1_cloth-sphere-32" / "manifest.json"));
+  EXPECT_EQ(run["parameters"]["frames"], nlohmann::json::array({0, 119})) << run["parameters"].dump();
+  const auto bench = csv_rows(slurp(out / "runs" / "r0_t1_cloth-sphere-32" / "bench.csv"));
+  EXPECT_EQ(bench.size(), 120u * 5u);  // frames x configurations
+  EXPECT_EQ(csv_rows(slurp(out / "frames.csv")).size(), 1u);
+}
+
 }  // namespace
