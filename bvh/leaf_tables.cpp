@@ -288,6 +288,7 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
   groups.resize(G);
   ids.resize(G * kTableSlots);
   out.slot_vertices.resize(G * kTableSlots);
+  out.wide.resize(G);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t k = r.begin(); k < r.end(); ++k) {
@@ -309,6 +310,7 @@ TableLayout make_table_layout(std::span<const LeafRange> ranges, std::span<const
         t.last = m.last;
         t.vertices = m.nslots;
         t.slot_mask = mask;
+        out.wide[gi] = (mask >> 16) != 0 ? 1 : 0;
         std::copy(std::begin(m.pair), std::end(m.pair), t.pair);
         std::fill(std::begin(t.unused), std::end(t.unused), 0u);
         ++gi;
@@ -331,9 +333,11 @@ namespace {
     for (std::size_t g = layout.group_offsets[c]; g < layout.group_offsets[c + 1]; ++g) {
       const std::uint32_t* sv = layout.slot_vertices.data() + kTableSlots * g;
       TableGroup& t = groups[g];
-      // Slots 16-31 unused (chunks 2 and 3 empty, so their first slots): only the rows' first
-      // cache lines (the others keep the NaN make_table_layout wrote).
-      const int end = sv[16] == layout.sentinel && sv[24] == layout.sentinel ? kTableSlots / 2 : kTableSlots;
+      // Slots 16-31 unused (TableLayout::wide): only the rows' first cache lines (the others keep
+      // the NaN make_table_layout wrote), and only the first line of the group's slot_vertices.
+      // (The flag replaced reading slots 16 and 24 from that second line: the twist's fill
+      // 1.11-1.17 -> 1.03-1.07 ms in bvh_bench's update loop; docs/tracing.md.)
+      const int end = layout.wide[g] ? kTableSlots : kTableSlots / 2;
       for (int q = 0; q < end; q += 4) {
         // Four slots' (x y z .) by 16-byte loads (add_sentinel's extra element keeps the last in
         // the array), transposed to rows; the NaN sentinel's lanes drop out of the min and max
@@ -369,9 +373,10 @@ __attribute__((target("avx2"))) void fill_clusters_avx2(const TableLayout& layou
 
 void fill_tables(const TableLayout& layout, const float* fp, std::span<TableGroup> groups, Box3f* cluster_boxes,
                  Vec3f* centres, bool allow_avx2) {
-  if (groups.size() != layout.group_count())
+  if (groups.size() != layout.group_count() || layout.wide.size() != layout.group_count())
     throw std::invalid_argument("fill_tables: " + std::to_string(groups.size()) + " groups for a layout of " +
-                                std::to_string(layout.group_count()));
+                                std::to_string(layout.group_count()) + " (" + std::to_string(layout.wide.size()) +
+                                " half flags)");
   const FillFn fill = allow_avx2 && simd::cpu_has_avx2() ? &fill_clusters_avx2 : &fill_clusters_sse2;
   const std::size_t C = layout.group_offsets.empty() ? 0 : layout.group_offsets.size() - 1;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, C, kClustersPerTask), [&](const tbb::blocked_range<std::size_t>& r) {

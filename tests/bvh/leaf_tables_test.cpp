@@ -117,6 +117,12 @@ TEST(LeafTables, EveryTriangleOnceWithItsCornersInGroupsOfThirtyTwo) {
       std::uint32_t mask = 0;
       for (std::size_t s = 0; s < S; ++s) mask |= sv[s] != V ? 1u << s : 0u;
       ASSERT_EQ(G.slot_mask, mask) << "group " << g;
+      // The fill's half flag: whether a slot of 16-31 holds a vertex (else it reads and writes
+      // only the first halves).
+      ASSERT_EQ(T.wide.size(), T.group_count());
+      bool upper = false;
+      for (std::size_t s = 16; s < S; ++s) upper = upper || sv[s] != V;
+      EXPECT_EQ(T.wide[g], upper ? 1 : 0) << "group " << g;
       const auto used = static_cast<std::size_t>(__builtin_popcount(mask));
       EXPECT_EQ(G.vertices, used) << "group " << g;
       for (std::size_t s = 1; s < S; ++s) {
@@ -475,6 +481,9 @@ TEST(LeafTables, MismatchedSizesAreRefused) {
   const TableLayout T = make_table_layout(ranges, ids, std::vector<std::uint32_t>(12, 0), 9, groups, tids);
   AlignedVector<TableGroup> none;
   EXPECT_THROW(fill_tables(T, nullptr, none, nullptr, nullptr), std::invalid_argument);
+  TableLayout no_flags = T;  // (a layout made elsewhere without the half flags)
+  no_flags.wide.clear();
+  EXPECT_THROW(fill_tables(no_flags, nullptr, groups, nullptr, nullptr), std::invalid_argument);
   // The estimate of LeafFormatChoice::Auto: offset lists of different lengths, or decreasing.
   const std::vector<std::uint32_t> two{0, 5}, three{0, 5, 9}, down{0, 5, 3};
   EXPECT_THROW((void)estimate_leaf_bytes(two, three), std::invalid_argument);
