@@ -21,8 +21,8 @@ struct TableLayout {
   /// kTableSlots per group: the frame-position index of each vertex slot (the NaN sentinel's
   /// index for unused slots).
   AlignedVector<std::uint32_t> slot_vertices;
-  /// Per group, 1 when it uses slots 16-31 (chunks 2 or 3), 0 when only 0-15: the fill then reads
-  /// and writes only the first half of each row (and of the group's slot_vertices).
+  /// Per group, 1 when it uses slots 16-31 (chunks 2 or 3), 0 when only 0-15: the fill then writes
+  /// only the first half of each row and reads only the first half of the group's slot_vertices.
   std::vector<std::uint8_t> wide;
   /// The NaN sentinel's index (make_table_layout's `sentinel`).
   std::uint32_t sentinel = 0;

@@ -179,7 +179,7 @@ def main():
                                  "shadow_mismatches": int(r["shadow_mismatches"]),
                                  # the run's lowest per-frame ratio of Embree's whole frame to this
                                  # configuration's (ptc-bench-summary/3)
-                                 # (nan from a build before ptc-bench-summary/3, or for Embree against itself)
+                                 # (1 for an Embree mode against itself; nan from a build before /3)
                                  "lowest_frame_vs_refit": float(r.get("whole_frame_speedup_lowest_vs_embree_refit", "nan")),
                                  "lowest_frame_vs_low": float(r.get("whole_frame_speedup_lowest_vs_embree_low", "nan")),
                                  **stages[c]})

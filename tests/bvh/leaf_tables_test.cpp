@@ -96,6 +96,7 @@ TEST(LeafTables, EveryTriangleOnceWithItsCornersInGroupsOfThirtyTwo) {
   ASSERT_EQ(T.group_offsets.size(), L.ranges.size() + 1);
   ASSERT_EQ(M.groups.size(), T.group_count());
   ASSERT_EQ(M.ids.size(), S * T.group_count());
+  ASSERT_EQ(T.wide.size(), T.group_count());
   for (std::size_t c = 0; c < L.ranges.size(); ++c) {
     // The cluster's lanes, (id, corners), against what its groups hold.
     std::vector<std::array<std::uint32_t, 4>> want, got;
@@ -119,7 +120,6 @@ TEST(LeafTables, EveryTriangleOnceWithItsCornersInGroupsOfThirtyTwo) {
       ASSERT_EQ(G.slot_mask, mask) << "group " << g;
       // The fill's half flag: whether a slot of 16-31 holds a vertex (else it reads and writes
       // only the first halves).
-      ASSERT_EQ(T.wide.size(), T.group_count());
       bool upper = false;
       for (std::size_t s = 16; s < S; ++s) upper = upper || sv[s] != V;
       EXPECT_EQ(T.wide[g], upper ? 1 : 0) << "group " << g;
