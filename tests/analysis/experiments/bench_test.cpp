@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "analysis/experiments/bench.h"
+#include "common/csv_rows.h"
 #include "toolkit/anim/deformers.h"
 #include "toolkit/core/stats.h"
 #include "toolkit/mesh/subdivision.h"
@@ -351,24 +352,15 @@ TEST(PeerBench, WholeFrameRatioRangeOverTheFrames) {
   EXPECT_DOUBLE_EQ(tie.lowest, 2.0);
   EXPECT_DOUBLE_EQ(tie.highest, 3.0);
 
-  const auto lines = split_lines(ptc::bench_summary_table(r).csv.str());
-  ASSERT_GE(lines.size(), 3u);
-  auto fields = [](const std::string& line) {
-    std::vector<std::string> out;
-    for (std::istringstream in(line); in.good();) out.emplace_back(), std::getline(in, out.back(), ',');
-    return out;
-  };
-  const std::vector<std::string> head = fields(lines[0]), ours = fields(lines[1]);
-  auto cell = [&](const std::string& name) {
-    const auto it = std::find(head.begin(), head.end(), name);
-    return it == head.end() ? std::string("missing") : ours.at(static_cast<std::size_t>(it - head.begin()));
-  };
-  EXPECT_EQ(ours.at(0), "ours_clusters");
-  EXPECT_EQ(cell("whole_frame_speedup_lowest_vs_embree_refit"), "0.5");
-  EXPECT_EQ(cell("whole_frame_speedup_lowest_scene_frame_vs_embree_refit"), "43");
-  EXPECT_EQ(cell("whole_frame_speedup_highest_vs_embree_refit"), "4");
-  EXPECT_EQ(cell("whole_frame_speedup_lowest_scene_frame_vs_embree_low"), "-1");
-  EXPECT_EQ(cell("whole_frame_speedup_highest_vs_embree_low"), "nan");
+  const auto rows = ptc::test::csv_rows(ptc::bench_summary_table(r).csv.str());
+  ASSERT_EQ(rows.size(), 2u);
+  const auto& ours = rows[0];
+  EXPECT_EQ(ours.at("config"), "ours_clusters");
+  EXPECT_EQ(ours.at("whole_frame_speedup_lowest_vs_embree_refit"), "0.5");
+  EXPECT_EQ(ours.at("whole_frame_speedup_lowest_scene_frame_vs_embree_refit"), "43");
+  EXPECT_EQ(ours.at("whole_frame_speedup_highest_vs_embree_refit"), "4");
+  EXPECT_EQ(ours.at("whole_frame_speedup_lowest_scene_frame_vs_embree_low"), "-1");
+  EXPECT_EQ(ours.at("whole_frame_speedup_highest_vs_embree_low"), "nan");
   // The text: the block after the whole-frame table, ours' line, its cell under each peer.
   const std::string text = ptc::bench_text(r);
   const auto block = text.find("per frame (the same frames)");
