@@ -15,6 +15,7 @@
 #include "bvh/leaf_tables.h"
 #include "bvh/scene_config.h"
 #include "bvh/scene_frame.h"
+#include "bvh/triangle_scene.h"
 #include "bvh/vertex_order.h"
 #include "bvh/wide_bvh.h"
 
@@ -67,7 +68,22 @@ class ClusterScene {
   /// (SceneConfig::built_once), std::invalid_argument for a wrong count or a non-finite position.
   void update(std::span<const Vec3> positions);
 
-  [[nodiscard]] const TraceData& data() const { return f_.data; }
+  /// What the last frame is traced on: the cluster BVH's data, or on a frame traced on the
+  /// triangle fallback (fallback_active()) the triangle BVH's.
+  [[nodiscard]] const TraceData& data() const { return fallback_active_ ? fallback_->data() : f_.data; }
+  /// The cluster BVH's trace data, whether or not the frame is traced on it.
+  [[nodiscard]] const TraceData& cluster_data() const { return f_.data; }
+  /// How far the clusters have come apart at the last update: the sum of the cluster boxes' half
+  /// surface areas (xy + yz + zx) over the sum of the triangles' areas at the positions the scene
+  /// was made with (both in the trace frame). A compact cluster on a surface has a box about as
+  /// large as its triangles (2-3 for the built-in meshes' clusters of 17-32 triangles); the
+  /// value grows as a cluster's triangles move apart, and with it the boxes a ray enters and the
+  /// triangles it tests. Triangles that keep their size (bending, rigid pieces) keep the
+  /// denominator; a mesh that grows as a whole raises the value with it. NaN for a mesh of
+  /// zero area.
+  [[nodiscard]] double swelling() const { return swelling_; }
+  /// Whether the last frame is traced on the triangle fallback (SceneConfig::fallback_swelling).
+  [[nodiscard]] bool fallback_active() const { return fallback_active_; }
   /// The last update's binary tree: over the clusters (primitive i = scene cluster i), or with
   /// GroupTrees::Refit over the groups (primitive g = group g of group_offsets()).
   [[nodiscard]] const Bvh& bvh() const { return f_.bvh; }
@@ -110,6 +126,8 @@ class ClusterScene {
   [[nodiscard]] bool fused_vertex_pass() const { return runs_.has_value(); }
 
  private:
+  void update_clusters(std::span<const Vec3> positions);
+  void update_fallback(std::span<const Vec3> positions);
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);
@@ -193,6 +211,10 @@ class ClusterScene {
   TableLayout tables_;  // LeafFormat::Tables: the groups per cluster and their slots' vertex indices
   LeafBytes leaf_estimate_;  // leaf_bytes_estimate()
   SceneFrame f_;
+  double triangle_area_ = 0;  // the triangles' areas at the scene's first positions, in the trace frame (swelling())
+  double swelling_ = 0;
+  bool fallback_active_ = false;
+  std::unique_ptr<TriangleScene> fallback_;  // made at the first frame traced on it
 };
 
 }  // namespace ptc::bvh

@@ -84,7 +84,7 @@ Vec3 trace_frame_origin(const Mesh& mesh, const SceneConfig& cfg) {
 
 FrameMap trace_frame(const Mesh& mesh, const SceneConfig& cfg) {
   const Vec3 origin = trace_frame_origin(mesh, cfg);
-  return {origin, trace_frame_scale(mesh, origin)};
+  return {origin, cfg.scale ? *cfg.scale : trace_frame_scale(mesh, origin)};
 }
 
 double trace_frame_scale(const Mesh& mesh, const Vec3& origin) {

@@ -31,9 +31,12 @@ struct StageTimes {
   /// Time during which two of the stages above ran at once (a ClusterScene on more than one
   /// thread writes the leaf data while it builds and links the tree); 0 otherwise.
   double overlap_ms = 0;
+  /// ClusterScene on a frame traced on its triangle fallback (SceneConfig::fallback_swelling):
+  /// the whole update of that triangle BVH (made at the first such frame); 0 otherwise.
+  double fallback_ms = 0;
   /// The update's wall time: the stages, less what they shared.
   [[nodiscard]] double total_ms() const {
-    return vertices_ms + boxes_ms + build_ms + collapse_ms + leaf_data_ms + refit_ms - overlap_ms;
+    return vertices_ms + boxes_ms + build_ms + collapse_ms + leaf_data_ms + refit_ms - overlap_ms + fallback_ms;
   }
 };
 
@@ -79,9 +82,22 @@ enum class SahBuilder { Binned, Sweep };
 /// "binned", "sweep".
 [[nodiscard]] const char* to_string(SahBuilder b);
 
+/// The swelling above which the commands trace a cluster scene's frame on a triangle BVH
+/// (SceneConfig::fallback_swelling, `--cluster-fallback auto`). ClusterScene::swelling() is
+/// about 2-3 for clusters of 17-32 triangles on the built-in meshes at rest and stays there
+/// under their bending, draping and skinning (the cloth 2.0-2.1, the twist and the wave about
+/// 3); on the explode scene it grows with the square of the time (5 at frame 1, 30 at frame 5,
+/// 95 at frame 10). There, with 1024 x 1024 primary rays and their shadow rays at two threads,
+/// the cluster BVH's whole frame passed the per-frame triangle BVH's between swellings 64 and
+/// 79 (docs/tracing.md, "Swollen clusters and the triangle fallback").
+inline constexpr double kAutoFallbackSwelling = 64.0;
+
 struct SceneConfig {
   BuildConfig build{};  ///< builder settings (max_leaf_size counts primitives: triangles or clusters)
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
+  /// The trace frame's scale (a power of two, as trace_frame_scale gives); default:
+  /// trace_frame_scale of the first frame (a scene that must share another's frame sets it).
+  std::optional<double> scale;
   ClusterLeaf cluster_leaf = ClusterLeaf::Linear;  ///< ClusterScene only (Linear: the paper's leaves, and the faster with Acc clusters, bench/bvh_bench.cpp)
   StageClock clock = StageClock::Wall;  ///< clock of the StageTimes (see stage_clock.h)
   /// ClusterScene with ClusterLeaf::Linear only: how the leaves hold their triangles (blocks of
@@ -113,6 +129,14 @@ struct SceneConfig {
   /// fused_vertex_pass() is false, and times() has vertices_ms 0 (the conversion is part of
   /// the constructor's layout).
   bool built_once = false;
+  /// ClusterScene only: on a frame whose clusters have come apart, swelling() above this, trace a
+  /// BVH over the frame's triangles instead (a TriangleScene with triangle_scene_defaults()'s
+  /// build and this scene's trace frame, made at the first such frame and rebuilt on each; its
+  /// time is StageTimes::fallback_ms). The cluster BVH is still updated every frame, so its
+  /// accessors (bvh(), boxes(), sah_cost(), cluster_data()) describe it; data() is what the
+  /// frame is traced on. 0 (the default, the method as published): never. See
+  /// kAutoFallbackSwelling.
+  double fallback_swelling = 0.0;
 };
 
 /// Default build settings of a triangle scene: SAH traversal 1, intersection 0.3 (a 4-wide node

@@ -24,7 +24,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   c.threads = resolve_threads(c.threads);
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
-  RunManifest manifest("bench", opt.argv, "ptc-bench/5");
+  RunManifest manifest("bench", opt.argv, "ptc-bench/6");
   const std::string arg = opt.input.string();
   MovingScene ms = open_moving_scene(opt.input, opt.scene_options, opt.deform, opt.frames, opt.extend_frames, manifest);
   Scene& scene = ms.scene;
@@ -89,6 +89,13 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("group_trees", r.cluster_group_size > 1 ? std::string(bvh::to_string(c.group_trees))
                                                                   : std::string("none (plain build)"));
   manifest.set_parameter("vertex_order", r.vertex_order);
+  // The triangle fallback's swelling threshold (0: off), and the frames traced on it.
+  manifest.set_parameter("cluster_fallback", c.cluster_fallback);
+  {
+    std::uint64_t fell = 0;
+    for (const BenchRow& row : r.rows) fell += row.fallback ? 1 : 0;
+    manifest.set_result("cluster_fallback_frames", fell);
+  }
   manifest.set_parameter("tie_rel", c.tie.rel_t);
   manifest.set_parameter("embree_set_affinity", false);
   manifest.set_parameter("shadows", opt.shadows);

@@ -109,6 +109,8 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   setup.cluster_group_size = cfg.cluster_group_size;
   setup.min_cluster_groups = cfg.min_cluster_groups;
   setup.group_trees = cfg.group_trees;
+  setup.cluster_fallback = cfg.cluster_fallback;
+  res.cluster_fallback = cfg.cluster_fallback;
   setup.threads = cfg.threads;
   setup.embree_packet_width = cfg.embree_packet_width;
 
@@ -135,7 +137,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
     if (k == loop::AccelKind::OursClusters) {
       res.cluster_scene_setup_ms = sw.ms();
       res.fused_vertex_pass = loop::cluster_scene_of(*accels.back())->fused_vertex_pass();
-      res.cluster_leaves = bvh::leaf_shape(loop::cluster_scene_of(*accels.back())->data());
+      res.cluster_leaves = bvh::leaf_shape(loop::cluster_scene_of(*accels.back())->cluster_data());
       res.cluster_leaf_estimate = loop::cluster_scene_of(*accels.back())->leaf_bytes_estimate();
       res.cluster_group_size = loop::cluster_scene_of(*accels.back())->group_size();
     }
@@ -172,6 +174,12 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
     row.frame_ms = fr.update_wall_ms;
     row.times = fr.times;
     row.sah_cost = a.sah_cost().value_or(nan());
+    if (const bvh::ClusterScene* cs = loop::cluster_scene_of(a)) {
+      row.swelling = cs->swelling();
+      row.fallback = cs->fallback_active() ? 1 : 0;
+    } else {
+      row.swelling = nan();
+    }
     bvh::HitBatch& h = fr.accel == 0 ? ref : hits;
     if (fr.index == 0) a.check_rays(rays);  // (the same rays every frame; outside the timed trace)
     Stopwatch sw;
@@ -215,7 +223,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
 }
 
 Table bench_table(const PeerBenchResult& r) {
-  return tabulate(Schema{"ptc-bench", 5}, r.rows, [](const BenchRow& x, Columns& col) {
+  return tabulate(Schema{"ptc-bench", 6}, r.rows, [](const BenchRow& x, Columns& col) {
     col("frame", x.frame);
     col("config", x.config);
     col("update_ms", x.times.update_ms);
@@ -249,6 +257,9 @@ Table bench_table(const PeerBenchResult& r) {
     col("shadow_ms", x.shadow_ms);
     col("shadow_mismatches", x.shadow_mismatches);
     col("whole_frame_ms", x.whole_frame_ms());
+    col("fallback_ms", x.times.stages.fallback_ms);
+    col("swelling", x.swelling);
+    col("fallback", x.fallback);
   });
 }
 
@@ -327,6 +338,38 @@ Table bench_summary_table(const PeerBenchResult& r) {
     }
   });
 }
+
+namespace {
+// The cluster BVH's swelling over the frames and the frames traced on its triangle fallback
+// (scene frames, runs of consecutive ones as A-B); empty without ours_clusters rows.
+std::string fallback_text(const PeerBenchResult& r) {
+  std::vector<const BenchRow*> rows;
+  for (const auto& row : r.rows)
+    if (row.config == loop::to_string(loop::AccelKind::OursClusters)) rows.push_back(&row);
+  if (rows.empty()) return {};
+  double high = rows.front()->swelling;
+  std::vector<std::int64_t> fell;
+  for (const BenchRow* row : rows) {
+    if (row->swelling > high) high = row->swelling;
+    if (row->fallback) fell.push_back(row->scene_frame);
+  }
+  std::string s = fmt::format("cluster swelling (box area / triangle area): {:.2f} at scene frame {}, {:.2f} at {}, "
+                              "highest {:.2f}; ",
+                              rows.front()->swelling, rows.front()->scene_frame, rows.back()->swelling,
+                              rows.back()->scene_frame, high);
+  if (!(r.cluster_fallback > 0)) return s + "triangle fallback off\n";
+  s += fmt::format("triangle fallback above {:g}: {} of {} frames", r.cluster_fallback, fell.size(), rows.size());
+  std::string runs;
+  for (std::size_t i = 0; i < fell.size();) {
+    std::size_t j = i;
+    while (j + 1 < fell.size() && fell[j + 1] == fell[j] + 1) ++j;
+    runs += (runs.empty() ? "" : ", ") +
+            (j == i ? fmt::format("{}", fell[i]) : fmt::format("{}-{}", fell[i], fell[j]));
+    i = j + 1;
+  }
+  return s + (runs.empty() ? std::string("\n") : " (scene frames " + runs + ")\n");
+}
+}  // namespace
 
 std::string bench_text(const PeerBenchResult& r) {
   const int frames = r.rows.empty() ? 0 : r.rows.back().frame + 1;
@@ -418,6 +461,7 @@ std::string bench_text(const PeerBenchResult& r) {
                        static_cast<double>(e.tables) / static_cast<double>(e.blocks), static_cast<double>(e.blocks) / 1e6,
                        bvh::kAutoTablesMaxShare);
   }
+  s += fallback_text(r);
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>19}", "upd+build vs " + std::string(to_string(e).substr(7)));

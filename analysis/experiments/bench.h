@@ -80,6 +80,9 @@ struct PeerBenchConfig {
   /// Our tracer's instruction-set variant (bvh::TraceOptions::isa; Auto: see bvh/tracer.h).
   /// Embree keeps its own choice.
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;
+  /// ours_clusters traces a frame on a triangle BVH when the clusters' swelling exceeds this
+  /// (bvh::SceneConfig::fallback_swelling; `ptc bench --cluster-fallback`); 0: never.
+  double cluster_fallback = bvh::kAutoFallbackSwelling;
 };
 
 struct BenchRow {
@@ -102,6 +105,10 @@ struct BenchRow {
   /// runs without them); NaN for Embree, which has none.
   double nodes_per_ray = 0, triangles_per_ray = 0;
   double sah_cost = 0;           ///< SAH cost of our binary BVH (NaN for Embree)
+  /// ours_clusters: bvh::ClusterScene::swelling() (NaN for the others), and whether the frame
+  /// was traced on the triangle fallback (0 for the others).
+  double swelling = 0;
+  int fallback = 0;
   double rss_mb = 0, peak_rss_mb = 0;  ///< resident and peak resident memory after the row's trace
 };
 
@@ -132,6 +139,7 @@ struct PeerBenchResult {
   bool packets = false;                ///< rays were traced in packets (cfg.packets)
   int embree_packet_width = 8;         ///< and Embree's packet width
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
+  double cluster_fallback = 0;         ///< the fallback's threshold (cfg.cluster_fallback; 0: off)
 };
 
 /// The per-frame ratio of a peer's whole frame to a configuration's (> 1: the configuration is
@@ -158,7 +166,7 @@ struct FrameRatioRange {
 /// and mismatch sums over all frames: the summary of run_peer_bench, recomputable from rows.
 [[nodiscard]] std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame);
 
-/// bench.csv (schema ptc-bench/5, docs/tracing.md): one row per frame and configuration.
+/// bench.csv (schema ptc-bench/6, docs/tracing.md): one row per frame and configuration.
 [[nodiscard]] Table bench_table(const PeerBenchResult& r);
 /// summary.csv (schema ptc-bench-summary/3): medians per configuration and ratios against each Embree mode.
 [[nodiscard]] Table bench_summary_table(const PeerBenchResult& r);

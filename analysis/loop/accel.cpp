@@ -28,7 +28,8 @@ bool is_embree(AccelKind k) {
 }
 
 UpdateTimes update_times_of(const bvh::StageTimes& t) {
-  return {t.vertices_ms + t.boxes_ms, t.build_ms + t.collapse_ms + t.leaf_data_ms + t.refit_ms - t.overlap_ms, t};
+  return {t.vertices_ms + t.boxes_ms,
+          t.build_ms + t.collapse_ms + t.leaf_data_ms + t.refit_ms - t.overlap_ms + t.fallback_ms, t};
 }
 
 UpdateTimes SceneAccel::last_update() const { return update_times_of(tracer_.moving_times()); }
@@ -100,6 +101,7 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   cfg.group_trees = s.group_trees;
   cfg.clock = s.clock;
   cfg.builder = s.builder;
+  cfg.fallback_swelling = s.cluster_fallback;
   if (s.cluster_build) cfg.build = *s.cluster_build;
   return cfg;
 }

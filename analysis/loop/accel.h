@@ -39,7 +39,7 @@ inline constexpr AccelKind kAllAccelKinds[] = {AccelKind::OursTriangles, AccelKi
 /// The last update of a configuration, milliseconds.
 struct UpdateTimes {
   double update_ms = 0;    ///< ours: positions into the trace frame + primitive boxes; Embree: vertex buffer
-  double build_ms = 0;     ///< ours: SAH build + collapse + leaf data (+ block-tree refit) - overlap (wall time); Embree: rtcCommitScene
+  double build_ms = 0;     ///< ours: SAH build + collapse + leaf data (+ block-tree refit) - overlap (wall time) + a cluster scene's triangle fallback; Embree: rtcCommitScene
   bvh::StageTimes stages;  ///< ours: each stage; Embree: zero (its commit is one call)
 };
 
@@ -84,6 +84,8 @@ struct AccelSetup {
   /// The SAH builder of ours_triangles and ours_clusters (Sweep: the exact reference, without
   /// the two-level build; accuracy studies).
   bvh::SahBuilder builder = bvh::SahBuilder::Binned;
+  /// ours_clusters: bvh::SceneConfig::fallback_swelling (0: the cluster BVH on every frame).
+  double cluster_fallback = 0.0;
 };
 
 /// The cluster scene settings of ours_clusters under `setup` (the method's precomputation, such

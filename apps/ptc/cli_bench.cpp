@@ -1,6 +1,9 @@
 // `ptc bench SCENE [--clusters DIR | --max-count N --adjacency A] [--frames A:B] [--data-dir DIR] [--width W --height H]
 // [--threads T] [--deform KIND|none] [--vertex-order clusters|input] [--json] --out DIR` (commands/bench.h).
+#include <cmath>
 #include <iostream>
+#include <optional>
+#include <string>
 
 #include "commands/bench.h"
 #include "apps/ptc/cli.h"
@@ -14,8 +17,18 @@ struct BenchArgs {
   CameraArgs camera;
   GroupTreesArg group_trees;
   std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
+  std::string cluster_fallback = "auto";
   CLI::App* app = nullptr;
 };
+
+// --cluster-fallback: auto (bvh::kAutoFallbackSwelling), off (0) or a swelling above 1.
+std::optional<double> parse_cluster_fallback(const std::string& s) {
+  if (s == "auto") return bvh::kAutoFallbackSwelling;
+  if (s == "off") return 0.0;
+  const std::optional<double> v = number_arg(s);
+  if (v && std::isfinite(*v) && *v > 1.0) return v;
+  return std::nullopt;
+}
 }  // namespace
 
 void register_bench(CLI::App& app, Context& ctx) {
@@ -39,6 +52,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       o.config.adjacency = *parse_cluster_adjacency(a->adjacency);
                       o.config.isa = *bvh::parse_trace_isa(a->isa);
+                      o.config.cluster_fallback = *parse_cluster_fallback(a->cluster_fallback);
                       if (o.config.isa != bvh::TraceIsa::Auto && bvh::resolve(o.config.isa) != o.config.isa)
                         throw UsageError("--isa", std::string("this CPU has no ") +
                                                       (o.config.isa == bvh::TraceIsa::Avx512 || o.config.isa == bvh::TraceIsa::Avx512Vl
@@ -124,6 +138,19 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);
+  static_assert(bvh::kAutoFallbackSwelling == 64.0, "the --cluster-fallback help quotes the threshold");
+  c->add_option("--cluster-fallback", a->cluster_fallback,
+                "trace a frame of ours_clusters on a BVH over its triangles, rebuilt that frame, when the clusters "
+                "have come apart: their boxes' half area over the triangles' area (the 'swelling' column) above X. "
+                "auto: X = 64 (about 3 at rest on the built-in meshes; the explode scene passes it at frame 9); off: "
+                "the cluster BVH on every frame (the method as published); or a number X > 1")
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            return parse_cluster_fallback(s) ? std::string()
+                                             : "'" + s + "' is not auto, off or a number above 1";
+          },
+          "auto|off|X"))
+      ->capture_default_str();
   c->add_option("--vertex-order", a->vertex_order,
                 "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "
                 "streams, no gather; every configuration sees the same mesh), or input: keep the file's order")

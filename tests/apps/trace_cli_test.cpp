@@ -1,5 +1,7 @@
 // `ptc trace` and `ptc bench` as a user runs them: outputs, exit codes and one-line errors.
 #include <gtest/gtest.h>
+
+#include <fmt/format.h>
 #include <tbb/info.h>
 #include <sys/wait.h>
 
@@ -188,6 +190,43 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   expect_error({"bench", mesh, "--leaf-format", "soup", "--out", out}, 2, "--leaf-format");
   expect_error({"bench", mesh, "--leaf-format", "tables", "--cluster-leaf", "block-tree", "--out", out}, 2,
                "--leaf-format: tables needs linear cluster leaves");
+  for (const char* bad : {"0.5", "1", "nan", "inf", "never", "-3"})
+    expect_error({"bench", mesh, "--cluster-fallback", bad, "--out", out}, 2, "--cluster-fallback");
+}
+
+// `ptc bench --cluster-fallback auto|off|X`: the threshold in the manifest (auto: 64, off: 0), the
+// frames traced on the fallback counted there and in bench.csv's fallback column, and the
+// summary line; a threshold just above 1 sends every frame of the bunny's twist to it, with zero
+// mismatches.
+TEST_F(TraceCli, BenchClusterFallbackIsRecorded) {
+  const std::string mesh = (fs::path(PTC_TEST_DATA) / "meshes" / "bunny00.off").string();
+  const std::pair<const char*, double> cases[] = {{"", 64.0}, {"off", 0.0}, {"1.0001", 1.0001}};
+  for (const auto& [arg, want] : cases) {
+    const fs::path out = dir_ / (std::string("fb_") + (*arg ? arg : "auto"));
+    std::vector<std::string> args{"bench", mesh, "--frames", "0:2", "--width", "24", "--height", "24",
+                                  "--max-count", "40", "--threads", "1", "--out", out.string()};
+    if (*arg) args.insert(args.end(), {"--cluster-fallback", arg});
+    const CmdResult r = ptc(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_EQ(j["parameters"]["cluster_fallback"].get<double>(), want) << arg;
+    std::uint64_t fell = 0;
+    for (const auto& row : csv_rows(slurp(out / "bench.csv"))) {
+      EXPECT_EQ(row.at("mismatches"), "0");
+      if (row.at("config") != "ours_clusters") {
+        EXPECT_EQ(row.at("fallback"), "0");
+        continue;
+      }
+      EXPECT_GT(std::stod(row.at("swelling")), 1.0);
+      fell += row.at("fallback") == "1";
+    }
+    EXPECT_EQ(j["results"]["cluster_fallback_frames"].get<std::uint64_t>(), fell) << arg;
+    EXPECT_EQ(fell, want == 1.0001 ? 3u : 0u) << arg;
+    EXPECT_NE(r.out.find(want > 0 ? fmt::format("triangle fallback above {:g}: {} of 3 frames", want, fell)
+                                  : std::string("triangle fallback off")),
+              std::string::npos)
+        << r.out;
+  }
 }
 
 // `ptc bench --leaf-format blocks|tables|auto` (and auto by default): the cluster BVH's leaves as

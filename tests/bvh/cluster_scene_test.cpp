@@ -775,6 +775,140 @@ TEST(ClusterScene, FixedGroupTreesAreRefittedExactly) {
   EXPECT_FALSE(parse_group_trees("Refit"));
 }
 
+// The swelling recomputed here, for a scene made at `rest` and now at `now`: each cluster's box
+// from its triangles' corners in the trace frame `f` (to_frame, as the scene's floats), its half
+// area (xy + yz + zx) in double, over the triangles' areas at `rest` in double, scaled into the
+// frame.
+double expected_swelling(const Mesh& rest, const Mesh& now, const Clustering& cl, const FrameMap& f) {
+  double tri = 0, box = 0;
+  for (std::size_t t = 0; t < rest.triangle_count(); ++t) {
+    const auto c = rest.corners(t);
+    tri += 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).norm();
+  }
+  tri *= f.scale * f.scale;
+  for (std::size_t k = 0; k + 1 < cl.triangle_offsets.size(); ++k) {
+    Box3f b;
+    for (std::uint32_t i = cl.triangle_offsets[k]; i < cl.triangle_offsets[k + 1]; ++i)
+      for (const Vec3& p : now.corners(cl.triangle_order[i])) {
+        const Vec3f q = to_frame(p, f);
+        for (int a = 0; a < 3; ++a) b.lo[a] = std::min(b.lo[a], q[a]), b.hi[a] = std::max(b.hi[a], q[a]);
+      }
+    const double ex = double(b.hi[0]) - b.lo[0], ey = double(b.hi[1]) - b.lo[1], ez = double(b.hi[2]) - b.lo[2];
+    box += ex * ey + ey * ez + ez * ex;
+  }
+  return box / tri;
+}
+
+// The mesh with every vertex moved by its own seeded random offset of up to `amplitude` box
+// diagonals per axis: the triangles stretch and the clusters' boxes swell.
+Mesh scattered(const Mesh& m, double amplitude, unsigned seed) {
+  std::vector<Vec3> p(m.positions().begin(), m.positions().end());
+  const double d = m.bounds().extent().norm();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (Vec3& q : p) q += amplitude * d * Vec3(u(rng), u(rng), u(rng));
+  return m.with_positions(std::move(p));
+}
+
+// ClusterScene::swelling() against the recomputation above, frame by frame, and the triangle
+// fallback (SceneConfig::fallback_swelling) with a threshold between the rest pose's swelling and
+// a scattered frame's: on exactly the frames above it the scene traces a triangle BVH (blocks,
+// in the cluster BVH's trace frame, StageTimes::fallback_ms > 0), elsewhere the cluster BVH
+// (data() is cluster_data()); every frame's traced data is valid and hits like brute force, and
+// the cluster BVH, still updated under the fallback, stays valid. Off (the default), no frame
+// falls back. At one and two threads, plain and two-level builds.
+TEST(ClusterScene, SwellingAndTheTriangleFallback) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const Clustering cl = ptc::morton_runs(m, 24);
+  const std::vector<Mesh> frames{m, scattered(m, 0.06, 5u), test::deformed(m, 0.05), scattered(m, 0.002, 6u),
+                                 scattered(m, 0.1, 7u), m};
+  for (std::uint32_t groups : {0u, 8u}) {
+    SceneConfig cfg = test::two_level_defaults();
+    cfg.cluster_group_size = groups;
+    std::vector<double> sw;
+    {
+      ClusterScene off(m, view_of(cl), cfg);  // (fallback_swelling 0: the default)
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        if (f > 0) off.update(frames[f].positions());
+        sw.push_back(off.swelling());
+        const double want = expected_swelling(m, frames[f], cl, off.cluster_data().frame());
+        EXPECT_NEAR(sw.back(), want, 1e-4 * want) << "groups " << groups << " frame " << f;
+        EXPECT_FALSE(off.fallback_active());
+        EXPECT_EQ(&off.data(), &off.cluster_data());
+        EXPECT_EQ(off.times().fallback_ms, 0.0);
+      }
+    }
+    ASSERT_GT(sw[0], 1.0);
+    ASSERT_GT(sw[1], 4.0 * sw[0]) << sw[0];  // (the scattered frames swell, the smooth one hardly)
+    ASSERT_LT(sw[2], 1.5 * sw[0]);
+    cfg.fallback_swelling = std::sqrt(sw[0] * sw[1]);
+    int fell = 0, kept = 0;
+    std::vector<TraceData> first;  // each frame's traced data at one thread
+    for (int threads : {1, 2}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+      ClusterScene s(m, view_of(cl), cfg);
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        if (f > 0) s.update(frames[f].positions());
+        const std::string what =
+            "groups " + std::to_string(groups) + " threads " + std::to_string(threads) + " frame " + std::to_string(f);
+        EXPECT_EQ(s.swelling(), sw[f]) << what;  // (the same boxes at any thread count)
+        const bool above = sw[f] > cfg.fallback_swelling;
+        ASSERT_EQ(s.fallback_active(), above) << what;
+        const TraceData& d = s.data();
+        if (above) {
+          ++fell;
+          EXPECT_NE(&d, &s.cluster_data()) << what;
+          EXPECT_EQ(d.format, LeafFormat::Blocks) << what;
+          EXPECT_GT(s.times().fallback_ms, 0.0) << what;
+          EXPECT_EQ(d.origin, s.cluster_data().origin) << what;
+          EXPECT_EQ(d.scale, s.cluster_data().scale) << what;
+          EXPECT_TRUE(validate(s.cluster_data(), m.triangle_count(), false).empty()) << what;
+        } else {
+          ++kept;
+          EXPECT_EQ(&d, &s.cluster_data()) << what;
+          EXPECT_EQ(s.times().fallback_ms, 0.0) << what;
+        }
+        EXPECT_GE(s.times().total_ms(), s.times().fallback_ms) << what;
+        ASSERT_TRUE(validate(d, m.triangle_count(), false).empty()) << what << test::joined(validate(d, m.triangle_count(), false));
+        if (threads == 1)  // (at two threads: the same traced bytes)
+          ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(d, frames[f], 31u + static_cast<unsigned>(f), 200, what));
+        else
+          expect_same_data(d, first[f], what);
+        if (threads == 1) first.push_back(d);
+      }
+    }
+    EXPECT_GE(fell, 4) << "groups " << groups;  // (frames 1 and 4 at least, twice)
+    EXPECT_GE(kept, 6) << "groups " << groups;
+  }
+}
+
+// Hard cases of the swelling: the same mesh a thousand times smaller and a million units away
+// has the same swelling (both sums are taken in the trace frame; the tolerance covers the
+// doubles' rounding of the moved positions); a mesh whose triangles all
+// have zero area (collinear corners) has none (NaN), and no threshold makes it fall back.
+TEST(ClusterScene, SwellingIsScaleFreeAndNaNWithoutArea) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const Clustering cl = ptc::morton_runs(m, 24);
+  std::vector<Vec3> far(m.positions().begin(), m.positions().end());
+  for (Vec3& p : far) p = 1e-3 * p + Vec3(1e6, -1e6, 3e5);
+  const Mesh small_far = m.with_positions(std::move(far));
+  SceneConfig cfg = test::two_level_defaults();
+  const ClusterScene a(m, view_of(cl), cfg), b(small_far, view_of(cl), cfg);
+  EXPECT_NEAR(b.swelling(), a.swelling(), 1e-3 * a.swelling());
+  EXPECT_GT(a.swelling(), 1.0);
+
+  std::vector<Vec3> line;
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) line.push_back(Vec3(double(v % 97), 2.0 * double(v % 97), 0.0));
+  const Mesh flat = m.with_positions(std::move(line));
+  cfg.fallback_swelling = 1.5;
+  ClusterScene c(flat, view_of(cl), cfg);
+  EXPECT_TRUE(std::isnan(c.swelling()));
+  EXPECT_FALSE(c.fallback_active());
+  c.update(m.positions());  // (areas are those of the positions the scene was made with)
+  EXPECT_TRUE(std::isnan(c.swelling()));
+  EXPECT_FALSE(c.fallback_active());
+}
+
 TEST(ClusterScene, TheSweepBuilderHasNoTwoLevelBuild) {
   const Mesh m = test::load_mesh("bunny00.off");
   const Clustering runs = ptc::morton_runs(m, 20);

@@ -299,6 +299,72 @@ TEST(PeerBench, ScenePositionsDriveTheFrames) {
   }
 }
 
+// Clusters that come apart: the explode deformer (every triangle of the sphere flies off along
+// its normal, 4% of the diagonal a frame) swells ours_clusters' boxes frame by frame. With a
+// threshold the bench traces exactly the frames whose swelling is above it on the triangle
+// fallback (its build in fallback_ms and build_ms), with zero mismatches on every frame; the
+// CSV carries swelling, fallback and fallback_ms as the rows hold them, and the text names the
+// threshold, the count and the scene frames. Off (0), no frame falls back.
+TEST(PeerBench, SwollenClustersTraceOnTheTriangleFallback) {
+  const Mesh m = sphere(4);
+  ptc::DeformParams ex = ptc::deform_preset(ptc::DeformKind::Explode);
+  ex.amplitude = 0.04;
+  for (double threshold : {0.0, 12.0}) {
+    ptc::PeerBenchConfig cfg;
+    cfg.frames = {0, 5};
+    cfg.width = 40, cfg.height = 32;
+    cfg.max_count = 20;
+    cfg.cluster_fallback = threshold;
+    ptc::Scene sc = scene_of(m, ptc::DeformKind::Explode, ex);
+    const ptc::PeerBenchResult r = ptc::run_peer_bench(sc, std::nullopt, cfg);
+    EXPECT_EQ(r.cluster_fallback, threshold);
+    std::vector<const ptc::BenchRow*> ours;
+    for (const auto& row : r.rows) {
+      EXPECT_EQ(row.agreement.mismatches(), 0u) << row.config << " frame " << row.frame;
+      if (row.config == "ours_clusters") ours.push_back(&row);
+      else EXPECT_TRUE(std::isnan(row.swelling) && row.fallback == 0) << row.config;
+    }
+    ASSERT_EQ(ours.size(), 6u);
+    std::vector<std::int64_t> fell;
+    for (std::size_t i = 0; i < ours.size(); ++i) {
+      const ptc::BenchRow& row = *ours[i];
+      if (i > 0) EXPECT_GT(row.swelling, ours[i - 1]->swelling) << "frame " << i;
+      const bool above = threshold > 0 && row.swelling > threshold;
+      EXPECT_EQ(row.fallback, above ? 1 : 0) << "frame " << i << " swelling " << row.swelling;
+      if (above) {
+        fell.push_back(row.scene_frame);
+        EXPECT_GT(row.times.stages.fallback_ms, 0.0);
+        EXPECT_GE(row.times.build_ms, row.times.stages.fallback_ms);
+      } else {
+        EXPECT_EQ(row.times.stages.fallback_ms, 0.0);
+      }
+    }
+    EXPECT_LT(ours.front()->swelling, 12.0);
+    EXPECT_GT(ours.back()->swelling, 12.0);
+    const auto csv = ptc::test::csv_rows(ptc::bench_table(r).csv.str());
+    ASSERT_EQ(csv.size(), r.rows.size());
+    for (std::size_t i = 0; i < csv.size(); ++i) {
+      const ptc::BenchRow& row = r.rows[i];
+      EXPECT_EQ(csv[i].at("fallback"), std::to_string(row.fallback));
+      if (row.config == "ours_clusters") {
+        EXPECT_NEAR(std::stod(csv[i].at("swelling")), row.swelling, 1e-6 * row.swelling);
+        EXPECT_NEAR(std::stod(csv[i].at("fallback_ms")), row.times.stages.fallback_ms, 1e-6 + 1e-6 * row.times.stages.fallback_ms);
+      }
+    }
+    const std::string text = ptc::bench_text(r);
+    if (threshold > 0) {
+      ASSERT_GE(fell.size(), 2u);
+      for (std::size_t i = 1; i < fell.size(); ++i) ASSERT_EQ(fell[i], fell[i - 1] + 1);  // (one run: A-B)
+      const std::string want = fmt::format("triangle fallback above 12: {} of 6 frames (scene frames {}-{})", fell.size(),
+                                           fell.front(), fell.back());
+      EXPECT_NE(text.find(want), std::string::npos) << want << "\n" << text;
+    } else {
+      EXPECT_TRUE(fell.empty());
+      EXPECT_NE(text.find("triangle fallback off"), std::string::npos) << text;
+    }
+  }
+}
+
 // The per-frame range behind the whole-frame medians, on rows made by hand: the ratio of the
 // peer's whole frame to the row's, frame by frame, over the frames of the medians only, skipping
 // frames where either side is missing, 0 ms or not finite; the lowest's frame (benchmark and
