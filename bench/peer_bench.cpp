@@ -5,7 +5,9 @@
 // built-in scenes' twist deformer (frame 0 out of the medians).
 //
 //   build/bin/peer_bench [MESH] [--levels 2] [--frames 8] [--size 1024] [--threads 1]
-//                        [--max-count 32] [--deform twist|bend|wave|rigid|explode] [--csv FILE]
+//                        [--max-count 32] [--deform twist|bend|wave|rigid|explode] [--cluster-fallback X|off]
+//                        [--csv FILE]
+// --cluster-fallback: ptc bench's (X: the swelling threshold, default 64; off: the cluster BVH on every frame).
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -40,6 +42,12 @@ int main(int argc, char** argv) {
       else if (a == "--threads") cfg.threads = static_cast<unsigned>(std::stoi(value("--threads")));
       else if (a == "--max-count") cfg.max_count = static_cast<std::uint32_t>(std::stoul(value("--max-count")));
       else if (a == "--csv") csv = value("--csv");
+      else if (a == "--cluster-fallback") {
+        const std::string v = value("--cluster-fallback");
+        cfg.cluster_fallback = v == "off" ? 0.0 : std::stod(v);
+        if (!(cfg.cluster_fallback == 0.0 || cfg.cluster_fallback > 1.0))
+          throw std::invalid_argument("--cluster-fallback: off or a number above 1");
+      }
       else if (a == "--deform") {
         const auto d = parse_deform_kind(value("--deform"));
         if (!d) throw std::invalid_argument("--deform: twist, bend, wave, rigid or explode");

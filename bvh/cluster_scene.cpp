@@ -50,18 +50,37 @@ double triangle_area(const Mesh& mesh, double scale) {
 }
 
 // The sum of the boxes' half surface areas (xy + yz + zx), empty boxes counting 0.
+// SSE2: a box's lo and hi by two unaligned loads (lo x y z hi.x, hi x y z and the next box's
+// lo.x; the last box alone), its extents clamped at 0, times their rotation (ey ez ex) summed in
+// float per 1024 boxes, the runs added in double in order. For the twist's 52k clusters 0.044 ms
+// on warm boxes (a stand-alone loop), against 0.09-0.12 ms for the scalar form (double products,
+// a branch per box); about 2% of the one-thread update.
 double box_half_areas(std::span<const Box3f> boxes) {
+  static_assert(sizeof(Box3f) == 6 * sizeof(float));
   double sum = 0;
-  for (const Box3f& b : boxes) {
-    const float ex = b.hi[0] - b.lo[0], ey = b.hi[1] - b.lo[1], ez = b.hi[2] - b.lo[2];
-    if (ex >= 0 && ey >= 0 && ez >= 0) sum += double(ex) * ey + double(ey) * ez + double(ez) * ex;
+  const std::size_t n = boxes.size();
+  const float* f = n ? &boxes[0].lo[0] : nullptr;
+  const __m128 keep = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)), zero = _mm_setzero_ps();
+  std::size_t i = 0;
+  while (i + 1 < n) {
+    __m128 acc = zero;
+    for (const std::size_t end = std::min(n - 1, i + 1024); i < end; ++i) {
+      const __m128 e = _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(f + 6 * i + 3), _mm_loadu_ps(f + 6 * i)), zero);
+      acc = _mm_add_ps(acc, _mm_and_ps(_mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1))), keep));
+    }
+    alignas(16) float a[4];
+    _mm_store_ps(a, acc);
+    sum += double(a[0]) + double(a[1]) + double(a[2]);
+  }
+  if (n) {  // (the last box: its hi's load would read past the array)
+    const Box3f& b = boxes[n - 1];
+    const float ex = std::max(b.hi[0] - b.lo[0], 0.0f), ey = std::max(b.hi[1] - b.lo[1], 0.0f),
+                ez = std::max(b.hi[2] - b.lo[2], 0.0f);
+    sum += double(ex * ey) + double(ey * ez) + double(ez * ex);
   }
   return sum;
 }
 
-}  // namespace
-
-namespace {
 
 // The set-up's per-cluster and per-block passes run in chunks on the caller's threads (oneTBB,
 // `--threads N`); each chunk writes only its own clusters' or blocks' entries.
@@ -793,30 +812,31 @@ bool ClusterScene::lists_are_corners(std::size_t vertex_count, std::span<const s
 void ClusterScene::update(std::span<const Vec3> positions) {
   update_clusters(positions);
   // The swelling (the boxes' half areas against the triangles' areas) and, above the threshold,
-  // the frame's triangle BVH. The sum is counted in build_ms (about 0.02 ms for 49k clusters).
+  // the frame's triangle BVH. The sum is counted in build_ms (box_half_areas: about 0.04 ms).
   const double t0 = clock_ms(cfg_.clock);
   swelling_ = triangle_area_ > 0 ? box_half_areas(f_.boxes) / triangle_area_ : std::numeric_limits<double>::quiet_NaN();
   f_.times.build_ms += clock_ms(cfg_.clock) - t0;
-  fallback_active_ = cfg_.fallback_swelling > 0 && swelling_ > cfg_.fallback_swelling;
+  fallback_active_ = false;
   f_.times.fallback_ms = 0.0;
-  if (fallback_active_) update_fallback(positions);
+  if (cfg_.fallback_swelling > 0 && swelling_ > cfg_.fallback_swelling) update_fallback(positions);
 }
 
 // The frame's triangle BVH, in the cluster BVH's trace frame (the same float vertices, so the
 // same hits), made at the first frame that needs it and rebuilt at every other.
 void ClusterScene::update_fallback(std::span<const Vec3> positions) {
   const double t0 = clock_ms(cfg_.clock);
-  if (!fallback_) {
+  if (!fallback_) {  // (made whole before it is used: a throw leaves the cluster BVH traced)
     SceneConfig tc = triangle_scene_defaults();
     tc.origin = f_.data.origin;
     tc.scale = f_.data.scale;
     tc.clock = cfg_.clock;
-    fallback_ = std::make_unique<TriangleScene>(
-        Mesh(std::vector<Tri>(tris_->begin(), tris_->end()), std::vector<Vec3>(positions.begin(), positions.end())), tc);
+    auto made = std::make_unique<TriangleScene>(Mesh::sharing(tris_, std::vector<Vec3>(positions.begin(), positions.end())), tc);
+    fallback_ = std::move(made);
   } else {
     fallback_->update(positions);
   }
   f_.times.fallback_ms = clock_ms(cfg_.clock) - t0;
+  fallback_active_ = true;
 }
 
 void ClusterScene::update_clusters(std::span<const Vec3> positions) {

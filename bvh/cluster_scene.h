@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -80,10 +81,12 @@ class ClusterScene {
   /// value grows as a cluster's triangles move apart, and with it the boxes a ray enters and the
   /// triangles it tests. Triangles that keep their size (bending, rigid pieces) keep the
   /// denominator; a mesh that grows as a whole raises the value with it. NaN for a mesh of
-  /// zero area.
+  /// zero area and for a scene built once (SceneConfig::built_once).
   [[nodiscard]] double swelling() const { return swelling_; }
   /// Whether the last frame is traced on the triangle fallback (SceneConfig::fallback_swelling).
   [[nodiscard]] bool fallback_active() const { return fallback_active_; }
+  /// The triangle fallback's scene (null until a frame first needs it).
+  [[nodiscard]] const TriangleScene* fallback_scene() const { return fallback_.get(); }
   /// The last update's binary tree: over the clusters (primitive i = scene cluster i), or with
   /// GroupTrees::Refit over the groups (primitive g = group g of group_offsets()).
   [[nodiscard]] const Bvh& bvh() const { return f_.bvh; }
@@ -212,7 +215,7 @@ class ClusterScene {
   LeafBytes leaf_estimate_;  // leaf_bytes_estimate()
   SceneFrame f_;
   double triangle_area_ = 0;  // the triangles' areas at the scene's first positions, in the trace frame (swelling())
-  double swelling_ = 0;
+  double swelling_ = std::numeric_limits<double>::quiet_NaN();  // (NaN for a scene built once: no frames)
   bool fallback_active_ = false;
   std::unique_ptr<TriangleScene> fallback_;  // made at the first frame traced on it
 };

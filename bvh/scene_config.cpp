@@ -84,7 +84,13 @@ Vec3 trace_frame_origin(const Mesh& mesh, const SceneConfig& cfg) {
 
 FrameMap trace_frame(const Mesh& mesh, const SceneConfig& cfg) {
   const Vec3 origin = trace_frame_origin(mesh, cfg);
-  return {origin, cfg.scale ? *cfg.scale : trace_frame_scale(mesh, origin)};
+  if (cfg.scale) {  // (another scene's frame: a power of two, as trace_frame_scale gives)
+    int e = 0;
+    if (!std::isfinite(*cfg.scale) || !(*cfg.scale > 0) || std::frexp(*cfg.scale, &e) != 0.5)
+      throw std::invalid_argument("trace frame scale " + std::to_string(*cfg.scale) + " is not a power of two");
+    return {origin, *cfg.scale};
+  }
+  return {origin, trace_frame_scale(mesh, origin)};
 }
 
 double trace_frame_scale(const Mesh& mesh, const Vec3& origin) {

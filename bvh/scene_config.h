@@ -22,7 +22,7 @@ struct StageTimes {
   /// primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion, on
   /// more than one thread); 0 when the fill of the blocks makes them (leaf_data_ms)
   double boxes_ms = 0;
-  double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder; GroupTrees::Refit: and the groups' refit)
+  double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder; GroupTrees::Refit: and the groups' refit; a ClusterScene's update: and its swelling sum)
   double collapse_ms = 0;   ///< binary -> 4-wide, (clusters) linking, and the 8-wide regroup (regroup_to_8)
   /// SoA triangle blocks (ClusterScene::fused_vertex_pass() on one thread: and the cluster boxes,
   /// taken from the blocks' corners as they are written)
@@ -85,9 +85,9 @@ enum class SahBuilder { Binned, Sweep };
 /// The swelling above which the commands trace a cluster scene's frame on a triangle BVH
 /// (SceneConfig::fallback_swelling, `--cluster-fallback auto`). ClusterScene::swelling() is
 /// about 2-3 for clusters of 17-32 triangles on the built-in meshes at rest and stays there
-/// under their bending, draping and skinning (the cloth 2.0-2.1, the twist and the wave about
-/// 3); on the explode scene it grows with the square of the time (5 at frame 1, 30 at frame 5,
-/// 95 at frame 10). There, with 1024 x 1024 primary rays and their shadow rays at two threads,
+/// under their bending, draping and skinning (the cloth 2.0-2.1, the twist 3.0-3.6); on the
+/// explode scene it grows fast (5.1 at frame 1, 30 at frame 5, 95 at frame 10, 344 at frame
+/// 20). There, with 1024 x 1024 primary rays and their shadow rays at two threads,
 /// the cluster BVH's whole frame passed the per-frame triangle BVH's between swellings 64 and
 /// 79 (docs/tracing.md, "Swollen clusters and the triangle fallback").
 inline constexpr double kAutoFallbackSwelling = 64.0;
@@ -97,7 +97,7 @@ struct SceneConfig {
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
   /// The trace frame's scale (a power of two, as trace_frame_scale gives); default:
   /// trace_frame_scale of the first frame (a scene that must share another's frame sets it).
-  std::optional<double> scale;
+  std::optional<double> scale = std::nullopt;
   ClusterLeaf cluster_leaf = ClusterLeaf::Linear;  ///< ClusterScene only (Linear: the paper's leaves, and the faster with Acc clusters, bench/bvh_bench.cpp)
   StageClock clock = StageClock::Wall;  ///< clock of the StageTimes (see stage_clock.h)
   /// ClusterScene with ClusterLeaf::Linear only: how the leaves hold their triangles (blocks of

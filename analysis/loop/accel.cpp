@@ -49,8 +49,12 @@ class OursAccel final : public Accel {
   }
   [[nodiscard]] Vec3 origin() const override { return scene_->data().origin; }
   [[nodiscard]] std::optional<double> sah_cost() const override {
-    if constexpr (requires { scene_->sah_cost(); }) return scene_->sah_cost();  // over the clusters (fixed group trees too)
-    else return scene_->bvh().cost;
+    if constexpr (requires { scene_->sah_cost(); }) {  // over the clusters (fixed group trees too),
+      if (scene_->fallback_active()) return scene_->fallback_scene()->bvh().cost;  // or the traced triangle BVH's
+      return scene_->sah_cost();
+    } else {
+      return scene_->bvh().cost;
+    }
   }
   [[nodiscard]] const S& scene() const { return *scene_; }
 

@@ -142,7 +142,7 @@ void register_bench(CLI::App& app, Context& ctx) {
   c->add_option("--cluster-fallback", a->cluster_fallback,
                 "trace a frame of ours_clusters on a BVH over its triangles, rebuilt that frame, when the clusters "
                 "have come apart: their boxes' half area over the triangles' area (the 'swelling' column) above X. "
-                "auto: X = 64 (about 3 at rest on the built-in meshes; the explode scene passes it at frame 9); off: "
+                "auto: X = 64 (2-3.6 on the built-in meshes but the explode scene, which passes it at frame 8); off: "
                 "the cluster BVH on every frame (the method as published); or a number X > 1")
       ->check(CLI::Validator(
           [](std::string& s) -> std::string {

@@ -695,6 +695,21 @@ TEST(Renumbering, InPlaceEqualsTheGatherAndLeavesSharersAlone) {
     }
     for (std::size_t t = 0; t < tris.size(); ++t) ASSERT_EQ(sharer.triangle(t), tris[t]) << trial;
     for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(sharer.position(i), pos[i]) << trial;
+    // Mesh::sharing another mesh's array (no copy): renaming copies it, the owner keeps its own.
+    const Mesh owner(tris, pos);
+    Mesh viewer = Mesh::sharing(owner.shared_triangles(), pos);
+    EXPECT_EQ(viewer.triangles().data(), owner.triangles().data()) << trial;
+    viewer.renumber_vertices(to_old);
+    EXPECT_NE(viewer.triangles().data(), owner.triangles().data()) << trial;
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      ASSERT_EQ(viewer.triangle(t), want.triangle(t)) << trial << " triangle " << t;
+      ASSERT_EQ(owner.triangle(t), tris[t]) << trial;
+    }
+  }
+  {  // Mesh::sharing checks the indices against its positions, as the constructor does
+    const Mesh quad({{0, 1, 2}, {2, 1, 3}}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)});
+    EXPECT_THROW((void)Mesh::sharing(quad.shared_triangles(), std::vector<Vec3>(3)), std::invalid_argument);
+    EXPECT_EQ(Mesh::sharing(nullptr, {}).triangle_count(), 0u);
   }
   // Refused before anything changes, with the message inverse_permutation gives.
   const Mesh m({{0, 1, 2}, {2, 1, 3}}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)});

@@ -15,6 +15,20 @@ Mesh::Mesh(std::vector<Tri> triangles, std::vector<Vec3> positions) : pos_(std::
   tris_ = std::make_shared<std::vector<Tri>>(std::move(triangles));
 }
 
+Mesh Mesh::sharing(std::shared_ptr<const std::vector<Tri>> triangles, std::vector<Vec3> positions) {
+  Mesh m;
+  // (renumber_vertices renames in place only when no one else holds the array)
+  m.tris_ = std::const_pointer_cast<std::vector<Tri>>(std::move(triangles));
+  m.pos_ = std::move(positions);
+  const std::size_t n = m.pos_.size();
+  for (std::size_t t = 0; t < m.triangle_count(); ++t)
+    for (std::uint32_t v : (*m.tris_)[t])
+      if (v >= n)
+        throw std::invalid_argument("Mesh: triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
+                                    " of " + std::to_string(n));
+  return m;
+}
+
 void Mesh::set_positions(std::vector<Vec3> positions) {
   if (positions.size() != pos_.size())
     throw std::invalid_argument("Mesh::set_positions: " + std::to_string(positions.size()) + " positions for " +

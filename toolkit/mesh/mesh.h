@@ -18,6 +18,9 @@ class Mesh {
   /// (loaders check this and report the element; here a violation is a programmer error and
   /// throws std::invalid_argument).
   Mesh(std::vector<Tri> triangles, std::vector<Vec3> positions);
+  /// A mesh sharing a triangle array another holds (shared_triangles(); no copy; null: no
+  /// triangles), with these positions; indices checked as by the constructor.
+  [[nodiscard]] static Mesh sharing(std::shared_ptr<const std::vector<Tri>> triangles, std::vector<Vec3> positions);
 
   [[nodiscard]] std::size_t triangle_count() const { return tris_ ? tris_->size() : 0; }
   [[nodiscard]] std::size_t vertex_count() const { return pos_.size(); }

@@ -328,7 +328,9 @@ TEST(PeerBench, SwollenClustersTraceOnTheTriangleFallback) {
     std::vector<std::int64_t> fell;
     for (std::size_t i = 0; i < ours.size(); ++i) {
       const ptc::BenchRow& row = *ours[i];
-      if (i > 0) EXPECT_GT(row.swelling, ours[i - 1]->swelling) << "frame " << i;
+      if (i > 0) {
+        EXPECT_GT(row.swelling, ours[i - 1]->swelling) << "frame " << i;
+      }
       const bool above = threshold > 0 && row.swelling > threshold;
       EXPECT_EQ(row.fallback, above ? 1 : 0) << "frame " << i << " swelling " << row.swelling;
       if (above) {
