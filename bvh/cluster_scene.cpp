@@ -81,7 +81,6 @@ double box_half_areas(std::span<const Box3f> boxes) {
   return sum;
 }
 
-
 // The set-up's per-cluster and per-block passes run in chunks on the caller's threads (oneTBB,
 // `--threads N`); each chunk writes only its own clusters' or blocks' entries.
 constexpr std::size_t kSetupClustersPerTask = 1024;
