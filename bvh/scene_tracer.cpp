@@ -83,6 +83,7 @@ SceneConfig cluster_config(const SceneTracerConfig& cfg, const Vec3& origin) {
   c.cluster_group_size = cfg.cluster_group_size;
   c.min_cluster_groups = cfg.min_cluster_groups;
   c.group_trees = cfg.group_trees;
+  c.fallback_swelling = cfg.cluster_fallback;
   return c;
 }
 

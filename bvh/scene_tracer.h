@@ -20,6 +20,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -54,6 +55,8 @@ struct SceneTracerConfig {
   /// SceneConfig::min_cluster_groups (0: groups of exactly up to cluster_group_size clusters).
   std::uint32_t min_cluster_groups = cluster_scene_defaults().min_cluster_groups;
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
+  /// The moving cluster BVH's SceneConfig::fallback_swelling (0, the default: never).
+  double cluster_fallback = 0.0;
 };
 
 /// The configuration of the cluster BVH a SceneTracer with `cfg` builds, in the trace frame
@@ -92,6 +95,12 @@ class SceneTracer {
   [[nodiscard]] std::size_t static_triangles() const { return static_n_; }
   [[nodiscard]] std::size_t moving_triangles() const { return moving_n_; }
   [[nodiscard]] bool moving_is_clusters() const { return bool(moving_cs_); }
+  /// Whether the last update traced the moving cluster BVH's frame on its triangle fallback
+  /// (SceneTracerConfig::cluster_fallback), and that BVH's swelling (NaN without one).
+  [[nodiscard]] bool moving_fallback_active() const { return moving_cs_ && moving_cs_->fallback_active(); }
+  [[nodiscard]] double moving_swelling() const {
+    return moving_cs_ ? moving_cs_->swelling() : std::numeric_limits<double>::quiet_NaN();
+  }
   /// The cluster BVH's group size (ClusterScene::group_size; 0: the plain build or no cluster BVH).
   [[nodiscard]] std::uint32_t cluster_group_size() const;
   /// Construction time of the static BVH (all parts static: of the one BVH), milliseconds.

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "bvh/scene_config.h"
 #include "render/camera.h"
 #include "toolkit/core/error.h"
 
@@ -117,6 +118,18 @@ std::pair<double, double> parse_value_range(const std::string& s, std::string_vi
   const double lo = num(s.substr(0, c)), hi = num(s.substr(c + 1));
   if (!(lo < hi)) throw UsageError(std::string(flag), fmt::format("'{}': MIN must be below MAX", s));
   return {lo, hi};
+}
+
+std::optional<double> parse_cluster_fallback(const std::string& s) {
+  if (s == "auto") return bvh::kAutoFallbackSwelling;
+  if (s == "off") return 0.0;
+  try {
+    std::size_t n = 0;
+    const double v = std::stod(s, &n);
+    if (n == s.size() && std::isfinite(v) && v > 1.0) return v;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
 }
 
 }  // namespace ptc

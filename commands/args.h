@@ -35,6 +35,10 @@ void check_image_size(int width, int height);
 /// command; any other value as given.
 [[nodiscard]] unsigned resolve_threads(unsigned threads);
 
+/// --cluster-fallback of `ptc bench` and `ptc trace`: auto (bvh::kAutoFallbackSwelling), off (0)
+/// or a finite swelling above 1; nothing for anything else.
+[[nodiscard]] std::optional<double> parse_cluster_fallback(const std::string& s);
+
 /// Frames a command may use: those of the scene's listed range (Scene::frames(): a scene file's
 /// "frames", a built-in scene's range), or with `extend` (--extend-frames) any frame the sources
 /// can give (procedural sources go on forever; a finite source stops at its last frame).

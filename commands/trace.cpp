@@ -141,6 +141,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   tcfg.cluster_group_size = tcfg.still_cluster_group_size = groups;
   if (opt.cluster_group_size) tcfg.min_cluster_groups = 0;  // (given: groups of exactly up to N)
   tcfg.group_trees = opt.group_trees.value_or(bvh::cluster_scene_defaults().group_trees);
+  tcfg.cluster_fallback = opt.cluster_fallback;
   // Set up at the rest pose, as ptc bench and the experiments do, and updated to every frame in
   // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend
   // on which frame the run starts at, so a frame traces the same in any range (the camera frames
@@ -194,6 +195,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   std::size_t empty_frames = 0;  // frames without a primary hit: the first noted, the rest counted
   std::uint64_t hits = 0;        // primary hits over the frames (results.hits)
   nlohmann::json per_frame = nlohmann::json::array();
+  std::uint64_t fallback_frames = 0;
+  bool tracer_has_moving_clusters = false;
 
   std::ostringstream text;  // the table; --json prints the rows as JSON instead
   text << fmt::format("{}: {} triangles ({} static, {} moving; {} part(s)), {}; {}x{} pixels, {} thread(s); "
@@ -259,6 +262,12 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     if (rc.shadows) pass("shadow", r.shadow_stats, false);
     if (rc.ao_samples > 0) pass("ao", r.ao_stats, false);
     per_frame.push_back({{"frame", f}, {"rays", r.primary_stats.rays}, {"hits", r.primary_stats.hits}});
+    tracer_has_moving_clusters = tracer.moving_is_clusters();
+    if (tracer.moving_is_clusters()) {  // the moving cluster BVH's swelling, and whether its triangle fallback traced the frame
+      per_frame.back()["swelling"] = tracer.moving_swelling();
+      per_frame.back()["fallback"] = tracer.moving_fallback_active();
+      fallback_frames += tracer.moving_fallback_active() ? 1 : 0;
+    }
     hits += r.primary_stats.hits;
     if (r.primary_stats.hits == 0 && r.primary_stats.rays > 0 && ++empty_frames == 1)  // background only
       std::cerr << "ptc: note: no primary ray hit the mesh in frame " << f
@@ -293,6 +302,10 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   if (use_clusters) manifest.set_parameter("cluster_group_size", groups_used);
   if (use_clusters) manifest.set_parameter("min_cluster_groups", tcfg.min_cluster_groups);
   if (use_clusters && groups_used > 1) manifest.set_parameter("group_trees", bvh::to_string(tcfg.group_trees));
+  if (use_clusters) {
+    manifest.set_parameter("cluster_fallback", tcfg.cluster_fallback);
+    manifest.set_result("cluster_fallback_frames", fallback_frames);
+  }
   manifest.set_parameter("width", rc.width);
   manifest.set_parameter("height", rc.height);
   manifest.set_parameter("threads", threads);
@@ -327,6 +340,9 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     return;
   }
   out << text.str();
+  if (tracer_has_moving_clusters && tcfg.cluster_fallback > 0)
+    out << fmt::format("cluster BVH: {} of {} frame(s) traced on the triangle fallback (swelling above {:g})\n",
+                       fallback_frames, per_frame.size(), tcfg.cluster_fallback);
   const std::string names = "{shaded,depth,normal,cost_nodes,cost_triangles" + std::string(rc.ao_samples > 0 ? ",ao" : "") + "}";
   out << "wrote " << opt.out_dir.string() << "/"
       << (sequence ? fmt::format("{}_{:04d}..{:04d}.png", names, range.first, range.last) : names + ".png")

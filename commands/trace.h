@@ -10,6 +10,7 @@
 #include "render/images.h"
 #include "render/camera.h"
 #include "render/view.h"
+#include "bvh/scene_config.h"
 #include "bvh/vertex_order.h"
 #include "toolkit/anim/scene.h"
 
@@ -30,6 +31,9 @@ struct TraceCommandOptions {
   /// still scene (every part static, built once) the plain build: the groups make the per-frame
   /// rebuild cheap, and its one tree is never rebuilt (docs/tracing.md, "A still scene").
   std::optional<std::uint32_t> cluster_group_size;
+  /// --cluster-fallback: the moving cluster BVH traces a frame on a triangle BVH when its swelling
+  /// exceeds this (bvh::SceneConfig::fallback_swelling; 0: never).
+  double cluster_fallback = bvh::kAutoFallbackSwelling;
   /// --group-trees: what the two-level build does inside a group (unset: the default, refit).
   /// Given for a still scene without --cluster-groups, it is a usage error (nothing to do).
   std::optional<bvh::GroupTrees> group_trees;

@@ -66,6 +66,20 @@ inline std::optional<double> number_arg(const std::string& s) {
   return std::nullopt;
 }
 
+/// --cluster-fallback (commands/args.h parse_cluster_fallback).
+inline CLI::Validator cluster_fallback_validator() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        return parse_cluster_fallback(s) ? std::string() : "'" + s + "' is not auto, off or a number above 1";
+      },
+      "auto|off|X");
+}
+inline constexpr const char* kClusterFallbackHelp =
+    "trace a frame of the cluster BVH on a BVH over its triangles, rebuilt that frame, when the clusters have come "
+    "apart: their boxes' half area over the triangles' area (the swelling) above X. auto: X = 64 (2-3.6 on the "
+    "built-in meshes but the explode scene, which passes it at frame 8); off: the cluster BVH on every frame (the "
+    "method as published); or a number X > 1";
+
 /// A finite number in [lo, hi]: refuses nan and inf (CLI11's Range lets nan through, since no
 /// comparison with it fails) and names the bounds in %g form (its "0.000000" hid a bound of 1e-9).
 inline CLI::Validator finite_in(double lo, double hi) {

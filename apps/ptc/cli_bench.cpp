@@ -21,14 +21,6 @@ struct BenchArgs {
   CLI::App* app = nullptr;
 };
 
-// --cluster-fallback: auto (bvh::kAutoFallbackSwelling), off (0) or a swelling above 1.
-std::optional<double> parse_cluster_fallback(const std::string& s) {
-  if (s == "auto") return bvh::kAutoFallbackSwelling;
-  if (s == "off") return 0.0;
-  const std::optional<double> v = number_arg(s);
-  if (v && std::isfinite(*v) && *v > 1.0) return v;
-  return std::nullopt;
-}
 }  // namespace
 
 void register_bench(CLI::App& app, Context& ctx) {
@@ -139,17 +131,8 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->capture_default_str();
   a->group_trees.add_to(c);
   static_assert(bvh::kAutoFallbackSwelling == 64.0, "the --cluster-fallback help quotes the threshold");
-  c->add_option("--cluster-fallback", a->cluster_fallback,
-                "trace a frame of ours_clusters on a BVH over its triangles, rebuilt that frame, when the clusters "
-                "have come apart: their boxes' half area over the triangles' area (the 'swelling' column) above X. "
-                "auto: X = 64 (2-3.6 on the built-in meshes but the explode scene, which passes it at frame 8); off: "
-                "the cluster BVH on every frame (the method as published); or a number X > 1")
-      ->check(CLI::Validator(
-          [](std::string& s) -> std::string {
-            return parse_cluster_fallback(s) ? std::string()
-                                             : "'" + s + "' is not auto, off or a number above 1";
-          },
-          "auto|off|X"))
+  c->add_option("--cluster-fallback", a->cluster_fallback, kClusterFallbackHelp)
+      ->check(cluster_fallback_validator())
       ->capture_default_str();
   c->add_option("--vertex-order", a->vertex_order,
                 "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "

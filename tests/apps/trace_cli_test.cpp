@@ -253,7 +253,9 @@ TEST_F(TraceCli, BenchTracesTheTablesFormatLikeTheBlocks) {
     const double est_blocks = leaves["estimated_blocks_bytes"], est_tables = leaves["estimated_tables_bytes"];
     EXPECT_GT(est_blocks, 0.0);
     const std::string used = f < 2 ? formats[f] : est_tables <= 0.85 * est_blocks ? "tables" : "blocks";
-    if (f >= 2) EXPECT_EQ(used, "tables") << est_tables << " " << est_blocks;
+    if (f >= 2) {
+      EXPECT_EQ(used, "tables") << est_tables << " " << est_blocks;
+    }
     EXPECT_EQ(leaves["format"], used);
     EXPECT_EQ(j["results"]["cluster_leaves"]["triangles"], j["results"]["triangles"]);
     EXPECT_NE(r.out.find("cluster leaves: " + used), std::string::npos) << r.out;
@@ -265,6 +267,51 @@ TEST_F(TraceCli, BenchTracesTheTablesFormatLikeTheBlocks) {
   }
   ASSERT_EQ(hits[0].size(), 3u);
   for (int f = 1; f < 4; ++f) EXPECT_EQ(hits[0], hits[f]) << formats[f];
+}
+
+// `ptc trace --clusters D --cluster-fallback X`: with X just above 1 every frame of the bunny's
+// twist is traced on the moving cluster BVH's triangle fallback, and the images and hits are
+// those of the cluster BVH on every frame (off): the same bytes, frame by frame; the manifest
+// records the threshold, each frame's swelling and flag, and the count; the summary says it.
+// Without --clusters the flag is a usage error.
+TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
+  const std::string mesh = (fs::path(PTC_TEST_DATA) / "meshes" / "bunny00.off").string();
+  const std::string cl = (dir_ / "fbc").string();
+  ASSERT_EQ(ptc({"cluster", mesh, "--method", "growth", "--max-count", "24", "--out", cl}).code, 0);
+  auto run = [&](const std::string& x) {
+    const fs::path out = dir_ / ("fbt_" + x);
+    const CmdResult r = ptc({"trace", mesh, "--clusters", cl, "--deform", "twist", "--frames", "0:3", "--width", "40",
+                             "--height", "32", "--shadows", "--cluster-fallback", x, "--out", out.string()});
+    EXPECT_EQ(r.code, 0) << r.err;
+    return std::pair{out, r.out};
+  };
+  const auto [on, on_text] = run("1.0001");
+  const auto [off, off_text] = run("off");
+  for (int f = 0; f <= 3; ++f)
+    for (const char* img : {"shaded", "depth", "normal"}) {
+      const std::string name = fmt::format("{}_{:04d}.png", img, f);
+      EXPECT_EQ(slurp(on / name), slurp(off / name)) << name;
+    }
+  const auto a = csv_rows(slurp(on / "trace.csv")), b = csv_rows(slurp(off / "trace.csv"));
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].at("hits"), b[i].at("hits")) << i;
+  const auto jon = nlohmann::json::parse(slurp(on / "manifest.json")), joff = nlohmann::json::parse(slurp(off / "manifest.json"));
+  EXPECT_EQ(jon["parameters"]["cluster_fallback"].get<double>(), 1.0001);
+  EXPECT_EQ(joff["parameters"]["cluster_fallback"].get<double>(), 0.0);
+  EXPECT_EQ(jon["results"]["cluster_fallback_frames"].get<std::uint64_t>(), 4u);
+  EXPECT_EQ(joff["results"]["cluster_fallback_frames"].get<std::uint64_t>(), 0u);
+  for (int f = 0; f <= 3; ++f) {
+    EXPECT_TRUE(jon["results"]["frames"][f]["fallback"].get<bool>()) << f;
+    EXPECT_FALSE(joff["results"]["frames"][f]["fallback"].get<bool>()) << f;
+    EXPECT_GT(jon["results"]["frames"][f]["swelling"].get<double>(), 1.0001) << f;
+    EXPECT_EQ(jon["results"]["frames"][f]["swelling"].get<double>(), joff["results"]["frames"][f]["swelling"].get<double>()) << f;
+  }
+  EXPECT_NE(on_text.find("cluster BVH: 4 of 4 frame(s) traced on the triangle fallback (swelling above 1.0001)"),
+            std::string::npos) << on_text;
+  expect_error({"trace", mesh, "--cluster-fallback", "2", "--out", (dir_ / "fb_bad").string()}, 2,
+               "--cluster-fallback: needs a cluster BVH");
+  expect_error({"trace", mesh, "--clusters", cl, "--cluster-fallback", "0.9", "--out", (dir_ / "fb_bad").string()}, 2,
+               "--cluster-fallback");
 }
 
 // A mesh of 1e13 units: our tracer's float products overflowed there, every ray missed, and the
