@@ -109,6 +109,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   // its rest pose in every frame: the rest mesh is traced and shown as it is, without a copy of
   // its positions (160 MB at 13.3M triangles, and the time to fill fresh memory with them).
   const bool still = scene.all_static();
+  if (still && !opt.clusters.empty() && opt.cluster_fallback)
+    throw UsageError("--cluster-fallback", "a still scene is built once and never updated: nothing falls back");
   if (still && !opt.clusters.empty() && opt.group_trees && !opt.cluster_group_size)
     throw UsageError("--group-trees", "a still scene is built once with the plain build: give --cluster-groups N > 1 too");
   std::vector<Vec3> first_pos;
@@ -141,7 +143,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   tcfg.cluster_group_size = tcfg.still_cluster_group_size = groups;
   if (opt.cluster_group_size) tcfg.min_cluster_groups = 0;  // (given: groups of exactly up to N)
   tcfg.group_trees = opt.group_trees.value_or(bvh::cluster_scene_defaults().group_trees);
-  tcfg.cluster_fallback = opt.cluster_fallback;
+  tcfg.cluster_fallback = opt.cluster_fallback.value_or(bvh::kAutoFallbackSwelling);
   // Set up at the rest pose, as ptc bench and the experiments do, and updated to every frame in
   // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend
   // on which frame the run starts at, so a frame traces the same in any range (the camera frames
@@ -302,7 +304,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   if (use_clusters) manifest.set_parameter("cluster_group_size", groups_used);
   if (use_clusters) manifest.set_parameter("min_cluster_groups", tcfg.min_cluster_groups);
   if (use_clusters && groups_used > 1) manifest.set_parameter("group_trees", bvh::to_string(tcfg.group_trees));
-  if (use_clusters) {
+  if (use_clusters && !still) {
     manifest.set_parameter("cluster_fallback", tcfg.cluster_fallback);
     manifest.set_result("cluster_fallback_frames", fallback_frames);
   }

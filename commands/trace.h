@@ -32,8 +32,9 @@ struct TraceCommandOptions {
   /// rebuild cheap, and its one tree is never rebuilt (docs/tracing.md, "A still scene").
   std::optional<std::uint32_t> cluster_group_size;
   /// --cluster-fallback: the moving cluster BVH traces a frame on a triangle BVH when its swelling
-  /// exceeds this (bvh::SceneConfig::fallback_swelling; 0: never).
-  double cluster_fallback = bvh::kAutoFallbackSwelling;
+  /// exceeds this (bvh::SceneConfig::fallback_swelling; 0: never). Unset: bvh::kAutoFallbackSwelling;
+  /// given for a still scene (built once, nothing moves), a usage error.
+  std::optional<double> cluster_fallback;
   /// --group-trees: what the two-level build does inside a group (unset: the default, refit).
   /// Given for a still scene without --cluster-groups, it is a usage error (nothing to do).
   std::optional<bvh::GroupTrees> group_trees;

@@ -40,7 +40,7 @@ void register_trace(CLI::App& app, Context& ctx) {
     for (const char* f : {"--ao-distance", "--seed"})
       if (a->app->count(f) && o.render.ao_samples == 0) throw UsageError(f, "needs ambient occlusion (--ao N > 0)");
     if (a->app->count("--cluster-groups")) o.cluster_group_size = a->cluster_groups;
-    o.cluster_fallback = *parse_cluster_fallback(a->cluster_fallback);
+    if (a->app->count("--cluster-fallback")) o.cluster_fallback = *parse_cluster_fallback(a->cluster_fallback);
     const bvh::GroupTrees trees = a->group_trees.get(
         !o.clusters.empty() && o.cluster_group_size.value_or(bvh::cluster_scene_defaults().cluster_group_size) > 1,
         "a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");

@@ -310,8 +310,18 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
             std::string::npos) << on_text;
   expect_error({"trace", mesh, "--cluster-fallback", "2", "--out", (dir_ / "fb_bad").string()}, 2,
                "--cluster-fallback: needs a cluster BVH");
-  expect_error({"trace", mesh, "--clusters", cl, "--cluster-fallback", "0.9", "--out", (dir_ / "fb_bad").string()}, 2,
-               "--cluster-fallback");
+  expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--cluster-fallback", "0.9", "--out",
+                (dir_ / "fb_bad").string()},
+               2, "--cluster-fallback");
+  // A still scene (no --deform) is built once: nothing can fall back, so the flag is refused, and
+  // without it the manifest says nothing of a fallback.
+  expect_error({"trace", mesh, "--clusters", cl, "--cluster-fallback", "auto", "--out", (dir_ / "fb_bad").string()}, 2,
+               "--cluster-fallback: a still scene is built once");
+  const fs::path still = dir_ / "fb_still";
+  ASSERT_EQ(ptc({"trace", mesh, "--clusters", cl, "--width", "8", "--height", "8", "--out", still.string()}).code, 0);
+  const auto js = nlohmann::json::parse(slurp(still / "manifest.json"));
+  EXPECT_FALSE(js["parameters"].contains("cluster_fallback"));
+  EXPECT_FALSE(js["results"].contains("cluster_fallback_frames"));
 }
 
 // A mesh of 1e13 units: our tracer's float products overflowed there, every ray missed, and the
