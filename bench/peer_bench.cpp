@@ -5,16 +5,18 @@
 // built-in scenes' twist deformer (frame 0 out of the medians).
 //
 //   build/bin/peer_bench [MESH] [--levels 2] [--frames 8] [--size 1024] [--threads 1]
-//                        [--max-count 32] [--deform twist|bend|wave|rigid|explode] [--cluster-fallback X|off]
+//                        [--max-count 32] [--deform twist|bend|wave|rigid|explode] [--cluster-fallback auto|off|X]
 //                        [--csv FILE]
-// --cluster-fallback: ptc bench's (X: the swelling threshold, default 64; off: the cluster BVH on every frame).
+// --cluster-fallback: ptc bench's (auto: 64, the default; off: the cluster BVH on every frame; X: the swelling threshold).
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include "analysis/experiments/bench.h"
+#include "commands/args.h"
 #include "toolkit/anim/deformers.h"
 #include "toolkit/anim/static_source.h"
 #include "toolkit/io/mesh_io.h"
@@ -43,10 +45,9 @@ int main(int argc, char** argv) {
       else if (a == "--max-count") cfg.max_count = static_cast<std::uint32_t>(std::stoul(value("--max-count")));
       else if (a == "--csv") csv = value("--csv");
       else if (a == "--cluster-fallback") {
-        const std::string v = value("--cluster-fallback");
-        cfg.cluster_fallback = v == "off" ? 0.0 : std::stod(v);
-        if (!(cfg.cluster_fallback == 0.0 || cfg.cluster_fallback > 1.0))
-          throw std::invalid_argument("--cluster-fallback: off or a number above 1");
+        const std::optional<double> x = parse_cluster_fallback(value("--cluster-fallback"));
+        if (!x) throw std::invalid_argument("--cluster-fallback: auto, off or a number above 1");
+        cfg.cluster_fallback = *x;
       }
       else if (a == "--deform") {
         const auto d = parse_deform_kind(value("--deform"));

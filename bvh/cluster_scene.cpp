@@ -3,6 +3,7 @@
 #include <emmintrin.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <numeric>
@@ -30,10 +31,10 @@ namespace ptc::bvh {
 
 namespace {
 
-// The sum of the triangles' areas of `mesh` at its positions, in the trace frame of `scale`:
-// per fixed chunk of triangles on the threads, the chunks' sums added in order (the same bits at
-// any thread count).
-double triangle_area(const Mesh& mesh, double scale) {
+// The sum of the triangles' areas of `mesh` at its positions (triangle_area, toolkit/geometry/
+// triangle.h), in the trace frame of `scale`: per fixed chunk of triangles on the threads, the
+// chunks' sums added in order (the same bits at any thread count).
+double mesh_area_in_frame(const Mesh& mesh, double scale) {
   const std::span<const Vec3> p = mesh.positions();
   const std::span<const Tri> t = mesh.triangles();
   constexpr std::size_t kChunk = 16384;
@@ -41,7 +42,7 @@ double triangle_area(const Mesh& mesh, double scale) {
   tbb::parallel_for(std::size_t{0}, part.size(), [&](std::size_t k) {
     double acc = 0;
     for (std::size_t i = k * kChunk; i < std::min(t.size(), (k + 1) * kChunk); ++i)
-      acc += 0.5 * (p[t[i][1]] - p[t[i][0]]).cross(p[t[i][2]] - p[t[i][0]]).norm();
+      acc += triangle_area(p[t[i][0]], p[t[i][1]], p[t[i][2]]);
     part[k] = acc;
   });
   double sum = 0;
@@ -49,12 +50,13 @@ double triangle_area(const Mesh& mesh, double scale) {
   return sum * scale * scale;
 }
 
-// The sum of the boxes' half surface areas (xy + yz + zx), empty boxes counting 0.
-// SSE2: a box's lo and hi by two unaligned loads (lo x y z hi.x, hi x y z and the next box's
+// The sum of the boxes' half surface areas (xy + yz + zx; Box3f::surface_area / 2), empty boxes
+// counting 0. SSE2: a box's lo and hi by two unaligned loads (lo x y z hi.x, hi x y z and the next box's
 // lo.x; the last box alone), its extents clamped at 0, times their rotation (ey ez ex) summed in
 // float per 1024 boxes, the runs added in double in order. For the twist's 52k clusters 0.044 ms
-// on warm boxes (a stand-alone loop), against 0.09-0.12 ms for the scalar form (double products,
-// a branch per box); about 2% of the one-thread update.
+// on warm boxes (a throwaway stand-alone loop), against 0.09-0.12 ms for the scalar form (double
+// products, a branch per box, as surface_area): about 2% of the one-thread update, which pays it
+// only with the fallback on.
 double box_half_areas(std::span<const Box3f> boxes) {
   static_assert(sizeof(Box3f) == 6 * sizeof(float));
   double sum = 0;
@@ -342,7 +344,7 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
   if (cfg_.built_once) {
     only_frame();
   } else {
-    triangle_area_ = triangle_area(mesh, data.scale);
+    triangle_area_ = mesh_area_in_frame(mesh, data.scale);
     update(mesh.positions());
   }
   // Needed only to lay the clusters out (the per-frame pass has its own vertex order).
@@ -810,14 +812,21 @@ bool ClusterScene::lists_are_corners(std::size_t vertex_count, std::span<const s
 
 void ClusterScene::update(std::span<const Vec3> positions) {
   update_clusters(positions);
-  // The swelling (the boxes' half areas against the triangles' areas) and, above the threshold,
-  // the frame's triangle BVH. The sum is counted in build_ms (box_half_areas: about 0.04 ms).
-  const double t0 = clock_ms(cfg_.clock);
-  swelling_ = triangle_area_ > 0 ? box_half_areas(f_.boxes) / triangle_area_ : std::numeric_limits<double>::quiet_NaN();
-  f_.times.build_ms += clock_ms(cfg_.clock) - t0;
+  // With the fallback on: the swelling (counted in build_ms; box_half_areas, about 0.04 ms) and,
+  // above the threshold, the frame's triangle BVH. Off, nothing: swelling() computes it on demand.
+  swelling_ = std::numeric_limits<double>::quiet_NaN();
   fallback_active_ = false;
   f_.times.fallback_ms = 0.0;
-  if (cfg_.fallback_swelling > 0 && swelling_ > cfg_.fallback_swelling) update_fallback(positions);
+  if (!(cfg_.fallback_swelling > 0)) return;
+  const double t0 = clock_ms(cfg_.clock);
+  swelling_ = swelling();
+  f_.times.build_ms += clock_ms(cfg_.clock) - t0;
+  if (swelling_ > cfg_.fallback_swelling) update_fallback(positions);
+}
+
+double ClusterScene::swelling() const {
+  if (!std::isnan(swelling_) || !(triangle_area_ > 0)) return swelling_;  // (this frame's, or NaN: no area, built once)
+  return box_half_areas(f_.boxes) / triangle_area_;
 }
 
 // The frame's triangle BVH, in the cluster BVH's trace frame (the same float vertices, so the

@@ -81,8 +81,10 @@ class ClusterScene {
   /// value grows as a cluster's triangles move apart, and with it the boxes a ray enters and the
   /// triangles it tests. Triangles that keep their size (bending, rigid pieces) keep the
   /// denominator; a mesh that grows as a whole raises the value with it. NaN for a mesh of
-  /// zero area and for a scene built once (SceneConfig::built_once).
-  [[nodiscard]] double swelling() const { return swelling_; }
+  /// zero area and for a scene built once (SceneConfig::built_once). With the fallback on, the
+  /// update computes it (in build_ms) and this returns that value; off, it is computed here, a pass
+  /// over the cluster boxes outside the update.
+  [[nodiscard]] double swelling() const;
   /// Whether the last frame is traced on the triangle fallback (SceneConfig::fallback_swelling).
   [[nodiscard]] bool fallback_active() const { return fallback_active_; }
   /// The triangle fallback's scene (null until a frame first needs it).
@@ -215,7 +217,7 @@ class ClusterScene {
   LeafBytes leaf_estimate_;  // leaf_bytes_estimate()
   SceneFrame f_;
   double triangle_area_ = 0;  // the triangles' areas at the scene's first positions, in the trace frame (swelling())
-  double swelling_ = std::numeric_limits<double>::quiet_NaN();  // (NaN for a scene built once: no frames)
+  double swelling_ = std::numeric_limits<double>::quiet_NaN();  // the last update's, when it needed it (else NaN)
   bool fallback_active_ = false;
   std::unique_ptr<TriangleScene> fallback_;  // made at the first frame traced on it
 };

@@ -22,7 +22,7 @@ struct StageTimes {
   /// primitive boxes and centroids (ClusterScene::fused_vertex_pass(): and the conversion, on
   /// more than one thread); 0 when the fill of the blocks makes them (leaf_data_ms)
   double boxes_ms = 0;
-  double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder; GroupTrees::Refit: and the groups' refit; a ClusterScene's update: and its swelling sum)
+  double build_ms = 0;      ///< SAH build (binned, or the sweep: SceneConfig::builder; GroupTrees::Refit: and the groups' refit; a ClusterScene's update with the triangle fallback on: and its swelling sum)
   double collapse_ms = 0;   ///< binary -> 4-wide, (clusters) linking, and the 8-wide regroup (regroup_to_8)
   /// SoA triangle blocks (ClusterScene::fused_vertex_pass() on one thread: and the cluster boxes,
   /// taken from the blocks' corners as they are written)
