@@ -3,6 +3,7 @@
 
 #include <iostream>
 #include <ostream>
+#include <string_view>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -31,6 +32,11 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   const FrameRange range = ms.range;
   const std::string& motion = ms.motion;
   c.frames = range;
+  // The cluster size: the flag, else the scene's own, else the bench's default.
+  const char* max_count_from = "--max-count";
+  if (opt.max_count) c.max_count = *opt.max_count;
+  else if (scene.cluster_max_count()) c.max_count = *scene.cluster_max_count(), max_count_from = "scene";
+  else max_count_from = "default";
   c.camera = camera_for(c.camera, scene);
   if (opt.light && !opt.light->allFinite()) throw UsageError("--light", "not a finite vector");
   // Bad vectors fail before any work; the light as `ptc trace` picks it (flag > scene > default).
@@ -78,6 +84,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("clustering", r.clustering);
   if (opt.clusters.empty()) {
     manifest.set_parameter("max_count", c.max_count);
+    manifest.set_parameter("max_count_from", max_count_from);  // --max-count, scene or default
     manifest.set_parameter("adjacency", to_string(c.adjacency));
   }
   manifest.set_parameter("cluster_leaf", bvh::to_string(c.cluster_leaf));
@@ -131,7 +138,10 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   }
   out << fmt::format("{}: {} triangles, {} vertices; {} clusters ({}{}; cluster scene setup {:.1f} ms); frames {}..{} "
                      "({}); {} thread(s)\n",
-                     arg, r.triangles, r.vertices, r.clusters, r.clustering,
+                     arg, r.triangles, r.vertices, r.clusters,
+                     r.clustering + (opt.clusters.empty() && max_count_from == std::string_view("scene")
+                                         ? " (the scene's cluster size)"
+                                         : ""),
                      r.cluster_ms > 0 ? fmt::format(", clustered in {:.0f} ms", r.cluster_ms) : "",
                      r.cluster_scene_setup_ms, range.first, range.last, motion, c.threads);
   out << bench_text(r);

@@ -24,6 +24,9 @@ struct BenchCommandOptions {
   /// rest pose every frame); nullopt: twist for a static scene. An animated scene refuses it.
   std::optional<std::string> deform;
   std::filesystem::path clusters;  ///< triangles.csv directory; empty: growth/Acc clustering with max_count
+  /// --max-count N: MaxCount = MaxSize of that clustering; nullopt: the scene's own
+  /// (Scene::cluster_max_count), else config.max_count.
+  std::optional<std::uint32_t> max_count;
   std::filesystem::path out_dir;   ///< bench.csv, summary.csv, manifest.json (required)
   PeerBenchConfig config;          ///< frames are set from `frames`; threads 0 = all cores; light from `light`
   /// --light X,Y,Z: the shadow rays' point light; nullopt: the scene's own, else render's

@@ -22,8 +22,8 @@ void cmd_scenes(const ScenesOptions& opt, std::ostream& out) {
 
   nlohmann::json list = nlohmann::json::array();
   if (!opt.json)
-    out << fmt::format("{:<22} {:>10} {:>10} {:>8} {:>7} {:>10}  {}\n", "scene", "triangles", "vertices", "animated",
-                       "static", "frames", "description");
+    out << fmt::format("{:<22} {:>10} {:>10} {:>8} {:>7} {:>10} {:>9}  {}\n", "scene", "triangles", "vertices", "animated",
+                       "static", "frames", "max_count", "description");
   std::optional<std::pair<std::string, std::string>> missing;  // a scene the user named that cannot be made
   for (const auto& n : names) {
     std::string desc;
@@ -41,10 +41,13 @@ void cmd_scenes(const ScenesOptions& opt, std::ostream& out) {
       row["static_parts"] = s.part_count() - animated;
       row["frames"] = {s.frames().first, s.frames().last};
       row["source_frames"] = s.frame_count();  // 0 = unbounded
+      // The scene's own cluster size (`ptc bench` clusters with it unless given --max-count); null: none.
+      row["cluster_max_count"] = s.cluster_max_count() ? nlohmann::json(*s.cluster_max_count()) : nlohmann::json();
       if (!opt.json)
-        out << fmt::format("{:<22} {:>10} {:>10} {:>8} {:>7} {:>10}  {}\n", n, s.rest().triangle_count(),
+        out << fmt::format("{:<22} {:>10} {:>10} {:>8} {:>7} {:>10} {:>9}  {}\n", n, s.rest().triangle_count(),
                            s.rest().vertex_count(), animated, s.part_count() - animated,
-                           fmt::format("{}:{}", s.frames().first, s.frames().last), desc);
+                           fmt::format("{}:{}", s.frames().first, s.frames().last),
+                           s.cluster_max_count() ? std::to_string(*s.cluster_max_count()) : std::string("-"), desc);
     } catch (const InputError& e) {
       row["available"] = false;
       row["reason"] = e.what();

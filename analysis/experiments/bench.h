@@ -37,6 +37,10 @@
 
 namespace ptc {
 
+/// MaxCount = MaxSize of the bench's own clustering when neither the user nor the scene gives one
+/// (docs/tracing.md, "The bench's cluster size").
+inline constexpr std::uint32_t kBenchDefaultMaxCount = 32;
+
 struct PeerBenchConfig {
   FrameRange frames{0, 4};                ///< scene frames (the first is left out of the medians)
   int width = 1024, height = 1024;        ///< primary rays of the camera (1..16384 each)
@@ -49,7 +53,7 @@ struct PeerBenchConfig {
   /// 50: the paper leaves MaxCount free, to be chosen per implementation for speed, and 32 gave
   /// this tracer the fastest whole frames over the built-in 832k scenes (docs/tracing.md, "The
   /// bench's cluster size").
-  std::uint32_t max_count = 32;
+  std::uint32_t max_count = kBenchDefaultMaxCount;
   ClusterAdjacency adjacency = ClusterAdjacency::Auto;  ///< and its adjacency (cluster.h)
   bvh::ClusterLeaf cluster_leaf = bvh::ClusterLeaf::Linear;
   /// How the cluster BVH's linear leaves hold their triangles (bvh::LeafFormatChoice; the format

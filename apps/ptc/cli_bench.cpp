@@ -18,6 +18,7 @@ struct BenchArgs {
   GroupTreesArg group_trees;
   std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
   std::string cluster_fallback = "auto";
+  std::uint32_t max_count = 32;
   CLI::App* app = nullptr;
 };
 
@@ -58,6 +59,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                                                           ? "our packet path needs avx2, avx512vl or avx512 (--isa sse2 traces single rays)"
                                                           : "our packet path needs AVX2, which this CPU does not have");
                       if (a->app->count("--frames")) o.frames = a->frames;
+                      if (a->app->count("--max-count")) o.max_count = a->max_count;
                       o.input = a->scene.input;
                       a->scene.apply(o.scene_options);
                       o.config.camera = a->camera.spec();
@@ -87,10 +89,12 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->check(enum_validator("instruction set", bvh::parse_trace_isa))
       ->capture_default_str();
   auto* cl = c->add_option("--clusters", a->opt.clusters, "use the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
-  c->add_option("--max-count", cfg.max_count,
+  static_assert(kBenchDefaultMaxCount == 32, "the --max-count help quotes the default");
+  c->add_option("--max-count", a->max_count,
                 "otherwise: growth/Acc clustering with MaxCount = MaxSize = N (0: one triangle per cluster, the "
-                "paper's standard)")
-      ->check(whole_in(0, 1 << 20))
+                "paper's standard); default: the scene's own cluster size ('ptc scenes' lists them; a scene "
+                "file's \"clusters\": {\"max_count\": N}), else 32")
+      ->check(whole_in(0, kMaxSceneClusterCount))
       ->excludes(cl)
       ->capture_default_str();
   c->add_option("--adjacency", a->adjacency,

@@ -12,8 +12,10 @@ Each (repeat, threads, scene) is one `ptc bench SCENE --threads T --frames A:B [
 measures by default; the default 0:5 takes the first frames only, where clusters have not yet
 swollen or a cloth not yet draped: docs/tracing.md, "Later frames")
 [--max-count N] [--leaf-format F] --out DIR/runs/...` (packets on both sides unless --single;
---max-count N: the bench's own clustering at MaxCount = MaxSize = N instead of its default, e.g.
-50 for the paper's value; --leaf-format F: the cluster leaves' format, default the bench's own,
+--max-count N: the bench's own clustering at MaxCount = MaxSize = N instead of its default (the
+scene's own cluster size, `ptc scenes` lists them, else 32), e.g. 50 for the paper's value; a
+list N,M,... sweeps the cluster size: every value gets its own runs and table rows, with the
+MaxCount each run used in the table and in runs.csv (`max_count`, `max_count_from`); --leaf-format F: the cluster leaves' format, default the bench's own,
 auto). Repeats run one after the other over the
 whole list, so a slow phase of the machine touches every scene a little rather than one scene a
 lot; the table gives, per scene and thread count, the median over the repeats of each
@@ -102,7 +104,8 @@ def main():
     ap.add_argument("--leaf-format", default=None, choices=("auto", "blocks", "tables"),
                     help="ptc bench --leaf-format F for every run (default: the bench's own, auto)")
     ap.add_argument("--max-count", default=None,
-                    help="ptc bench --max-count N for every run (default: the bench's own default)")
+                    help="ptc bench --max-count N for every run, or N,M,...: a sweep, each value its own runs and rows "
+                         "(default: the bench's own: the scene's cluster size, else 32)")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
     try:
@@ -113,8 +116,16 @@ def main():
         usage("--threads: every count must be >= 1")
     if a.repeat < 1:
         usage("--repeat must be >= 1")
-    if a.max_count is not None and not (a.max_count.isdigit() and int(a.max_count) <= 1 << 20):
-        usage(f"--max-count: '{a.max_count}' is not a whole number from 0 to {1 << 20}")
+    # --max-count N[,M...]: each value its own runs and table rows (a sweep of the cluster size);
+    # unset: the bench's own choice (the scene's cluster size, else 32), one set of runs.
+    max_counts = [None]
+    if a.max_count is not None:
+        max_counts = a.max_count.split(",")
+        for m in max_counts:
+            if not (m.isdigit() and int(m) <= 1 << 20):
+                usage(f"--max-count: '{m}' is not a whole number from 0 to {1 << 20}")
+        if len(set(int(m) for m in max_counts)) != len(max_counts):
+            usage(f"--max-count: '{a.max_count}' gives a value twice")
     if os.path.exists(a.out):
         usage(f"--out: '{a.out}' exists; give a new directory (nothing is overwritten)")
     ptc = os.path.join(a.build, "bin", "ptc")
@@ -149,15 +160,15 @@ def main():
     commands, rows = [], []
     for rep in range(a.repeat):
         for t in threads:
-            for s in scenes:
-                d = os.path.join(tmp, "runs", f"r{rep}_t{t}_{s}")
+            for s, mc in ((s, mc) for s in scenes for mc in max_counts):
+                d = os.path.join(tmp, "runs", f"r{rep}_t{t}_{s}" + ("" if mc is None else f"_m{mc}"))
                 cmd = [ptc, "bench", s, "--data-dir", data, "--threads", str(t),
                        *([] if a.frames == "all" else ["--frames", a.frames]),
                        "--width", str(a.width), "--height", str(a.height), "--out", d]
                 if not a.single:
                     cmd.append("--packets")
-                if a.max_count is not None:
-                    cmd += ["--max-count", a.max_count]
+                if mc is not None:
+                    cmd += ["--max-count", mc]
                 if a.leaf_format is not None:
                     cmd += ["--leaf-format", a.leaf_format]
                 commands.append(cmd)
@@ -170,9 +181,13 @@ def main():
                     sys.exit(1)
                 summary = read_summary(os.path.join(d, "summary.csv"))
                 stages = stage_medians(os.path.join(d, "bench.csv"))
+                # the cluster size the run used, and where it came from (--max-count, scene, default)
+                params = json.load(open(os.path.join(d, "manifest.json")))["parameters"]
                 for c in CONFIGS:
                     r = summary[c]
-                    rows.append({"repeat": rep, "threads": t, "scene": s, "config": c,
+                    rows.append({"repeat": rep, "threads": t, "scene": s, "config": c, "sweep": mc or "",
+                                 "max_count": params.get("max_count", ""),
+                                 "max_count_from": params.get("max_count_from", ""),
                                  "whole_frame_ms": float(r["whole_frame_ms"]),
                                  "update_build_ms": float(r["update_build_ms"]), "trace_ms": float(r["trace_ms"]),
                                  "shadow_ms": float(r["shadow_ms"]), "mismatches": int(r["mismatches"]),
@@ -190,13 +205,15 @@ def main():
 
     table = []
     for t in threads:
-        for s in scenes:
-            by = {c: [r for r in rows if r["threads"] == t and r["scene"] == s and r["config"] == c] for c in CONFIGS}
+        for s, mc in ((s, mc) for s in scenes for mc in max_counts):
+            by = {c: [r for r in rows if r["threads"] == t and r["scene"] == s and r["sweep"] == (mc or "")
+                      and r["config"] == c] for c in CONFIGS}
             med = {c: statistics.median(r["whole_frame_ms"] for r in by[c]) for c in CONFIGS}
             per_run = {p: [by[p][i]["whole_frame_ms"] / by["ours_clusters"][i]["whole_frame_ms"] for i in range(a.repeat)]
                        for p in ("embree_refit", "embree_low")}
             table.append({
                 "threads": t, "scene": s, "triangles": known[s]["triangles"], "repeats": a.repeat,
+                "max_count": by["ours_clusters"][0]["max_count"], "max_count_from": by["ours_clusters"][0]["max_count_from"],
                 "ours_ms": med["ours_clusters"], "refit_ms": med["embree_refit"], "low_ms": med["embree_low"],
                 "ours_update_build_ms": statistics.median(r["update_build_ms"] for r in by["ours_clusters"]),
                 "vs_refit": med["embree_refit"] / med["ours_clusters"], "vs_low": med["embree_low"] / med["ours_clusters"],
@@ -214,15 +231,17 @@ def main():
     # How each stage scales: the first thread count against each other one.
     scaling = []
     for t in threads[1:]:
-        for s in scenes:
+        for s, mc in ((s, mc) for s in scenes for mc in max_counts):
             for c in CONFIGS:
                 def med(tt, k):
-                    return statistics.median(r[k] for r in rows if r["threads"] == tt and r["scene"] == s and r["config"] == c)
+                    return statistics.median(r[k] for r in rows if r["threads"] == tt and r["scene"] == s
+                                             and r["sweep"] == (mc or "") and r["config"] == c)
                 for k in MEASURES:
                     if c != "ours_clusters" and k in STAGES:
                         continue  # (Embree's commit is one stage)
                     base, now = med(threads[0], k), med(t, k)
-                    scaling.append({"scene": s, "config": c, "measure": k, "threads_base": threads[0], "threads": t,
+                    scaling.append({"scene": s, "sweep": mc or "", "config": c, "measure": k,
+                                    "threads_base": threads[0], "threads": t,
                                     "base_ms": base, "ms": now,
                                     # (the overlap is time saved, not a stage: no speed-up; nor for a
                                     # stage that is 0 on one side: on one thread the cluster scene's
@@ -230,7 +249,8 @@ def main():
                                     "speedup": base / now if now > 0 and base > 0 and k != "overlap_ms"
                                     else float("nan")})
     with open(os.path.join(tmp, "scaling.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["scene", "config", "measure", "threads_base", "threads", "base_ms", "ms", "speedup"],
+        w = csv.DictWriter(f, fieldnames=["scene", "sweep", "config", "measure", "threads_base", "threads", "base_ms", "ms",
+                                          "speedup"],
                            lineterminator="\n")
         w.writeheader()
         w.writerows(scaling)
@@ -238,7 +258,7 @@ def main():
     json.dump({"schema": "ptc-frames/1", "argv": sys.argv, "commands": commands, "ptc_commit": git,
                "parameters": {"threads": threads, "frames": a.frames, "scenes": scenes, "repeat": a.repeat,
                               "packets": not a.single, "width": a.width, "height": a.height,
-                              "max_count": int(a.max_count) if a.max_count is not None else None,
+                              "max_count": [int(m) for m in max_counts] if a.max_count is not None else None,
                               "leaf_format": a.leaf_format},
                "outputs": ["runs.csv", "frames.csv", "scaling.csv"]},
               open(os.path.join(tmp, "manifest.json"), "w"), indent=2)
@@ -246,10 +266,12 @@ def main():
 
     print(f"ours_clusters' whole frame against Embree's, medians of {a.repeat} run(s) "
           f"({'packets' if not a.single else 'single rays'} on both sides; ratio > 1: ours is faster)")
-    print("| T | scene | ours / REFIT / LOW ms | vs REFIT (runs) | vs LOW (runs) | lowest frame vs REFIT / LOW | ours mismatches |")
-    print("|---|---|---|---|---|---|---|")
+    print("| T | scene | MaxCount | ours / REFIT / LOW ms | vs REFIT (runs) | vs LOW (runs) | lowest frame vs REFIT / LOW "
+          "| ours mismatches |")
+    print("|---|---|---|---|---|---|---|---|")
     for r in table:
-        print(f"| {r['threads']} | {r['scene']} | {r['ours_ms']:.1f} / {r['refit_ms']:.1f} / {r['low_ms']:.1f} | "
+        mc_cell = f"{r['max_count']}" + (f" ({r['max_count_from']})" if r["max_count_from"] not in ("", "--max-count") else "")
+        print(f"| {r['threads']} | {r['scene']} | {mc_cell} | {r['ours_ms']:.1f} / {r['refit_ms']:.1f} / {r['low_ms']:.1f} | "
               f"{r['vs_refit']:.2f}x ({r['vs_refit_min']:.2f}-{r['vs_refit_max']:.2f}) | "
               f"{r['vs_low']:.2f}x ({r['vs_low_min']:.2f}-{r['vs_low_max']:.2f}) | "
               f"{ratio_cell(r['vs_refit_lowest_frame'])} / {ratio_cell(r['vs_low_lowest_frame'])} | {r['ours_mismatches']} |")
@@ -259,16 +281,17 @@ def main():
         print("| T | scene | config | " + " | ".join(n for _, n in cols) + " |")
         print("|---|---|---|" + "---|" * len(cols))
         for t in threads[1:]:
-            for s in scenes:
+            for s, mc in ((s, mc) for s in scenes for mc in max_counts):
                 for c in CONFIGS:
-                    cell = {r["measure"]: r for r in scaling if r["threads"] == t and r["scene"] == s and r["config"] == c}
+                    cell = {r["measure"]: r for r in scaling if r["threads"] == t and r["scene"] == s
+                            and r["sweep"] == (mc or "") and r["config"] == c}
                     vals = []
                     for k, _ in cols:
                         r = cell.get(k)
                         vals.append("-" if r is None else
                                     f"{r['base_ms']:.2f} -> {r['ms']:.2f} ({r['speedup']:.2f}x)" if r["speedup"] == r["speedup"] else
                                     f"{r['base_ms']:.2f} -> {r['ms']:.2f}")
-                    print(f"| {t} | {s} | {c} | " + " | ".join(vals) + " |")
+                    print(f"| {t} | {s}{'' if mc is None else f' (MaxCount {mc})'} | {c} | " + " | ".join(vals) + " |")
     print(f"wrote {a.out}/frames.csv, {a.out}/runs.csv, {a.out}/scaling.csv, {a.out}/manifest.json")
 
 

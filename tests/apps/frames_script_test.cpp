@@ -158,30 +158,70 @@ TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
   }
 }
 
-// --max-count N reaches every ptc bench run (each run's manifest records it, and the clusters'
-// count follows it) and the script's own manifest; without it the bench's default is used.
+// --max-count N,M,... reaches every ptc bench run: each value its own runs (each run's manifest
+// records it, and the clusters' count follows it), runs.csv and frames.csv rows and the script's
+// own manifest; without it the bench's own choice is used (the scene's, else 32), and the table
+// says which.
 TEST_F(FramesScript, MaxCountReachesEveryRun) {
+  const auto args = [&](const fs::path& out) {
+    return std::vector<std::string>{"--threads", "1", "--frames", "0:1", "--width", "8", "--height", "8", "--scenes",
+                                    "armadillo-twist", "--out", out.string()};
+  };
   std::map<std::string, std::size_t> clusters;  // value -> ours_clusters' cluster count
-  for (const char* mc : {"4", "", "50"}) {
-    const fs::path out = dir_ / (std::string("mc") + mc);
-    std::vector<std::string> args{"--threads", "1", "--frames", "0:1", "--width", "8", "--height", "8", "--scenes",
-                                  "armadillo-twist", "--out", out.string()};
-    if (*mc) args.insert(args.end(), {"--max-count", mc});
-    const auto r = frames(args);
+  {
+    const fs::path out = dir_ / "sweep";
+    auto a = args(out);
+    a.insert(a.end(), {"--max-count", "4,50"});
+    const auto r = frames(a);
     ASSERT_EQ(r.code, 0) << r.err;
     const auto m = nlohmann::json::parse(slurp(out / "manifest.json"));
-    const auto run = nlohmann::json::parse(slurp(out / "runs" / "r0_t1_armadillo-twist" / "manifest.json"));
-    if (*mc) {
-      EXPECT_EQ(m["parameters"]["max_count"], std::stoi(mc));
+    EXPECT_EQ(m["parameters"]["max_count"], nlohmann::json::array({4, 50}));
+    for (const char* mc : {"4", "50"}) {
+      const auto run =
+          nlohmann::json::parse(slurp(out / "runs" / (std::string("r0_t1_armadillo-twist_m") + mc) / "manifest.json"));
       EXPECT_EQ(run["parameters"]["max_count"], std::stoi(mc));
-    } else {
-      EXPECT_TRUE(m["parameters"]["max_count"].is_null());
-      EXPECT_EQ(run["parameters"]["max_count"], 32);  // the bench's default
+      EXPECT_EQ(run["parameters"]["max_count_from"], "--max-count");
+      clusters[mc] = run["results"]["clusters"].get<std::size_t>();
     }
-    clusters[mc] = run["results"]["clusters"].get<std::size_t>();
+    const auto runs = csv_rows(slurp(out / "runs.csv"));
+    ASSERT_EQ(runs.size(), 2u * 3u);  // values x configurations
+    for (const auto& row : runs) {
+      EXPECT_EQ(row.at("sweep"), row.at("max_count"));
+      EXPECT_EQ(row.at("max_count_from"), "--max-count");
+    }
+    const auto table = csv_rows(slurp(out / "frames.csv"));
+    ASSERT_EQ(table.size(), 2u);
+    EXPECT_EQ(table[0].at("max_count"), "4");
+    EXPECT_EQ(table[1].at("max_count"), "50");
+    // Each table row is its own value's run (one repeat: the run's summary itself).
+    for (const auto& t : table)
+      for (const auto& row : runs)
+        if (row.at("max_count") == t.at("max_count") && row.at("config") == "ours_clusters") {
+          EXPECT_DOUBLE_EQ(std::stod(t.at("ours_ms")), std::stod(row.at("whole_frame_ms")));
+        }
+    EXPECT_NE(r.out.find("| 1 | armadillo-twist | 4 |"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("| 1 | armadillo-twist | 50 |"), std::string::npos) << r.out;
+  }
+  {
+    const fs::path out = dir_ / "default";
+    const auto r = frames(args(out));
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(nlohmann::json::parse(slurp(out / "manifest.json"))["parameters"]["max_count"].is_null());
+    const auto run = nlohmann::json::parse(slurp(out / "runs" / "r0_t1_armadillo-twist" / "manifest.json"));
+    EXPECT_EQ(run["parameters"]["max_count"], 32);  // the bench's default (the scene has none)
+    EXPECT_EQ(run["parameters"]["max_count_from"], "default");
+    EXPECT_EQ(csv_rows(slurp(out / "frames.csv")).at(0).at("max_count_from"), "default");
+    EXPECT_NE(r.out.find("| 1 | armadillo-twist | 32 (default) |"), std::string::npos) << r.out;
+    clusters[""] = run["results"]["clusters"].get<std::size_t>();
   }
   EXPECT_GT(clusters["4"], clusters[""]);  // smaller clusters, more of them
   EXPECT_GT(clusters[""], clusters["50"]);
+  for (const char* bad : {"4,4", "4,", "4,-1"}) {
+    const auto e = frames({"--max-count", bad, "--out", (dir_ / "bad").string()});
+    EXPECT_EQ(e.code, 2) << bad << ": " << e.err;
+    EXPECT_EQ(lines(e.err), 1u) << e.err;
+    EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  }
 }
 
 // --frames all: no --frames for ptc bench, so each scene's whole animation (the run's manifest

@@ -229,6 +229,49 @@ TEST_F(TraceCli, BenchClusterFallbackIsRecorded) {
   }
 }
 
+// The bench's cluster size: --max-count, else the scene's own ("clusters" in a scene file), else
+// 32; the manifest says which, and the run clusters with it (the same clusters as --max-count N).
+TEST_F(TraceCli, BenchTakesTheScenesClusterSize) {
+  const std::string bunny = (fs::path(PTC_TEST_DATA) / "meshes" / "bunny00.off").string();
+  const auto scene_file = [&](const std::string& name, const std::string& clusters) {
+    return write(name, R"({"meshes": [{"file": ")" + bunny + R"(", "deform": {"kind": "twist"}}], "frames": [0, 2])" +
+                           clusters + "}")
+        .string();
+  };
+  const std::string own = scene_file("own.json", R"(, "clusters": {"max_count": 12})");
+  const std::string none = scene_file("none.json", "");
+  struct Case {
+    std::string scene, flag, from;
+    std::uint32_t used;
+  };
+  const Case cases[] = {{own, "", "scene", 12}, {own, "40", "--max-count", 40}, {none, "", "default", 32},
+                        {none, "12", "--max-count", 12}};
+  std::map<std::uint32_t, std::uint64_t> clusters;
+  for (std::size_t k = 0; k < std::size(cases); ++k) {
+    const Case& c = cases[k];
+    const fs::path out = dir_ / fmt::format("mc_{}", k);
+    std::vector<std::string> args{"bench", c.scene, "--width", "16", "--height", "16", "--threads", "1", "--out", out.string()};
+    if (!c.flag.empty()) args.insert(args.end(), {"--max-count", c.flag});
+    const CmdResult r = ptc(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_EQ(j["parameters"]["max_count"].get<std::uint32_t>(), c.used) << k;
+    EXPECT_EQ(j["parameters"]["max_count_from"].get<std::string>(), c.from) << k;
+    EXPECT_NE(r.out.find(fmt::format("MaxCount={} MaxSize={}", c.used, c.used)), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("(the scene's cluster size)") != std::string::npos, c.from == "scene") << r.out;
+    const auto n = j["results"]["clusters"].get<std::uint64_t>();
+    if (const auto it = clusters.find(c.used); it != clusters.end()) {
+      EXPECT_EQ(it->second, n) << k;
+    }
+    clusters[c.used] = n;
+  }
+  EXPECT_GT(clusters.at(12), clusters.at(32));  // (smaller clusters: more of them)
+  EXPECT_GE(clusters.at(32), clusters.at(40));
+  // The clustering flags still exclude a given clustering; a value outside the range is bad usage.
+  EXPECT_EQ(ptc({"bench", own, "--max-count", "1048577", "--out", (dir_ / "bad").string()}).code, 2);
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
+
 // `ptc bench --leaf-format blocks|tables|auto` (and auto by default): the cluster BVH's leaves as
 // blocks or vertex tables, recorded in the manifest with the estimate auto chose by, with the same
 // hits and zero mismatches against brute force.

@@ -96,6 +96,37 @@ TEST_F(SceneFile, SceneFileGood) {
   for (std::size_t i = 0; i < own.size(); ++i) ASSERT_EQ(all[s.vertex_offset(3) + i], own[i]);
 }
 
+// "clusters": {"max_count": N} is the scene's own cluster size (what `ptc bench` clusters it with
+// when given no --max-count): read exactly, absent without the key, refused outside [0, 2^20] or
+// when not a whole number, kept by the stand-in motion of a static scene.
+TEST_F(SceneFile, TheScenesOwnClusterSize) {
+  const auto scene_with = [&](const std::string& clusters) {
+    return load_scene_file(write("c.json", R"({"meshes": [{"file": "cube.off"}])" + clusters + "}"));
+  };
+  EXPECT_FALSE(scene_with("").cluster_max_count().has_value());
+  for (const std::uint32_t n : {0u, 1u, 24u, kMaxSceneClusterCount}) {
+    const Scene s = scene_with(R"(, "clusters": {"max_count": )" + std::to_string(n) + "}");
+    ASSERT_TRUE(s.cluster_max_count().has_value()) << n;
+    EXPECT_EQ(*s.cluster_max_count(), n);
+    EXPECT_EQ(deform_scene(s, deform_preset(DeformKind::Twist)).cluster_max_count(), s.cluster_max_count());
+  }
+  const std::string f = (dir_ / "scene.json").string();
+  const std::pair<const char*, const char*> bad[] = {
+      {R"({"max_count": -1})", "clusters.max_count: -1 is outside [0, 1048576]"},
+      {R"({"max_count": 1048577})", "clusters.max_count: 1048577 is outside [0, 1048576]"},
+      {R"({"max_count": 24.5})", "clusters.max_count: expected an integer"},
+      {R"({"max_count": "24"})", "clusters.max_count: expected an integer"},
+      {R"({})", "clusters.max_count: missing"},
+      {R"({"max_count": 24, "max_size": 24})", "clusters.max_size"},
+      {R"(24)", "clusters"},
+  };
+  for (const auto& [value, want] : bad) {
+    const std::string e = scene_error(R"({"meshes": [{"file": "cube.off"}], "clusters": )" + std::string(value) + "}");
+    EXPECT_NE(e.find(f), std::string::npos) << e;
+    EXPECT_NE(e.find(want), std::string::npos) << value << " -> " << e;
+  }
+}
+
 // A glob in `file` is a frame sequence, as on the command line (it was read as one mesh file
 // named with the '*').
 TEST_F(SceneFile, AGlobIsAFrameSequence) {

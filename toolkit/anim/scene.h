@@ -49,6 +49,9 @@ struct FrameRange {
   [[nodiscard]] std::int64_t count() const { return last - first + 1; }
 };
 
+/// The largest cluster size (MaxCount) a scene may carry; `ptc bench --max-count` takes the same range.
+inline constexpr std::uint32_t kMaxSceneClusterCount = 1u << 20;
+
 struct ScenePart {
   std::string name;
   AnimationPtr source;
@@ -91,6 +94,12 @@ class Scene {
   /// constructor's defaults as their view).
   void adopt_view() { own_camera_ = own_light_ = true; }
   [[nodiscard]] const FrameRange& frames() const { return frames_; }
+  /// The scene's own cluster size: the MaxCount (= MaxSize) a command that clusters the scene
+  /// itself uses when the user gives none (`ptc bench` without --max-count or --clusters). From
+  /// a scene file's "clusters": {"max_count": N}, or a built-in scene's measured choice
+  /// (docs/animation.md); nullopt: the command's own default.
+  [[nodiscard]] std::optional<std::uint32_t> cluster_max_count() const { return cluster_max_count_; }
+  void set_cluster_max_count(std::optional<std::uint32_t> n) { cluster_max_count_ = n; }
   /// Smallest finite frame_count() over the parts; 0 when every part is unbounded.
   [[nodiscard]] std::size_t frame_count() const;
 
@@ -124,11 +133,12 @@ class Scene {
   SceneLight light_;
   bool own_camera_ = false, own_light_ = false;
   FrameRange frames_;
+  std::optional<std::uint32_t> cluster_max_count_;
 };
 
 /// The whole scene (its combined rest mesh) as one part moved by a deformer (toolkit/anim/
 /// deformers.h): the stand-in motion of a static scene (`ptc bench --deform`). The scene's own
-/// camera and light are kept; frames default to 0..59. InputError for bad parameters.
+/// camera, light and cluster size are kept; frames default to 0..59. InputError for bad parameters.
 [[nodiscard]] Scene deform_scene(const Scene& scene, const DeformParams& params, std::optional<FrameRange> frames = {});
 
 /// Camera looking at the centre of `bounds` from the front-right-above direction (1/3, 1/3, 1)

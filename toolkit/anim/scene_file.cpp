@@ -339,7 +339,7 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
   }
   const Reader r(name, base_dir, opt);
   r.expect_object(root, "(root)");
-  r.only_keys(root, "", {"schema", "name", "frames", "camera", "light", "meshes"});
+  r.only_keys(root, "", {"schema", "name", "frames", "camera", "light", "clusters", "meshes"});
   if (root.contains("schema") && r.string(root["schema"], "schema") != "ptc-scene/1")
     r.fail("schema", "unsupported schema (expected \"ptc-scene/1\")");
 
@@ -399,8 +399,23 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
     if (sl.intensity < 0) r.fail("light.intensity", "must be >= 0");
     light = sl;
   }
+  // The scene's own cluster size (Scene::cluster_max_count): MaxCount = MaxSize for a command that
+  // clusters the scene itself and is given none.
+  std::optional<std::uint32_t> max_count;
+  if (root.contains("clusters")) {
+    const json& c = root["clusters"];
+    r.expect_object(c, "clusters");
+    r.only_keys(c, "clusters", {"max_count"});
+    if (!c.contains("max_count")) r.fail("clusters.max_count", "missing");
+    const std::int64_t n = r.integer(c["max_count"], "clusters.max_count");
+    if (n < 0 || n > kMaxSceneClusterCount)
+      r.fail("clusters.max_count", fmt::format("{} is outside [0, {}] (0: one triangle per cluster)", n, kMaxSceneClusterCount));
+    max_count = static_cast<std::uint32_t>(n);
+  }
   try {
-    return Scene(scene_name, std::move(parts), cam, light, frames);
+    Scene s(scene_name, std::move(parts), cam, light, frames);
+    s.set_cluster_max_count(max_count);
+    return s;
   } catch (const InputError& e) {
     if (e.element() == "scene frames") r.fail("frames", e.reason());
     r.fail("", e.reason());
