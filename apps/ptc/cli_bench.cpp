@@ -18,7 +18,7 @@ struct BenchArgs {
   GroupTreesArg group_trees;
   std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
   std::string cluster_fallback = "auto";
-  std::uint32_t max_count = 32;
+  std::uint32_t max_count = kBenchDefaultMaxCount;
   CLI::App* app = nullptr;
 };
 
@@ -95,8 +95,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "paper's standard); default: the scene's own cluster size ('ptc scenes' lists them; a scene "
                 "file's \"clusters\": {\"max_count\": N}), else 32")
       ->check(whole_in(0, kMaxSceneClusterCount))
-      ->excludes(cl)
-      ->capture_default_str();
+      ->excludes(cl);  // (no default shown: the scene's own, else 32, as the text says)
   c->add_option("--adjacency", a->adjacency,
                 "otherwise: neighbouring triangles of that clustering: edges (shared vertex ids), positions (sides "
                 "whose corner positions coincide at rest) or auto (positions for a triangle soup, else edges)")

@@ -5,9 +5,9 @@ REFIT and LOW, per scene and thread count, from `ptc bench` runs made here.
 
     /usr/bin/python3 bench/frames/frames.py [--build build] [--threads 1,2] [--frames 0:5 | --frames all]
         [--min-triangles 500000] [--scenes A,B] [--repeat 1] [--single] [--width 1024 --height 1024]
-        [--max-count N] [--leaf-format auto|blocks|tables] --out DIR
+        [--max-count N[,M...]] [--leaf-format auto|blocks|tables] --out DIR
 
-Each (repeat, threads, scene) is one `ptc bench SCENE --threads T --frames A:B [--packets]
+Each (repeat, threads, scene, --max-count value) is one `ptc bench SCENE --threads T --frames A:B [--packets]
 (`--frames all`: no --frames, so each scene's whole animation, which is what `ptc bench SCENE`
 measures by default; the default 0:5 takes the first frames only, where clusters have not yet
 swollen or a cloth not yet draped: docs/tracing.md, "Later frames")
@@ -18,7 +18,7 @@ list N,M,... sweeps the cluster size: every value gets its own runs and table ro
 MaxCount each run used in the table and in runs.csv (`max_count`, `max_count_from`); --leaf-format F: the cluster leaves' format, default the bench's own,
 auto). Repeats run one after the other over the
 whole list, so a slow phase of the machine touches every scene a little rather than one scene a
-lot; the table gives, per scene and thread count, the median over the repeats of each
+lot; the table gives, per scene, thread count (and --max-count value), the median over the repeats of each
 configuration's whole frame (each run's own median over frames 1..B) and the ratios of those
 medians, plus the smallest and largest ratio of single runs, and the lowest ratio of a single
 frame in any run (Embree's whole frame / ours on that frame: where along the animation the
@@ -228,7 +228,9 @@ def main():
         w = csv.DictWriter(f, fieldnames=list(table[0].keys()), lineterminator="\n")
         w.writeheader()
         w.writerows(table)
-    # How each stage scales: the first thread count against each other one.
+    # How each stage scales: the first thread count against each other one (with the MaxCount the
+    # runs used: the scene's own when no --max-count was given).
+    by_mc = {(r["scene"], r["sweep"] or None): r["max_count"] for r in rows}
     scaling = []
     for t in threads[1:]:
         for s, mc in ((s, mc) for s in scenes for mc in max_counts):
@@ -241,7 +243,7 @@ def main():
                         continue  # (Embree's commit is one stage)
                     base, now = med(threads[0], k), med(t, k)
                     scaling.append({"scene": s, "sweep": mc or "", "config": c, "measure": k,
-                                    "threads_base": threads[0], "threads": t,
+                                    "max_count": by_mc.get((s, mc), ""), "threads_base": threads[0], "threads": t,
                                     "base_ms": base, "ms": now,
                                     # (the overlap is time saved, not a stage: no speed-up; nor for a
                                     # stage that is 0 on one side: on one thread the cluster scene's
@@ -249,13 +251,13 @@ def main():
                                     "speedup": base / now if now > 0 and base > 0 and k != "overlap_ms"
                                     else float("nan")})
     with open(os.path.join(tmp, "scaling.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["scene", "sweep", "config", "measure", "threads_base", "threads", "base_ms", "ms",
-                                          "speedup"],
+        w = csv.DictWriter(f, fieldnames=["scene", "sweep", "max_count", "config", "measure", "threads_base", "threads",
+                                          "base_ms", "ms", "speedup"],
                            lineterminator="\n")
         w.writeheader()
         w.writerows(scaling)
     git = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
-    json.dump({"schema": "ptc-frames/1", "argv": sys.argv, "commands": commands, "ptc_commit": git,
+    json.dump({"schema": "ptc-frames/2", "argv": sys.argv, "commands": commands, "ptc_commit": git,
                "parameters": {"threads": threads, "frames": a.frames, "scenes": scenes, "repeat": a.repeat,
                               "packets": not a.single, "width": a.width, "height": a.height,
                               "max_count": [int(m) for m in max_counts] if a.max_count is not None else None,

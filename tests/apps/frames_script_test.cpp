@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -163,44 +164,67 @@ TEST_F(FramesScript, TableIsTheMediansOfTheRunsAndTheirRatios) {
 // own manifest; without it the bench's own choice is used (the scene's, else 32), and the table
 // says which.
 TEST_F(FramesScript, MaxCountReachesEveryRun) {
-  const auto args = [&](const fs::path& out) {
-    return std::vector<std::string>{"--threads", "1", "--frames", "0:1", "--width", "8", "--height", "8", "--scenes",
+  const auto args = [&](const fs::path& out, const char* threads = "1") {
+    return std::vector<std::string>{"--threads", threads, "--frames", "0:1", "--width", "8", "--height", "8", "--scenes",
                                     "armadillo-twist", "--out", out.string()};
   };
   std::map<std::string, std::size_t> clusters;  // value -> ours_clusters' cluster count
   {
     const fs::path out = dir_ / "sweep";
-    auto a = args(out);
+    auto a = args(out, "1,2");
     a.insert(a.end(), {"--max-count", "4,50"});
     const auto r = frames(a);
     ASSERT_EQ(r.code, 0) << r.err;
     const auto m = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_EQ(m["schema"], "ptc-frames/2");
     EXPECT_EQ(m["parameters"]["max_count"], nlohmann::json::array({4, 50}));
-    for (const char* mc : {"4", "50"}) {
-      const auto run =
-          nlohmann::json::parse(slurp(out / "runs" / (std::string("r0_t1_armadillo-twist_m") + mc) / "manifest.json"));
-      EXPECT_EQ(run["parameters"]["max_count"], std::stoi(mc));
-      EXPECT_EQ(run["parameters"]["max_count_from"], "--max-count");
-      clusters[mc] = run["results"]["clusters"].get<std::size_t>();
-    }
+    for (const char* t : {"1", "2"})
+      for (const char* mc : {"4", "50"}) {
+        const auto run = nlohmann::json::parse(
+            slurp(out / "runs" / (std::string("r0_t") + t + "_armadillo-twist_m" + mc) / "manifest.json"));
+        EXPECT_EQ(run["parameters"]["max_count"], std::stoi(mc));
+        EXPECT_EQ(run["parameters"]["max_count_from"], "--max-count");
+        EXPECT_EQ(run["parameters"]["threads"], std::stoi(t));
+        clusters[mc] = run["results"]["clusters"].get<std::size_t>();
+      }
     const auto runs = csv_rows(slurp(out / "runs.csv"));
-    ASSERT_EQ(runs.size(), 2u * 3u);  // values x configurations
+    ASSERT_EQ(runs.size(), 2u * 2u * 3u);  // threads x values x configurations
     for (const auto& row : runs) {
       EXPECT_EQ(row.at("sweep"), row.at("max_count"));
       EXPECT_EQ(row.at("max_count_from"), "--max-count");
     }
     const auto table = csv_rows(slurp(out / "frames.csv"));
-    ASSERT_EQ(table.size(), 2u);
-    EXPECT_EQ(table[0].at("max_count"), "4");
-    EXPECT_EQ(table[1].at("max_count"), "50");
-    // Each table row is its own value's run (one repeat: the run's summary itself).
-    for (const auto& t : table)
+    ASSERT_EQ(table.size(), 4u);  // threads x values
+    // Each table row is its own thread count's and value's run (one repeat: the run's summary).
+    std::set<std::string> seen;
+    for (const auto& t : table) {
+      seen.insert(t.at("threads") + "/" + t.at("max_count"));
+      std::size_t matched = 0;
       for (const auto& row : runs)
-        if (row.at("max_count") == t.at("max_count") && row.at("config") == "ours_clusters") {
+        if (row.at("threads") == t.at("threads") && row.at("max_count") == t.at("max_count") &&
+            row.at("config") == "ours_clusters") {
+          ++matched;
           EXPECT_DOUBLE_EQ(std::stod(t.at("ours_ms")), std::stod(row.at("whole_frame_ms")));
         }
+      EXPECT_EQ(matched, 1u);
+    }
+    EXPECT_EQ(seen, (std::set<std::string>{"1/4", "1/50", "2/4", "2/50"}));
     EXPECT_NE(r.out.find("| 1 | armadillo-twist | 4 |"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("| 1 | armadillo-twist | 50 |"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("| 2 | armadillo-twist | 50 |"), std::string::npos) << r.out;
+    // How each stage scales, per value: T=1 against T=2 of that value's runs.
+    const auto scaling = csv_rows(slurp(out / "scaling.csv"));
+    ASSERT_EQ(scaling.size(), 2u * (10u + 2u * 4u));  // values x (ours: 10 measures, Embree: 4 each)
+    for (const auto& sc : scaling) {
+      EXPECT_EQ(sc.at("sweep"), sc.at("max_count"));
+      std::map<std::string, double> at;  // threads -> the run's value
+      for (const auto& row : runs)
+        if (row.at("max_count") == sc.at("max_count") && row.at("config") == sc.at("config"))
+          at[row.at("threads")] = std::stod(row.at(sc.at("measure")));
+      ASSERT_EQ(at.size(), 2u);
+      EXPECT_NEAR(std::stod(sc.at("base_ms")), at["1"], 1e-9 * std::max(1.0, at["1"])) << sc.at("measure");
+      EXPECT_NEAR(std::stod(sc.at("ms")), at["2"], 1e-9 * std::max(1.0, at["2"])) << sc.at("measure");
+    }
+    EXPECT_NE(r.out.find("| 2 | armadillo-twist (MaxCount 50) | ours_clusters |"), std::string::npos) << r.out;
   }
   {
     const fs::path out = dir_ / "default";

@@ -240,24 +240,38 @@ TEST_F(TraceCli, BenchTakesTheScenesClusterSize) {
   };
   const std::string own = scene_file("own.json", R"(, "clusters": {"max_count": 12})");
   const std::string none = scene_file("none.json", "");
+  // A static scene file: the bench's stand-in motion (twist by default, or --deform) keeps its size.
+  const std::string still =
+      write("still.json", R"({"meshes": [{"file": ")" + bunny + R"("}], "clusters": {"max_count": 12}})").string();
+  const std::string zero = scene_file("zero.json", R"(, "clusters": {"max_count": 0})");
   struct Case {
     std::string scene, flag, from;
     std::uint32_t used;
+    std::vector<std::string> more = {};
   };
-  const Case cases[] = {{own, "", "scene", 12}, {own, "40", "--max-count", 40}, {none, "", "default", 32},
-                        {none, "12", "--max-count", 12}};
+  const Case cases[] = {{own, "", "scene", 12},
+                        {own, "40", "--max-count", 40},
+                        {none, "", "default", 32},
+                        {none, "12", "--max-count", 12},
+                        {still, "", "scene", 12, {"--frames", "0:2"}},
+                        {still, "", "scene", 12, {"--frames", "0:2", "--deform", "wave"}},
+                        {zero, "", "scene", 0}};
   std::map<std::uint32_t, std::uint64_t> clusters;
   for (std::size_t k = 0; k < std::size(cases); ++k) {
     const Case& c = cases[k];
     const fs::path out = dir_ / fmt::format("mc_{}", k);
     std::vector<std::string> args{"bench", c.scene, "--width", "16", "--height", "16", "--threads", "1", "--out", out.string()};
     if (!c.flag.empty()) args.insert(args.end(), {"--max-count", c.flag});
+    args.insert(args.end(), c.more.begin(), c.more.end());
     const CmdResult r = ptc(args);
     ASSERT_EQ(r.code, 0) << r.err;
     const auto j = nlohmann::json::parse(slurp(out / "manifest.json"));
     EXPECT_EQ(j["parameters"]["max_count"].get<std::uint32_t>(), c.used) << k;
     EXPECT_EQ(j["parameters"]["max_count_from"].get<std::string>(), c.from) << k;
-    EXPECT_NE(r.out.find(fmt::format("MaxCount={} MaxSize={}", c.used, c.used)), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(c.used == 0 ? std::string("one triangle per cluster (MaxCount = MaxSize = 0)")
+                                     : fmt::format("MaxCount={} MaxSize={}", c.used, c.used)),
+              std::string::npos)
+        << r.out;
     EXPECT_EQ(r.out.find("(the scene's cluster size)") != std::string::npos, c.from == "scene") << r.out;
     const auto n = j["results"]["clusters"].get<std::uint64_t>();
     if (const auto it = clusters.find(c.used); it != clusters.end()) {
@@ -265,11 +279,33 @@ TEST_F(TraceCli, BenchTakesTheScenesClusterSize) {
     }
     clusters[c.used] = n;
   }
-  EXPECT_GT(clusters.at(12), clusters.at(32));  // (smaller clusters: more of them)
+  EXPECT_GT(clusters.at(0), clusters.at(12));  // (smaller clusters: more of them)
+  EXPECT_GT(clusters.at(12), clusters.at(32));
   EXPECT_GE(clusters.at(32), clusters.at(40));
-  // The clustering flags still exclude a given clustering; a value outside the range is bad usage.
-  EXPECT_EQ(ptc({"bench", own, "--max-count", "1048577", "--out", (dir_ / "bad").string()}).code, 2);
-  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  // A given clustering (--clusters) is used as it is: no cluster size recorded or printed.
+  const fs::path cl = dir_ / "bunny_clusters";
+  ASSERT_EQ(ptc({"cluster", bunny, "--out", cl.string()}).code, 0);
+  {
+    const fs::path out = dir_ / "mc_given";
+    const CmdResult r = ptc({"bench", own, "--clusters", cl.string(), "--width", "16", "--height", "16", "--threads", "1",
+                             "--out", out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_FALSE(j["parameters"].contains("max_count"));
+    EXPECT_FALSE(j["parameters"].contains("max_count_from"));
+    EXPECT_EQ(j["parameters"]["clustering"], "given");
+    EXPECT_EQ(r.out.find("(the scene's cluster size)"), std::string::npos) << r.out;
+  }
+  // The clustering flags exclude a given clustering, and a value outside the range is bad usage:
+  // exit 2, nothing written.
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--max-count", "1048577"}, {"--max-count", "12", "--clusters", cl.string()}}) {
+    std::vector<std::string> args{"bench", own, "--out", (dir_ / "bad").string()};
+    args.insert(args.end(), bad.begin(), bad.end());
+    const CmdResult r = ptc(args);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  }
 }
 
 // `ptc bench --leaf-format blocks|tables|auto` (and auto by default): the cluster BVH's leaves as

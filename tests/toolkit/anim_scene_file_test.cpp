@@ -124,6 +124,7 @@ TEST_F(SceneFile, TheScenesOwnClusterSize) {
     const std::string e = scene_error(R"({"meshes": [{"file": "cube.off"}], "clusters": )" + std::string(value) + "}");
     EXPECT_NE(e.find(f), std::string::npos) << e;
     EXPECT_NE(e.find(want), std::string::npos) << value << " -> " << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;  // (one line)
   }
 }
 

@@ -328,6 +328,17 @@ TEST(BuiltinScenes, ClothSphereHasAnimatedClothAndStaticObstacles) {
     ASSERT_GE((x[i] - cloth.params().sphere_center).norm(), cloth.params().sphere_radius) << i;
 }
 
+// The built-in scenes' own cluster sizes (docs/tracing.md, "The cloth's own cluster size"): the
+// 646 x 646 cloth carries the 28 its sweep chose; the smaller cloths and the armadillo none.
+TEST(BuiltinScenes, OwnClusterSizes) {
+  EXPECT_EQ(make_builtin_scene("cloth-sphere-832k").cluster_max_count(), std::optional<std::uint32_t>(28));
+  EXPECT_FALSE(make_builtin_scene("cloth-sphere-128").cluster_max_count().has_value());
+  EXPECT_FALSE(make_builtin_scene("cloth-sphere-32").cluster_max_count().has_value());
+  SceneOptions o;
+  o.data_dir = kData;
+  EXPECT_FALSE(make_builtin_scene("armadillo-twist", o).cluster_max_count().has_value());
+}
+
 TEST(BuiltinScenes, ArmadilloFromTheDataDirectory) {
   SceneOptions o;
   o.data_dir = kData;

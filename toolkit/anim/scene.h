@@ -94,10 +94,10 @@ class Scene {
   /// constructor's defaults as their view).
   void adopt_view() { own_camera_ = own_light_ = true; }
   [[nodiscard]] const FrameRange& frames() const { return frames_; }
-  /// The scene's own cluster size: the MaxCount (= MaxSize) a command that clusters the scene
-  /// itself uses when the user gives none (`ptc bench` without --max-count or --clusters). From
-  /// a scene file's "clusters": {"max_count": N}, or a built-in scene's measured choice
-  /// (docs/animation.md); nullopt: the command's own default.
+  /// The scene's own cluster size: the MaxCount (= MaxSize) `ptc bench` clusters the scene with
+  /// when given neither --max-count nor --clusters (`ptc cluster` and `ptc experiment` take their
+  /// own flags). From a scene file's "clusters": {"max_count": N}, or a built-in scene's measured
+  /// choice (docs/animation.md, the scene table); nullopt: the bench's default.
   [[nodiscard]] std::optional<std::uint32_t> cluster_max_count() const { return cluster_max_count_; }
   void set_cluster_max_count(std::optional<std::uint32_t> n) { cluster_max_count_ = n; }
   /// Smallest finite frame_count() over the parts; 0 when every part is unbounded.
