@@ -198,7 +198,6 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   std::uint64_t hits = 0;        // primary hits over the frames (results.hits)
   nlohmann::json per_frame = nlohmann::json::array();
   std::uint64_t fallback_frames = 0;
-  bool tracer_has_moving_clusters = false;
 
   std::ostringstream text;  // the table; --json prints the rows as JSON instead
   text << fmt::format("{}: {} triangles ({} static, {} moving; {} part(s)), {}; {}x{} pixels, {} thread(s); "
@@ -264,7 +263,6 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     if (rc.shadows) pass("shadow", r.shadow_stats, false);
     if (rc.ao_samples > 0) pass("ao", r.ao_stats, false);
     per_frame.push_back({{"frame", f}, {"rays", r.primary_stats.rays}, {"hits", r.primary_stats.hits}});
-    tracer_has_moving_clusters = tracer.moving_is_clusters();
     if (tracer.moving_is_clusters()) {  // the moving cluster BVH's swelling, and whether its triangle fallback traced the frame
       per_frame.back()["swelling"] = tracer.moving_swelling();
       per_frame.back()["fallback"] = tracer.moving_fallback_active();
@@ -342,7 +340,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     return;
   }
   out << text.str();
-  if (tracer_has_moving_clusters && tcfg.cluster_fallback > 0)
+  if (tracer.moving_is_clusters() && tcfg.cluster_fallback > 0)
     out << fmt::format("cluster BVH: {} of {} frame(s) traced on the triangle fallback (swelling above {:g})\n",
                        fallback_frames, per_frame.size(), tcfg.cluster_fallback);
   const std::string names = "{shaded,depth,normal,cost_nodes,cost_triangles" + std::string(rc.ao_samples > 0 ? ",ao" : "") + "}";

@@ -117,8 +117,8 @@ def main():
     if a.repeat < 1:
         usage("--repeat must be >= 1")
     # --max-count N[,M...]: each value its own runs and table rows (a sweep of the cluster size);
-    # unset: the bench's own choice (the scene's cluster size, else 32), one set of runs.
-    max_counts = [None]
+    # unset: the bench's own choice (the scene's cluster size, else 32), one set of runs ("").
+    max_counts = [""]
     if a.max_count is not None:
         max_counts = a.max_count.split(",")
         for m in max_counts:
@@ -157,17 +157,19 @@ def main():
     tmp = a.out + ".tmp"
     shutil.rmtree(tmp, ignore_errors=True)
     os.makedirs(os.path.join(tmp, "runs"))
+    # Each (scene, --max-count value) pair: its runs, its table rows, its scaling rows.
+    cells = [(s, mc) for s in scenes for mc in max_counts]
     commands, rows = [], []
     for rep in range(a.repeat):
         for t in threads:
-            for s, mc in ((s, mc) for s in scenes for mc in max_counts):
-                d = os.path.join(tmp, "runs", f"r{rep}_t{t}_{s}" + ("" if mc is None else f"_m{mc}"))
+            for s, mc in cells:
+                d = os.path.join(tmp, "runs", f"r{rep}_t{t}_{s}" + (f"_m{mc}" if mc else ""))
                 cmd = [ptc, "bench", s, "--data-dir", data, "--threads", str(t),
                        *([] if a.frames == "all" else ["--frames", a.frames]),
                        "--width", str(a.width), "--height", str(a.height), "--out", d]
                 if not a.single:
                     cmd.append("--packets")
-                if mc is not None:
+                if mc:
                     cmd += ["--max-count", mc]
                 if a.leaf_format is not None:
                     cmd += ["--leaf-format", a.leaf_format]
@@ -185,7 +187,7 @@ def main():
                 params = json.load(open(os.path.join(d, "manifest.json")))["parameters"]
                 for c in CONFIGS:
                     r = summary[c]
-                    rows.append({"repeat": rep, "threads": t, "scene": s, "config": c, "sweep": mc or "",
+                    rows.append({"repeat": rep, "threads": t, "scene": s, "config": c, "sweep": mc,
                                  "max_count": params.get("max_count", ""),
                                  "max_count_from": params.get("max_count_from", ""),
                                  "whole_frame_ms": float(r["whole_frame_ms"]),
@@ -203,11 +205,14 @@ def main():
         w.writeheader()
         w.writerows(rows)
 
+    def runs_of(t, s, mc, c):
+        """The rows of configuration c's runs at t threads on scene s with --max-count value mc."""
+        return [r for r in rows if r["threads"] == t and r["scene"] == s and r["sweep"] == mc and r["config"] == c]
+
     table = []
     for t in threads:
-        for s, mc in ((s, mc) for s in scenes for mc in max_counts):
-            by = {c: [r for r in rows if r["threads"] == t and r["scene"] == s and r["sweep"] == (mc or "")
-                      and r["config"] == c] for c in CONFIGS}
+        for s, mc in cells:
+            by = {c: runs_of(t, s, mc, c) for c in CONFIGS}
             med = {c: statistics.median(r["whole_frame_ms"] for r in by[c]) for c in CONFIGS}
             per_run = {p: [by[p][i]["whole_frame_ms"] / by["ours_clusters"][i]["whole_frame_ms"] for i in range(a.repeat)]
                        for p in ("embree_refit", "embree_low")}
@@ -230,19 +235,18 @@ def main():
         w.writerows(table)
     # How each stage scales: the first thread count against each other one (with the MaxCount the
     # runs used: the scene's own when no --max-count was given).
-    by_mc = {(r["scene"], r["sweep"] or None): r["max_count"] for r in rows}
+    by_mc = {(r["scene"], r["sweep"]): r["max_count"] for r in rows}
     scaling = []
     for t in threads[1:]:
-        for s, mc in ((s, mc) for s in scenes for mc in max_counts):
+        for s, mc in cells:
             for c in CONFIGS:
                 def med(tt, k):
-                    return statistics.median(r[k] for r in rows if r["threads"] == tt and r["scene"] == s
-                                             and r["sweep"] == (mc or "") and r["config"] == c)
+                    return statistics.median(r[k] for r in runs_of(tt, s, mc, c))
                 for k in MEASURES:
                     if c != "ours_clusters" and k in STAGES:
                         continue  # (Embree's commit is one stage)
                     base, now = med(threads[0], k), med(t, k)
-                    scaling.append({"scene": s, "sweep": mc or "", "config": c, "measure": k,
+                    scaling.append({"scene": s, "sweep": mc, "config": c, "measure": k,
                                     "max_count": by_mc.get((s, mc), ""), "threads_base": threads[0], "threads": t,
                                     "base_ms": base, "ms": now,
                                     # (the overlap is time saved, not a stage: no speed-up; nor for a
@@ -283,17 +287,17 @@ def main():
         print("| T | scene | config | " + " | ".join(n for _, n in cols) + " |")
         print("|---|---|---|" + "---|" * len(cols))
         for t in threads[1:]:
-            for s, mc in ((s, mc) for s in scenes for mc in max_counts):
+            for s, mc in cells:
                 for c in CONFIGS:
                     cell = {r["measure"]: r for r in scaling if r["threads"] == t and r["scene"] == s
-                            and r["sweep"] == (mc or "") and r["config"] == c}
+                            and r["sweep"] == mc and r["config"] == c}
                     vals = []
                     for k, _ in cols:
                         r = cell.get(k)
                         vals.append("-" if r is None else
                                     f"{r['base_ms']:.2f} -> {r['ms']:.2f} ({r['speedup']:.2f}x)" if r["speedup"] == r["speedup"] else
                                     f"{r['base_ms']:.2f} -> {r['ms']:.2f}")
-                    print(f"| {t} | {s}{'' if mc is None else f' (MaxCount {mc})'} | {c} | " + " | ".join(vals) + " |")
+                    print(f"| {t} | {s}{f' (MaxCount {mc})' if mc else ''} | {c} | " + " | ".join(vals) + " |")
     print(f"wrote {a.out}/frames.csv, {a.out}/runs.csv, {a.out}/scaling.csv, {a.out}/manifest.json")
 
 

@@ -5,13 +5,16 @@
 
 namespace ptc {
 
-Mesh::Mesh(std::vector<Tri> triangles, std::vector<Vec3> positions) : pos_(std::move(positions)) {
-  const std::size_t n = pos_.size();
+void Mesh::check_indices(std::span<const Tri> triangles, std::size_t n) {
   for (std::size_t t = 0; t < triangles.size(); ++t)
     for (std::uint32_t v : triangles[t])
       if (v >= n)
         throw std::invalid_argument("Mesh: triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
                                     " of " + std::to_string(n));
+}
+
+Mesh::Mesh(std::vector<Tri> triangles, std::vector<Vec3> positions) : pos_(std::move(positions)) {
+  check_indices(triangles, pos_.size());
   tris_ = std::make_shared<std::vector<Tri>>(std::move(triangles));
 }
 
@@ -20,12 +23,7 @@ Mesh Mesh::sharing(std::shared_ptr<const std::vector<Tri>> triangles, std::vecto
   // (renumber_vertices renames in place only when no one else holds the array)
   m.tris_ = std::const_pointer_cast<std::vector<Tri>>(std::move(triangles));
   m.pos_ = std::move(positions);
-  const std::size_t n = m.pos_.size();
-  for (std::size_t t = 0; t < m.triangle_count(); ++t)
-    for (std::uint32_t v : (*m.tris_)[t])
-      if (v >= n)
-        throw std::invalid_argument("Mesh: triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
-                                    " of " + std::to_string(n));
+  check_indices(m.triangles(), m.pos_.size());
   return m;
 }
 

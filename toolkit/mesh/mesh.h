@@ -63,6 +63,9 @@ class Mesh {
   [[nodiscard]] Box3 referenced_bounds() const;
 
  private:
+  // std::invalid_argument naming the first triangle that refers to a vertex at or past n.
+  static void check_indices(std::span<const Tri> triangles, std::size_t n);
+
   std::shared_ptr<std::vector<Tri>> tris_;  // never changed while shared (see renumber_vertices)
   std::vector<Vec3> pos_;
 };
