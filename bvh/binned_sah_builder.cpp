@@ -3,10 +3,17 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <deque>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_for_each.h>
+#include <tbb/task_arena.h>
 
 #include "bvh/aligned.h"
 #include "bvh/binning.h"
@@ -32,6 +39,13 @@ using namespace binned;
 
 constexpr std::uint32_t kSweepBelow = 16;    // nodes of at most this many primitives are swept exactly
 constexpr std::uint32_t kTwoSetsFrom = 256;  // binning into two bin sets from this many primitives up (below: one)
+// The parallel build (build_parallel): from this many items at the root (primitives, or groups
+// in a two-level build) and more than one thread in the arena; subtrees of at least
+// max(kSmallestFragment, root items / (kFragmentsPerThread * threads)) items become fragments.
+constexpr std::uint32_t kParallelFrom = 1u << 15;
+constexpr std::uint32_t kSmallestFragment = 1u << 11;
+constexpr std::uint32_t kFragmentsPerThread = 8;
+constexpr std::uint32_t kRecordsPerTask = 1u << 15;  // records made per task
 
 struct BinnedExtra {
   Box3f box;   // union of the primitive boxes
@@ -82,16 +96,16 @@ struct RootBounds {
   __m128 clo, chi;  // bounds of the centroids
 };
 
-// The records of the input, in input order, and the root's bounds. A NaN anywhere makes
-// check_no_nan name the primitive. Records are assembled in registers (store_record).
-RootBounds make_records(const BuildInput& in, Ref* refs) {
+// The records of primitives [begin, end) of the input, in input order, and their bounds; `nan`
+// is set when a NaN was seen. Records are assembled in registers (store_record).
+RootBounds make_records_range(const BuildInput& in, Ref* refs, std::uint32_t begin, std::uint32_t end, bool& nan_seen) {
   const auto n = static_cast<std::uint32_t>(in.boxes.size());
   static_assert(sizeof(Box3f) == 24 && sizeof(Vec3f) == 12);
   const float* cf = in.centroids.empty() ? nullptr : in.centroids[0].data();
   const __m128 mask = xyz_mask();
   RootBounds rb{_mm_set1_ps(kInf), _mm_set1_ps(-kInf), _mm_set1_ps(kInf), _mm_set1_ps(-kInf)};
   __m128 nan = _mm_setzero_ps();
-  for (std::uint32_t i = 0; i < n; ++i) {
+  for (std::uint32_t i = begin; i < end; ++i) {
     __m128 l, h;
     simd::load_box(in.boxes[i], l, h);
     l = _mm_and_ps(l, mask), h = _mm_and_ps(h, mask);  // (lane 3 cleared)
@@ -109,7 +123,37 @@ RootBounds make_records(const BuildInput& in, Ref* refs) {
     rb.clo = _mm_min_ps(rb.clo, c), rb.chi = _mm_max_ps(rb.chi, c);
     nan = _mm_or_ps(nan, _mm_or_ps(_mm_cmpunord_ps(l, h), _mm_cmpunord_ps(c, c)));
   }
-  if (_mm_movemask_ps(nan)) check_no_nan(in);
+  nan_seen = _mm_movemask_ps(nan) != 0;
+  return rb;
+}
+
+// The records of the input and the root's bounds, in pieces on `threads` threads from
+// kParallelFrom primitives up (minima and maxima: the same bounds in any order). A NaN
+// anywhere makes check_no_nan name the primitive.
+RootBounds make_records(const BuildInput& in, Ref* refs, int threads) {
+  const auto n = static_cast<std::uint32_t>(in.boxes.size());
+  bool nan = false;
+  RootBounds rb;
+  if (threads <= 1 || n < kParallelFrom) {
+    rb = make_records_range(in, refs, 0, n, nan);
+  } else {
+    const std::uint32_t pieces = (n + kRecordsPerTask - 1) / kRecordsPerTask;
+    std::vector<RootBounds> piece_bounds(pieces);
+    std::vector<char> piece_nan(pieces, 0);
+    tbb::parallel_for(std::uint32_t{0}, pieces, [&](std::uint32_t k) {
+      bool nk = false;
+      piece_bounds[k] = make_records_range(in, refs, k * kRecordsPerTask, std::min(n, (k + 1) * kRecordsPerTask), nk);
+      piece_nan[k] = nk;
+    });
+    rb = piece_bounds[0];
+    for (std::uint32_t k = 0; k < pieces; ++k) {
+      const RootBounds& p = piece_bounds[k];
+      rb.lo = _mm_min_ps(rb.lo, p.lo), rb.hi = _mm_max_ps(rb.hi, p.hi);
+      rb.clo = _mm_min_ps(rb.clo, p.clo), rb.chi = _mm_max_ps(rb.chi, p.chi);
+      nan = nan || piece_nan[k];
+    }
+  }
+  if (nan) check_no_nan(in);
   return rb;
 }
 
@@ -138,13 +182,42 @@ Box3f make_group_records(std::span<const std::uint32_t> groups, const Ref* refs,
   return to_box(gclo, gchi);
 }
 
+// What one thread of a build works in: the bins of the node at hand and the stack of pending
+// subtrees.
+struct Scratch {
+  Bins bins[2];
+  std::vector<BinnedTask> stack;
+};
+
+// A parallel build's piece of the tree (see build_parallel): the subtree of `root` built by one
+// job, in pre-order with local indices, where `holes` lists (in ascending order) the local nodes
+// that stand for subtrees deferred to other fragments.
+struct Fragment {
+  BinnedTask root;
+  Bvh nodes;  // (its nodes only)
+  std::vector<std::pair<std::uint32_t, Fragment*>> holes;
+  std::vector<std::uint64_t> shift;  // shift[h]: nodes the holes before hole h add (total - 1 each)
+  std::uint64_t total = 0;           // nodes of the spliced subtree
+  std::uint64_t base = 0;            // its root's position in the tree
+};
+
 }  // namespace
 
 struct BuildWorkspace::Impl {
   AlignedVector<Ref> refs;
   AlignedVector<Ref> group_refs;  // two-level build: one record per group
-  std::vector<BinnedTask> stack;
-  Bins bins[2];
+  Scratch scratch;                                       // the sequential build's
+  std::vector<std::unique_ptr<Scratch>> thread_scratch;  // the parallel build's, per thread of the arena
+  std::deque<Fragment> fragments;  // kept from one build to the next (their node arrays too)
+  std::size_t fragments_used = 0;
+  std::mutex fragments_mutex;
+  Fragment* new_fragment() {
+    const std::lock_guard<std::mutex> lock(fragments_mutex);
+    if (fragments_used == fragments.size()) fragments.emplace_back();
+    Fragment* f = &fragments[fragments_used++];
+    f->nodes.nodes.clear(), f->holes.clear(), f->shift.clear();
+    return f;
+  }
 };
 
 namespace {
@@ -156,7 +229,7 @@ namespace {
 class BinnedBuilder {
  public:
   using Task = BinnedTask;
-  // The best split of a node; the bins it was found in are w.bins[0] until apply().
+  // The best split of a node; the bins it was found in are bins_[0] until apply().
   struct Split {
     double cost = std::numeric_limits<double>::infinity();  // inf: none (leaf, or the object median)
     std::uint64_t weight = 0;                               // W(P)
@@ -171,12 +244,12 @@ class BinnedBuilder {
     RefBits swept[3][kSweepBelow];           // the records in order[a]
   };
 
-  BinnedBuilder(const BuildInput& in, const BuildConfig& cfg, BuildWorkspace::Impl& w)
-      : in_(in), cfg_(cfg), w_(w), bin_range_(bin_range_for(cfg.allow_avx2)) {}
+  BinnedBuilder(const BuildInput& in, const BuildConfig& cfg, Ref* refs, Ref* group_refs, Bins* bins)
+      : in_(in), cfg_(cfg), refs_(refs), group_refs_(group_refs), bins_(bins), bin_range_(bin_range_for(cfg.allow_avx2)) {}
 
   Box3f open(Task& t) const {
     if (t.extra.groups && t.size() == 1) {  // one group: continue with its primitives
-      const std::uint32_t g = w_.group_refs[t.begin].id;
+      const std::uint32_t g = group_refs_[t.begin].id;
       t = {{t.extra.box, Box3f{}, 0}, in_.groups[g], in_.groups[g + 1], t.patch_parent};
     }
     return t.extra.box;
@@ -264,7 +337,7 @@ class BinnedBuilder {
     bool usable[3];
   };
 
-  Ref* records(const Task& t) const { return (t.extra.groups ? w_.group_refs.data() : w_.refs.data()) + t.begin; }
+  Ref* records(const Task& t) const { return (t.extra.groups ? group_refs_ : refs_) + t.begin; }
 
   // The grid over the node's centroid bounds (gathered here when the parent's partition did
   // not: they are only needed here). An axis of zero extent, or of an extent below ~1e-38 (too
@@ -294,16 +367,16 @@ class BinnedBuilder {
     return g;
   }
 
-  // One binning pass into w.bins[0], then per usable axis a right and a left sweep over the
+  // One binning pass into bins_[0], then per usable axis a right and a left sweep over the
   // non-empty bins (a boundary next to an empty bin gives the same partition as the boundary
   // before it; small nodes, the majority, have few non-empty bins).
   void bin_split(Ref* r, std::uint32_t count, const BinGrid& grid, double area, Split& s) const {
     const std::uint32_t nbins = s.nbins;
-    Bins& b0 = w_.bins[0];
+    Bins& b0 = bins_[0];
     // Two bin sets (alternate primitives) hide the latency of consecutive updates of one bin;
     // in nodes of few primitives clearing and merging the second set costs more than it hides.
     if (count >= kTwoSetsFrom) {
-      Bins& b1 = w_.bins[1];
+      Bins& b1 = bins_[1];
       b0.clear(nbins);
       b1.clear(nbins);
       s.weight = bin_range_(r, count, grid.params, b0, b1);
@@ -420,7 +493,7 @@ class BinnedBuilder {
   // Ref::bins and is never read from these bounds. Returns k.
   std::uint32_t partition_by_bin(Ref* r, std::uint32_t count, const Split& s, SideBounds& left, SideBounds& right,
                                  Box3f& left_cb, Box3f& right_cb) const {
-    const Bins& b0 = w_.bins[0];
+    const Bins& b0 = bins_[0];
     const int a = s.bin_axis;
     for (std::uint32_t b = 0; b < s.nbins; ++b) {
       SideBounds& side = b < s.bin_split ? left : right;
@@ -448,7 +521,9 @@ class BinnedBuilder {
 
   const BuildInput& in_;
   const BuildConfig& cfg_;
-  BuildWorkspace::Impl& w_;
+  Ref* const refs_;
+  Ref* const group_refs_;
+  Bins* const bins_;  // two bin sets
   const BinRangeFn bin_range_;
 };
 
@@ -468,6 +543,109 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
   return bvh;
 }
 
+namespace {
+
+// What a fragment's job hands on: a task of at least `cutoff` items (never its own root) becomes
+// a new fragment, fed to the parallel loop.
+struct Deferrer {
+  std::uint32_t cutoff;
+  BuildWorkspace::Impl& w;
+  Fragment& f;
+  tbb::feeder<Fragment*>& feeder;
+  bool wants(const BinnedTask& t) const { return t.size() >= cutoff; }
+  void take(std::uint32_t idx, const BinnedTask& t) {
+    Fragment* c = w.new_fragment();
+    c->root = t;
+    c->root.patch_parent = kNoParent;  // (its root is its own node 0; the placeholder was patched)
+    f.holes.emplace_back(idx, c);
+    feeder.add(c);
+  }
+};
+
+// The SAH cost of a finished tree, its terms summed in node order: the order in which the
+// sequential build adds them (top_down_builder.h), so the same bits. A leaf weighs its records'
+// weights (their count when every primitive weighs 1).
+double tree_cost(const SahCostModel& m, const AlignedVector<BvhNode>& nodes, const Ref* refs, bool weighted) {
+  CostAccumulator acc;
+  for (const BvhNode& nd : nodes) {
+    const double area = nd.bounds.surface_area();
+    if (!nd.is_leaf()) {
+      acc.inner(m, area);
+      continue;
+    }
+    std::uint64_t wt = nd.count;
+    if (weighted) {
+      wt = 0;
+      for (std::uint32_t i = nd.index; i < nd.index + nd.count; ++i) wt += refs[i].weight;
+    }
+    acc.leaf(m, area, static_cast<double>(wt));
+  }
+  return acc.total(nodes[0].bounds.surface_area());
+}
+
+// The parallel build: the tree is cut into fragments, subtrees of at least `cutoff` items,
+// each built by one job on the skeleton (its deferred subtrees become new jobs), then spliced at
+// their placeholders in pre-order and their local indices moved to the final ones. Every
+// subtree is built from the same records by the same decisions as in the sequential build, so
+// the tree, its node order, the records' order and the cost are the sequential build's, at any
+// thread count.
+void build_parallel(const BuildInput& in, const BuildConfig& cfg, const BinnedTask& root, int threads,
+                    BuildWorkspace::Impl& w, Bvh& bvh) {
+  const std::uint32_t cutoff = std::max(kSmallestFragment, root.size() / (kFragmentsPerThread * static_cast<std::uint32_t>(threads)));
+  if (w.thread_scratch.size() < static_cast<std::size_t>(threads)) w.thread_scratch.resize(static_cast<std::size_t>(threads));
+  w.fragments_used = 0;
+  Fragment* top = w.new_fragment();
+  top->root = root;
+  Fragment* const start[1] = {top};
+  tbb::parallel_for_each(start, start + 1, [&](Fragment* f, tbb::feeder<Fragment*>& feeder) {
+    const int t = tbb::this_task_arena::current_thread_index();
+    std::unique_ptr<Scratch>& sc = w.thread_scratch[static_cast<std::size_t>(t)];
+    if (!sc) sc = std::make_unique<Scratch>();
+    BinnedBuilder builder(in, cfg, w.refs.data(), w.group_refs.data(), sc->bins);
+    f->nodes.nodes.clear();
+    build_top_down(builder, cfg, f->root, sc->stack, f->nodes, Deferrer{cutoff, w, *f, feeder});
+  });
+  // Sizes bottom-up (a fragment is made before the fragments it defers to), positions top-down.
+  const std::size_t F = w.fragments_used;
+  for (std::size_t i = F; i-- > 0;) {
+    Fragment& f = w.fragments[i];
+    f.total = f.nodes.nodes.size();
+    f.shift.assign(f.holes.size() + 1, 0);
+    for (std::size_t h = 0; h < f.holes.size(); ++h) {
+      f.total += f.holes[h].second->total - 1;
+      f.shift[h + 1] = f.shift[h] + f.holes[h].second->total - 1;
+    }
+  }
+  top->base = 0;
+  for (std::size_t i = 0; i < F; ++i) {
+    const Fragment& f = w.fragments[i];
+    for (std::size_t h = 0; h < f.holes.size(); ++h) f.holes[h].second->base = f.base + f.holes[h].first + f.shift[h];
+  }
+  bvh.nodes.resize(top->total);
+  tbb::parallel_for(std::size_t{0}, F, [&](std::size_t i) {
+    const Fragment& f = w.fragments[i];
+    // Position of local node j: base + j + the holes before j (their subtrees, less the placeholder).
+    auto position = [&](std::uint32_t j) {
+      std::size_t h = 0;
+      while (h < f.holes.size() && f.holes[h].first < j) ++h;
+      return f.base + j + f.shift[h];
+    };
+    std::size_t h = 0;
+    for (std::uint32_t j = 0; j < f.nodes.nodes.size(); ++j) {
+      if (h < f.holes.size() && f.holes[h].first == j) {
+        ++h;
+        continue;
+      }
+      BvhNode nd = f.nodes.nodes[j];
+      if (!nd.is_leaf()) nd.index = static_cast<std::uint32_t>(position(nd.index));
+      bvh.nodes[f.base + j + f.shift[h]] = nd;
+    }
+  });
+  bvh.cost = tree_cost(cfg.cost, bvh.nodes, w.refs.data(), !in.weights.empty());
+}
+
+}  // namespace
+
 void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, BuildWorkspace& ws) {
   check_input(in, cfg);
   bvh.nodes.clear();
@@ -477,9 +655,9 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
   if (n == 0) return;
   if (!ws.impl_) ws.impl_ = std::make_unique<BuildWorkspace::Impl>();  // (a moved-from workspace)
   BuildWorkspace::Impl& w = *ws.impl_;
+  const int threads = tbb::this_task_arena::max_concurrency();
   w.refs.resize(n);
-  const RootBounds rb = make_records(in, w.refs.data());
-  bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
+  const RootBounds rb = make_records(in, w.refs.data(), threads);
   // The root: the group records when there are two groups or more (the top levels split
   // groups, and a node of one group continues with the group's primitives, contiguous in the
   // records), else the primitives.
@@ -488,8 +666,17 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
     throw std::invalid_argument("build_binned_sah: group offsets do not span the " + std::to_string(n) + " primitives");
   BinnedTask root{{to_box(rb.lo, rb.hi), to_box(rb.clo, rb.chi), 0}, 0, n};
   if (G > 1) root = {{root.extra.box, make_group_records(in.groups, w.refs.data(), w.group_refs), 1}, 0, static_cast<std::uint32_t>(G)};
-  BinnedBuilder builder(in, cfg, w);
-  build_top_down(builder, cfg, root, w.stack, bvh);
+  if (threads > 1 && root.size() >= kParallelFrom) {
+    build_parallel(in, cfg, root, threads, w, bvh);
+    bvh.prim_order.resize(n);
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, kRecordsPerTask), [&](const tbb::blocked_range<std::uint32_t>& r) {
+      for (std::uint32_t i = r.begin(); i < r.end(); ++i) bvh.prim_order[i] = w.refs[i].id;
+    });
+    return;
+  }
+  bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
+  BinnedBuilder builder(in, cfg, w.refs.data(), w.group_refs.data(), w.scratch.bins);
+  build_top_down(builder, cfg, root, w.scratch.stack, bvh);
   bvh.prim_order.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) bvh.prim_order[i] = w.refs[i].id;
 }

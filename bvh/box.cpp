@@ -13,6 +13,10 @@
 
 namespace ptc::bvh {
 
+namespace {
+constexpr std::size_t kPointsPerTask = 1u << 14;  // vertices or triangles per task of the per-frame passes
+}  // namespace
+
 std::vector<Box3f> triangle_boxes(std::span<const Vec3> positions, std::span<const Tri> triangles,
                                   const FrameMap& f) {
   std::vector<Box3f> boxes(triangles.size());
@@ -51,12 +55,16 @@ std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span
 void frame_positions(std::span<const Vec3> positions, const FrameMap& origin, AlignedVector<Vec3f>& out) {
   out.reserve(positions.size() + 2);  // room for add_sentinel's two entries: no second array
   out.resize(positions.size());
-  for (std::size_t v = 0; v < positions.size(); ++v) out[v] = to_frame(positions[v], origin);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), kPointsPerTask),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t v = r.begin(); v < r.end(); ++v) out[v] = to_frame(positions[v], origin);
+  });
 }
 
 namespace {
 
 using simd::load3;
+
 
 // The box of the min / max rows lo, hi widened by one unit in the last place (see box.h).
 inline void store_box(Box3f& box, __m128 lo, __m128 hi) {
@@ -173,6 +181,22 @@ void triangle_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangle
     const Vec3f& d = fp[triangles[t][2]];
     for (int k = 0; k < 3; ++k) c[t][k] = (a[k] + b[k] + d[k]) * (1.0f / 3.0f);
   }
+}
+
+void triangle_boxes_and_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangles, std::span<Box3f> boxes,
+                                  std::span<Vec3f> centroids) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), kPointsPerTask),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+    const __m128 third = _mm_set1_ps(1.0f / 3.0f);
+    for (std::size_t t = r.begin(); t < r.end(); ++t) {
+      const __m128 a = load3(fp[triangles[t][0]]), b = load3(fp[triangles[t][1]]), c = load3(fp[triangles[t][2]]);
+      store_box(boxes[t], _mm_min_ps(_mm_min_ps(a, b), c), _mm_max_ps(_mm_max_ps(a, b), c));
+      // (a + b + c) * (1/3), per lane in triangle_centroids' order: the same bits
+      alignas(16) float m[4];
+      _mm_store_ps(m, _mm_mul_ps(_mm_add_ps(_mm_add_ps(a, b), c), third));
+      centroids[t] = {m[0], m[1], m[2]};
+    }
+  });
 }
 
 std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangles) {

@@ -136,7 +136,8 @@ struct FrameMap {
 }
 
 /// The positions in the trace frame, rounded to nearest (the tracer's vertices): out[v] =
-/// to_frame(positions[v], origin). One pass, done once per frame; everything else gathers from it.
+/// to_frame(positions[v], origin). One pass, done once per frame (in chunks on the caller's
+/// threads); everything else gathers from it.
 /// `out` gets capacity for two more entries (add_sentinel's, leaf_blocks.h): appending them does
 /// not move the array (at 13.3M vertices that was 160 MB of new memory on the first frame).
 void frame_positions(std::span<const Vec3> positions, const FrameMap& origin, AlignedVector<Vec3f>& out);
@@ -172,6 +173,11 @@ void check_finite(std::span<const Vec3> positions, std::span<const Vec3f> frame_
 [[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles);
 /// The same into out[0 .. triangles.size()) (sized by the caller).
 void triangle_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles, std::span<Vec3f> out);
+
+/// triangle_boxes and triangle_centroids (the same bits) in one pass over the triangles' corners,
+/// in chunks on the caller's threads (the per-frame pass of a triangle scene).
+void triangle_boxes_and_centroids(std::span<const Vec3f> frame_pos, std::span<const Tri> triangles,
+                                  std::span<Box3f> boxes, std::span<Vec3f> centroids);
 
 /// Centroids (v0 + v1 + v2) / 3 of the triangles in the frame at `origin`.
 [[nodiscard]] std::vector<Vec3f> triangle_centroids(std::span<const Vec3> positions, std::span<const Tri> triangles,

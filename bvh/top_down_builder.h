@@ -95,11 +95,27 @@ concept TopDownBuilder = requires(B& b, typename B::Task& task, const typename B
   { b.apply(ct, split) } -> std::same_as<TopDownChildren<decltype(ct.extra)>>;
 };
 
+/// The default of build_top_down's `defer`: every task is built here.
+struct BuildEverything {
+  template <class Task>
+  bool wants(const Task&) const { return false; }
+  template <class Task>
+  void take(std::uint32_t, const Task&) {}
+};
+
 /// Builds the tree of `root` into bvh.nodes (appended; the caller clears and reserves them)
 /// and sets bvh.cost. bvh.prim_order is the builder's business.
-template <TopDownBuilder B>
+///
+/// `defer` lets a parallel build cut the tree into fragments: a task other than the root for
+/// which defer.wants(task) holds is not opened here; a placeholder node (empty box, index and
+/// count 0, its parent patched as for any node) is emitted in its place and defer.take(index,
+/// task) is told, and the subtree is someone else's (the same skeleton over that task as its
+/// root builds it, node for node, as it would have been built here). Splicing each fragment in
+/// at its placeholder gives the tree built without deferring, in the same pre-order; bvh.cost
+/// then counts only the nodes built here.
+template <TopDownBuilder B, class Defer = BuildEverything>
 void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& root,
-                    std::vector<typename B::Task>& stack, Bvh& bvh) {
+                    std::vector<typename B::Task>& stack, Bvh& bvh, Defer&& defer = {}) {
   using Task = typename B::Task;
   const SahCostModel& m = cfg.cost;
   CostAccumulator acc;
@@ -121,9 +137,15 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
   };
   stack.clear();
   stack.push_back(root);
+  bool at_root = true;
   while (!stack.empty()) {
     Task task = stack.back();
     stack.pop_back();
+    if (!at_root && defer.wants(task)) {
+      defer.take(emit(task, Box3f{}), task);
+      continue;
+    }
+    at_root = false;
     const Box3f box = builder.open(task);
     const std::uint32_t idx = emit(task, box);
     const double area = box.surface_area();

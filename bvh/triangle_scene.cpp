@@ -4,7 +4,14 @@
 #include "bvh/stage_clock.h"
 #include "bvh/sweep_sah_builder.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace ptc::bvh {
+
+namespace {
+constexpr std::size_t kWideNodesPerTask = 4096;  // wide nodes per task of the leaf data's fill
+}  // namespace
 
 TriangleScene::TriangleScene(const Mesh& mesh, const SceneConfig& cfg) : tris_(mesh.shared_triangles()), cfg_(cfg) {
   const FrameMap frame = trace_frame(mesh, cfg);
@@ -27,8 +34,7 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   t0 = clock_ms(cfg_.clock);
   f_.boxes.resize(tris.size());  // (kept from frame to frame)
   f_.centroids.resize(tris.size());
-  triangle_boxes(fp, tris, f_.boxes);
-  triangle_centroids(fp, tris, f_.centroids);
+  triangle_boxes_and_centroids(fp, tris, f_.boxes, f_.centroids);
   times.boxes_ms = clock_ms(cfg_.clock) - t0;
 
   t0 = clock_ms(cfg_.clock);
@@ -41,26 +47,39 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   times.collapse_ms = clock_ms(cfg_.clock) - t0;
 
   // Leaf data: blocks in the order the leaves appear in the wide nodes; leaves become direct.
+  // The nodes' first blocks (a prefix sum), then the nodes in chunks on the caller's threads
+  // (each chunk fences its own streaming stores): the same bytes at any count.
   t0 = clock_ms(cfg_.clock);
-  std::uint32_t nblocks = 0;
-  for (const WideNode& n : data.wide.nodes)
+  const std::size_t W = data.wide.nodes.size();
+  first_block_.resize(W + 1);
+  first_block_[0] = 0;
+  for (std::size_t i = 0; i < W; ++i) {
+    const WideNode& n = data.wide.nodes[i];
+    std::uint32_t nb = 0;
     for (int k = 0; k < 4; ++k)
-      if (n.is_leaf(k)) nblocks += blocks_for(n.count[k]);
+      if (n.is_leaf(k)) nb += blocks_for(n.count[k]);
+    first_block_[i + 1] = first_block_[i] + nb;
+  }
+  const std::uint32_t nblocks = first_block_[W];
   data.blocks.resize(nblocks);
   data.triangle_ids.resize(4 * static_cast<std::size_t>(nblocks));
   data.ranges.clear();
-  std::uint32_t next = 0;
-  for (WideNode& n : data.wide.nodes)
-    for (int k = 0; k < 4; ++k) {
-      if (!n.is_leaf(k)) continue;
-      const std::uint32_t nb = blocks_for(n.count[k]);
-      fill_leaf_blocks(std::span<const std::uint32_t>(f_.bvh.prim_order.data() + n.child[k], n.count[k]), tris,
-                       f_.fpos[0].data(), V, data.triangle_ids.data() + 4 * std::size_t(next),
-                       std::span<TriBlock>(data.blocks.data() + next, nb));
-      n.child[k] = next;  // direct leaf: count stays the triangle count
-      next += nb;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, W, kWideNodesPerTask), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      WideNode& n = data.wide.nodes[i];
+      std::uint32_t next = first_block_[i];
+      for (int k = 0; k < 4; ++k) {
+        if (!n.is_leaf(k)) continue;
+        const std::uint32_t nb = blocks_for(n.count[k]);
+        fill_leaf_blocks(std::span<const std::uint32_t>(f_.bvh.prim_order.data() + n.child[k], n.count[k]), tris,
+                         f_.fpos[0].data(), V, data.triangle_ids.data() + 4 * std::size_t(next),
+                         std::span<TriBlock>(data.blocks.data() + next, nb));
+        n.child[k] = next;  // direct leaf: count stays the triangle count
+        next += nb;
+      }
     }
-  fence_blocks();
+    fence_blocks();
+  });
   times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
   times.refit_ms = 0.0;
   t0 = clock_ms(cfg_.clock);

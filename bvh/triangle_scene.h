@@ -2,6 +2,7 @@
 // SIMD blocks are laid out in leaf order (see trace_scene.h for the per-frame loop).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
@@ -29,6 +30,7 @@ class TriangleScene {
   std::shared_ptr<const std::vector<Tri>> tris_;
   SceneConfig cfg_;
   SceneFrame f_;
+  std::vector<std::uint32_t> first_block_;  // per wide node: its first leaf block (the leaf data's prefix sum)
 };
 
 }  // namespace ptc::bvh

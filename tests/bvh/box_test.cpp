@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <cstring>
@@ -81,6 +82,58 @@ TEST(Box, BoxesContainDoubleAndFloatTriangles) {
           }
         }
       }
+    }
+  }
+}
+
+// The per-frame pass of a triangle scene: frame_positions, then triangle_boxes_and_centroids, in
+// chunks on the caller's threads. The answers: to_frame per vertex, and triangle_boxes and
+// triangle_centroids (one thread, the scalar centroid), bit for bit, at one, two and three
+// threads, over 100,000 triangles with hard corners: signed zeros, subnormals, values near the
+// float's largest (sums overflow to infinity alike), far offsets and repeated corners.
+TEST(Box, FusedTrianglePassMatchesTheSeparateOnes) {
+  std::mt19937 g(17);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::uniform_int_distribution<int> kind(0, 5);
+  constexpr std::uint32_t T = 100000;
+  std::vector<Vec3> pos;
+  std::vector<Tri> tris;
+  for (std::uint32_t t = 0; t < T; ++t) {
+    const int k = kind(g);
+    for (int c = 0; c < 3; ++c) {
+      Vec3 p(U(g), U(g), U(g));
+      if (k == 1) p *= 1e-41;                             // subnormal floats
+      if (k == 2) p = Vec3(c == 0 ? -0.0 : 0.0, 0.0, -0.0);  // signed zeros, a point triangle
+      if (k == 3) p *= 3e38;                              // the corners' sum overflows
+      if (k == 4) p += Vec3(1e7, -1e7, 3e6);
+      pos.push_back(p);
+    }
+    tris.push_back(k == 5 ? Tri{3 * t, 3 * t, 3 * t + 1} : Tri{3 * t, 3 * t + 1, 3 * t + 2});  // a repeated corner
+  }
+  const FrameMap origin{};
+  AlignedVector<Vec3f> fp1;
+  tbb::task_arena(1).execute([&] { frame_positions(pos, origin, fp1); });
+  ASSERT_EQ(fp1.size(), pos.size());
+  for (std::size_t v = 0; v < pos.size(); ++v) {
+    const Vec3f e = to_frame(pos[v], origin);
+    ASSERT_EQ(std::memcmp(&fp1[v], &e, sizeof(Vec3f)), 0) << v;
+  }
+  const auto boxes = triangle_boxes(fp1, tris);
+  const auto cents = triangle_centroids(fp1, tris);
+  tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 3);
+  for (int threads : {1, 2, 3}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    AlignedVector<Vec3f> fp;
+    std::vector<Box3f> b(T);
+    std::vector<Vec3f> c(T);
+    tbb::task_arena(threads).execute([&] {
+      frame_positions(pos, origin, fp);
+      triangle_boxes_and_centroids(fp, tris, b, c);
+    });
+    ASSERT_EQ(std::memcmp(fp.data(), fp1.data(), fp1.size() * sizeof(Vec3f)), 0);
+    for (std::uint32_t t = 0; t < T; ++t) {
+      ASSERT_EQ(std::memcmp(&b[t], &boxes[t], sizeof(Box3f)), 0) << t;
+      ASSERT_EQ(std::memcmp(&c[t], &cents[t], sizeof(Vec3f)), 0) << t;
     }
   }
 }

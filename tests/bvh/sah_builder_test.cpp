@@ -5,9 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
-#include <string>
 #include <numeric>
+#include <random>
+#include <string>
+
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include "bvh/sah_cost.h"
 #include "bvh/validate.h"
@@ -461,6 +466,83 @@ TEST(SahBuilder, GroupedBuild) {
     EXPECT_THROW((void)build_binned_sah({boxes, centers, weights, *bad}, cfg), std::invalid_argument);
 }
 
+
+// The binned build runs in parallel from 2^15 items at the root when its arena has more than one
+// thread: the tree is cut into fragments built at once and spliced in pre-order. The answer to
+// compare with is the same build in an arena of one thread (the sequential code path), node for
+// node (bounds, index, count), the primitive order and the cost's bits, at 2, 3 and 4 threads, on
+// hard inputs: duplicated centroids (object-median splits), points, huge offsets at a tiny
+// scale, weights, single-primitive leaves and a two-level build; one workspace goes through
+// every case and thread count. A NaN far into a large input is refused by the parallel record
+// pass, naming the primitive.
+TEST(SahBuilder, ParallelBuildIsTheSequentialTree) {
+  constexpr std::size_t kN = 70000;
+  std::mt19937 rng(11);
+  const auto random = test::random_boxes(kN, 21);
+  std::vector<Box3f> dup(kN), points(kN), far(kN);
+  std::uniform_int_distribution<int> pick(0, 5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (std::size_t i = 0; i < kN; ++i) {
+    const float x = static_cast<float>(pick(rng));  // six distinct positions, many copies each
+    dup[i] = {{x, 0.0f, 0.0f}, {x + 1.0f, 1.0f, 1.0f}};
+    const Vec3f p{u(rng), u(rng), i % 3 == 0 ? 0.5f : u(rng)};
+    points[i] = {p, p};  // zero-size boxes
+    for (int a = 0; a < 3; ++a) {
+      far[i].lo[a] = 1e30f + 1e24f * random[i].lo[a];
+      far[i].hi[a] = 1e30f + 1e24f * random[i].hi[a];
+    }
+  }
+  std::vector<std::uint32_t> weights(kN);
+  for (std::size_t i = 0; i < kN; ++i) weights[i] = 1 + static_cast<std::uint32_t>((i * 7919) % 60);
+  std::vector<std::uint32_t> groups{0};  // 35,000 groups of one to three primitives
+  while (groups.back() < kN)
+    groups.push_back(std::min<std::uint32_t>(groups.back() + 1 + static_cast<std::uint32_t>(groups.size() % 3), kN));
+  ASSERT_GE(groups.size() - 1, 1u << 15);
+  const auto crandom = box_centers(random), cdup = box_centers(dup), cpoints = box_centers(points), cfar = box_centers(far);
+  struct Case {
+    const char* name;
+    BuildInput in;
+    std::uint32_t leaf;
+  };
+  const Case cases[] = {{"random", {random, crandom, {}}, 4},     {"duplicated", {dup, cdup, {}}, 4},
+                        {"points", {points, cpoints, {}}, 8},     {"far and tiny", {far, cfar, {}}, 4},
+                        {"weighted", {random, crandom, weights}, 1}, {"grouped", {random, crandom, weights, groups}, 1},
+                        {"random, leaf 1", {random, crandom, {}}, 1}};
+  tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);  // (above this machine's cores)
+  BuildWorkspace ws;
+  Bvh out;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    BuildConfig cfg;
+    cfg.max_leaf_size = c.leaf;
+    cfg.cost = {1.0, 0.3};
+    Bvh seq;
+    tbb::task_arena(1).execute([&] { seq = build_binned_sah(c.in, cfg); });
+    expect_valid(seq, c.in.boxes, cfg, c.in.weights);
+    for (int threads : {2, 3, 4}) {
+      SCOPED_TRACE(std::to_string(threads) + " threads");
+      tbb::task_arena(threads).execute([&] { build_binned_sah(c.in, cfg, out, ws); });
+      ASSERT_EQ(out.nodes.size(), seq.nodes.size());
+      for (std::size_t i = 0; i < seq.nodes.size(); ++i) {
+        ASSERT_EQ(out.nodes[i].bounds, seq.nodes[i].bounds) << i;
+        ASSERT_EQ(out.nodes[i].index, seq.nodes[i].index) << i;
+        ASSERT_EQ(out.nodes[i].count, seq.nodes[i].count) << i;
+      }
+      EXPECT_EQ(out.prim_order, seq.prim_order);
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(out.cost), std::bit_cast<std::uint64_t>(seq.cost)) << out.cost << " vs " << seq.cost;
+    }
+  }
+  auto bad = random;
+  bad[61234].hi[1] = std::nanf("");
+  tbb::task_arena(2).execute([&] {
+    try {
+      (void)build_binned_sah({bad, crandom, {}}, {});
+      ADD_FAILURE() << "accepted NaN";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("primitive 61234"), std::string::npos) << e.what();
+    }
+  });
+}
 
 // NaN in a box or a centroid (a NaN position upstream): both builders refuse it, naming the
 // primitive, instead of building a broken tree (ranks by a NaN centroid are not an order).
