@@ -43,7 +43,7 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   times.build_ms = clock_ms(cfg_.clock) - t0;
 
   t0 = clock_ms(cfg_.clock);
-  collapse_to_wide(f_.bvh, data.wide);
+  collapse_to_wide(f_.bvh, data.wide, wide_ws_);
   times.collapse_ms = clock_ms(cfg_.clock) - t0;
 
   // Leaf data: blocks in the order the leaves appear in the wide nodes; leaves become direct.
@@ -83,7 +83,7 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
   times.refit_ms = 0.0;
   t0 = clock_ms(cfg_.clock);
-  regroup_to_8(data.wide, data.wide8);
+  regroup_to_8(data.wide, data.wide8, wide_ws_);
   times.collapse_ms += clock_ms(cfg_.clock) - t0;
 }
 

@@ -9,6 +9,7 @@
 
 #include "bvh/scene_config.h"
 #include "bvh/scene_frame.h"
+#include "bvh/wide_bvh.h"
 
 namespace ptc::bvh {
 
@@ -30,6 +31,7 @@ class TriangleScene {
   std::shared_ptr<const std::vector<Tri>> tris_;
   SceneConfig cfg_;
   SceneFrame f_;
+  WideWorkspace wide_ws_;                   // the parallel collapse's and regroup's scratch
   std::vector<std::uint32_t> first_block_;  // per wide node: its first leaf block (the leaf data's prefix sum)
 };
 

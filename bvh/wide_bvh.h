@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -75,6 +76,24 @@ struct WideBvh8 {
   std::uint32_t depth = 0;
 };
 
+/// Scratch of the parallel collapse and regroup (below), kept from one frame to the next: one
+/// per scene, used by one call at a time. A copy is a fresh workspace.
+class WideWorkspace {
+ public:
+  WideWorkspace();
+  ~WideWorkspace();
+  WideWorkspace(const WideWorkspace&);
+  WideWorkspace& operator=(const WideWorkspace&);
+  WideWorkspace(WideWorkspace&&) noexcept;
+  WideWorkspace& operator=(WideWorkspace&&) noexcept;
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+  friend void collapse_to_wide(const Bvh&, WideBvh&, WideWorkspace&);
+  friend void regroup_to_8(const WideBvh&, WideBvh8&, WideWorkspace&);
+};
+
 /// Regroups a 4-wide tree into 8-wide nodes with the same leaf children (the same child, count
 /// and box: leaf references are copied, not interpreted) and the same boxes. An 8-wide node
 /// starts with its 4-wide node's children and repeatedly replaces the inner child of largest
@@ -82,6 +101,10 @@ struct WideBvh8 {
 /// of the dependent node visits a ray makes on the way down (log8 against log4 levels).
 /// O(nodes); `out` keeps its capacity (per frame only the small work stack is allocated).
 void regroup_to_8(const WideBvh& w4, WideBvh8& out);
+/// The same with kept scratch: on the caller's threads from 2^14 4-wide nodes up (the tree cut
+/// into fragments regrouped at once and spliced), the same nodes in the same order at any
+/// thread count.
+void regroup_to_8(const WideBvh& w4, WideBvh8& out, WideWorkspace& ws);
 
 /// Where an 8-wide slot's box comes from: slot `slot` of 4-wide node `node` (node kEmptySlot:
 /// an empty slot).
@@ -126,6 +149,10 @@ inline int wide_children(const Bvh& bvh, std::uint32_t b, std::uint32_t (&kids)[
 /// The same into `out`, whose node array keeps its capacity (a per-frame rebuild then allocates
 /// nothing: fresh pages cost more than the collapse itself).
 void collapse_to_wide(const Bvh& bvh, WideBvh& out);
+/// The same with kept scratch: on the caller's threads from 2^16 binary nodes up (the tree cut
+/// into fragments collapsed at once and spliced), the same nodes in the same order at any
+/// thread count.
+void collapse_to_wide(const Bvh& bvh, WideBvh& out, WideWorkspace& ws);
 
 /// Checks of a collapsed tree against its binary source before rebinding: every binary leaf
 /// appears exactly once as a wide leaf child with the same range and box; every inner child's

@@ -3,6 +3,8 @@
 #include "bvh/wide_bvh.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -30,6 +32,71 @@ TEST(WideBvh, CollapseKeepsLeavesAndBoxes) {
     EXPECT_EQ(w.leaves, stats(b).leaves);
     EXPECT_LT(w.nodes.size(), stats(b).inner / 2);  // ~1/3 of the binary inner nodes
     EXPECT_EQ(w.bounds, b.nodes[0].bounds);
+  }
+}
+
+// The parallel collapse and regroup (2^16 binary / 2^14 4-wide nodes and more, more than one
+// thread): the answer is the same call in an arena of one thread (the sequential walk), node for
+// node (every byte), with the same depth, leaf count and bounds, at 2, 3 and 4 threads, through
+// one kept workspace and output; the trees: random boxes in leaves of one and of eight, many
+// duplicated boxes, and a skewed tree (boxes at exponentially growing distances: deep and
+// unbalanced, so that the cut level holds subtrees of very different sizes).
+TEST(WideBvh, ParallelCollapseAndRegroupAreTheSequentialOnes) {
+  const auto random = test::random_boxes(150000, 4);
+  std::vector<Box3f> dup(150000), skewed(100000);
+  for (std::size_t i = 0; i < dup.size(); ++i) {
+    const float x = static_cast<float>(i % 7);
+    dup[i] = {{x, 0, 0}, {x + 0.5f, 1, 1}};
+  }
+  for (std::size_t i = 0; i < skewed.size(); ++i) {
+    const float x = std::pow(1.0002f, static_cast<float>(i));
+    skewed[i] = {{x, 0, 0}, {x * 1.0001f, 1, 1}};
+  }
+  struct Case {
+    const char* name;
+    const std::vector<Box3f>* boxes;
+    std::uint32_t leaf;
+  };
+  const Case cases[] = {{"random, leaf 1", &random, 1}, {"random, leaf 8", &random, 8}, {"duplicated", &dup, 4},
+                        {"skewed", &skewed, 1}};
+  tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);
+  WideWorkspace ws;
+  WideBvh w;
+  WideBvh8 w8;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    BuildConfig cfg;
+    cfg.max_leaf_size = c.leaf;
+    Bvh b;
+    WideBvh seq;
+    WideBvh8 seq8;
+    tbb::task_arena(1).execute([&] {
+      b = build_binned_sah({*c.boxes, box_centers(*c.boxes), {}}, cfg);
+      collapse_to_wide(b, seq);
+      regroup_to_8(seq, seq8);
+    });
+    ASSERT_GE(b.nodes.size(), std::size_t{1} << 16);
+    ASSERT_GE(seq.nodes.size(), std::size_t{1} << 14);
+    EXPECT_TRUE(validate_wide(seq, b).empty()) << test::joined(validate_wide(seq, b));
+    for (int threads : {2, 3, 4}) {
+      SCOPED_TRACE(std::to_string(threads) + " threads");
+      tbb::task_arena(threads).execute([&] {
+        collapse_to_wide(b, w, ws);
+        regroup_to_8(w, w8, ws);
+      });
+      ASSERT_EQ(w.nodes.size(), seq.nodes.size());
+      for (std::size_t i = 0; i < seq.nodes.size(); ++i)
+        ASSERT_EQ(std::memcmp(&w.nodes[i], &seq.nodes[i], sizeof(WideNode)), 0) << "4-wide node " << i;
+      EXPECT_EQ(w.root, seq.root);
+      EXPECT_EQ(w.bounds, seq.bounds);
+      EXPECT_EQ(w.depth, seq.depth);
+      EXPECT_EQ(w.leaves, seq.leaves);
+      ASSERT_EQ(w8.nodes.size(), seq8.nodes.size());
+      for (std::size_t i = 0; i < seq8.nodes.size(); ++i)
+        ASSERT_EQ(std::memcmp(&w8.nodes[i], &seq8.nodes[i], sizeof(WideNode8)), 0) << "8-wide node " << i;
+      EXPECT_EQ(w8.root, seq8.root);
+      EXPECT_EQ(w8.depth, seq8.depth);
+    }
   }
 }
 
