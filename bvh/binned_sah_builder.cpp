@@ -44,7 +44,7 @@ constexpr std::uint32_t kTwoSetsFrom = 256;  // binning into two bin sets from t
 // max(kSmallestFragment, root items / (kFragmentsPerThread * threads)) items become fragments.
 constexpr std::uint32_t kParallelFrom = 1u << 15;
 constexpr std::uint32_t kSmallestFragment = 1u << 11;
-constexpr std::uint32_t kFragmentsPerThread = 8;
+constexpr std::uint32_t kFragmentsPerThread = 32;
 constexpr std::uint32_t kRecordsPerTask = 1u << 15;  // records made per task
 
 struct BinnedExtra {

@@ -17,10 +17,14 @@ namespace ptc::bvh {
 /// primitives that must be split are split without search; a node within max_leaf_size whose
 /// leaf cost is below the lower bound traversal + intersection * sum_p A(p) w(p) / A(node) of
 /// every split becomes a leaf without evaluating splits (the same decision, sooner).
-/// Sequential, O(n log n); on one core here about 0.11 s for 832k triangles and 3.6 ms for
-/// 27.6k clusters, 1.75 ms with ClusterScene's groups of at most 8 clusters (bench/bvh_bench.cpp,
-/// --build-loop for the build alone). The binning loop has
-/// an AVX2 variant chosen at runtime (BuildConfig::allow_avx2); the tree does not depend on it.
+/// O(n log n); on one core here about 0.11 s for 832k triangles and 3.6 ms for 27.6k clusters,
+/// 1.75 ms with ClusterScene's groups of at most 8 clusters (bench/bvh_bench.cpp, --build-loop
+/// for the build alone). From 2^15 items at the root (primitives, or groups) on more than one
+/// thread of the caller's arena it runs in parallel: subtrees are built at once as fragments of
+/// the tree and spliced in pre-order, and the tree, its node order, prim_order and the cost
+/// (its terms summed in node order) are the sequential build's, bit for bit, at any thread count.
+/// The binning loop has an AVX2 variant chosen at runtime (BuildConfig::allow_avx2); the tree
+/// does not depend on it.
 [[nodiscard]] Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg = {});
 
 /// Scratch memory of the binned builder, kept from one build to the next: a per-frame rebuild
