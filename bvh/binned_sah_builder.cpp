@@ -18,6 +18,7 @@
 #include "bvh/aligned.h"
 #include "bvh/binning.h"
 #include "bvh/box_simd.h"
+#include "bvh/threads.h"
 #include "bvh/top_down_builder.h"
 
 // The binned builder on the top-down skeleton (top_down_builder.h). Its steps:
@@ -655,7 +656,7 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
   if (n == 0) return;
   if (!ws.impl_) ws.impl_ = std::make_unique<BuildWorkspace::Impl>();  // (a moved-from workspace)
   BuildWorkspace::Impl& w = *ws.impl_;
-  const int threads = tbb::this_task_arena::max_concurrency();
+  const int threads = usable_threads();
   w.refs.resize(n);
   const RootBounds rb = make_records(in, w.refs.data(), threads);
   // The root: the group records when there are two groups or more (the top levels split

@@ -23,6 +23,7 @@
 #include "bvh/leaf_tables.h"
 #include "bvh/refit.h"
 #include "bvh/stage_clock.h"
+#include "bvh/threads.h"
 #include "bvh/sweep_sah_builder.h"
 #include "toolkit/geometry/morton.h"
 #include "toolkit/geometry/triangle.h"
@@ -889,9 +890,7 @@ void ClusterScene::update_clusters(std::span<const Vec3> positions) {
 // Whether build_frame can write the leaf data beside the tree: more than one thread, wall-clock
 // stage times (each stage's own time is then wall time too).
 bool ClusterScene::overlap_possible() const {
-  return cfg_.clock == StageClock::Wall &&
-         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1 &&
-         tbb::this_task_arena::max_concurrency() > 1;
+  return cfg_.clock == StageClock::Wall && usable_threads() > 1;
 }
 
 // The frame after its cluster boxes (f_.boxes, f_.centroids) and frame positions (f_.fpos, then

@@ -1,5 +1,7 @@
 #include "bvh/wide_bvh.h"
 
+#include "bvh/threads.h"
+
 #include <algorithm>
 #include <deque>
 #include <map>
@@ -336,7 +338,7 @@ void collapse_to_wide(const Bvh& bvh, WideBvh& w, WideWorkspace& ws) {
     w.depth = 1, w.leaves = 1;
     return;
   }
-  if (bvh.nodes.size() < kParallelCollapseFrom || tbb::this_task_arena::max_concurrency() < 2) {
+  if (bvh.nodes.size() < kParallelCollapseFrom || usable_threads() < 2) {
     w.nodes.reserve(bvh.nodes.size() / 2 + 1);
     w.nodes.push_back(empty_node());
     NoDefer none;
@@ -379,7 +381,7 @@ void regroup_to_8(const WideBvh& w4, WideBvh8& out, WideWorkspace& ws) {
   if (w4.nodes.empty()) return;
   if (!ws.impl_) ws.impl_ = std::make_unique<WideWorkspace::Impl>();
   WideWorkspace::Impl& wk = *ws.impl_;
-  if (w4.nodes.size() < kParallelRegroupFrom || tbb::this_task_arena::max_concurrency() < 2) {
+  if (w4.nodes.size() < kParallelRegroupFrom || usable_threads() < 2) {
     out.nodes.reserve(w4.nodes.size());  // at least one 4-wide node per 8-wide one
     out.nodes.emplace_back();
     NoDefer none;
