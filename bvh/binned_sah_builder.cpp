@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <mutex>
 #include <stdexcept>
@@ -97,8 +96,8 @@ struct RootBounds {
   __m128 clo, chi;  // bounds of the centroids
 };
 
-// The records of primitives [begin, end) of the input, in input order, and their bounds; `nan`
-// is set when a NaN was seen. Records are assembled in registers (store_record).
+// The records of primitives [begin, end) of the input, in input order, and their bounds;
+// `nan_seen` is set when a NaN was seen. Records are assembled in registers (store_record).
 RootBounds make_records_range(const BuildInput& in, Ref* refs, std::uint32_t begin, std::uint32_t end, bool& nan_seen) {
   const auto n = static_cast<std::uint32_t>(in.boxes.size());
   static_assert(sizeof(Box3f) == 24 && sizeof(Vec3f) == 12);
@@ -129,8 +128,9 @@ RootBounds make_records_range(const BuildInput& in, Ref* refs, std::uint32_t beg
 }
 
 // The records of the input and the root's bounds, in pieces on `threads` threads from
-// kParallelFrom primitives up (minima and maxima: the same bounds in any order). A NaN
-// anywhere makes check_no_nan name the primitive.
+// kParallelFrom primitives up. The pieces' bounds are merged in their order: _mm_min_ps and
+// _mm_max_ps keep the later of two equal values (a +0 and a -0), as the one-piece loop does, so
+// the bounds have the same bits. A NaN anywhere makes check_no_nan name the primitive.
 RootBounds make_records(const BuildInput& in, Ref* refs, int threads) {
   const auto n = static_cast<std::uint32_t>(in.boxes.size());
   bool nan = false;
@@ -147,7 +147,8 @@ RootBounds make_records(const BuildInput& in, Ref* refs, int threads) {
       piece_nan[k] = nk;
     });
     rb = piece_bounds[0];
-    for (std::uint32_t k = 0; k < pieces; ++k) {
+    nan = piece_nan[0];
+    for (std::uint32_t k = 1; k < pieces; ++k) {
       const RootBounds& p = piece_bounds[k];
       rb.lo = _mm_min_ps(rb.lo, p.lo), rb.hi = _mm_max_ps(rb.hi, p.hi);
       rb.clo = _mm_min_ps(rb.clo, p.clo), rb.chi = _mm_max_ps(rb.chi, p.chi);
@@ -208,14 +209,16 @@ struct BuildWorkspace::Impl {
   AlignedVector<Ref> refs;
   AlignedVector<Ref> group_refs;  // two-level build: one record per group
   Scratch scratch;                                       // the sequential build's
-  std::vector<std::unique_ptr<Scratch>> thread_scratch;  // the parallel build's, per thread of the arena
-  std::deque<Fragment> fragments;  // kept from one build to the next (their node arrays too)
+  // The parallel build's, per thread slot of the arena (tbb::this_task_arena::current_thread_index()
+  // is below its max_concurrency(), which may exceed the threads the global limit lets run).
+  std::vector<std::unique_ptr<Scratch>> thread_scratch;
+  std::vector<std::unique_ptr<Fragment>> fragments;  // kept from one build to the next (their node arrays too)
   std::size_t fragments_used = 0;
   std::mutex fragments_mutex;
   Fragment* new_fragment() {
     const std::lock_guard<std::mutex> lock(fragments_mutex);
-    if (fragments_used == fragments.size()) fragments.emplace_back();
-    Fragment* f = &fragments[fragments_used++];
+    if (fragments_used == fragments.size()) fragments.push_back(std::make_unique<Fragment>());
+    Fragment* f = fragments[fragments_used++].get();
     f->nodes.nodes.clear(), f->holes.clear(), f->shift.clear();
     return f;
   }
@@ -593,7 +596,8 @@ double tree_cost(const SahCostModel& m, const AlignedVector<BvhNode>& nodes, con
 void build_parallel(const BuildInput& in, const BuildConfig& cfg, const BinnedTask& root, int threads,
                     BuildWorkspace::Impl& w, Bvh& bvh) {
   const std::uint32_t cutoff = std::max(kSmallestFragment, root.size() / (kFragmentsPerThread * static_cast<std::uint32_t>(threads)));
-  if (w.thread_scratch.size() < static_cast<std::size_t>(threads)) w.thread_scratch.resize(static_cast<std::size_t>(threads));
+  const auto slots = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  if (w.thread_scratch.size() < slots) w.thread_scratch.resize(slots);
   w.fragments_used = 0;
   Fragment* top = w.new_fragment();
   top->root = root;
@@ -609,7 +613,7 @@ void build_parallel(const BuildInput& in, const BuildConfig& cfg, const BinnedTa
   // Sizes bottom-up (a fragment is made before the fragments it defers to), positions top-down.
   const std::size_t F = w.fragments_used;
   for (std::size_t i = F; i-- > 0;) {
-    Fragment& f = w.fragments[i];
+    Fragment& f = *w.fragments[i];
     f.total = f.nodes.nodes.size();
     f.shift.assign(f.holes.size() + 1, 0);
     for (std::size_t h = 0; h < f.holes.size(); ++h) {
@@ -619,12 +623,12 @@ void build_parallel(const BuildInput& in, const BuildConfig& cfg, const BinnedTa
   }
   top->base = 0;
   for (std::size_t i = 0; i < F; ++i) {
-    const Fragment& f = w.fragments[i];
+    const Fragment& f = *w.fragments[i];
     for (std::size_t h = 0; h < f.holes.size(); ++h) f.holes[h].second->base = f.base + f.holes[h].first + f.shift[h];
   }
   bvh.nodes.resize(top->total);
   tbb::parallel_for(std::size_t{0}, F, [&](std::size_t i) {
-    const Fragment& f = w.fragments[i];
+    const Fragment& f = *w.fragments[i];
     // Position of local node j: base + j + the holes before j (their subtrees, less the placeholder).
     auto position = [&](std::uint32_t j) {
       std::size_t h = 0;

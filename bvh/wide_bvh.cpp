@@ -3,7 +3,6 @@
 #include "bvh/threads.h"
 
 #include <algorithm>
-#include <deque>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -204,13 +203,13 @@ struct WalkFragment {
 // Fragments kept from one walk to the next (their node arrays too), handed out under a lock.
 template <class Frag>
 struct FragmentPool {
-  std::deque<Frag> all;
+  std::vector<std::unique_ptr<Frag>> all;
   std::size_t used = 0;
   std::mutex mutex;
   Frag* take() {
     const std::lock_guard<std::mutex> lock(mutex);
-    if (used == all.size()) all.emplace_back();
-    Frag* f = &all[used++];
+    if (used == all.size()) all.push_back(std::make_unique<Frag>());
+    Frag* f = all[used++].get();
     f->nodes.clear(), f->holes.clear(), f->hole_locals.clear(), f->shift.clear();
     f->depth = 0, f->leaves = 0;
     return f;
@@ -249,7 +248,7 @@ template <class Frag, class Node>
 std::uint64_t splice_fragments(FragmentPool<Frag>& pool, AlignedVector<Node>& out, std::uint64_t base) {
   const std::size_t F = pool.used;
   for (std::size_t i = F; i-- > 0;) {  // sizes, children first
-    Frag& f = pool.all[i];
+    Frag& f = *pool.all[i];
     f.size = f.nodes.size();
     f.shift.assign(f.holes.size() + 1, 0);
     f.hole_locals.clear();
@@ -260,10 +259,10 @@ std::uint64_t splice_fragments(FragmentPool<Frag>& pool, AlignedVector<Node>& ou
     }
     std::sort(f.hole_locals.begin(), f.hole_locals.end());
   }
-  Frag& top = pool.all[0];
+  Frag& top = *pool.all[0];
   top.root_pos = base, top.desc_start = base + 1;
   for (std::size_t i = 0; i < F; ++i) {  // positions, parents first
-    const Frag& f = pool.all[i];
+    const Frag& f = *pool.all[i];
     for (std::size_t h = 0; h < f.holes.size(); ++h) {
       Frag& c = *f.holes[h].child;
       c.root_pos = f.position(f.holes[h].local);
@@ -272,7 +271,7 @@ std::uint64_t splice_fragments(FragmentPool<Frag>& pool, AlignedVector<Node>& ou
   }
   out.resize(base + top.size);
   tbb::parallel_for(std::size_t{0}, F, [&](std::size_t i) {
-    const Frag& f = pool.all[i];
+    const Frag& f = *pool.all[i];
     std::size_t skip = 0;
     for (std::uint32_t j = 0; j < f.nodes.size(); ++j) {
       if (skip < f.hole_locals.size() && f.hole_locals[skip] == j) {  // (its subtree's fragment writes it)
@@ -299,10 +298,10 @@ constexpr std::uint32_t kRegroupCutDepth = 3;
 }  // namespace
 
 struct WideWorkspace::Impl {
-  std::vector<CollapseItem> collapse_stack;
+  std::vector<CollapseItem> collapse_stack;  // the sequential walks' work lists
   std::vector<RegroupItem> regroup_stack;
-  FragmentPool<WalkFragment<WideNode, CollapseItem>> collapse_fragments;
-  FragmentPool<WalkFragment<WideNode8, RegroupItem>> regroup_fragments;
+  FragmentPool<WalkFragment<WideNode, CollapseItem>> collapse_fragments;  // the parallel walks'
+  FragmentPool<WalkFragment<WideNode8, RegroupItem>> regroup_fragments;   // (their work lists: thread_local)
 };
 
 WideWorkspace::WideWorkspace() : impl_(std::make_unique<Impl>()) {}
@@ -312,23 +311,16 @@ WideWorkspace& WideWorkspace::operator=(const WideWorkspace&) { return *this; }
 WideWorkspace::WideWorkspace(WideWorkspace&&) noexcept = default;
 WideWorkspace& WideWorkspace::operator=(WideWorkspace&&) noexcept = default;
 
-WideBvh collapse_to_wide(const Bvh& bvh) {
-  WideBvh w;
-  collapse_to_wide(bvh, w);
-  return w;
-}
+namespace {
 
-void collapse_to_wide(const Bvh& bvh, WideBvh& w) {
-  WideWorkspace ws;
-  collapse_to_wide(bvh, w, ws);
-}
+bool collapse_in_parallel(const Bvh& bvh) { return bvh.nodes.size() >= kParallelCollapseFrom && usable_threads() >= 2; }
+bool regroup_in_parallel(const WideBvh& w4) { return w4.nodes.size() >= kParallelRegroupFrom && usable_threads() >= 2; }
 
-void collapse_to_wide(const Bvh& bvh, WideBvh& w, WideWorkspace& ws) {
+// Both collapses: the root's fields, then the walk (sequential with `stack`, or in fragments).
+void collapse(const Bvh& bvh, WideBvh& w, std::vector<CollapseItem>* stack, WideWorkspace::Impl* wk) {
   w.nodes.clear();
   w.root = 0, w.bounds = Box3f{}, w.depth = 0, w.leaves = 0;
   if (bvh.nodes.empty()) return;
-  if (!ws.impl_) ws.impl_ = std::make_unique<WideWorkspace::Impl>();  // (a moved-from workspace)
-  WideWorkspace::Impl& wk = *ws.impl_;
   w.bounds = bvh.nodes[0].bounds;
   if (bvh.nodes[0].is_leaf()) {
     w.nodes.push_back(empty_node());
@@ -338,24 +330,66 @@ void collapse_to_wide(const Bvh& bvh, WideBvh& w, WideWorkspace& ws) {
     w.depth = 1, w.leaves = 1;
     return;
   }
-  if (bvh.nodes.size() < kParallelCollapseFrom || usable_threads() < 2) {
+  if (stack) {
     w.nodes.reserve(bvh.nodes.size() / 2 + 1);
     w.nodes.push_back(empty_node());
     NoDefer none;
-    collapse_walk(bvh, {0, 0, 1}, w.nodes, wk.collapse_stack, w.depth, w.leaves, none);
+    collapse_walk(bvh, {0, 0, 1}, w.nodes, *stack, w.depth, w.leaves, none);
     return;
   }
   using Frag = WalkFragment<WideNode, CollapseItem>;
-  auto& pool = wk.collapse_fragments;
+  auto& pool = wk->collapse_fragments;
   walk_fragments(pool, CollapseItem{0, 0, 1}, [](const CollapseItem& it) { return it.depth == kCollapseCutDepth; },
                  [&](Frag& f, auto& defer) {
-                   thread_local std::vector<CollapseItem> stack;
+                   thread_local std::vector<CollapseItem> local_stack;
                    f.nodes.push_back(empty_node());
-                   collapse_walk(bvh, {f.root.binary, 0, f.root.depth}, f.nodes, stack, f.depth, f.leaves, defer);
+                   collapse_walk(bvh, {f.root.binary, 0, f.root.depth}, f.nodes, local_stack, f.depth, f.leaves, defer);
                  });
   splice_fragments(pool, w.nodes, 0);
-  for (std::size_t i = 0; i < pool.used; ++i)
-    w.depth = std::max(w.depth, pool.all[i].depth), w.leaves += pool.all[i].leaves;
+  for (std::size_t i = 0; i < pool.used; ++i) w.depth = std::max(w.depth, pool.all[i]->depth), w.leaves += pool.all[i]->leaves;
+}
+
+void regroup(const WideBvh& w4, WideBvh8& out, std::vector<RegroupItem>* stack, WideWorkspace::Impl* wk) {
+  out.nodes.clear();
+  out.root = 0, out.depth = 0;
+  if (w4.nodes.empty()) return;
+  if (stack) {
+    out.nodes.reserve(w4.nodes.size());  // at least one 4-wide node per 8-wide one
+    out.nodes.emplace_back();
+    NoDefer none;
+    regroup_walk(w4.nodes, {w4.root, 0, 1}, out.nodes, *stack, out.depth, 0, {}, nullptr, none);
+    return;
+  }
+  using Frag = WalkFragment<WideNode8, RegroupItem>;
+  auto& pool = wk->regroup_fragments;
+  const std::span<const WideNode> nodes4(w4.nodes);
+  walk_fragments(pool, RegroupItem{w4.root, 0, 1}, [](const RegroupItem& it) { return it.depth == kRegroupCutDepth; },
+                 [&](Frag& f, auto& defer) {
+                   thread_local std::vector<RegroupItem> local_stack;
+                   f.nodes.emplace_back();
+                   regroup_walk(nodes4, {f.root.node4, 0, f.root.depth}, f.nodes, local_stack, f.depth, 0, {}, nullptr, defer);
+                 });
+  splice_fragments(pool, out.nodes, 0);
+  for (std::size_t i = 0; i < pool.used; ++i) out.depth = std::max(out.depth, pool.all[i]->depth);
+}
+
+}  // namespace
+
+WideBvh collapse_to_wide(const Bvh& bvh) {
+  WideBvh w;
+  collapse_to_wide(bvh, w);
+  return w;
+}
+
+void collapse_to_wide(const Bvh& bvh, WideBvh& w) {
+  WideWorkspace ws;  // (one allocation: its work lists and fragments start empty)
+  collapse_to_wide(bvh, w, ws);
+}
+
+void collapse_to_wide(const Bvh& bvh, WideBvh& w, WideWorkspace& ws) {
+  if (!ws.impl_) ws.impl_ = std::make_unique<WideWorkspace::Impl>();  // (a moved-from workspace)
+  if (collapse_in_parallel(bvh)) collapse(bvh, w, nullptr, ws.impl_.get());
+  else collapse(bvh, w, &ws.impl_->collapse_stack, nullptr);
 }
 
 std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4, AlignedVector<WideNode8>& out,
@@ -376,29 +410,9 @@ void regroup_to_8(const WideBvh& w4, WideBvh8& out) {
 }
 
 void regroup_to_8(const WideBvh& w4, WideBvh8& out, WideWorkspace& ws) {
-  out.nodes.clear();
-  out.root = 0, out.depth = 0;
-  if (w4.nodes.empty()) return;
   if (!ws.impl_) ws.impl_ = std::make_unique<WideWorkspace::Impl>();
-  WideWorkspace::Impl& wk = *ws.impl_;
-  if (w4.nodes.size() < kParallelRegroupFrom || usable_threads() < 2) {
-    out.nodes.reserve(w4.nodes.size());  // at least one 4-wide node per 8-wide one
-    out.nodes.emplace_back();
-    NoDefer none;
-    regroup_walk(w4.nodes, {w4.root, 0, 1}, out.nodes, wk.regroup_stack, out.depth, 0, {}, nullptr, none);
-    return;
-  }
-  using Frag = WalkFragment<WideNode8, RegroupItem>;
-  auto& pool = wk.regroup_fragments;
-  const std::span<const WideNode> nodes4(w4.nodes);
-  walk_fragments(pool, RegroupItem{w4.root, 0, 1}, [](const RegroupItem& it) { return it.depth == kRegroupCutDepth; },
-                 [&](Frag& f, auto& defer) {
-                   thread_local std::vector<RegroupItem> stack;
-                   f.nodes.emplace_back();
-                   regroup_walk(nodes4, {f.root.node4, 0, f.root.depth}, f.nodes, stack, f.depth, 0, {}, nullptr, defer);
-                 });
-  splice_fragments(pool, out.nodes, 0);
-  for (std::size_t i = 0; i < pool.used; ++i) out.depth = std::max(out.depth, pool.all[i].depth);
+  if (regroup_in_parallel(w4)) regroup(w4, out, nullptr, ws.impl_.get());
+  else regroup(w4, out, &ws.impl_->regroup_stack, nullptr);
 }
 
 std::vector<std::string> validate_wide(const WideBvh& wide, const Bvh& bvh) {

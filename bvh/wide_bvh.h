@@ -76,8 +76,10 @@ struct WideBvh8 {
   std::uint32_t depth = 0;
 };
 
-/// Scratch of the parallel collapse and regroup (below), kept from one frame to the next: one
-/// per scene, used by one call at a time. A copy is a fresh workspace.
+/// What the collapse and the regroup keep from one frame to the next (below): the sequential
+/// walks' work lists, and the parallel walks' fragments with their node arrays (each thread's
+/// work list there is its own). One per scene, used by one call at a time. A copy is a fresh
+/// workspace.
 class WideWorkspace {
  public:
   WideWorkspace();
@@ -99,7 +101,8 @@ class WideWorkspace {
 /// starts with its 4-wide node's children and repeatedly replaces the inner child of largest
 /// surface area whose children still fit (at most 8 in all) by those children. About two thirds
 /// of the dependent node visits a ray makes on the way down (log8 against log4 levels).
-/// O(nodes); `out` keeps its capacity (per frame only the small work stack is allocated).
+/// O(nodes); `out` keeps its capacity (per frame only a temporary workspace is allocated, and
+/// above the parallel threshold below its fragments: pass a kept one).
 void regroup_to_8(const WideBvh& w4, WideBvh8& out);
 /// The same with kept scratch: on the caller's threads from 2^14 4-wide nodes up (the tree cut
 /// into fragments regrouped at once and spliced), the same nodes in the same order at any
@@ -147,7 +150,8 @@ inline int wide_children(const Bvh& bvh, std::uint32_t b, std::uint32_t (&kids)[
 /// that is a single leaf becomes one wide node with one leaf child. O(nodes).
 [[nodiscard]] WideBvh collapse_to_wide(const Bvh& bvh);
 /// The same into `out`, whose node array keeps its capacity (a per-frame rebuild then allocates
-/// nothing: fresh pages cost more than the collapse itself).
+/// only a temporary workspace, and above the parallel threshold below its fragments: pass a kept
+/// one; fresh pages cost more than the collapse itself).
 void collapse_to_wide(const Bvh& bvh, WideBvh& out);
 /// The same with kept scratch: on the caller's threads from 2^16 binary nodes up (the tree cut
 /// into fragments collapsed at once and spliced), the same nodes in the same order at any

@@ -532,6 +532,19 @@ TEST(SahBuilder, ParallelBuildIsTheSequentialTree) {
       EXPECT_EQ(std::bit_cast<std::uint64_t>(out.cost), std::bit_cast<std::uint64_t>(seq.cost)) << out.cost << " vs " << seq.cost;
     }
   }
+  {  // an arena wider than the process's limit (ptc --threads 2 under a wider arena): its thread
+     // slots run past the limit; the build still gives the sequential tree
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    BuildConfig cfg;
+    cfg.max_leaf_size = 4;
+    const Bvh seq = build_binned_sah({random, crandom, {}}, cfg);  // (compared above with one thread's)
+    for (int round = 0; round < 3; ++round) {
+      tbb::task_arena(4).execute([&] { build_binned_sah({random, crandom, {}}, cfg, out, ws); });
+      ASSERT_EQ(out.nodes.size(), seq.nodes.size());
+      for (std::size_t i = 0; i < seq.nodes.size(); ++i) ASSERT_EQ(out.nodes[i].index, seq.nodes[i].index) << i;
+      EXPECT_EQ(out.prim_order, seq.prim_order);
+    }
+  }
   auto bad = random;
   bad[61234].hi[1] = std::nanf("");
   tbb::task_arena(2).execute([&] {
