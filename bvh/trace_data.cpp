@@ -225,6 +225,7 @@ std::vector<std::string> validate(const TraceData& d, std::size_t triangle_count
   } else if (d.triangle_ids.size() != 4 * d.blocks.size()) {
     issues.push_back("triangle_ids size is not 4 per block");
   }
+  if (!issues.empty()) return issues;  // (the walks below index the ids by group or block)
   // (A cluster scene's data has no 4-wide tree: `wide` is then empty.)
   if (!d.wide.nodes.empty()) validate_tree(d, d.wide, triangle_count, exact_unions, "", issues);
   if (d.wide8.nodes.empty() && !d.wide.nodes.empty()) issues.push_back("no 8-wide nodes beside the 4-wide tree");
