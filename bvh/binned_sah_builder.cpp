@@ -196,7 +196,12 @@ struct Scratch {
 // that stand for subtrees deferred to other fragments.
 struct Fragment {
   BinnedTask root;
-  Bvh nodes;  // (its nodes only)
+  // Its nodes (and a cost build_top_down sets, unused). A plain vector: an AlignedVector puts
+  // every array of 256 KiB or more on whole 2 MiB pages (a hundred fragments: +200 MB).
+  struct {
+    std::vector<BvhNode> nodes;
+    double cost = 0.0;
+  } nodes;
   std::vector<std::pair<std::uint32_t, Fragment*>> holes;
   std::vector<std::uint64_t> shift;  // shift[h]: nodes the holes before hole h add (total - 1 each)
   std::uint64_t total = 0;           // nodes of the spliced subtree

@@ -113,9 +113,10 @@ struct BuildEverything {
 /// root builds it, node for node, as it would have been built here). Splicing each fragment in
 /// at its placeholder gives the tree built without deferring, in the same pre-order; bvh.cost
 /// then counts only the nodes built here.
-template <TopDownBuilder B, class Defer = BuildEverything>
+/// (`Tree`: a Bvh, or anything with `nodes`, a vector of BvhNode, and `cost`.)
+template <TopDownBuilder B, class Tree = Bvh, class Defer = BuildEverything>
 void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& root,
-                    std::vector<typename B::Task>& stack, Bvh& bvh, Defer&& defer = {}) {
+                    std::vector<typename B::Task>& stack, Tree& bvh, Defer&& defer = {}) {
   using Task = typename B::Task;
   const SahCostModel& m = cfg.cost;
   CostAccumulator acc;

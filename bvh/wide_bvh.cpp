@@ -58,8 +58,8 @@ inline std::uint32_t local_of(const CollapseItem& it) { return it.wide; }  // (t
 inline std::uint32_t local_of(const RegroupItem& it) { return it.node8; }
 
 // The collapse from `root` (its wide node already in `nodes`); raises depth, adds to leaves.
-template <class Defer>
-void collapse_walk(const Bvh& bvh, CollapseItem root, AlignedVector<WideNode>& nodes, std::vector<CollapseItem>& stack,
+template <class Nodes, class Defer>
+void collapse_walk(const Bvh& bvh, CollapseItem root, Nodes& nodes, std::vector<CollapseItem>& stack,
                    std::uint32_t& depth, std::uint32_t& leaves, Defer& defer) {
   stack.clear();
   stack.push_back(root);
@@ -95,8 +95,8 @@ void collapse_walk(const Bvh& bvh, CollapseItem root, AlignedVector<WideNode>& n
 }
 
 // regroup_subtree's walk from `root` (its 8-wide node already in `out`).
-template <class Defer>
-void regroup_walk(std::span<const WideNode> w4, RegroupItem root, AlignedVector<WideNode8>& out,
+template <class Nodes, class Defer>
+void regroup_walk(std::span<const WideNode> w4, RegroupItem root, Nodes& out,
                   std::vector<RegroupItem>& stack, std::uint32_t& depth, std::uint32_t linked_below,
                   std::span<const std::uint32_t> linked8, std::vector<SlotSource>* sources, Defer& defer) {
   // A slot of the 8-wide node being filled; an inner one keeps its area and its node's number of
@@ -180,7 +180,7 @@ void regroup_walk(std::span<const WideNode> w4, RegroupItem root, AlignedVector<
 template <class Node, class Item>
 struct WalkFragment {
   Item root{};
-  AlignedVector<Node> nodes;
+  std::vector<Node> nodes;  // (not an AlignedVector, which puts arrays of 256 KiB or more on whole 2 MiB pages)
   struct Hole {
     std::uint32_t local, cut;
     WalkFragment* child;
