@@ -4,19 +4,18 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_for_each.h>
 #include <tbb/task_arena.h>
 
 #include "bvh/aligned.h"
 #include "bvh/binning.h"
 #include "bvh/box_simd.h"
+#include "bvh/fragments.h"
 #include "bvh/threads.h"
 #include "bvh/top_down_builder.h"
 
@@ -191,22 +190,9 @@ struct Scratch {
   std::vector<BinnedTask> stack;
 };
 
-// A parallel build's piece of the tree (see build_parallel): the subtree of `root` built by one
-// job, in pre-order with local indices, where `holes` lists (in ascending order) the local nodes
-// that stand for subtrees deferred to other fragments.
-struct Fragment {
-  BinnedTask root;
-  // Its nodes (and a cost build_top_down sets, unused). A plain vector: an AlignedVector puts
-  // every array of 256 KiB or more on whole 2 MiB pages (a hundred fragments: +200 MB).
-  struct {
-    std::vector<BvhNode> nodes;
-    double cost = 0.0;
-  } nodes;
-  std::vector<std::pair<std::uint32_t, Fragment*>> holes;
-  std::vector<std::uint64_t> shift;  // shift[h]: nodes the holes before hole h add (total - 1 each)
-  std::uint64_t total = 0;           // nodes of the spliced subtree
-  std::uint64_t base = 0;            // its root's position in the tree
-};
+// A parallel build's piece of the tree (fragments.h): the subtree of a task built by one job,
+// in pre-order with local indices.
+using BinnedFragment = Fragment<BvhNode, BinnedTask>;
 
 }  // namespace
 
@@ -217,16 +203,7 @@ struct BuildWorkspace::Impl {
   // The parallel build's, per thread slot of the arena (tbb::this_task_arena::current_thread_index()
   // is below its max_concurrency(), which may exceed the threads the global limit lets run).
   std::vector<std::unique_ptr<Scratch>> thread_scratch;
-  std::vector<std::unique_ptr<Fragment>> fragments;  // kept from one build to the next (their node arrays too)
-  std::size_t fragments_used = 0;
-  std::mutex fragments_mutex;
-  Fragment* new_fragment() {
-    const std::lock_guard<std::mutex> lock(fragments_mutex);
-    if (fragments_used == fragments.size()) fragments.push_back(std::make_unique<Fragment>());
-    Fragment* f = fragments[fragments_used++].get();
-    f->nodes.nodes.clear(), f->holes.clear(), f->shift.clear();
-    return f;
-  }
+  FragmentPool<BinnedFragment> fragments;  // kept from one build to the next (their node arrays too)
 };
 
 namespace {
@@ -555,19 +532,15 @@ Bvh build_binned_sah(const BuildInput& in, const BuildConfig& cfg) {
 namespace {
 
 // What a fragment's job hands on: a task of at least `cutoff` items (never its own root) becomes
-// a new fragment, fed to the parallel loop.
+// a new fragment. In pre-order the deferred subtree's nodes follow its placeholder at once: its
+// cut is the placeholder's index + 1.
 struct Deferrer {
   std::uint32_t cutoff;
-  BuildWorkspace::Impl& w;
-  Fragment& f;
-  tbb::feeder<Fragment*>& feeder;
+  FragmentFeed<BinnedFragment>& feed;
   bool wants(const BinnedTask& t) const { return t.size() >= cutoff; }
-  void take(std::uint32_t idx, const BinnedTask& t) {
-    Fragment* c = w.new_fragment();
-    c->root = t;
-    c->root.patch_parent = kNoParent;  // (its root is its own node 0; the placeholder was patched)
-    f.holes.emplace_back(idx, c);
-    feeder.add(c);
+  void take(std::uint32_t idx, BinnedTask t) {
+    t.patch_parent = kNoParent;  // (its root is its own node 0; the placeholder was patched)
+    feed.add(idx, idx + 1, t);
   }
 };
 
@@ -603,53 +576,16 @@ void build_parallel(const BuildInput& in, const BuildConfig& cfg, const BinnedTa
   const std::uint32_t cutoff = std::max(kSmallestFragment, root.size() / (kFragmentsPerThread * static_cast<std::uint32_t>(threads)));
   const auto slots = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
   if (w.thread_scratch.size() < slots) w.thread_scratch.resize(slots);
-  w.fragments_used = 0;
-  Fragment* top = w.new_fragment();
-  top->root = root;
-  Fragment* const start[1] = {top};
-  tbb::parallel_for_each(start, start + 1, [&](Fragment* f, tbb::feeder<Fragment*>& feeder) {
+  walk_fragments(w.fragments, root, [&](BinnedFragment& f, FragmentFeed<BinnedFragment>& feed) {
     const int t = tbb::this_task_arena::current_thread_index();
     std::unique_ptr<Scratch>& sc = w.thread_scratch[static_cast<std::size_t>(t)];
     if (!sc) sc = std::make_unique<Scratch>();
     BinnedBuilder builder(in, cfg, w.refs.data(), w.group_refs.data(), sc->bins);
-    f->nodes.nodes.clear();
-    build_top_down(builder, cfg, f->root, sc->stack, f->nodes, Deferrer{cutoff, w, *f, feeder});
+    build_top_down(builder, cfg, f.root, sc->stack, f, Deferrer{cutoff, feed});
   });
-  // Sizes bottom-up (a fragment is made before the fragments it defers to), positions top-down.
-  const std::size_t F = w.fragments_used;
-  for (std::size_t i = F; i-- > 0;) {
-    Fragment& f = *w.fragments[i];
-    f.total = f.nodes.nodes.size();
-    f.shift.assign(f.holes.size() + 1, 0);
-    for (std::size_t h = 0; h < f.holes.size(); ++h) {
-      f.total += f.holes[h].second->total - 1;
-      f.shift[h + 1] = f.shift[h] + f.holes[h].second->total - 1;
-    }
-  }
-  top->base = 0;
-  for (std::size_t i = 0; i < F; ++i) {
-    const Fragment& f = *w.fragments[i];
-    for (std::size_t h = 0; h < f.holes.size(); ++h) f.holes[h].second->base = f.base + f.holes[h].first + f.shift[h];
-  }
-  bvh.nodes.resize(top->total);
-  tbb::parallel_for(std::size_t{0}, F, [&](std::size_t i) {
-    const Fragment& f = *w.fragments[i];
-    // Position of local node j: base + j + the holes before j (their subtrees, less the placeholder).
-    auto position = [&](std::uint32_t j) {
-      std::size_t h = 0;
-      while (h < f.holes.size() && f.holes[h].first < j) ++h;
-      return f.base + j + f.shift[h];
-    };
-    std::size_t h = 0;
-    for (std::uint32_t j = 0; j < f.nodes.nodes.size(); ++j) {
-      if (h < f.holes.size() && f.holes[h].first == j) {
-        ++h;
-        continue;
-      }
-      BvhNode nd = f.nodes.nodes[j];
-      if (!nd.is_leaf()) nd.index = static_cast<std::uint32_t>(position(nd.index));
-      bvh.nodes[f.base + j + f.shift[h]] = nd;
-    }
+  // An inner node's index is its second child.
+  splice_fragments(w.fragments, bvh.nodes, 0, [](BvhNode& nd, const BinnedFragment& f) {
+    if (!nd.is_leaf()) nd.index = static_cast<std::uint32_t>(f.position(nd.index));
   });
   bvh.cost = tree_cost(cfg.cost, bvh.nodes, w.refs.data(), !in.weights.empty());
 }

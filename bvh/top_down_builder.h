@@ -95,7 +95,8 @@ concept TopDownBuilder = requires(B& b, typename B::Task& task, const typename B
   { b.apply(ct, split) } -> std::same_as<TopDownChildren<decltype(ct.extra)>>;
 };
 
-/// The default of build_top_down's `defer`: every task is built here.
+/// The default of build_top_down's `defer` (and the sequential wide walks', wide_bvh.cpp): every
+/// task is built here. The parallel forms defer through fragments.h.
 struct BuildEverything {
   template <class Task>
   bool wants(const Task&) const { return false; }

@@ -1,16 +1,14 @@
 #include "bvh/wide_bvh.h"
 
+#include "bvh/fragments.h"
 #include "bvh/threads.h"
+#include "bvh/top_down_builder.h"
 
 #include <algorithm>
 #include <map>
 #include <memory>
-#include <mutex>
+#include <type_traits>
 #include <utility>
-
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_for_each.h>
-#include <tbb/task_arena.h>
 
 namespace ptc::bvh {
 
@@ -27,26 +25,11 @@ WideNode empty_node() {
   return n;
 }
 
-}  // namespace
-
-namespace {
-
 // Both walks below allocate a node's inner children (consecutive indices, in slot order) when
 // they open the node, and open nodes last-in first-out: a node, then its children, then the
-// descendants of its last child, ..., of its first. So the descendants of a node (without the
-// node itself) are contiguous, and a walk over a subtree alone, its root at 0, numbers them in
-// the same order. The parallel forms cut the tree at a fixed depth into fragments walked at once
-// (the `defer` hook of the walks: an item at that depth is not opened; its node stays a
-// placeholder) and splice them (splice_fragments): a fragment's local node i > 0 lands at
-// desc_start + i - 1 plus the nodes of the deferred subtrees opened before it was allocated.
-// The same nodes in the same order as the sequential walk, at any thread count.
-
-struct NoDefer {
-  template <class Item>
-  bool wants(const Item&) const { return false; }
-  template <class Item>
-  void take(const Item&, std::uint32_t) {}
-};
+// descendants of its last child, ..., of its first. So their parallel forms are fragments.h's:
+// the tree cut at a fixed level (LevelCut, through the walks' `defer` hook), the fragments walked
+// at once and spliced; the same nodes in the same order as the sequential walk.
 
 struct CollapseItem {
   std::uint32_t binary, wide, depth;  // binary node to expand, wide node to fill, its level
@@ -68,7 +51,7 @@ void collapse_walk(const Bvh& bvh, CollapseItem root, Nodes& nodes, std::vector<
     const CollapseItem it = stack.back();
     stack.pop_back();
     if (!at_root && defer.wants(it)) {
-      defer.take(it, static_cast<std::uint32_t>(nodes.size()));
+      defer.take(static_cast<std::uint32_t>(nodes.size()), it);  // (the nodes allocated by now)
       continue;
     }
     at_root = false;
@@ -127,7 +110,7 @@ void regroup_walk(std::span<const WideNode> w4, RegroupItem root, Nodes& out,
     const RegroupItem it = stack.back();
     stack.pop_back();
     if (!at_root && defer.wants(it)) {
-      defer.take(it, static_cast<std::uint32_t>(out.size()));
+      defer.take(static_cast<std::uint32_t>(out.size()), it);
       continue;
     }
     at_root = false;
@@ -174,118 +157,22 @@ void regroup_walk(std::span<const WideNode> w4, RegroupItem root, Nodes& out,
   }
 }
 
-// A piece of a walk (see above): the subtree of `root` walked alone, its nodes numbered from 0
-// (the root). `holes` are the items deferred to other fragments, in the order the walk met
-// them: the placeholder's local index and the number of local nodes allocated by then.
-template <class Node, class Item>
-struct WalkFragment {
-  Item root{};
-  std::vector<Node> nodes;  // (not an AlignedVector, which puts arrays of 256 KiB or more on whole 2 MiB pages)
-  struct Hole {
-    std::uint32_t local, cut;
-    WalkFragment* child;
-  };
-  std::vector<Hole> holes;
-  std::vector<std::uint32_t> hole_locals;  // sorted: the placeholders, which the splice skips
-  std::vector<std::uint64_t> shift;        // shift[h]: nodes the holes before h add (size - 1 each)
-  std::uint64_t size = 0, root_pos = 0, desc_start = 0;
-  std::uint32_t depth = 0, leaves = 0;
-
-  // Final position of local node i.
-  [[nodiscard]] std::uint64_t position(std::uint32_t i) const {
-    if (i == 0) return root_pos;
-    std::size_t h = 0;  // (holes before i: their cut is at most i; cuts ascend)
-    while (h < holes.size() && holes[h].cut <= i) ++h;
-    return desc_start + (i - 1) + shift[h];
-  }
-};
-
-// Fragments kept from one walk to the next (their node arrays too), handed out under a lock.
+// Defers the items at one level of the walk to fragments of their own (fragments.h).
 template <class Frag>
-struct FragmentPool {
-  std::vector<std::unique_ptr<Frag>> all;
-  std::size_t used = 0;
-  std::mutex mutex;
-  Frag* take() {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (used == all.size()) all.push_back(std::make_unique<Frag>());
-    Frag* f = all[used++].get();
-    f->nodes.clear(), f->holes.clear(), f->hole_locals.clear(), f->shift.clear();
-    f->depth = 0, f->leaves = 0;
-    return f;
-  }
+struct LevelCut {
+  std::uint32_t level;
+  FragmentFeed<Frag>& feed;
+  template <class Item>
+  bool wants(const Item& it) const { return it.depth == level; }
+  template <class Item>
+  void take(std::uint32_t allocated, const Item& it) { feed.add(local_of(it), allocated, it); }
 };
 
-// Runs walk(fragment, defer) over the fragment of `root` and every fragment deferred from it, on
-// the caller's threads; items for which cut(item) holds (never a fragment's root) are deferred.
-template <class Frag, class Item, class Cut, class Walk>
-void walk_fragments(FragmentPool<Frag>& pool, const Item& root, const Cut& cut, const Walk& walk) {
-  pool.used = 0;
-  Frag* top = pool.take();
-  top->root = root;
-  Frag* const start[1] = {top};
-  tbb::parallel_for_each(start, start + 1, [&](Frag* f, tbb::feeder<Frag*>& feeder) {
-    struct Deferrer {
-      FragmentPool<Frag>& pool;
-      Frag& f;
-      tbb::feeder<Frag*>& feeder;
-      const Cut& cut;
-      bool wants(const Item& it) const { return cut(it); }
-      void take(const Item& it, std::uint32_t allocated) {
-        Frag* c = pool.take();
-        c->root = it;
-        f.holes.push_back({local_of(it), allocated, c});
-        feeder.add(c);
-      }
-    } defer{pool, *f, feeder, cut};
-    walk(*f, defer);
-  });
-}
-
-// The fragments spliced into out[base ..), their inner children's indices made final; returns
-// the nodes written. Fragments were handed out parents first.
-template <class Frag, class Node>
-std::uint64_t splice_fragments(FragmentPool<Frag>& pool, AlignedVector<Node>& out, std::uint64_t base) {
-  const std::size_t F = pool.used;
-  for (std::size_t i = F; i-- > 0;) {  // sizes, children first
-    Frag& f = *pool.all[i];
-    f.size = f.nodes.size();
-    f.shift.assign(f.holes.size() + 1, 0);
-    f.hole_locals.clear();
-    for (std::size_t h = 0; h < f.holes.size(); ++h) {
-      f.size += f.holes[h].child->size - 1;
-      f.shift[h + 1] = f.shift[h] + f.holes[h].child->size - 1;
-      f.hole_locals.push_back(f.holes[h].local);
-    }
-    std::sort(f.hole_locals.begin(), f.hole_locals.end());
-  }
-  Frag& top = *pool.all[0];
-  top.root_pos = base, top.desc_start = base + 1;
-  for (std::size_t i = 0; i < F; ++i) {  // positions, parents first
-    const Frag& f = *pool.all[i];
-    for (std::size_t h = 0; h < f.holes.size(); ++h) {
-      Frag& c = *f.holes[h].child;
-      c.root_pos = f.position(f.holes[h].local);
-      c.desc_start = f.desc_start + (f.holes[h].cut - 1) + f.shift[h];
-    }
-  }
-  out.resize(base + top.size);
-  tbb::parallel_for(std::size_t{0}, F, [&](std::size_t i) {
-    const Frag& f = *pool.all[i];
-    std::size_t skip = 0;
-    for (std::uint32_t j = 0; j < f.nodes.size(); ++j) {
-      if (skip < f.hole_locals.size() && f.hole_locals[skip] == j) {  // (its subtree's fragment writes it)
-        ++skip;
-        continue;
-      }
-      Node nd = f.nodes[j];
-      for (int k = 0; k < Node::kWidth; ++k)
-        if (nd.count[k] == 0 && nd.child[k] != Node::kEmptySlot) nd.child[k] = static_cast<std::uint32_t>(f.position(nd.child[k]));
-      out[f.position(j)] = nd;
-    }
-  });
-  return top.size;
-}
+// A wide node's inner children through the fragment's final positions.
+constexpr auto kRemapWideChildren = [](auto& nd, const auto& f) {
+  for (int k = 0; k < std::remove_reference_t<decltype(nd)>::kWidth; ++k)
+    if (nd.count[k] == 0 && nd.child[k] != WideNode::kEmptySlot) nd.child[k] = static_cast<std::uint32_t>(f.position(nd.child[k]));
+};
 
 // The parallel forms: from these many nodes (binary ones for the collapse, 4-wide ones for the
 // regroup) on more than one thread, cut at this level (at most 4^3 and 8^2 fragments below the
@@ -300,8 +187,8 @@ constexpr std::uint32_t kRegroupCutDepth = 3;
 struct WideWorkspace::Impl {
   std::vector<CollapseItem> collapse_stack;  // the sequential walks' work lists
   std::vector<RegroupItem> regroup_stack;
-  FragmentPool<WalkFragment<WideNode, CollapseItem>> collapse_fragments;  // the parallel walks'
-  FragmentPool<WalkFragment<WideNode8, RegroupItem>> regroup_fragments;   // (their work lists: thread_local)
+  FragmentPool<Fragment<WideNode, CollapseItem>> collapse_fragments;  // the parallel walks'
+  FragmentPool<Fragment<WideNode8, RegroupItem>> regroup_fragments;   // (their work lists: thread_local)
 };
 
 WideWorkspace::WideWorkspace() : impl_(std::make_unique<Impl>()) {}
@@ -333,19 +220,19 @@ void collapse(const Bvh& bvh, WideBvh& w, std::vector<CollapseItem>* stack, Wide
   if (stack) {
     w.nodes.reserve(bvh.nodes.size() / 2 + 1);
     w.nodes.push_back(empty_node());
-    NoDefer none;
+    BuildEverything none;
     collapse_walk(bvh, {0, 0, 1}, w.nodes, *stack, w.depth, w.leaves, none);
     return;
   }
-  using Frag = WalkFragment<WideNode, CollapseItem>;
+  using Frag = Fragment<WideNode, CollapseItem>;
   auto& pool = wk->collapse_fragments;
-  walk_fragments(pool, CollapseItem{0, 0, 1}, [](const CollapseItem& it) { return it.depth == kCollapseCutDepth; },
-                 [&](Frag& f, auto& defer) {
-                   thread_local std::vector<CollapseItem> local_stack;
-                   f.nodes.push_back(empty_node());
-                   collapse_walk(bvh, {f.root.binary, 0, f.root.depth}, f.nodes, local_stack, f.depth, f.leaves, defer);
-                 });
-  splice_fragments(pool, w.nodes, 0);
+  walk_fragments(pool, CollapseItem{0, 0, 1}, [&](Frag& f, FragmentFeed<Frag>& feed) {
+    thread_local std::vector<CollapseItem> local_stack;
+    LevelCut<Frag> cut{kCollapseCutDepth, feed};
+    f.nodes.push_back(empty_node());
+    collapse_walk(bvh, {f.root.binary, 0, f.root.depth}, f.nodes, local_stack, f.depth, f.leaves, cut);
+  });
+  splice_fragments(pool, w.nodes, 0, kRemapWideChildren);
   for (std::size_t i = 0; i < pool.used; ++i) w.depth = std::max(w.depth, pool.all[i]->depth), w.leaves += pool.all[i]->leaves;
 }
 
@@ -356,20 +243,20 @@ void regroup(const WideBvh& w4, WideBvh8& out, std::vector<RegroupItem>* stack, 
   if (stack) {
     out.nodes.reserve(w4.nodes.size());  // at least one 4-wide node per 8-wide one
     out.nodes.emplace_back();
-    NoDefer none;
+    BuildEverything none;
     regroup_walk(w4.nodes, {w4.root, 0, 1}, out.nodes, *stack, out.depth, 0, {}, nullptr, none);
     return;
   }
-  using Frag = WalkFragment<WideNode8, RegroupItem>;
+  using Frag = Fragment<WideNode8, RegroupItem>;
   auto& pool = wk->regroup_fragments;
   const std::span<const WideNode> nodes4(w4.nodes);
-  walk_fragments(pool, RegroupItem{w4.root, 0, 1}, [](const RegroupItem& it) { return it.depth == kRegroupCutDepth; },
-                 [&](Frag& f, auto& defer) {
-                   thread_local std::vector<RegroupItem> local_stack;
-                   f.nodes.emplace_back();
-                   regroup_walk(nodes4, {f.root.node4, 0, f.root.depth}, f.nodes, local_stack, f.depth, 0, {}, nullptr, defer);
-                 });
-  splice_fragments(pool, out.nodes, 0);
+  walk_fragments(pool, RegroupItem{w4.root, 0, 1}, [&](Frag& f, FragmentFeed<Frag>& feed) {
+    thread_local std::vector<RegroupItem> local_stack;
+    LevelCut<Frag> cut{kRegroupCutDepth, feed};
+    f.nodes.emplace_back();
+    regroup_walk(nodes4, {f.root.node4, 0, f.root.depth}, f.nodes, local_stack, f.depth, 0, {}, nullptr, cut);
+  });
+  splice_fragments(pool, out.nodes, 0, kRemapWideChildren);
   for (std::size_t i = 0; i < pool.used; ++i) out.depth = std::max(out.depth, pool.all[i]->depth);
 }
 
@@ -399,7 +286,7 @@ std::uint32_t regroup_subtree(std::span<const WideNode> w4, std::uint32_t root4,
   stack.reserve(64);
   const auto root8 = static_cast<std::uint32_t>(out.size());
   out.emplace_back();
-  NoDefer none;
+  BuildEverything none;
   regroup_walk(w4, {root4, root8, 1}, out, stack, depth, linked_below, linked8, sources, none);
   return root8;
 }
