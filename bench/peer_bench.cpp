@@ -6,8 +6,9 @@
 //
 //   build/bin/peer_bench [MESH] [--levels 2] [--frames 8] [--size 1024] [--threads 1]
 //                        [--max-count 32] [--deform twist|bend|wave|rigid|explode] [--cluster-fallback auto|off|X]
-//                        [--csv FILE]
+//                        [--fallback-refit auto|off|X] [--csv FILE]
 // --cluster-fallback: ptc bench's (auto: 64, the default; off: the cluster BVH on every frame; X: the swelling threshold).
+// --fallback-refit: ptc bench's (auto: 0.2, the default; off: the fallback rebuilt every frame; X: the cost growth allowed).
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -48,6 +49,10 @@ int main(int argc, char** argv) {
         const std::optional<double> x = parse_cluster_fallback(value("--cluster-fallback"));
         if (!x) throw std::invalid_argument("--cluster-fallback: auto, off or a number above 1");
         cfg.cluster_fallback = *x;
+      } else if (a == "--fallback-refit") {
+        const std::optional<double> x = parse_fallback_refit(value("--fallback-refit"));
+        if (!x) throw std::invalid_argument("--fallback-refit: auto, off or a number above 0");
+        cfg.fallback_refit = *x;
       }
       else if (a == "--deform") {
         const auto d = parse_deform_kind(value("--deform"));

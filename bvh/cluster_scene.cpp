@@ -835,10 +835,11 @@ double ClusterScene::swelling() const {
 void ClusterScene::update_fallback(std::span<const Vec3> positions) {
   const double t0 = clock_ms(cfg_.clock);
   if (!fallback_) {  // (made whole before it is used: a throw leaves the cluster BVH traced)
-    SceneConfig tc = triangle_scene_defaults();
+    SceneConfig tc = fallback_scene_defaults();
     tc.origin = f_.data.origin;
     tc.scale = f_.data.scale;
     tc.clock = cfg_.clock;
+    tc.refit_growth = cfg_.refit_growth;
     auto made = std::make_unique<TriangleScene>(Mesh::sharing(tris_, std::vector<Vec3>(positions.begin(), positions.end())), tc);
     fallback_ = std::move(made);
   } else {

@@ -19,4 +19,25 @@ namespace ptc::bvh {
 [[nodiscard]] double sah_cost(const Bvh& bvh, std::span<const Box3f> boxes, std::span<const std::uint32_t> weights,
                               const SahCostModel& model);
 
+/// The SAH cost of a wide tree as its nodes hold it (boxes read from the nodes, unlike
+/// sah_cost): traversal * (A(root) + sum of the inner slots' A) + intersection * (sum of the
+/// leaf slots' count * A), over A(root), `root` the box of the whole tree. An empty tree: 0;
+/// A(root) = 0: each ratio taken as 1. What a refitted tree is compared with the tree it had
+/// right after its build (SceneConfig::refit_growth).
+template <class Nodes>
+[[nodiscard]] double wide_sah_cost(const Nodes& nodes, const Box3f& root, const SahCostModel& model) {
+  if (nodes.empty()) return 0.0;
+  double inner = root.surface_area(), leaf = 0.0, inner_n = 1.0, leaf_n = 0.0;
+  for (const auto& n : nodes)
+    for (int k = 0; k < n.kWidth; ++k) {
+      if (n.is_empty(k)) continue;
+      const double a = n.child_box(k).surface_area();
+      if (n.is_leaf(k)) leaf += n.count[k] * a, leaf_n += n.count[k];
+      else inner += a, inner_n += 1.0;
+    }
+  const double ar = root.surface_area();
+  return ar > 0.0 ? (model.traversal * inner + model.intersection * leaf) / ar
+                  : model.traversal * inner_n + model.intersection * leaf_n;
+}
+
 }  // namespace ptc::bvh

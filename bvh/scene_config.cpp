@@ -53,6 +53,12 @@ SceneConfig triangle_scene_defaults() {
   return c;
 }
 
+SceneConfig fallback_scene_defaults() {
+  SceneConfig c = triangle_scene_defaults();
+  c.build.cost.intersection = 0.1;
+  return c;
+}
+
 SceneConfig cluster_scene_defaults() {
   SceneConfig c;
   c.build.cost = {1.0, 0.3};

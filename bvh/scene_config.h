@@ -27,7 +27,7 @@ struct StageTimes {
   /// SoA triangle blocks (ClusterScene::fused_vertex_pass() on one thread: and the cluster boxes,
   /// taken from the blocks' corners as they are written)
   double leaf_data_ms = 0;
-  double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees
+  double refit_ms = 0;      ///< ClusterLeaf::BlockTree: refit of the per-cluster trees; a TriangleScene with refit_growth: its wide trees' refit and cost
   /// Time during which two of the stages above ran at once (a ClusterScene on more than one
   /// thread writes the leaf data while it builds and links the tree); 0 otherwise.
   double overlap_ms = 0;
@@ -92,6 +92,13 @@ enum class SahBuilder { Binned, Sweep };
 /// 79 (docs/tracing.md, "Swollen clusters and the triangle fallback").
 inline constexpr double kAutoFallbackSwelling = 64.0;
 
+/// The refit limit of the triangle fallback (SceneConfig::refit_growth, `--fallback-refit auto`).
+/// On the explode scene, where the fallback runs, one frame of refit raises the 8-wide tree's
+/// cost by 16% at frame 12 and 8.5% at frame 40, two frames by 46% and 25%: the tree is kept one
+/// frame in two there. 0.1 kept it less often from frame 24 on, 0.15 to 0.25 alike
+/// (docs/tracing.md, "The fallback keeps its tree a frame").
+inline constexpr double kAutoFallbackRefitGrowth = 0.2;
+
 struct SceneConfig {
   BuildConfig build{};  ///< builder settings (max_leaf_size counts primitives: triangles or clusters)
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's vertex bounds
@@ -137,12 +144,28 @@ struct SceneConfig {
   /// frame is traced on. 0 (the default, the method as published): never. See
   /// kAutoFallbackSwelling.
   double fallback_swelling = 0.0;
+  /// TriangleScene: keep the tree of the last build and only refit it to a new frame (the
+  /// blocks refilled in place, the boxes recomputed) while its SAH cost stays at most (1 + x)
+  /// times the cost it had right after that build; rebuild otherwise (the rebuild criterion of
+  /// Lauterbach et al. 2006, "RT-DEFORM"). The cost is the 8-wide tree's, as the tracer walks it
+  /// (wide_sah_cost). A frame whose extrapolated growth (the square of the tree's age) would pass
+  /// the limit rebuilds without trying; after a refit that fails at its first frame the next
+  /// attempts wait 1, 2, 4, then 8 rebuilds. ClusterScene: its triangle fallback's value. 0 (the
+  /// default): rebuild every frame. See kAutoFallbackRefitGrowth.
+  double refit_growth = 0.0;
 };
 
 /// Default build settings of a triangle scene: SAH traversal 1, intersection 0.3 (a 4-wide node
 /// test costs about three triangle tests of a 4-wide block; measured best on armadillo x2, see
 /// bench/bvh_bench.cpp), leaves of up to 8 triangles.
 [[nodiscard]] SceneConfig triangle_scene_defaults();
+/// The build settings of a cluster scene's triangle fallback (SceneConfig::fallback_swelling):
+/// triangle_scene_defaults() with intersection cost 0.1. The fallback runs on clusters whose
+/// triangles have flown apart, a sparse cloud of triangles, where larger leaves cost the rays
+/// little and spare nodes: on the explode scene's frames 12-19, 24-31 and 46-53 at two threads
+/// the update fell by 17-20% and the shadow rays by 12-14% against 0.3, the primary rays alike
+/// (docs/tracing.md, "The fallback keeps its tree a frame").
+[[nodiscard]] SceneConfig fallback_scene_defaults();
 /// Default build settings of a cluster scene: the same SAH constants, one cluster per leaf
 /// (leaves of several clusters cost the sum of their triangles and are rarely chosen), and the
 /// two-level build over groups of at most 32 clusters (cluster_group_size; groups of 8 measured

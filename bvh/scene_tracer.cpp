@@ -84,6 +84,7 @@ SceneConfig cluster_config(const SceneTracerConfig& cfg, const Vec3& origin) {
   c.min_cluster_groups = cfg.min_cluster_groups;
   c.group_trees = cfg.group_trees;
   c.fallback_swelling = cfg.cluster_fallback;
+  c.refit_growth = cfg.fallback_refit;
   return c;
 }
 

@@ -57,6 +57,9 @@ struct SceneTracerConfig {
   std::optional<Vec3> origin;  ///< trace frame; default: centre of the first frame's bounds
   /// The moving cluster BVH's SceneConfig::fallback_swelling (0, the default: never).
   double cluster_fallback = 0.0;
+  /// The moving cluster BVH's SceneConfig::refit_growth: its triangle fallback's refit limit (0,
+  /// the default: rebuilt every frame).
+  double fallback_refit = 0.0;
 };
 
 /// The configuration of the cluster BVH a SceneTracer with `cfg` builds, in the trace frame
@@ -98,6 +101,11 @@ class SceneTracer {
   /// Whether the last update traced the moving cluster BVH's frame on its triangle fallback
   /// (SceneTracerConfig::cluster_fallback), and that BVH's swelling (NaN without one).
   [[nodiscard]] bool moving_fallback_active() const { return moving_cs_ && moving_cs_->fallback_active(); }
+  /// Whether that fallback kept its tree and refitted it for the last update
+  /// (SceneTracerConfig::fallback_refit; false when the frame was not traced on it).
+  [[nodiscard]] bool moving_fallback_refitted() const {
+    return moving_fallback_active() && moving_cs_->fallback_scene()->refitted();
+  }
   [[nodiscard]] double moving_swelling() const {
     return moving_cs_ ? moving_cs_->swelling() : std::numeric_limits<double>::quiet_NaN();
   }

@@ -1,9 +1,12 @@
 #include "bvh/triangle_scene.h"
 
+#include "bvh/box_simd.h"
 #include "bvh/leaf_blocks.h"
+#include "bvh/sah_cost.h"
 #include "bvh/stage_clock.h"
 #include "bvh/sweep_sah_builder.h"
 
+#include <algorithm>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -11,6 +14,44 @@ namespace ptc::bvh {
 
 namespace {
 constexpr std::size_t kWideNodesPerTask = 4096;  // wide nodes per task of the leaf data's fill
+
+// The box widened by one unit in the last place on every side, as triangle_boxes widens each
+// triangle's (widening is monotone, so the widened union is the union of the widened boxes).
+Box3f widened(const Box3f& b) {
+  alignas(16) float l[4], h[4];
+  _mm_store_ps(l, simd::widen_down(_mm_setr_ps(b.lo[0], b.lo[1], b.lo[2], 0.0f)));
+  _mm_store_ps(h, simd::widen_up(_mm_setr_ps(b.hi[0], b.hi[1], b.hi[2], 0.0f)));
+  return {{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
+}
+
+// New boxes for a tree whose leaf children are direct block ranges (child = first block,
+// count = triangles): a leaf slot gets the union of its blocks' exact boxes, widened as the
+// build's triangle boxes are, an inner slot the union of its node's slots (one reverse sweep:
+// children come after their parents). So a tree refitted to the positions it was built with
+// holds the build's boxes. Returns the root's box.
+template <class Nodes>
+Box3f refit_block_tree(Nodes& nodes, std::span<const Box3f> block_boxes) {
+  for (std::size_t i = nodes.size(); i-- > 0;) {
+    auto& n = nodes[i];
+    for (int k = 0; k < n.kWidth; ++k) {
+      if (n.is_empty(k)) continue;
+      Box3f b;
+      if (n.is_leaf(k)) {
+        const std::uint32_t first = n.child[k], nb = blocks_for(n.count[k]);
+        for (std::uint32_t j = first; j < first + nb; ++j) b.extend(block_boxes[j]);
+        b = widened(b);
+      } else {
+        const auto& c = nodes[n.child[k]];
+        for (int j = 0; j < c.kWidth; ++j) b.extend(c.child_box(j));
+      }
+      n.set_child_box(k, b);
+    }
+  }
+  Box3f root;
+  if (!nodes.empty())
+    for (int j = 0; j < nodes[0].kWidth; ++j) root.extend(nodes[0].child_box(j));
+  return root;
+}
 }  // namespace
 
 TriangleScene::TriangleScene(const Mesh& mesh, const SceneConfig& cfg) : tris_(mesh.shared_triangles()), cfg_(cfg) {
@@ -21,17 +62,57 @@ TriangleScene::TriangleScene(const Mesh& mesh, const SceneConfig& cfg) : tris_(m
 
 void TriangleScene::update(std::span<const Vec3> positions) {
   const std::span<const Tri> tris = tris_ ? std::span<const Tri>(*tris_) : std::span<const Tri>();
+  StageTimes& times = f_.times;
+  const double t0 = clock_ms(cfg_.clock);
+  frame_positions(positions, f_.data.frame(), f_.fpos);
+  check_finite(positions, f_.fpos, f_.data.frame());  // (a NaN box would break the build)
+  add_sentinel(f_.fpos);
+  times = {};
+  times.vertices_ms = clock_ms(cfg_.clock) - t0;
+  const bool attempt = cfg_.refit_growth > 0.0 && !f_.data.wide8.nodes.empty() && refit_due_;
+  refit_tried_ = attempt;
+  refitted_ = attempt && try_refit(tris);
+  if (attempt && !refitted_ && age_ == 0) {
+    // Even one frame of refit passed the limit: leave out the next attempts after the rebuilds
+    // of 1, 2, 4, then 8 frames (retrying, as the motion may slow down), so that a scene whose
+    // tree cannot be kept pays the wasted refit on one frame in nine at most.
+    skip_ = backoff_, backoff_ = std::min<std::uint32_t>(2 * backoff_, 8);
+  }
+  if (!refitted_) rebuild(tris);
+}
+
+// The blocks refilled from their lanes' triangle ids (the layout kept), each block's box taken
+// as it is written, and both wide trees' boxes recomputed from those; kept when the 8-wide
+// tree's cost stays within the growth allowed over its cost at the build.
+bool TriangleScene::try_refit(std::span<const Tri> tris) {
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
+  const auto V = static_cast<std::uint32_t>(f_.fpos.size() - 2);  // (less the sentinel and its pad)
   double t0 = clock_ms(cfg_.clock);
-  frame_positions(positions, data.frame(), f_.fpos);
-  check_finite(positions, f_.fpos, data.frame());  // (a NaN box would break the build)
-  const auto V = static_cast<std::uint32_t>(f_.fpos.size());
-  add_sentinel(f_.fpos);
-  const std::span<const Vec3f> fp(f_.fpos.data(), V);
-  times.vertices_ms = clock_ms(cfg_.clock) - t0;
-
+  block_boxes_.resize(data.blocks.size());
+  fill_blocks_from_lanes(data.triangle_ids, tris, f_.fpos[0].data(), V, data.blocks, block_boxes_.data());
+  times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
   t0 = clock_ms(cfg_.clock);
+  data.wide.bounds = refit_block_tree(data.wide.nodes, block_boxes_);
+  const Box3f root = refit_block_tree(data.wide8.nodes, block_boxes_);
+  wide_cost_ = wide_sah_cost(data.wide8.nodes, root, cfg_.build.cost);
+  times.refit_ms = clock_ms(cfg_.clock) - t0;
+  if (!(wide_cost_ <= (1.0 + cfg_.refit_growth) * built_wide_cost_)) return false;
+  // The next frame's growth, extrapolated as the square of the tree's age (boxes that spread
+  // apart linearly grow in area quadratically): when it would pass the limit, the next frame
+  // rebuilds without trying the refit first.
+  ++age_, backoff_ = 1;
+  const double next = (wide_cost_ / built_wide_cost_ - 1.0) * double(age_ + 1) * double(age_ + 1) / (double(age_) * double(age_));
+  refit_due_ = next <= cfg_.refit_growth;
+  return true;
+}
+
+void TriangleScene::rebuild(std::span<const Tri> tris) {
+  TraceData& data = f_.data;
+  StageTimes& times = f_.times;
+  const auto V = static_cast<std::uint32_t>(f_.fpos.size() - 2);
+  const std::span<const Vec3f> fp(f_.fpos.data(), V);
+  double t0 = clock_ms(cfg_.clock);
   f_.boxes.resize(tris.size());  // (kept from frame to frame)
   f_.centroids.resize(tris.size());
   triangle_boxes_and_centroids(fp, tris, f_.boxes, f_.centroids);
@@ -80,11 +161,17 @@ void TriangleScene::update(std::span<const Vec3> positions) {
     }
     fence_blocks();
   });
-  times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
-  times.refit_ms = 0.0;
+  times.leaf_data_ms += clock_ms(cfg_.clock) - t0;
   t0 = clock_ms(cfg_.clock);
   regroup_to_8(data.wide, data.wide8, wide_ws_);
   times.collapse_ms += clock_ms(cfg_.clock) - t0;
+  if (cfg_.refit_growth > 0.0) {
+    t0 = clock_ms(cfg_.clock);
+    built_wide_cost_ = wide_cost_ = wide_sah_cost(data.wide8.nodes, data.wide.bounds, cfg_.build.cost);
+    age_ = 0, refit_due_ = skip_ == 0;
+    if (skip_ > 0) --skip_;
+    times.refit_ms += clock_ms(cfg_.clock) - t0;
+  }
 }
 
 }  // namespace ptc::bvh

@@ -26,6 +26,14 @@ class TriangleScene {
   [[nodiscard]] const Bvh& bvh() const { return f_.bvh; }
   [[nodiscard]] std::span<const Box3f> boxes() const { return f_.boxes; }
   [[nodiscard]] const StageTimes& times() const { return f_.times; }
+  /// Whether the last update refitted the tree instead of rebuilding it (SceneConfig::refit_growth);
+  /// bvh() and boxes() are then those of the last build.
+  [[nodiscard]] bool refitted() const { return refitted_; }
+  /// Whether the last update tried the refit (refitted(), or rejected and then rebuilt).
+  [[nodiscard]] bool refit_tried() const { return refit_tried_; }
+  /// wide_sah_cost of the traced tree now, and right after its last build.
+  [[nodiscard]] double wide_cost() const { return wide_cost_; }
+  [[nodiscard]] double built_wide_cost() const { return built_wide_cost_; }
 
  private:
   std::shared_ptr<const std::vector<Tri>> tris_;
@@ -33,6 +41,15 @@ class TriangleScene {
   SceneFrame f_;
   WideWorkspace wide_ws_;                   // the parallel collapse's and regroup's scratch
   std::vector<std::uint32_t> first_block_;  // per wide node: its first leaf block (the leaf data's prefix sum)
+  AlignedVector<Box3f> block_boxes_;        // refit frames: each block's box
+  bool refitted_ = false, refit_tried_ = false;
+  double wide_cost_ = 0.0, built_wide_cost_ = 0.0;
+  std::uint32_t age_ = 0;   // frames refitted since the last build
+  bool refit_due_ = true;   // the next update tries the refit first
+  std::uint32_t skip_ = 0, backoff_ = 1;  // rebuilds left without a refit attempt; the next such pause
+
+  bool try_refit(std::span<const Tri> tris);
+  void rebuild(std::span<const Tri> tris);
 };
 
 }  // namespace ptc::bvh

@@ -132,4 +132,16 @@ std::optional<double> parse_cluster_fallback(const std::string& s) {
   return std::nullopt;
 }
 
+std::optional<double> parse_fallback_refit(const std::string& s) {
+  if (s == "auto") return bvh::kAutoFallbackRefitGrowth;
+  if (s == "off") return 0.0;
+  try {
+    std::size_t n = 0;
+    const double v = std::stod(s, &n);
+    if (n == s.size() && std::isfinite(v) && v > 0.0) return v;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
+}
+
 }  // namespace ptc

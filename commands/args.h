@@ -38,6 +38,9 @@ void check_image_size(int width, int height);
 /// --cluster-fallback of `ptc bench` and `ptc trace`: auto (bvh::kAutoFallbackSwelling), off (0)
 /// or a finite swelling above 1; nothing for anything else.
 [[nodiscard]] std::optional<double> parse_cluster_fallback(const std::string& s);
+/// --fallback-refit of `ptc bench` and `ptc trace`: auto (bvh::kAutoFallbackRefitGrowth), off (0)
+/// or a finite growth above 0; nothing for anything else.
+[[nodiscard]] std::optional<double> parse_fallback_refit(const std::string& s);
 
 /// Frames a command may use: those of the scene's listed range (Scene::frames(): a scene file's
 /// "frames", a built-in scene's range), or with `extend` (--extend-frames) any frame the sources

@@ -25,7 +25,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   c.threads = resolve_threads(c.threads);
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
-  RunManifest manifest("bench", opt.argv, "ptc-bench/6");
+  RunManifest manifest("bench", opt.argv, "ptc-bench/7");
   const std::string arg = opt.input.string();
   MovingScene ms = open_moving_scene(opt.input, opt.scene_options, opt.deform, opt.frames, opt.extend_frames, manifest);
   Scene& scene = ms.scene;
@@ -102,6 +102,13 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     std::uint64_t fell = 0;
     for (const BenchRow& row : r.rows) fell += row.fallback ? 1 : 0;
     manifest.set_result("cluster_fallback_frames", fell);
+  }
+  // The fallback's refit limit (0: rebuilt every frame), and the frames on which it kept its tree.
+  manifest.set_parameter("fallback_refit", c.fallback_refit);
+  {
+    std::uint64_t kept = 0;
+    for (const BenchRow& row : r.rows) kept += row.fallback_refit ? 1 : 0;
+    manifest.set_result("fallback_refit_frames", kept);
   }
   manifest.set_parameter("tie_rel", c.tie.rel_t);
   manifest.set_parameter("embree_set_affinity", false);

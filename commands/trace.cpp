@@ -111,6 +111,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   const bool still = scene.all_static();
   if (still && !opt.clusters.empty() && opt.cluster_fallback)
     throw UsageError("--cluster-fallback", "a still scene is built once and never updated: nothing falls back");
+  if (still && !opt.clusters.empty() && opt.fallback_refit)
+    throw UsageError("--fallback-refit", "a still scene is built once and never updated: nothing falls back");
   if (still && !opt.clusters.empty() && opt.group_trees && !opt.cluster_group_size)
     throw UsageError("--group-trees", "a still scene is built once with the plain build: give --cluster-groups N > 1 too");
   std::vector<Vec3> first_pos;
@@ -144,6 +146,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   if (opt.cluster_group_size) tcfg.min_cluster_groups = 0;  // (given: groups of exactly up to N)
   tcfg.group_trees = opt.group_trees.value_or(bvh::cluster_scene_defaults().group_trees);
   tcfg.cluster_fallback = opt.cluster_fallback.value_or(bvh::kAutoFallbackSwelling);
+  tcfg.fallback_refit = opt.fallback_refit.value_or(bvh::kAutoFallbackRefitGrowth);
   // Set up at the rest pose, as ptc bench and the experiments do, and updated to every frame in
   // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend
   // on which frame the run starts at, so a frame traces the same in any range (the camera frames
@@ -197,7 +200,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   std::size_t empty_frames = 0;  // frames without a primary hit: the first noted, the rest counted
   std::uint64_t hits = 0;        // primary hits over the frames (results.hits)
   nlohmann::json per_frame = nlohmann::json::array();
-  std::uint64_t fallback_frames = 0;
+  std::uint64_t fallback_frames = 0, refit_frames = 0;
 
   std::ostringstream text;  // the table; --json prints the rows as JSON instead
   text << fmt::format("{}: {} triangles ({} static, {} moving; {} part(s)), {}; {}x{} pixels, {} thread(s); "
@@ -266,7 +269,9 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     if (tracer.moving_is_clusters()) {  // the moving cluster BVH's swelling, and whether its triangle fallback traced the frame
       per_frame.back()["swelling"] = tracer.moving_swelling();
       per_frame.back()["fallback"] = tracer.moving_fallback_active();
+      per_frame.back()["fallback_refit"] = tracer.moving_fallback_refitted();
       fallback_frames += tracer.moving_fallback_active() ? 1 : 0;
+      refit_frames += tracer.moving_fallback_refitted() ? 1 : 0;
     }
     hits += r.primary_stats.hits;
     if (r.primary_stats.hits == 0 && r.primary_stats.rays > 0 && ++empty_frames == 1)  // background only
@@ -305,6 +310,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   if (use_clusters && !still) {
     manifest.set_parameter("cluster_fallback", tcfg.cluster_fallback);
     manifest.set_result("cluster_fallback_frames", fallback_frames);
+    manifest.set_parameter("fallback_refit", tcfg.fallback_refit);
+    manifest.set_result("fallback_refit_frames", refit_frames);
   }
   manifest.set_parameter("width", rc.width);
   manifest.set_parameter("height", rc.height);
@@ -341,8 +348,11 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   }
   out << text.str();
   if (tracer.moving_is_clusters() && tcfg.cluster_fallback > 0)
-    out << fmt::format("cluster BVH: {} of {} frame(s) traced on the triangle fallback (swelling above {:g})\n",
-                       fallback_frames, per_frame.size(), tcfg.cluster_fallback);
+    out << fmt::format("cluster BVH: {} of {} frame(s) traced on the triangle fallback (swelling above {:g}){}\n",
+                       fallback_frames, per_frame.size(), tcfg.cluster_fallback,
+                       tcfg.fallback_refit > 0 ? fmt::format("; its tree refitted on {} of them (cost growth at most {:g})",
+                                                             refit_frames, tcfg.fallback_refit)
+                                               : std::string("; its tree rebuilt on each"));
   const std::string names = "{shaded,depth,normal,cost_nodes,cost_triangles" + std::string(rc.ao_samples > 0 ? ",ao" : "") + "}";
   out << "wrote " << opt.out_dir.string() << "/"
       << (sequence ? fmt::format("{}_{:04d}..{:04d}.png", names, range.first, range.last) : names + ".png")

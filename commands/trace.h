@@ -35,6 +35,9 @@ struct TraceCommandOptions {
   /// exceeds this (bvh::SceneConfig::fallback_swelling; 0: never). Unset: bvh::kAutoFallbackSwelling;
   /// given for a still scene (built once, nothing moves), a usage error.
   std::optional<double> cluster_fallback;
+  /// --fallback-refit: the triangle fallback's bvh::SceneConfig::refit_growth (0: rebuilt every
+  /// frame). Unset: bvh::kAutoFallbackRefitGrowth.
+  std::optional<double> fallback_refit;
   /// --group-trees: what the two-level build does inside a group (unset: the default, refit).
   /// Given for a still scene without --cluster-groups, it is a usage error (nothing to do).
   std::optional<bvh::GroupTrees> group_trees;

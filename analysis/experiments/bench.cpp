@@ -111,6 +111,8 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   setup.group_trees = cfg.group_trees;
   setup.cluster_fallback = cfg.cluster_fallback;
   res.cluster_fallback = cfg.cluster_fallback;
+  setup.fallback_refit = cfg.fallback_refit;
+  res.fallback_refit = cfg.fallback_refit;
   setup.threads = cfg.threads;
   setup.embree_packet_width = cfg.embree_packet_width;
 
@@ -177,6 +179,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
     if (const bvh::ClusterScene* cs = loop::cluster_scene_of(a)) {
       row.swelling = cs->swelling();
       row.fallback = cs->fallback_active() ? 1 : 0;
+      row.fallback_refit = cs->fallback_active() && cs->fallback_scene()->refitted() ? 1 : 0;
     } else {
       row.swelling = nan();
     }
@@ -223,7 +226,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
 }
 
 Table bench_table(const PeerBenchResult& r) {
-  return tabulate(Schema{"ptc-bench", 6}, r.rows, [](const BenchRow& x, Columns& col) {
+  return tabulate(Schema{"ptc-bench", 7}, r.rows, [](const BenchRow& x, Columns& col) {
     col("frame", x.frame);
     col("config", x.config);
     col("update_ms", x.times.update_ms);
@@ -260,6 +263,7 @@ Table bench_table(const PeerBenchResult& r) {
     col("fallback_ms", x.times.stages.fallback_ms);
     col("swelling", x.swelling);
     col("fallback", x.fallback);
+    col("fallback_refit", x.fallback_refit);
   });
 }
 
@@ -359,6 +363,11 @@ std::string fallback_text(const PeerBenchResult& r) {
                               rows.back()->scene_frame, high);
   if (!(r.cluster_fallback > 0)) return s + "triangle fallback off\n";
   s += fmt::format("triangle fallback above {:g}: {} of {} frames", r.cluster_fallback, fell.size(), rows.size());
+  std::size_t kept = 0;
+  for (const BenchRow* row : rows) kept += row->fallback_refit ? 1 : 0;
+  const std::string tree = r.fallback_refit > 0 ? fmt::format("; its tree refitted on {} of them (cost growth at most {:g})",
+                                                              kept, r.fallback_refit)
+                                                : std::string("; its tree rebuilt on each");
   std::string runs;
   for (std::size_t i = 0; i < fell.size();) {
     std::size_t j = i;
@@ -367,7 +376,7 @@ std::string fallback_text(const PeerBenchResult& r) {
             (j == i ? fmt::format("{}", fell[i]) : fmt::format("{}-{}", fell[i], fell[j]));
     i = j + 1;
   }
-  return s + (runs.empty() ? std::string("\n") : " (scene frames " + runs + ")\n");
+  return s + (runs.empty() ? std::string() : " (scene frames " + runs + ")") + (fell.empty() ? std::string() : tree) + "\n";
 }
 }  // namespace
 

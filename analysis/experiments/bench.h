@@ -89,6 +89,9 @@ struct PeerBenchConfig {
   /// ours_clusters traces a frame on a triangle BVH when the clusters' swelling exceeds this
   /// (bvh::SceneConfig::fallback_swelling; `ptc bench --cluster-fallback`); 0: never.
   double cluster_fallback = bvh::kAutoFallbackSwelling;
+  /// ours_clusters: the triangle fallback's refit limit (bvh::SceneConfig::refit_growth; `ptc
+  /// bench --fallback-refit`); 0: rebuilt every frame.
+  double fallback_refit = bvh::kAutoFallbackRefitGrowth;
 };
 
 struct BenchRow {
@@ -115,6 +118,9 @@ struct BenchRow {
   /// was traced on the triangle fallback (0 for the others).
   double swelling = 0;
   int fallback = 0;
+  /// ours_clusters on a frame traced on the triangle fallback: 1 when the fallback kept its tree
+  /// and refitted it (bvh::TriangleScene::refitted()), 0 when it was rebuilt; 0 for the others.
+  int fallback_refit = 0;
   double rss_mb = 0, peak_rss_mb = 0;  ///< resident and peak resident memory after the row's trace
 };
 
@@ -146,6 +152,7 @@ struct PeerBenchResult {
   int embree_packet_width = 8;         ///< and Embree's packet width
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
   double cluster_fallback = 0;         ///< the fallback's threshold (cfg.cluster_fallback; 0: off)
+  double fallback_refit = 0;           ///< the fallback's refit limit (cfg.fallback_refit; 0: rebuilt every frame)
 };
 
 /// The per-frame ratio of a peer's whole frame to a configuration's (> 1: the configuration is

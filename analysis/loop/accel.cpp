@@ -50,7 +50,10 @@ class OursAccel final : public Accel {
   [[nodiscard]] Vec3 origin() const override { return scene_->data().origin; }
   [[nodiscard]] std::optional<double> sah_cost() const override {
     if constexpr (requires { scene_->sah_cost(); }) {  // over the clusters (fixed group trees too),
-      if (scene_->fallback_active()) return scene_->fallback_scene()->bvh().cost;  // or the traced triangle BVH's
+      if (scene_->fallback_active()) {  // or the traced triangle BVH's: none for a refitted one (its
+        const bvh::TriangleScene& f = *scene_->fallback_scene();  // binary tree is its last build's)
+        return f.refitted() ? std::nullopt : std::optional<double>(f.bvh().cost);
+      }
       return scene_->sah_cost();
     } else {
       return scene_->bvh().cost;
@@ -106,6 +109,7 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   cfg.clock = s.clock;
   cfg.builder = s.builder;
   cfg.fallback_swelling = s.cluster_fallback;
+  cfg.refit_growth = s.fallback_refit;
   if (s.cluster_build) cfg.build = *s.cluster_build;
   return cfg;
 }

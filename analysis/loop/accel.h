@@ -86,6 +86,9 @@ struct AccelSetup {
   bvh::SahBuilder builder = bvh::SahBuilder::Binned;
   /// ours_clusters: bvh::SceneConfig::fallback_swelling (0: the cluster BVH on every frame).
   double cluster_fallback = 0.0;
+  /// ours_clusters: bvh::SceneConfig::refit_growth, the triangle fallback's refit limit (0: rebuilt
+  /// every frame).
+  double fallback_refit = 0.0;
 };
 
 /// The cluster scene settings of ours_clusters under `setup` (the method's precomputation, such

@@ -80,6 +80,19 @@ inline constexpr const char* kClusterFallbackHelp =
     "built-in meshes but the explode scene, which passes it at frame 8); off: the cluster BVH on every frame (the "
     "method as published); or a number X > 1";
 
+/// --fallback-refit (commands/args.h parse_fallback_refit).
+inline CLI::Validator fallback_refit_validator() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        return parse_fallback_refit(s) ? std::string() : "'" + s + "' is not auto, off or a number above 0";
+      },
+      "auto|off|X");
+}
+inline constexpr const char* kFallbackRefitHelp =
+    "with the triangle fallback: keep its tree and refit it to the next frames while its SAH cost stays within "
+    "(1 + X) of the cost right after its build, rebuild otherwise. auto: X = 0.2 (the tree is then kept about "
+    "every other frame on the explode scene); off: rebuild it every frame";
+
 /// A finite number in [lo, hi]: refuses nan and inf (CLI11's Range lets nan through, since no
 /// comparison with it fails) and names the bounds in %g form (its "0.000000" hid a bound of 1e-9).
 inline CLI::Validator finite_in(double lo, double hi) {

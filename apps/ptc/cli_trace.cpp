@@ -15,7 +15,7 @@ struct TraceArgs {
   std::string frame, frames, cost_range, deform, vertex_order = "input";
   GroupTreesArg group_trees;
   std::uint32_t cluster_groups = bvh::cluster_scene_defaults().cluster_group_size;  // (given: opt.cluster_group_size)
-  std::string cluster_fallback = "auto";
+  std::string cluster_fallback = "auto", fallback_refit = "auto";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -34,13 +34,18 @@ void register_trace(CLI::App& app, Context& ctx) {
     if (a->app->count("--cost-range")) o.cost_range = a->cost_range;
     if (a->app->count("--deform")) o.deform = a->deform;
     // Flags that would do nothing are refused, as `ptc cluster` refuses a flag its method does not use.
-    for (const char* f : {"--cluster-groups", "--vertex-order", "--cluster-fallback"})
+    for (const char* f : {"--cluster-groups", "--vertex-order", "--cluster-fallback", "--fallback-refit"})
       if (a->app->count(f) && o.clusters.empty()) throw UsageError(f, "needs a cluster BVH (--clusters DIR)");
     o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
     for (const char* f : {"--ao-distance", "--seed"})
       if (a->app->count(f) && o.render.ao_samples == 0) throw UsageError(f, "needs ambient occlusion (--ao N > 0)");
     if (a->app->count("--cluster-groups")) o.cluster_group_size = a->cluster_groups;
     if (a->app->count("--cluster-fallback")) o.cluster_fallback = *parse_cluster_fallback(a->cluster_fallback);
+    if (a->app->count("--fallback-refit")) {
+      o.fallback_refit = *parse_fallback_refit(a->fallback_refit);
+      if (o.cluster_fallback && !(*o.cluster_fallback > 0))
+        throw UsageError("--fallback-refit", "needs the triangle fallback (--cluster-fallback auto or X)");
+    }
     const bvh::GroupTrees trees = a->group_trees.get(
         !o.clusters.empty() && o.cluster_group_size.value_or(bvh::cluster_scene_defaults().cluster_group_size) > 1,
         "a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");
@@ -68,6 +73,9 @@ void register_trace(CLI::App& app, Context& ctx) {
   a->group_trees.add_to(c);
   c->add_option("--cluster-fallback", a->cluster_fallback, kClusterFallbackHelp)
       ->check(cluster_fallback_validator())
+      ->capture_default_str();
+  c->add_option("--fallback-refit", a->fallback_refit, kFallbackRefitHelp)
+      ->check(fallback_refit_validator())
       ->capture_default_str();
   c->add_option("--vertex-order", a->vertex_order,
                 "with --clusters: clusters renumbers the vertices once so each cluster's are consecutive (the "

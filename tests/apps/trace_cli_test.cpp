@@ -192,6 +192,10 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
                "--leaf-format: tables needs linear cluster leaves");
   for (const char* bad : {"0.5", "1", "nan", "inf", "never", "-3"})
     expect_error({"bench", mesh, "--cluster-fallback", bad, "--out", out}, 2, "--cluster-fallback");
+  for (const char* bad : {"0", "-0.1", "nan", "inf", "always", "0.2x"})
+    expect_error({"bench", mesh, "--fallback-refit", bad, "--out", out}, 2, "--fallback-refit");
+  expect_error({"bench", mesh, "--cluster-fallback", "off", "--fallback-refit", "0.3", "--out", out}, 2,
+               "--fallback-refit: needs the triangle fallback");
 }
 
 // `ptc bench --cluster-fallback auto|off|X`: the threshold in the manifest (auto: 64, off: 0), the
@@ -224,6 +228,38 @@ TEST_F(TraceCli, BenchClusterFallbackIsRecorded) {
     EXPECT_EQ(fell, want == 1.0001 ? 3u : 0u) << arg;
     EXPECT_NE(r.out.find(want > 0 ? fmt::format("triangle fallback above {:g}: {} of 3 frames", want, fell)
                                   : std::string("triangle fallback off")),
+              std::string::npos)
+        << r.out;
+    EXPECT_EQ(j["parameters"]["fallback_refit"].get<double>(), 0.2) << arg;  // (auto)
+  }
+  // --fallback-refit: a limit no growth reaches keeps the fallback's tree on every frame (it is made
+  // with the scene, at the rest pose, whose swelling is above 1.0001: frame 0 refits it too;
+  // bench.csv's fallback_refit on each, no binary SAH cost there), off rebuilds it on each; the
+  // same hits either way.
+  const std::pair<const char*, std::uint64_t> refits[] = {{"1e9", 3u}, {"off", 0u}};
+  for (const auto& [arg, want] : refits) {
+    const fs::path out = dir_ / (std::string("fr_") + arg);
+    const CmdResult r = ptc({"bench", mesh, "--frames", "0:2", "--width", "24", "--height", "24", "--max-count", "40",
+                             "--threads", "1", "--cluster-fallback", "1.0001", "--fallback-refit", arg, "--out",
+                             out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_EQ(j["parameters"]["fallback_refit"].get<double>(), want ? 1e9 : 0.0) << arg;
+    EXPECT_EQ(j["results"]["fallback_refit_frames"].get<std::uint64_t>(), want) << arg;
+    std::uint64_t kept = 0;
+    for (const auto& row : csv_rows(slurp(out / "bench.csv"))) {
+      EXPECT_EQ(row.at("mismatches"), "0") << arg;
+      EXPECT_EQ(row.at("shadow_mismatches"), "0") << arg;
+      const bool refitted = row.at("fallback_refit") == "1";
+      kept += refitted;
+      if (row.at("config") == "ours_clusters") {
+        EXPECT_EQ(refitted, want > 0) << arg << " frame " << row.at("frame");
+        EXPECT_EQ(row.at("sah_cost") == "nan", refitted) << arg;
+      }
+    }
+    EXPECT_EQ(kept, want) << arg;
+    EXPECT_NE(r.out.find(want ? std::string("its tree refitted on 3 of them (cost growth at most 1e+09)")
+                              : std::string("its tree rebuilt on each")),
               std::string::npos)
         << r.out;
   }
@@ -357,20 +393,29 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
   const std::string mesh = (fs::path(PTC_TEST_DATA) / "meshes" / "bunny00.off").string();
   const std::string cl = (dir_ / "fbc").string();
   ASSERT_EQ(ptc({"cluster", mesh, "--method", "growth", "--max-count", "24", "--out", cl}).code, 0);
-  auto run = [&](const std::string& x) {
-    const fs::path out = dir_ / ("fbt_" + x);
-    const CmdResult r = ptc({"trace", mesh, "--clusters", cl, "--deform", "twist", "--frames", "0:3", "--width", "40",
-                             "--height", "32", "--shadows", "--cluster-fallback", x, "--out", out.string()});
+  auto run = [&](const std::string& x, const char* refit = nullptr) {
+    const fs::path out = dir_ / ("fbt_" + x + (refit ? std::string("_") + refit : std::string()));
+    std::vector<std::string> args{"trace", mesh, "--clusters", cl, "--deform", "twist", "--frames", "0:3", "--width",
+                                  "40", "--height", "32", "--shadows", "--cluster-fallback", x, "--out", out.string()};
+    if (refit) args.insert(args.end(), {"--fallback-refit", refit});
+    const CmdResult r = ptc(args);
     EXPECT_EQ(r.code, 0) << r.err;
     return std::pair{out, r.out};
   };
   const auto [on, on_text] = run("1.0001");
   const auto [off, off_text] = run("off");
+  const auto [kept, kept_text] = run("1.0001", "1e9");  // (the fallback, made at the rest pose, refitted on every frame)
   for (int f = 0; f <= 3; ++f)
     for (const char* img : {"shaded", "depth", "normal"}) {
       const std::string name = fmt::format("{}_{:04d}.png", img, f);
       EXPECT_EQ(slurp(on / name), slurp(off / name)) << name;
+      EXPECT_EQ(slurp(kept / name), slurp(off / name)) << name;
     }
+  const auto jk = nlohmann::json::parse(slurp(kept / "manifest.json"));
+  EXPECT_EQ(jk["parameters"]["fallback_refit"].get<double>(), 1e9);
+  EXPECT_EQ(jk["results"]["fallback_refit_frames"].get<std::uint64_t>(), 4u);
+  for (int f = 0; f <= 3; ++f) EXPECT_TRUE(jk["results"]["frames"][f]["fallback_refit"].get<bool>()) << f;
+  EXPECT_NE(kept_text.find("its tree refitted on 4 of them (cost growth at most 1e+09)"), std::string::npos) << kept_text;
   const auto a = csv_rows(slurp(on / "trace.csv")), b = csv_rows(slurp(off / "trace.csv"));
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].at("hits"), b[i].at("hits")) << i;
@@ -389,6 +434,17 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
             std::string::npos) << on_text;
   expect_error({"trace", mesh, "--cluster-fallback", "2", "--out", (dir_ / "fb_bad").string()}, 2,
                "--cluster-fallback: needs a cluster BVH");
+  expect_error({"trace", mesh, "--fallback-refit", "0.3", "--out", (dir_ / "fb_bad").string()}, 2,
+               "--fallback-refit: needs a cluster BVH");
+  expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--cluster-fallback", "off", "--fallback-refit",
+                "0.3", "--out", (dir_ / "fb_bad").string()},
+               2, "--fallback-refit: needs the triangle fallback");
+  for (const char* bad : {"0", "-1", "nan", "never"})
+    expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--fallback-refit", bad, "--out",
+                  (dir_ / "fb_bad").string()},
+                 2, "--fallback-refit");
+  expect_error({"trace", mesh, "--clusters", cl, "--fallback-refit", "0.3", "--out", (dir_ / "fb_bad").string()}, 2,
+               "--fallback-refit: a still scene is built once");
   expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--cluster-fallback", "0.9", "--out",
                 (dir_ / "fb_bad").string()},
                2, "--cluster-fallback");
@@ -401,6 +457,7 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
   const auto js = nlohmann::json::parse(slurp(still / "manifest.json"));
   EXPECT_FALSE(js["parameters"].contains("cluster_fallback"));
   EXPECT_FALSE(js["results"].contains("cluster_fallback_frames"));
+  EXPECT_FALSE(js["parameters"].contains("fallback_refit"));
 }
 
 // A mesh of 1e13 units: our tracer's float products overflowed there, every ray missed, and the

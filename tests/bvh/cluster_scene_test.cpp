@@ -870,51 +870,61 @@ TEST(ClusterScene, SwellingAndTheTriangleFallback) {
     ASSERT_LT(sw[2], 1.5 * sw[0]) << name;
     if (!k.fallback) continue;
     cfg.fallback_swelling = std::sqrt(sw[0] * sw[1]);
-    int fell = 0, kept = 0;
-    std::vector<TraceData> first;  // each frame's traced data at one thread
-    for (int threads : {1, 2}) {
-      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-      ClusterScene s(mesh, view_of(clusters), cfg);
-      for (std::size_t f = 0; f < frames.size(); ++f) {
-        const Mesh now = positions(f);
-        double wall = 0;
-        if (f > 0) {
-          const auto t0 = std::chrono::steady_clock::now();
-          s.update(now.positions());
-          wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-        }
-        const std::string what = name + " threads " + std::to_string(threads) + " frame " + std::to_string(f);
-        EXPECT_EQ(s.swelling(), sw[f]) << what;  // (the same boxes at any thread count)
-        const bool above = sw[f] > cfg.fallback_swelling;
-        ASSERT_EQ(s.fallback_active(), above) << what;
-        const TraceData& d = s.data();
-        if (above) {
-          ++fell;
-          EXPECT_NE(&d, &s.cluster_data()) << what;
-          EXPECT_EQ(d.format, LeafFormat::Blocks) << what;
-          EXPECT_GT(s.times().fallback_ms, 0.0) << what;
-          EXPECT_EQ(d.origin, s.cluster_data().origin) << what;
-          EXPECT_EQ(d.scale, s.cluster_data().scale) << what;
-          EXPECT_TRUE(validate(s.cluster_data(), m.triangle_count(), false).empty()) << what;
-        } else {
-          ++kept;
-          EXPECT_EQ(&d, &s.cluster_data()) << what;
-          EXPECT_EQ(s.times().fallback_ms, 0.0) << what;
-        }
-        if (f > 0) {
-          EXPECT_LE(s.times().total_ms(), wall + 1e-6) << what;
-        }
-        ASSERT_TRUE(validate(d, m.triangle_count(), false).empty()) << what << test::joined(validate(d, m.triangle_count(), false));
-        if (threads == 1) {  // (at two threads: the same traced bytes)
-          ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(d, now, 31u + static_cast<unsigned>(f), 200, what));
-          first.push_back(d);
-        } else {
-          expect_same_data(d, first[f], what);
+    int fell = 0, kept = 0, refitted = 0;
+    // The fallback rebuilt on every frame, and kept and refitted on every frame after its first
+    // (a limit no growth reaches: frame 4 refits frame 1's tree to its own positions).
+    for (const double refit : {0.0, 1e9}) {
+      cfg.refit_growth = refit;
+      std::vector<TraceData> first;  // each frame's traced data at one thread
+      for (int threads : {1, 2}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        ClusterScene s(mesh, view_of(clusters), cfg);
+        bool made = false;  // (the fallback exists: its next frame is a refit with the limit on)
+        for (std::size_t f = 0; f < frames.size(); ++f) {
+          const Mesh now = positions(f);
+          double wall = 0;
+          if (f > 0) {
+            const auto t0 = std::chrono::steady_clock::now();
+            s.update(now.positions());
+            wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+          }
+          const std::string what = name + " threads " + std::to_string(threads) + " frame " + std::to_string(f);
+          EXPECT_EQ(s.swelling(), sw[f]) << what;  // (the same boxes at any thread count)
+          const bool above = sw[f] > cfg.fallback_swelling;
+          ASSERT_EQ(s.fallback_active(), above) << what;
+          const TraceData& d = s.data();
+          if (above) {
+            ++fell;
+            ASSERT_EQ(s.fallback_scene()->refitted(), refit > 0 && made) << what;
+            refitted += s.fallback_scene()->refitted() ? 1 : 0;
+            made = true;
+            EXPECT_NE(&d, &s.cluster_data()) << what;
+            EXPECT_EQ(d.format, LeafFormat::Blocks) << what;
+            EXPECT_GT(s.times().fallback_ms, 0.0) << what;
+            EXPECT_EQ(d.origin, s.cluster_data().origin) << what;
+            EXPECT_EQ(d.scale, s.cluster_data().scale) << what;
+            EXPECT_TRUE(validate(s.cluster_data(), m.triangle_count(), false).empty()) << what;
+          } else {
+            ++kept;
+            EXPECT_EQ(&d, &s.cluster_data()) << what;
+            EXPECT_EQ(s.times().fallback_ms, 0.0) << what;
+          }
+          if (f > 0) {
+            EXPECT_LE(s.times().total_ms(), wall + 1e-6) << what;
+          }
+          ASSERT_TRUE(validate(d, m.triangle_count(), false).empty()) << what << test::joined(validate(d, m.triangle_count(), false));
+          if (threads == 1) {  // (at two threads: the same traced bytes)
+            ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(d, now, 31u + static_cast<unsigned>(f), 200, what));
+            first.push_back(d);
+          } else {
+            expect_same_data(d, first[f], what);
+          }
         }
       }
     }
-    EXPECT_GE(fell, 4) << name;  // (frames 1 and 4 at least, twice)
-    EXPECT_GE(kept, 6) << name;
+    EXPECT_GE(fell, 8) << name;  // (frames 1 and 4 at least, twice each way)
+    EXPECT_GE(kept, 12) << name;
+    EXPECT_GE(refitted, 2) << name;  // (frame 4 at least, at both thread counts)
   }
 }
 

@@ -6,11 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <random>
 #include <string>
 #include <variant>
+
+#include <tbb/global_control.h>
 
 #include "toolkit/clustering/morton_runs.h"
 #include "bvh/camera.h"
@@ -823,6 +826,163 @@ TEST(Tracer, UpdateFollowsTheAnimation) {
   }
 }
 
+
+// A triangle soup of `m` (three own vertices a triangle) with hard cases appended: a duplicate
+// of triangle 0, a zero-area triangle (collinear corners) and one with a repeated corner.
+Mesh soup_with_hard_cases(const Mesh& m) {
+  std::vector<Vec3> p;
+  std::vector<Tri> t;
+  auto add = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+    const auto v = static_cast<std::uint32_t>(p.size());
+    p.push_back(a), p.push_back(b), p.push_back(c);
+    t.push_back({v, v + 1, v + 2});
+  };
+  for (std::size_t i = 0; i < m.triangle_count(); ++i) {
+    const auto c = m.corners(i);
+    add(c[0], c[1], c[2]);
+  }
+  const auto c0 = m.corners(0), c5 = m.corners(5);
+  add(c0[0], c0[1], c0[2]);
+  add(c5[0], 0.5 * (c5[0] + c5[1]), c5[1]);
+  add(c5[2], c5[2], c5[0]);
+  return Mesh(std::move(t), std::move(p));
+}
+
+// The soup with each triangle moved along its unit normal by amount * (box diagonal) * f, f in
+// [0.5, 1.5) a seeded hash of the triangle (the explode scene's motion); zero-area triangles stay.
+Mesh flown_apart(const Mesh& soup, double amount) {
+  std::vector<Vec3> p(soup.positions().begin(), soup.positions().end());
+  const double d = (soup.bounds().hi - soup.bounds().lo).norm();
+  for (std::size_t i = 0; i < soup.triangle_count(); ++i) {
+    const auto c = soup.corners(i);
+    const Vec3 n = (c[1] - c[0]).cross(c[2] - c[0]);
+    if (!(n.norm() > 0)) continue;
+    const double f = 0.5 + double((i * 2654435761u) % 1000u) / 1000.0;
+    for (int k = 0; k < 3; ++k) p[3 * i + k] += amount * d * f * n.normalized();
+  }
+  return soup.with_positions(std::move(p));
+}
+
+// Every slot box of a wide tree against the union of triangle_boxes (the build's widened boxes)
+// of the triangles below the slot (leaves read through the lane ids: a leaf's first `count`
+// lanes), and the tree's SAH cost as wide_sah_cost defines it, summed over those boxes. Returns
+// the cost.
+template <class Nodes>
+double expect_exact_boxes(const Nodes& nodes, const TraceData& d, const Mesh& now, const SahCostModel& model,
+                          const std::string& what) {
+  double inner = 0.0, leaf = 0.0;
+  std::vector<Vec3f> fp;
+  for (const Vec3& p : now.positions()) fp.push_back(to_frame(p, d.frame()));
+  const std::vector<Box3f> tri_boxes = triangle_boxes(fp, now.triangles());
+  std::function<Box3f(std::uint32_t)> walk = [&](std::uint32_t i) {
+    Box3f node;
+    for (int k = 0; k < nodes[i].kWidth; ++k) {
+      if (nodes[i].is_empty(k)) continue;
+      Box3f b;
+      if (nodes[i].is_leaf(k)) {
+        for (std::uint32_t l = 0; l < nodes[i].count[k]; ++l)
+          b.extend(tri_boxes[d.triangle_ids[4 * std::size_t(nodes[i].child[k]) + l]]);
+        leaf += nodes[i].count[k] * b.surface_area();
+      } else {
+        b = walk(nodes[i].child[k]);
+        inner += b.surface_area();
+      }
+      EXPECT_EQ(nodes[i].child_box(k), b) << what << " node " << i << " slot " << k;
+      node.extend(b);
+    }
+    return node;
+  };
+  const Box3f root = walk(0);
+  return (model.traversal * (inner + root.surface_area()) + model.intersection * leaf) / root.surface_area();
+}
+
+// SceneConfig::refit_growth: a TriangleScene refitted to the positions it was built with holds
+// the same bytes; refitted to frames whose triangles fly apart, every box of both wide trees is
+// the exact box of its triangles, the hits are brute force's and the bytes the same at 1, 2 and
+// 3 threads; a limit every refit passes rebuilds, and the rebuilt data is a fresh scene's; the
+// schedule: a refit that fails at its first frame pauses the attempts for 1, 2, 4, then 8
+// frames, and a frame whose growth, extrapolated as the square of the age, would pass the limit
+// rebuilds without trying.
+TEST(Tracer, TriangleSceneRefitsWhileItsCostAllowsAndRebuildsOtherwise) {
+  const Mesh soup = soup_with_hard_cases(test::load_mesh("bunny00.off"));
+  SceneConfig cfg = fallback_scene_defaults();
+  cfg.origin = soup.bounds().center();  // (one trace frame for every scene below)
+  cfg.scale = trace_frame_scale(soup, *cfg.origin);
+  cfg.refit_growth = 1e9;
+  {
+    TriangleScene s(soup, cfg);
+    EXPECT_FALSE(s.refit_tried());
+    const TraceData built = s.data();
+    s.update(soup.positions());
+    ASSERT_TRUE(s.refit_tried() && s.refitted());
+    test::expect_same_data(s.data(), built, "refitted to the build's own positions");
+    EXPECT_EQ(s.wide_cost(), s.built_wide_cost());
+  }
+  std::vector<TraceData> first;
+  for (int threads : {1, 2, 3}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    TriangleScene s(soup, cfg);
+    for (int f = 1; f <= 4; ++f) {
+      const Mesh now = flown_apart(soup, 0.002 * f);
+      s.update(now.positions());
+      const std::string what = "threads " + std::to_string(threads) + " frame " + std::to_string(f);
+      ASSERT_TRUE(s.refitted()) << what;
+      const TraceData& d = s.data();
+      ASSERT_TRUE(validate(d, soup.triangle_count()).empty()) << what << test::joined(validate(d, soup.triangle_count()));
+      if (threads > 1) {
+        test::expect_same_data(d, first[f - 1], what);
+        continue;
+      }
+      first.push_back(d);
+      expect_exact_boxes(d.wide.nodes, d, now, cfg.build.cost, what + " 4-wide");
+      const double cost = expect_exact_boxes(d.wide8.nodes, d, now, cfg.build.cost, what + " 8-wide");
+      EXPECT_NEAR(s.wide_cost(), cost, 1e-9 * cost) << what;
+      EXPECT_GT(s.wide_cost(), s.built_wide_cost()) << what;  // (the triangles spread)
+      const RaySet rs = random_rays(now, 300, 40u + f);
+      for (std::size_t i = 0; i < rs.org.size(); ++i)
+        expect_same(trace_ray(d, rs.org[i], rs.dir[i]), test::brute_force(now, d.frame(), rs.org[i], rs.dir[i]),
+                    what + " ray " + std::to_string(i));
+    }
+  }
+  {  // A limit every refit passes: rebuilt, as a fresh scene over the frame.
+    cfg.refit_growth = 1e-12;
+    TriangleScene s(soup, cfg);
+    const Mesh now = flown_apart(soup, 0.003);
+    s.update(now.positions());
+    EXPECT_TRUE(s.refit_tried());
+    EXPECT_FALSE(s.refitted());
+    EXPECT_EQ(s.wide_cost(), s.built_wide_cost());
+    const TriangleScene fresh(now, cfg);
+    test::expect_same_data(s.data(), fresh.data(), "rebuilt after a refit over the limit");
+  }
+  {  // The pauses after refits that fail at their first frame: attempts on updates 1, 3, 6, 11, 20, 29.
+    TriangleScene s(soup, cfg);
+    std::vector<int> tried;
+    for (int u = 1; u <= 30; ++u) {
+      s.update(flown_apart(soup, 0.001 * u).positions());
+      ASSERT_FALSE(s.refitted()) << "update " << u;
+      if (s.refit_tried()) tried.push_back(u);
+    }
+    EXPECT_EQ(tried, (std::vector<int>{1, 3, 6, 11, 20, 29}));
+  }
+  {  // The extrapolation: a limit of twice the first frame's growth keeps one frame in two.
+    cfg.refit_growth = 1e9;
+    TriangleScene probe(soup, cfg);
+    probe.update(flown_apart(soup, 0.001).positions());
+    const double g1 = probe.wide_cost() / probe.built_wide_cost() - 1.0;
+    ASSERT_GT(g1, 0.0);
+    cfg.refit_growth = 2.0 * g1;
+    TriangleScene s(soup, cfg);
+    for (int u = 1; u <= 6; ++u) {
+      s.update(flown_apart(soup, 0.001 * u).positions());
+      EXPECT_EQ(s.refitted(), u % 2 == 1) << "update " << u;
+      EXPECT_EQ(s.refit_tried(), u % 2 == 1) << "update " << u;
+      if (s.refitted()) {
+        EXPECT_LE(s.wide_cost(), (1.0 + cfg.refit_growth) * s.built_wide_cost()) << "update " << u;
+      }
+    }
+  }
+}
 
 }  // namespace
 }  // namespace ptc::bvh
