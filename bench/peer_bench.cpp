@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   int levels = 2, frames = 8;
   DeformKind kind = DeformKind::Twist;
   PeerBenchConfig cfg;
+  bool refit_given = false;
   for (int i = 1; i < argc; ++i) {
     auto value = [&](const char* what) -> std::string {
       if (i + 1 >= argc) {
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
         const std::optional<double> x = parse_fallback_refit(value("--fallback-refit"));
         if (!x) throw std::invalid_argument("--fallback-refit: auto, off or a number above 0");
         cfg.fallback_refit = *x;
+        refit_given = true;
       }
       else if (a == "--deform") {
         const auto d = parse_deform_kind(value("--deform"));
@@ -64,6 +66,10 @@ int main(int argc, char** argv) {
       std::cerr << "peer_bench: " << e.what() << "\n";
       return 2;
     }
+  }
+  if (refit_given && !(cfg.cluster_fallback > 0)) {
+    std::cerr << "peer_bench: --fallback-refit: needs the triangle fallback (--cluster-fallback auto or X)\n";
+    return 2;
   }
   if (levels < 0 || levels > 6 || cfg.threads < 1 || frames < 1) {
     std::cerr << "peer_bench: --levels 0..6, --threads >= 1, --frames >= 1\n";

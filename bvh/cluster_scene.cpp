@@ -831,7 +831,8 @@ double ClusterScene::swelling() const {
 }
 
 // The frame's triangle BVH, in the cluster BVH's trace frame (the same float vertices, so the
-// same hits), made at the first frame that needs it and rebuilt at every other.
+// same hits), made at the first frame that needs it (with fallback_scene_defaults()) and then
+// updated on each such frame: rebuilt, or refitted while SceneConfig::refit_growth allows.
 void ClusterScene::update_fallback(std::span<const Vec3> positions) {
   const double t0 = clock_ms(cfg_.clock);
   if (!fallback_) {  // (made whole before it is used: a throw leaves the cluster BVH traced)

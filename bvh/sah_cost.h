@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include "bvh/bvh.h"
@@ -21,23 +22,25 @@ namespace ptc::bvh {
 
 /// The SAH cost of a wide tree as its nodes hold it (boxes read from the nodes, unlike
 /// sah_cost): traversal * (A(root) + sum of the inner slots' A) + intersection * (sum of the
-/// leaf slots' count * A), over A(root), `root` the box of the whole tree. An empty tree: 0;
-/// A(root) = 0: each ratio taken as 1. What a refitted tree is compared with the tree it had
-/// right after its build (SceneConfig::refit_growth).
+/// leaf slots' count * A), over A(root), `root` the box of the whole tree. What a refitted tree
+/// is compared with the tree it had right after its build (SceneConfig::refit_growth). An empty
+/// tree: 0. A(root) = 0 (no ratio to take): NaN, which no comparison passes, so a tree built
+/// over such a frame is never kept (counting each ratio as 1, as sah_cost does, would let
+/// every later refit pass, since no area ratio exceeds 1).
 template <class Nodes>
 [[nodiscard]] double wide_sah_cost(const Nodes& nodes, const Box3f& root, const SahCostModel& model) {
   if (nodes.empty()) return 0.0;
-  double inner = root.surface_area(), leaf = 0.0, inner_n = 1.0, leaf_n = 0.0;
+  const double ar = root.surface_area();
+  if (!(ar > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  double inner = ar, leaf = 0.0;
   for (const auto& n : nodes)
     for (int k = 0; k < n.kWidth; ++k) {
       if (n.is_empty(k)) continue;
       const double a = n.child_box(k).surface_area();
-      if (n.is_leaf(k)) leaf += n.count[k] * a, leaf_n += n.count[k];
-      else inner += a, inner_n += 1.0;
+      if (n.is_leaf(k)) leaf += n.count[k] * a;
+      else inner += a;
     }
-  const double ar = root.surface_area();
-  return ar > 0.0 ? (model.traversal * inner + model.intersection * leaf) / ar
-                  : model.traversal * inner_n + model.intersection * leaf_n;
+  return (model.traversal * inner + model.intersection * leaf) / ar;
 }
 
 }  // namespace ptc::bvh

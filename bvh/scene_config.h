@@ -150,7 +150,9 @@ struct SceneConfig {
   /// Lauterbach et al. 2006, "RT-DEFORM"). The cost is the 8-wide tree's, as the tracer walks it
   /// (wide_sah_cost). A frame whose extrapolated growth (the square of the tree's age) would pass
   /// the limit rebuilds without trying; after a refit that fails at its first frame the next
-  /// attempts wait 1, 2, 4, then 8 rebuilds. ClusterScene: its triangle fallback's value. 0 (the
+  /// attempts wait 1, 2, 4, then 8 rebuilds. The age counts the scene's updates, not scene
+  /// frames (a cluster scene's fallback is updated only on the frames traced on it; the cost
+  /// check holds whatever the gap). ClusterScene: its triangle fallback's value. 0 (the
   /// default): rebuild every frame. See kAutoFallbackRefitGrowth.
   double refit_growth = 0.0;
 };

@@ -7,6 +7,8 @@
 #include "bvh/sweep_sah_builder.h"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -41,6 +43,9 @@ Box3f refit_block_tree(Nodes& nodes, std::span<const Box3f> block_boxes) {
         for (std::uint32_t j = first; j < first + nb; ++j) b.extend(block_boxes[j]);
         b = widened(b);
       } else {
+        if (n.child[k] <= i)  // (the sweep needs children after parents, as every walk lays them out)
+          throw std::logic_error("TriangleScene refit: node " + std::to_string(i) + " has child " +
+                                 std::to_string(n.child[k]) + " before it");
         const auto& c = nodes[n.child[k]];
         for (int j = 0; j < c.kWidth; ++j) b.extend(c.child_box(j));
       }

@@ -31,7 +31,8 @@ class TriangleScene {
   [[nodiscard]] bool refitted() const { return refitted_; }
   /// Whether the last update tried the refit (refitted(), or rejected and then rebuilt).
   [[nodiscard]] bool refit_tried() const { return refit_tried_; }
-  /// wide_sah_cost of the traced tree now, and right after its last build.
+  /// wide_sah_cost of the traced tree now, and right after its last build (both 0 without
+  /// SceneConfig::refit_growth, which alone computes them).
   [[nodiscard]] double wide_cost() const { return wide_cost_; }
   [[nodiscard]] double built_wide_cost() const { return built_wide_cost_; }
 

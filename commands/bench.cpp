@@ -104,7 +104,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     manifest.set_result("cluster_fallback_frames", fell);
   }
   // The fallback's refit limit (0: rebuilt every frame), and the frames on which it kept its tree.
-  manifest.set_parameter("fallback_refit", c.fallback_refit);
+  manifest.set_parameter("fallback_refit", c.cluster_fallback > 0 ? c.fallback_refit : 0.0);
   {
     std::uint64_t kept = 0;
     for (const BenchRow& row : r.rows) kept += row.fallback_refit ? 1 : 0;

@@ -310,7 +310,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   if (use_clusters && !still) {
     manifest.set_parameter("cluster_fallback", tcfg.cluster_fallback);
     manifest.set_result("cluster_fallback_frames", fallback_frames);
-    manifest.set_parameter("fallback_refit", tcfg.fallback_refit);
+    manifest.set_parameter("fallback_refit", tcfg.cluster_fallback > 0 ? tcfg.fallback_refit : 0.0);
     manifest.set_result("fallback_refit_frames", refit_frames);
   }
   manifest.set_parameter("width", rc.width);

@@ -179,7 +179,7 @@ struct FrameRatioRange {
 /// and mismatch sums over all frames: the summary of run_peer_bench, recomputable from rows.
 [[nodiscard]] std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame);
 
-/// bench.csv (schema ptc-bench/6, docs/tracing.md): one row per frame and configuration.
+/// bench.csv (schema ptc-bench/7, docs/tracing.md): one row per frame and configuration.
 [[nodiscard]] Table bench_table(const PeerBenchResult& r);
 /// summary.csv (schema ptc-bench-summary/3): medians per configuration and ratios against each Embree mode.
 [[nodiscard]] Table bench_summary_table(const PeerBenchResult& r);

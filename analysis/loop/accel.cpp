@@ -55,7 +55,9 @@ class OursAccel final : public Accel {
         return f.refitted() ? std::nullopt : std::optional<double>(f.bvh().cost);
       }
       return scene_->sah_cost();
-    } else {
+    } else {  // (a triangle scene refitted has no binary tree of this frame)
+      if constexpr (requires { scene_->refitted(); })
+        if (scene_->refitted()) return std::nullopt;
       return scene_->bvh().cost;
     }
   }

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -964,6 +965,31 @@ TEST(Tracer, TriangleSceneRefitsWhileItsCostAllowsAndRebuildsOtherwise) {
       if (s.refit_tried()) tried.push_back(u);
     }
     EXPECT_EQ(tried, (std::vector<int>{1, 3, 6, 11, 20, 29}));
+  }
+  {  // A refit that fails after a kept frame: no pause, the next update tries again; the
+     // rejected frame's stages hold the refit's time and the rebuild's.
+    cfg.refit_growth = 1e9;
+    TriangleScene probe(soup, cfg);
+    probe.update(flown_apart(soup, 0.001).positions());
+    const double g1 = probe.wide_cost() / probe.built_wide_cost() - 1.0;
+    cfg.refit_growth = 10.0 * g1;  // (the extrapolation after one kept frame, 4 g1, passes)
+    TriangleScene s(soup, cfg);
+    s.update(flown_apart(soup, 0.001).positions());
+    ASSERT_TRUE(s.refitted());
+    const auto t0 = std::chrono::steady_clock::now();
+    s.update(flown_apart(soup, 0.05).positions());  // (a jump no limit of 10 g1 holds)
+    const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_TRUE(s.refit_tried());
+    EXPECT_FALSE(s.refitted());
+    const StageTimes& t = s.times();
+    EXPECT_GT(t.refit_ms, 0.0);
+    EXPECT_GT(t.leaf_data_ms, 0.0);
+    EXPECT_GT(t.build_ms, 0.0);
+    EXPECT_GT(t.collapse_ms, 0.0);
+    EXPECT_LE(t.total_ms(), wall + 1e-6);
+    s.update(flown_apart(soup, 0.0505).positions());
+    EXPECT_TRUE(s.refit_tried());
+    EXPECT_TRUE(s.refitted());
   }
   {  // The extrapolation: a limit of twice the first frame's growth keeps one frame in two.
     cfg.refit_growth = 1e9;
