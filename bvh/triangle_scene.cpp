@@ -1,6 +1,5 @@
 #include "bvh/triangle_scene.h"
 
-#include "bvh/box_simd.h"
 #include "bvh/leaf_blocks.h"
 #include "bvh/sah_cost.h"
 #include "bvh/stage_clock.h"
@@ -17,18 +16,10 @@ namespace ptc::bvh {
 namespace {
 constexpr std::size_t kWideNodesPerTask = 4096;  // wide nodes per task of the leaf data's fill
 
-// The box widened by one unit in the last place on every side, as triangle_boxes widens each
-// triangle's (widening is monotone, so the widened union is the union of the widened boxes).
-Box3f widened(const Box3f& b) {
-  alignas(16) float l[4], h[4];
-  _mm_store_ps(l, simd::widen_down(_mm_setr_ps(b.lo[0], b.lo[1], b.lo[2], 0.0f)));
-  _mm_store_ps(h, simd::widen_up(_mm_setr_ps(b.hi[0], b.hi[1], b.hi[2], 0.0f)));
-  return {{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
-}
-
 // New boxes for a tree whose leaf children are direct block ranges (child = first block,
-// count = triangles): a leaf slot gets the union of its blocks' exact boxes, widened as the
-// build's triangle boxes are, an inner slot the union of its node's slots (one reverse sweep:
+// count = triangles): a leaf slot gets the union of its blocks' exact boxes, widened one unit in
+// the last place as the build's triangle boxes are (widening is monotone: the widened union is
+// the union of the widened boxes), an inner slot the union of its node's slots (one reverse sweep:
 // children come after their parents). So a tree refitted to the positions it was built with
 // holds the build's boxes. Returns the root's box.
 template <class Nodes>
@@ -41,7 +32,7 @@ Box3f refit_block_tree(Nodes& nodes, std::span<const Box3f> block_boxes) {
       if (n.is_leaf(k)) {
         const std::uint32_t first = n.child[k], nb = blocks_for(n.count[k]);
         for (std::uint32_t j = first; j < first + nb; ++j) b.extend(block_boxes[j]);
-        b = widened(b);
+        for (int a = 0; a < 3; ++a) b.lo[a] = next_below(b.lo[a]), b.hi[a] = next_above(b.hi[a]);
       } else {
         if (n.child[k] <= i)  // (the sweep needs children after parents, as every walk lays them out)
           throw std::logic_error("TriangleScene refit: node " + std::to_string(i) + " has child " +
@@ -72,30 +63,31 @@ void TriangleScene::update(std::span<const Vec3> positions) {
   frame_positions(positions, f_.data.frame(), f_.fpos);
   check_finite(positions, f_.fpos, f_.data.frame());  // (a NaN box would break the build)
   add_sentinel(f_.fpos);
+  const std::span<const Vec3f> fp(f_.fpos.data(), f_.fpos.size() - 2);  // (less the sentinel and its pad)
   times = {};
   times.vertices_ms = clock_ms(cfg_.clock) - t0;
   const bool attempt = cfg_.refit_growth > 0.0 && !f_.data.wide8.nodes.empty() && refit_due_;
   refit_tried_ = attempt;
-  refitted_ = attempt && try_refit(tris);
+  refitted_ = attempt && try_refit(fp, tris);
   if (attempt && !refitted_ && age_ == 0) {
     // Even one frame of refit passed the limit: leave out the next attempts after the rebuilds
     // of 1, 2, 4, then 8 frames (retrying, as the motion may slow down), so that a scene whose
     // tree cannot be kept pays the wasted refit on one frame in nine at most.
     skip_ = backoff_, backoff_ = std::min<std::uint32_t>(2 * backoff_, 8);
   }
-  if (!refitted_) rebuild(tris);
+  if (!refitted_) rebuild(fp, tris);
 }
 
 // The blocks refilled from their lanes' triangle ids (the layout kept), each block's box taken
 // as it is written, and both wide trees' boxes recomputed from those; kept when the 8-wide
 // tree's cost stays within the growth allowed over its cost at the build.
-bool TriangleScene::try_refit(std::span<const Tri> tris) {
+bool TriangleScene::try_refit(std::span<const Vec3f> fp, std::span<const Tri> tris) {
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
-  const auto V = static_cast<std::uint32_t>(f_.fpos.size() - 2);  // (less the sentinel and its pad)
   double t0 = clock_ms(cfg_.clock);
   block_boxes_.resize(data.blocks.size());
-  fill_blocks_from_lanes(data.triangle_ids, tris, f_.fpos[0].data(), V, data.blocks, block_boxes_.data());
+  fill_blocks_from_lanes(data.triangle_ids, tris, f_.fpos[0].data(), static_cast<std::uint32_t>(fp.size()), data.blocks,
+                         block_boxes_.data());
   times.leaf_data_ms = clock_ms(cfg_.clock) - t0;
   t0 = clock_ms(cfg_.clock);
   data.wide.bounds = refit_block_tree(data.wide.nodes, block_boxes_);
@@ -112,11 +104,10 @@ bool TriangleScene::try_refit(std::span<const Tri> tris) {
   return true;
 }
 
-void TriangleScene::rebuild(std::span<const Tri> tris) {
+void TriangleScene::rebuild(std::span<const Vec3f> fp, std::span<const Tri> tris) {
   TraceData& data = f_.data;
   StageTimes& times = f_.times;
-  const auto V = static_cast<std::uint32_t>(f_.fpos.size() - 2);
-  const std::span<const Vec3f> fp(f_.fpos.data(), V);
+  const auto V = static_cast<std::uint32_t>(fp.size());  // (the sentinel's index)
   double t0 = clock_ms(cfg_.clock);
   f_.boxes.resize(tris.size());  // (kept from frame to frame)
   f_.centroids.resize(tris.size());

@@ -49,8 +49,9 @@ class TriangleScene {
   bool refit_due_ = true;   // the next update tries the refit first
   std::uint32_t skip_ = 0, backoff_ = 1;  // rebuilds left without a refit attempt; the next such pause
 
-  bool try_refit(std::span<const Tri> tris);
-  void rebuild(std::span<const Tri> tris);
+  // fp: the frame positions without the sentinel (which follows them in f_.fpos).
+  bool try_refit(std::span<const Vec3f> fp, std::span<const Tri> tris);
+  void rebuild(std::span<const Vec3f> fp, std::span<const Tri> tris);
 };
 
 }  // namespace ptc::bvh

@@ -120,28 +120,24 @@ std::pair<double, double> parse_value_range(const std::string& s, std::string_vi
   return {lo, hi};
 }
 
-std::optional<double> parse_cluster_fallback(const std::string& s) {
-  if (s == "auto") return bvh::kAutoFallbackSwelling;
+std::optional<double> parse_auto_off_or_above(const std::string& s, double auto_value, double above) {
+  if (s == "auto") return auto_value;
   if (s == "off") return 0.0;
   try {
     std::size_t n = 0;
     const double v = std::stod(s, &n);
-    if (n == s.size() && std::isfinite(v) && v > 1.0) return v;
+    if (n == s.size() && std::isfinite(v) && v > above) return v;
   } catch (const std::exception&) {
   }
   return std::nullopt;
 }
 
+std::optional<double> parse_cluster_fallback(const std::string& s) {
+  return parse_auto_off_or_above(s, bvh::kAutoFallbackSwelling, 1.0);
+}
+
 std::optional<double> parse_fallback_refit(const std::string& s) {
-  if (s == "auto") return bvh::kAutoFallbackRefitGrowth;
-  if (s == "off") return 0.0;
-  try {
-    std::size_t n = 0;
-    const double v = std::stod(s, &n);
-    if (n == s.size() && std::isfinite(v) && v > 0.0) return v;
-  } catch (const std::exception&) {
-  }
-  return std::nullopt;
+  return parse_auto_off_or_above(s, bvh::kAutoFallbackRefitGrowth, 0.0);
 }
 
 }  // namespace ptc

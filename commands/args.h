@@ -35,6 +35,9 @@ void check_image_size(int width, int height);
 /// command; any other value as given.
 [[nodiscard]] unsigned resolve_threads(unsigned threads);
 
+/// auto (auto_value), off (0) or a finite number above `above`; nothing for anything else (the
+/// two flags below).
+[[nodiscard]] std::optional<double> parse_auto_off_or_above(const std::string& s, double auto_value, double above);
 /// --cluster-fallback of `ptc bench` and `ptc trace`: auto (bvh::kAutoFallbackSwelling), off (0)
 /// or a finite swelling above 1; nothing for anything else.
 [[nodiscard]] std::optional<double> parse_cluster_fallback(const std::string& s);

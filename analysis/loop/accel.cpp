@@ -49,16 +49,13 @@ class OursAccel final : public Accel {
   }
   [[nodiscard]] Vec3 origin() const override { return scene_->data().origin; }
   [[nodiscard]] std::optional<double> sah_cost() const override {
+    // A triangle BVH's binary SAH cost; none when it was refitted (its binary tree is the last build's).
+    auto of = [](const bvh::TriangleScene& t) { return t.refitted() ? std::nullopt : std::optional<double>(t.bvh().cost); };
     if constexpr (requires { scene_->sah_cost(); }) {  // over the clusters (fixed group trees too),
-      if (scene_->fallback_active()) {  // or the traced triangle BVH's: none for a refitted one (its
-        const bvh::TriangleScene& f = *scene_->fallback_scene();  // binary tree is its last build's)
-        return f.refitted() ? std::nullopt : std::optional<double>(f.bvh().cost);
-      }
+      if (scene_->fallback_active()) return of(*scene_->fallback_scene());  // or the traced triangle BVH's
       return scene_->sah_cost();
-    } else {  // (a triangle scene refitted has no binary tree of this frame)
-      if constexpr (requires { scene_->refitted(); })
-        if (scene_->refitted()) return std::nullopt;
-      return scene_->bvh().cost;
+    } else {
+      return of(*scene_);
     }
   }
   [[nodiscard]] const S& scene() const { return *scene_; }

@@ -66,14 +66,20 @@ inline std::optional<double> number_arg(const std::string& s) {
   return std::nullopt;
 }
 
-/// --cluster-fallback (commands/args.h parse_cluster_fallback).
-inline CLI::Validator cluster_fallback_validator() {
+/// auto, off or a number above `above` (commands/args.h parse_auto_off_or_above; the auto value
+/// does not matter for the check).
+inline CLI::Validator auto_off_or_above_validator(double above) {
   return CLI::Validator(
-      [](std::string& s) -> std::string {
-        return parse_cluster_fallback(s) ? std::string() : "'" + s + "' is not auto, off or a number above 1";
+      [above](std::string& s) -> std::string {
+        if (parse_auto_off_or_above(s, 0.0, above)) return {};
+        char bound[32];
+        std::snprintf(bound, sizeof bound, "%g", above);
+        return "'" + s + "' is not auto, off or a number above " + bound;
       },
       "auto|off|X");
 }
+/// --cluster-fallback (commands/args.h parse_cluster_fallback).
+inline CLI::Validator cluster_fallback_validator() { return auto_off_or_above_validator(1.0); }
 inline constexpr const char* kClusterFallbackHelp =
     "trace a frame of the cluster BVH on a BVH over its triangles, rebuilt that frame, when the clusters have come "
     "apart: their boxes' half area over the triangles' area (the swelling) above X. auto: X = 64 (2-3.6 on the "
@@ -81,13 +87,7 @@ inline constexpr const char* kClusterFallbackHelp =
     "method as published); or a number X > 1";
 
 /// --fallback-refit (commands/args.h parse_fallback_refit).
-inline CLI::Validator fallback_refit_validator() {
-  return CLI::Validator(
-      [](std::string& s) -> std::string {
-        return parse_fallback_refit(s) ? std::string() : "'" + s + "' is not auto, off or a number above 0";
-      },
-      "auto|off|X");
-}
+inline CLI::Validator fallback_refit_validator() { return auto_off_or_above_validator(0.0); }
 inline constexpr const char* kFallbackRefitHelp =
     "with the triangle fallback: keep its tree and refit it to the next frames while its SAH cost stays within "
     "(1 + X) of the cost right after its build, rebuild otherwise. auto: X = 0.2 (the tree is then kept about "
