@@ -9,6 +9,7 @@
 //                        [--fallback-refit auto|off|X] [--csv FILE]
 // --cluster-fallback: ptc bench's (auto: 64, the default; off: the cluster BVH on every frame; X: the swelling threshold).
 // --fallback-refit: ptc bench's (auto: 0.2, the default; off: the fallback rebuilt every frame; X: the cost growth allowed).
+// --fallback-sah: ptc bench's (rays, the default: the fallback built for the camera's rays; plain: the plain SAH).
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
   int levels = 2, frames = 8;
   DeformKind kind = DeformKind::Twist;
   PeerBenchConfig cfg;
-  bool refit_given = false;
+  bool refit_given = false, sah_given = false;
   for (int i = 1; i < argc; ++i) {
     auto value = [&](const char* what) -> std::string {
       if (i + 1 >= argc) {
@@ -55,6 +56,11 @@ int main(int argc, char** argv) {
         if (!x) throw std::invalid_argument("--fallback-refit: auto, off or a number above 0");
         cfg.fallback_refit = *x;
         refit_given = true;
+      } else if (a == "--fallback-sah") {
+        const std::optional<bool> x = parse_fallback_sah(value("--fallback-sah"));
+        if (!x) throw std::invalid_argument("--fallback-sah: rays or plain");
+        cfg.fallback_sah_rays = *x;
+        sah_given = true;
       }
       else if (a == "--deform") {
         const auto d = parse_deform_kind(value("--deform"));
@@ -67,10 +73,11 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (refit_given && !(cfg.cluster_fallback > 0)) {
-    std::cerr << "peer_bench: --fallback-refit: needs the triangle fallback (--cluster-fallback auto or X)\n";
-    return 2;
-  }
+  for (const auto& [given, flag] : {std::pair{refit_given, "--fallback-refit"}, std::pair{sah_given, "--fallback-sah"}})
+    if (given && !(cfg.cluster_fallback > 0)) {
+      std::cerr << "peer_bench: " << flag << ": needs the triangle fallback (--cluster-fallback auto or X)\n";
+      return 2;
+    }
   if (levels < 0 || levels > 6 || cfg.threads < 1 || frames < 1) {
     std::cerr << "peer_bench: --levels 0..6, --threads >= 1, --frames >= 1\n";
     return 2;

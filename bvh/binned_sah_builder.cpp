@@ -231,7 +231,8 @@ class BinnedBuilder {
   };
 
   BinnedBuilder(const BuildInput& in, const BuildConfig& cfg, Ref* refs, Ref* group_refs, Bins* bins)
-      : in_(in), cfg_(cfg), refs_(refs), group_refs_(group_refs), bins_(bins), bin_range_(bin_range_for(cfg.allow_avx2)) {}
+      : in_(in), cfg_(cfg), refs_(refs), group_refs_(group_refs), bins_(bins), bin_range_(bin_range_for(cfg.allow_avx2)),
+        aw_(area_weights_of(cfg.area_weights)) {}
 
   Box3f open(Task& t) const {
     if (t.extra.groups && t.size() == 1) {  // one group: continue with its primitives
@@ -258,7 +259,7 @@ class BinnedBuilder {
     double wt = 0.0, aw = 0.0;
     for (std::uint32_t i = 0; i < t.size(); ++i) {
       wt += r[i].weight;
-      aw += 2.0 * static_cast<double>(half_area(load_lo(r[i]), load_hi(r[i]))) * r[i].weight;
+      aw += 2.0 * static_cast<double>(half_area(load_lo(r[i]), load_hi(r[i]), aw_)) * r[i].weight;
     }
     const SahCostModel& m = cfg_.cost;
     return m.intersection * wt <= m.traversal + m.intersection * aw / area;
@@ -386,7 +387,7 @@ class BinnedBuilder {
         const std::uint32_t b = used[j];
         lo = _mm_min_ps(lo, b0.lo(a, b)), nhi = _mm_min_ps(nhi, b0.neg_hi(a, b));
         wr += b0.weight[a][b];
-        right_area[j] = half_area(lo, negate(nhi));
+        right_area[j] = half_area(lo, negate(nhi), aw_);
         right_weight[j] = static_cast<float>(wr);
       }
       lo = inf, nhi = inf;
@@ -395,7 +396,7 @@ class BinnedBuilder {
         const std::uint32_t b = used[j - 1];
         lo = _mm_min_ps(lo, b0.lo(a, b)), nhi = _mm_min_ps(nhi, b0.neg_hi(a, b));
         wl += b0.weight[a][b];
-        const float sum = half_area(lo, negate(nhi)) * static_cast<float>(wl) + right_area[j] * right_weight[j];
+        const float sum = half_area(lo, negate(nhi), aw_) * static_cast<float>(wl) + right_area[j] * right_weight[j];
         if (sum < best_sum) best_sum = sum, s.bin_axis = a, s.bin_split = used[j];
       }
     }
@@ -412,9 +413,14 @@ class BinnedBuilder {
     __m128 suffix_lo[kSweepBelow], suffix_hi[kSweepBelow];
     const __m128 mask3 = xyz_mask();
     float best_sum = std::numeric_limits<float>::infinity();
+    // The longest axis, each extent over its area weight: the axis whose faces' weighted area
+    // w_a * (product of the other extents) is the least, so a cut across it shrinks the most of
+    // the weighted area (with the plain weights simply the longest extent).
+    const auto& w = cfg_.area_weights;
+    auto reach = [&](int a) { return (t.extra.box.hi[a] - t.extra.box.lo[a]) / w[a]; };
     int longest = 0;
     for (int a = 1; a < 3; ++a)
-      if (t.extra.box.hi[a] - t.extra.box.lo[a] > t.extra.box.hi[longest] - t.extra.box.lo[longest]) longest = a;
+      if (reach(a) > reach(longest)) longest = a;
     for (int a = 0; a < 3; ++a) {
       if (cfg_.small_nodes_longest_axis && a != longest) continue;
       std::uint8_t* o = s.order[a];
@@ -431,7 +437,7 @@ class BinnedBuilder {
         lo = _mm_min_ps(lo, _mm_and_ps(x.a, mask3)), hi = _mm_max_ps(hi, _mm_and_ps(x.b, mask3));
         wr += r[o[j]].weight;
         suffix_lo[j] = lo, suffix_hi[j] = hi;
-        right_area[j] = half_area(lo, hi);
+        right_area[j] = half_area(lo, hi, aw_);
         right_weight[j] = static_cast<float>(wr);
       }
       s.weight = wr;
@@ -444,7 +450,7 @@ class BinnedBuilder {
           hi = _mm_max_ps(hi, _mm_and_ps(s.swept[a][i].b, mask3));
           wr += r[o[i]].weight;
         }
-        const float sum = half_area(lo, hi) * static_cast<float>(wr) + right_area[j] * right_weight[j];
+        const float sum = half_area(lo, hi, aw_) * static_cast<float>(wr) + right_area[j] * right_weight[j];
         if (sum < best_sum) {
           best_sum = sum, s.sweep_axis = a, s.sweep_k = j;
           s.sweep_left = {lo, hi}, s.sweep_right = {suffix_lo[j], suffix_hi[j]};
@@ -455,7 +461,7 @@ class BinnedBuilder {
         lo = _mm_min_ps(lo, _mm_and_ps(s.swept[a][j - 1].a, mask3));
         hi = _mm_max_ps(hi, _mm_and_ps(s.swept[a][j - 1].b, mask3));
         wr += r[o[j - 1]].weight;
-        const float sum = half_area(lo, hi) * static_cast<float>(wr) + right_area[j] * right_weight[j];
+        const float sum = half_area(lo, hi, aw_) * static_cast<float>(wr) + right_area[j] * right_weight[j];
         if (sum < best_sum) {
           best_sum = sum, s.sweep_axis = a, s.sweep_k = j;
           s.sweep_left = {lo, hi}, s.sweep_right = {suffix_lo[j], suffix_hi[j]};
@@ -511,6 +517,7 @@ class BinnedBuilder {
   Ref* const group_refs_;
   Bins* const bins_;  // two bin sets
   const BinRangeFn bin_range_;
+  const __m128 aw_;  // half_area's weights (BuildConfig::area_weights)
 };
 
 }  // namespace
@@ -594,6 +601,7 @@ void build_parallel(const BuildInput& in, const BuildConfig& cfg, const BinnedTa
 
 void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, BuildWorkspace& ws) {
   check_input(in, cfg);
+  check_area_weights(cfg);
   bvh.nodes.clear();
   bvh.prim_order.clear();
   bvh.cost = 0.0;

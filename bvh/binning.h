@@ -92,14 +92,18 @@ inline Box3f to_box(__m128 lo, __m128 hi) {
   return {{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
 }
 
-// Half the surface area, xy + yz + zx, of a non-empty box (lanes 0-2), in float: only compared.
-inline float half_area(__m128 lo, __m128 hi) {
+// Half the weighted surface area, w_z xy + w_x yz + w_y zx, of a non-empty box (lanes 0-2), in
+// float: only compared. w: area_weights_of(BuildConfig::area_weights).
+inline float half_area(__m128 lo, __m128 hi, __m128 w) {
   const __m128 e = _mm_sub_ps(hi, lo);                                 // x y z .
   const __m128 r = _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1));       // y z x .
-  const __m128 p = _mm_mul_ps(e, r);                                   // xy yz zx .
+  const __m128 p = _mm_mul_ps(_mm_mul_ps(e, r), w);                    // w_z xy, w_x yz, w_y zx, .
   const __m128 s = _mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 1)));
   return _mm_cvtss_f32(_mm_add_ss(s, _mm_movehl_ps(p, p)));
 }
+
+// The weights of half_area's products xy, yz, zx (1, 1, 1: the plain half area, the same bits).
+inline __m128 area_weights_of(const std::array<float, 3>& w) { return _mm_setr_ps(w[2], w[0], w[1], 0.0f); }
 
 inline __m128 negate(__m128 x) { return _mm_xor_ps(x, _mm_set1_ps(-0.0f)); }
 

@@ -58,6 +58,14 @@ struct Box3f {
     const double x = double(hi[0]) - lo[0], y = double(hi[1]) - lo[1], z = double(hi[2]) - lo[2];
     return 2.0 * (x * y + y * z + z * x);
   }
+  /// The surface area with the faces across axis a weighted by w[a]: 2(w_z xy + w_x yz + w_y zx)
+  /// (BuildConfig::area_weights; 0 for an empty box). With w = (1, 1, 1) the same bits as
+  /// surface_area().
+  [[nodiscard]] double weighted_area(const std::array<float, 3>& w) const {
+    if (empty()) return 0.0;
+    const double x = double(hi[0]) - lo[0], y = double(hi[1]) - lo[1], z = double(hi[2]) - lo[2];
+    return 2.0 * (w[2] * (x * y) + w[0] * (y * z) + w[1] * (z * x));
+  }
   [[nodiscard]] Vec3f center() const {
     return {0.5f * (lo[0] + hi[0]), 0.5f * (lo[1] + hi[1]), 0.5f * (lo[2] + hi[2])};
   }

@@ -1,5 +1,6 @@
 #include "bvh/camera.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ptc::bvh {
@@ -42,6 +43,24 @@ RayBatch primary_rays(const PinholeCamera& cam, int width, int height) {
       rays.set(i, cam.eye, {static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z())});
     }
   return rays;
+}
+
+std::array<float, 3> direction_area_weights(const RayBatch& rays) {
+  double sum[3] = {0.0, 0.0, 0.0};
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const double d[3] = {rays.dx[i], rays.dy[i], rays.dz[i]};
+    const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if (!(len > 0.0) || !std::isfinite(len)) continue;
+    for (int a = 0; a < 3; ++a) sum[a] += std::abs(d[a]) / len;
+    ++used;
+  }
+  if (used == 0) return {1.0f, 1.0f, 1.0f};
+  double w[3], top = 0.0;
+  for (int a = 0; a < 3; ++a) w[a] = 2.0 * sum[a] / static_cast<double>(used), top = std::max(top, w[a]);
+  std::array<float, 3> out{};
+  for (int a = 0; a < 3; ++a) out[a] = static_cast<float>(std::max(w[a], top / 64.0));
+  return out;
 }
 
 }  // namespace ptc::bvh

@@ -1,6 +1,8 @@
 // A pinhole camera and its primary rays (a first version of the cameras and ray sets).
 #pragma once
 
+#include <array>
+
 #include "bvh/tracer.h"
 
 namespace ptc::bvh {
@@ -22,5 +24,13 @@ struct PinholeCamera {
 /// width x height rays through the pixel centres, row-major from the top-left pixel; unit
 /// directions, tmin = 0, tmax = inf. Square pixels.
 [[nodiscard]] RayBatch primary_rays(const PinholeCamera& cam, int width, int height);
+
+/// The area weights (BuildConfig::area_weights) of a tree built for `rays`: 2 mean |d_a| over
+/// their unit directions d, so that directions spread evenly over the sphere give about
+/// (1, 1, 1), the plain SAH (a box's mean projected area is a quarter of its surface area), and
+/// rays along one axis weight only the faces across it. Each weight is at least 1/64 of the
+/// largest (a box flat across the rays keeps some area). Rays whose direction is zero or not
+/// finite are left out; with none left: (1, 1, 1).
+[[nodiscard]] std::array<float, 3> direction_area_weights(const RayBatch& rays);
 
 }  // namespace ptc::bvh

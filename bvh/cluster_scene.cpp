@@ -841,6 +841,7 @@ void ClusterScene::update_fallback(std::span<const Vec3> positions) {
     tc.scale = f_.data.scale;
     tc.clock = cfg_.clock;
     tc.refit_growth = cfg_.refit_growth;
+    tc.build.area_weights = cfg_.fallback_area_weights;
     auto made = std::make_unique<TriangleScene>(Mesh::sharing(tris_, std::vector<Vec3>(positions.begin(), positions.end())), tc);
     fallback_ = std::move(made);
   } else {

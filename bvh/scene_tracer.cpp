@@ -85,6 +85,7 @@ SceneConfig cluster_config(const SceneTracerConfig& cfg, const Vec3& origin) {
   c.group_trees = cfg.group_trees;
   c.fallback_swelling = cfg.cluster_fallback;
   c.refit_growth = cfg.fallback_refit;
+  c.fallback_area_weights = cfg.fallback_area_weights;
   return c;
 }
 

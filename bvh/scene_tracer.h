@@ -60,6 +60,8 @@ struct SceneTracerConfig {
   /// The moving cluster BVH's SceneConfig::refit_growth: its triangle fallback's refit limit (0,
   /// the default: rebuilt every frame).
   double fallback_refit = 0.0;
+  /// The moving cluster BVH's SceneConfig::fallback_area_weights (the plain SAH by default).
+  std::array<float, 3> fallback_area_weights = {1.0f, 1.0f, 1.0f};
 };
 
 /// The configuration of the cluster BVH a SceneTracer with `cfg` builds, in the trace frame

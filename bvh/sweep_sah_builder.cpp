@@ -59,7 +59,7 @@ class SweepBuilder {
       for (std::uint32_t i = count; i-- > 0;) {
         right.extend(in_.boxes[order_[i]]);
         wr += weight_of(in_, order_[i]);
-        suffix_area_[i] = right.surface_area();
+        suffix_area_[i] = right.weighted_area(cfg_.area_weights);
         suffix_weight_[i] = wr;
       }
       Box3f left;
@@ -68,7 +68,7 @@ class SweepBuilder {
         left.extend(in_.boxes[order_[k - 1]]);
         wl += weight_of(in_, order_[k - 1]);
         const double c =
-            m.traversal + m.intersection * (left.surface_area() * wl + suffix_area_[k] * suffix_weight_[k]) / area;
+            m.traversal + m.intersection * (left.weighted_area(cfg_.area_weights) * wl + suffix_area_[k] * suffix_weight_[k]) / area;
         if (c < s.cost) s.cost = c, s.axis = axis, s.k = k;
       }
     }
@@ -100,6 +100,7 @@ class SweepBuilder {
 
 Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg) {
   check_input(in, cfg);
+  check_area_weights(cfg);
   check_no_nan(in);
   Bvh bvh;
   const auto n = static_cast<std::uint32_t>(in.boxes.size());

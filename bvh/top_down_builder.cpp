@@ -16,6 +16,13 @@ void check_input(const BuildInput& in, const BuildConfig& cfg) {
   (void)in, (void)cfg;
 }
 
+void check_area_weights(const BuildConfig& cfg) {
+  for (int a = 0; a < 3; ++a)
+    if (!(std::isfinite(cfg.area_weights[a]) && cfg.area_weights[a] > 0.0f))
+      throw std::invalid_argument("BVH build: the area weight of axis " + std::string(1, "xyz"[a]) + " is " +
+                                  std::to_string(cfg.area_weights[a]) + " (each must be finite and above 0)");
+}
+
 void check_no_nan(const BuildInput& in) {
   for (std::size_t i = 0; i < in.boxes.size(); ++i)
     for (int a = 0; a < 3; ++a)

@@ -17,8 +17,11 @@
 //     k, first, second = builder.apply(task, split)             (primitives put in place)
 //     inner node; a child of one primitive is emitted as a leaf at once when it is next in
 //     pre-order (the first child, then the second when the first was one), else pushed.
-// A leaf costs intersection * W(P) * A, an inner node traversal * A (CostAccumulator); their sum
-// over A(root) is Bvh::cost (sah_cost.h's formula).
+// A is the node's area as the splits are priced: its surface area, or with
+// BuildConfig::area_weights its weighted area (Box3f::weighted_area), the builders' half areas
+// weighted alike. A leaf costs intersection * W(P) * S, an inner node traversal * S, S the
+// surface area, whatever the weights (CostAccumulator); their sum over S(root) is Bvh::cost
+// (sah_cost.h's formula).
 #pragma once
 
 #include <concepts>
@@ -51,6 +54,9 @@ struct CostAccumulator {
 
 /// The preconditions of BuildInput and BuildConfig (assertions: programmer errors).
 void check_input(const BuildInput& in, const BuildConfig& cfg);
+
+/// BuildConfig::area_weights not all finite and above 0: std::invalid_argument naming the axis.
+void check_area_weights(const BuildConfig& cfg);
 
 /// NaN in a box or centroid (comparisons with NaN break every ordering the builders rely on):
 /// std::invalid_argument naming the first such primitive.
@@ -120,6 +126,7 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
                     std::vector<typename B::Task>& stack, Tree& bvh, Defer&& defer = {}) {
   using Task = typename B::Task;
   const SahCostModel& m = cfg.cost;
+  const bool plain = cfg.area_weights == std::array<float, 3>{1.0f, 1.0f, 1.0f};
   CostAccumulator acc;
   // A node for `task` (already opened, with its box), its parent patched.
   auto emit = [&](const Task& task, const Box3f& box) {
@@ -150,17 +157,18 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
     at_root = false;
     const Box3f box = builder.open(task);
     const std::uint32_t idx = emit(task, box);
-    const double area = box.surface_area();
+    const double area = box.surface_area();  // (the cost's; the splits are chosen by `chooser`)
     if (task.size() == 1) {
       make_leaf(idx, task, area, builder.leaf_weight(task));
       continue;
     }
+    const double chooser = plain ? area : box.weighted_area(cfg.area_weights);
     const bool must_split = task.size() > cfg.max_leaf_size || builder.must_split(task);
-    if (!must_split && builder.leaf_by_bound(task, area)) {
+    if (!must_split && builder.leaf_by_bound(task, chooser)) {
       make_leaf(idx, task, area, builder.leaf_weight(task));
       continue;
     }
-    const typename B::Split split = builder.find_split(task, area, must_split);
+    const typename B::Split split = builder.find_split(task, chooser, must_split);
     const double weight = static_cast<double>(split.weight);
     if (!must_split && m.intersection * weight <= split.cost) {
       make_leaf(idx, task, area, weight);

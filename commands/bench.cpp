@@ -110,6 +110,9 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     for (const BenchRow& row : r.rows) kept += row.fallback_refit ? 1 : 0;
     manifest.set_result("fallback_refit_frames", kept);
   }
+  // The fallback's SAH: built for the camera's rays (their area weights) or plain (1, 1, 1).
+  manifest.set_parameter("fallback_sah", c.cluster_fallback > 0 && c.fallback_sah_rays ? "rays" : "plain");
+  manifest.set_parameter("fallback_area_weights", std::vector<double>(r.fallback_area_weights.begin(), r.fallback_area_weights.end()));
   manifest.set_parameter("tie_rel", c.tie.rel_t);
   manifest.set_parameter("embree_set_affinity", false);
   manifest.set_parameter("shadows", opt.shadows);

@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "analysis/loop/frame_loop.h"
+#include "bvh/camera.h"
 #include "bvh/scene_tracer.h"
 #include "render/rays.h"
 #include "toolkit/clustering/cluster.h"
@@ -115,6 +116,13 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   res.fallback_refit = cfg.fallback_refit;
   setup.threads = cfg.threads;
   setup.embree_packet_width = cfg.embree_packet_width;
+  // The camera's rays, made before the configurations: the fallback may be built for them.
+  const bvh::PinholeCamera cam =
+      cfg.made_camera ? *cfg.made_camera : make_camera(cfg.camera, scene.rest().referenced_bounds(), cfg.width, cfg.height);
+  const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
+  res.rays = rays.size();
+  if (cfg.fallback_sah_rays && cfg.cluster_fallback > 0) setup.fallback_area_weights = bvh::direction_area_weights(rays);
+  res.fallback_area_weights = setup.fallback_area_weights;
 
   // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
   // are consecutive; the scene renumbers its sources (or gathers, which it then says).
@@ -126,11 +134,6 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   }
   setup.clusters = &*clusters;
   const Mesh& mesh = scene.rest();
-
-  const bvh::PinholeCamera cam =
-      cfg.made_camera ? *cfg.made_camera : make_camera(cfg.camera, scene.rest().referenced_bounds(), cfg.width, cfg.height);
-  const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
-  res.rays = rays.size();
 
   std::vector<std::unique_ptr<loop::Accel>> accels;
   for (loop::AccelKind k : loop::kAllAccelKinds) {
@@ -368,6 +371,10 @@ std::string fallback_text(const PeerBenchResult& r) {
   const std::string tree = r.fallback_refit > 0 ? fmt::format("; its tree refitted on {} of them (cost growth at most {:g})",
                                                               kept, r.fallback_refit)
                                                 : std::string("; its tree rebuilt on each");
+  const auto& w = r.fallback_area_weights;
+  const std::string sah = w == std::array<float, 3>{1.0f, 1.0f, 1.0f}
+                              ? std::string("; plain SAH")
+                              : fmt::format("; SAH for the camera's rays (area weights {:.3g} {:.3g} {:.3g})", w[0], w[1], w[2]);
   std::string runs;
   for (std::size_t i = 0; i < fell.size();) {
     std::size_t j = i;
@@ -376,7 +383,7 @@ std::string fallback_text(const PeerBenchResult& r) {
             (j == i ? fmt::format("{}", fell[i]) : fmt::format("{}-{}", fell[i], fell[j]));
     i = j + 1;
   }
-  return s + (runs.empty() ? std::string() : " (scene frames " + runs + ")") + (fell.empty() ? std::string() : tree) + "\n";
+  return s + (runs.empty() ? std::string() : " (scene frames " + runs + ")") + (fell.empty() ? std::string() : tree + sah) + "\n";
 }
 }  // namespace
 

@@ -92,6 +92,10 @@ struct PeerBenchConfig {
   /// ours_clusters: the triangle fallback's refit limit (bvh::SceneConfig::refit_growth; `ptc
   /// bench --fallback-refit`); 0: rebuilt every frame.
   double fallback_refit = bvh::kAutoFallbackRefitGrowth;
+  /// ours_clusters: the triangle fallback built for the bench's primary rays (their
+  /// bvh::direction_area_weights as bvh::SceneConfig::fallback_area_weights; `ptc bench
+  /// --fallback-sah rays`), or with the plain SAH (false; `plain`).
+  bool fallback_sah_rays = true;
 };
 
 struct BenchRow {
@@ -153,6 +157,8 @@ struct PeerBenchResult {
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
   double cluster_fallback = 0;         ///< the fallback's threshold (cfg.cluster_fallback; 0: off)
   double fallback_refit = 0;           ///< the fallback's refit limit (cfg.fallback_refit; 0: rebuilt every frame)
+  /// the fallback's area weights (cfg.fallback_sah_rays: the primary rays'; else 1, 1, 1)
+  std::array<float, 3> fallback_area_weights = {1.0f, 1.0f, 1.0f};
 };
 
 /// The per-frame ratio of a peer's whole frame to a configuration's (> 1: the configuration is

@@ -109,6 +109,7 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   cfg.builder = s.builder;
   cfg.fallback_swelling = s.cluster_fallback;
   cfg.refit_growth = s.fallback_refit;
+  cfg.fallback_area_weights = s.fallback_area_weights;
   if (s.cluster_build) cfg.build = *s.cluster_build;
   return cfg;
 }

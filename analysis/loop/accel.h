@@ -89,6 +89,8 @@ struct AccelSetup {
   /// ours_clusters: bvh::SceneConfig::refit_growth, the triangle fallback's refit limit (0: rebuilt
   /// every frame).
   double fallback_refit = 0.0;
+  /// ours_clusters: bvh::SceneConfig::fallback_area_weights (the plain SAH by default).
+  std::array<float, 3> fallback_area_weights = {1.0f, 1.0f, 1.0f};
 };
 
 /// The cluster scene settings of ours_clusters under `setup` (the method's precomputation, such

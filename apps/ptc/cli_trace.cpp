@@ -15,7 +15,7 @@ struct TraceArgs {
   std::string frame, frames, cost_range, deform, vertex_order = "input";
   GroupTreesArg group_trees;
   std::uint32_t cluster_groups = bvh::cluster_scene_defaults().cluster_group_size;  // (given: opt.cluster_group_size)
-  std::string cluster_fallback = "auto", fallback_refit = "auto";
+  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "rays";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -34,7 +34,7 @@ void register_trace(CLI::App& app, Context& ctx) {
     if (a->app->count("--cost-range")) o.cost_range = a->cost_range;
     if (a->app->count("--deform")) o.deform = a->deform;
     // Flags that would do nothing are refused, as `ptc cluster` refuses a flag its method does not use.
-    for (const char* f : {"--cluster-groups", "--vertex-order", "--cluster-fallback", "--fallback-refit"})
+    for (const char* f : {"--cluster-groups", "--vertex-order", "--cluster-fallback", "--fallback-refit", "--fallback-sah"})
       if (a->app->count(f) && o.clusters.empty()) throw UsageError(f, "needs a cluster BVH (--clusters DIR)");
     o.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
     for (const char* f : {"--ao-distance", "--seed"})
@@ -45,6 +45,11 @@ void register_trace(CLI::App& app, Context& ctx) {
       o.fallback_refit = *parse_fallback_refit(a->fallback_refit);
       if (o.cluster_fallback && !(*o.cluster_fallback > 0))
         throw UsageError("--fallback-refit", "needs the triangle fallback (--cluster-fallback auto or X)");
+    }
+    if (a->app->count("--fallback-sah")) {
+      o.fallback_sah_rays = *parse_fallback_sah(a->fallback_sah);
+      if (o.cluster_fallback && !(*o.cluster_fallback > 0))
+        throw UsageError("--fallback-sah", "needs the triangle fallback (--cluster-fallback auto or X)");
     }
     const bvh::GroupTrees trees = a->group_trees.get(
         !o.clusters.empty() && o.cluster_group_size.value_or(bvh::cluster_scene_defaults().cluster_group_size) > 1,
@@ -76,6 +81,9 @@ void register_trace(CLI::App& app, Context& ctx) {
       ->capture_default_str();
   c->add_option("--fallback-refit", a->fallback_refit, kFallbackRefitHelp)
       ->check(fallback_refit_validator())
+      ->capture_default_str();
+  c->add_option("--fallback-sah", a->fallback_sah, kFallbackSahHelp)
+      ->check(enum_validator("fallback SAH (rays or plain)", parse_fallback_sah))
       ->capture_default_str();
   c->add_option("--vertex-order", a->vertex_order,
                 "with --clusters: clusters renumbers the vertices once so each cluster's are consecutive (the "

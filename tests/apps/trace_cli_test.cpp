@@ -196,6 +196,10 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
     expect_error({"bench", mesh, "--fallback-refit", bad, "--out", out}, 2, "--fallback-refit");
   expect_error({"bench", mesh, "--cluster-fallback", "off", "--fallback-refit", "0.3", "--out", out}, 2,
                "--fallback-refit: needs the triangle fallback");
+  for (const char* bad : {"", "camera", "RAYS", "uniform"})
+    expect_error({"bench", mesh, "--fallback-sah", bad, "--out", out}, 2, "--fallback-sah");
+  expect_error({"bench", mesh, "--cluster-fallback", "off", "--fallback-sah", "plain", "--out", out}, 2,
+               "--fallback-sah: needs the triangle fallback");
 }
 
 // `ptc bench --cluster-fallback auto|off|X`: the threshold in the manifest (auto: 64, off: 0), the
@@ -231,6 +235,29 @@ TEST_F(TraceCli, BenchClusterFallbackIsRecorded) {
               std::string::npos)
         << r.out;
     EXPECT_EQ(j["parameters"]["fallback_refit"].get<double>(), want > 0 ? 0.2 : 0.0) << arg;  // (auto; none without a fallback)
+    // (the fallback built for the camera's rays by default: their weights, none plain without one)
+    EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), want > 0 ? "rays" : "plain") << arg;
+    const auto w = j["parameters"]["fallback_area_weights"].get<std::vector<double>>();
+    ASSERT_EQ(w.size(), 3u);
+    if (want > 0) {
+      EXPECT_NE(w, std::vector<double>({1.0, 1.0, 1.0})) << arg;
+      for (const double x : w) EXPECT_TRUE(x > 0.0 && x <= 2.0) << x;
+      if (fell > 0) EXPECT_NE(r.out.find("SAH for the camera's rays (area weights"), std::string::npos) << r.out;
+    } else {
+      EXPECT_EQ(w, std::vector<double>({1.0, 1.0, 1.0})) << arg;
+    }
+  }
+  {  // --fallback-sah plain: the plain SAH's weights, the same hits
+    const fs::path out = dir_ / "fb_plain";
+    const CmdResult r = ptc({"bench", mesh, "--frames", "0:2", "--width", "24", "--height", "24", "--max-count", "40",
+                             "--threads", "1", "--cluster-fallback", "1.0001", "--fallback-sah", "plain", "--out",
+                             out.string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(out / "manifest.json"));
+    EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), "plain");
+    EXPECT_EQ(j["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
+    EXPECT_NE(r.out.find("; plain SAH"), std::string::npos) << r.out;
+    for (const auto& row : csv_rows(slurp(out / "bench.csv"))) EXPECT_EQ(row.at("mismatches"), "0");
   }
   // --fallback-refit: a limit no growth reaches keeps the fallback's tree on every frame (it is made
   // with the scene, at the rest pose, whose swelling is above 1.0001: frame 0 refits it too;
@@ -393,11 +420,13 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
   const std::string mesh = (fs::path(PTC_TEST_DATA) / "meshes" / "bunny00.off").string();
   const std::string cl = (dir_ / "fbc").string();
   ASSERT_EQ(ptc({"cluster", mesh, "--method", "growth", "--max-count", "24", "--out", cl}).code, 0);
-  auto run = [&](const std::string& x, const char* refit = nullptr) {
-    const fs::path out = dir_ / ("fbt_" + x + (refit ? std::string("_") + refit : std::string()));
+  auto run = [&](const std::string& x, const char* refit = nullptr, const char* sah = nullptr) {
+    const fs::path out = dir_ / ("fbt_" + x + (refit ? std::string("_") + refit : std::string()) +
+                                 (sah ? std::string("_") + sah : std::string()));
     std::vector<std::string> args{"trace", mesh, "--clusters", cl, "--deform", "twist", "--frames", "0:3", "--width",
                                   "40", "--height", "32", "--shadows", "--cluster-fallback", x, "--out", out.string()};
     if (refit) args.insert(args.end(), {"--fallback-refit", refit});
+    if (sah) args.insert(args.end(), {"--fallback-sah", sah});
     const CmdResult r = ptc(args);
     EXPECT_EQ(r.code, 0) << r.err;
     return std::pair{out, r.out};
@@ -405,12 +434,26 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
   const auto [on, on_text] = run("1.0001");
   const auto [off, off_text] = run("off");
   const auto [kept, kept_text] = run("1.0001", "1e9");  // (the fallback, made at the rest pose, refitted on every frame)
+  const auto [plain, plain_text] = run("1.0001", nullptr, "plain");
   for (int f = 0; f <= 3; ++f)
     for (const char* img : {"shaded", "depth", "normal"}) {
       const std::string name = fmt::format("{}_{:04d}.png", img, f);
       EXPECT_EQ(slurp(on / name), slurp(off / name)) << name;
       EXPECT_EQ(slurp(kept / name), slurp(off / name)) << name;
+      EXPECT_EQ(slurp(plain / name), slurp(off / name)) << name;
     }
+  // The fallback built for the camera's rays by default (their weights), plain on request; the
+  // summary says which.
+  const auto jp = nlohmann::json::parse(slurp(plain / "manifest.json"));
+  EXPECT_EQ(jp["parameters"]["fallback_sah"].get<std::string>(), "plain");
+  EXPECT_EQ(jp["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
+  EXPECT_NE(plain_text.find("; plain SAH"), std::string::npos) << plain_text;
+  {
+    const auto jr = nlohmann::json::parse(slurp(on / "manifest.json"));
+    EXPECT_EQ(jr["parameters"]["fallback_sah"].get<std::string>(), "rays");
+    EXPECT_NE(jr["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
+    EXPECT_NE(on_text.find("; SAH for the camera's rays"), std::string::npos) << on_text;
+  }
   const auto jk = nlohmann::json::parse(slurp(kept / "manifest.json"));
   EXPECT_EQ(jk["parameters"]["fallback_refit"].get<double>(), 1e9);
   EXPECT_EQ(jk["results"]["fallback_refit_frames"].get<std::uint64_t>(), 4u);
@@ -445,6 +488,16 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
                  2, "--fallback-refit");
   expect_error({"trace", mesh, "--clusters", cl, "--fallback-refit", "0.3", "--out", (dir_ / "fb_bad").string()}, 2,
                "--fallback-refit: a still scene is built once");
+  expect_error({"trace", mesh, "--fallback-sah", "plain", "--out", (dir_ / "fb_bad").string()}, 2,
+               "--fallback-sah: needs a cluster BVH");
+  expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--cluster-fallback", "off", "--fallback-sah",
+                "rays", "--out", (dir_ / "fb_bad").string()},
+               2, "--fallback-sah: needs the triangle fallback");
+  expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--fallback-sah", "camera", "--out",
+                (dir_ / "fb_bad").string()},
+               2, "--fallback-sah");
+  expect_error({"trace", mesh, "--clusters", cl, "--fallback-sah", "rays", "--out", (dir_ / "fb_bad").string()}, 2,
+               "--fallback-sah: a still scene is built once");
   expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--cluster-fallback", "0.9", "--out",
                 (dir_ / "fb_bad").string()},
                2, "--cluster-fallback");
@@ -458,6 +511,7 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
   EXPECT_FALSE(js["parameters"].contains("cluster_fallback"));
   EXPECT_FALSE(js["results"].contains("cluster_fallback_frames"));
   EXPECT_FALSE(js["parameters"].contains("fallback_refit"));
+  EXPECT_FALSE(js["parameters"].contains("fallback_sah"));
 }
 
 // A mesh of 1e13 units: our tracer's float products overflowed there, every ray missed, and the

@@ -10,6 +10,7 @@
 #include <chrono>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -26,6 +27,7 @@
 #include "toolkit/mesh/mesh.h"
 #include "bvh/scene_config.h"
 #include "bvh/tracer.h"
+#include "bvh/triangle_scene.h"
 #include "bvh/validate.h"
 #include "bvh/wide_bvh.h"
 #include "test_util.h"
@@ -929,6 +931,43 @@ TEST(ClusterScene, SwellingAndTheTriangleFallback) {
     EXPECT_GE(kept, 18) << name;
     EXPECT_GE(refitted, 2) << name;  // (frame 4 at least, at both thread counts)
   }
+}
+
+// SceneConfig::fallback_area_weights reach the fallback: its traced data is, byte for byte, that
+// of a triangle scene built at the frame's positions with fallback_scene_defaults(), the cluster
+// BVH's trace frame and those weights (uneven weights give another tree than the plain SAH's),
+// and it hits like brute force.
+TEST(ClusterScene, TheFallbackIsBuiltWithItsAreaWeights) {
+  const Mesh m = test::load_mesh("bunny00.off");
+  const Clustering cl = ptc::morton_runs(m, 24);
+  const Mesh far = scattered(m, 0.1, 7u);
+  SceneConfig cfg = test::two_level_defaults();
+  {
+    ClusterScene probe(m, view_of(cl), cfg);
+    const double rest = probe.swelling();
+    probe.update(far.positions());
+    ASSERT_GT(probe.swelling(), 4.0 * rest);
+    cfg.fallback_swelling = 2.0 * rest;
+  }
+  std::vector<TraceData> made;
+  for (const std::array<float, 3> w : {std::array<float, 3>{1, 1, 1}, std::array<float, 3>{0.05f, 0.2f, 1.9f}}) {
+    const std::string what = "weights " + std::to_string(w[0]) + " " + std::to_string(w[1]) + " " + std::to_string(w[2]);
+    cfg.fallback_area_weights = w;
+    ClusterScene s(m, view_of(cl), cfg);
+    s.update(far.positions());
+    ASSERT_TRUE(s.fallback_active()) << what;
+    SceneConfig tc = fallback_scene_defaults();
+    tc.origin = s.cluster_data().origin;
+    tc.scale = s.cluster_data().scale;
+    tc.build.area_weights = w;
+    const TriangleScene direct(far, tc);
+    expect_same_data(s.data(), direct.data(), what);
+    ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(s.data(), far, 41u, 300, what));
+    made.push_back(s.data());
+  }
+  ASSERT_EQ(made.size(), 2u);
+  EXPECT_FALSE(made[0].wide.nodes.size() == made[1].wide.nodes.size() &&
+               test::same_bytes(made[0].wide.nodes.data(), made[1].wide.nodes.data(), made[0].wide.nodes.size()));
 }
 
 // Hard cases of the swelling: the same mesh a thousand times smaller and a million units away

@@ -8,7 +8,9 @@
 #include <bit>
 #include <cmath>
 #include <numeric>
+#include <limits>
 #include <random>
+#include <utility>
 #include <string>
 
 #include <tbb/global_control.h>
@@ -582,6 +584,91 @@ TEST(SahBuilder, NanBoxesAndCentroidsAreRefused) {
     std::vector<std::uint32_t> groups{0, 20, 43};
     EXPECT_THROW((void)build_binned_sah({b2, c2, {}, groups}, cfg), std::invalid_argument);
   }
+}
+
+// BuildConfig::area_weights: four unit boxes at the corners of a 4 x 6 rectangle in x and z.
+// The plain SAH cuts across z (children of area 18 against 26 across x); weights (0.01, 0.01, 1),
+// rays along z, price the children across x at 2(1 + 0.06 + 0.06) = 2.24 and across z at
+// 2(4 + 0.01 + 0.04) = 8.1, so both builders cut across x. Bvh::cost is the plain SAH cost of
+// the tree either way (by hand: (68 + 18 + 18 + 4 * 6) / 68 and (68 + 26 + 26 + 24) / 68).
+TEST(SahBuilder, AreaWeightsChooseTheSplitsAndTheCostStaysPlain) {
+  const std::vector<Box3f> boxes{{{0, 0, 0}, {1, 1, 1}}, {{0, 0, 5}, {1, 1, 6}}, {{3, 0, 0}, {4, 1, 1}}, {{3, 0, 5}, {4, 1, 6}}};
+  const auto c = box_centers(boxes);
+  for (const Named& b : kBuilders) {
+    SCOPED_TRACE(b.name);
+    BuildConfig cfg;
+    cfg.max_leaf_size = 1;
+    const Bvh plain = b.fn({boxes, c, {}}, cfg);
+    cfg.area_weights = {0.01f, 0.01f, 1.0f};
+    const Bvh along_z = b.fn({boxes, c, {}}, cfg);
+    for (const Bvh* t : {&plain, &along_z}) {
+      expect_valid(*t, boxes, cfg);
+      ASSERT_EQ(t->nodes.size(), 7u);
+      EXPECT_DOUBLE_EQ(sah_cost(*t, boxes, {}, cfg.cost), t->cost);
+    }
+    EXPECT_DOUBLE_EQ(plain.cost, 128.0 / 68.0);
+    EXPECT_DOUBLE_EQ(along_z.cost, 144.0 / 68.0);
+    // The root's first child holds prim_order[0, 2): {0, 2} (across z) or {0, 1} (across x).
+    auto first_pair = [](const Bvh& t) {
+    return std::make_pair(std::min(t.prim_order[0], t.prim_order[1]), std::max(t.prim_order[0], t.prim_order[1]));
+  };
+    EXPECT_EQ(first_pair(plain), std::make_pair(0u, 2u));
+    EXPECT_EQ(first_pair(along_z), std::make_pair(0u, 1u));
+    EXPECT_EQ(plain.nodes[1].bounds, (Box3f{{0, 0, 0}, {4, 1, 1}}));
+    EXPECT_EQ(along_z.nodes[1].bounds, (Box3f{{0, 0, 0}, {1, 1, 6}}));
+  }
+}
+
+// Only the weights' ratios matter: doubling all three (exact in float) gives the plain tree bit
+// for bit, as (1, 1, 1) given explicitly does; uneven weights give another valid tree, the same
+// at one and two threads, whose cost stays the plain SAH cost recomputed independently.
+TEST(SahBuilder, AreaWeightsAreScaleFreeAndDeterministic) {
+  const auto boxes = test::random_boxes(60000, 5);
+  const auto c = box_centers(boxes);
+  auto same = [](const Bvh& a, const Bvh& b) {
+    if (a.prim_order != b.prim_order || a.nodes.size() != b.nodes.size() || a.cost != b.cost) return false;
+    for (std::size_t i = 0; i < a.nodes.size(); ++i)
+      if (!(a.nodes[i].bounds == b.nodes[i].bounds) || a.nodes[i].index != b.nodes[i].index ||
+          a.nodes[i].count != b.nodes[i].count)
+        return false;
+    return true;
+  };
+  for (const Named& b : kBuilders) {
+    SCOPED_TRACE(b.name);
+    const auto& sub = b.fn == &build_sweep_sah ? std::span<const Box3f>(boxes).first(3000) : std::span<const Box3f>(boxes);
+    const auto sc = std::span<const Vec3f>(c).first(sub.size());
+    BuildConfig cfg;
+    const Bvh plain = b.fn({sub, sc, {}}, cfg);
+    cfg.area_weights = {1.0f, 1.0f, 1.0f};
+    EXPECT_TRUE(same(plain, b.fn({sub, sc, {}}, cfg)));
+    cfg.area_weights = {2.0f, 2.0f, 2.0f};
+    EXPECT_TRUE(same(plain, b.fn({sub, sc, {}}, cfg)));
+    cfg.area_weights = {0.1f, 0.6f, 1.7f};
+    const Bvh uneven = b.fn({sub, sc, {}}, cfg);
+    expect_valid(uneven, sub, cfg);
+    EXPECT_FALSE(same(plain, uneven));
+    EXPECT_NEAR(sah_cost(uneven, sub, {}, cfg.cost), uneven.cost, 1e-12 * uneven.cost);  // (summed in another order)
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    EXPECT_TRUE(same(uneven, b.fn({sub, sc, {}}, cfg)));
+  }
+}
+
+TEST(SahBuilder, BadAreaWeightsAreRefused) {
+  const auto boxes = test::random_boxes(40, 8);
+  const auto c = box_centers(boxes);
+  const float bad[] = {0.0f, -1.0f, std::nanf(""), std::numeric_limits<float>::infinity()};
+  for (int a = 0; a < 3; ++a)
+    for (const float v : bad)
+      for (const Named& b : kBuilders) {
+        BuildConfig cfg;
+        cfg.area_weights[a] = v;
+        try {
+          (void)b.fn({boxes, c, {}}, cfg);
+          ADD_FAILURE() << b.name << " took area weight " << v << " on axis " << a;
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find(std::string("axis ") + "xyz"[a]), std::string::npos) << e.what();
+        }
+      }
 }
 
 }  // namespace

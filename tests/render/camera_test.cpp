@@ -2,8 +2,12 @@
 // naming the option, and the default camera framing every vertex for any aspect ratio.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <vector>
 
+#include "bvh/camera.h"
 #include "render/camera.h"
 #include "toolkit/core/error.h"
 
@@ -129,4 +133,64 @@ TEST(TraceCamera, DefaultCameraSeesAFlatMeshFromAbove) {
   deep.extend(Vec3(-2, -0.01, -3));
   deep.extend(Vec3(2, 0.01, 3));  // thin, but not flat (1/300 of its length)
   EXPECT_EQ(ptc::make_camera({}, deep, 64, 48).forward, Vec3(0, 0, -1));
+}
+
+// direction_area_weights: rays along one axis weight only the faces across it (the others at the
+// floor, 1/64 of it); zero and NaN directions are left out; none left gives the plain SAH's
+// (1, 1, 1); directions spread evenly over the sphere give about (1, 1, 1) (a box's mean
+// projected area is a quarter of its surface area).
+TEST(TraceCamera, DirectionAreaWeights) {
+  using ptc::bvh::RayBatch;
+  using ptc::bvh::direction_area_weights;
+  auto batch = [](const std::vector<ptc::bvh::Vec3f>& dirs) {
+    RayBatch r;
+    r.resize(dirs.size());
+    for (std::size_t i = 0; i < dirs.size(); ++i) r.set(i, Vec3(1e6, -3, 2), dirs[i]);
+    return r;
+  };
+  const float nan = std::nanf("");
+  EXPECT_EQ(direction_area_weights(RayBatch{}), (std::array<float, 3>{1, 1, 1}));
+  EXPECT_EQ(direction_area_weights(batch({{0, 0, 0}, {nan, 1, 0}})), (std::array<float, 3>{1, 1, 1}));
+  EXPECT_EQ(direction_area_weights(batch({{0, 0, -1}, {0, 0, 0}, {0, 0, 7}, {nan, 0, 1}})),
+            (std::array<float, 3>{2.0f / 64, 2.0f / 64, 2.0f}));
+  const auto w = direction_area_weights(batch({{3, 4, 0}, {-0.3f, 0.4f, 0}}));  // (unit: 0.6, 0.8, 0)
+  EXPECT_NEAR(w[0], 1.2f, 1e-6f);
+  EXPECT_NEAR(w[1], 1.6f, 1e-6f);
+  EXPECT_FLOAT_EQ(w[2], 1.6f / 64);
+  std::vector<ptc::bvh::Vec3f> sphere;  // Fibonacci points: evenly spread unit directions
+  const int n = 200000;
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * M_PI * (3.0 - std::sqrt(5.0));
+    sphere.push_back({static_cast<float>(r * std::cos(phi)), static_cast<float>(r * std::sin(phi)), static_cast<float>(z)});
+  }
+  for (const float x : direction_area_weights(batch(sphere))) EXPECT_NEAR(x, 1.0f, 2e-3f);
+}
+
+// What the weights are for: with those of parallel rays along d, a quarter of a box's weighted
+// area is its area projected across d, the share of those rays it meets. Counted by brute force:
+// a fine grid of parallel rays over the box's shadow, each tested against the box's slabs.
+TEST(TraceCamera, DirectionAreaWeightsGiveTheProjectedArea) {
+  const Vec3 d = Vec3(0.36, -0.48, 0.8).normalized();
+  ptc::bvh::RayBatch one;
+  one.resize(1);
+  one.set(0, Vec3::Zero(), {static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z())});
+  const auto w = ptc::bvh::direction_area_weights(one);
+  const ptc::bvh::Box3f box{{-1.0f, 0.5f, 2.0f}, {2.0f, 1.0f, 4.5f}};
+  // A plane across d, spanned by u and v, far behind the box; cells of h x h.
+  const Vec3 u = d.cross(Vec3(0, 0, 1)).normalized(), v = d.cross(u);
+  const Vec3 centre(0.5, 0.75, 3.25);
+  const double h = 0.004;
+  std::size_t hits = 0;
+  for (double s = -3.0; s < 3.0; s += h)
+    for (double t = -3.0; t < 3.0; t += h) {
+      const Vec3 o = centre - 10.0 * d + s * u + t * v;
+      double t0 = -1e300, t1 = 1e300;
+      for (int a = 0; a < 3; ++a) {
+        const double ta = (box.lo[a] - o[a]) / d[a], tb = (box.hi[a] - o[a]) / d[a];
+        t0 = std::max(t0, std::min(ta, tb)), t1 = std::min(t1, std::max(ta, tb));
+      }
+      hits += t0 <= t1 ? 1 : 0;
+    }
+  const double counted = static_cast<double>(hits) * h * h;
+  EXPECT_NEAR(box.weighted_area(w) / 4.0, counted, 0.005 * counted);
 }
