@@ -6,7 +6,7 @@
 //
 //   build/bin/peer_bench [MESH] [--levels 2] [--frames 8] [--size 1024] [--threads 1]
 //                        [--max-count 32] [--deform twist|bend|wave|rigid|explode] [--cluster-fallback auto|off|X]
-//                        [--fallback-refit auto|off|X] [--csv FILE]
+//                        [--fallback-refit auto|off|X] [--fallback-sah rays|plain] [--csv FILE]
 // --cluster-fallback: ptc bench's (auto: 64, the default; off: the cluster BVH on every frame; X: the swelling threshold).
 // --fallback-refit: ptc bench's (auto: 0.2, the default; off: the fallback rebuilt every frame; X: the cost growth allowed).
 // --fallback-sah: ptc bench's (rays, the default: the fallback built for the camera's rays; plain: the plain SAH).

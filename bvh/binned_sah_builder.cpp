@@ -232,7 +232,7 @@ class BinnedBuilder {
 
   BinnedBuilder(const BuildInput& in, const BuildConfig& cfg, Ref* refs, Ref* group_refs, Bins* bins)
       : in_(in), cfg_(cfg), refs_(refs), group_refs_(group_refs), bins_(bins), bin_range_(bin_range_for(cfg.allow_avx2)),
-        aw_(area_weights_of(cfg.area_weights)) {}
+        aw_(area_weights_of(split_area_weights(cfg))) {}
 
   Box3f open(Task& t) const {
     if (t.extra.groups && t.size() == 1) {  // one group: continue with its primitives
@@ -416,7 +416,7 @@ class BinnedBuilder {
     // The longest axis, each extent over its area weight: the axis whose faces' weighted area
     // w_a * (product of the other extents) is the least, so a cut across it shrinks the most of
     // the weighted area (with the plain weights simply the longest extent).
-    const auto& w = cfg_.area_weights;
+    const std::array<float, 3> w = split_area_weights(cfg_);
     auto reach = [&](int a) { return (t.extra.box.hi[a] - t.extra.box.lo[a]) / w[a]; };
     int longest = 0;
     for (int a = 1; a < 3; ++a)

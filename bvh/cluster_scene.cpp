@@ -24,6 +24,7 @@
 #include "bvh/refit.h"
 #include "bvh/stage_clock.h"
 #include "bvh/threads.h"
+#include "bvh/top_down_builder.h"
 #include "bvh/sweep_sah_builder.h"
 #include "toolkit/geometry/morton.h"
 #include "toolkit/geometry/triangle.h"
@@ -294,6 +295,11 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
       throw std::invalid_argument("the sweep builder has no two-level build: cluster_group_size must be 0 with it");
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.leaf_format == LeafFormatChoice::Tables)
       throw std::invalid_argument("the tables leaf format needs linear cluster leaves (block trees keep blocks)");
+    if (cfg_.fallback_swelling > 0) {  // (the fallback's build would refuse them only at its first frame)
+      BuildConfig fallback_build;
+      fallback_build.area_weights = cfg_.fallback_area_weights;
+      check_area_weights(fallback_build);
+    }
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
                                   std::to_string(cfg_.build.max_leaf_size) + " given)");

@@ -19,6 +19,7 @@
 // When every part is static there is one BVH, built once; when none is, one BVH updated per frame.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>

@@ -25,7 +25,7 @@ class SweepBuilder {
   };
 
   SweepBuilder(const BuildInput& in, const BuildConfig& cfg, AlignedVector<std::uint32_t>& prim_order)
-      : in_(in), cfg_(cfg), prims_(prim_order), order_(prim_order.size()), suffix_area_(prim_order.size() + 1),
+      : in_(in), cfg_(cfg), aw_(split_area_weights(cfg)), prims_(prim_order), order_(prim_order.size()), suffix_area_(prim_order.size() + 1),
         suffix_weight_(prim_order.size() + 1) {}
 
   Box3f open(Task& t) const {
@@ -59,7 +59,7 @@ class SweepBuilder {
       for (std::uint32_t i = count; i-- > 0;) {
         right.extend(in_.boxes[order_[i]]);
         wr += weight_of(in_, order_[i]);
-        suffix_area_[i] = right.weighted_area(cfg_.area_weights);
+        suffix_area_[i] = right.weighted_area(aw_);
         suffix_weight_[i] = wr;
       }
       Box3f left;
@@ -68,7 +68,7 @@ class SweepBuilder {
         left.extend(in_.boxes[order_[k - 1]]);
         wl += weight_of(in_, order_[k - 1]);
         const double c =
-            m.traversal + m.intersection * (left.weighted_area(cfg_.area_weights) * wl + suffix_area_[k] * suffix_weight_[k]) / area;
+            m.traversal + m.intersection * (left.weighted_area(aw_) * wl + suffix_area_[k] * suffix_weight_[k]) / area;
         if (c < s.cost) s.cost = c, s.axis = axis, s.k = k;
       }
     }
@@ -91,6 +91,7 @@ class SweepBuilder {
 
   const BuildInput& in_;
   const BuildConfig& cfg_;
+  const std::array<float, 3> aw_;  // split_area_weights(cfg)
   AlignedVector<std::uint32_t>& prims_;
   std::vector<std::uint32_t> order_;
   std::vector<double> suffix_area_, suffix_weight_;

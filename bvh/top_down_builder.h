@@ -24,6 +24,8 @@
 // (sah_cost.h's formula).
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <concepts>
 #include <cstdint>
 #include <vector>
@@ -57,6 +59,15 @@ void check_input(const BuildInput& in, const BuildConfig& cfg);
 
 /// BuildConfig::area_weights not all finite and above 0: std::invalid_argument naming the axis.
 void check_area_weights(const BuildConfig& cfg);
+
+/// The area weights the splits are priced with: BuildConfig::area_weights over the largest of
+/// them (only their ratios matter; so the float half areas stay in range whatever their scale).
+/// (1, 1, 1) stays (1, 1, 1), the same bits as the plain surface area.
+[[nodiscard]] inline std::array<float, 3> split_area_weights(const BuildConfig& cfg) {
+  const auto& w = cfg.area_weights;
+  const float top = std::max(w[0], std::max(w[1], w[2]));
+  return {w[0] / top, w[1] / top, w[2] / top};
+}
 
 /// NaN in a box or centroid (comparisons with NaN break every ordering the builders rely on):
 /// std::invalid_argument naming the first such primitive.
@@ -126,7 +137,8 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
                     std::vector<typename B::Task>& stack, Tree& bvh, Defer&& defer = {}) {
   using Task = typename B::Task;
   const SahCostModel& m = cfg.cost;
-  const bool plain = cfg.area_weights == std::array<float, 3>{1.0f, 1.0f, 1.0f};
+  const std::array<float, 3> aw = split_area_weights(cfg);
+  const bool plain = aw == std::array<float, 3>{1.0f, 1.0f, 1.0f};
   CostAccumulator acc;
   // A node for `task` (already opened, with its box), its parent patched.
   auto emit = [&](const Task& task, const Box3f& box) {
@@ -162,7 +174,7 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
       make_leaf(idx, task, area, builder.leaf_weight(task));
       continue;
     }
-    const double chooser = plain ? area : box.weighted_area(cfg.area_weights);
+    const double chooser = plain ? area : box.weighted_area(aw);
     const bool must_split = task.size() > cfg.max_leaf_size || builder.must_split(task);
     if (!must_split && builder.leaf_by_bound(task, chooser)) {
       make_leaf(idx, task, area, builder.leaf_weight(task));

@@ -111,7 +111,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     manifest.set_result("fallback_refit_frames", kept);
   }
   // The fallback's SAH: built for the camera's rays (their area weights) or plain (1, 1, 1).
-  manifest.set_parameter("fallback_sah", c.cluster_fallback > 0 && c.fallback_sah_rays ? "rays" : "plain");
+  manifest.set_parameter("fallback_sah", r.fallback_sah_rays ? "rays" : "plain");
   manifest.set_parameter("fallback_area_weights", std::vector<double>(r.fallback_area_weights.begin(), r.fallback_area_weights.end()));
   manifest.set_parameter("tie_rel", c.tie.rel_t);
   manifest.set_parameter("embree_set_affinity", false);

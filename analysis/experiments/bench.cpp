@@ -121,7 +121,8 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
       cfg.made_camera ? *cfg.made_camera : make_camera(cfg.camera, scene.rest().referenced_bounds(), cfg.width, cfg.height);
   const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
   res.rays = rays.size();
-  if (cfg.fallback_sah_rays && cfg.cluster_fallback > 0) setup.fallback_area_weights = bvh::direction_area_weights(rays);
+  res.fallback_sah_rays = cfg.fallback_sah_rays && cfg.cluster_fallback > 0;
+  if (res.fallback_sah_rays) setup.fallback_area_weights = bvh::direction_area_weights(rays);
   res.fallback_area_weights = setup.fallback_area_weights;
 
   // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
@@ -372,7 +373,7 @@ std::string fallback_text(const PeerBenchResult& r) {
                                                               kept, r.fallback_refit)
                                                 : std::string("; its tree rebuilt on each");
   const auto& w = r.fallback_area_weights;
-  const std::string sah = w == std::array<float, 3>{1.0f, 1.0f, 1.0f}
+  const std::string sah = !r.fallback_sah_rays
                               ? std::string("; plain SAH")
                               : fmt::format("; SAH for the camera's rays (area weights {:.3g} {:.3g} {:.3g})", w[0], w[1], w[2]);
   std::string runs;

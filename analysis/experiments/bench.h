@@ -19,6 +19,7 @@
 // (builds and traces), Embree's device gets "threads=N"; set_affinity is never used.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -157,7 +158,9 @@ struct PeerBenchResult {
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
   double cluster_fallback = 0;         ///< the fallback's threshold (cfg.cluster_fallback; 0: off)
   double fallback_refit = 0;           ///< the fallback's refit limit (cfg.fallback_refit; 0: rebuilt every frame)
-  /// the fallback's area weights (cfg.fallback_sah_rays: the primary rays'; else 1, 1, 1)
+  /// the fallback built for the camera's rays (cfg.fallback_sah_rays with the fallback on), and
+  /// its area weights (the primary rays'; else 1, 1, 1)
+  bool fallback_sah_rays = false;
   std::array<float, 3> fallback_area_weights = {1.0f, 1.0f, 1.0f};
 };
 

@@ -14,6 +14,7 @@
 // comparisons count on both sides: positions in, traceable structure out).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>

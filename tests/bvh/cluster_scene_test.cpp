@@ -968,6 +968,15 @@ TEST(ClusterScene, TheFallbackIsBuiltWithItsAreaWeights) {
   ASSERT_EQ(made.size(), 2u);
   EXPECT_FALSE(made[0].wide.nodes.size() == made[1].wide.nodes.size() &&
                test::same_bytes(made[0].wide.nodes.data(), made[1].wide.nodes.data(), made[0].wide.nodes.size()));
+  // Bad weights are refused when the scene is made (not at its first fallback frame), and only
+  // with the fallback on.
+  for (const float bad : {0.0f, -2.0f, std::nanf(""), std::numeric_limits<float>::infinity()}) {
+    cfg.fallback_area_weights = {1.0f, bad, 1.0f};
+    EXPECT_THROW(ClusterScene(m, view_of(cl), cfg), std::invalid_argument) << bad;
+    SceneConfig no_fallback = cfg;
+    no_fallback.fallback_swelling = 0.0;
+    EXPECT_NO_THROW(ClusterScene(m, view_of(cl), no_fallback)) << bad;
+  }
 }
 
 // Hard cases of the swelling: the same mesh a thousand times smaller and a million units away

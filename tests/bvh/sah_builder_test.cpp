@@ -16,6 +16,7 @@
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
+#include "bvh/binning.h"
 #include "bvh/sah_cost.h"
 #include "bvh/validate.h"
 #include "test_util.h"
@@ -594,10 +595,12 @@ TEST(SahBuilder, NanBoxesAndCentroidsAreRefused) {
 TEST(SahBuilder, AreaWeightsChooseTheSplitsAndTheCostStaysPlain) {
   const std::vector<Box3f> boxes{{{0, 0, 0}, {1, 1, 1}}, {{0, 0, 5}, {1, 1, 6}}, {{3, 0, 0}, {4, 1, 1}}, {{3, 0, 5}, {4, 1, 6}}};
   const auto c = box_centers(boxes);
-  for (const Named& b : kBuilders) {
-    SCOPED_TRACE(b.name);
+  for (const Named& b : kBuilders)
+    for (const bool longest : {true, false}) {  // (binned: the small node swept along one axis, or all three)
+    SCOPED_TRACE(std::string(b.name) + (longest ? " longest axis" : " all axes"));
     BuildConfig cfg;
     cfg.max_leaf_size = 1;
+    cfg.small_nodes_longest_axis = longest;
     const Bvh plain = b.fn({boxes, c, {}}, cfg);
     cfg.area_weights = {0.01f, 0.01f, 1.0f};
     const Bvh along_z = b.fn({boxes, c, {}}, cfg);
@@ -616,6 +619,62 @@ TEST(SahBuilder, AreaWeightsChooseTheSplitsAndTheCostStaysPlain) {
     EXPECT_EQ(first_pair(along_z), std::make_pair(0u, 1u));
     EXPECT_EQ(plain.nodes[1].bounds, (Box3f{{0, 0, 0}, {4, 1, 1}}));
     EXPECT_EQ(along_z.nodes[1].bounds, (Box3f{{0, 0, 0}, {1, 1, 6}}));
+    }
+}
+
+// The same four corners, each a stack of five unit boxes along y (20 boxes: the binned builder
+// bins the root, on all three axes). Sums of child area times count: plain, across z 2 * 58 * 10
+// against across x 2 * 82 * 10 (and every cut across y dearer); with weights (0.01, 0.01, 1),
+// across x 2 * (2 * 5.36) * 10 against across z 2 * (2 * 20.09) * 10, a cut across y at k
+// boxes up at least 2 * 280.9 (k = 1). And the binned builder's float half areas with the
+// weights are Box3f::weighted_area's halves.
+TEST(SahBuilder, AreaWeightsChooseTheBinnedRootSplit) {
+  std::vector<Box3f> boxes;
+  for (const float x : {0.0f, 3.0f})
+    for (const float z : {0.0f, 5.0f})
+      for (int k = 0; k < 5; ++k) boxes.push_back({{x, float(k), z}, {x + 1, float(k + 1), z + 1}});
+  const auto c = box_centers(boxes);
+  for (const Named& b : kBuilders) {
+    SCOPED_TRACE(b.name);
+    BuildConfig cfg;
+    cfg.max_leaf_size = 1;
+    const Bvh plain = b.fn({boxes, c, {}}, cfg);
+    cfg.area_weights = {0.01f, 0.01f, 1.0f};
+    const Bvh along_z = b.fn({boxes, c, {}}, cfg);
+    for (const Bvh* t : {&plain, &along_z}) {
+      expect_valid(*t, boxes, cfg);
+      EXPECT_NEAR(sah_cost(*t, boxes, {}, cfg.cost), t->cost, 1e-12 * t->cost);
+    }
+    EXPECT_EQ(plain.nodes[1].bounds, (Box3f{{0, 0, 0}, {4, 5, 1}}));
+    EXPECT_EQ(along_z.nodes[1].bounds, (Box3f{{0, 0, 0}, {1, 5, 6}}));
+    EXPECT_LT(plain.cost, along_z.cost);  // (the plain SAH's own tree is the cheaper under it)
+  }
+  const Box3f box{{-1.5f, 0.25f, 2.0f}, {2.0f, 1.0f, 7.5f}};
+  for (const std::array<float, 3> w : {std::array<float, 3>{1, 1, 1}, std::array<float, 3>{0.05f, 0.7f, 1.9f}}) {
+    const __m128 lo = _mm_setr_ps(box.lo[0], box.lo[1], box.lo[2], 0), hi = _mm_setr_ps(box.hi[0], box.hi[1], box.hi[2], 0);
+    const double half = binned::half_area(lo, hi, binned::area_weights_of(w));
+    EXPECT_NEAR(2.0 * half, box.weighted_area(w), 1e-6 * box.weighted_area(w));
+  }
+  EXPECT_EQ(box.weighted_area({1, 1, 1}), box.surface_area());
+  EXPECT_DOUBLE_EQ(box.weighted_area({0.05f, 0.7f, 1.9f}), 2.0 * (double(1.9f) * 3.5 * 0.75 + double(0.05f) * 0.75 * 5.5 +
+                                                                   double(0.7f) * 5.5 * 3.5));
+}
+
+// Weights of any scale: only their ratios count (the builders divide by the largest), so
+// (s, s, 3s) builds the tree of (1, 1, 3) for s = 2^120 (whose products with areas and counts
+// would pass the float range) and 2^-120 (whose would fall into subnormals).
+TEST(SahBuilder, AreaWeightsOfAnyScale) {
+  const auto boxes = test::random_boxes(5000, 9);
+  const auto c = box_centers(boxes);
+  BuildConfig cfg;
+  cfg.area_weights = {1.0f, 1.0f, 3.0f};
+  const Bvh want = build_binned_sah({boxes, c, {}}, cfg);
+  for (const float s : {std::ldexp(1.0f, 120), std::ldexp(1.0f, -120)}) {
+    cfg.area_weights = {s, s, 3.0f * s};
+    const Bvh got = build_binned_sah({boxes, c, {}}, cfg);
+    EXPECT_EQ(got.prim_order, want.prim_order) << s;
+    EXPECT_EQ(got.nodes.size(), want.nodes.size()) << s;
+    EXPECT_EQ(got.cost, want.cost) << s;
   }
 }
 
