@@ -6,10 +6,11 @@
 //
 //   build/bin/peer_bench [MESH] [--levels 2] [--frames 8] [--size 1024] [--threads 1]
 //                        [--max-count 32] [--deform twist|bend|wave|rigid|explode] [--cluster-fallback auto|off|X]
-//                        [--fallback-refit auto|off|X] [--fallback-sah rays|plain] [--csv FILE]
+//                        [--fallback-refit auto|off|X] [--fallback-sah eye|directions|plain] [--csv FILE]
 // --cluster-fallback: ptc bench's (auto: 64, the default; off: the cluster BVH on every frame; X: the swelling threshold).
 // --fallback-refit: ptc bench's (auto: 0.2, the default; off: the fallback rebuilt every frame; X: the cost growth allowed).
-// --fallback-sah: ptc bench's (rays, the default: the fallback built for the camera's rays; plain: the plain SAH).
+// --fallback-sah: ptc bench's (eye, the default: the fallback built for rays from the camera's eye; directions: for
+// their mean directions; plain: the plain SAH).
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -57,9 +58,9 @@ int main(int argc, char** argv) {
         cfg.fallback_refit = *x;
         refit_given = true;
       } else if (a == "--fallback-sah") {
-        const std::optional<bool> x = parse_fallback_sah(value("--fallback-sah"));
-        if (!x) throw std::invalid_argument("--fallback-sah: rays or plain");
-        cfg.fallback_sah_rays = *x;
+        const std::optional<bvh::FallbackSah> x = bvh::parse_fallback_sah(value("--fallback-sah"));
+        if (!x) throw std::invalid_argument("--fallback-sah: eye, directions or plain");
+        cfg.fallback_sah = *x;
         sah_given = true;
       }
       else if (a == "--deform") {

@@ -232,7 +232,12 @@ class BinnedBuilder {
 
   BinnedBuilder(const BuildInput& in, const BuildConfig& cfg, Ref* refs, Ref* group_refs, Bins* bins)
       : in_(in), cfg_(cfg), refs_(refs), group_refs_(group_refs), bins_(bins), bin_range_(bin_range_for(cfg.allow_avx2)),
-        aw_(area_weights_of(split_area_weights(cfg))) {}
+        aw_(area_weights_of(split_area_weights(cfg))),
+        has_eye_(cfg.area_eye.has_value()),
+        eye_(cfg.area_eye ? _mm_setr_ps((*cfg.area_eye)[0], (*cfg.area_eye)[1], (*cfg.area_eye)[2], 0.0f) : _mm_setzero_ps()) {}
+
+  // Half a box's area as the splits are priced (BuildConfig::area_weights, or area_eye).
+  float split_area(__m128 lo, __m128 hi) const { return has_eye_ ? half_area_from(lo, hi, eye_) : half_area(lo, hi, aw_); }
 
   Box3f open(Task& t) const {
     if (t.extra.groups && t.size() == 1) {  // one group: continue with its primitives
@@ -259,7 +264,7 @@ class BinnedBuilder {
     double wt = 0.0, aw = 0.0;
     for (std::uint32_t i = 0; i < t.size(); ++i) {
       wt += r[i].weight;
-      aw += 2.0 * static_cast<double>(half_area(load_lo(r[i]), load_hi(r[i]), aw_)) * r[i].weight;
+      aw += 2.0 * static_cast<double>(split_area(load_lo(r[i]), load_hi(r[i]))) * r[i].weight;
     }
     const SahCostModel& m = cfg_.cost;
     return m.intersection * wt <= m.traversal + m.intersection * aw / area;
@@ -387,7 +392,7 @@ class BinnedBuilder {
         const std::uint32_t b = used[j];
         lo = _mm_min_ps(lo, b0.lo(a, b)), nhi = _mm_min_ps(nhi, b0.neg_hi(a, b));
         wr += b0.weight[a][b];
-        right_area[j] = half_area(lo, negate(nhi), aw_);
+        right_area[j] = split_area(lo, negate(nhi));
         right_weight[j] = static_cast<float>(wr);
       }
       lo = inf, nhi = inf;
@@ -396,7 +401,7 @@ class BinnedBuilder {
         const std::uint32_t b = used[j - 1];
         lo = _mm_min_ps(lo, b0.lo(a, b)), nhi = _mm_min_ps(nhi, b0.neg_hi(a, b));
         wl += b0.weight[a][b];
-        const float sum = half_area(lo, negate(nhi), aw_) * static_cast<float>(wl) + right_area[j] * right_weight[j];
+        const float sum = split_area(lo, negate(nhi)) * static_cast<float>(wl) + right_area[j] * right_weight[j];
         if (sum < best_sum) best_sum = sum, s.bin_axis = a, s.bin_split = used[j];
       }
     }
@@ -416,7 +421,15 @@ class BinnedBuilder {
     // The longest axis, each extent over its area weight: the axis whose faces' weighted area
     // w_a * (product of the other extents) is the least, so a cut across it shrinks the most of
     // the weighted area (with the plain weights simply the longest extent).
-    const std::array<float, 3> w = split_area_weights(cfg_);
+    std::array<float, 3> w = split_area_weights(cfg_);
+    if (cfg_.area_eye) {  // (the weights toward the point: |v_a| from it to the node's centre, floored as area_from's)
+      float len = 0.0f;
+      for (int a = 0; a < 3; ++a) {
+        w[a] = std::abs(0.5f * (t.extra.box.lo[a] + t.extra.box.hi[a]) - (*cfg_.area_eye)[a]);
+        len = std::max(len, w[a]);
+      }
+      for (float& x : w) x = std::max(x, len / 64.0f + std::numeric_limits<float>::min());
+    }
     auto reach = [&](int a) { return (t.extra.box.hi[a] - t.extra.box.lo[a]) / w[a]; };
     int longest = 0;
     for (int a = 1; a < 3; ++a)
@@ -437,7 +450,7 @@ class BinnedBuilder {
         lo = _mm_min_ps(lo, _mm_and_ps(x.a, mask3)), hi = _mm_max_ps(hi, _mm_and_ps(x.b, mask3));
         wr += r[o[j]].weight;
         suffix_lo[j] = lo, suffix_hi[j] = hi;
-        right_area[j] = half_area(lo, hi, aw_);
+        right_area[j] = split_area(lo, hi);
         right_weight[j] = static_cast<float>(wr);
       }
       s.weight = wr;
@@ -450,7 +463,7 @@ class BinnedBuilder {
           hi = _mm_max_ps(hi, _mm_and_ps(s.swept[a][i].b, mask3));
           wr += r[o[i]].weight;
         }
-        const float sum = half_area(lo, hi, aw_) * static_cast<float>(wr) + right_area[j] * right_weight[j];
+        const float sum = split_area(lo, hi) * static_cast<float>(wr) + right_area[j] * right_weight[j];
         if (sum < best_sum) {
           best_sum = sum, s.sweep_axis = a, s.sweep_k = j;
           s.sweep_left = {lo, hi}, s.sweep_right = {suffix_lo[j], suffix_hi[j]};
@@ -461,7 +474,7 @@ class BinnedBuilder {
         lo = _mm_min_ps(lo, _mm_and_ps(s.swept[a][j - 1].a, mask3));
         hi = _mm_max_ps(hi, _mm_and_ps(s.swept[a][j - 1].b, mask3));
         wr += r[o[j - 1]].weight;
-        const float sum = half_area(lo, hi, aw_) * static_cast<float>(wr) + right_area[j] * right_weight[j];
+        const float sum = split_area(lo, hi) * static_cast<float>(wr) + right_area[j] * right_weight[j];
         if (sum < best_sum) {
           best_sum = sum, s.sweep_axis = a, s.sweep_k = j;
           s.sweep_left = {lo, hi}, s.sweep_right = {suffix_lo[j], suffix_hi[j]};
@@ -518,6 +531,8 @@ class BinnedBuilder {
   Bins* const bins_;  // two bin sets
   const BinRangeFn bin_range_;
   const __m128 aw_;  // half_area's weights (BuildConfig::area_weights)
+  const bool has_eye_;  // BuildConfig::area_eye given: half_area_from(eye_) instead
+  const __m128 eye_;
 };
 
 }  // namespace
@@ -602,6 +617,7 @@ void build_parallel(const BuildInput& in, const BuildConfig& cfg, const BinnedTa
 void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, BuildWorkspace& ws) {
   check_input(in, cfg);
   check_area_weights(cfg);
+  check_area_eye(cfg);
   bvh.nodes.clear();
   bvh.prim_order.clear();
   bvh.cost = 0.0;

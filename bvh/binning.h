@@ -9,6 +9,7 @@
 
 #include <immintrin.h>  // SSE2 (the x86-64 baseline); AVX2 only in binning.cpp's bin_range_avx2
 
+#include <cmath>
 #include <cstdint>
 
 #include "bvh/box.h"
@@ -100,6 +101,28 @@ inline float half_area(__m128 lo, __m128 hi, __m128 w) {
   const __m128 p = _mm_mul_ps(_mm_mul_ps(e, r), w);                    // w_z xy, w_x yz, w_y zx, .
   const __m128 s = _mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 1)));
   return _mm_cvtss_f32(_mm_add_ss(s, _mm_movehl_ps(p, p)));
+}
+
+// Lanes 0 + 1 + 2 of x, in that order.
+inline float sum3(__m128 x) {
+  const __m128 s = _mm_add_ss(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(3, 3, 3, 1)));
+  return _mm_cvtss_f32(_mm_add_ss(s, _mm_movehl_ps(x, x)));
+}
+
+// Half of Box3f::area_from in float: the solid angle a non-empty box (lanes 0-2) shows the point
+// `eye` (lanes 0-2), roughly (BuildConfig::area_eye); only compared.
+inline float half_area_from(__m128 lo, __m128 hi, __m128 eye) {
+  const __m128 e = _mm_sub_ps(hi, lo);
+  const __m128 v = _mm_sub_ps(_mm_mul_ps(_mm_add_ps(lo, hi), _mm_set1_ps(0.5f)), eye);
+  const __m128 av = _mm_andnot_ps(_mm_set1_ps(-0.0f), v);
+  const __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1)));  // xy yz zx .
+  const __m128 w = _mm_shuffle_ps(av, av, _MM_SHUFFLE(3, 1, 0, 2));               // |v_z| |v_x| |v_y| .
+  const float seen = sum3(_mm_mul_ps(p, w)), all = sum3(p);
+  const float d2 = sum3(_mm_mul_ps(v, v)), r2 = 0.25f * sum3(_mm_mul_ps(e, e));
+  const float D2 = d2 > r2 ? d2 : r2;
+  if (!(D2 > 0.0f)) return 0.0f;
+  const float D = std::sqrt(D2);
+  return seen / (D2 * D) + static_cast<float>(kEyeAreaIsotropic) * all / D2;
 }
 
 // The weights of half_area's products xy, yz, zx (1, 1, 1: the plain half area, the same bits).

@@ -61,6 +61,11 @@ struct Box3f {
   /// The surface area with the faces across axis a weighted by w[a]: 2(w_z xy + w_x yz + w_y zx)
   /// (BuildConfig::area_weights; 0 for an empty box). With w = (1, 1, 1) the same bits as
   /// surface_area().
+  /// Twice the solid angle the box shows the point `eye` (BuildConfig::area_eye), roughly: with
+  /// v from eye to the centre and D = max(|v|, half the diagonal),
+  /// 2 ((|v_z| xy + |v_x| yz + |v_y| zx) / D^3 + kEyeAreaIsotropic (xy + yz + zx) / D^2);
+  /// 0 for an empty box or one of no extent at the point.
+  [[nodiscard]] double area_from(const Vec3f& eye) const;
   [[nodiscard]] double weighted_area(const std::array<float, 3>& w) const {
     if (empty()) return 0.0;
     const double x = double(hi[0]) - lo[0], y = double(hi[1]) - lo[1], z = double(hi[2]) - lo[2];
@@ -71,6 +76,22 @@ struct Box3f {
   }
   friend bool operator==(const Box3f&, const Box3f&) = default;
 };
+
+/// The share of a box's surface area (over D^2) added to its solid angle in Box3f::area_from, as
+/// the floor of direction_area_weights: 1/64.
+inline constexpr double kEyeAreaIsotropic = 1.0 / 64.0;
+
+inline double Box3f::area_from(const Vec3f& eye) const {
+  if (empty()) return 0.0;
+  const double x = double(hi[0]) - lo[0], y = double(hi[1]) - lo[1], z = double(hi[2]) - lo[2];
+  double v[3], d2 = 0.0;
+  for (int a = 0; a < 3; ++a) v[a] = 0.5 * (double(lo[a]) + hi[a]) - eye[a], d2 += v[a] * v[a];
+  const double r2 = 0.25 * (x * x + y * y + z * z), D2 = d2 > r2 ? d2 : r2;
+  if (!(D2 > 0.0)) return 0.0;
+  const double D = std::sqrt(D2);
+  return 2.0 * ((std::abs(v[2]) * (x * y) + std::abs(v[0]) * (y * z) + std::abs(v[1]) * (z * x)) / (D2 * D) +
+                kEyeAreaIsotropic * (x * y + y * z + z * x) / D2);
+}
 
 /// Largest float <= x (x finite or infinite). Branch-free (boxes are made per frame, and the
 /// rounding direction is a coin flip the branch predictor cannot learn): when the nearest float

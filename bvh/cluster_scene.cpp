@@ -299,6 +299,8 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
       BuildConfig fallback_build;
       fallback_build.area_weights = cfg_.fallback_area_weights;
       check_area_weights(fallback_build);
+      if (cfg_.fallback_area_eye && !cfg_.fallback_area_eye->allFinite())
+        throw std::invalid_argument("the triangle fallback's rays' point (fallback_area_eye) is not finite");
     }
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
@@ -848,6 +850,7 @@ void ClusterScene::update_fallback(std::span<const Vec3> positions) {
     tc.clock = cfg_.clock;
     tc.refit_growth = cfg_.refit_growth;
     tc.build.area_weights = cfg_.fallback_area_weights;
+    if (cfg_.fallback_area_eye) tc.build.area_eye = to_frame(*cfg_.fallback_area_eye, f_.data.frame());
     auto made = std::make_unique<TriangleScene>(Mesh::sharing(tris_, std::vector<Vec3>(positions.begin(), positions.end())), tc);
     fallback_ = std::move(made);
   } else {

@@ -21,6 +21,17 @@ std::optional<GroupTrees> parse_group_trees(std::string_view s) {
   return std::nullopt;
 }
 
+const char* to_string(FallbackSah s) {
+  return s == FallbackSah::Eye ? "eye" : s == FallbackSah::Directions ? "directions" : "plain";
+}
+
+std::optional<FallbackSah> parse_fallback_sah(std::string_view s) {
+  if (s == "eye") return FallbackSah::Eye;
+  if (s == "directions") return FallbackSah::Directions;
+  if (s == "plain") return FallbackSah::Plain;
+  return std::nullopt;
+}
+
 const char* to_string(LeafFormat f) { return f == LeafFormat::Blocks ? "blocks" : "tables"; }
 
 std::optional<LeafFormat> parse_leaf_format(std::string_view s) {

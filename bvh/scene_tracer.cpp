@@ -86,6 +86,7 @@ SceneConfig cluster_config(const SceneTracerConfig& cfg, const Vec3& origin) {
   c.fallback_swelling = cfg.cluster_fallback;
   c.refit_growth = cfg.fallback_refit;
   c.fallback_area_weights = cfg.fallback_area_weights;
+  c.fallback_area_eye = cfg.fallback_area_eye;
   return c;
 }
 

@@ -63,6 +63,8 @@ struct SceneTracerConfig {
   double fallback_refit = 0.0;
   /// The moving cluster BVH's SceneConfig::fallback_area_weights (the plain SAH by default).
   std::array<float, 3> fallback_area_weights = {1.0f, 1.0f, 1.0f};
+  /// The moving cluster BVH's SceneConfig::fallback_area_eye (none by default).
+  std::optional<Vec3> fallback_area_eye;
 };
 
 /// The configuration of the cluster BVH a SceneTracer with `cfg` builds, in the trace frame

@@ -34,6 +34,8 @@ class SweepBuilder {
     return box;
   }
   bool single_primitive(const Task& t) const { return t.size() == 1; }
+  // A box's area as the splits are priced (BuildConfig::area_weights, or area_eye).
+  double split_area(const Box3f& b) const { return cfg_.area_eye ? b.area_from(*cfg_.area_eye) : b.weighted_area(aw_); }
   bool must_split(const Task&) const { return false; }
   bool leaf_by_bound(const Task&, double) const { return false; }
   double leaf_weight(const Task& t) const {
@@ -59,7 +61,7 @@ class SweepBuilder {
       for (std::uint32_t i = count; i-- > 0;) {
         right.extend(in_.boxes[order_[i]]);
         wr += weight_of(in_, order_[i]);
-        suffix_area_[i] = right.weighted_area(aw_);
+        suffix_area_[i] = split_area(right);
         suffix_weight_[i] = wr;
       }
       Box3f left;
@@ -68,7 +70,7 @@ class SweepBuilder {
         left.extend(in_.boxes[order_[k - 1]]);
         wl += weight_of(in_, order_[k - 1]);
         const double c =
-            m.traversal + m.intersection * (left.weighted_area(aw_) * wl + suffix_area_[k] * suffix_weight_[k]) / area;
+            m.traversal + m.intersection * (split_area(left) * wl + suffix_area_[k] * suffix_weight_[k]) / area;
         if (c < s.cost) s.cost = c, s.axis = axis, s.k = k;
       }
     }
@@ -102,6 +104,7 @@ class SweepBuilder {
 Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg) {
   check_input(in, cfg);
   check_area_weights(cfg);
+  check_area_eye(cfg);
   check_no_nan(in);
   Bvh bvh;
   const auto n = static_cast<std::uint32_t>(in.boxes.size());

@@ -23,6 +23,13 @@ void check_area_weights(const BuildConfig& cfg) {
                                   std::to_string(cfg.area_weights[a]) + " (each must be finite and above 0)");
 }
 
+void check_area_eye(const BuildConfig& cfg) {
+  if (cfg.area_eye)
+    for (int a = 0; a < 3; ++a)
+      if (!std::isfinite((*cfg.area_eye)[a]))
+        throw std::invalid_argument("BVH build: the rays' point (area_eye) is not finite on axis " + std::string(1, "xyz"[a]));
+}
+
 void check_no_nan(const BuildInput& in) {
   for (std::size_t i = 0; i < in.boxes.size(); ++i)
     for (int a = 0; a < 3; ++a)

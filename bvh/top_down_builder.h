@@ -60,6 +60,9 @@ void check_input(const BuildInput& in, const BuildConfig& cfg);
 /// BuildConfig::area_weights not all finite and above 0: std::invalid_argument naming the axis.
 void check_area_weights(const BuildConfig& cfg);
 
+/// BuildConfig::area_eye not finite: std::invalid_argument naming the axis.
+void check_area_eye(const BuildConfig& cfg);
+
 /// The area weights the splits are priced with: BuildConfig::area_weights over the largest of
 /// them (only their ratios matter; so the float half areas stay in range whatever their scale).
 /// (1, 1, 1) stays (1, 1, 1), the same bits as the plain surface area.
@@ -174,7 +177,7 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
       make_leaf(idx, task, area, builder.leaf_weight(task));
       continue;
     }
-    const double chooser = plain ? area : box.weighted_area(aw);
+    const double chooser = cfg.area_eye ? box.area_from(*cfg.area_eye) : plain ? area : box.weighted_area(aw);
     const bool must_split = task.size() > cfg.max_leaf_size || builder.must_split(task);
     if (!must_split && builder.leaf_by_bound(task, chooser)) {
       make_leaf(idx, task, area, builder.leaf_weight(task));

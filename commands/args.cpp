@@ -140,10 +140,4 @@ std::optional<double> parse_fallback_refit(const std::string& s) {
   return parse_auto_off_or_above(s, bvh::kAutoFallbackRefitGrowth, 0.0);
 }
 
-std::optional<bool> parse_fallback_sah(const std::string& s) {
-  if (s == "rays") return true;
-  if (s == "plain") return false;
-  return std::nullopt;
-}
-
 }  // namespace ptc

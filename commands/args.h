@@ -44,9 +44,6 @@ void check_image_size(int width, int height);
 /// --fallback-refit of `ptc bench` and `ptc trace`: auto (bvh::kAutoFallbackRefitGrowth), off (0)
 /// or a finite growth above 0; nothing for anything else.
 [[nodiscard]] std::optional<double> parse_fallback_refit(const std::string& s);
-/// --fallback-sah of `ptc bench` and `ptc trace`: rays (true: the fallback built for the run's
-/// primary rays, bvh::direction_area_weights) or plain (false: the plain SAH); nothing else.
-[[nodiscard]] std::optional<bool> parse_fallback_sah(const std::string& s);
 
 /// Frames a command may use: those of the scene's listed range (Scene::frames(): a scene file's
 /// "frames", a built-in scene's range), or with `extend` (--extend-frames) any frame the sources

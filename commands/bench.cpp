@@ -111,8 +111,9 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     manifest.set_result("fallback_refit_frames", kept);
   }
   // The fallback's SAH: built for the camera's rays (their area weights) or plain (1, 1, 1).
-  manifest.set_parameter("fallback_sah", r.fallback_sah_rays ? "rays" : "plain");
+  manifest.set_parameter("fallback_sah", bvh::to_string(r.fallback_sah));
   manifest.set_parameter("fallback_area_weights", std::vector<double>(r.fallback_area_weights.begin(), r.fallback_area_weights.end()));
+  manifest.set_parameter("fallback_area_eye", r.fallback_area_eye ? vec_json(*r.fallback_area_eye) : nlohmann::json(nullptr));
   manifest.set_parameter("tie_rel", c.tie.rel_t);
   manifest.set_parameter("embree_set_affinity", false);
   manifest.set_parameter("shadows", opt.shadows);

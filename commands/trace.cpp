@@ -114,7 +114,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     throw UsageError("--cluster-fallback", "a still scene is built once and never updated: nothing falls back");
   if (still && !opt.clusters.empty() && opt.fallback_refit)
     throw UsageError("--fallback-refit", "a still scene is built once and never updated: nothing falls back");
-  if (still && !opt.clusters.empty() && opt.fallback_sah_rays)
+  if (still && !opt.clusters.empty() && opt.fallback_sah)
     throw UsageError("--fallback-sah", "a still scene is built once and never updated: nothing falls back");
   if (still && !opt.clusters.empty() && opt.group_trees && !opt.cluster_group_size)
     throw UsageError("--group-trees", "a still scene is built once with the plain build: give --cluster-groups N > 1 too");
@@ -150,10 +150,14 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   tcfg.group_trees = opt.group_trees.value_or(bvh::cluster_scene_defaults().group_trees);
   tcfg.cluster_fallback = opt.cluster_fallback.value_or(bvh::kAutoFallbackSwelling);
   tcfg.fallback_refit = opt.fallback_refit.value_or(bvh::kAutoFallbackRefitGrowth);
-  // The fallback built for the camera's rays (their mean |direction|; docs/tracing.md, "The
-  // fallback built for the camera's rays"), unless --fallback-sah plain.
-  const bool fallback_for_rays = use_clusters && !still && tcfg.cluster_fallback > 0 && opt.fallback_sah_rays.value_or(true);
-  if (fallback_for_rays) tcfg.fallback_area_weights = bvh::direction_area_weights(camera_rays(cam, rc.width, rc.height));
+  // The fallback built for rays from the camera's eye, or for their mean directions, or plain
+  // (--fallback-sah; docs/tracing.md, "The fallback built for the camera's eye").
+  const bvh::FallbackSah fallback_sah = use_clusters && !still && tcfg.cluster_fallback > 0
+                                            ? opt.fallback_sah.value_or(bvh::FallbackSah::Eye)
+                                            : bvh::FallbackSah::Plain;
+  if (fallback_sah == bvh::FallbackSah::Directions)
+    tcfg.fallback_area_weights = bvh::direction_area_weights(camera_rays(cam, rc.width, rc.height));
+  if (fallback_sah == bvh::FallbackSah::Eye) tcfg.fallback_area_eye = cam.eye;
   // Set up at the rest pose, as ptc bench and the experiments do, and updated to every frame in
   // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend
   // on which frame the run starts at, so a frame traces the same in any range (the camera frames
@@ -319,9 +323,11 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
     manifest.set_result("cluster_fallback_frames", fallback_frames);
     manifest.set_parameter("fallback_refit", tcfg.cluster_fallback > 0 ? tcfg.fallback_refit : 0.0);
     manifest.set_result("fallback_refit_frames", refit_frames);
-    manifest.set_parameter("fallback_sah", fallback_for_rays ? "rays" : "plain");
+    manifest.set_parameter("fallback_sah", bvh::to_string(fallback_sah));
     const auto& w = tcfg.fallback_area_weights;
     manifest.set_parameter("fallback_area_weights", std::vector<double>(w.begin(), w.end()));
+    manifest.set_parameter("fallback_area_eye",
+                           tcfg.fallback_area_eye ? vec_json(*tcfg.fallback_area_eye) : nlohmann::json(nullptr));
   }
   manifest.set_parameter("width", rc.width);
   manifest.set_parameter("height", rc.height);
@@ -363,7 +369,9 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
                        tcfg.fallback_refit > 0 ? fmt::format("; its tree refitted on {} of them (cost growth at most {:g})",
                                                              refit_frames, tcfg.fallback_refit)
                                                : std::string("; its tree rebuilt on each"),
-                       fallback_for_rays ? "; SAH for the camera's rays" : "; plain SAH");
+                       fallback_sah == bvh::FallbackSah::Eye          ? "; SAH for rays from the camera's eye"
+                       : fallback_sah == bvh::FallbackSah::Directions ? "; SAH for the camera's ray directions"
+                                                                      : "; plain SAH");
   const std::string names = "{shaded,depth,normal,cost_nodes,cost_triangles" + std::string(rc.ao_samples > 0 ? ",ao" : "") + "}";
   out << "wrote " << opt.out_dir.string() << "/"
       << (sequence ? fmt::format("{}_{:04d}..{:04d}.png", names, range.first, range.last) : names + ".png")

@@ -38,9 +38,9 @@ struct TraceCommandOptions {
   /// --fallback-refit: the triangle fallback's bvh::SceneConfig::refit_growth (0: rebuilt every
   /// frame). Unset: bvh::kAutoFallbackRefitGrowth.
   std::optional<double> fallback_refit;
-  /// --fallback-sah: the triangle fallback built for the camera's primary rays (true, the
-  /// default when unset: their bvh::direction_area_weights) or with the plain SAH (false).
-  std::optional<bool> fallback_sah_rays;
+  /// --fallback-sah: how the triangle fallback is built (bvh::FallbackSah; unset: Eye, for rays
+  /// from the camera's eye).
+  std::optional<bvh::FallbackSah> fallback_sah;
   /// --group-trees: what the two-level build does inside a group (unset: the default, refit).
   /// Given for a still scene without --cluster-groups, it is a usage error (nothing to do).
   std::optional<bvh::GroupTrees> group_trees;

@@ -121,9 +121,11 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
       cfg.made_camera ? *cfg.made_camera : make_camera(cfg.camera, scene.rest().referenced_bounds(), cfg.width, cfg.height);
   const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
   res.rays = rays.size();
-  res.fallback_sah_rays = cfg.fallback_sah_rays && cfg.cluster_fallback > 0;
-  if (res.fallback_sah_rays) setup.fallback_area_weights = bvh::direction_area_weights(rays);
+  res.fallback_sah = cfg.cluster_fallback > 0 ? cfg.fallback_sah : bvh::FallbackSah::Plain;
+  if (res.fallback_sah == bvh::FallbackSah::Directions) setup.fallback_area_weights = bvh::direction_area_weights(rays);
+  if (res.fallback_sah == bvh::FallbackSah::Eye) setup.fallback_area_eye = cam.eye;
   res.fallback_area_weights = setup.fallback_area_weights;
+  res.fallback_area_eye = setup.fallback_area_eye;
 
   // The method's precomputation, once: vertices renumbered so that each cluster's own vertices
   // are consecutive; the scene renumbers its sources (or gathers, which it then says).
@@ -373,9 +375,11 @@ std::string fallback_text(const PeerBenchResult& r) {
                                                               kept, r.fallback_refit)
                                                 : std::string("; its tree rebuilt on each");
   const auto& w = r.fallback_area_weights;
-  const std::string sah = !r.fallback_sah_rays
-                              ? std::string("; plain SAH")
-                              : fmt::format("; SAH for the camera's rays (area weights {:.3g} {:.3g} {:.3g})", w[0], w[1], w[2]);
+  const std::string sah =
+      r.fallback_sah == bvh::FallbackSah::Plain ? std::string("; plain SAH")
+      : r.fallback_sah == bvh::FallbackSah::Eye
+          ? std::string("; SAH for rays from the camera's eye")
+          : fmt::format("; SAH for the camera's ray directions (area weights {:.3g} {:.3g} {:.3g})", w[0], w[1], w[2]);
   std::string runs;
   for (std::size_t i = 0; i < fell.size();) {
     std::size_t j = i;

@@ -93,10 +93,10 @@ struct PeerBenchConfig {
   /// ours_clusters: the triangle fallback's refit limit (bvh::SceneConfig::refit_growth; `ptc
   /// bench --fallback-refit`); 0: rebuilt every frame.
   double fallback_refit = bvh::kAutoFallbackRefitGrowth;
-  /// ours_clusters: the triangle fallback built for the bench's primary rays (their
-  /// bvh::direction_area_weights as bvh::SceneConfig::fallback_area_weights; `ptc bench
-  /// --fallback-sah rays`), or with the plain SAH (false; `plain`).
-  bool fallback_sah_rays = true;
+  /// ours_clusters: the triangle fallback built for rays from the camera's eye (Eye, `ptc bench
+  /// --fallback-sah eye`: bvh::SceneConfig::fallback_area_eye), for the primary rays' mean
+  /// directions (Directions: their bvh::direction_area_weights), or with the plain SAH.
+  bvh::FallbackSah fallback_sah = bvh::FallbackSah::Eye;
 };
 
 struct BenchRow {
@@ -158,10 +158,12 @@ struct PeerBenchResult {
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
   double cluster_fallback = 0;         ///< the fallback's threshold (cfg.cluster_fallback; 0: off)
   double fallback_refit = 0;           ///< the fallback's refit limit (cfg.fallback_refit; 0: rebuilt every frame)
-  /// the fallback built for the camera's rays (cfg.fallback_sah_rays with the fallback on), and
-  /// its area weights (the primary rays'; else 1, 1, 1)
-  bool fallback_sah_rays = false;
+  /// how the fallback was built (cfg.fallback_sah with the fallback on, else Plain), and with
+  /// what: its area weights (the primary rays' with Directions; else 1, 1, 1) and its rays'
+  /// point (the camera's eye with Eye; else none)
+  bvh::FallbackSah fallback_sah = bvh::FallbackSah::Plain;
   std::array<float, 3> fallback_area_weights = {1.0f, 1.0f, 1.0f};
+  std::optional<Vec3> fallback_area_eye;
 };
 
 /// The per-frame ratio of a peer's whole frame to a configuration's (> 1: the configuration is

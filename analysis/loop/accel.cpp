@@ -110,6 +110,7 @@ bvh::SceneConfig cluster_scene_config(const AccelSetup& s) {
   cfg.fallback_swelling = s.cluster_fallback;
   cfg.refit_growth = s.fallback_refit;
   cfg.fallback_area_weights = s.fallback_area_weights;
+  cfg.fallback_area_eye = s.fallback_area_eye;
   if (s.cluster_build) cfg.build = *s.cluster_build;
   return cfg;
 }

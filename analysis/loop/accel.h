@@ -92,6 +92,8 @@ struct AccelSetup {
   double fallback_refit = 0.0;
   /// ours_clusters: bvh::SceneConfig::fallback_area_weights (the plain SAH by default).
   std::array<float, 3> fallback_area_weights = {1.0f, 1.0f, 1.0f};
+  /// ours_clusters: bvh::SceneConfig::fallback_area_eye (none by default).
+  std::optional<Vec3> fallback_area_eye;
 };
 
 /// The cluster scene settings of ours_clusters under `setup` (the method's precomputation, such

@@ -17,7 +17,7 @@ struct BenchArgs {
   CameraArgs camera;
   GroupTreesArg group_trees;
   std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
-  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "rays";
+  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "eye";
   std::uint32_t max_count = kBenchDefaultMaxCount;
   CLI::App* app = nullptr;
 };
@@ -49,7 +49,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.fallback_refit = *parse_fallback_refit(a->fallback_refit);
                       if (a->app->count("--fallback-refit") && !(o.config.cluster_fallback > 0))
                         throw UsageError("--fallback-refit", "needs the triangle fallback (--cluster-fallback auto or X)");
-                      o.config.fallback_sah_rays = *parse_fallback_sah(a->fallback_sah);
+                      o.config.fallback_sah = *bvh::parse_fallback_sah(a->fallback_sah);
                       if (a->app->count("--fallback-sah") && !(o.config.cluster_fallback > 0))
                         throw UsageError("--fallback-sah", "needs the triangle fallback (--cluster-fallback auto or X)");
                       if (o.config.isa != bvh::TraceIsa::Auto && bvh::resolve(o.config.isa) != o.config.isa)
@@ -148,7 +148,7 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->check(fallback_refit_validator())
       ->capture_default_str();
   c->add_option("--fallback-sah", a->fallback_sah, kFallbackSahHelp)
-      ->check(enum_validator("fallback SAH (rays or plain)", parse_fallback_sah))
+      ->check(enum_validator("fallback SAH (eye, directions or plain)", bvh::parse_fallback_sah))
       ->capture_default_str();
   c->add_option("--vertex-order", a->vertex_order,
                 "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "

@@ -15,7 +15,7 @@ struct TraceArgs {
   std::string frame, frames, cost_range, deform, vertex_order = "input";
   GroupTreesArg group_trees;
   std::uint32_t cluster_groups = bvh::cluster_scene_defaults().cluster_group_size;  // (given: opt.cluster_group_size)
-  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "rays";
+  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "eye";
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -47,7 +47,7 @@ void register_trace(CLI::App& app, Context& ctx) {
         throw UsageError("--fallback-refit", "needs the triangle fallback (--cluster-fallback auto or X)");
     }
     if (a->app->count("--fallback-sah")) {
-      o.fallback_sah_rays = *parse_fallback_sah(a->fallback_sah);
+      o.fallback_sah = *bvh::parse_fallback_sah(a->fallback_sah);
       if (o.cluster_fallback && !(*o.cluster_fallback > 0))
         throw UsageError("--fallback-sah", "needs the triangle fallback (--cluster-fallback auto or X)");
     }
@@ -83,7 +83,7 @@ void register_trace(CLI::App& app, Context& ctx) {
       ->check(fallback_refit_validator())
       ->capture_default_str();
   c->add_option("--fallback-sah", a->fallback_sah, kFallbackSahHelp)
-      ->check(enum_validator("fallback SAH (rays or plain)", parse_fallback_sah))
+      ->check(enum_validator("fallback SAH (eye, directions or plain)", bvh::parse_fallback_sah))
       ->capture_default_str();
   c->add_option("--vertex-order", a->vertex_order,
                 "with --clusters: clusters renumbers the vertices once so each cluster's are consecutive (the "

@@ -196,7 +196,7 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
     expect_error({"bench", mesh, "--fallback-refit", bad, "--out", out}, 2, "--fallback-refit");
   expect_error({"bench", mesh, "--cluster-fallback", "off", "--fallback-refit", "0.3", "--out", out}, 2,
                "--fallback-refit: needs the triangle fallback");
-  for (const char* bad : {"", "camera", "RAYS", "uniform"})
+  for (const char* bad : {"", "camera", "EYE", "rays", "uniform"})
     expect_error({"bench", mesh, "--fallback-sah", bad, "--out", out}, 2, "--fallback-sah");
   expect_error({"bench", mesh, "--cluster-fallback", "off", "--fallback-sah", "plain", "--out", out}, 2,
                "--fallback-sah: needs the triangle fallback");
@@ -235,29 +235,36 @@ TEST_F(TraceCli, BenchClusterFallbackIsRecorded) {
               std::string::npos)
         << r.out;
     EXPECT_EQ(j["parameters"]["fallback_refit"].get<double>(), want > 0 ? 0.2 : 0.0) << arg;  // (auto; none without a fallback)
-    // (the fallback built for the camera's rays by default: their weights, none plain without one)
-    EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), want > 0 ? "rays" : "plain") << arg;
-    const auto w = j["parameters"]["fallback_area_weights"].get<std::vector<double>>();
-    ASSERT_EQ(w.size(), 3u);
+    // (the fallback built for rays from the camera's eye by default; plain without one)
+    EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), want > 0 ? "eye" : "plain") << arg;
+    EXPECT_EQ(j["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
+    EXPECT_EQ(j["parameters"]["fallback_area_eye"].is_null(), !(want > 0)) << arg;
     if (want > 0) {
-      EXPECT_NE(w, std::vector<double>({1.0, 1.0, 1.0})) << arg;
-      for (const double x : w) EXPECT_TRUE(x > 0.0 && x <= 2.0) << x;
-      if (fell > 0) EXPECT_NE(r.out.find("SAH for the camera's rays (area weights"), std::string::npos) << r.out;
-    } else {
-      EXPECT_EQ(w, std::vector<double>({1.0, 1.0, 1.0})) << arg;
+      EXPECT_EQ(j["parameters"]["fallback_area_eye"].size(), 3u) << arg;
+      if (fell > 0) EXPECT_NE(r.out.find("; SAH for rays from the camera's eye"), std::string::npos) << r.out;
     }
   }
-  {  // --fallback-sah plain: the plain SAH's weights, the same hits
-    const fs::path out = dir_ / "fb_plain";
+  // --fallback-sah directions: the primary rays' weights, no point; plain: neither; the same hits.
+  for (const char* sah : {"directions", "plain"}) {
+    const fs::path out = dir_ / (std::string("fb_sah_") + sah);
     const CmdResult r = ptc({"bench", mesh, "--frames", "0:2", "--width", "24", "--height", "24", "--max-count", "40",
-                             "--threads", "1", "--cluster-fallback", "1.0001", "--fallback-sah", "plain", "--out",
+                             "--threads", "1", "--cluster-fallback", "1.0001", "--fallback-sah", sah, "--out",
                              out.string()});
     ASSERT_EQ(r.code, 0) << r.err;
     const auto j = nlohmann::json::parse(slurp(out / "manifest.json"));
-    EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), "plain");
-    EXPECT_EQ(j["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
-    EXPECT_NE(r.out.find("; plain SAH"), std::string::npos) << r.out;
-    for (const auto& row : csv_rows(slurp(out / "bench.csv"))) EXPECT_EQ(row.at("mismatches"), "0");
+    EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), sah);
+    EXPECT_TRUE(j["parameters"]["fallback_area_eye"].is_null()) << sah;
+    const auto w = j["parameters"]["fallback_area_weights"].get<std::vector<double>>();
+    ASSERT_EQ(w.size(), 3u);
+    if (std::string(sah) == "plain") {
+      EXPECT_EQ(w, std::vector<double>({1.0, 1.0, 1.0}));
+      EXPECT_NE(r.out.find("; plain SAH"), std::string::npos) << r.out;
+    } else {
+      EXPECT_NE(w, std::vector<double>({1.0, 1.0, 1.0}));
+      for (const double x : w) EXPECT_TRUE(x > 0.0 && x <= 2.0) << x;
+      EXPECT_NE(r.out.find("; SAH for the camera's ray directions (area weights"), std::string::npos) << r.out;
+    }
+    for (const auto& row : csv_rows(slurp(out / "bench.csv"))) EXPECT_EQ(row.at("mismatches"), "0") << sah;
   }
   // --fallback-refit: a limit no growth reaches keeps the fallback's tree on every frame (it is made
   // with the scene, at the rest pose, whose swelling is above 1.0001: frame 0 refits it too;
@@ -435,24 +442,33 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
   const auto [off, off_text] = run("off");
   const auto [kept, kept_text] = run("1.0001", "1e9");  // (the fallback, made at the rest pose, refitted on every frame)
   const auto [plain, plain_text] = run("1.0001", nullptr, "plain");
+  const auto [dirs, dirs_text] = run("1.0001", nullptr, "directions");
   for (int f = 0; f <= 3; ++f)
     for (const char* img : {"shaded", "depth", "normal"}) {
       const std::string name = fmt::format("{}_{:04d}.png", img, f);
       EXPECT_EQ(slurp(on / name), slurp(off / name)) << name;
       EXPECT_EQ(slurp(kept / name), slurp(off / name)) << name;
       EXPECT_EQ(slurp(plain / name), slurp(off / name)) << name;
+      EXPECT_EQ(slurp(dirs / name), slurp(off / name)) << name;
     }
-  // The fallback built for the camera's rays by default (their weights), plain on request; the
-  // summary says which.
+  // The fallback built for rays from the camera's eye by default (the manifest's camera eye),
+  // for their directions or plain on request; the summary says which.
   const auto jp = nlohmann::json::parse(slurp(plain / "manifest.json"));
   EXPECT_EQ(jp["parameters"]["fallback_sah"].get<std::string>(), "plain");
   EXPECT_EQ(jp["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
+  EXPECT_TRUE(jp["parameters"]["fallback_area_eye"].is_null());
   EXPECT_NE(plain_text.find("; plain SAH"), std::string::npos) << plain_text;
   {
     const auto jr = nlohmann::json::parse(slurp(on / "manifest.json"));
-    EXPECT_EQ(jr["parameters"]["fallback_sah"].get<std::string>(), "rays");
-    EXPECT_NE(jr["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
-    EXPECT_NE(on_text.find("; SAH for the camera's rays"), std::string::npos) << on_text;
+    EXPECT_EQ(jr["parameters"]["fallback_sah"].get<std::string>(), "eye");
+    EXPECT_EQ(jr["parameters"]["fallback_area_eye"], jr["parameters"]["camera"]["eye"]);
+    EXPECT_EQ(jr["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
+    EXPECT_NE(on_text.find("; SAH for rays from the camera's eye"), std::string::npos) << on_text;
+    const auto jd = nlohmann::json::parse(slurp(dirs / "manifest.json"));
+    EXPECT_EQ(jd["parameters"]["fallback_sah"].get<std::string>(), "directions");
+    EXPECT_NE(jd["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
+    EXPECT_TRUE(jd["parameters"]["fallback_area_eye"].is_null());
+    EXPECT_NE(dirs_text.find("; SAH for the camera's ray directions"), std::string::npos) << dirs_text;
   }
   const auto jk = nlohmann::json::parse(slurp(kept / "manifest.json"));
   EXPECT_EQ(jk["parameters"]["fallback_refit"].get<double>(), 1e9);
@@ -491,12 +507,12 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
   expect_error({"trace", mesh, "--fallback-sah", "plain", "--out", (dir_ / "fb_bad").string()}, 2,
                "--fallback-sah: needs a cluster BVH");
   expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--cluster-fallback", "off", "--fallback-sah",
-                "rays", "--out", (dir_ / "fb_bad").string()},
+                "eye", "--out", (dir_ / "fb_bad").string()},
                2, "--fallback-sah: needs the triangle fallback");
   expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--fallback-sah", "camera", "--out",
                 (dir_ / "fb_bad").string()},
                2, "--fallback-sah");
-  expect_error({"trace", mesh, "--clusters", cl, "--fallback-sah", "rays", "--out", (dir_ / "fb_bad").string()}, 2,
+  expect_error({"trace", mesh, "--clusters", cl, "--fallback-sah", "directions", "--out", (dir_ / "fb_bad").string()}, 2,
                "--fallback-sah: a still scene is built once");
   expect_error({"trace", mesh, "--clusters", cl, "--deform", "twist", "--cluster-fallback", "0.9", "--out",
                 (dir_ / "fb_bad").string()},

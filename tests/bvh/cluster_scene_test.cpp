@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <random>
 #include <string>
 #include <stdexcept>
@@ -950,9 +951,13 @@ TEST(ClusterScene, TheFallbackIsBuiltWithItsAreaWeights) {
     cfg.fallback_swelling = 2.0 * rest;
   }
   std::vector<TraceData> made;
-  for (const std::array<float, 3> w : {std::array<float, 3>{1, 1, 1}, std::array<float, 3>{0.05f, 0.2f, 1.9f}}) {
-    const std::string what = "weights " + std::to_string(w[0]) + " " + std::to_string(w[1]) + " " + std::to_string(w[2]);
+  const Vec3 eye = m.bounds().center() + Vec3(0.3, 0.2, 1.5) * m.bounds().extent().norm();  // (a camera's, in the world)
+  for (int k = 0; k < 3; ++k) {
+    const std::array<float, 3> w = k == 1 ? std::array<float, 3>{0.05f, 0.2f, 1.9f} : std::array<float, 3>{1, 1, 1};
+    const std::string what = "weights " + std::to_string(w[0]) + " " + std::to_string(w[1]) + " " + std::to_string(w[2]) +
+                             (k == 2 ? " and an eye" : "");
     cfg.fallback_area_weights = w;
+    cfg.fallback_area_eye = k == 2 ? std::optional<Vec3>(eye) : std::nullopt;
     ClusterScene s(m, view_of(cl), cfg);
     s.update(far.positions());
     ASSERT_TRUE(s.fallback_active()) << what;
@@ -960,14 +965,17 @@ TEST(ClusterScene, TheFallbackIsBuiltWithItsAreaWeights) {
     tc.origin = s.cluster_data().origin;
     tc.scale = s.cluster_data().scale;
     tc.build.area_weights = w;
+    if (k == 2) tc.build.area_eye = to_frame(eye, s.cluster_data().frame());  // (in the trace frame)
     const TriangleScene direct(far, tc);
     expect_same_data(s.data(), direct.data(), what);
     ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(s.data(), far, 41u, 300, what));
     made.push_back(s.data());
   }
-  ASSERT_EQ(made.size(), 2u);
-  EXPECT_FALSE(made[0].wide.nodes.size() == made[1].wide.nodes.size() &&
-               test::same_bytes(made[0].wide.nodes.data(), made[1].wide.nodes.data(), made[0].wide.nodes.size()));
+  ASSERT_EQ(made.size(), 3u);
+  for (const int k : {1, 2})
+    EXPECT_FALSE(made[0].wide.nodes.size() == made[k].wide.nodes.size() &&
+                 test::same_bytes(made[0].wide.nodes.data(), made[k].wide.nodes.data(), made[0].wide.nodes.size()))
+        << k;
   // Bad weights are refused when the scene is made (not at its first fallback frame), and only
   // with the fallback on.
   for (const float bad : {0.0f, -2.0f, std::nanf(""), std::numeric_limits<float>::infinity()}) {
@@ -977,6 +985,9 @@ TEST(ClusterScene, TheFallbackIsBuiltWithItsAreaWeights) {
     no_fallback.fallback_swelling = 0.0;
     EXPECT_NO_THROW(ClusterScene(m, view_of(cl), no_fallback)) << bad;
   }
+  cfg.fallback_area_weights = {1.0f, 1.0f, 1.0f};
+  cfg.fallback_area_eye = Vec3(0.0, std::numeric_limits<double>::infinity(), 0.0);
+  EXPECT_THROW(ClusterScene(m, view_of(cl), cfg), std::invalid_argument);
 }
 
 // Hard cases of the swelling: the same mesh a thousand times smaller and a million units away

@@ -604,7 +604,14 @@ TEST(SahBuilder, AreaWeightsChooseTheSplitsAndTheCostStaysPlain) {
     const Bvh plain = b.fn({boxes, c, {}}, cfg);
     cfg.area_weights = {0.01f, 0.01f, 1.0f};
     const Bvh along_z = b.fn({boxes, c, {}}, cfg);
-    for (const Bvh* t : {&plain, &along_z}) {
+    // (rays from a point far along z see the same: BuildConfig::area_eye, which replaces the weights)
+    BuildConfig eye_cfg = cfg;
+    eye_cfg.area_weights = {1.0f, 1.0f, 1.0f};
+    eye_cfg.area_eye = Vec3f{2.0f, 0.5f, 1e4f};
+    const Bvh from_far = b.fn({boxes, c, {}}, eye_cfg);
+    EXPECT_EQ(from_far.prim_order, along_z.prim_order);
+    EXPECT_EQ(from_far.cost, along_z.cost);
+    for (const Bvh* t : {&plain, &along_z, &from_far}) {
       expect_valid(*t, boxes, cfg);
       ASSERT_EQ(t->nodes.size(), 7u);
       EXPECT_DOUBLE_EQ(sah_cost(*t, boxes, {}, cfg.cost), t->cost);
@@ -658,6 +665,55 @@ TEST(SahBuilder, AreaWeightsChooseTheBinnedRootSplit) {
   EXPECT_EQ(box.weighted_area({1, 1, 1}), box.surface_area());
   EXPECT_DOUBLE_EQ(box.weighted_area({0.05f, 0.7f, 1.9f}), 2.0 * (double(1.9f) * 3.5 * 0.75 + double(0.05f) * 0.75 * 5.5 +
                                                                    double(0.7f) * 5.5 * 3.5));
+}
+
+// Box3f::area_from is about twice the solid angle the box shows the point (plus kEyeAreaIsotropic
+// of its area over D^2): counted by brute force, the share of 8 million directions spread evenly
+// from the point (Fibonacci) that meet the box's slabs, times 4 pi. The binned builder's float
+// half_area_from is half of it. A box around the point, or a point box at it, stays finite.
+TEST(SahBuilder, AreaFromAPointIsItsSolidAngle) {
+  const Vec3f eye{0.5f, -1.0f, 2.0f};
+  const Box3f boxes[] = {{{10.0f, 3.0f, -1.0f}, {11.5f, 4.0f, 1.0f}}, {{-2.0f, -16.0f, 1.0f}, {0.0f, -14.5f, 4.0f}}};
+  const int n = 8000000;
+  for (const Box3f& box : boxes) {
+    std::size_t hits = 0;
+    for (int i = 0; i < n; ++i) {
+      const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * M_PI * (3.0 - std::sqrt(5.0));
+      const double d[3] = {r * std::cos(phi), r * std::sin(phi), z};
+      double t0 = 0.0, t1 = 1e300;
+      for (int a = 0; a < 3; ++a) {
+        const double ta = (box.lo[a] - eye[a]) / d[a], tb = (box.hi[a] - eye[a]) / d[a];
+        t0 = std::max(t0, std::min(ta, tb)), t1 = std::min(t1, std::max(ta, tb));
+      }
+      hits += t0 <= t1 ? 1 : 0;
+    }
+    const double omega = 4.0 * M_PI * static_cast<double>(hits) / n;
+    // (the isotropic share: the faces' areas sum over D^2, v to the centre, D = |v| here)
+    double x = double(box.hi[0]) - box.lo[0], y = double(box.hi[1]) - box.lo[1], zz = double(box.hi[2]) - box.lo[2], d2 = 0.0;
+    for (int a = 0; a < 3; ++a) d2 += std::pow(0.5 * (double(box.lo[a]) + box.hi[a]) - eye[a], 2.0);
+    const double iso = kEyeAreaIsotropic * (x * y + y * zz + zz * x) / d2;
+    EXPECT_NEAR(box.area_from(eye) / 2.0 - iso, omega, 0.04 * omega);
+    const __m128 lo = _mm_setr_ps(box.lo[0], box.lo[1], box.lo[2], 0), hi = _mm_setr_ps(box.hi[0], box.hi[1], box.hi[2], 0);
+    EXPECT_NEAR(binned::half_area_from(lo, hi, _mm_setr_ps(eye[0], eye[1], eye[2], 0)), box.area_from(eye) / 2.0,
+                1e-5 * box.area_from(eye));
+  }
+  const Box3f around{{0.0f, -2.0f, 1.0f}, {1.0f, 0.0f, 3.0f}};
+  EXPECT_TRUE(std::isfinite(around.area_from(eye)) && around.area_from(eye) > 0.0);
+  EXPECT_EQ((Box3f{eye, eye}.area_from(eye)), 0.0);
+  EXPECT_EQ(Box3f{}.area_from(eye), 0.0);
+  // A point that is not finite is refused by both builders, naming the axis.
+  const auto rb = test::random_boxes(30, 4);
+  const auto rc = box_centers(rb);
+  for (const Named& b : kBuilders) {
+    BuildConfig cfg;
+    cfg.area_eye = Vec3f{0.0f, std::nanf(""), 0.0f};
+    try {
+      (void)b.fn({rb, rc, {}}, cfg);
+      ADD_FAILURE() << b.name << " took a NaN point";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("axis y"), std::string::npos) << e.what();
+    }
+  }
 }
 
 // Weights of any scale: only their ratios count (the builders divide by the largest), so
