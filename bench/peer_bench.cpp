@@ -9,8 +9,8 @@
 //                        [--fallback-refit auto|off|X] [--fallback-sah eye|directions|plain] [--csv FILE]
 // --cluster-fallback: ptc bench's (auto: 64, the default; off: the cluster BVH on every frame; X: the swelling threshold).
 // --fallback-refit: ptc bench's (auto: 0.2, the default; off: the fallback rebuilt every frame; X: the cost growth allowed).
-// --fallback-sah: ptc bench's (eye, the default: the fallback built for rays from the camera's eye; directions: for
-// their mean directions; plain: the plain SAH).
+// --fallback-sah: ptc bench's (directions, the default: the fallback built for the primary rays' mean directions;
+// eye: for rays from the camera's eye; plain: the plain SAH).
 #include <cstdio>
 #include <cstring>
 #include <fstream>

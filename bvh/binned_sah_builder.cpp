@@ -259,6 +259,8 @@ class BinnedBuilder {
   // primitive lies in a child whose area is at least its own), so a leaf that is no dearer than
   // that bound wins without evaluating any split.
   bool leaf_by_bound(const Task& t, double area) const {
+    // (with area_eye the bound is approximate: a primitive stretched toward the point may price
+    // above a node around it; kept, as the search it spares is most of a small node's build)
     if (!(area > 0.0)) return false;
     const Ref* r = records(t);
     double wt = 0.0, aw = 0.0;
@@ -422,13 +424,15 @@ class BinnedBuilder {
     // w_a * (product of the other extents) is the least, so a cut across it shrinks the most of
     // the weighted area (with the plain weights simply the longest extent).
     std::array<float, 3> w = split_area_weights(cfg_);
-    if (cfg_.area_eye) {  // (the weights toward the point: |v_a| from it to the node's centre, floored as area_from's)
-      float len = 0.0f;
+    if (cfg_.area_eye) {  // (the faces' weights in area_from: |v_a| / D + kEyeAreaIsotropic)
+      float v[3], d2 = 0.0f, r2 = 0.0f;
       for (int a = 0; a < 3; ++a) {
-        w[a] = std::abs(0.5f * (t.extra.box.lo[a] + t.extra.box.hi[a]) - (*cfg_.area_eye)[a]);
-        len = std::max(len, w[a]);
+        v[a] = 0.5f * (t.extra.box.lo[a] + t.extra.box.hi[a]) - (*cfg_.area_eye)[a];
+        const float e = t.extra.box.hi[a] - t.extra.box.lo[a];
+        d2 += v[a] * v[a], r2 += 0.25f * e * e;
       }
-      for (float& x : w) x = std::max(x, len / 64.0f + std::numeric_limits<float>::min());
+      const float D = std::sqrt(std::max(d2, r2));
+      for (int a = 0; a < 3; ++a) w[a] = (D > 0.0f ? std::abs(v[a]) / D : 0.0f) + static_cast<float>(kEyeAreaIsotropic);
     }
     auto reach = [&](int a) { return (t.extra.box.hi[a] - t.extra.box.lo[a]) / w[a]; };
     int longest = 0;
@@ -635,9 +639,12 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
   if (!in.groups.empty() && (G == 0 || in.groups.front() != 0 || in.groups.back() != n))
     throw std::invalid_argument("build_binned_sah: group offsets do not span the " + std::to_string(n) + " primitives");
   BinnedTask root{{to_box(rb.lo, rb.hi), to_box(rb.clo, rb.chi), 0}, 0, n};
+  BuildConfig near_cfg;  // (cfg with a far area_eye moved in: near_area_eye)
+  const BuildConfig* use = &cfg;
+  if (cfg.area_eye) near_cfg = cfg, near_cfg.area_eye = near_area_eye(cfg, root.extra.box), use = &near_cfg;
   if (G > 1) root = {{root.extra.box, make_group_records(in.groups, w.refs.data(), w.group_refs), 1}, 0, static_cast<std::uint32_t>(G)};
   if (threads > 1 && root.size() >= kParallelFrom) {
-    build_parallel(in, cfg, root, threads, w, bvh);
+    build_parallel(in, *use, root, threads, w, bvh);
     bvh.prim_order.resize(n);
     tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, kRecordsPerTask), [&](const tbb::blocked_range<std::uint32_t>& r) {
       for (std::uint32_t i = r.begin(); i < r.end(); ++i) bvh.prim_order[i] = w.refs[i].id;
@@ -645,8 +652,8 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
     return;
   }
   bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
-  BinnedBuilder builder(in, cfg, w.refs.data(), w.group_refs.data(), w.scratch.bins);
-  build_top_down(builder, cfg, root, w.scratch.stack, bvh);
+  BinnedBuilder builder(in, *use, w.refs.data(), w.group_refs.data(), w.scratch.bins);
+  build_top_down(builder, *use, root, w.scratch.stack, bvh);
   bvh.prim_order.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) bvh.prim_order[i] = w.refs[i].id;
 }

@@ -58,14 +58,15 @@ struct Box3f {
     const double x = double(hi[0]) - lo[0], y = double(hi[1]) - lo[1], z = double(hi[2]) - lo[2];
     return 2.0 * (x * y + y * z + z * x);
   }
+  /// Twice the solid angle the box shows the point `eye` (BuildConfig::area_eye), roughly: with
+  /// v from eye to the centre and D = max(|v|, half the diagonal),
+  /// 2 ((|v_z| xy + |v_x| yz + |v_y| zx) / D + kEyeAreaIsotropic (xy + yz + zx)) / D^2;
+  /// 0 for an empty box or one of no extent at the point. Not monotone: a box stretched toward
+  /// the point may price below a box inside it (D is taken to the centre).
+  [[nodiscard]] double area_from(const Vec3f& eye) const;
   /// The surface area with the faces across axis a weighted by w[a]: 2(w_z xy + w_x yz + w_y zx)
   /// (BuildConfig::area_weights; 0 for an empty box). With w = (1, 1, 1) the same bits as
   /// surface_area().
-  /// Twice the solid angle the box shows the point `eye` (BuildConfig::area_eye), roughly: with
-  /// v from eye to the centre and D = max(|v|, half the diagonal),
-  /// 2 ((|v_z| xy + |v_x| yz + |v_y| zx) / D^3 + kEyeAreaIsotropic (xy + yz + zx) / D^2);
-  /// 0 for an empty box or one of no extent at the point.
-  [[nodiscard]] double area_from(const Vec3f& eye) const;
   [[nodiscard]] double weighted_area(const std::array<float, 3>& w) const {
     if (empty()) return 0.0;
     const double x = double(hi[0]) - lo[0], y = double(hi[1]) - lo[1], z = double(hi[2]) - lo[2];
@@ -89,8 +90,9 @@ inline double Box3f::area_from(const Vec3f& eye) const {
   const double r2 = 0.25 * (x * x + y * y + z * z), D2 = d2 > r2 ? d2 : r2;
   if (!(D2 > 0.0)) return 0.0;
   const double D = std::sqrt(D2);
-  return 2.0 * ((std::abs(v[2]) * (x * y) + std::abs(v[0]) * (y * z) + std::abs(v[1]) * (z * x)) / (D2 * D) +
-                kEyeAreaIsotropic * (x * y + y * z + z * x) / D2);
+  return 2.0 * ((std::abs(v[2]) * (x * y) + std::abs(v[0]) * (y * z) + std::abs(v[1]) * (z * x)) / D +
+                kEyeAreaIsotropic * (x * y + y * z + z * x)) /
+         D2;
 }
 
 /// Largest float <= x (x finite or infinite). Branch-free (boxes are made per frame, and the

@@ -31,7 +31,8 @@ struct BuildConfig {
   std::uint32_t bins = 16;          ///< binned builder: bins per axis, in [2, 256] (Wald 2007 uses 16)
   /// Binned builder: nodes of at most 16 primitives are swept along the longest axis of their box
   /// only, instead of all three (with area_weights: the largest extent over its weight, the axis
-  /// a cut across which shrinks the weighted area the most). Measured on 28k Acc clusters of armadillo x2: build 20% faster,
+  /// a cut across which shrinks the weighted area the most; with area_eye, the weights of the
+  /// node's faces in Box3f::area_from). Measured on 28k Acc clusters of armadillo x2: build 20% faster,
   /// SAH cost 0.4% higher, trace speed unchanged within noise (bench/bvh_bench.cpp).
   bool small_nodes_longest_axis = true;
   /// Binned builder: a node of at most this many primitives that must be split (more than
@@ -66,7 +67,10 @@ struct BuildConfig {
   /// kEyeAreaIsotropic of its surface area over D^2 (so a face seen edge-on keeps some). A tree
   /// for rays from that point: boxes near it meet more of them than the same boxes far off
   /// (docs/tracing.md, "The fallback built for the camera's eye"). Must be finite (else
-  /// std::invalid_argument). As with area_weights, Bvh::cost stays the plain SAH cost.
+  /// std::invalid_argument); a point farther than 2^20 root diagonals from the root is moved in
+  /// along its direction (near_area_eye). The price is not monotone (a box stretched toward the
+  /// point may price below one inside it), so the binned builder's early-leaf bound is only
+  /// approximate with it. As with area_weights, Bvh::cost stays the plain SAH cost.
   std::optional<Vec3f> area_eye;
 };
 

@@ -299,8 +299,11 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
       BuildConfig fallback_build;
       fallback_build.area_weights = cfg_.fallback_area_weights;
       check_area_weights(fallback_build);
-      if (cfg_.fallback_area_eye && !cfg_.fallback_area_eye->allFinite())
-        throw std::invalid_argument("the triangle fallback's rays' point (fallback_area_eye) is not finite");
+      if (cfg_.fallback_area_eye) {
+        const Vec3f e = to_frame(*cfg_.fallback_area_eye, data.frame());
+        if (!cfg_.fallback_area_eye->allFinite() || !(std::isfinite(e[0]) && std::isfinite(e[1]) && std::isfinite(e[2])))
+          throw std::invalid_argument("the triangle fallback's rays' point (fallback_area_eye) is not finite in the trace frame");
+      }
     }
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +

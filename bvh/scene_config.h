@@ -166,15 +166,16 @@ struct SceneConfig {
   double refit_growth = 0.0;
   /// ClusterScene only: the area weights its triangle fallback is built with
   /// (BuildConfig::area_weights). (1, 1, 1), the default: the plain SAH. The commands give the
-  /// weights of their primary rays (direction_area_weights; `--fallback-sah rays`), a tree for
-  /// the camera's rays: on the explode scene they crossed 12-14% fewer nodes
+  /// weights of their primary rays with `--fallback-sah directions`, their default (direction_area_weights), a
+  /// tree for the camera's rays: on the explode scene they crossed 12-14% fewer nodes
   /// (docs/tracing.md, "The fallback built for the camera's rays").
   std::array<float, 3> fallback_area_weights = {1.0f, 1.0f, 1.0f};
   /// ClusterScene only: the point its triangle fallback's rays leave from (world coordinates;
   /// BuildConfig::area_eye in the trace frame), which then replaces fallback_area_weights; none
-  /// by default. The commands give the camera's eye (`--fallback-sah eye`, their default): on
-  /// the explode scene a further 8-9% fewer nodes a primary ray than the mean directions
-  /// (docs/tracing.md, "The fallback built for the camera's eye"). Must be finite.
+  /// by default. The commands give the camera's eye with `--fallback-sah eye`: on the explode
+  /// scene a further 8-9% fewer nodes a primary ray than the mean directions, but a dearer
+  /// update and slower shadow rays (docs/tracing.md, "The fallback built for the camera's eye").
+  /// Must be finite.
   std::optional<Vec3> fallback_area_eye;
 };
 

@@ -112,9 +112,15 @@ Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg) {
   bvh.prim_order.resize(n);
   std::iota(bvh.prim_order.begin(), bvh.prim_order.end(), 0u);
   bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
-  SweepBuilder builder(in, cfg, bvh.prim_order);
+  BuildConfig use = cfg;  // (a far area_eye moved in: near_area_eye)
+  if (cfg.area_eye) {
+    Box3f root;
+    for (const Box3f& b : in.boxes) root.extend(b);
+    use.area_eye = near_area_eye(cfg, root);
+  }
+  SweepBuilder builder(in, use, bvh.prim_order);
   std::vector<SweepBuilder::Task> stack;
-  build_top_down(builder, cfg, {{}, 0, n}, stack, bvh);
+  build_top_down(builder, use, {{}, 0, n}, stack, bvh);
   return bvh;
 }
 

@@ -17,16 +17,19 @@
 //     k, first, second = builder.apply(task, split)             (primitives put in place)
 //     inner node; a child of one primitive is emitted as a leaf at once when it is next in
 //     pre-order (the first child, then the second when the first was one), else pushed.
-// A is the node's area as the splits are priced: its surface area, or with
-// BuildConfig::area_weights its weighted area (Box3f::weighted_area), the builders' half areas
-// weighted alike. A leaf costs intersection * W(P) * S, an inner node traversal * S, S the
+// A is the node's area as the splits are priced: its surface area, with
+// BuildConfig::area_weights its weighted area (Box3f::weighted_area), or with
+// BuildConfig::area_eye the solid angle it shows that point (Box3f::area_from); the builders'
+// half areas alike. A leaf costs intersection * W(P) * S, an inner node traversal * S, S the
 // surface area, whatever the weights (CostAccumulator); their sum over S(root) is Bvh::cost
 // (sah_cost.h's formula).
 #pragma once
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <concepts>
+#include <optional>
 #include <cstdint>
 #include <vector>
 
@@ -62,6 +65,24 @@ void check_area_weights(const BuildConfig& cfg);
 
 /// BuildConfig::area_eye not finite: std::invalid_argument naming the axis.
 void check_area_eye(const BuildConfig& cfg);
+
+/// BuildConfig::area_eye as the builders use it for a tree whose root box is `root`: a point
+/// farther than 2^20 root diagonals from the root's centre is moved toward it, along the same
+/// direction, to that distance (it prices every box alike but for a factor, and the float
+/// solid angles stay in range).
+[[nodiscard]] inline std::optional<Vec3f> near_area_eye(const BuildConfig& cfg, const Box3f& root) {
+  if (!cfg.area_eye || root.empty()) return cfg.area_eye;
+  double v[3], d2 = 0.0, diag2 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    v[a] = double((*cfg.area_eye)[a]) - 0.5 * (double(root.lo[a]) + root.hi[a]);
+    d2 += v[a] * v[a], diag2 += (double(root.hi[a]) - root.lo[a]) * (double(root.hi[a]) - root.lo[a]);
+  }
+  const double far = 1048576.0 * std::sqrt(diag2), d = std::sqrt(d2);
+  if (!(far > 0.0) || d <= far) return cfg.area_eye;
+  Vec3f e{};
+  for (int a = 0; a < 3; ++a) e[a] = static_cast<float>(0.5 * (double(root.lo[a]) + root.hi[a]) + v[a] * (far / d));
+  return e;
+}
 
 /// The area weights the splits are priced with: BuildConfig::area_weights over the largest of
 /// them (only their ratios matter; so the float half areas stay in range whatever their scale).

@@ -110,7 +110,8 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     for (const BenchRow& row : r.rows) kept += row.fallback_refit ? 1 : 0;
     manifest.set_result("fallback_refit_frames", kept);
   }
-  // The fallback's SAH: built for the camera's rays (their area weights) or plain (1, 1, 1).
+  // The fallback's SAH: for rays from the camera's eye (the point), for their directions (the
+  // weights), or plain (neither: weights 1, 1, 1, no point).
   manifest.set_parameter("fallback_sah", bvh::to_string(r.fallback_sah));
   manifest.set_parameter("fallback_area_weights", std::vector<double>(r.fallback_area_weights.begin(), r.fallback_area_weights.end()));
   manifest.set_parameter("fallback_area_eye", r.fallback_area_eye ? vec_json(*r.fallback_area_eye) : nlohmann::json(nullptr));

@@ -153,7 +153,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   // The fallback built for rays from the camera's eye, or for their mean directions, or plain
   // (--fallback-sah; docs/tracing.md, "The fallback built for the camera's eye").
   const bvh::FallbackSah fallback_sah = use_clusters && !still && tcfg.cluster_fallback > 0
-                                            ? opt.fallback_sah.value_or(bvh::FallbackSah::Eye)
+                                            ? opt.fallback_sah.value_or(bvh::FallbackSah::Directions)
                                             : bvh::FallbackSah::Plain;
   if (fallback_sah == bvh::FallbackSah::Directions)
     tcfg.fallback_area_weights = bvh::direction_area_weights(camera_rays(cam, rc.width, rc.height));

@@ -38,8 +38,8 @@ struct TraceCommandOptions {
   /// --fallback-refit: the triangle fallback's bvh::SceneConfig::refit_growth (0: rebuilt every
   /// frame). Unset: bvh::kAutoFallbackRefitGrowth.
   std::optional<double> fallback_refit;
-  /// --fallback-sah: how the triangle fallback is built (bvh::FallbackSah; unset: Eye, for rays
-  /// from the camera's eye).
+  /// --fallback-sah: how the triangle fallback is built (bvh::FallbackSah; unset: Directions, for
+  /// the primary rays' mean directions).
   std::optional<bvh::FallbackSah> fallback_sah;
   /// --group-trees: what the two-level build does inside a group (unset: the default, refit).
   /// Given for a still scene without --cluster-groups, it is a usage error (nothing to do).

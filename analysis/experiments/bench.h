@@ -93,10 +93,11 @@ struct PeerBenchConfig {
   /// ours_clusters: the triangle fallback's refit limit (bvh::SceneConfig::refit_growth; `ptc
   /// bench --fallback-refit`); 0: rebuilt every frame.
   double fallback_refit = bvh::kAutoFallbackRefitGrowth;
-  /// ours_clusters: the triangle fallback built for rays from the camera's eye (Eye, `ptc bench
-  /// --fallback-sah eye`: bvh::SceneConfig::fallback_area_eye), for the primary rays' mean
-  /// directions (Directions: their bvh::direction_area_weights), or with the plain SAH.
-  bvh::FallbackSah fallback_sah = bvh::FallbackSah::Eye;
+  /// ours_clusters: the triangle fallback built for the primary rays' mean directions
+  /// (Directions, `ptc bench --fallback-sah directions`, the default: their
+  /// bvh::direction_area_weights), for rays from the camera's eye (Eye:
+  /// bvh::SceneConfig::fallback_area_eye), or with the plain SAH.
+  bvh::FallbackSah fallback_sah = bvh::FallbackSah::Directions;
 };
 
 struct BenchRow {

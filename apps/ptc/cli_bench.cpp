@@ -17,7 +17,7 @@ struct BenchArgs {
   CameraArgs camera;
   GroupTreesArg group_trees;
   std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
-  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "eye";
+  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "directions";
   std::uint32_t max_count = kBenchDefaultMaxCount;
   CLI::App* app = nullptr;
 };

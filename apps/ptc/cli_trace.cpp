@@ -15,7 +15,7 @@ struct TraceArgs {
   std::string frame, frames, cost_range, deform, vertex_order = "input";
   GroupTreesArg group_trees;
   std::uint32_t cluster_groups = bvh::cluster_scene_defaults().cluster_group_size;  // (given: opt.cluster_group_size)
-  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "eye";
+  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "directions";
   CLI::App* app = nullptr;
 };
 }  // namespace

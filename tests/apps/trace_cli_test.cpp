@@ -235,17 +235,18 @@ TEST_F(TraceCli, BenchClusterFallbackIsRecorded) {
               std::string::npos)
         << r.out;
     EXPECT_EQ(j["parameters"]["fallback_refit"].get<double>(), want > 0 ? 0.2 : 0.0) << arg;  // (auto; none without a fallback)
-    // (the fallback built for rays from the camera's eye by default; plain without one)
-    EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), want > 0 ? "eye" : "plain") << arg;
-    EXPECT_EQ(j["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
-    EXPECT_EQ(j["parameters"]["fallback_area_eye"].is_null(), !(want > 0)) << arg;
-    if (want > 0) {
-      EXPECT_EQ(j["parameters"]["fallback_area_eye"].size(), 3u) << arg;
-      if (fell > 0) EXPECT_NE(r.out.find("; SAH for rays from the camera's eye"), std::string::npos) << r.out;
-    }
+    // (the fallback built for the primary rays' directions by default: their weights; plain
+    // without one)
+    EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), want > 0 ? "directions" : "plain") << arg;
+    EXPECT_EQ(j["parameters"]["fallback_area_weights"].get<std::vector<double>>() == std::vector<double>({1.0, 1.0, 1.0}),
+              !(want > 0))
+        << arg;
+    EXPECT_TRUE(j["parameters"]["fallback_area_eye"].is_null()) << arg;
+    if (want > 0 && fell > 0) EXPECT_NE(r.out.find("; SAH for the camera's ray directions"), std::string::npos) << r.out;
   }
-  // --fallback-sah directions: the primary rays' weights, no point; plain: neither; the same hits.
-  for (const char* sah : {"directions", "plain"}) {
+  // --fallback-sah eye: the camera's eye, weights 1; directions: the primary rays' weights, no
+  // point; plain: neither; the same hits.
+  for (const char* sah : {"eye", "directions", "plain"}) {
     const fs::path out = dir_ / (std::string("fb_sah_") + sah);
     const CmdResult r = ptc({"bench", mesh, "--frames", "0:2", "--width", "24", "--height", "24", "--max-count", "40",
                              "--threads", "1", "--cluster-fallback", "1.0001", "--fallback-sah", sah, "--out",
@@ -253,10 +254,14 @@ TEST_F(TraceCli, BenchClusterFallbackIsRecorded) {
     ASSERT_EQ(r.code, 0) << r.err;
     const auto j = nlohmann::json::parse(slurp(out / "manifest.json"));
     EXPECT_EQ(j["parameters"]["fallback_sah"].get<std::string>(), sah);
-    EXPECT_TRUE(j["parameters"]["fallback_area_eye"].is_null()) << sah;
+    EXPECT_EQ(j["parameters"]["fallback_area_eye"].is_null(), std::string(sah) != "eye") << sah;
     const auto w = j["parameters"]["fallback_area_weights"].get<std::vector<double>>();
     ASSERT_EQ(w.size(), 3u);
-    if (std::string(sah) == "plain") {
+    if (std::string(sah) == "eye") {
+      EXPECT_EQ(w, std::vector<double>({1.0, 1.0, 1.0}));
+      EXPECT_EQ(j["parameters"]["fallback_area_eye"].size(), 3u);
+      EXPECT_NE(r.out.find("; SAH for rays from the camera's eye"), std::string::npos) << r.out;
+    } else if (std::string(sah) == "plain") {
       EXPECT_EQ(w, std::vector<double>({1.0, 1.0, 1.0}));
       EXPECT_NE(r.out.find("; plain SAH"), std::string::npos) << r.out;
     } else {
@@ -442,33 +447,33 @@ TEST_F(TraceCli, TraceClusterFallbackDrawsTheSameImages) {
   const auto [off, off_text] = run("off");
   const auto [kept, kept_text] = run("1.0001", "1e9");  // (the fallback, made at the rest pose, refitted on every frame)
   const auto [plain, plain_text] = run("1.0001", nullptr, "plain");
-  const auto [dirs, dirs_text] = run("1.0001", nullptr, "directions");
+  const auto [eyes, eyes_text] = run("1.0001", nullptr, "eye");
   for (int f = 0; f <= 3; ++f)
     for (const char* img : {"shaded", "depth", "normal"}) {
       const std::string name = fmt::format("{}_{:04d}.png", img, f);
       EXPECT_EQ(slurp(on / name), slurp(off / name)) << name;
       EXPECT_EQ(slurp(kept / name), slurp(off / name)) << name;
       EXPECT_EQ(slurp(plain / name), slurp(off / name)) << name;
-      EXPECT_EQ(slurp(dirs / name), slurp(off / name)) << name;
+      EXPECT_EQ(slurp(eyes / name), slurp(off / name)) << name;
     }
-  // The fallback built for rays from the camera's eye by default (the manifest's camera eye),
-  // for their directions or plain on request; the summary says which.
+  // The fallback built for the primary rays' directions by default, for rays from the camera's
+  // eye (the manifest's camera eye) or plain on request; the summary says which.
   const auto jp = nlohmann::json::parse(slurp(plain / "manifest.json"));
   EXPECT_EQ(jp["parameters"]["fallback_sah"].get<std::string>(), "plain");
   EXPECT_EQ(jp["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
   EXPECT_TRUE(jp["parameters"]["fallback_area_eye"].is_null());
   EXPECT_NE(plain_text.find("; plain SAH"), std::string::npos) << plain_text;
   {
-    const auto jr = nlohmann::json::parse(slurp(on / "manifest.json"));
-    EXPECT_EQ(jr["parameters"]["fallback_sah"].get<std::string>(), "eye");
-    EXPECT_EQ(jr["parameters"]["fallback_area_eye"], jr["parameters"]["camera"]["eye"]);
-    EXPECT_EQ(jr["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
-    EXPECT_NE(on_text.find("; SAH for rays from the camera's eye"), std::string::npos) << on_text;
-    const auto jd = nlohmann::json::parse(slurp(dirs / "manifest.json"));
+    const auto je = nlohmann::json::parse(slurp(eyes / "manifest.json"));
+    EXPECT_EQ(je["parameters"]["fallback_sah"].get<std::string>(), "eye");
+    EXPECT_EQ(je["parameters"]["fallback_area_eye"], je["parameters"]["camera"]["eye"]);
+    EXPECT_EQ(je["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
+    EXPECT_NE(eyes_text.find("; SAH for rays from the camera's eye"), std::string::npos) << eyes_text;
+    const auto jd = nlohmann::json::parse(slurp(on / "manifest.json"));
     EXPECT_EQ(jd["parameters"]["fallback_sah"].get<std::string>(), "directions");
     EXPECT_NE(jd["parameters"]["fallback_area_weights"].get<std::vector<double>>(), std::vector<double>({1.0, 1.0, 1.0}));
     EXPECT_TRUE(jd["parameters"]["fallback_area_eye"].is_null());
-    EXPECT_NE(dirs_text.find("; SAH for the camera's ray directions"), std::string::npos) << dirs_text;
+    EXPECT_NE(on_text.find("; SAH for the camera's ray directions"), std::string::npos) << on_text;
   }
   const auto jk = nlohmann::json::parse(slurp(kept / "manifest.json"));
   EXPECT_EQ(jk["parameters"]["fallback_refit"].get<double>(), 1e9);

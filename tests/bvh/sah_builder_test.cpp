@@ -697,8 +697,13 @@ TEST(SahBuilder, AreaFromAPointIsItsSolidAngle) {
     EXPECT_NEAR(binned::half_area_from(lo, hi, _mm_setr_ps(eye[0], eye[1], eye[2], 0)), box.area_from(eye) / 2.0,
                 1e-5 * box.area_from(eye));
   }
-  const Box3f around{{0.0f, -2.0f, 1.0f}, {1.0f, 0.0f, 3.0f}};
-  EXPECT_TRUE(std::isfinite(around.area_from(eye)) && around.area_from(eye) > 0.0);
+  // By hand: box (1,2,3)-(2,4,4) from the origin: v = (1.5, 3, 3.5), D^2 = 23.5, faces xy 2,
+  // yz 2, zx 1, seen 3.5*2 + 1.5*2 + 3*1 = 13, all 5. A box around the origin, (-1,-1,-1)-(1,1,3):
+  // v = (0, 0, 1), D^2 = max(1, 6) = 6 (half the diagonal), faces 4, 8, 8, seen 4, all 20.
+  const Vec3f o{0.0f, 0.0f, 0.0f};
+  EXPECT_NEAR((Box3f{{1, 2, 3}, {2, 4, 4}}.area_from(o)), 2.0 * (13.0 / std::sqrt(23.5) + 5.0 / 64.0) / 23.5, 1e-14);
+  const Box3f around{{-1, -1, -1}, {1, 1, 3}};
+  EXPECT_NEAR(around.area_from(o), 2.0 * (4.0 / std::sqrt(6.0) + 20.0 / 64.0) / 6.0, 1e-14);
   EXPECT_EQ((Box3f{eye, eye}.area_from(eye)), 0.0);
   EXPECT_EQ(Box3f{}.area_from(eye), 0.0);
   // A point that is not finite is refused by both builders, naming the axis.
@@ -713,6 +718,26 @@ TEST(SahBuilder, AreaFromAPointIsItsSolidAngle) {
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find("axis y"), std::string::npos) << e.what();
     }
+  }
+}
+
+// A point beyond 2^20 root diagonals is moved in along its direction (near_area_eye): points at
+// 2^40 and 2^100 straight up build the same tree, a valid one, in both builders (at 2^100 the
+// float solid angles would overflow: every box would price 0).
+TEST(SahBuilder, AFarPointIsMovedIn) {
+  const auto boxes = test::random_boxes(3000, 17);
+  const auto c = box_centers(boxes);
+  for (const Named& b : kBuilders) {
+    SCOPED_TRACE(b.name);
+    BuildConfig cfg;
+    cfg.area_eye = Vec3f{0.0f, 0.0f, std::ldexp(1.0f, 40)};
+    const Bvh near = b.fn({boxes, c, {}}, cfg);
+    cfg.area_eye = Vec3f{0.0f, 0.0f, std::ldexp(1.0f, 100)};
+    const Bvh far = b.fn({boxes, c, {}}, cfg);
+    expect_valid(far, boxes, cfg);
+    EXPECT_EQ(near.prim_order, far.prim_order);
+    EXPECT_EQ(near.nodes.size(), far.nodes.size());
+    EXPECT_EQ(near.cost, far.cost);
   }
 }
 
