@@ -232,7 +232,8 @@ class BinnedBuilder {
 
   BinnedBuilder(const BuildInput& in, const BuildConfig& cfg, Ref* refs, Ref* group_refs, Bins* bins)
       : in_(in), cfg_(cfg), refs_(refs), group_refs_(group_refs), bins_(bins), bin_range_(bin_range_for(cfg.allow_avx2)),
-        aw_(area_weights_of(split_area_weights(cfg))),
+        w_(split_area_weights(cfg)),
+        aw_(area_weights_of(w_)),
         has_eye_(cfg.area_eye.has_value()),
         eye_(cfg.area_eye ? _mm_setr_ps((*cfg.area_eye)[0], (*cfg.area_eye)[1], (*cfg.area_eye)[2], 0.0f) : _mm_setzero_ps()) {}
 
@@ -423,7 +424,7 @@ class BinnedBuilder {
     // The longest axis, each extent over its area weight: the axis whose faces' weighted area
     // w_a * (product of the other extents) is the least, so a cut across it shrinks the most of
     // the weighted area (with the plain weights simply the longest extent).
-    std::array<float, 3> w = split_area_weights(cfg_);
+    std::array<float, 3> w = w_;
     if (cfg_.area_eye) {  // (the faces' weights in area_from: |v_a| / D + kEyeAreaIsotropic)
       float v[3], d2 = 0.0f, r2 = 0.0f;
       for (int a = 0; a < 3; ++a) {
@@ -534,7 +535,8 @@ class BinnedBuilder {
   Ref* const group_refs_;
   Bins* const bins_;  // two bin sets
   const BinRangeFn bin_range_;
-  const __m128 aw_;  // half_area's weights (BuildConfig::area_weights)
+  const std::array<float, 3> w_;  // split_area_weights(cfg)
+  const __m128 aw_;               // the same in half_area's lanes
   const bool has_eye_;  // BuildConfig::area_eye given: half_area_from(eye_) instead
   const __m128 eye_;
 };
@@ -639,12 +641,10 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
   if (!in.groups.empty() && (G == 0 || in.groups.front() != 0 || in.groups.back() != n))
     throw std::invalid_argument("build_binned_sah: group offsets do not span the " + std::to_string(n) + " primitives");
   BinnedTask root{{to_box(rb.lo, rb.hi), to_box(rb.clo, rb.chi), 0}, 0, n};
-  BuildConfig near_cfg;  // (cfg with a far area_eye moved in: near_area_eye)
-  const BuildConfig* use = &cfg;
-  if (cfg.area_eye) near_cfg = cfg, near_cfg.area_eye = near_area_eye(cfg, root.extra.box), use = &near_cfg;
+  const BuildConfig use = with_near_area_eye(cfg, root.extra.box);
   if (G > 1) root = {{root.extra.box, make_group_records(in.groups, w.refs.data(), w.group_refs), 1}, 0, static_cast<std::uint32_t>(G)};
   if (threads > 1 && root.size() >= kParallelFrom) {
-    build_parallel(in, *use, root, threads, w, bvh);
+    build_parallel(in, use, root, threads, w, bvh);
     bvh.prim_order.resize(n);
     tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, kRecordsPerTask), [&](const tbb::blocked_range<std::uint32_t>& r) {
       for (std::uint32_t i = r.begin(); i < r.end(); ++i) bvh.prim_order[i] = w.refs[i].id;
@@ -652,8 +652,8 @@ void build_binned_sah(const BuildInput& in, const BuildConfig& cfg, Bvh& bvh, Bu
     return;
   }
   bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
-  BinnedBuilder builder(in, *use, w.refs.data(), w.group_refs.data(), w.scratch.bins);
-  build_top_down(builder, *use, root, w.scratch.stack, bvh);
+  BinnedBuilder builder(in, use, w.refs.data(), w.group_refs.data(), w.scratch.bins);
+  build_top_down(builder, use, root, w.scratch.stack, bvh);
   bvh.prim_order.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) bvh.prim_order[i] = w.refs[i].id;
 }

@@ -94,20 +94,18 @@ inline Box3f to_box(__m128 lo, __m128 hi) {
   return {{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
 }
 
+// Lanes 0 + 1 + 2 of x, in that order.
+inline float sum3(__m128 x) {
+  const __m128 s = _mm_add_ss(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(3, 3, 3, 1)));
+  return _mm_cvtss_f32(_mm_add_ss(s, _mm_movehl_ps(x, x)));
+}
+
 // Half the weighted surface area, w_z xy + w_x yz + w_y zx, of a non-empty box (lanes 0-2), in
 // float: only compared. w: area_weights_of(BuildConfig::area_weights).
 inline float half_area(__m128 lo, __m128 hi, __m128 w) {
   const __m128 e = _mm_sub_ps(hi, lo);                                 // x y z .
   const __m128 r = _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1));       // y z x .
-  const __m128 p = _mm_mul_ps(_mm_mul_ps(e, r), w);                    // w_z xy, w_x yz, w_y zx, .
-  const __m128 s = _mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 1)));
-  return _mm_cvtss_f32(_mm_add_ss(s, _mm_movehl_ps(p, p)));
-}
-
-// Lanes 0 + 1 + 2 of x, in that order.
-inline float sum3(__m128 x) {
-  const __m128 s = _mm_add_ss(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(3, 3, 3, 1)));
-  return _mm_cvtss_f32(_mm_add_ss(s, _mm_movehl_ps(x, x)));
+  return sum3(_mm_mul_ps(_mm_mul_ps(e, r), w));                        // w_z xy + w_x yz + w_y zx
 }
 
 // Half of Box3f::area_from in float: the solid angle a non-empty box (lanes 0-2) shows the point

@@ -68,7 +68,7 @@ struct BuildConfig {
   /// for rays from that point: boxes near it meet more of them than the same boxes far off
   /// (docs/tracing.md, "The fallback built for the camera's eye"). Must be finite (else
   /// std::invalid_argument); a point farther than 2^20 root diagonals from the root is moved in
-  /// along its direction (near_area_eye). The price is not monotone (a box stretched toward the
+  /// along its direction (with_near_area_eye). The price is not monotone (a box stretched toward the
   /// point may price below one inside it), so the binned builder's early-leaf bound is only
   /// approximate with it. As with area_weights, Bvh::cost stays the plain SAH cost.
   std::optional<Vec3f> area_eye;

@@ -32,5 +32,8 @@ struct PinholeCamera {
 /// largest (a box flat across the rays keeps some area). Rays whose direction is zero or not
 /// finite are left out; with none left: (1, 1, 1).
 [[nodiscard]] std::array<float, 3> direction_area_weights(const RayBatch& rays);
+/// The same for the primary rays of `cam` (primary_rays(cam, width, height), the same bits),
+/// without making them.
+[[nodiscard]] std::array<float, 3> direction_area_weights(const PinholeCamera& cam, int width, int height);
 
 }  // namespace ptc::bvh

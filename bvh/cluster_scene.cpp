@@ -296,14 +296,9 @@ ClusterScene::ClusterScene(const Mesh& mesh, const ClusterView& cv, const SceneC
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.leaf_format == LeafFormatChoice::Tables)
       throw std::invalid_argument("the tables leaf format needs linear cluster leaves (block trees keep blocks)");
     if (cfg_.fallback_swelling > 0) {  // (the fallback's build would refuse them only at its first frame)
-      BuildConfig fallback_build;
-      fallback_build.area_weights = cfg_.fallback_area_weights;
+      const BuildConfig fallback_build = fallback_config().build;
       check_area_weights(fallback_build);
-      if (cfg_.fallback_area_eye) {
-        const Vec3f e = to_frame(*cfg_.fallback_area_eye, data.frame());
-        if (!cfg_.fallback_area_eye->allFinite() || !(std::isfinite(e[0]) && std::isfinite(e[1]) && std::isfinite(e[2])))
-          throw std::invalid_argument("the triangle fallback's rays' point (fallback_area_eye) is not finite in the trace frame");
-      }
+      check_area_eye(fallback_build);
     }
     if (cfg_.cluster_leaf == ClusterLeaf::BlockTree && cfg_.build.max_leaf_size > 1)  // (a leaf of several would bypass their trees)
       throw std::invalid_argument("block-tree cluster leaves hold one cluster each: max_leaf_size must be 1 with them (" +
@@ -841,20 +836,25 @@ double ClusterScene::swelling() const {
   return box_half_areas(f_.boxes) / triangle_area_;
 }
 
+SceneConfig ClusterScene::fallback_config() const {
+  SceneConfig tc = fallback_scene_defaults();
+  tc.origin = f_.data.origin;
+  tc.scale = f_.data.scale;
+  tc.clock = cfg_.clock;
+  tc.refit_growth = cfg_.refit_growth;
+  tc.build.area_weights = cfg_.fallback_area_weights;
+  if (cfg_.fallback_area_eye) tc.build.area_eye = to_frame(*cfg_.fallback_area_eye, f_.data.frame());  // (its trace frame)
+  return tc;
+}
+
 // The frame's triangle BVH, in the cluster BVH's trace frame (the same float vertices, so the
 // same hits), made at the first frame that needs it (with fallback_scene_defaults()) and then
 // updated on each such frame: rebuilt, or refitted while SceneConfig::refit_growth allows.
 void ClusterScene::update_fallback(std::span<const Vec3> positions) {
   const double t0 = clock_ms(cfg_.clock);
   if (!fallback_) {  // (made whole before it is used: a throw leaves the cluster BVH traced)
-    SceneConfig tc = fallback_scene_defaults();
-    tc.origin = f_.data.origin;
-    tc.scale = f_.data.scale;
-    tc.clock = cfg_.clock;
-    tc.refit_growth = cfg_.refit_growth;
-    tc.build.area_weights = cfg_.fallback_area_weights;
-    if (cfg_.fallback_area_eye) tc.build.area_eye = to_frame(*cfg_.fallback_area_eye, f_.data.frame());
-    auto made = std::make_unique<TriangleScene>(Mesh::sharing(tris_, std::vector<Vec3>(positions.begin(), positions.end())), tc);
+    auto made = std::make_unique<TriangleScene>(Mesh::sharing(tris_, std::vector<Vec3>(positions.begin(), positions.end())),
+                                                fallback_config());
     fallback_ = std::move(made);
   } else {
     fallback_->update(positions);

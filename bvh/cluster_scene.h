@@ -133,6 +133,9 @@ class ClusterScene {
  private:
   void update_clusters(std::span<const Vec3> positions);
   void update_fallback(std::span<const Vec3> positions);
+  // The triangle fallback's configuration: fallback_scene_defaults() in this scene's trace frame,
+  // with its refit limit and area weights or point (SceneConfig::fallback_area_*).
+  [[nodiscard]] SceneConfig fallback_config() const;
   void layout_linear(AlignedVector<std::uint32_t>& lane_ids);
   void layout_block_trees(AlignedVector<std::uint32_t>& lane_ids);
   void set_vertex_order(const Mesh& mesh, std::span<const std::uint32_t> lane_ids);

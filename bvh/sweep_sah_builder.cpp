@@ -112,12 +112,10 @@ Bvh build_sweep_sah(const BuildInput& in, const BuildConfig& cfg) {
   bvh.prim_order.resize(n);
   std::iota(bvh.prim_order.begin(), bvh.prim_order.end(), 0u);
   bvh.nodes.reserve(2 * static_cast<std::size_t>(n));
-  BuildConfig use = cfg;  // (a far area_eye moved in: near_area_eye)
-  if (cfg.area_eye) {
-    Box3f root;
+  Box3f root;
+  if (cfg.area_eye)
     for (const Box3f& b : in.boxes) root.extend(b);
-    use.area_eye = near_area_eye(cfg, root);
-  }
+  const BuildConfig use = with_near_area_eye(cfg, root);
   SweepBuilder builder(in, use, bvh.prim_order);
   std::vector<SweepBuilder::Task> stack;
   build_top_down(builder, use, {{}, 0, n}, stack, bvh);

@@ -66,22 +66,21 @@ void check_area_weights(const BuildConfig& cfg);
 /// BuildConfig::area_eye not finite: std::invalid_argument naming the axis.
 void check_area_eye(const BuildConfig& cfg);
 
-/// BuildConfig::area_eye as the builders use it for a tree whose root box is `root`: a point
+/// `cfg` as the builders use it for a tree whose root box is `root`: a BuildConfig::area_eye
 /// farther than 2^20 root diagonals from the root's centre is moved toward it, along the same
 /// direction, to that distance (it prices every box alike but for a factor, and the float
 /// solid angles stay in range).
-[[nodiscard]] inline std::optional<Vec3f> near_area_eye(const BuildConfig& cfg, const Box3f& root) {
-  if (!cfg.area_eye || root.empty()) return cfg.area_eye;
+[[nodiscard]] inline BuildConfig with_near_area_eye(BuildConfig cfg, const Box3f& root) {
+  if (!cfg.area_eye || root.empty()) return cfg;
   double v[3], d2 = 0.0, diag2 = 0.0;
   for (int a = 0; a < 3; ++a) {
     v[a] = double((*cfg.area_eye)[a]) - 0.5 * (double(root.lo[a]) + root.hi[a]);
     d2 += v[a] * v[a], diag2 += (double(root.hi[a]) - root.lo[a]) * (double(root.hi[a]) - root.lo[a]);
   }
   const double far = 1048576.0 * std::sqrt(diag2), d = std::sqrt(d2);
-  if (!(far > 0.0) || d <= far) return cfg.area_eye;
-  Vec3f e{};
-  for (int a = 0; a < 3; ++a) e[a] = static_cast<float>(0.5 * (double(root.lo[a]) + root.hi[a]) + v[a] * (far / d));
-  return e;
+  if (!(far > 0.0) || d <= far) return cfg;
+  for (int a = 0; a < 3; ++a) (*cfg.area_eye)[a] = static_cast<float>(0.5 * (double(root.lo[a]) + root.hi[a]) + v[a] * (far / d));
+  return cfg;
 }
 
 /// The area weights the splits are priced with: BuildConfig::area_weights over the largest of
@@ -162,7 +161,6 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
   using Task = typename B::Task;
   const SahCostModel& m = cfg.cost;
   const std::array<float, 3> aw = split_area_weights(cfg);
-  const bool plain = aw == std::array<float, 3>{1.0f, 1.0f, 1.0f};
   CostAccumulator acc;
   // A node for `task` (already opened, with its box), its parent patched.
   auto emit = [&](const Task& task, const Box3f& box) {
@@ -198,7 +196,7 @@ void build_top_down(B& builder, const BuildConfig& cfg, const typename B::Task& 
       make_leaf(idx, task, area, builder.leaf_weight(task));
       continue;
     }
-    const double chooser = cfg.area_eye ? box.area_from(*cfg.area_eye) : plain ? area : box.weighted_area(aw);
+    const double chooser = cfg.area_eye ? box.area_from(*cfg.area_eye) : box.weighted_area(aw);
     const bool must_split = task.size() > cfg.max_leaf_size || builder.must_split(task);
     if (!must_split && builder.leaf_by_bound(task, chooser)) {
       make_leaf(idx, task, area, builder.leaf_weight(task));

@@ -156,7 +156,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
                                             ? opt.fallback_sah.value_or(bvh::FallbackSah::Directions)
                                             : bvh::FallbackSah::Plain;
   if (fallback_sah == bvh::FallbackSah::Directions)
-    tcfg.fallback_area_weights = bvh::direction_area_weights(camera_rays(cam, rc.width, rc.height));
+    tcfg.fallback_area_weights = bvh::direction_area_weights(cam, rc.width, rc.height);
   if (fallback_sah == bvh::FallbackSah::Eye) tcfg.fallback_area_eye = cam.eye;
   // Set up at the rest pose, as ptc bench and the experiments do, and updated to every frame in
   // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend

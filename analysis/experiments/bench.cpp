@@ -116,13 +116,11 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   res.fallback_refit = cfg.fallback_refit;
   setup.threads = cfg.threads;
   setup.embree_packet_width = cfg.embree_packet_width;
-  // The camera's rays, made before the configurations: the fallback may be built for them.
   const bvh::PinholeCamera cam =
       cfg.made_camera ? *cfg.made_camera : make_camera(cfg.camera, scene.rest().referenced_bounds(), cfg.width, cfg.height);
-  const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
-  res.rays = rays.size();
   res.fallback_sah = cfg.cluster_fallback > 0 ? cfg.fallback_sah : bvh::FallbackSah::Plain;
-  if (res.fallback_sah == bvh::FallbackSah::Directions) setup.fallback_area_weights = bvh::direction_area_weights(rays);
+  if (res.fallback_sah == bvh::FallbackSah::Directions)
+    setup.fallback_area_weights = bvh::direction_area_weights(cam, cfg.width, cfg.height);
   if (res.fallback_sah == bvh::FallbackSah::Eye) setup.fallback_area_eye = cam.eye;
   res.fallback_area_weights = setup.fallback_area_weights;
   res.fallback_area_eye = setup.fallback_area_eye;
@@ -137,6 +135,9 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   }
   setup.clusters = &*clusters;
   const Mesh& mesh = scene.rest();
+
+  const bvh::RayBatch rays = camera_rays(cam, cfg.width, cfg.height);
+  res.rays = rays.size();
 
   std::vector<std::unique_ptr<loop::Accel>> accels;
   for (loop::AccelKind k : loop::kAllAccelKinds) {

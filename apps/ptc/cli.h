@@ -185,6 +185,16 @@ struct GroupTreesArg {
   [[nodiscard]] bvh::GroupTrees get(bool two_level, const std::string& needs) const;
 };
 
+/// The triangle fallback's flags of `ptc bench` and `ptc trace` (--cluster-fallback,
+/// --fallback-refit, --fallback-sah): the same help, checks and defaults in both.
+struct FallbackFlags {
+  std::string swelling = "auto", refit = "auto", sah = "directions";
+  CLI::App* cmd = nullptr;
+  void add_to(CLI::App* c);
+  /// --fallback-refit or --fallback-sah given while the fallback is off (`on` false): UsageError.
+  void require_fallback(bool on) const;
+};
+
 /// The clustering flags, as `ptc cluster` spells them (--method, --objective, --max-count, ...);
 /// `ptc experiment` takes the same. apply() fills the ClusterConfig and lists the parameters the
 /// user set (names of kClusterParameters) in `given`.

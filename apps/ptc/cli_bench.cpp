@@ -17,7 +17,7 @@ struct BenchArgs {
   CameraArgs camera;
   GroupTreesArg group_trees;
   std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
-  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "directions";
+  FallbackFlags fallback;
   std::uint32_t max_count = kBenchDefaultMaxCount;
   CLI::App* app = nullptr;
 };
@@ -45,13 +45,10 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       o.config.adjacency = *parse_cluster_adjacency(a->adjacency);
                       o.config.isa = *bvh::parse_trace_isa(a->isa);
-                      o.config.cluster_fallback = *parse_cluster_fallback(a->cluster_fallback);
-                      o.config.fallback_refit = *parse_fallback_refit(a->fallback_refit);
-                      if (a->app->count("--fallback-refit") && !(o.config.cluster_fallback > 0))
-                        throw UsageError("--fallback-refit", "needs the triangle fallback (--cluster-fallback auto or X)");
-                      o.config.fallback_sah = *bvh::parse_fallback_sah(a->fallback_sah);
-                      if (a->app->count("--fallback-sah") && !(o.config.cluster_fallback > 0))
-                        throw UsageError("--fallback-sah", "needs the triangle fallback (--cluster-fallback auto or X)");
+                      o.config.cluster_fallback = *parse_cluster_fallback(a->fallback.swelling);
+                      o.config.fallback_refit = *parse_fallback_refit(a->fallback.refit);
+                      o.config.fallback_sah = *bvh::parse_fallback_sah(a->fallback.sah);
+                      a->fallback.require_fallback(o.config.cluster_fallback > 0);
                       if (o.config.isa != bvh::TraceIsa::Auto && bvh::resolve(o.config.isa) != o.config.isa)
                         throw UsageError("--isa", std::string("this CPU has no ") +
                                                       (o.config.isa == bvh::TraceIsa::Avx512 || o.config.isa == bvh::TraceIsa::Avx512Vl
@@ -139,17 +136,7 @@ void register_bench(CLI::App& app, Context& ctx) {
       ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);
-  static_assert(bvh::kAutoFallbackSwelling == 64.0, "the --cluster-fallback help quotes the threshold");
-  c->add_option("--cluster-fallback", a->cluster_fallback, kClusterFallbackHelp)
-      ->check(cluster_fallback_validator())
-      ->capture_default_str();
-  static_assert(bvh::kAutoFallbackRefitGrowth == 0.2, "the --fallback-refit help quotes the limit");
-  c->add_option("--fallback-refit", a->fallback_refit, kFallbackRefitHelp)
-      ->check(fallback_refit_validator())
-      ->capture_default_str();
-  c->add_option("--fallback-sah", a->fallback_sah, kFallbackSahHelp)
-      ->check(enum_validator("fallback SAH (eye, directions or plain)", bvh::parse_fallback_sah))
-      ->capture_default_str();
+  a->fallback.add_to(c);
   c->add_option("--vertex-order", a->vertex_order,
                 "clusters: renumber the vertices once so each cluster's are consecutive (the cluster path then "
                 "streams, no gather; every configuration sees the same mesh), or input: keep the file's order")

@@ -43,6 +43,22 @@ bvh::GroupTrees GroupTreesArg::get(bool two_level, const std::string& needs) con
   return *bvh::parse_group_trees(value);
 }
 
+void FallbackFlags::add_to(CLI::App* c) {
+  cmd = c;
+  static_assert(bvh::kAutoFallbackSwelling == 64.0, "the --cluster-fallback help quotes the threshold");
+  c->add_option("--cluster-fallback", swelling, kClusterFallbackHelp)->check(cluster_fallback_validator())->capture_default_str();
+  static_assert(bvh::kAutoFallbackRefitGrowth == 0.2, "the --fallback-refit help quotes the limit");
+  c->add_option("--fallback-refit", refit, kFallbackRefitHelp)->check(fallback_refit_validator())->capture_default_str();
+  c->add_option("--fallback-sah", sah, kFallbackSahHelp)
+      ->check(enum_validator("fallback SAH (eye, directions or plain)", bvh::parse_fallback_sah))
+      ->capture_default_str();
+}
+
+void FallbackFlags::require_fallback(bool on) const {
+  for (const char* f : {"--fallback-refit", "--fallback-sah"})
+    if (!on && cmd->count(f)) throw UsageError(f, "needs the triangle fallback (--cluster-fallback auto or X)");
+}
+
 void CameraArgs::add_to(CLI::App* c, bool with_light) {
   c->add_option("--eye", eye, "camera position (default: the scene's camera, else framing the whole first frame)")
       ->check(vec3_validator());

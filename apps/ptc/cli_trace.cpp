@@ -15,7 +15,7 @@ struct TraceArgs {
   std::string frame, frames, cost_range, deform, vertex_order = "input";
   GroupTreesArg group_trees;
   std::uint32_t cluster_groups = bvh::cluster_scene_defaults().cluster_group_size;  // (given: opt.cluster_group_size)
-  std::string cluster_fallback = "auto", fallback_refit = "auto", fallback_sah = "directions";
+  FallbackFlags fallback;
   CLI::App* app = nullptr;
 };
 }  // namespace
@@ -40,17 +40,10 @@ void register_trace(CLI::App& app, Context& ctx) {
     for (const char* f : {"--ao-distance", "--seed"})
       if (a->app->count(f) && o.render.ao_samples == 0) throw UsageError(f, "needs ambient occlusion (--ao N > 0)");
     if (a->app->count("--cluster-groups")) o.cluster_group_size = a->cluster_groups;
-    if (a->app->count("--cluster-fallback")) o.cluster_fallback = *parse_cluster_fallback(a->cluster_fallback);
-    if (a->app->count("--fallback-refit")) {
-      o.fallback_refit = *parse_fallback_refit(a->fallback_refit);
-      if (o.cluster_fallback && !(*o.cluster_fallback > 0))
-        throw UsageError("--fallback-refit", "needs the triangle fallback (--cluster-fallback auto or X)");
-    }
-    if (a->app->count("--fallback-sah")) {
-      o.fallback_sah = *bvh::parse_fallback_sah(a->fallback_sah);
-      if (o.cluster_fallback && !(*o.cluster_fallback > 0))
-        throw UsageError("--fallback-sah", "needs the triangle fallback (--cluster-fallback auto or X)");
-    }
+    if (a->app->count("--cluster-fallback")) o.cluster_fallback = *parse_cluster_fallback(a->fallback.swelling);
+    if (a->app->count("--fallback-refit")) o.fallback_refit = *parse_fallback_refit(a->fallback.refit);
+    if (a->app->count("--fallback-sah")) o.fallback_sah = *bvh::parse_fallback_sah(a->fallback.sah);
+    a->fallback.require_fallback(!o.cluster_fallback || *o.cluster_fallback > 0);  // (unset: auto, on)
     const bvh::GroupTrees trees = a->group_trees.get(
         !o.clusters.empty() && o.cluster_group_size.value_or(bvh::cluster_scene_defaults().cluster_group_size) > 1,
         "a cluster BVH with the two-level build (--clusters DIR, --cluster-groups N > 1)");
@@ -76,15 +69,7 @@ void register_trace(CLI::App& app, Context& ctx) {
       ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);
-  c->add_option("--cluster-fallback", a->cluster_fallback, kClusterFallbackHelp)
-      ->check(cluster_fallback_validator())
-      ->capture_default_str();
-  c->add_option("--fallback-refit", a->fallback_refit, kFallbackRefitHelp)
-      ->check(fallback_refit_validator())
-      ->capture_default_str();
-  c->add_option("--fallback-sah", a->fallback_sah, kFallbackSahHelp)
-      ->check(enum_validator("fallback SAH (eye, directions or plain)", bvh::parse_fallback_sah))
-      ->capture_default_str();
+  a->fallback.add_to(c);
   c->add_option("--vertex-order", a->vertex_order,
                 "with --clusters: clusters renumbers the vertices once so each cluster's are consecutive (the "
                 "method's precomputation, as in ptc bench: each frame's update streams instead of gathering, which "

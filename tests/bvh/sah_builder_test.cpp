@@ -721,7 +721,7 @@ TEST(SahBuilder, AreaFromAPointIsItsSolidAngle) {
   }
 }
 
-// A point beyond 2^20 root diagonals is moved in along its direction (near_area_eye): points at
+// A point beyond 2^20 root diagonals is moved in along its direction (with_near_area_eye): points at
 // 2^40 and 2^100 straight up build the same tree, a valid one, in both builders (at 2^100 the
 // float solid angles would overflow: every box would price 0).
 TEST(SahBuilder, AFarPointIsMovedIn) {

@@ -164,6 +164,9 @@ TEST(TraceCamera, DirectionAreaWeights) {
     sphere.push_back({static_cast<float>(r * std::cos(phi)), static_cast<float>(r * std::sin(phi)), static_cast<float>(z)});
   }
   for (const float x : direction_area_weights(batch(sphere))) EXPECT_NEAR(x, 1.0f, 2e-3f);
+  // A camera's weights without its rays: those of its primary rays, bit for bit.
+  const ptc::bvh::PinholeCamera cam = ptc::bvh::frame_box(ptc::Box3(Vec3(-1, 0, 2), Vec3(3, 2, 5)), Vec3(0.2, -0.5, -1.0));
+  EXPECT_EQ(direction_area_weights(cam, 37, 23), direction_area_weights(ptc::bvh::primary_rays(cam, 37, 23)));
 }
 
 // What the weights are for: with those of parallel rays along d, a quarter of a box's weighted
