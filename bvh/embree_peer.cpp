@@ -175,14 +175,15 @@ void trace_singles(RTCScene scene, const FrameMap& frame, const RayBatch& rays, 
   }
 }
 
-// Rays [begin, end) in packets of N consecutive rays (rtcIntersectN / rtcOccludedN, coherent);
-// the lanes past `end` of the last packet are invalid.
+// Rays [begin, end) in packets of N consecutive rays (rtcIntersectN / rtcOccludedN, with the
+// coherent or the incoherent context flag); the lanes past `end` of the last packet are invalid.
 template <int N, typename RayHitN, typename IntersectFn, typename OccludedFn>
 void trace_packets_of(RTCScene scene, const FrameMap& frame, const RayBatch& rays, HitBatch& hits, HitMode mode,
-                      std::size_t begin, std::size_t end, TraceTotals& tot, IntersectFn intersect, OccludedFn occluded) {
+                      bool coherent, std::size_t begin, std::size_t end, TraceTotals& tot, IntersectFn intersect,
+                      OccludedFn occluded) {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
   const TScale ts(frame.scale);
   for (std::size_t first = begin; first < end; first += N) {
     const int n = static_cast<int>(std::min<std::size_t>(N, end - first));
@@ -235,7 +236,7 @@ TraceTotals EmbreeScene::trace(const RayBatch& rays, HitBatch& hits, HitMode mod
 }
 
 TraceTotals EmbreeScene::trace_packets(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads,
-                                       int width) const {
+                                       int width, bool coherent) const {
   if (width != 1 && width != 4 && width != 8 && width != 16)
     throw std::invalid_argument("Embree packets: width " + std::to_string(width) + " is not 1, 4, 8 or 16");
   const Impl& im = *impl_;
@@ -248,10 +249,15 @@ TraceTotals EmbreeScene::trace_packets(const RayBatch& rays, HitBatch& hits, Hit
     const std::size_t b = range.begin() * kTile, e = std::min(n, range.end() * kTile);
     switch (width) {
       case 1: trace_singles(im.scene, im.frame, rays, hits, mode, b, e, tot); break;
-      case 4: trace_packets_of<4, RTCRayHit4>(im.scene, im.frame, rays, hits, mode, b, e, tot, rtcIntersect4, rtcOccluded4); break;
-      case 8: trace_packets_of<8, RTCRayHit8>(im.scene, im.frame, rays, hits, mode, b, e, tot, rtcIntersect8, rtcOccluded8); break;
+      case 4:
+        trace_packets_of<4, RTCRayHit4>(im.scene, im.frame, rays, hits, mode, coherent, b, e, tot, rtcIntersect4, rtcOccluded4);
+        break;
+      case 8:
+        trace_packets_of<8, RTCRayHit8>(im.scene, im.frame, rays, hits, mode, coherent, b, e, tot, rtcIntersect8, rtcOccluded8);
+        break;
       default:
-        trace_packets_of<16, RTCRayHit16>(im.scene, im.frame, rays, hits, mode, b, e, tot, rtcIntersect16, rtcOccluded16);
+        trace_packets_of<16, RTCRayHit16>(im.scene, im.frame, rays, hits, mode, coherent, b, e, tot, rtcIntersect16,
+                                          rtcOccluded16);
     }
   };
   const std::size_t tiles = (n + kTile - 1) / kTile;

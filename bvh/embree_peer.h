@@ -66,7 +66,10 @@ class EmbreeScene {
   /// The same with packets of `width` (4, 8 or 16) consecutive rays: rtcIntersect4/8/16 or
   /// rtcOccluded4/8/16 with the coherent context flag (RTC_INTERSECT_CONTEXT_FLAG_COHERENT), the
   /// peer of our packet path (TraceOptions::packets). width 1: trace() above; else std::invalid_argument.
-  TraceTotals trace_packets(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads, int width) const;
+  /// coherent: the packets' context flag, RTC_INTERSECT_CONTEXT_FLAG_COHERENT (true) or
+  /// _INCOHERENT (false, Embree's default); the same hits either way.
+  TraceTotals trace_packets(const RayBatch& rays, HitBatch& hits, HitMode mode, unsigned threads, int width,
+                            bool coherent = true) const;
 
  private:
   struct Impl;

@@ -94,6 +94,11 @@ struct TraceOptions {
   /// same rays are occluded). Needs AVX2 or AVX-512 (isa other than Sse2, on a CPU with it); else
   /// single rays.
   bool packets = false;
+  /// A hint for the peer only (ours ignores it): with packets, Embree's context flag,
+  /// RTC_INTERSECT_CONTEXT_FLAG_COHERENT (true: a camera's rows) or _INCOHERENT (false: Embree's
+  /// default, which its documentation advises for rays other than a camera's; docs/tracing.md,
+  /// "Embree's shadow packets").
+  bool coherent = true;
 };
 
 /// Sums over a batch.

@@ -25,7 +25,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   c.threads = resolve_threads(c.threads);
   refuse_overwriting_input(opt.out_dir, opt.input);
   refuse_overwriting_input(opt.out_dir, opt.clusters);
-  RunManifest manifest("bench", opt.argv, "ptc-bench/7");
+  RunManifest manifest("bench", opt.argv, "ptc-bench/8");
   const std::string arg = opt.input.string();
   MovingScene ms = open_moving_scene(opt.input, opt.scene_options, opt.deform, opt.frames, opt.extend_frames, manifest);
   Scene& scene = ms.scene;
@@ -121,6 +121,8 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("packets", opt.config.packets);
   manifest.set_parameter("isa", bvh::to_string(r.isa));  // our tracer's variant (Embree keeps its own)
   if (opt.config.packets) manifest.set_parameter("embree_packet_width", opt.config.embree_packet_width);
+  if (opt.config.packets && opt.shadows)
+    manifest.set_parameter("embree_shadow_hint", std::string(to_string(opt.config.embree_shadow_hint)));
   if (opt.shadows) manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
   manifest.set_result("triangles", r.triangles);
   manifest.set_result("clusters", r.clusters);

@@ -80,6 +80,16 @@ TraceTarget with_counters(TraceTarget target) {
   return target;
 }
 
+TraceTarget with_coherence(TraceTarget target, bool coherent) {
+  auto inner = std::move(target.trace);
+  target.trace = [inner = std::move(inner), coherent](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
+    bvh::TraceOptions c = o;
+    c.coherent = coherent;
+    return inner(r, h, c);
+  };
+  return target;
+}
+
 TraceTarget with_isa(TraceTarget target, bvh::TraceIsa isa) {
   auto inner = std::move(target.trace);
   target.trace = [inner = std::move(inner), isa](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {

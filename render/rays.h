@@ -80,6 +80,9 @@ template <class Tracer>
 /// The same target tracing with the per-ray counters on, whatever the pass asks (the untimed
 /// counted trace of the experiments and benchmarks).
 [[nodiscard]] TraceTarget with_counters(TraceTarget target);
+/// The same target with the rays' coherence hint (bvh::TraceOptions::coherent: Embree's packets'
+/// context flag; our tracer ignores it), whatever the pass asks.
+[[nodiscard]] TraceTarget with_coherence(TraceTarget target, bool coherent);
 /// The same target tracing with our tracer's instruction-set variant `isa`, whatever the pass
 /// asks (Embree's targets ignore it).
 [[nodiscard]] TraceTarget with_isa(TraceTarget target, bvh::TraceIsa isa);

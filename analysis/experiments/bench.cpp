@@ -38,6 +38,17 @@ double nan() { return std::numeric_limits<double>::quiet_NaN(); }
 
 }  // namespace
 
+const char* to_string(EmbreeShadowHint h) {
+  return h == EmbreeShadowHint::Best ? "best" : h == EmbreeShadowHint::Coherent ? "coherent" : "incoherent";
+}
+
+std::optional<EmbreeShadowHint> parse_embree_shadow_hint(std::string_view s) {
+  if (s == "best") return EmbreeShadowHint::Best;
+  if (s == "coherent") return EmbreeShadowHint::Coherent;
+  if (s == "incoherent") return EmbreeShadowHint::Incoherent;
+  return std::nullopt;
+}
+
 std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame) {
   std::vector<BenchSummary> out;
   std::map<std::string, std::vector<const BenchRow*>> by;
@@ -167,6 +178,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   res.shadows = cfg.light.has_value();
   res.packets = cfg.packets;
   res.embree_packet_width = cfg.embree_packet_width;
+  res.embree_shadow_hint = cfg.embree_shadow_hint;
   res.isa = bvh::resolve(cfg.isa);
   std::optional<Mesh> frame_mesh;  // only with a light: the frame's positions on the mesh's triangles
   SurfaceHits surface;
@@ -206,8 +218,31 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
         surface = surface_hits(*frame_mesh, rays, ref);
         frame_bounds = frame_mesh->bounds();
       }
-      const ShadowResult sr = trace_shadows(with_isa(target_of(a), cfg.isa), surface, *cfg.light,
-                                            RayFrame{frame_bounds, a.origin()}, cfg.threads, cfg.packets);
+      const TraceTarget target = with_isa(target_of(a), cfg.isa);
+      auto shadows = [&](bool coherent) {
+        return trace_shadows(with_coherence(target, coherent), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
+                             cfg.threads, cfg.packets);
+      };
+      ShadowResult sr;
+      if (cfg.packets && loop::is_embree(loop::kAllAccelKinds[fr.accel])) {
+        bool coherent = cfg.embree_shadow_hint != EmbreeShadowHint::Incoherent;
+        if (cfg.embree_shadow_hint == EmbreeShadowHint::Best) {
+          // Both flags, first one then the other, the order alternating with the frame (so that
+          // neither always finds the caches warm); the faster counts.
+          const bool first = fr.index % 2 == 0;
+          ShadowResult one = shadows(first), two = shadows(!first);
+          ShadowResult& with_coherent = first ? one : two;
+          ShadowResult& with_incoherent = first ? two : one;
+          coherent = with_coherent.stats.trace_ms <= with_incoherent.stats.trace_ms;
+          row.shadow_other_ms = coherent ? with_incoherent.stats.trace_ms : with_coherent.stats.trace_ms;
+          sr = std::move(coherent ? with_coherent : with_incoherent);
+        } else {
+          sr = shadows(coherent);
+        }
+        row.shadow_hint = coherent ? "coherent" : "incoherent";
+      } else {
+        sr = shadows(true);
+      }
       row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
       if (fr.accel == 0) ref_lit = sr.lit;
       else
@@ -233,7 +268,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
 }
 
 Table bench_table(const PeerBenchResult& r) {
-  return tabulate(Schema{"ptc-bench", 7}, r.rows, [](const BenchRow& x, Columns& col) {
+  return tabulate(Schema{"ptc-bench", 8}, r.rows, [](const BenchRow& x, Columns& col) {
     col("frame", x.frame);
     col("config", x.config);
     col("update_ms", x.times.update_ms);
@@ -271,6 +306,8 @@ Table bench_table(const PeerBenchResult& r) {
     col("swelling", x.swelling);
     col("fallback", x.fallback);
     col("fallback_refit", x.fallback_refit);
+    col("shadow_hint", x.shadow_hint);
+    col("shadow_other_ms", x.shadow_other_ms);
   });
 }
 
@@ -391,6 +428,23 @@ std::string fallback_text(const PeerBenchResult& r) {
   }
   return s + (runs.empty() ? std::string() : " (scene frames " + runs + ")") + (fell.empty() ? std::string() : tree + sah) + "\n";
 }
+// With EmbreeShadowHint::Best: per Embree configuration, the frames of the medians on which each
+// context flag was the faster for the shadow packets; empty otherwise.
+std::string shadow_hint_text(const PeerBenchResult& r) {
+  if (!r.packets || !r.shadows || r.embree_shadow_hint != EmbreeShadowHint::Best) return {};
+  std::string s;
+  for (loop::AccelKind e : kEmbree) {
+    int coherent = 0, incoherent = 0;
+    for (const auto& row : r.rows)
+      if (row.config == to_string(e) && row.frame >= r.median_first_frame)
+        (row.shadow_hint == "coherent" ? coherent : incoherent) += row.shadow_hint.empty() ? 0 : 1;
+    if (coherent + incoherent == 0) continue;
+    s += fmt::format("{}{} coherent on {}, incoherent on {}", s.empty() ? "" : "; ", to_string(e), coherent, incoherent);
+  }
+  return s.empty() ? s
+                   : "Embree's shadow packets, the faster flag per frame (frames of the medians; bench.csv shadow_hint, "
+                     "shadow_other_ms): " + s + "\n";
+}
 }  // namespace
 
 std::string bench_text(const PeerBenchResult& r) {
@@ -402,8 +456,14 @@ std::string bench_text(const PeerBenchResult& r) {
   s += fmt::format("whole frame = update + build + primary{} (> 1: the row is faster; Embree's frame / the row's){}\n",
                    r.shadows ? " + shadow rays" : "",
                    r.packets ? fmt::format("; rays in packets (ours: 8, one per AVX2 lane; Embree: {0}, "
-                                           "rtcIntersect{0}/rtcOccluded{0}, coherent)",
-                                           r.embree_packet_width)
+                                           "rtcIntersect{0} coherent{1})",
+                                           r.embree_packet_width,
+                                           !r.shadows ? std::string()
+                                           : r.embree_shadow_hint == EmbreeShadowHint::Best
+                                               ? fmt::format(", rtcOccluded{} with the faster of its coherent and incoherent "
+                                                             "flags each frame", r.embree_packet_width)
+                                               : fmt::format(", rtcOccluded{} {}", r.embree_packet_width,
+                                                             to_string(r.embree_shadow_hint)))
                              : std::string());
   s += fmt::format("{:<16} {:>10}", "config", "whole_ms");  // (summary.csv's whole_frame_ms)
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>15}", "vs " + std::string(to_string(e)));
@@ -484,6 +544,7 @@ std::string bench_text(const PeerBenchResult& r) {
                        bvh::kAutoTablesMaxShare);
   }
   s += fallback_text(r);
+  s += shadow_hint_text(r);
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>19}", "upd+build vs " + std::string(to_string(e).substr(7)));

@@ -12,7 +12,8 @@
 // ours_triangles of the same frame (analysis/metrics/hit_agreement.h). With a light (the
 // default of `ptc bench`): shadow rays towards it (render/rays.h trace_shadows, any hit), one
 // batch per frame made from ours_triangles' primary hits and traced by every configuration
-// (rtcOccluded1 for Embree), shadow_ms timed alone, and the points lit differently from
+// (rtcOccluded1 for Embree; with packets rtcOccludedN, by default timed with both context
+// flags and the faster counted: EmbreeShadowHint), shadow_ms timed alone, and the points lit differently from
 // ours_triangles counted; the whole frame is update + build + primary trace + shadow trace.
 // Medians skip the first frame (first-touch page faults, caches, Embree's lazy initialisation)
 // when there is more than one. Threads: oneTBB is limited to `threads` for the whole run
@@ -41,6 +42,14 @@ namespace ptc {
 /// MaxCount = MaxSize of the bench's own clustering when neither the user nor the scene gives one
 /// (docs/tracing.md, "The bench's cluster size").
 inline constexpr std::uint32_t kBenchDefaultMaxCount = 32;
+
+/// Embree's shadow packets' context flag (`ptc bench --embree-shadow-hint`): Best times each
+/// frame's shadow rays with both flags and counts the faster (the other's time is kept), since
+/// neither is faster on every scene (docs/tracing.md, "Embree's shadow packets"); Coherent or
+/// Incoherent: that flag alone. Primary packets always take the coherent flag (a camera's rows).
+enum class EmbreeShadowHint : std::uint8_t { Best, Coherent, Incoherent };
+[[nodiscard]] const char* to_string(EmbreeShadowHint h);
+[[nodiscard]] std::optional<EmbreeShadowHint> parse_embree_shadow_hint(std::string_view s);
 
 struct PeerBenchConfig {
   FrameRange frames{0, 4};                ///< scene frames (the first is left out of the medians)
@@ -80,10 +89,12 @@ struct PeerBenchConfig {
   /// update + build + primary trace).
   std::optional<Vec3> light;
   /// Trace primary and shadow rays in packets: ours with bvh::TraceOptions::packets (8 rays, one
-  /// per AVX2 lane), Embree with rtcIntersectN / rtcOccludedN (N = embree_packet_width) and the
-  /// coherent flag. Off: single rays on both sides (rtcIntersect1 / rtcOccluded1).
+  /// per AVX2 lane), Embree with rtcIntersectN / rtcOccludedN (N = embree_packet_width), the
+  /// coherent flag for primary rays and embree_shadow_hint's for shadow rays. Off: single rays
+  /// on both sides (rtcIntersect1 / rtcOccluded1).
   bool packets = false;
   int embree_packet_width = 8;  ///< Embree's packets with `packets`: 4, 8 or 16 rays (rtcIntersect4/8/16)
+  EmbreeShadowHint embree_shadow_hint = EmbreeShadowHint::Best;  ///< with `packets` and a light
   /// Our tracer's instruction-set variant (bvh::TraceOptions::isa; Auto: see bvh/tracer.h).
   /// Embree keeps its own choice.
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;
@@ -114,6 +125,11 @@ struct BenchRow {
   /// trace time, and points whose lit/unlit differs from ours_triangles' of the same frame.
   std::uint64_t shadow_rays = 0, shadow_occluded = 0, shadow_mismatches = 0;
   double shadow_ms = 0;
+  /// Embree's shadow packets: the context flag of shadow_ms ("coherent" or "incoherent"; empty
+  /// for ours, single rays and without a light), and with EmbreeShadowHint::Best the other
+  /// flag's time (NaN otherwise).
+  std::string shadow_hint;
+  double shadow_other_ms = std::numeric_limits<double>::quiet_NaN();
   /// update_ms + build_ms + trace_ms + shadow_ms.
   [[nodiscard]] double whole_frame_ms() const { return times.update_ms + times.build_ms + trace_ms + shadow_ms; }
   /// Per-ray traversal counters of ours (an untimed second trace with counters on: the timed one
@@ -156,6 +172,7 @@ struct PeerBenchResult {
   bool shadows = false;                ///< a shadow pass was traced (cfg.light)
   bool packets = false;                ///< rays were traced in packets (cfg.packets)
   int embree_packet_width = 8;         ///< and Embree's packet width
+  EmbreeShadowHint embree_shadow_hint = EmbreeShadowHint::Best;  ///< and its shadow packets' flag (cfg's)
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
   double cluster_fallback = 0;         ///< the fallback's threshold (cfg.cluster_fallback; 0: off)
   double fallback_refit = 0;           ///< the fallback's refit limit (cfg.fallback_refit; 0: rebuilt every frame)
@@ -191,7 +208,7 @@ struct FrameRatioRange {
 /// and mismatch sums over all frames: the summary of run_peer_bench, recomputable from rows.
 [[nodiscard]] std::vector<BenchSummary> summarize(const std::vector<BenchRow>& rows, int first_frame);
 
-/// bench.csv (schema ptc-bench/7, docs/tracing.md): one row per frame and configuration.
+/// bench.csv (schema ptc-bench/8, docs/tracing.md): one row per frame and configuration.
 [[nodiscard]] Table bench_table(const PeerBenchResult& r);
 /// summary.csv (schema ptc-bench-summary/3): medians per configuration and ratios against each Embree mode.
 [[nodiscard]] Table bench_summary_table(const PeerBenchResult& r);

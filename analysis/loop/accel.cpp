@@ -81,8 +81,9 @@ class EmbreeAccel final : public Accel {
     return {scene_.last_vertex_ms(), scene_.last_commit_ms(), {}};
   }
   bvh::TraceTotals trace(const bvh::RayBatch& rays, bvh::HitBatch& hits, const bvh::TraceOptions& opt) const override {
-    // Packets: Embree's packets (rtcIntersect4/8/16) with the coherent flag, the peer of ours.
-    return scene_.trace_packets(rays, hits, opt.mode, threads_, opt.packets ? packet_width_ : 1);
+    // Packets: Embree's packets (rtcIntersect4/8/16), the peer of ours, with the options' hint
+    // (TraceOptions::coherent: the coherent or the incoherent context flag).
+    return scene_.trace_packets(rays, hits, opt.mode, threads_, opt.packets ? packet_width_ : 1, opt.coherent);
   }
   void check_rays(const bvh::RayBatch& rays) const override { scene_.check_rays(rays); }
   [[nodiscard]] Vec3 origin() const override { return origin_; }

@@ -17,6 +17,7 @@ struct BenchArgs {
   CameraArgs camera;
   GroupTreesArg group_trees;
   std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
+  std::string embree_shadow_hint = "best";
   FallbackFlags fallback;
   std::uint32_t max_count = kBenchDefaultMaxCount;
   CLI::App* app = nullptr;
@@ -45,6 +46,7 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       o.config.adjacency = *parse_cluster_adjacency(a->adjacency);
                       o.config.isa = *bvh::parse_trace_isa(a->isa);
+                      o.config.embree_shadow_hint = *parse_embree_shadow_hint(a->embree_shadow_hint);
                       o.config.cluster_fallback = *parse_cluster_fallback(a->fallback.swelling);
                       o.config.fallback_refit = *parse_fallback_refit(a->fallback.refit);
                       o.config.fallback_sah = *bvh::parse_fallback_sah(a->fallback.sah);
@@ -69,6 +71,8 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.light = a->camera.light_position();
                       if (a->app->count("--light") && !o.shadows)  // (the light is only the shadow rays' target)
                         throw UsageError("--light", "needs shadow rays (drop --no-shadows)");
+                      if (a->app->count("--embree-shadow-hint") && !o.shadows)
+                        throw UsageError("--embree-shadow-hint", "needs shadow rays (drop --no-shadows)");
                       o.argv = ctx.args;
                       cmd_bench(o, std::cout);
                     });
@@ -79,11 +83,18 @@ void register_bench(CLI::App& app, Context& ctx) {
               "primary rays only (default: the whole frame includes shadow rays to the light)");
   auto* packets = c->add_flag("--packets", cfg.packets,
                               "trace primary and shadow rays in packets (ours: 8, one ray per AVX2 lane; Embree: "
-                              "rtcIntersectN / rtcOccludedN, coherent, N = --embree-packet-width); default: single "
+                              "rtcIntersectN / rtcOccludedN, N = --embree-packet-width); default: single "
                               "rays on both sides");
   c->add_option("--embree-packet-width", cfg.embree_packet_width,
                 "with --packets: Embree's packet width, 4, 8 or 16 (rtcIntersect4/8/16)")
       ->check(CLI::IsMember({4, 8, 16}))
+      ->needs(packets)
+      ->capture_default_str();
+  c->add_option("--embree-shadow-hint", a->embree_shadow_hint,
+                "with --packets: the context flag of Embree's shadow packets (rtcOccludedN), best (each frame "
+                "timed with both, the faster counted), coherent or incoherent (Embree's default); its primary "
+                "packets are coherent")
+      ->check(enum_validator("Embree shadow hint (best, coherent or incoherent)", parse_embree_shadow_hint))
       ->needs(packets)
       ->capture_default_str();
   c->add_option("--isa", a->isa,

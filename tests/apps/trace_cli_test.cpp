@@ -742,7 +742,34 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
                                 "--out", (dir_ / "packed").string()});
   ASSERT_EQ(packed.code, 0) << packed.err;
   EXPECT_NE(packed.out.find("rays in packets (ours: 8, one per AVX2 lane; Embree: 8,"), std::string::npos) << packed.out;
-  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "packed" / "manifest.json"))["parameters"]["packets"], true);
+  const nlohmann::json pm = nlohmann::json::parse(slurp(dir_ / "packed" / "manifest.json"));
+  EXPECT_EQ(pm["parameters"]["packets"], true);
+  EXPECT_EQ(pm["parameters"]["embree_shadow_hint"], "best");
+  EXPECT_NE(packed.out.find("rtcOccluded8 with the faster of its coherent and incoherent flags each frame"), std::string::npos)
+      << packed.out;
+  // --embree-shadow-hint: one flag for Embree's shadow packets, recorded per row; usage errors
+  // without packets, without shadow rays and for another value.
+  const CmdResult incoherent = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--packets",
+                                    "--embree-shadow-hint", "incoherent", "--out", (dir_ / "incoherent").string()});
+  ASSERT_EQ(incoherent.code, 0) << incoherent.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "incoherent" / "manifest.json"))["parameters"]["embree_shadow_hint"],
+            "incoherent");
+  for (const auto& row : csv_rows(slurp(dir_ / "incoherent" / "bench.csv"))) {
+    const bool embree = row.at("config").rfind("embree_", 0) == 0;
+    EXPECT_EQ(row.at("shadow_hint"), embree ? "incoherent" : "") << row.at("config");
+  }
+  for (const auto& [args, name] :
+       {std::pair{std::vector<std::string>{"--embree-shadow-hint", "coherent"}, "nopackets"},
+        std::pair{std::vector<std::string>{"--packets", "--no-shadows", "--embree-shadow-hint", "coherent"}, "noshadows"},
+        std::pair{std::vector<std::string>{"--packets", "--embree-shadow-hint", "sometimes"}, "badhint"}}) {
+    std::vector<std::string> argv = {"bench", cube_.string()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    argv.insert(argv.end(), {"--out", (dir_ / name).string()});
+    const CmdResult bad = ptc(argv);
+    EXPECT_EQ(bad.code, 2) << name << ": " << bad.err;
+    EXPECT_NE(bad.err.find("--embree-shadow-hint"), std::string::npos) << name << ": " << bad.err;
+    EXPECT_FALSE(fs::exists(dir_ / name)) << name;
+  }
   // Embree's packet width means nothing without packets: a usage error, nothing written.
   const CmdResult width = ptc({"bench", cube_.string(), "--embree-packet-width", "16", "--out", (dir_ / "width").string()});
   EXPECT_EQ(width.code, 2) << width.err;

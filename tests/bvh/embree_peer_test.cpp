@@ -85,6 +85,17 @@ TEST(EmbreePeer, TracesInTheScaledTraceFrameExactly) {
         (void)s.trace_packets(r, any, HitMode::Any, 1, width);
         for (std::size_t i = 0; i < rays.size(); ++i)
           ASSERT_EQ(any.triangle[i] != kNoTriangle, want.triangle[i] != kNoTriangle) << what << " any hit, ray " << i;
+        // The incoherent context flag (Embree's default; the bench's shadow packets may take
+        // it): the same closest hits and the same occluded rays.
+        HitBatch loose, loose_any;
+        (void)s.trace_packets(r, loose, HitMode::Closest, 1, width, /*coherent=*/false);
+        (void)s.trace_packets(r, loose_any, HitMode::Any, 1, width, /*coherent=*/false);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          ASSERT_EQ(loose.triangle[i], got.triangle[i]) << what << " incoherent, ray " << i;
+          ASSERT_EQ(loose.t[i], got.t[i]) << what << " incoherent, ray " << i;
+          ASSERT_EQ(loose_any.triangle[i] != kNoTriangle, any.triangle[i] != kNoTriangle)
+              << what << " incoherent any hit, ray " << i;
+        }
       }
     }
 }

@@ -291,7 +291,7 @@ TEST_F(Commands, BenchEveryConfigurationHitsWhatBruteForceHits) {
   }
   EXPECT_EQ(configs.size(), 5u);
   const auto m = nlohmann::json::parse(slurp(dir_ / "b" / "manifest.json"));
-  EXPECT_EQ(m["output_schemas"]["bench.csv"], "ptc-bench/7");
+  EXPECT_EQ(m["output_schemas"]["bench.csv"], "ptc-bench/8");
   EXPECT_EQ(m["parameters"]["threads"], 1);
   // An animated scene refuses a stand-in motion; frames outside its range are refused.
   o.input = write_scene(dir_);

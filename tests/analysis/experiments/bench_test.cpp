@@ -216,6 +216,49 @@ TEST(PeerBench, ShadowRaysAgreeAcrossConfigurationsWithOccluders) {
       EXPECT_EQ(packed.shadow_mismatches, 0u) << "packets " << row.config;
     }
   }
+  // Embree's shadow packets: by default (Best) each frame timed with both context flags, the
+  // faster counted and the other kept; with one flag, that flag alone. The same occluded points
+  // with every flag; ours and single rays have no flag.
+  const bool embree_row[] = {false, false, true, true, true};
+  ASSERT_EQ(names.size(), std::size(embree_row));
+  for (const ptc::EmbreeShadowHint hint :
+       {ptc::EmbreeShadowHint::Best, ptc::EmbreeShadowHint::Coherent, ptc::EmbreeShadowHint::Incoherent}) {
+    cfg.embree_shadow_hint = hint;
+    ptc::Scene sc3 = scene_of(m, ptc::DeformKind::Rigid);
+    const ptc::PeerBenchResult rh = ptc::run_peer_bench(sc3, std::nullopt, cfg);
+    ASSERT_EQ(rh.rows.size(), r.rows.size());
+    for (std::size_t i = 0; i < rh.rows.size(); ++i) {
+      const ptc::BenchRow& row = rh.rows[i];
+      const ptc::BenchRow& single = r.rows[i];
+      const std::string at = std::string(ptc::to_string(hint)) + " " + row.config + " frame " + std::to_string(row.frame);
+      EXPECT_TRUE(single.shadow_hint.empty()) << at;
+      EXPECT_TRUE(std::isnan(single.shadow_other_ms)) << at;
+      EXPECT_EQ(row.shadow_occluded, single.shadow_occluded) << at;
+      EXPECT_EQ(row.shadow_mismatches, 0u) << at;
+      if (!embree_row[i % names.size()]) {
+        EXPECT_TRUE(row.shadow_hint.empty()) << at;
+        EXPECT_TRUE(std::isnan(row.shadow_other_ms)) << at;
+      } else if (hint == ptc::EmbreeShadowHint::Best) {
+        EXPECT_TRUE(row.shadow_hint == "coherent" || row.shadow_hint == "incoherent") << at << ": " << row.shadow_hint;
+        EXPECT_GE(row.shadow_other_ms, row.shadow_ms) << at;  // (the faster counts)
+      } else {
+        EXPECT_EQ(row.shadow_hint, ptc::to_string(hint)) << at;
+        EXPECT_TRUE(std::isnan(row.shadow_other_ms)) << at;
+      }
+    }
+    const std::string text = ptc::bench_text(rh);
+    EXPECT_EQ(text.find("Embree's shadow packets, the faster flag per frame") != std::string::npos,
+              hint == ptc::EmbreeShadowHint::Best)
+        << text;
+  }
+}
+
+TEST(PeerBench, EmbreeShadowHintNamesParse) {
+  for (const ptc::EmbreeShadowHint h :
+       {ptc::EmbreeShadowHint::Best, ptc::EmbreeShadowHint::Coherent, ptc::EmbreeShadowHint::Incoherent})
+    EXPECT_EQ(ptc::parse_embree_shadow_hint(ptc::to_string(h)), h);
+  EXPECT_FALSE(ptc::parse_embree_shadow_hint("Coherent"));
+  EXPECT_FALSE(ptc::parse_embree_shadow_hint(""));
 }
 
 TEST(PeerBench, GivenClusteringAndLinearLeavesAlsoMatch) {
