@@ -43,7 +43,8 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   const Box3 shape = scene.rest().referenced_bounds();  // (unreferenced vertices are not framed)
   const bvh::PinholeCamera cam = make_camera(c.camera, shape, c.width, c.height, arg);
   c.made_camera = cam;  // (the bench's rays: the same camera, framed once)
-  const LightChoice light = light_for(opt.light, scene, cam, shape);
+  check_eye_reach(cam, opt.config.camera, scene, arg);
+  const LightChoice light = opt.shadows ? light_for(opt.light, scene, cam, shape, arg) : LightChoice{};  // (only the shadow rays' target)
   if (opt.shadows) c.light = light.position;
   // The output directory is checked before the (long) run, so a refused target costs nothing.
   OutputDir dir(opt.out_dir);

@@ -19,12 +19,24 @@
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
+#include "toolkit/geometry/triangle.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/topology.h"
 
 namespace ptc {
 
 namespace {
+
+// A cluster's metrics measured on the mesh times 2^-k, in the mesh's own units: lengths (the
+// sphere, the box) times 2^k, areas times 2^2k (exact unless they leave double's range); the
+// ratios (reg, connectivity, p_hit, Acc's terms) are the same at any scale.
+void unscale_lengths(ClusterMetrics& m, int k) {
+  if (!m.sphere.is_empty()) m.sphere.center = times_pow2(m.sphere.center, k), m.sphere.radius = times_pow2(m.sphere.radius, k);
+  if (!m.box.empty()) m.box.lo = times_pow2(m.box.lo, k), m.box.hi = times_pow2(m.box.hi, k);
+  m.area = times_pow2(m.area, 2 * k);
+  m.area_c = times_pow2(m.area_c, 2 * k);
+  m.area_p = times_pow2(m.area_p, 2 * k);
+}
 
 // The value of a used parameter, for the manifest.
 nlohmann::json value_of(const ClusterConfig& c, std::string_view p) {
@@ -97,22 +109,48 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   // when an Acc objective ran (on the whole mesh it comes out of the tables' pass), else computed
   // here (the metrics score every method by the paper's objective).
   double acc_avg_sa = std::numeric_limits<double>::quiet_NaN();  // left alone when no Acc objective ran
+  // A mesh of extreme scale (coordinates beyond 2^100 or within 2^-100 at most) is clustered and
+  // measured as the same mesh times the power of two 2^k that brings it near 1 (exact, and every
+  // method gives the same clusters at either scale: cluster_mesh), so that its areas neither
+  // underflow nor overflow; clusters.csv's lengths and areas are then scaled back.
+  const int k = extreme_scale_exponent(lm.mesh);
+  std::optional<Mesh> scaled;
+  if (k != 0) {
+    std::vector<Vec3> p(lm.mesh.positions().begin(), lm.mesh.positions().end());
+    for (Vec3& q : p) q = times_pow2(q, k);
+    scaled = lm.mesh.with_positions(std::move(p));
+    std::cerr << fmt::format("ptc: note: {}: coordinates of extreme scale: clustered and measured at 2^{} times "
+                             "its size (exact); clusters.csv's lengths and areas are in the mesh's units\n",
+                             opt.input.string(), k);
+  }
+  const Mesh& work = scaled ? *scaled : lm.mesh;
   {
     ProgressBar bar("clustering");
     try {
-      clustering = cluster_mesh(lm.mesh, c, [&](double f) { bar.update(f); }, std::nullopt, &acc_avg_sa);
+      clustering = cluster_mesh(work, c, [&](double f) { bar.update(f); }, std::nullopt, &acc_avg_sa);
     } catch (const std::invalid_argument& e) {  // what the mesh cannot give (the flags were checked before)
       throw InputError(opt.input.string(), "", "", e.what());
     }
   }
-  if (acc_avg_sa == 0.0 && !lm.mesh.empty())
+  // --target-clusters stops the contraction early, never forces it on: say when it did nothing.
+  if (c.method == ClusterMethod::Contraction && c.target_clusters > 0) {
+    if (c.target_clusters >= lm.mesh.triangle_count())
+      std::cerr << fmt::format("ptc: note: --target-clusters {} is not below the mesh's {} triangles: it stopped nothing\n",
+                               c.target_clusters, lm.mesh.triangle_count());
+    else if (clustering.cluster_count() > c.target_clusters)
+      std::cerr << fmt::format("ptc: note: the contraction stopped at {} clusters, above --target-clusters {}: its limits "
+                               "(--max-count{}) allow no further merge of neighbours, or the mesh has that many parts\n",
+                               clustering.cluster_count(), c.target_clusters,
+                               c.objective == ObjectiveKind::Acc ? ", --max-size" : "");
+  }
+  if (acc_avg_sa == 0.0 && !work.empty())
     std::cerr << "ptc: note: " << opt.input.string()
               << ": every triangle collapses to a point (AvgSA = 0): one cluster per triangle; acc, reg_bound and "
                  "size_bound are nan\n";
   const std::optional<double> avg_sa =
       c.max_count > 0 && c.max_size > 0
           ? std::optional<double>(!std::isnan(acc_avg_sa) ? acc_avg_sa
-                                                          : average_triangle_sphere_area(lm.mesh.positions(), lm.mesh.triangles()))
+                                                          : average_triangle_sphere_area(work.positions(), work.triangles()))
           : std::nullopt;
   if (avg_sa && std::isinf(*avg_sa))  // (a method without the Acc objective clustered the mesh anyway; cluster_rows leaves them nan)
     std::cerr << "ptc: note: " << opt.input.string()
@@ -133,7 +171,9 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
 
   throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
-  const auto rows = cluster_rows(lm.mesh, clustering, c, avg_sa, adjacency_tris);
+  std::vector<ClusterRow> rows = cluster_rows(work, clustering, c, avg_sa, adjacency_tris);
+  if (k != 0)
+    for (ClusterRow& r : rows) unscale_lengths(r.m, -k);  // (a length times 2^-k, an area times 2^-2k)
   manifest.add_timing_ms("metrics", t0.ms());
   const nlohmann::json dist = cluster_distributions(rows);
 

@@ -103,6 +103,7 @@ Clustering read_clusters(const std::filesystem::path& dir, const Mesh& mesh) {
     line = ln;
     if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
     if (line == 1) {
+      if (l.substr(0, 3) == "\xEF\xBB\xBF") l.remove_prefix(3);  // a UTF-8 byte order mark (spreadsheets write one)
       if (l != "triangle_id,cluster_id")
         throw InputError(name, line_loc(1), "header", "expected 'triangle_id,cluster_id', got " + shown(l));
       return true;

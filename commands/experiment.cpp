@@ -294,7 +294,8 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
   setup.camera = camera_for(opt.camera, ms.scene);
   const Box3 bounds = ms.scene.rest().referenced_bounds();  // (the camera's and the light's)
   const bvh::PinholeCamera cam = make_camera(setup.camera, bounds, setup.width, setup.height, opt.input.string());
-  const LightChoice light = light_for(opt.light, ms.scene, cam, bounds);
+  check_eye_reach(cam, opt.camera, ms.scene, opt.input.string());
+  const LightChoice light = light_for(opt.light, ms.scene, cam, bounds, opt.input.string());
   setup.light = light.position;
   OutputDir dir(opt.out_dir);  // a refused target fails before the (long) run
   Clustering clusters;
@@ -512,6 +513,10 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
     }
     const auto& sh = s.manifest["parameters"]["shard"];
     const std::uint32_t k = sh["index"].get<std::uint32_t>(), nn = sh["count"].get<std::uint32_t>();
+    if (nn == 1)  // (a run without --shard records itself as shard 1/1)
+      throw InputError(s.dir.string(), "", "",
+                       "the output of a whole run (ptc experiment without --shard K/N), not a shard: ptc merge joins "
+                       "the shards of one split");
     if (nn != n)
       throw InputError(s.dir.string(), "", "", fmt::format("shard {}/{} of a split into {} (the first is split into {})", k, nn, nn, n));
     if (!seen.emplace(k, s.dir).second)

@@ -7,6 +7,7 @@
 #include <ostream>
 #include <string>
 
+#include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/info.h>
 
 #include "analysis/schema/json.h"
@@ -57,7 +58,10 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
   };
   for (const MemoryModel& m : kMemoryModels) add(m.command, m.base_mb, m.bytes_per_triangle);
   // With --regions 8 and 32 at this machine's default thread count (all cores).
-  const unsigned threads = std::max(1, tbb::info::default_concurrency());  // ptc's default --threads
+  // The threads a run would take: --threads (ptc sets a process-wide limit from it), else all cores.
+  const auto limit = oneapi::tbb::global_control::active_value(oneapi::tbb::global_control::max_allowed_parallelism);
+  const unsigned threads = static_cast<unsigned>(
+      std::max<std::size_t>(1, std::min<std::size_t>(limit, static_cast<std::size_t>(tbb::info::default_concurrency()))));
   for (const MemoryModel& m : kMemoryModels)
     if (m.regions)
       for (const int n : {8, 32})

@@ -10,6 +10,8 @@
 #include <vector>
 #include <system_error>
 
+#include <fmt/format.h>
+
 #include "analysis/schema/json.h"
 #include "analysis/schema/manifest.h"
 #include "toolkit/core/cancel.h"
@@ -207,16 +209,21 @@ void OutputDir::commit() {
     if (fs::is_directory(target_, ec)) {
       const PreviousMarker prev = read_marker(target_ / kMarker);
       const std::string before = manifest_command(target_ / "manifest.json"), now = manifest_command(tmp_ / "manifest.json");
-      if (prev.present && !before.empty() && !now.empty() && before != now) {
+      // Said when another command's output is replaced, and whenever files of the previous output
+      // that this run does not write again go (a re-run with fewer frames drops the later ones).
+      if (prev.present) {
         std::vector<std::string> gone;
         for (const auto& name : prev.listed)
           if (!std::binary_search(written.begin(), written.end(), name) && fs::exists(target_ / name, ec)) gone.push_back(name);
         std::string list;
         for (std::size_t i = 0; i < gone.size() && i < 6; ++i) list += (i ? ", " : "") + gone[i];
-        if (gone.size() > 6) list += ", ...";
-        replaced_note = "ptc: note: replaced the output of `ptc " + before + "` in " + target_.string() +
-                        (gone.empty() ? std::string() : " (its " + list + (gone.size() == 1 ? " is" : " are") + " gone)") +
-                        "\n";
+        if (gone.size() > 6) list += fmt::format(", ... ({} files)", gone.size());
+        const std::string went = gone.empty() ? std::string() : " (its " + list + (gone.size() == 1 ? " is" : " are") + " gone)";
+        if (!before.empty() && !now.empty() && before != now)
+          replaced_note = "ptc: note: replaced the output of `ptc " + before + "` in " + target_.string() + went + "\n";
+        else if (!gone.empty())
+          replaced_note = "ptc: note: replaced the previous output in " + target_.string() + went +
+                          ": this run did not write " + (gone.size() == 1 ? "it" : "them") + " again\n";
       }
       if (!prev.present && !fs::is_empty(target_, ec))
         throw InputError(target_.string(), "", "",

@@ -1,11 +1,14 @@
 #include "commands/scene_args.h"
 
+#include <cmath>
 #include <iostream>
+#include <string_view>
 
 #include <fmt/format.h>
 
 #include "commands/args.h"
 #include "commands/cluster_files.h"
+#include "bvh/scene_config.h"
 #include "commands/inputs.h"
 #include "render/view.h"
 #include "toolkit/anim/deformers.h"
@@ -106,10 +109,39 @@ CameraSpec camera_for(const CameraSpec& flags, const Scene& scene) {
 }
 
 LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const bvh::PinholeCamera& cam,
-                      const Box3& bounds) {
-  if (flag) return {*flag, "--light"};
-  if (scene.has_own_light()) return {scene.light().position, "scene"};
-  return {default_light(cam, bounds), "default"};
+                      const Box3& bounds, std::string_view input) {
+  const LightChoice c = flag                    ? LightChoice{*flag, "--light"}
+                        : scene.has_own_light() ? LightChoice{scene.light().position, "scene"}
+                                                : LightChoice{default_light(cam, bounds), "default"};
+  check_reach(scene, c.position, "the light", "--light", c.from, "light", input);
+  return c;
+}
+
+void check_eye_reach(const bvh::PinholeCamera& cam, const CameraSpec& flags, const Scene& scene, std::string_view input) {
+  const char* from = flags.eye ? "--eye" : scene.has_own_camera() ? "scene" : "default";
+  check_reach(scene, cam.eye, "the camera's eye", "--eye", from, "camera", input);
+}
+
+void check_reach(const Scene& scene, const Vec3& p, std::string_view what, std::string_view flag, std::string_view from,
+                 std::string_view element, std::string_view input) {
+  const Mesh& rest = scene.rest();
+  if (rest.vertex_count() == 0) return;
+  const Vec3 centre = rest.bounds().center();
+  double scale = 1.0;
+  try {
+    scale = bvh::trace_frame_scale(rest, centre);
+  } catch (const bvh::FrameRangeError&) {
+    return;  // (the mesh itself is refused when its BVH is made)
+  }
+  if (!centre.allFinite()) return;
+  const double d = (p - centre).cwiseAbs().maxCoeff();
+  if (std::isfinite(d) && d * scale <= kTraceReach) return;
+  const std::string reason =
+      fmt::format("{} ({:.6g}, {:.6g}, {:.6g}) lies {:.3g} units from the scene's centre, beyond the tracer's reach "
+                  "(at most {:.3g} units for this scene, {:g} in its single-precision frame); move it closer",
+                  what, p.x(), p.y(), p.z(), d, kTraceReach / scale, kTraceReach);
+  if (from == flag) throw UsageError(std::string(flag), reason);
+  throw InputError(std::string(input), "", std::string(element), reason);
 }
 
 void refuse_unused_data_dir(const std::filesystem::path& input) {

@@ -65,7 +65,21 @@ struct LightChoice {
   Vec3 position = Vec3::Zero();
   const char* from = "default";  ///< "--light", "scene" or "default" (recorded in manifests)
 };
+/// The light is refused as check_reach says (its element "light"; `input` names the scene).
 [[nodiscard]] LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const bvh::PinholeCamera& cam,
-                                    const Box3& bounds);
+                                    const Box3& bounds, std::string_view input);
+
+/// The camera's eye (`flags` are the user's, camera_for's input): refused as check_reach says.
+void check_eye_reach(const bvh::PinholeCamera& cam, const CameraSpec& flags, const Scene& scene, std::string_view input);
+
+/// A ray's origin or its light as the tracer takes them: within kTraceReach units of the scene's
+/// trace frame (the rest pose's centre and power-of-two scale, bvh::trace_frame_scale) of that
+/// centre, Embree's bound too (docs/tracing.md, "The trace frame at any scale"). Farther, the
+/// rays' floats overflow and the picture is silently wrong (a light at 1e308 gave no shadows).
+/// Throws UsageError naming `flag` when `from` is the flag, else InputError naming `input` and
+/// `element` ("camera", "light"). A mesh beyond the frame's own range is left to the BVH's check.
+inline constexpr double kTraceReach = 1e18;
+void check_reach(const Scene& scene, const Vec3& p, std::string_view what, std::string_view flag, std::string_view from,
+                 std::string_view element, std::string_view input);
 
 }  // namespace ptc

@@ -18,6 +18,11 @@
 namespace ptc {
 
 void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
+  {
+    std::error_code dir_ec;
+    if (std::filesystem::is_directory(opt.output, dir_ec))
+      throw UsageError("--out", "'" + opt.output.string() + "' is a directory: give the output mesh's file name (.off, .obj or .ply)");
+  }
   if (const auto f = format_from_extension(opt.output); !f || *f == MeshFormat::Stl)
     throw UsageError("--out", "'" + opt.output.string() + "': cannot write this format (use .off, .obj or .ply)");
   refuse_overwriting_input(opt.output, opt.input);
@@ -32,7 +37,7 @@ void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
       return Subdivider::build(lm.mesh.triangles(), lm.mesh.vertex_count(), opt.scheme, opt.levels);
     } catch (const InputError& e) {
       if (!e.file().empty()) throw;
-      throw InputError(opt.input.string(), e.location(), e.element(), e.reason());
+      throw InputError(opt.input.string(), e.location(), e.element() == "levels" ? "--levels" : e.element(), e.reason());
     }
   }();
   throw_if_cancelled();

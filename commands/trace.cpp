@@ -133,7 +133,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   const CameraSpec spec = camera_for(opt.camera, scene);
   const bvh::PinholeCamera cam = make_camera(spec, first_bounds, opt.render.width, opt.render.height, arg);
   RenderConfig rc = opt.render;
-  const LightChoice light = light_for(rc.light, scene, cam, first_bounds);
+  check_eye_reach(cam, opt.camera, scene, arg);
+  const LightChoice light = light_for(rc.light, scene, cam, first_bounds, arg);
   rc.light = light.position;
 
   Clustering clusters;

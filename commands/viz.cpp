@@ -201,7 +201,8 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   const bool needs_metrics = kind == VizKind::Export || cmetric.has_value();
   RenderConfig rc;
   rc.width = opt.width, rc.height = opt.height, rc.shadows = opt.shadows, rc.threads = opt.threads;
-  const LightChoice light = needs_trace ? light_for(opt.light, scene, cam, first_bounds) : LightChoice{};
+  if (needs_trace) check_eye_reach(cam, opt.camera, scene, arg);
+  const LightChoice light = needs_trace ? light_for(opt.light, scene, cam, first_bounds, arg) : LightChoice{};
   rc.light = light.position;
   std::unique_ptr<loop::SceneAccel> accel;
   if (needs_trace) {

@@ -5,6 +5,8 @@
 #include <optional>
 #include <string>
 
+#include <tbb/info.h>
+
 #include "commands/bench.h"
 #include "apps/ptc/cli.h"
 
@@ -43,6 +45,14 @@ void register_bench(CLI::App& app, Context& ctx) {
                       o.config.group_trees = a->group_trees.get(o.config.cluster_group_size > 1,
                                                                 "the two-level build (--cluster-groups N, N > 1)");
                       o.config.threads = static_cast<unsigned>(ctx.threads);  // 0: all cores
+                      // Embree's device takes at most the machine's threads (it lowers threads=N to
+                      // them, and oneTBB then warns that our N-thread arenas get fewer workers): the two
+                      // sides would not run with the same threads.
+                      if (const int cores = tbb::info::default_concurrency(); ctx.threads > cores)
+                        throw UsageError("--threads", std::to_string(ctx.threads) + " threads on a machine that runs " +
+                                                          std::to_string(cores) +
+                                                          " at once: Embree would take " + std::to_string(cores) +
+                                                          ", so both sides could not run with the same threads");
                       o.config.vertex_order = *bvh::parse_vertex_order(a->vertex_order);
                       o.config.adjacency = *parse_cluster_adjacency(a->adjacency);
                       o.config.isa = *bvh::parse_trace_isa(a->isa);

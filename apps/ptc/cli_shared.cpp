@@ -70,7 +70,8 @@ void CameraArgs::add_to(CLI::App* c, bool with_light) {
             std::string why;
             const auto v = parse_vec3(s, &why);
             if (!v) return why;
-            return v->isZero() ? "the up vector is zero" : std::string();
+            // (exactly zero: Eigen's isZero() calls 1e-300 zero too, while any direction normalises)
+            return v->cwiseAbs().maxCoeff() == 0.0 ? "the up vector is zero" : std::string();
           },
           "X,Y,Z"));
   fov_opt = c->add_option("--fov", fov, "vertical field of view in degrees, in (0, 180)")
@@ -131,8 +132,10 @@ void ClusterFlags::add_to(CLI::App* c, ClusterConfig& cfg, bool with_method) {
       ->check(enum_validator("weight", parse_gwh_weight))
       ->capture_default_str();
   c->add_option("--target-clusters", cfg.target_clusters, "contraction (any objective): stop at this many clusters (0 = off)")
+      ->check(whole_in(0, 4294967295LL))
       ->capture_default_str();
   c->add_option("--max-triangles", cfg.max_triangles, "sah-split/meshopt triangle limit (0 = 2 x max-count)")
+      ->check(whole_in(0, 4294967295LL))
       ->capture_default_str();
   c->add_option("--regions", cfg.regions,
                 "growth or contraction with acc or naive: cluster N spatial regions at once, on all --threads "

@@ -541,24 +541,40 @@ TEST_F(Cli, ClusterOnMeshesWithoutASizeScale) {
     for (const char* col : {"acc", "reg_bound", "size_bound"}) EXPECT_EQ(rows[0].at(col), "nan") << col;
     EXPECT_EQ(rows[0].at("reg"), "0");
   }
+  // A square of 1e300 units and one of 1e-300 (areas beyond double's range: AvgSA overflowed or
+  // underflowed, and Acc refused the first and made one cluster per triangle of the second) are
+  // clustered and measured at a power-of-two scale: for every method, the same clusters and the
+  // same ratio columns as the unit square, lengths and areas in the mesh's units, with a note.
+  const auto unit = write("unit.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 2\n");
   const auto huge = write("huge.off", "OFF\n4 2 0\n0 0 0\n1e300 0 0\n0 1e300 0\n1e300 1e300 0\n3 0 1 2\n3 1 3 2\n");
-  r = ptc({"cluster", huge.string(), "--out", (dir_ / "h").string()});
-  EXPECT_EQ(r.code, 1) << r.err;
-  EXPECT_EQ(lines(r.err), 1u) << r.err;
-  EXPECT_NE(r.err.find("huge.off: the mean bounding-sphere area of the triangles (AvgSA"), std::string::npos) << r.err;
-  EXPECT_EQ(r.err.find("AccObjective"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir_ / "h"));
-  // Methods without the Acc objective cluster it; the metrics' Acc columns are nan, with a note
-  // (before, an internal `size_bound: avg_sa` error without the file).
-  for (const char* method : {"sah-split", "meshopt"}) {
-    const fs::path out = dir_ / (std::string("h_") + method);
-    r = ptc({"cluster", huge.string(), "--method", method, "--out", out.string()});
-    EXPECT_EQ(r.code, 0) << method << " " << r.err;
-    EXPECT_NE(r.err.find("huge.off: the triangles' mean bounding-sphere area (AvgSA) overflows"), std::string::npos)
-        << r.err;
-    const auto rows = ptc::test::csv_rows(slurp(out / "clusters.csv"));
-    ASSERT_FALSE(rows.empty()) << method;
-    for (const char* col : {"acc", "reg_bound", "size_bound"}) EXPECT_EQ(rows[0].at(col), "nan") << method << " " << col;
+  const auto tiny = write("tiny.off", "OFF\n4 2 0\n0 0 0\n1e-300 0 0\n0 1e-300 0\n1e-300 1e-300 0\n3 0 1 2\n3 1 3 2\n");
+  for (const char* method : {"growth", "contraction", "sah-split", "meshopt"}) {
+    const fs::path u = dir_ / (std::string("u_") + method);
+    r = ptc({"cluster", unit.string(), "--method", method, "--out", u.string()});
+    ASSERT_EQ(r.code, 0) << method << " " << r.err;
+    const auto want = ptc::test::csv_rows(slurp(u / "clusters.csv"));
+    for (const auto& [mesh, size] : {std::pair{huge, 1e300}, std::pair{tiny, 1e-300}}) {
+      const fs::path out = dir_ / (std::string("s_") + method + (size > 1 ? "_huge" : "_tiny"));
+      r = ptc({"cluster", mesh.string(), "--method", method, "--out", out.string()});
+      ASSERT_EQ(r.code, 0) << method << " " << r.err;
+      EXPECT_NE(r.err.find(mesh.filename().string() + ": coordinates of extreme scale: clustered and measured at 2^"),
+                std::string::npos)
+          << r.err;
+      EXPECT_EQ(r.err.find("collapses to a point"), std::string::npos) << r.err;
+      EXPECT_EQ(slurp(out / "triangles.csv"), slurp(u / "triangles.csv")) << method;
+      const auto rows = ptc::test::csv_rows(slurp(out / "clusters.csv"));
+      ASSERT_EQ(rows.size(), want.size()) << method;
+      for (std::size_t i = 0; i < rows.size(); ++i) {
+        for (const char* col : {"triangles", "vertices", "connectivity"})
+          EXPECT_EQ(rows[i].at(col), want[i].at(col)) << method << " " << col;
+        // (1e300 and 1e-300 are not powers of two times 1: ratios and lengths agree to rounding)
+        for (const char* col : {"reg", "acc", "p_hit", "reg_bound", "size_bound"})
+          EXPECT_NEAR(std::stod(rows[i].at(col)), std::stod(want[i].at(col)), 1e-12) << method << " " << col;
+        EXPECT_NEAR(std::stod(rows[i].at("sphere_radius")) / size, std::stod(want[i].at("sphere_radius")), 1e-12) << method;
+        if (size > 1) EXPECT_TRUE(std::isinf(std::stod(rows[i].at("area")))) << method;  // (1e600: beyond double)
+        else EXPECT_EQ(std::stod(rows[i].at("area")), 0.0) << method;                     // (1e-600: below it)
+      }
+    }
   }
 }
 
@@ -751,6 +767,117 @@ TEST_F(Cli, OutputInAMissingDirectoryIsNamedAsGiven) {
 // The output of another command replaced by a run with the same --out is said, naming the
 // command and the files that are gone (found by a new user: a `ptc cluster` output vanished
 // under an experiment without a word); the same command again replaces silently, as documented.
+// What a new user ran into (a sweep of unusual inputs, 2026-12-07), each with the answer the
+// standards ask for: a light or an eye beyond the tracer's reach refused (a light at 1e308 gave a
+// picture without shadows, silently), an up vector of 1e-300 taken (Eigen called it zero), an
+// empty file name named, a byte order mark in triangles.csv read, numbers that are not whole
+// refused in the tool's words, a missing --data-dir said as such, a frame directory with a gap
+// in its numbers noted, and a re-run that writes fewer files said.
+TEST_F(Cli, SlipsOfANewUser) {
+  const auto cube = write("cube.off", kCube);
+  const std::string out = (dir_ / "t").string();
+  auto trace = [&](std::vector<std::string> extra, const std::string& mesh) {
+    std::vector<std::string> a = {"trace", mesh, "--width", "8", "--height", "8"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    a.insert(a.end(), {"--out", out});
+    return ptc(a);
+  };
+  RunResult r = trace({"--light", "1e308,1e308,1e308"}, cube.string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("--light"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("beyond the tracer's reach"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  r = trace({"--eye", "1e300,1e300,1e300", "--look-at", "-1e300,-1e300,-1e300"}, cube.string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--eye"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the camera's eye"), std::string::npos) << r.err;
+  // Within reach: a light at 1e12 units still lights (and shadows) the unit cube.
+  r = trace({"--light", "1e12,2e12,3e12"}, cube.string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  fs::remove_all(out);
+  // A scene file's own light: bad input (exit 1) naming the file and its light.
+  const auto scene = write("far.json", "{\"meshes\": [{\"file\": \"cube.off\"}], \"light\": {\"position\": [0, 0, 1e308]}}");
+  r = trace({}, scene.string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("far.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("light"), std::string::npos) << r.err;
+  // An up vector of 1e-300 is a direction.
+  r = trace({"--eye", "0.5,0.5,5", "--look-at", "0.5,0.5,0.5", "--up", "1e-300,1e-300,0"}, cube.string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  fs::remove_all(out);
+  // More bench threads than the machine runs: Embree would take fewer (and oneTBB said so in its
+  // own words), so the run is refused.
+  r = ptc({"bench", cube.string(), "--threads", "4096", "--out", (dir_ / "b").string()});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--threads: 4096 threads on a machine that runs"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("TBB"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "b"));
+  // subdivide: a directory as --out is named as one; too many levels name --levels.
+  fs::create_directories(dir_ / "outdir");
+  r = ptc({"subdivide", cube.string(), "--out", (dir_ / "outdir").string()});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("outdir' is a directory"), std::string::npos) << r.err;
+  const std::string armadillo = std::string(PTC_TEST_DATA) + "/meshes/armadillo.off";
+  r = ptc({"subdivide", armadillo, "--levels", "8", "--out", (dir_ / "s.off").string()});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("armadillo.off: --levels: 8 levels of"), std::string::npos) << r.err;
+  // ptc info's memory estimate takes the threads a run would take: --threads when given.
+  r = ptc({"info", cube.string(), "--json", "--threads", "1"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["memory_estimate"]["threads"], 1);
+  r = ptc({"info", ""});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("'': an empty file name"), std::string::npos) << r.err;
+  for (const char* flag : {"--target-clusters", "--max-triangles"}) {
+    r = ptc({"cluster", cube.string(), flag, "-1", "--out", (dir_ / "c").string()});
+    EXPECT_EQ(r.code, 2) << flag << " " << r.err;
+    EXPECT_NE(r.err.find(std::string(flag) + ": '-1' is not a whole number in [0, 4294967295]"), std::string::npos) << r.err;
+  }
+  // --target-clusters that stops nothing, or that the limits keep the contraction from reaching.
+  r = ptc({"cluster", cube.string(), "--method", "contraction", "--target-clusters", "100", "--out", (dir_ / "tc").string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("--target-clusters 100 is not below the mesh's 12 triangles: it stopped nothing"), std::string::npos)
+      << r.err;
+  r = ptc({"cluster", cube.string(), "--method", "contraction", "--objective", "naive", "--max-count", "3",
+           "--target-clusters", "1", "--out", (dir_ / "tc").string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ptc: note: the contraction stopped at 12 clusters, above --target-clusters 1"), std::string::npos)
+      << r.err;
+  // triangles.csv saved by a spreadsheet, with a UTF-8 byte order mark.
+  ASSERT_EQ(ptc({"cluster", cube.string(), "--out", (dir_ / "c").string()}).code, 0);
+  const std::string csv = slurp(dir_ / "c" / "triangles.csv");
+  std::ofstream(dir_ / "c" / "triangles.csv", std::ios::binary) << "\xEF\xBB\xBF" << csv;
+  r = trace({"--clusters", (dir_ / "c").string()}, cube.string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  fs::remove_all(out);
+  // --data-dir that does not exist.
+  r = trace({"--data-dir", (dir_ / "nowhere").string()}, "armadillo-twist");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("missing: the data directory given by --data-dir, " + (dir_ / "nowhere").string() + ", does not exist"),
+            std::string::npos)
+      << r.err;
+  // A frame directory whose numbers skip one.
+  fs::create_directories(dir_ / "frames");
+  fs::copy_file(cube, dir_ / "frames" / "frame_0000.off");
+  fs::copy_file(cube, dir_ / "frames" / "frame_0002.off");
+  r = trace({"--frames", "0:1"}, (dir_ / "frames").string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("the frame files' numbers are not consecutive (frame_0000.off is followed by frame_0002.off): "
+                       "frames are the files in name order, so frame 1 reads frame_0002.off"),
+            std::string::npos)
+      << r.err;
+  // The same command again with fewer frames: the later frames' files go, and that is said.
+  r = trace({"--frames", "0:0"}, (dir_ / "frames").string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ptc: note: replaced the previous output in " + out + " (its "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("shaded_0001.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("this run did not write them again"), std::string::npos) << r.err;
+  r = trace({"--frames", "0:0"}, (dir_ / "frames").string());  // (the same files: nothing to say)
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("replaced"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, ReplacingAnotherCommandsOutputIsSaid) {
   const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
   const std::string out = (dir_ / "o").string();

@@ -266,6 +266,20 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   r = ptc({"merge", a, (dir_ / "third").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("split into 3"), std::string::npos) << r.err;
+  // The output of a run without --shard (it records itself as shard 1/1), alone or beside a
+  // shard: said in those words (before: "shard 1/1 of a split into 1").
+  ASSERT_EQ(run({"--frames", "0:1"}, "whole").code, 0);
+  const std::string whole = (dir_ / "whole").string();
+  for (const std::vector<std::string>& dirs : {std::vector<std::string>{a, whole}, std::vector<std::string>{whole}}) {
+    std::vector<std::string> argv = {"merge"};
+    argv.insert(argv.end(), dirs.begin(), dirs.end());
+    argv.insert(argv.end(), {"--out", out});
+    r = ptc(argv);
+    EXPECT_EQ(r.code, 1) << r.err;
+    EXPECT_NE(r.err.find(whole + ": the output of a whole run (ptc experiment without --shard K/N), not a shard"),
+              std::string::npos)
+        << r.err;
+  }
   // A shard of another experiment: said in those words (a JSON path of the difference before).
   ASSERT_EQ(ptc({"experiment", "compare", "cloth-sphere-32", "--configs", "acc_growth,naive", "--frames", "0:1", "--width", "16",
                  "--height", "16", "--quiet", "--shard", "2/2", "--out", (dir_ / "cmp").string()})

@@ -174,9 +174,11 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   expect_error({"trace", mesh, "--eye", "1e308,0,0", "--look-at", "-1e308,0,0", "--out", out}, 2,
                "--eye: eye 1e+308,0,0 and look-at -1e+308,0,0 are too far apart");
   // A far eye whose difference to look-at does not overflow: the view direction is right (the
-  // norm of 1e300 overflowed before, and the message blamed --up).
+  // norm of 1e300 overflowed before, and the message blamed --up), but the eye lies beyond the
+  // tracer's reach (before the fortieth session: Embree's check, exit 1, "beyond what Embree
+  // accepts"; now the flag's usage error, as in ptc trace).
   expect_error({"bench", mesh, "--eye", "1e300,0,0", "--width", "4", "--height", "4", "--frames", "0:1", "--out", out},
-               1, "beyond what Embree accepts");
+               2, "--eye: the camera's eye (1e+300, 0, 0) lies 1e+300 units from the scene's centre, beyond the tracer's reach");
   expect_error({"trace", mesh, "--clusters", (dir_ / "none").string(), "--out", out}, 1, "none: no such file");
   // Clusters of another mesh: a 2-triangle quad's clustering against the 12-triangle cube.
   fs::create_directories(dir_ / "quad");

@@ -1,7 +1,10 @@
 // The one "flag > scene > default" rule for the camera and the light (commands/scene_args.h).
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "commands/scene_args.h"
+#include "toolkit/core/error.h"
 #include "render/view.h"
 #include "toolkit/anim/static_source.h"
 
@@ -42,15 +45,64 @@ TEST(SceneArgs, LightFlagThenTheScenesOwnThenDefault) {
   const Scene with = ball(std::nullopt, SceneLight{Vec3(1, 9, 1), 1.0}), without = ball(std::nullopt, std::nullopt);
   const Box3 b = without.rest().bounds();
   const bvh::PinholeCamera cam = make_camera({}, b, 16, 16);
-  LightChoice l = light_for(Vec3(5, 5, 5), with, cam, b);
+  LightChoice l = light_for(Vec3(5, 5, 5), with, cam, b, "s.json");
   EXPECT_EQ(l.position, Vec3(5, 5, 5));
   EXPECT_STREQ(l.from, "--light");
-  l = light_for(std::nullopt, with, cam, b);
+  l = light_for(std::nullopt, with, cam, b, "s.json");
   EXPECT_EQ(l.position, Vec3(1, 9, 1));
   EXPECT_STREQ(l.from, "scene");
-  l = light_for(std::nullopt, without, cam, b);
+  l = light_for(std::nullopt, without, cam, b, "s.json");
   EXPECT_EQ(l.position, default_light(cam, b));
   EXPECT_STREQ(l.from, "default");
+}
+
+// The tracer's reach (kTraceReach of the scene's trace frame from its rest centre): a light or an
+// eye beyond it is refused, a flag's as a usage error naming the flag, a scene's as bad input
+// naming the file and its camera or light; at the bound itself, accepted. The ball has radius 1
+// about (0, 0, 0): its frame's scale is 1, so the reach is 1e18 units.
+TEST(SceneArgs, ALightOrAnEyeBeyondTheTracersReachIsRefused) {
+  const Scene far_light = ball(std::nullopt, SceneLight{Vec3(0, 0, 2e18), 1.0}), plain = ball(std::nullopt, std::nullopt);
+  const Box3 b = plain.rest().bounds();
+  const bvh::PinholeCamera cam = make_camera({}, b, 16, 16);
+  const Vec3 c = plain.rest().bounds().center();
+  EXPECT_NO_THROW((void)light_for(Vec3(c.x(), c.y(), c.z() + 1e18), plain, cam, b, "s.json"));
+  try {
+    (void)light_for(Vec3(1e308, 1e308, 1e308), plain, cam, b, "s.json");
+    ADD_FAILURE() << "a light at 1e308 was taken";
+  } catch (const UsageError& e) {
+    EXPECT_EQ(e.element(), "--light");
+    EXPECT_NE(e.reason().find("beyond the tracer's reach (at most 1e+18 units for this scene"), std::string::npos) << e.what();
+  }
+  try {
+    (void)light_for(std::nullopt, far_light, cam, b, "s.json");
+    ADD_FAILURE() << "the scene's light at 2e18 was taken";
+  } catch (const UsageError&) {
+    ADD_FAILURE() << "the scene's light was refused as a flag";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "s.json");
+    EXPECT_EQ(e.element(), "light");
+  }
+  // The same bound scales with the mesh: a ball of radius 2^-40 reaches 2^40 times less far.
+  std::vector<ScenePart> parts;
+  parts.push_back({"tiny", std::make_unique<StaticSource>(make_sphere_mesh(Vec3::Zero(), std::ldexp(1.0, -40), 1), "tiny")});
+  const Scene tiny("tiny", std::move(parts), std::nullopt, std::nullopt);
+  EXPECT_THROW(check_reach(tiny, Vec3(0, 0, 1e9), "the light", "--light", "--light", "light", "s.json"), UsageError);
+  EXPECT_NO_THROW(check_reach(tiny, Vec3(0, 0, 1e5), "the light", "--light", "--light", "light", "s.json"));
+  // The eye: from --eye a usage error, from the scene's camera bad input.
+  bvh::PinholeCamera far = cam;
+  far.eye = Vec3(0, 0, -3e18);
+  CameraSpec flags;
+  flags.eye = far.eye;
+  EXPECT_THROW(check_eye_reach(far, flags, plain, "s.json"), UsageError);
+  try {
+    check_eye_reach(far, CameraSpec{}, ball(SceneCamera{}, std::nullopt), "s.json");
+    ADD_FAILURE() << "the scene's eye at 3e18 was taken";
+  } catch (const UsageError&) {
+    ADD_FAILURE() << "the scene's eye was refused as a flag";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.element(), "camera");
+  }
+  EXPECT_NO_THROW(check_eye_reach(cam, CameraSpec{}, plain, "s.json"));
 }
 
 }  // namespace

@@ -188,6 +188,28 @@ TEST(ClusterFrontDoor, BaselinesInvariantUnderPowerOfTwoScalingValidWhenRotated)
     }
 }
 
+// Meshes of extreme scale (coordinates near 1e-301 or 1e301, where triangle areas underflow to 0
+// or overflow) are clustered as the same mesh times a power of two: the same clusters as at unit
+// scale, for every method and objective, and AvgSA in the mesh's own units. Before, the tiny
+// elephant's growth gave one cluster per triangle ("every triangle collapses to a point").
+TEST(ClusterFrontDoor, ExtremeScalesClusterAsTheUnitMesh) {
+  const Mesh m = load("elephant.off");
+  EXPECT_EQ(extreme_scale_exponent(m), 0);
+  for (const int e : {-1000, 1000}) {
+    const Mesh s = moved(m, Eigen::Matrix3d::Identity(), Vec3::Zero(), std::ldexp(1.0, e));
+    EXPECT_NE(extreme_scale_exponent(s), 0) << e;
+    EXPECT_EQ(extreme_scale_exponent(moved(m, Eigen::Matrix3d::Identity(), Vec3::Zero(), std::ldexp(1.0, e / 20))), 0) << e;
+    for (const Case& c : all_cases()) {
+      const ClusterConfig cfg = config_of(c, 24);
+      double unit_sa = -1.0, scaled_sa = -1.0;
+      const Clustering a = cluster_mesh(m, cfg, {}, std::nullopt, &unit_sa);
+      const Clustering b = cluster_mesh(s, cfg, {}, std::nullopt, &scaled_sa);
+      expect_same(a, b, what(c, 24, "elephant times 2^" + std::to_string(e)));
+      EXPECT_EQ(scaled_sa, unit_sa < 0 ? -1.0 : std::ldexp(unit_sa, 2 * e)) << what(c, 24, "AvgSA");
+    }
+  }
+}
+
 // cluster_mesh's avg_sa_used (ptc cluster's AvgSA for the metrics) is the separate pass's value
 // bit for bit on every path that runs Acc: the whole mesh (the tables' pass), regions (the
 // separate pass), a soup clustered over its weld, and a given value; it is left alone by the

@@ -196,6 +196,22 @@ TEST(IoStl, TruncatedBinaryAndBadCounts) {
   }
   e = stl_error(binary_stl({}));
   EXPECT_EQ(e.reason(), "mesh has no triangles");
+  // A header counting fewer facets than the file holds: the count is taken, and the bytes after
+  // it are reported (a note once there is room for a facet; padding of less is not).
+  std::string fewer = full;
+  const std::uint32_t two = 2;
+  std::memcpy(fewer.data() + 80, &two, 4);
+  const LoadedMesh lf = stl(fewer);
+  EXPECT_EQ(lf.mesh.triangle_count(), 2u);
+  EXPECT_EQ(lf.report.trailing_bytes, 50u);
+  const std::vector<std::string> notes = read_notes(lf.report);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0], "50 bytes after the 2 facets the header counts were ignored (room for 1 more; a header with too "
+                      "small a count drops them)");
+  const LoadedMesh padded = stl(full + std::string(49, '\0'));
+  EXPECT_EQ(padded.report.trailing_bytes, 49u);
+  EXPECT_TRUE(read_notes(padded.report).empty());
+  EXPECT_EQ(stl(full).report.trailing_bytes, 0u);
   e = stl_error("");
   EXPECT_NE(e.reason().find("84"), std::string::npos) << e.what();
   e = stl_error("solid empty\nendsolid empty\n");

@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
+
+#include "toolkit/geometry/triangle.h"
 
 #include <CGAL/Gmpq.h>
 
@@ -113,6 +116,51 @@ TEST(MeshReport, SliverIsNearDegenerateAndHugeCoordinatesStayFinite) {
   const auto tiny = analyze_mesh(Mesh({{0, 1, 2}, {1, 3, 2}, {0, 1, 4}}, q));
   EXPECT_EQ(tiny.near_degenerate_triangles, 1u);
   EXPECT_EQ(tiny.zero_area_triangles, 0u);
+}
+
+// Corners near 1e308 of opposite signs: their differences overflow while the corners are finite.
+// The triangle is a right isosceles one (legs sqrt(2) 1e308, area 1e616: inf), not degenerate,
+// and its edge lengths are sqrt(2) 1e308 (twice) and 2e308 (inf), never NaN.
+TEST(MeshReport, CornersWhoseDifferencesOverflow) {
+  const std::vector<Vec3> p{{1e308, 0, 0}, {-1e308, 0, 0}, {0, 1e308, 0}};
+  const auto r = analyze_mesh(Mesh({{0, 1, 2}}, p));
+  EXPECT_EQ(r.near_degenerate_triangles, 0u);
+  EXPECT_EQ(r.zero_area_triangles, 0u);
+  EXPECT_TRUE(std::isinf(r.total_area) && r.total_area > 0) << r.total_area;
+  EXPECT_EQ(r.edge_length.min, std::hypot(1e308, 1e308));
+  EXPECT_TRUE(std::isinf(r.edge_length.max));
+  EXPECT_FALSE(std::isnan(r.edge_length.mean) || std::isnan(r.edge_length.p5) || std::isnan(r.edge_length.p50));
+  // The geometry itself: the normal of the triangle at a quarter of the size, -z ((b - a) x (c - a)
+  // = (-2, 0, 0) x (-1, 1, 0) times 1e308^2).
+  const TriangleGeometry g = triangle_geometry(p[0], p[1], p[2]);
+  EXPECT_EQ(g.normal, Vec3(0, 0, -1));
+  EXPECT_TRUE(std::isinf(g.area));
+  // At 2^-600 of the size (exact) the area is finite: base 2e308 s, height 1e308 s.
+  const double s = std::ldexp(1.0, -600);
+  const TriangleGeometry small = triangle_geometry(s * p[0], s * p[1], s * p[2]);
+  EXPECT_DOUBLE_EQ(small.area, 0.5 * (2.0 * (1e308 * s)) * (1e308 * s));
+  EXPECT_EQ(small.normal, Vec3(0, 0, -1));
+  EXPECT_EQ(safe_distance(p[0], p[1]), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(safe_distance(p[0], p[2]), std::hypot(1e308, 1e308));
+  EXPECT_EQ(safe_distance(Vec3(1, 2, 3), Vec3(4, 6, 3)), 5.0);
+  EXPECT_TRUE(std::isnan(safe_distance(Vec3(std::nan(""), 0, 0), Vec3(1e308, 0, 0))));
+}
+
+// A triangle collapsed by a repeated corner index has no edges: a mesh of only such faces is
+// not a closed manifold (it was reported as one: no boundary edge), nor is a closed cube with one.
+TEST(MeshReport, CollapsedTrianglesAreNotAClosedManifold) {
+  const std::vector<Vec3> p{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  const auto r = analyze_mesh(Mesh({{0, 0, 0}}, p));
+  EXPECT_EQ(r.edges, 0u);
+  EXPECT_EQ(r.repeated_index_triangles, 1u);
+  EXPECT_FALSE(r.closed_manifold());
+  Mesh cube = unit_cube();
+  std::vector<Tri> t(cube.triangles().begin(), cube.triangles().end());
+  t.push_back({1, 1, 2});
+  const auto with = analyze_mesh(Mesh(t, std::vector<Vec3>(cube.positions().begin(), cube.positions().end())));
+  EXPECT_EQ(with.boundary_edges, 0u);
+  EXPECT_FALSE(with.closed_manifold());
+  EXPECT_TRUE(analyze_mesh(cube).closed_manifold());
 }
 
 TEST(MeshReport, BookOfManyPagesIsFast) {

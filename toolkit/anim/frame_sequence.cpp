@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -130,6 +132,37 @@ bool is_frame_extension(const fs::path& p) {
   return f && (*f == MeshFormat::Obj || *f == MeshFormat::Ply || *f == MeshFormat::Off);
 }
 
+// The number in a frame file's name: its last run of digits (frame_0012.ply: 12); nothing when
+// it has none or more than 18 digits.
+std::optional<std::uint64_t> name_number(const std::string& name) {
+  const std::size_t stem_end = name.rfind('.');
+  const std::string stem = name.substr(0, stem_end);
+  std::size_t e = stem.size();
+  while (e > 0 && !std::isdigit(static_cast<unsigned char>(stem[e - 1]))) --e;
+  std::size_t b = e;
+  while (b > 0 && std::isdigit(static_cast<unsigned char>(stem[b - 1]))) --b;
+  if (b == e || e - b > 18) return std::nullopt;
+  return std::stoull(stem.substr(b, e - b));
+}
+
+// Frames are the files in name order, whatever numbers their names carry; when every name has a
+// number and two neighbours' numbers are not consecutive (frame_0000, frame_0002), a note says
+// which file a frame index then reads, so that a missing file is not taken for a frame.
+void note_numbering_gap(const std::string& input, const std::vector<std::pair<std::string, fs::path>>& sorted) {
+  std::optional<std::uint64_t> prev;
+  for (std::size_t k = 0; k < sorted.size(); ++k) {
+    const std::optional<std::uint64_t> n = name_number(sorted[k].first);
+    if (!n) return;
+    if (prev && *n != *prev + 1) {
+      read_note(input, fmt::format("the frame files' numbers are not consecutive ({} is followed by {}): frames are the files in "
+                                   "name order, so frame {} reads {}",
+                                   sorted[k - 1].first, sorted[k].first, k, sorted[k].first));
+      return;
+    }
+    prev = n;
+  }
+}
+
 }  // namespace
 
 std::vector<fs::path> list_frame_files(const std::string& dir_or_glob) {
@@ -163,6 +196,7 @@ std::vector<fs::path> list_frame_files(const std::string& dir_or_glob) {
     throw InputError(dir_or_glob, "", "",
                      pattern.empty() ? "no .obj/.ply/.off frame files in the directory" : "no file matches the pattern");
   std::sort(found.begin(), found.end(), [](const auto& x, const auto& y) { return natural_less(x.first, y.first); });
+  note_numbering_gap(dir_or_glob, found);
   std::vector<fs::path> files;
   files.reserve(found.size());
   for (auto& f : found) files.push_back(std::move(f.second));

@@ -212,8 +212,20 @@ fs::path data_file(const SceneOptions& opt, const std::string& rel) {
     throw InputError("", "", "data directory",
                      "no data directory found (pass --data-dir or set PTC_DATA_DIR to the build tree's data/)");
   const fs::path p = dir / rel;
-  if (!fs::is_regular_file(p))
-    throw InputError(p.string(), "", "", "missing (pass --data-dir or set PTC_DATA_DIR to the build tree's data/)");
+  if (!fs::is_regular_file(p)) {
+    // Say which of the user's settings points where: the flag, the variable or the default.
+    const char* given = !opt.data_dir.empty()        ? "--data-dir"
+                        : std::getenv("PTC_DATA_DIR") ? "PTC_DATA_DIR"
+                                                      : nullptr;
+    std::error_code ec;
+    if (given && !fs::is_directory(dir, ec))
+      throw InputError(p.string(), "", "", std::string("missing: the data directory given by ") + given + ", " +
+                                                dir.string() + ", does not exist (it should be the build tree's data/)");
+    throw InputError(p.string(), "", "",
+                     given ? std::string("missing from the data directory given by ") + given +
+                                 " (it should be the build tree's data/)"
+                           : std::string("missing (pass --data-dir or set PTC_DATA_DIR to the build tree's data/)"));
+  }
   return p;
 }
 

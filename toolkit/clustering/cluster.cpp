@@ -17,8 +17,10 @@
 // cluster: every sphere has radius 0, so reg = 0 and Acc = -regBound < 0 for every merge.
 #include "toolkit/clustering/cluster.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <stdexcept>
@@ -32,6 +34,7 @@
 #include "toolkit/clustering/regions.h"
 #include "toolkit/clustering/sah_split.h"
 #include "toolkit/geometry/sphere.h"
+#include "toolkit/geometry/triangle.h"
 
 namespace ptc {
 
@@ -276,6 +279,18 @@ std::optional<ConfigProblem> check(const ClusterConfig& c) {
   return std::nullopt;
 }
 
+// The power of two cluster_mesh scales a mesh by: 0 when its largest finite coordinate (in
+// absolute value) lies in [2^-100, 2^100] or there is none, else minus that coordinate's exponent.
+int extreme_scale_exponent(const Mesh& mesh) {
+  double m = 0.0;
+  for (const Vec3& p : mesh.positions())
+    for (int a = 0; a < 3; ++a)
+      if (std::isfinite(p[a])) m = std::max(m, std::abs(p[a]));
+  if (!(m > 0.0)) return 0;
+  const int e = std::ilogb(m);
+  return e > 100 || e < -100 ? -e : 0;
+}
+
 Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress,
                         std::optional<double> known_avg_sa, double* avg_sa_used) {
   if (!(config.max_size >= 0.0) || !std::isfinite(config.max_size))
@@ -284,6 +299,19 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
   if (config.max_count == 0 && config.max_size == 0.0) {  // the Standard baseline
     if (progress) progress(1.0);
     return one_per_triangle(mesh);
+  }
+  // A mesh of extreme scale clusters as the same mesh times a power of two that brings its
+  // largest coordinate near 1 (exact; every method is invariant under it, above): the areas of
+  // triangles of 1e-160 units underflow to 0 and those of 1e160 units overflow. Meshes whose
+  // largest coordinate lies in [2^-100, 2^100] are clustered as they are.
+  if (const int k = extreme_scale_exponent(mesh); k != 0) {
+    std::vector<Vec3> scaled(mesh.positions().begin(), mesh.positions().end());
+    for (Vec3& p : scaled) p = times_pow2(p, k);
+    const std::optional<double> known = known_avg_sa ? std::optional<double>(times_pow2(*known_avg_sa, 2 * k)) : std::nullopt;
+    double used = std::numeric_limits<double>::quiet_NaN();
+    const Clustering c = cluster_mesh(mesh.with_positions(std::move(scaled)), config, progress, known, &used);
+    if (avg_sa_used && !std::isnan(used)) *avg_sa_used = times_pow2(used, -2 * k);  // (the mesh's own units)
+    return c;
   }
   // Adjacency by positions: the same method over the welded mesh (same triangles, same order, the
   // same positions per corner), its clusters relabelled onto this mesh's vertex ids.

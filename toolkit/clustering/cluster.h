@@ -125,6 +125,11 @@ struct ConfigProblem {
 /// Progress callback: fraction done in [0, 1]; called at most a few hundred times.
 using ProgressFn = std::function<void(double)>;
 
+/// The power of two by which cluster_mesh scales a mesh of extreme scale before clustering it
+/// (exact, so the same clusters as at an ordinary scale): 0 when the largest finite coordinate's
+/// magnitude lies in [2^-100, 2^100] (or the mesh has none), else minus its binary exponent.
+[[nodiscard]] int extreme_scale_exponent(const Mesh& mesh);
+
 /// Clusters the mesh's triangles. Deterministic (same input, same output, bit for bit, every
 /// method; tested). Invariance (tested in clustering_frontdoor_test and the method tests):
 /// - rigid motion (rotation + translation; up to rounding ties): contraction with Acc or GWH01;

@@ -69,12 +69,21 @@ TriangleGeometry triangle_geometry(const Vec3& a, const Vec3& b, const Vec3& c) 
   // Scale the sides by a power of two (exact) so that the cross product neither overflows
   // (coordinates ~1e300) nor underflows (~1e-300); the area is scaled back at the end.
   Vec3 ab = b - a, bc = c - b, ca = a - c;
-  const double big = std::max({ab.cwiseAbs().maxCoeff(), bc.cwiseAbs().maxCoeff(), ca.cwiseAbs().maxCoeff()});
+  double big = std::max({ab.cwiseAbs().maxCoeff(), bc.cwiseAbs().maxCoeff(), ca.cwiseAbs().maxCoeff()});
   int e = 0;
+  if (!std::isfinite(big) && a.allFinite() && b.allFinite() && c.allFinite()) [[unlikely]] {
+    // A side beyond double's range between finite corners (signs opposite, near 1e308): the sides
+    // of the same triangle at a quarter of its size (exact), and two more binary orders in e.
+    const Vec3 qa = 0.25 * a, qb = 0.25 * b, qc = 0.25 * c;
+    ab = qb - qa, bc = qc - qb, ca = qa - qc;
+    big = std::max({ab.cwiseAbs().maxCoeff(), bc.cwiseAbs().maxCoeff(), ca.cwiseAbs().maxCoeff()});
+    e = 2;
+  }
   if (big > 0 && std::isfinite(big)) {
-    e = exponent_of(big);
-    const double scale = times_pow2(1.0, -e);
+    const int k = exponent_of(big);
+    const double scale = times_pow2(1.0, -k);
     ab = ab * scale, bc = bc * scale, ca = ca * scale;
+    e += k;
   }
   const double lab = safe_norm(ab), lbc = safe_norm(bc), lca = safe_norm(ca);
   Vec3 cr;
@@ -95,6 +104,15 @@ TriangleGeometry triangle_geometry(const Vec3& a, const Vec3& b, const Vec3& c) 
   g.area = times_pow2(0.5 * n, 2 * e);  // inf only when the true area exceeds the double range
   g.normal = cr / n;
   return g;
+}
+
+/// |q - p| for finite points, inf only when the distance itself is beyond double's range (the
+/// difference of coordinates near 1e308 of opposite signs overflows: then four times the
+/// distance of the quartered points, exact); NaN for a non-finite point.
+[[nodiscard]] inline double safe_distance(const Vec3& p, const Vec3& q) {
+  const Vec3 d = q - p;
+  if (d.allFinite() || !p.allFinite() || !q.allFinite()) return safe_norm(d);
+  return 4.0 * safe_norm(0.25 * q - 0.25 * p);
 }
 
 /// Area of one side (unit length^2); 0 for degenerate triangles.

@@ -132,6 +132,7 @@ LoadedMesh read_mesh_from_memory(std::string_view bytes, MeshFormat f, const std
 
 LoadedMesh read_mesh(const std::filesystem::path& path) {
   note_input_file(path);
+  if (path.empty()) throw InputError("''", "", "", "an empty file name");
   const std::optional<MeshFormat> f = format_from_extension(path);
   {
     std::error_code ec;
@@ -177,9 +178,17 @@ std::vector<std::string> read_notes(const ReadReport& r) {
     notes.push_back(std::to_string(r.surplus_lines) + (r.surplus_lines == 1 ? " line carries" : " lines carry") +
                     " more values than the header declares; the extra values were ignored (first: " +
                     r.first_surplus + ")");
+  if (r.trailing_bytes >= 50)  // (room for a facet: less is padding no one would ask about)
+    notes.push_back(std::to_string(r.trailing_bytes) + " bytes after the " + std::to_string(r.faces) +
+                    (r.faces == 1 ? " facet" : " facets") + " the header counts were ignored (room for " +
+                    std::to_string(r.trailing_bytes / 50) + " more; a header with too small a count drops them)");
   return notes;
 }
 
 void set_read_note_handler(ReadNoteHandler h) { g_note_handler.store(h); }
+
+void read_note(const std::string& file, const std::string& note) {
+  if (const ReadNoteHandler h = g_note_handler.load()) h(file, note);
+}
 
 }  // namespace ptc

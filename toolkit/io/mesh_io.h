@@ -50,6 +50,9 @@ struct ReadReport {
   /// writers); the extra values are ignored.
   std::size_t surplus_lines = 0;
   std::string first_surplus;  ///< "face 0 (line 13): 4 extra values" of the first one
+  /// Binary STL: bytes after the facets its header counts, ignored (exporters pad files; a
+  /// header whose count is too small leaves whole facets there, which the note says).
+  std::size_t trailing_bytes = 0;
 
   /// The file face triangle t came from.
   [[nodiscard]] std::size_t source_face_of(std::size_t t) const { return source_face.empty() ? t : source_face[t]; }
@@ -63,6 +66,8 @@ struct ReadReport {
 /// `ptc` program prints them on stderr. The handler may be called from several threads at once.
 using ReadNoteHandler = void (*)(const std::string& file, const std::string& note);
 void set_read_note_handler(ReadNoteHandler h);
+/// Passes one note about an input (a file or a directory) to the handler, if one is set.
+void read_note(const std::string& file, const std::string& note);
 
 struct LoadedMesh {
   Mesh mesh;

@@ -130,6 +130,7 @@ LoadedMesh read_binary(std::string_view bytes, const std::string& name) {
   ReadReport report;
   report.format = MeshFormat::Stl;
   report.binary = true;
+  report.trailing_bytes = static_cast<std::size_t>(left - 50ull * n);
   Welder w(3ull * n);
   std::vector<Tri> tris;
   tris.reserve(n);
@@ -179,7 +180,7 @@ class AsciiStl {
         t = tr_.next();
         if (iequals(t, "endsolid")) break;
         facet_ = tris.size();
-        if (t.empty()) fail("file ends before 'endsolid' (after " + std::to_string(tris.size()) + " facets)");
+        if (t.empty()) fail("file ends before 'endsolid' (after " + std::to_string(tris.size()) + (tris.size() == 1 ? " facet)" : " facets)"));
         if (!iequals(t, "facet")) fail("expected 'facet' or 'endsolid', found " + quote(t));
         expect("normal");
         for (int k = 0; k < 3; ++k) (void)number("normal", 0, k);  // ignored

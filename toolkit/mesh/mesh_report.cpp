@@ -133,7 +133,7 @@ MeshReport analyze_mesh(const Mesh& mesh, const EdgeMap& edges) {
 
   std::vector<double> lengths(edges.edge_count());
   for (std::size_t e = 0; e < edges.edge_count(); ++e)
-    lengths[e] = safe_norm(pos[edges.edge(e).v1] - pos[edges.edge(e).v0]);
+    lengths[e] = safe_distance(pos[edges.edge(e).v0], pos[edges.edge(e).v1]);  // (inf, not NaN, beyond the range)
   r.edge_length = summarize(lengths);
 
   r.duplicate_vertices = count_duplicate_vertices(pos);

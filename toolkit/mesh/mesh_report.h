@@ -37,9 +37,12 @@ struct MeshReport {
   std::size_t components = 0;                ///< connected through shared vertices
   std::size_t edge_components = 0;           ///< connected through shared edges (dual-graph components)
 
-  /// Closed 2-manifold: no boundary, non-manifold edge or vertex.
+  /// Closed 2-manifold: no boundary, non-manifold edge or vertex, and no triangle collapsed to an
+  /// edge or a point by a repeated corner index (such a face has no edges to close, so a mesh of
+  /// only such faces would otherwise pass).
   [[nodiscard]] bool closed_manifold() const {
-    return boundary_edges == 0 && non_manifold_edges == 0 && non_manifold_vertices == 0 && triangles > 0;
+    return boundary_edges == 0 && non_manifold_edges == 0 && non_manifold_vertices == 0 && triangles > 0 &&
+           repeated_index_triangles == 0;
   }
   /// V - E + F over referenced vertices.
   [[nodiscard]] long long euler_characteristic() const {
