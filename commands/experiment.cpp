@@ -515,8 +515,8 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
     const std::uint32_t k = sh["index"].get<std::uint32_t>(), nn = sh["count"].get<std::uint32_t>();
     if (nn == 1)  // (a run without --shard records itself as shard 1/1)
       throw InputError(s.dir.string(), "", "",
-                       "the output of a whole run (ptc experiment without --shard K/N), not a shard: ptc merge joins "
-                       "the shards of one split");
+                       "not one shard of a split: it records shard 1/1 (a whole run of ptc experiment, or a merge's "
+                       "output); ptc merge joins the shards of one split (--shard K/N, N > 1)");
     if (nn != n)
       throw InputError(s.dir.string(), "", "", fmt::format("shard {}/{} of a split into {} (the first is split into {})", k, nn, nn, n));
     if (!seen.emplace(k, s.dir).second)

@@ -113,13 +113,27 @@ LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const
   const LightChoice c = flag                    ? LightChoice{*flag, "--light"}
                         : scene.has_own_light() ? LightChoice{scene.light().position, "scene"}
                                                 : LightChoice{default_light(cam, bounds), "default"};
-  check_reach(scene, c.position, "the light", "--light", c.from, "light", input);
+  // The light is not a ray origin (shadow rays leave the surface toward it): it only has to be a
+  // double's distance away, its difference to the scene finite (the directions are taken without
+  // overflowing squares, render/rays.cpp).
+  const Box3 b = scene.rest().bounds();
+  if (!b.empty() && b.lo.allFinite() && b.hi.allFinite() &&
+      (!(c.position - b.lo).allFinite() || !(c.position - b.hi).allFinite())) {
+    const std::string reason = fmt::format("the light ({:.6g}, {:.6g}, {:.6g}) and the scene are too far apart: their "
+                                           "difference is beyond double's range",
+                                           c.position.x(), c.position.y(), c.position.z());
+    if (std::string_view(c.from) == "--light") throw UsageError("--light", reason);
+    throw InputError(std::string(input), "", "light", reason);
+  }
   return c;
 }
 
 void check_eye_reach(const bvh::PinholeCamera& cam, const CameraSpec& flags, const Scene& scene, std::string_view input) {
-  const char* from = flags.eye ? "--eye" : scene.has_own_camera() ? "scene" : "default";
-  check_reach(scene, cam.eye, "the camera's eye", "--eye", from, "camera", input);
+  if (flags.eye) return check_reach(scene, cam.eye, "the camera's eye", "--eye", "--eye", "camera", input);
+  if (scene.has_own_camera()) return check_reach(scene, cam.eye, "the camera's eye", "--eye", "scene", "camera", input);
+  // Framed by make_camera: its distance follows --fov and --look-at when they were given.
+  const char* flag = flags.fov_deg ? "--fov" : flags.look_at ? "--look-at" : "";
+  check_reach(scene, cam.eye, "the eye of the camera framing the mesh", flag, *flag ? flag : "default", "camera", input);
 }
 
 void check_reach(const Scene& scene, const Vec3& p, std::string_view what, std::string_view flag, std::string_view from,

@@ -65,17 +65,23 @@ struct LightChoice {
   Vec3 position = Vec3::Zero();
   const char* from = "default";  ///< "--light", "scene" or "default" (recorded in manifests)
 };
-/// The light is refused as check_reach says (its element "light"; `input` names the scene).
+/// A light whose difference to the scene's rest bounds overflows is refused (a usage error for
+/// --light, else InputError naming `input` and "light"); a far light is not (shadow rays start on
+/// the surface; a light at 1e308 lights and shadows as one at 1e30).
 [[nodiscard]] LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const bvh::PinholeCamera& cam,
                                     const Box3& bounds, std::string_view input);
 
-/// The camera's eye (`flags` are the user's, camera_for's input): refused as check_reach says.
+/// The camera's eye (`flags` are the user's, camera_for's input): refused as check_reach says,
+/// naming --eye when it was given, the scene's camera when it has one, else --fov or --look-at
+/// when they moved the framing camera, else the input.
 void check_eye_reach(const bvh::PinholeCamera& cam, const CameraSpec& flags, const Scene& scene, std::string_view input);
 
-/// A ray's origin or its light as the tracer takes them: within kTraceReach units of the scene's
-/// trace frame (the rest pose's centre and power-of-two scale, bvh::trace_frame_scale) of that
-/// centre, Embree's bound too (docs/tracing.md, "The trace frame at any scale"). Farther, the
-/// rays' floats overflow and the picture is silently wrong (a light at 1e308 gave no shadows).
+/// A ray's origin as the tracer takes it: within kTraceReach units of the scene's trace frame
+/// (the rest pose's centre and power-of-two scale, bvh::trace_frame_scale) of that centre,
+/// Embree's bound too (docs/tracing.md, "The trace frame at any scale"). Farther, the rays'
+/// floats lose the mesh (an eye at 1e300 saw nothing). (Scenes with static and moving parts
+/// trace each in its own part's frame, whose scale may be larger: the check takes the whole
+/// rest pose's.)
 /// Throws UsageError naming `flag` when `from` is the flag, else InputError naming `input` and
 /// `element` ("camera", "light"). A mesh beyond the frame's own range is left to the BVH's check.
 inline constexpr double kTraceReach = 1e18;

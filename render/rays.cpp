@@ -1,4 +1,5 @@
 #include "render/rays.h"
+#include "toolkit/geometry/triangle.h"
 #include "toolkit/core/stopwatch.h"
 
 #include <tbb/blocked_range.h>
@@ -166,9 +167,13 @@ ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const
       [&](bvh::RayBatch& rays, std::size_t slot, std::uint32_t i) {
         const Vec3 o = frame.offset_origin(s.point[i], s.normal[i]);
         const Vec3 l = light - o;
-        const double dist = l.norm();
+        double dist = l.norm();
+        Vec3 dir = l / dist;
+        // A light so far that the squares overflow (1e308): the same direction without them, and
+        // a distance of inf where it is beyond double (the ray then has no end short of the light).
+        if (!std::isfinite(dist)) dist = l.stableNorm(), dir = unit_vector(l);
         // The direction is unit, so t is a distance; stop just short of the light itself.
-        rays.set(slot, o, to_f(l / dist), 0.0f, static_cast<float>(dist * (1.0 - 1.0 / 1048576.0)));
+        rays.set(slot, o, to_f(dir), 0.0f, static_cast<float>(dist * (1.0 - 1.0 / 1048576.0)));
       },
       [&](const bvh::HitBatch& hits, std::size_t slot, std::uint32_t i) {
         r.lit[i] = hits.triangle[slot] == bvh::kNoTriangle;

@@ -8,6 +8,7 @@
 
 #include "render/camera.h"
 #include "toolkit/core/stopwatch.h"
+#include "toolkit/geometry/triangle.h"
 
 namespace ptc {
 namespace {
@@ -62,7 +63,9 @@ RgbImage shaded_image(const Render& r) {
   RgbImage img(r.width, r.height, kBackground);
   for (std::size_t i = 0; i < img.pixel_count(); ++i) {
     if (!r.surface.hit[i]) continue;
-    const Vec3 l = (r.light - r.surface.point[i]).normalized();
+    const Vec3 to_light = r.light - r.surface.point[i];
+    const double n = to_light.norm();
+    const Vec3 l = std::isfinite(n) ? to_light.normalized() : unit_vector(to_light);  // (a light at 1e308)
     const double diffuse = std::max(0.0, r.surface.normal[i].dot(l)) * (r.lit.empty() ? 1.0 : double(r.lit[i]));
     const double ambient = r.ao.empty() ? 1.0 : double(r.ao[i]);
     const std::uint8_t g = to_u8(kAlbedo * (kAmbient * ambient + kDiffuse * diffuse));

@@ -236,6 +236,11 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
           coherent = with_coherent.stats.trace_ms <= with_incoherent.stats.trace_ms;
           row.shadow_other_ms = coherent ? with_incoherent.stats.trace_ms : with_coherent.stats.trace_ms;
           sr = std::move(coherent ? with_coherent : with_incoherent);
+          // The other flag's lit points are checked too: shadow_mismatches counts the worse.
+          const ShadowResult& other = coherent ? with_incoherent : with_coherent;
+          std::uint64_t other_mismatches = 0;
+          for (std::size_t i = 0; i < other.lit.size() && i < ref_lit.size(); ++i) other_mismatches += other.lit[i] != ref_lit[i];
+          row.shadow_mismatches = other_mismatches;  // (the counted pass's are added below; the larger is kept)
         } else {
           sr = shadows(coherent);
         }
@@ -244,9 +249,13 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
         sr = shadows(true);
       }
       row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
-      if (fr.accel == 0) ref_lit = sr.lit;
-      else
-        for (std::size_t i = 0; i < sr.lit.size(); ++i) row.shadow_mismatches += sr.lit[i] != ref_lit[i];
+      if (fr.accel == 0) {
+        ref_lit = sr.lit;
+      } else {
+        std::uint64_t mismatches = 0;
+        for (std::size_t i = 0; i < sr.lit.size(); ++i) mismatches += sr.lit[i] != ref_lit[i];
+        row.shadow_mismatches = std::max(row.shadow_mismatches, mismatches);
+      }
     }
     if (!loop::is_embree(loop::kAllAccelKinds[fr.accel])) {  // ours: the counters, from an untimed trace with them on
       bvh::TraceOptions with = opt;

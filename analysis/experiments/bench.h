@@ -122,7 +122,8 @@ struct BenchRow {
   std::uint64_t rays = 0, hits = 0;
   HitAgreement agreement;        ///< against ours_triangles of the same frame (zero for itself)
   /// Shadow pass (zero without a light): rays (surface points facing the light), occluded rays,
-  /// trace time, and points whose lit/unlit differs from ours_triangles' of the same frame.
+  /// trace time, and points whose lit/unlit differs from ours_triangles' of the same frame (with
+  /// EmbreeShadowHint::Best, the larger count of the two flags' passes).
   std::uint64_t shadow_rays = 0, shadow_occluded = 0, shadow_mismatches = 0;
   double shadow_ms = 0;
   /// Embree's shadow packets: the context flag of shadow_ms ("coherent" or "incoherent"; empty

@@ -114,6 +114,10 @@ def main():
         usage(f"--threads: not a comma-separated list of integers: '{a.threads}'")
     if not threads or any(t < 1 for t in threads):
         usage("--threads: every count must be >= 1")
+    cores = len(os.sched_getaffinity(0))
+    over = [t for t in threads if t > cores]
+    if over:  # (ptc bench refuses them: Embree would take fewer threads than ours)
+        usage(f"--threads: {','.join(map(str, over))} above the {cores} threads this machine runs at once")
     if a.repeat < 1:
         usage("--repeat must be >= 1")
     # --max-count N[,M...]: each value its own runs and table rows (a sweep of the cluster size);

@@ -764,12 +764,10 @@ TEST_F(Cli, OutputInAMissingDirectoryIsNamedAsGiven) {
   EXPECT_EQ(r.err.find(".tmp"), std::string::npos) << r.err;
 }
 
-// The output of another command replaced by a run with the same --out is said, naming the
-// command and the files that are gone (found by a new user: a `ptc cluster` output vanished
-// under an experiment without a word); the same command again replaces silently, as documented.
 // What a new user ran into (a sweep of unusual inputs, 2026-12-07), each with the answer the
-// standards ask for: a light or an eye beyond the tracer's reach refused (a light at 1e308 gave a
-// picture without shadows, silently), an up vector of 1e-300 taken (Eigen called it zero), an
+// standards ask for: a light at 1e308 lights and shadows as one at 1e30 (its squared distance
+// overflowed, and the picture had no shadows, silently), an eye beyond the tracer's reach is
+// refused, an up vector of 1e-300 taken (Eigen called it zero), an
 // empty file name named, a byte order mark in triangles.csv read, numbers that are not whole
 // refused in the tool's words, a missing --data-dir said as such, a frame directory with a gap
 // in its numbers noted, and a re-run that writes fewer files said.
@@ -782,13 +780,25 @@ TEST_F(Cli, SlipsOfANewUser) {
     a.insert(a.end(), {"--out", out});
     return ptc(a);
   };
-  RunResult r = trace({"--light", "1e308,1e308,1e308"}, cube.string());
-  EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(lines(r.err), 1u) << r.err;
-  EXPECT_NE(r.err.find("--light"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("beyond the tracer's reach"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(out));
-  r = trace({"--eye", "1e300,1e300,1e300", "--look-at", "-1e300,-1e300,-1e300"}, cube.string());
+  // The same picture, shadows and counters with the light at 1e308 and at 1e30 in the same
+  // direction (their directions agree to far below a float's precision).
+  const std::vector<std::string> view = {"--shadows", "--eye", "2.5,1.8,3", "--look-at", "0.5,0.5,0.5"};
+  std::string images[2], csvs[2];
+  for (int k = 0; k < 2; ++k) {
+    std::vector<std::string> a = view;
+    a.insert(a.end(), {"--light", k == 0 ? "1e308,1.5e308,1.2e308" : "1e30,1.5e30,1.2e30"});
+    const RunResult lit = trace(a, cube.string());
+    ASSERT_EQ(lit.code, 0) << lit.err;
+    images[k] = slurp(dir_ / "t" / "shaded.png");
+    for (const auto& row : ptc::test::csv_rows(slurp(dir_ / "t" / "trace.csv")))
+      if (row.at("pass") == "shadow") csvs[k] = row.at("rays") + " " + row.at("hits") + " " + row.at("nodes_per_ray");
+    fs::remove_all(out);
+  }
+  EXPECT_FALSE(images[0].empty());
+  EXPECT_EQ(images[0], images[1]);
+  EXPECT_FALSE(csvs[0].empty());
+  EXPECT_EQ(csvs[0], csvs[1]);
+  RunResult r = trace({"--eye", "1e300,1e300,1e300", "--look-at", "-1e300,-1e300,-1e300"}, cube.string());
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--eye"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("the camera's eye"), std::string::npos) << r.err;
@@ -796,12 +806,16 @@ TEST_F(Cli, SlipsOfANewUser) {
   r = trace({"--light", "1e12,2e12,3e12"}, cube.string());
   EXPECT_EQ(r.code, 0) << r.err;
   fs::remove_all(out);
-  // A scene file's own light: bad input (exit 1) naming the file and its light.
-  const auto scene = write("far.json", "{\"meshes\": [{\"file\": \"cube.off\"}], \"light\": {\"position\": [0, 0, 1e308]}}");
+  // A scene file's own camera that far: bad input (exit 1) naming the file and its camera.
+  const auto scene = write("far.json", "{\"meshes\": [{\"file\": \"cube.off\"}], \"camera\": {\"eye\": [0, 0, 1e100], "
+                                       "\"look_at\": [0.5, 0.5, 0.5]}}");
   r = trace({}, scene.string());
   EXPECT_EQ(r.code, 1) << r.err;
-  EXPECT_NE(r.err.find("far.json"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("light"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("far.json: camera: the camera's eye"), std::string::npos) << r.err;
+  // A framing camera pushed that far by --fov: --fov is named.
+  r = trace({"--fov", "1e-30"}, cube.string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--fov: the eye of the camera framing the mesh"), std::string::npos) << r.err;
   // An up vector of 1e-300 is a direction.
   r = trace({"--eye", "0.5,0.5,5", "--look-at", "0.5,0.5,0.5", "--up", "1e-300,1e-300,0"}, cube.string());
   EXPECT_EQ(r.code, 0) << r.err;
@@ -867,6 +881,16 @@ TEST_F(Cli, SlipsOfANewUser) {
                        "frames are the files in name order, so frame 1 reads frame_0002.off"),
             std::string::npos)
       << r.err;
+  // Names whose counter is not their last number (a constant suffix): consecutive, no note.
+  fs::create_directories(dir_ / "frames_v");
+  fs::copy_file(cube, dir_ / "frames_v" / "f_0001_v2.off");
+  fs::copy_file(cube, dir_ / "frames_v" / "f_0002_v2.off");
+  {
+    const RunResult v = ptc({"trace", (dir_ / "frames_v").string(), "--frames", "0:1", "--width", "8", "--height", "8",
+                             "--out", (dir_ / "tv").string()});
+    EXPECT_EQ(v.code, 0) << v.err;
+    EXPECT_EQ(v.err.find("not consecutive"), std::string::npos) << v.err;
+  }
   // The same command again with fewer frames: the later frames' files go, and that is said.
   r = trace({"--frames", "0:0"}, (dir_ / "frames").string());
   EXPECT_EQ(r.code, 0) << r.err;
@@ -878,6 +902,9 @@ TEST_F(Cli, SlipsOfANewUser) {
   EXPECT_EQ(r.err.find("replaced"), std::string::npos) << r.err;
 }
 
+// The output of another command replaced by a run with the same --out is said, naming the
+// command and the files that are gone (found by a new user: a `ptc cluster` output vanished
+// under an experiment without a word); the same command again replaces silently, as documented.
 TEST_F(Cli, ReplacingAnotherCommandsOutputIsSaid) {
   const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";
   const std::string out = (dir_ / "o").string();

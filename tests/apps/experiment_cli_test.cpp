@@ -276,7 +276,7 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
     argv.insert(argv.end(), {"--out", out});
     r = ptc(argv);
     EXPECT_EQ(r.code, 1) << r.err;
-    EXPECT_NE(r.err.find(whole + ": the output of a whole run (ptc experiment without --shard K/N), not a shard"),
+    EXPECT_NE(r.err.find(whole + ": not one shard of a split: it records shard 1/1"),
               std::string::npos)
         << r.err;
   }

@@ -195,17 +195,23 @@ TEST(ClusterFrontDoor, BaselinesInvariantUnderPowerOfTwoScalingValidWhenRotated)
 TEST(ClusterFrontDoor, ExtremeScalesClusterAsTheUnitMesh) {
   const Mesh m = load("elephant.off");
   EXPECT_EQ(extreme_scale_exponent(m), 0);
-  for (const int e : {-1000, 1000}) {
+  for (const int e : {-300, 300, -1000, 1000}) {
     const Mesh s = moved(m, Eigen::Matrix3d::Identity(), Vec3::Zero(), std::ldexp(1.0, e));
     EXPECT_NE(extreme_scale_exponent(s), 0) << e;
     EXPECT_EQ(extreme_scale_exponent(moved(m, Eigen::Matrix3d::Identity(), Vec3::Zero(), std::ldexp(1.0, e / 20))), 0) << e;
+    // A stray unreferenced vertex far out does not scale the mesh (the triangles' extent does).
+    std::vector<Vec3> stray(m.positions().begin(), m.positions().end());
+    stray.push_back(Vec3(std::ldexp(1.0, 1000), 0, 0));
+    EXPECT_EQ(extreme_scale_exponent(Mesh(std::vector<Tri>(m.triangles().begin(), m.triangles().end()), stray)), 0);
     for (const Case& c : all_cases()) {
       const ClusterConfig cfg = config_of(c, 24);
       double unit_sa = -1.0, scaled_sa = -1.0;
       const Clustering a = cluster_mesh(m, cfg, {}, std::nullopt, &unit_sa);
       const Clustering b = cluster_mesh(s, cfg, {}, std::nullopt, &scaled_sa);
       expect_same(a, b, what(c, 24, "elephant times 2^" + std::to_string(e)));
+      // (at 2^+-300 the AvgSA is a finite double, at 2^+-1000 inf or 0)
       EXPECT_EQ(scaled_sa, unit_sa < 0 ? -1.0 : std::ldexp(unit_sa, 2 * e)) << what(c, 24, "AvgSA");
+      if (std::abs(e) == 300 && unit_sa > 0) EXPECT_TRUE(std::isfinite(scaled_sa) && scaled_sa > 0) << scaled_sa;
     }
   }
 }

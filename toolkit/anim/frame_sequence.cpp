@@ -132,34 +132,43 @@ bool is_frame_extension(const fs::path& p) {
   return f && (*f == MeshFormat::Obj || *f == MeshFormat::Ply || *f == MeshFormat::Off);
 }
 
-// The number in a frame file's name: its last run of digits (frame_0012.ply: 12); nothing when
-// it has none or more than 18 digits.
-std::optional<std::uint64_t> name_number(const std::string& name) {
-  const std::size_t stem_end = name.rfind('.');
-  const std::string stem = name.substr(0, stem_end);
-  std::size_t e = stem.size();
-  while (e > 0 && !std::isdigit(static_cast<unsigned char>(stem[e - 1]))) --e;
-  std::size_t b = e;
-  while (b > 0 && std::isdigit(static_cast<unsigned char>(stem[b - 1]))) --b;
-  if (b == e || e - b > 18) return std::nullopt;
-  return std::stoull(stem.substr(b, e - b));
+// The runs of decimal digits in a name, in order, as numbers (nothing for a run of more than 18
+// digits: such a name is not numbered by a counter here).
+std::optional<std::vector<std::uint64_t>> digit_runs(const std::string& name) {
+  std::vector<std::uint64_t> runs;
+  for (std::size_t i = 0; i < name.size();) {
+    if (!std::isdigit(static_cast<unsigned char>(name[i]))) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j < name.size() && std::isdigit(static_cast<unsigned char>(name[j]))) ++j;
+    if (j - i > 18) return std::nullopt;
+    runs.push_back(std::stoull(name.substr(i, j - i)));
+    i = j;
+  }
+  return runs;
 }
 
-// Frames are the files in name order, whatever numbers their names carry; when every name has a
-// number and two neighbours' numbers are not consecutive (frame_0000, frame_0002), a note says
-// which file a frame index then reads, so that a missing file is not taken for a frame.
+// Frames are the files in name order, whatever numbers their names carry. The counter of two
+// neighbouring names is the one run of digits in which they differ (frame_0001_v2 and
+// frame_0002_v2: the first); when a counter skips (frame_0000, frame_0002), a note says which
+// file a frame index then reads, so that a missing file is not taken for a frame. Names shaped
+// differently, or differing in more than one run, carry no counter to check.
 void note_numbering_gap(const std::string& input, const std::vector<std::pair<std::string, fs::path>>& sorted) {
-  std::optional<std::uint64_t> prev;
-  for (std::size_t k = 0; k < sorted.size(); ++k) {
-    const std::optional<std::uint64_t> n = name_number(sorted[k].first);
-    if (!n) return;
-    if (prev && *n != *prev + 1) {
-      read_note(input, fmt::format("the frame files' numbers are not consecutive ({} is followed by {}): frames are the files in "
-                                   "name order, so frame {} reads {}",
+  for (std::size_t k = 1; k < sorted.size(); ++k) {
+    const auto a = digit_runs(sorted[k - 1].first), b = digit_runs(sorted[k].first);
+    if (!a || !b || a->size() != b->size()) return;
+    std::size_t differing = 0, at = 0;
+    for (std::size_t i = 0; i < a->size(); ++i)
+      if ((*a)[i] != (*b)[i]) ++differing, at = i;
+    if (differing != 1) return;
+    if ((*b)[at] != (*a)[at] + 1) {
+      read_note(input, fmt::format("the frame files' numbers are not consecutive ({} is followed by {}): frames are the "
+                                   "files in name order, so frame {} reads {}",
                                    sorted[k - 1].first, sorted[k].first, k, sorted[k].first));
       return;
     }
-    prev = n;
   }
 }
 

@@ -214,9 +214,8 @@ fs::path data_file(const SceneOptions& opt, const std::string& rel) {
   const fs::path p = dir / rel;
   if (!fs::is_regular_file(p)) {
     // Say which of the user's settings points where: the flag, the variable or the default.
-    const char* given = !opt.data_dir.empty()        ? "--data-dir"
-                        : std::getenv("PTC_DATA_DIR") ? "PTC_DATA_DIR"
-                                                      : nullptr;
+    const char* env = std::getenv("PTC_DATA_DIR");
+    const char* given = !opt.data_dir.empty() ? "--data-dir" : env && *env ? "PTC_DATA_DIR" : nullptr;
     std::error_code ec;
     if (given && !fs::is_directory(dir, ec))
       throw InputError(p.string(), "", "", std::string("missing: the data directory given by ") + given + ", " +

@@ -279,16 +279,20 @@ std::optional<ConfigProblem> check(const ClusterConfig& c) {
   return std::nullopt;
 }
 
-// The power of two cluster_mesh scales a mesh by: 0 when its largest finite coordinate (in
-// absolute value) lies in [2^-100, 2^100] or there is none, else minus that coordinate's exponent.
+// The power of two cluster_mesh scales a mesh by (header).
 int extreme_scale_exponent(const Mesh& mesh) {
-  double m = 0.0;
-  for (const Vec3& p : mesh.positions())
-    for (int a = 0; a < 3; ++a)
-      if (std::isfinite(p[a])) m = std::max(m, std::abs(p[a]));
-  if (!(m > 0.0)) return 0;
-  const int e = std::ilogb(m);
-  return e > 100 || e < -100 ? -e : 0;
+  if (mesh.triangle_count() == 0) return 0;
+  const Box3 b = mesh.referenced_bounds();
+  if (b.empty() || !b.lo.allFinite() || !b.hi.allFinite()) return 0;
+  const double extent = (b.hi - b.lo).maxCoeff();
+  if (!(extent > 0.0) || !std::isfinite(extent)) return 0;
+  const int e = std::ilogb(extent);
+  if (e <= 100 && e >= -100) return 0;
+  // Every position (unreferenced ones too) must stay a finite normal number where it is not 0.
+  double largest = 0.0;
+  for (const Vec3& p : mesh.positions()) largest = std::max(largest, p.cwiseAbs().maxCoeff());
+  if (!std::isfinite(largest) || std::ilogb(largest) - e > 1000) return 0;
+  return -e;
 }
 
 Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress,

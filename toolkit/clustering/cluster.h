@@ -125,9 +125,12 @@ struct ConfigProblem {
 /// Progress callback: fraction done in [0, 1]; called at most a few hundred times.
 using ProgressFn = std::function<void(double)>;
 
-/// The power of two by which cluster_mesh scales a mesh of extreme scale before clustering it
-/// (exact, so the same clusters as at an ordinary scale): 0 when the largest finite coordinate's
-/// magnitude lies in [2^-100, 2^100] (or the mesh has none), else minus its binary exponent.
+/// The power of two by which cluster_mesh scales a mesh of extreme size before clustering it
+/// (exact, so the same clusters as at an ordinary size): minus the binary exponent of its
+/// triangles' extent (the largest side of the referenced vertices' box) when that lies beyond
+/// 2^100 or below 2^-100 and every position times the power stays finite (a small mesh far from
+/// the origin may not be scaled: its coordinates would overflow); else 0. A stray unreferenced
+/// vertex does not count.
 [[nodiscard]] int extreme_scale_exponent(const Mesh& mesh);
 
 /// Clusters the mesh's triangles. Deterministic (same input, same output, bit for bit, every

@@ -81,8 +81,12 @@ TriangleGeometry triangle_geometry(const Vec3& a, const Vec3& b, const Vec3& c) 
   }
   if (big > 0 && std::isfinite(big)) {
     const int k = exponent_of(big);
-    const double scale = times_pow2(1.0, -k);
-    ab = ab * scale, bc = bc * scale, ca = ca * scale;
+    if (k >= -1023) {
+      const double scale = times_pow2(1.0, -k);
+      ab = ab * scale, bc = bc * scale, ca = ca * scale;
+    } else {  // (subnormal sides: 2^-k is beyond double, so each coordinate is scaled alone)
+      ab = times_pow2(ab, -k), bc = times_pow2(bc, -k), ca = times_pow2(ca, -k);
+    }
     e += k;
   }
   const double lab = safe_norm(ab), lbc = safe_norm(bc), lca = safe_norm(ca);
@@ -104,6 +108,14 @@ TriangleGeometry triangle_geometry(const Vec3& a, const Vec3& b, const Vec3& c) 
   g.area = times_pow2(0.5 * n, 2 * e);  // inf only when the true area exceeds the double range
   g.normal = cr / n;
   return g;
+}
+
+/// v / |v| for a finite v != 0 whose length may be beyond double (|(1e308, 1.5e308, 0)|): v over
+/// its largest coordinate first. (Eigen's stableNormalized() divides by the length itself, which
+/// overflows there, and returns 0.)
+[[nodiscard]] inline Vec3 unit_vector(const Vec3& v) {
+  const Vec3 s = v / v.cwiseAbs().maxCoeff();
+  return s / s.norm();
 }
 
 /// |q - p| for finite points, inf only when the distance itself is beyond double's range (the
