@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "render/rays.h"
+#include "toolkit/geometry/triangle.h"
 #include "bvh/trace_scene.h"
 
 using ptc::Mesh;
@@ -157,6 +158,48 @@ TEST(TraceRays, ShadowOfABlockerMatchesAnalyticAndBruteForce) {
     EXPECT_EQ(sh.stats.rays, rays.size());  // every point faces the light
     EXPECT_EQ(sh.stats.hits, shadowed);
   }
+}
+
+// A light so far that its squared distance overflows (1e308) shadows as a far light in the same
+// direction (1e30): the same lit points, point by point, and a blocker's shadow (before, the
+// direction was taken as l / |l| with |l| = inf: zero, and no shadow at all).
+TEST(TraceRays, AFarLightShadowsAsANearerOneInItsDirection) {
+  const Mesh ground = grid(24, -2, 2, 0);
+  const Mesh blocker = grid(3, 0, 1, 0, [](const Vec3& q) { return Vec3(-0.5 + q.x(), -0.3 + 0.7 * q.y(), 1.0); });
+  const Mesh m = append(ground, blocker);
+  const bvh::TriangleScene scene(m);
+  const Traced tr = primary(scene.data(), m, rays_down(97, -1.95, 1.95, 5.0));
+  const ptc::RayFrame frame{m.bounds(), scene.data().origin};
+  const Vec3 dir(0.6, 0.4, 1.0);  // (times 1.7e308: a length of 2.1e308, beyond double)
+  const ptc::ShadowResult nearer = ptc::trace_shadows(scene.data(), tr.s, 1e30 * dir, frame, 2);
+  const ptc::ShadowResult far = ptc::trace_shadows(scene.data(), tr.s, 1.7e308 * dir, frame, 2);
+  ASSERT_FALSE(std::isfinite((1.7e308 * dir).norm()));
+  EXPECT_GT(nearer.stats.hits, 200u);
+  EXPECT_EQ(far.stats.rays, nearer.stats.rays);
+  EXPECT_EQ(far.stats.hits, nearer.stats.hits);
+  EXPECT_EQ(far.lit, nearer.lit);
+  EXPECT_LT((ptc::unit_vector(Vec3(1e308, 1.5e308, 0)) - Vec3(1.0, 1.5, 0.0).normalized()).norm(), 1e-15);
+  EXPECT_EQ(Vec3(1e308, 1.5e308, 0).stableNormalized(), Vec3::Zero());  // (why unit_vector: Eigen's overflows)
+}
+
+// with_coherence hands its hint to the target's options, whatever the pass asks (Embree's packets
+// read it; the hits do not show it, so the options themselves are checked).
+TEST(TraceRays, WithCoherenceSetsTheHint) {
+  std::vector<bool> seen;
+  const ptc::TraceTarget target{[&](const bvh::RayBatch&, bvh::HitBatch&, const bvh::TraceOptions& o) {
+                                  seen.push_back(o.coherent);
+                                  return bvh::TraceTotals{};
+                                },
+                                Vec3::Zero()};
+  bvh::RayBatch rays;
+  bvh::HitBatch hits;
+  bvh::TraceOptions asked;
+  asked.coherent = true;
+  (void)ptc::with_coherence(target, false).trace(rays, hits, asked);
+  asked.coherent = false;
+  (void)ptc::with_coherence(target, true).trace(rays, hits, asked);
+  (void)target.trace(rays, hits, asked);
+  EXPECT_EQ(seen, (std::vector<bool>{false, true, false}));
 }
 
 TEST(TraceRays, LightBehindTheSurfaceIsUnlitWithoutARay) {
