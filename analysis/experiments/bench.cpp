@@ -503,9 +503,10 @@ std::string bench_text(const PeerBenchResult& r) {
     s += "\n";
   }
   s += "\n";
-  s += fmt::format("{:<16} {:>10} {:>10} {:>13} {:>10} {:>10} {:>10} {:>8} {:>8} {:>10} {:>11} {:>10}\n", "config",
-                   "update_ms", "build_ms", "upd+build_ms", "trace_ms", "Mrays/s", "hits", "mismatch", "ties",
-                   "shadow_ms", "shadow_rays", "lit_diff");
+  // (the names of summary.csv's columns; hits and shadow_rays are medians of bench.csv's)
+  s += fmt::format("{:<16} {:>10} {:>10} {:>13} {:>10} {:>10} {:>10} {:>10} {:>8} {:>10} {:>11} {:>17}\n", "config",
+                   "update_ms", "build_ms", "upd+build_ms", "trace_ms", "Mrays/s", "hits", "mismatches", "ties",
+                   "shadow_ms", "shadow_rays", "shadow_mismatches");
   // A median count in full ("{:g}" would print 1048576 as 1.04858e+06; between two counts it ends in .5).
   auto count = [](const std::vector<double>& v) {
     if (v.empty()) return std::string("-");
@@ -519,7 +520,7 @@ std::string bench_text(const PeerBenchResult& r) {
       if (row.config == x.config && row.frame >= r.median_first_frame)
         hv.push_back(static_cast<double>(row.hits)), sv.push_back(static_cast<double>(row.shadow_rays));
     const std::string hits = count(hv), shadow_rays = count(sv);
-    s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>8} {:>8} {:>10.2f} {:>11} {:>10}\n",
+    s += fmt::format("{:<16} {:>10.2f} {:>10.2f} {:>13.2f} {:>10.2f} {:>10.2f} {:>10} {:>10} {:>8} {:>10.2f} {:>11} {:>17}\n",
                      x.config, x.update_ms, x.build_ms, x.update_build_ms, x.trace_ms, x.mrays_per_s, hits,
                      x.mismatches, x.ties, x.shadow_ms, shadow_rays, x.shadow_mismatches);
   }

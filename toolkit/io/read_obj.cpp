@@ -3,6 +3,7 @@
 // indices may refer to vertices defined further down (common in the wild); they are range-checked
 // once the whole file has been read, and the error names the line of the largest one.
 // vt, vn, vp, g, o, s, usemtl, mtllib, l, p and unknown keywords are ignored.
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -82,12 +83,16 @@ struct ObjParser {
           // to be made of digits, signs and slashes.
           const std::size_t slash = t.find('/');
           const std::string_view vi = t.substr(0, slash);
-          if (slash != std::string_view::npos && t.find_first_not_of("0123456789-+/", slash) != std::string_view::npos)
+          // (and at most two slashes: "3/4/5/6" is no corner either)
+          if (slash != std::string_view::npos && (t.find_first_not_of("0123456789-+/", slash) != std::string_view::npos ||
+                                                  std::count(t.begin(), t.end(), '/') > 2))
             fail_here("corner " + quote(t) + " is not of the form i, i/t, i/t/n or i//n");
           std::int64_t idx = 0;
           const NumStatus st = parse_int(vi, idx);
           if (st == NumStatus::Garbled) fail_here("corner " + quote(t) + " is not an integer index");
-          if (st == NumStatus::OutOfRange) fail_here("index " + std::string(vi) + " out of range");
+          if (st == NumStatus::OutOfRange)
+            fail_here("index " + std::string(vi) + " out of range (" + std::to_string(pos.size()) +
+                      " vertices defined so far)");
           if (idx == 0) fail_here("index 0 is invalid (OBJ indices start at 1)");
           std::uint64_t v = 0;
           if (idx < 0) {
