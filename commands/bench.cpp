@@ -124,6 +124,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   if (opt.config.packets) manifest.set_parameter("embree_packet_width", opt.config.embree_packet_width);
   if (opt.config.packets && opt.shadows)
     manifest.set_parameter("embree_shadow_hint", std::string(to_string(opt.config.embree_shadow_hint)));
+  if (opt.shadows) manifest.set_parameter("shadow_order", opt.config.shadow_morton ? "morton" : "pixel");
   if (opt.shadows) manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
   manifest.set_result("triangles", r.triangles);
   manifest.set_result("clusters", r.clusters);

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace ptc {
 namespace {
@@ -155,13 +156,18 @@ AoResult trace_ao(const bvh::TraceData& scene, const SurfaceHits& s, const AoCon
 }
 
 ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const Vec3& light, const RayFrame& frame,
-                           unsigned threads, bool packets) {
+                           unsigned threads, bool packets, std::span<const std::uint32_t> order) {
+  if (!order.empty() && order.size() != s.size())
+    throw std::invalid_argument("trace_shadows: the order has " + std::to_string(order.size()) + " points, the surface " +
+                                std::to_string(s.size()));
   ShadowResult r;
   r.lit.assign(s.size(), 0);
   // Points that face the light get a ray; the others stay unlit.
   std::vector<std::uint32_t> idx;
-  for (std::size_t i = 0; i < s.size(); ++i)
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const std::size_t i = order.empty() ? k : order[k];
     if (s.hit[i] && s.normal[i].dot(light - s.point[i]) > 0) idx.push_back(static_cast<std::uint32_t>(i));
+  }
   any_hit_pass(
       scene, idx, 1, threads, r.stats,
       [&](bvh::RayBatch& rays, std::size_t slot, std::uint32_t i) {
@@ -180,6 +186,45 @@ ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const
       },
       packets);
   return r;
+}
+
+namespace {
+// The 21 low bits of x, spread to every third bit.
+std::uint64_t spread3(std::uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+}  // namespace
+
+std::vector<std::uint32_t> morton_order(const SurfaceHits& s, const Box3& bounds) {
+  const std::size_t n = s.size();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> key(n);
+  const bool box = !bounds.empty() && bounds.lo.allFinite() && bounds.hi.allFinite();
+  const Vec3 lo = box ? bounds.lo : Vec3::Zero();
+  const Vec3 ext = box ? Vec3(bounds.hi - bounds.lo) : Vec3::Ones();
+  constexpr double kCells = 2097151.0;  // 2^21 - 1
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint64_t code = ~std::uint64_t{0};  // (no hit: after every hit)
+    if (s.hit[i]) {
+      code = 0;
+      for (int a = 0; a < 3; ++a) {
+        // (a flat box side: every point in cell 0; a point outside the box: the nearest cell)
+        const double f = ext[a] > 0 ? (s.point[i][a] - lo[a]) / ext[a] * kCells : 0.0;
+        const double c = f > 0 ? (f < kCells ? f : kCells) : 0.0;  // (NaN: 0)
+        code |= spread3(static_cast<std::uint64_t>(c)) << a;
+      }
+    }
+    key[i] = {code, static_cast<std::uint32_t>(i)};
+  }
+  std::sort(key.begin(), key.end());  // (the index breaks ties: a deterministic order)
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = key[i].second;
+  return order;
 }
 
 std::pair<double, double> ao_uniforms(std::uint64_t seed, std::uint64_t i, std::uint64_t k) {

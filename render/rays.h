@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <concepts>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "bvh/tracer.h"
@@ -104,9 +105,17 @@ struct ShadowResult {
   PassStats stats;
 };
 /// packets: trace them in packets (bvh::TraceOptions::packets; the points are taken in pixel order,
-/// so neighbouring rays leave neighbouring points).
+/// so neighbouring rays leave neighbouring points). order: when not empty, the points in this
+/// order instead (a permutation of 0 .. s.size() - 1, e.g. morton_order; lit stays indexed by
+/// point, and the same points are lit).
 [[nodiscard]] ShadowResult trace_shadows(const TraceTarget& scene, const SurfaceHits& s, const Vec3& light,
-                                         const RayFrame& frame, unsigned threads = 0, bool packets = false);
+                                         const RayFrame& frame, unsigned threads = 0, bool packets = false,
+                                         std::span<const std::uint32_t> order = {});
+/// The surface points ordered by the Morton code of their position in `bounds` (21 bits an axis;
+/// ties and the points without a hit in index order): neighbouring shadow rays then leave
+/// neighbouring points, which pixel order does not give where the hits are scattered (a cloud of
+/// separated triangles; docs/tracing.md, "Shadow rays in Morton order").
+[[nodiscard]] std::vector<std::uint32_t> morton_order(const SurfaceHits& s, const Box3& bounds);
 [[nodiscard]] ShadowResult trace_shadows(const bvh::TraceData& scene, const SurfaceHits& s, const Vec3& light,
                                          const RayFrame& frame, unsigned threads = 0);
 

@@ -179,6 +179,9 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
   res.packets = cfg.packets;
   res.embree_packet_width = cfg.embree_packet_width;
   res.embree_shadow_hint = cfg.embree_shadow_hint;
+  res.shadow_morton = cfg.shadow_morton;
+  std::vector<std::uint32_t> shadow_order;  // the frame's (with shadow_morton)
+  double shadow_order_ms = 0;
   res.isa = bvh::resolve(cfg.isa);
   std::optional<Mesh> frame_mesh;  // only with a light: the frame's positions on the mesh's triangles
   SurfaceHits surface;
@@ -217,11 +220,16 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
         frame_mesh->set_positions(std::vector<Vec3>(positions.begin(), positions.end()));
         surface = surface_hits(*frame_mesh, rays, ref);
         frame_bounds = frame_mesh->bounds();
+        if (cfg.shadow_morton) {
+          Stopwatch order_sw;
+          shadow_order = morton_order(surface, frame_bounds);
+          shadow_order_ms = order_sw.ms();
+        }
       }
       const TraceTarget target = with_isa(target_of(a), cfg.isa);
       auto shadows = [&](bool coherent) {
         return trace_shadows(with_coherence(target, coherent), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
-                             cfg.threads, cfg.packets);
+                             cfg.threads, cfg.packets, shadow_order);
       };
       ShadowResult sr;
       if (cfg.packets && loop::is_embree(loop::kAllAccelKinds[fr.accel])) {
@@ -249,6 +257,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
         sr = shadows(true);
       }
       row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
+      row.shadow_order_ms = shadow_order_ms;
       if (fr.accel == 0) {
         ref_lit = sr.lit;
       } else {
@@ -317,6 +326,7 @@ Table bench_table(const PeerBenchResult& r) {
     col("fallback_refit", x.fallback_refit);
     col("shadow_hint", x.shadow_hint);
     col("shadow_other_ms", x.shadow_other_ms);
+    col("shadow_order_ms", x.shadow_order_ms);
   });
 }
 
@@ -555,6 +565,9 @@ std::string bench_text(const PeerBenchResult& r) {
   }
   s += fallback_text(r);
   s += shadow_hint_text(r);
+  if (r.shadows && r.shadow_morton)
+    s += "shadow rays in the Morton order of their hit points (made once a frame, bench.csv shadow_order_ms, counted "
+         "in every configuration's whole frame)\n";
   s += "\nratios (> 1: the row is faster): update+build = Embree's time / the row's; trace = the row's Mrays/s / Embree's\n";
   s += fmt::format("{:<16}", "config");
   for (loop::AccelKind e : kEmbree) s += fmt::format(" {:>19}", "upd+build vs " + std::string(to_string(e).substr(7)));

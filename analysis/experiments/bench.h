@@ -95,6 +95,10 @@ struct PeerBenchConfig {
   bool packets = false;
   int embree_packet_width = 8;  ///< Embree's packets with `packets`: 4, 8 or 16 rays (rtcIntersect4/8/16)
   EmbreeShadowHint embree_shadow_hint = EmbreeShadowHint::Best;  ///< with `packets` and a light
+  /// The shadow batch's order (`ptc bench --shadow-order`): the primary hits' pixel order, or the
+  /// Morton order of the hit points (render/rays.h morton_order), made once per frame for every
+  /// configuration alike; its time is BenchRow::shadow_order_ms, counted in every whole frame.
+  bool shadow_morton = false;
   /// Our tracer's instruction-set variant (bvh::TraceOptions::isa; Auto: see bvh/tracer.h).
   /// Embree keeps its own choice.
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;
@@ -131,8 +135,13 @@ struct BenchRow {
   /// flag's time (NaN otherwise).
   std::string shadow_hint;
   double shadow_other_ms = std::numeric_limits<double>::quiet_NaN();
-  /// update_ms + build_ms + trace_ms + shadow_ms.
-  [[nodiscard]] double whole_frame_ms() const { return times.update_ms + times.build_ms + trace_ms + shadow_ms; }
+  /// With PeerBenchConfig::shadow_morton: the frame's Morton ordering of the shadow batch, made
+  /// once and the same in every configuration's row (0 otherwise).
+  double shadow_order_ms = 0;
+  /// update_ms + build_ms + trace_ms + shadow_order_ms + shadow_ms.
+  [[nodiscard]] double whole_frame_ms() const {
+    return times.update_ms + times.build_ms + trace_ms + shadow_order_ms + shadow_ms;
+  }
   /// Per-ray traversal counters of ours (an untimed second trace with counters on: the timed one
   /// runs without them); NaN for Embree, which has none.
   double nodes_per_ray = 0, triangles_per_ray = 0;
@@ -174,6 +183,7 @@ struct PeerBenchResult {
   bool packets = false;                ///< rays were traced in packets (cfg.packets)
   int embree_packet_width = 8;         ///< and Embree's packet width
   EmbreeShadowHint embree_shadow_hint = EmbreeShadowHint::Best;  ///< and its shadow packets' flag (cfg's)
+  bool shadow_morton = false;          ///< the shadow batch in Morton order (cfg's)
   bvh::TraceIsa isa = bvh::TraceIsa::Auto;  ///< our tracer's variant that ran (resolved)
   double cluster_fallback = 0;         ///< the fallback's threshold (cfg.cluster_fallback; 0: off)
   double fallback_refit = 0;           ///< the fallback's refit limit (cfg.fallback_refit; 0: rebuilt every frame)

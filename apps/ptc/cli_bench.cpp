@@ -19,7 +19,7 @@ struct BenchArgs {
   CameraArgs camera;
   GroupTreesArg group_trees;
   std::string deform, cluster_leaf = "linear", leaf_format = "auto", frames, vertex_order = "clusters", adjacency = "auto", isa = "auto";
-  std::string embree_shadow_hint = "best";
+  std::string embree_shadow_hint = "best", shadow_order = "pixel";
   FallbackFlags fallback;
   std::uint32_t max_count = kBenchDefaultMaxCount;
   CLI::App* app = nullptr;
@@ -83,6 +83,9 @@ void register_bench(CLI::App& app, Context& ctx) {
                         throw UsageError("--light", "needs shadow rays (drop --no-shadows)");
                       if (a->app->count("--embree-shadow-hint") && !o.shadows)
                         throw UsageError("--embree-shadow-hint", "needs shadow rays (drop --no-shadows)");
+                      if (a->app->count("--shadow-order") && !o.shadows)
+                        throw UsageError("--shadow-order", "needs shadow rays (drop --no-shadows)");
+                      o.config.shadow_morton = a->shadow_order == "morton";
                       o.argv = ctx.args;
                       cmd_bench(o, std::cout);
                     });
@@ -99,6 +102,15 @@ void register_bench(CLI::App& app, Context& ctx) {
                 "with --packets: Embree's packet width, 4, 8 or 16 (rtcIntersect4/8/16)")
       ->check(CLI::IsMember({4, 8, 16}))
       ->needs(packets)
+      ->capture_default_str();
+  c->add_option("--shadow-order", a->shadow_order,
+                "the shadow rays' order, the same for every configuration: pixel (the primary hits' order) or morton "
+                "(by the Morton code of the hit points, made once a frame and counted in every whole frame)")
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            return s == "pixel" || s == "morton" ? std::string() : "'" + s + "' is not a valid shadow order (pixel or morton)";
+          },
+          "pixel|morton"))
       ->capture_default_str();
   c->add_option("--embree-shadow-hint", a->embree_shadow_hint,
                 "with --packets: the context flag of Embree's shadow packets (rtcOccludedN), best (each frame "

@@ -760,6 +760,30 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
     const bool embree = row.at("config").rfind("embree_", 0) == 0;
     EXPECT_EQ(row.at("shadow_hint"), embree ? "incoherent" : "") << row.at("config");
   }
+  // --shadow-order morton: recorded, the same occluded points; usage errors as the hint's.
+  const CmdResult morton = ptc({"bench", cube_.string(), "--frames", "0:1", "--width", "8", "--height", "8", "--packets",
+                                "--shadow-order", "morton", "--out", (dir_ / "morton").string()});
+  ASSERT_EQ(morton.code, 0) << morton.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "morton" / "manifest.json"))["parameters"]["shadow_order"], "morton");
+  EXPECT_EQ(pm["parameters"]["shadow_order"], "pixel");
+  {
+    const auto mrows = csv_rows(slurp(dir_ / "morton" / "bench.csv"));
+    const auto prows = csv_rows(slurp(dir_ / "packed" / "bench.csv"));
+    ASSERT_EQ(mrows.size(), prows.size());
+    for (std::size_t i = 0; i < prows.size(); ++i)
+      EXPECT_EQ(mrows[i].at("shadow_occluded"), prows[i].at("shadow_occluded")) << mrows[i].at("config");
+  }
+  for (const auto& [args, name] :
+       {std::pair{std::vector<std::string>{"--packets", "--shadow-order", "zigzag"}, "badorder"},
+        std::pair{std::vector<std::string>{"--no-shadows", "--shadow-order", "morton"}, "noshadoworder"}}) {
+    std::vector<std::string> argv = {"bench", cube_.string()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    argv.insert(argv.end(), {"--out", (dir_ / name).string()});
+    const CmdResult bad = ptc(argv);
+    EXPECT_EQ(bad.code, 2) << name << ": " << bad.err;
+    EXPECT_NE(bad.err.find("--shadow-order"), std::string::npos) << name << ": " << bad.err;
+    EXPECT_FALSE(fs::exists(dir_ / name)) << name;
+  }
   for (const auto& [args, name] :
        {std::pair{std::vector<std::string>{"--embree-shadow-hint", "coherent"}, "nopackets"},
         std::pair{std::vector<std::string>{"--packets", "--no-shadows", "--embree-shadow-hint", "coherent"}, "noshadows"},

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <map>
 #include <random>
 #include <tuple>
@@ -180,6 +181,61 @@ TEST(TraceRays, AFarLightShadowsAsANearerOneInItsDirection) {
   EXPECT_EQ(far.lit, nearer.lit);
   EXPECT_LT((ptc::unit_vector(Vec3(1e308, 1.5e308, 0)) - Vec3(1.0, 1.5, 0.0).normalized()).norm(), 1e-15);
   EXPECT_EQ(Vec3(1e308, 1.5e308, 0).stableNormalized(), Vec3::Zero());  // (why unit_vector: Eigen's overflows)
+}
+
+// morton_order: a permutation of the points, the hits first; the shadow pass over it lights the
+// same points as in pixel order; and neighbours in it lie near each other where pixel order
+// scatters them (the points of a shuffled grid: the mean step between consecutive hits falls).
+TEST(TraceRays, MortonOrderedShadowsLightTheSamePoints) {
+  const Mesh ground = grid(24, -2, 2, 0);
+  const Mesh blocker = grid(3, 0, 1, 0, [](const Vec3& q) { return Vec3(-0.5 + q.x(), -0.3 + 0.7 * q.y(), 1.0); });
+  const Mesh m = append(ground, blocker);
+  const bvh::TriangleScene scene(m);
+  bvh::RayBatch rays = rays_down(61, -2.5, 2.5, 5.0);  // (some miss the ground)
+  const Traced tr = primary(scene.data(), m, rays);
+  // Shuffle the points (a scattered pixel order).
+  ptc::SurfaceHits s = tr.s;
+  std::mt19937 rng(7);
+  for (std::size_t i = s.size(); i > 1; --i) {
+    const std::size_t j = rng() % i;
+    std::swap(s.point[i - 1], s.point[j]), std::swap(s.normal[i - 1], s.normal[j]);
+    const std::uint8_t h = s.hit[i - 1];
+    s.hit[i - 1] = s.hit[j], s.hit[j] = h;
+  }
+  const std::vector<std::uint32_t> order = ptc::morton_order(s, m.bounds());
+  ASSERT_EQ(order.size(), s.size());
+  std::vector<std::uint32_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::uint32_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], i);
+  std::size_t hits = 0;
+  for (std::uint8_t h : s.hit) hits += h;
+  ASSERT_GT(hits, 100u);
+  ASSERT_LT(hits, s.size());
+  for (std::size_t k = 0; k < order.size(); ++k) EXPECT_EQ(s.hit[order[k]] != 0, k < hits) << k;
+  auto mean_step = [&](auto index) {
+    double sum = 0;
+    for (std::size_t k = 1; k < hits; ++k) sum += (s.point[index(k)] - s.point[index(k - 1)]).norm();
+    return sum / double(hits - 1);
+  };
+  std::vector<std::uint32_t> hit_ids;
+  for (std::uint32_t i = 0; i < s.size(); ++i)
+    if (s.hit[i]) hit_ids.push_back(i);
+  const double scattered = mean_step([&](std::size_t k) { return hit_ids[k]; });
+  const double ordered = mean_step([&](std::size_t k) { return order[k]; });
+  EXPECT_LT(ordered, 0.2 * scattered) << ordered << " " << scattered;
+  const ptc::RayFrame frame{m.bounds(), scene.data().origin};
+  const Vec3 light(0.6, 0.4, 3.0);
+  for (const bool packets : {false, true}) {
+    const ptc::ShadowResult a = ptc::trace_shadows(ptc::target_of(scene.data()), s, light, frame, 2, packets);
+    const ptc::ShadowResult b = ptc::trace_shadows(ptc::target_of(scene.data()), s, light, frame, 2, packets, order);
+    EXPECT_GT(a.stats.hits, 50u);
+    EXPECT_EQ(a.lit, b.lit) << packets;
+    EXPECT_EQ(a.stats.rays, b.stats.rays);
+    EXPECT_EQ(a.stats.hits, b.stats.hits);
+  }
+  EXPECT_THROW((void)ptc::trace_shadows(ptc::target_of(scene.data()), s, light, frame, 1, false,
+                                        std::span<const std::uint32_t>(order.data(), 3)),
+               std::invalid_argument);
 }
 
 // with_coherence hands its hint to the target's options, whatever the pass asks (Embree's packets

@@ -253,6 +253,45 @@ TEST(PeerBench, ShadowRaysAgreeAcrossConfigurationsWithOccluders) {
   }
 }
 
+// The shadow batch in Morton order: the same occluded points in every configuration as in pixel
+// order, the ordering's time once a frame in every row of the frame and in its whole frame.
+TEST(PeerBench, ShadowRaysInMortonOrderLightTheSamePoints) {
+  const Mesh a = sphere(4);
+  std::vector<Vec3> p(a.positions().begin(), a.positions().end());
+  std::vector<ptc::Tri> t(a.triangles().begin(), a.triangles().end());
+  const auto n = static_cast<std::uint32_t>(p.size());
+  for (const Vec3& v : a.positions()) p.push_back(0.5 * v + Vec3(0.8, 2.5, 1.2));
+  for (const ptc::Tri& tri : a.triangles()) t.push_back({tri[0] + n, tri[1] + n, tri[2] + n});
+  const Mesh m(std::move(t), std::move(p));
+  ptc::PeerBenchConfig cfg;
+  cfg.frames = {0, 1};
+  cfg.width = cfg.height = 48;
+  cfg.max_count = 20;
+  cfg.light = Vec3(1.6, 5.0, 2.4);
+  cfg.packets = true;
+  ptc::Scene s1 = scene_of(m, ptc::DeformKind::Rigid);
+  const ptc::PeerBenchResult pixel = ptc::run_peer_bench(s1, std::nullopt, cfg);
+  cfg.shadow_morton = true;
+  ptc::Scene s2 = scene_of(m, ptc::DeformKind::Rigid);
+  const ptc::PeerBenchResult morton = ptc::run_peer_bench(s2, std::nullopt, cfg);
+  ASSERT_EQ(pixel.rows.size(), morton.rows.size());
+  for (std::size_t i = 0; i < pixel.rows.size(); ++i) {
+    const ptc::BenchRow &x = pixel.rows[i], &y = morton.rows[i];
+    const std::string at = y.config + " frame " + std::to_string(y.frame);
+    EXPECT_EQ(y.shadow_rays, x.shadow_rays) << at;
+    EXPECT_EQ(y.shadow_occluded, x.shadow_occluded) << at;
+    EXPECT_GT(y.shadow_occluded, 10u) << at;
+    EXPECT_EQ(y.shadow_mismatches, 0u) << at;
+    EXPECT_EQ(x.shadow_order_ms, 0.0) << at;
+    EXPECT_GT(y.shadow_order_ms, 0.0) << at;
+    EXPECT_EQ(y.shadow_order_ms, morton.rows[i - i % 5].shadow_order_ms) << at;  // (once a frame)
+    EXPECT_DOUBLE_EQ(y.whole_frame_ms(),
+                     y.times.update_ms + y.times.build_ms + y.trace_ms + y.shadow_order_ms + y.shadow_ms) << at;
+  }
+  EXPECT_NE(ptc::bench_text(morton).find("shadow rays in the Morton order of their hit points"), std::string::npos);
+  EXPECT_EQ(ptc::bench_text(pixel).find("Morton order"), std::string::npos);
+}
+
 TEST(PeerBench, EmbreeShadowHintNamesParse) {
   for (const ptc::EmbreeShadowHint h :
        {ptc::EmbreeShadowHint::Best, ptc::EmbreeShadowHint::Coherent, ptc::EmbreeShadowHint::Incoherent})
