@@ -203,27 +203,38 @@ std::uint64_t spread3(std::uint64_t x) {
 
 std::vector<std::uint32_t> morton_order(const SurfaceHits& s, const Box3& bounds) {
   const std::size_t n = s.size();
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> key(n);
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> key;
+  key.reserve(n);
   const bool box = !bounds.empty() && bounds.lo.allFinite() && bounds.hi.allFinite();
   const Vec3 lo = box ? bounds.lo : Vec3::Zero();
   const Vec3 ext = box ? Vec3(bounds.hi - bounds.lo) : Vec3::Ones();
   constexpr double kCells = 2097151.0;  // 2^21 - 1
   for (std::size_t i = 0; i < n; ++i) {
-    std::uint64_t code = ~std::uint64_t{0};  // (no hit: after every hit)
-    if (s.hit[i]) {
-      code = 0;
-      for (int a = 0; a < 3; ++a) {
-        // (a flat box side: every point in cell 0; a point outside the box: the nearest cell)
-        const double f = ext[a] > 0 ? (s.point[i][a] - lo[a]) / ext[a] * kCells : 0.0;
-        const double c = f > 0 ? (f < kCells ? f : kCells) : 0.0;  // (NaN: 0)
-        code |= spread3(static_cast<std::uint64_t>(c)) << a;
-      }
+    if (!s.hit[i]) continue;  // (the misses follow the hits, in index order)
+    std::uint64_t code = 0;
+    for (int a = 0; a < 3; ++a) {
+      // (a flat box side: every point in cell 0; a point outside the box: the nearest cell)
+      const double f = ext[a] > 0 ? (s.point[i][a] - lo[a]) / ext[a] * kCells : 0.0;
+      const double c = f > 0 ? (f < kCells ? f : kCells) : 0.0;  // (NaN: 0)
+      code |= spread3(static_cast<std::uint64_t>(c)) << a;
     }
-    key[i] = {code, static_cast<std::uint32_t>(i)};
+    key.push_back({code, static_cast<std::uint32_t>(i)});
   }
-  std::sort(key.begin(), key.end());  // (the index breaks ties: a deterministic order)
-  std::vector<std::uint32_t> order(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = key[i].second;
+  // LSD radix sort on the 63-bit codes, 11 bits a pass (stable: ties keep index order). A
+  // comparison sort of all pixels took 100 ms a frame at 1024 x 1024.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> tmp(key.size());
+  for (int shift = 0; shift < 63; shift += 11) {
+    std::size_t count[2049] = {};
+    for (const auto& k : key) ++count[((k.first >> shift) & 2047) + 1];
+    for (int d = 0; d < 2048; ++d) count[d + 1] += count[d];
+    for (const auto& k : key) tmp[count[(k.first >> shift) & 2047]++] = k;
+    key.swap(tmp);
+  }
+  std::vector<std::uint32_t> order;
+  order.reserve(n);
+  for (const auto& k : key) order.push_back(k.second);
+  for (std::size_t i = 0; i < n; ++i)
+    if (!s.hit[i]) order.push_back(static_cast<std::uint32_t>(i));
   return order;
 }
 
