@@ -109,19 +109,18 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   // when an Acc objective ran (on the whole mesh it comes out of the tables' pass), else computed
   // here (the metrics score every method by the paper's objective).
   double acc_avg_sa = std::numeric_limits<double>::quiet_NaN();  // left alone when no Acc objective ran
-  // A mesh of extreme scale (coordinates beyond 2^100 or within 2^-100 at most) is clustered and
-  // measured as the same mesh times the power of two 2^k that brings it near 1 (exact, and every
-  // method gives the same clusters at either scale: cluster_mesh), so that its areas neither
-  // underflow nor overflow; clusters.csv's lengths and areas are then scaled back.
-  const int k = extreme_scale_exponent(lm.mesh);
+  // A mesh of extreme size (extreme_scale_exponent: its triangles' extent beyond 2^100 or below
+  // 2^-100) is clustered and measured as the same mesh times the power of two 2^pow2 that brings it
+  // near 1 (exact, and every method gives the same clusters at either scale: cluster_mesh, which
+  // then sees 0), so that its areas neither underflow nor overflow; clusters.csv's lengths
+  // and areas are then scaled back.
+  const int pow2 = extreme_scale_exponent(lm.mesh);
   std::optional<Mesh> scaled;
-  if (k != 0) {
-    std::vector<Vec3> p(lm.mesh.positions().begin(), lm.mesh.positions().end());
-    for (Vec3& q : p) q = times_pow2(q, k);
-    scaled = lm.mesh.with_positions(std::move(p));
+  if (pow2 != 0) {
+    scaled = scaled_by_pow2(lm.mesh, pow2);
     std::cerr << fmt::format("ptc: note: {}: coordinates of extreme scale: clustered and measured at 2^{} times "
                              "its size (exact); clusters.csv's lengths and areas are in the mesh's units\n",
-                             opt.input.string(), k);
+                             opt.input.string(), pow2);
   }
   const Mesh& work = scaled ? *scaled : lm.mesh;
   {
@@ -172,8 +171,8 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   throw_if_cancelled();  // between stages (a stage of a 13M-triangle mesh takes seconds)
   t0.restart();
   std::vector<ClusterRow> rows = cluster_rows(work, clustering, c, avg_sa, adjacency_tris);
-  if (k != 0)
-    for (ClusterRow& r : rows) unscale_lengths(r.m, -k);  // (a length times 2^-k, an area times 2^-2k)
+  if (pow2 != 0)
+    for (ClusterRow& r : rows) unscale_lengths(r.m, -pow2);  // (a length times 2^-pow2, an area times 2^-2pow2)
   manifest.add_timing_ms("metrics", t0.ms());
   const nlohmann::json dist = cluster_distributions(rows);
 

@@ -7,10 +7,9 @@
 #include <ostream>
 #include <string>
 
-#include <oneapi/tbb/global_control.h>
-#include <oneapi/tbb/info.h>
 
 #include "analysis/schema/json.h"
+#include "bvh/threads.h"
 #include "toolkit/core/memory.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/mesh_report.h"
@@ -59,9 +58,7 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
   for (const MemoryModel& m : kMemoryModels) add(m.command, m.base_mb, m.bytes_per_triangle);
   // With --regions 8 and 32 at this machine's default thread count (all cores).
   // The threads a run would take: --threads (ptc sets a process-wide limit from it), else all cores.
-  const auto limit = oneapi::tbb::global_control::active_value(oneapi::tbb::global_control::max_allowed_parallelism);
-  const unsigned threads = static_cast<unsigned>(
-      std::max<std::size_t>(1, std::min<std::size_t>(limit, static_cast<std::size_t>(tbb::info::default_concurrency()))));
+  const unsigned threads = static_cast<unsigned>(bvh::usable_threads());
   for (const MemoryModel& m : kMemoryModels)
     if (m.regions)
       for (const int n : {8, 32})

@@ -72,34 +72,30 @@ void any_hit_pass(const TraceTarget& scene, const std::vector<std::uint32_t>& po
 
 }  // namespace
 
-TraceTarget with_counters(TraceTarget target) {
+namespace {
+// The same target with `set` applied to the options of every call.
+template <class Set>
+TraceTarget with_options(TraceTarget target, Set set) {
   auto inner = std::move(target.trace);
-  target.trace = [inner = std::move(inner)](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
+  target.trace = [inner = std::move(inner), set](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
     bvh::TraceOptions c = o;
-    c.counters = true;
+    set(c);
     return inner(r, h, c);
   };
   return target;
+}
+}  // namespace
+
+TraceTarget with_counters(TraceTarget target) {
+  return with_options(std::move(target), [](bvh::TraceOptions& o) { o.counters = true; });
 }
 
 TraceTarget with_coherence(TraceTarget target, bool coherent) {
-  auto inner = std::move(target.trace);
-  target.trace = [inner = std::move(inner), coherent](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
-    bvh::TraceOptions c = o;
-    c.coherent = coherent;
-    return inner(r, h, c);
-  };
-  return target;
+  return with_options(std::move(target), [coherent](bvh::TraceOptions& o) { o.coherent = coherent; });
 }
 
 TraceTarget with_isa(TraceTarget target, bvh::TraceIsa isa) {
-  auto inner = std::move(target.trace);
-  target.trace = [inner = std::move(inner), isa](const bvh::RayBatch& r, bvh::HitBatch& h, const bvh::TraceOptions& o) {
-    bvh::TraceOptions c = o;
-    c.isa = isa;
-    return inner(r, h, c);
-  };
-  return target;
+  return with_options(std::move(target), [isa](bvh::TraceOptions& o) { o.isa = isa; });
 }
 
 void PassStats::add(const bvh::TraceTotals& t, double ms) {

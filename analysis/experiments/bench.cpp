@@ -231,6 +231,12 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
         return trace_shadows(with_coherence(target, coherent), surface, *cfg.light, RayFrame{frame_bounds, a.origin()},
                              cfg.threads, cfg.packets, shadow_order);
       };
+      // Points lit otherwise than ours_triangles' (the reference, fr.accel 0).
+      auto mismatches = [&](const ShadowResult& x) {
+        std::uint64_t m = 0;
+        for (std::size_t i = 0; i < x.lit.size() && i < ref_lit.size(); ++i) m += x.lit[i] != ref_lit[i];
+        return m;
+      };
       ShadowResult sr;
       if (cfg.packets && loop::is_embree(loop::kAllAccelKinds[fr.accel])) {
         bool coherent = cfg.embree_shadow_hint != EmbreeShadowHint::Incoherent;
@@ -243,12 +249,9 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
           ShadowResult& with_incoherent = first ? two : one;
           coherent = with_coherent.stats.trace_ms <= with_incoherent.stats.trace_ms;
           row.shadow_other_ms = coherent ? with_incoherent.stats.trace_ms : with_coherent.stats.trace_ms;
+          // The other flag's lit points are checked too: shadow_mismatches counts the worse pass.
+          row.shadow_mismatches = mismatches(coherent ? with_incoherent : with_coherent);
           sr = std::move(coherent ? with_coherent : with_incoherent);
-          // The other flag's lit points are checked too: shadow_mismatches counts the worse.
-          const ShadowResult& other = coherent ? with_incoherent : with_coherent;
-          std::uint64_t other_mismatches = 0;
-          for (std::size_t i = 0; i < other.lit.size() && i < ref_lit.size(); ++i) other_mismatches += other.lit[i] != ref_lit[i];
-          row.shadow_mismatches = other_mismatches;  // (the counted pass's are added below; the larger is kept)
         } else {
           sr = shadows(coherent);
         }
@@ -258,13 +261,8 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
       }
       row.shadow_rays = sr.stats.rays, row.shadow_occluded = sr.stats.hits, row.shadow_ms = sr.stats.trace_ms;
       row.shadow_order_ms = shadow_order_ms;
-      if (fr.accel == 0) {
-        ref_lit = sr.lit;
-      } else {
-        std::uint64_t mismatches = 0;
-        for (std::size_t i = 0; i < sr.lit.size(); ++i) mismatches += sr.lit[i] != ref_lit[i];
-        row.shadow_mismatches = std::max(row.shadow_mismatches, mismatches);
-      }
+      if (fr.accel == 0) ref_lit = sr.lit;
+      else row.shadow_mismatches = std::max(row.shadow_mismatches, mismatches(sr));
     }
     if (!loop::is_embree(loop::kAllAccelKinds[fr.accel])) {  // ours: the counters, from an untimed trace with them on
       bvh::TraceOptions with = opt;
@@ -456,7 +454,7 @@ std::string shadow_hint_text(const PeerBenchResult& r) {
     int coherent = 0, incoherent = 0;
     for (const auto& row : r.rows)
       if (row.config == to_string(e) && row.frame >= r.median_first_frame)
-        (row.shadow_hint == "coherent" ? coherent : incoherent) += row.shadow_hint.empty() ? 0 : 1;
+        coherent += row.shadow_hint == "coherent", incoherent += row.shadow_hint == "incoherent";
     if (coherent + incoherent == 0) continue;
     s += fmt::format("{}{} coherent on {}, incoherent on {}", s.empty() ? "" : "; ", to_string(e), coherent, incoherent);
   }

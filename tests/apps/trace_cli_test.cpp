@@ -244,7 +244,9 @@ TEST_F(TraceCli, BenchClusterFallbackIsRecorded) {
               !(want > 0))
         << arg;
     EXPECT_TRUE(j["parameters"]["fallback_area_eye"].is_null()) << arg;
-    if (want > 0 && fell > 0) EXPECT_NE(r.out.find("; SAH for the camera's ray directions"), std::string::npos) << r.out;
+    if (want > 0 && fell > 0) {
+      EXPECT_NE(r.out.find("; SAH for the camera's ray directions"), std::string::npos) << r.out;
+    }
   }
   // --fallback-sah eye: the camera's eye, weights 1; directions: the primary rays' weights, no
   // point; plain: neither; the same hits.
@@ -773,28 +775,24 @@ TEST_F(TraceCli, BenchWritesEveryConfigurationPerFrame) {
     for (std::size_t i = 0; i < prows.size(); ++i)
       EXPECT_EQ(mrows[i].at("shadow_occluded"), prows[i].at("shadow_occluded")) << mrows[i].at("config");
   }
-  for (const auto& [args, name] :
-       {std::pair{std::vector<std::string>{"--packets", "--shadow-order", "zigzag"}, "badorder"},
-        std::pair{std::vector<std::string>{"--no-shadows", "--shadow-order", "morton"}, "noshadoworder"}}) {
+  struct Bad {
+    std::vector<std::string> args;
+    const char* name;
+    const char* flag;  // the flag the one-line error names
+  };
+  for (const Bad& b : {Bad{{"--packets", "--shadow-order", "zigzag"}, "badorder", "--shadow-order"},
+                       Bad{{"--no-shadows", "--shadow-order", "morton"}, "noshadoworder", "--shadow-order"},
+                       Bad{{"--embree-shadow-hint", "coherent"}, "nopackets", "--embree-shadow-hint"},
+                       Bad{{"--packets", "--no-shadows", "--embree-shadow-hint", "coherent"}, "noshadows",
+                           "--embree-shadow-hint"},
+                       Bad{{"--packets", "--embree-shadow-hint", "sometimes"}, "badhint", "--embree-shadow-hint"}}) {
     std::vector<std::string> argv = {"bench", cube_.string()};
-    argv.insert(argv.end(), args.begin(), args.end());
-    argv.insert(argv.end(), {"--out", (dir_ / name).string()});
+    argv.insert(argv.end(), b.args.begin(), b.args.end());
+    argv.insert(argv.end(), {"--out", (dir_ / b.name).string()});
     const CmdResult bad = ptc(argv);
-    EXPECT_EQ(bad.code, 2) << name << ": " << bad.err;
-    EXPECT_NE(bad.err.find("--shadow-order"), std::string::npos) << name << ": " << bad.err;
-    EXPECT_FALSE(fs::exists(dir_ / name)) << name;
-  }
-  for (const auto& [args, name] :
-       {std::pair{std::vector<std::string>{"--embree-shadow-hint", "coherent"}, "nopackets"},
-        std::pair{std::vector<std::string>{"--packets", "--no-shadows", "--embree-shadow-hint", "coherent"}, "noshadows"},
-        std::pair{std::vector<std::string>{"--packets", "--embree-shadow-hint", "sometimes"}, "badhint"}}) {
-    std::vector<std::string> argv = {"bench", cube_.string()};
-    argv.insert(argv.end(), args.begin(), args.end());
-    argv.insert(argv.end(), {"--out", (dir_ / name).string()});
-    const CmdResult bad = ptc(argv);
-    EXPECT_EQ(bad.code, 2) << name << ": " << bad.err;
-    EXPECT_NE(bad.err.find("--embree-shadow-hint"), std::string::npos) << name << ": " << bad.err;
-    EXPECT_FALSE(fs::exists(dir_ / name)) << name;
+    EXPECT_EQ(bad.code, 2) << b.name << ": " << bad.err;
+    EXPECT_NE(bad.err.find(b.flag), std::string::npos) << b.name << ": " << bad.err;
+    EXPECT_FALSE(fs::exists(dir_ / b.name)) << b.name;
   }
   // Embree's packet width means nothing without packets: a usage error, nothing written.
   const CmdResult width = ptc({"bench", cube_.string(), "--embree-packet-width", "16", "--out", (dir_ / "width").string()});

@@ -1024,7 +1024,8 @@ TEST(Tracer, DoubleFallbackDecidesAnEdgeFunctionThatRoundsToZero) {
   const double e = std::ldexp(1.0, -23);
   const std::vector<Vec3> p{{-1, 1, 2}, {-1, -1 - e, 2}, {1 + e, 1 + 2 * e, 2}, {1, -1, 1.5}};  // A B C D
   const Mesh m({{2, 1, 3}, {0, 1, 2}}, p);
-  const SceneConfig at_zero{{}, Vec3::Zero()};
+  SceneConfig at_zero;
+  at_zero.origin = Vec3::Zero();
   const TriangleScene s(m, at_zero);
   const WatertightRay r = make_watertight_ray({0, 0, 0}, {0, 0, 1});
   auto f = [&](int v) { return to_frame(p[v], Vec3::Zero()); };

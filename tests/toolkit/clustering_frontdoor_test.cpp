@@ -211,7 +211,9 @@ TEST(ClusterFrontDoor, ExtremeScalesClusterAsTheUnitMesh) {
       expect_same(a, b, what(c, 24, "elephant times 2^" + std::to_string(e)));
       // (at 2^+-300 the AvgSA is a finite double, at 2^+-1000 inf or 0)
       EXPECT_EQ(scaled_sa, unit_sa < 0 ? -1.0 : std::ldexp(unit_sa, 2 * e)) << what(c, 24, "AvgSA");
-      if (std::abs(e) == 300 && unit_sa > 0) EXPECT_TRUE(std::isfinite(scaled_sa) && scaled_sa > 0) << scaled_sa;
+      if (std::abs(e) == 300 && unit_sa > 0) {
+        EXPECT_TRUE(std::isfinite(scaled_sa) && scaled_sa > 0) << scaled_sa;
+      }
     }
   }
 }

@@ -295,6 +295,12 @@ int extreme_scale_exponent(const Mesh& mesh) {
   return -e;
 }
 
+Mesh scaled_by_pow2(const Mesh& mesh, int k) {
+  std::vector<Vec3> p(mesh.positions().begin(), mesh.positions().end());
+  for (Vec3& q : p) q = times_pow2(q, k);
+  return mesh.with_positions(std::move(p));
+}
+
 Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const ProgressFn& progress,
                         std::optional<double> known_avg_sa, double* avg_sa_used) {
   if (!(config.max_size >= 0.0) || !std::isfinite(config.max_size))
@@ -304,16 +310,14 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
     if (progress) progress(1.0);
     return one_per_triangle(mesh);
   }
-  // A mesh of extreme scale clusters as the same mesh times a power of two that brings its
-  // largest coordinate near 1 (exact; every method is invariant under it, above): the areas of
-  // triangles of 1e-160 units underflow to 0 and those of 1e160 units overflow. Meshes whose
-  // largest coordinate lies in [2^-100, 2^100] are clustered as they are.
+  // A mesh of extreme size clusters as the same mesh times the power of two that brings its
+  // triangles' extent near 1 (extreme_scale_exponent; exact, and every method is invariant under
+  // it, above): the areas of triangles of 1e-160 units underflow to 0 and those of 1e160 units
+  // overflow. Meshes whose extent lies in [2^-100, 2^100] are clustered as they are.
   if (const int k = extreme_scale_exponent(mesh); k != 0) {
-    std::vector<Vec3> scaled(mesh.positions().begin(), mesh.positions().end());
-    for (Vec3& p : scaled) p = times_pow2(p, k);
     const std::optional<double> known = known_avg_sa ? std::optional<double>(times_pow2(*known_avg_sa, 2 * k)) : std::nullopt;
     double used = std::numeric_limits<double>::quiet_NaN();
-    const Clustering c = cluster_mesh(mesh.with_positions(std::move(scaled)), config, progress, known, &used);
+    const Clustering c = cluster_mesh(scaled_by_pow2(mesh, k), config, progress, known, &used);
     if (avg_sa_used && !std::isnan(used)) *avg_sa_used = times_pow2(used, -2 * k);  // (the mesh's own units)
     return c;
   }

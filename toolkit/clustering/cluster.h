@@ -132,6 +132,9 @@ using ProgressFn = std::function<void(double)>;
 /// the origin may not be scaled: its coordinates would overflow); else 0. A stray unreferenced
 /// vertex does not count.
 [[nodiscard]] int extreme_scale_exponent(const Mesh& mesh);
+/// The mesh with every position times 2^k (exact where the results are normal doubles), the
+/// same triangles.
+[[nodiscard]] Mesh scaled_by_pow2(const Mesh& mesh, int k);
 
 /// Clusters the mesh's triangles. Deterministic (same input, same output, bit for bit, every
 /// method; tested). Invariance (tested in clustering_frontdoor_test and the method tests):
