@@ -22,6 +22,7 @@
 #include "toolkit/anim/scene_file.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
+#include "toolkit/core/strings.h"
 
 namespace fs = std::filesystem;
 
@@ -140,8 +141,10 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
     out << dump_json(results);
     return;
   }
-  out << fmt::format("{}: {} triangles, {} vertices, {} part(s); frames {}..{} -> {}/frame_*.{} in {:.0f} ms (animate {:.0f} ms)\n",
-                     scene.name(), rest.triangle_count(), rest.vertex_count(), scene.part_count(), range.first, range.last,
+  out << fmt::format("{}: {}, {}, {}; frames {}..{} -> {}/frame_*.{} in {:.0f} ms (animate {:.0f} ms)\n",
+                     scene.name(), counted(rest.triangle_count(), "triangle"),
+                     counted(rest.vertex_count(), "vertex", "vertices"), counted(scene.part_count(), "part"), range.first,
+                     range.last,
                      opt.out_dir.string(), ext, animate_ms + write_ms, animate_ms);
   if (opt.stats) {
     out << fmt::format("{:>6} {:>36} {:>12} {:>10} {:>10} {:>10}\n", "frame", "bbox min .. max (diagonal)", "total_area",

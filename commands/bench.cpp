@@ -15,6 +15,7 @@
 #include "commands/scene_args.h"
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 
@@ -152,14 +153,14 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
     out << dump_json({{"schema", "ptc-bench-medians/2"}, {"medians", j}});
     return;
   }
-  out << fmt::format("{}: {} triangles, {} vertices; {} clusters ({}{}; cluster scene setup {:.1f} ms); frames {}..{} "
-                     "({}); {} thread(s)\n",
-                     arg, r.triangles, r.vertices, r.clusters,
+  out << fmt::format("{}: {}, {}; {} ({}{}; cluster scene setup {:.1f} ms); frames {}..{} ({}); {}\n", arg,
+                     counted(r.triangles, "triangle"), counted(r.vertices, "vertex", "vertices"),
+                     counted(r.clusters, "cluster"),
                      r.clustering + (opt.clusters.empty() && max_count_from == std::string_view("scene")
                                          ? " (the scene's cluster size)"
                                          : ""),
                      r.cluster_ms > 0 ? fmt::format(", clustered in {:.0f} ms", r.cluster_ms) : "",
-                     r.cluster_scene_setup_ms, range.first, range.last, motion, c.threads);
+                     r.cluster_scene_setup_ms, range.first, range.last, motion, counted(c.threads, "thread"));
   out << bench_text(r);
   out << "wrote " << opt.out_dir.string() << "/{bench.csv,summary.csv,manifest.json}\n";
 }

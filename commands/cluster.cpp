@@ -22,6 +22,7 @@
 #include "toolkit/geometry/triangle.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/topology.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 
@@ -134,8 +135,8 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
   // --target-clusters stops the contraction early, never forces it on: say when it did nothing.
   if (c.method == ClusterMethod::Contraction && c.target_clusters > 0) {
     if (c.target_clusters >= lm.mesh.triangle_count())
-      std::cerr << fmt::format("ptc: note: --target-clusters {} is not below the mesh's {} triangles: it stopped nothing\n",
-                               c.target_clusters, lm.mesh.triangle_count());
+      std::cerr << fmt::format("ptc: note: --target-clusters {} is not below the mesh's {}: it stopped nothing\n",
+                               c.target_clusters, counted(lm.mesh.triangle_count(), "triangle"));
     else if (clustering.cluster_count() > c.target_clusters)
       std::cerr << fmt::format("ptc: note: the contraction stopped at {} clusters, above --target-clusters {}: its limits "
                                "(--max-count{}) allow no further merge of neighbours, or the mesh has that many parts\n",
@@ -211,8 +212,9 @@ void cmd_cluster(const ClusterOptions& opt, std::ostream& out) {
     return;
   }
   const bool uses_objective = c.method == ClusterMethod::Growth || c.method == ClusterMethod::Contraction;
-  out << fmt::format("{}: {} triangles -> {} clusters ({}{}, MaxCount {}{}) in {:.0f} ms\n", opt.input.string(),
-                     lm.mesh.triangle_count(), clustering.cluster_count(), to_string(c.method),
+  out << fmt::format("{}: {} -> {} ({}{}, MaxCount {}{}) in {:.0f} ms\n", opt.input.string(),
+                     counted(lm.mesh.triangle_count(), "triangle"), counted(clustering.cluster_count(), "cluster"),
+                     to_string(c.method),
                      uses_objective ? " / " + std::string(to_string(c.objective)) : std::string(), c.max_count,
                      uses_objective && c.objective == ObjectiveKind::Acc ? fmt::format(", MaxSize {}", c.max_size) : "",
                      mj["timings_ms"]["cluster"].get<double>());

@@ -369,8 +369,9 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
     out << dump_json(summary_json(a, "ptc-experiment-summary/1"));
     return;
   }
-  out << fmt::format("{} {}: {} triangles, frames {}..{} ({}), {} rays per frame, {} thread(s){}\n", k, p.scene,
-                     run.triangles, setup.frames.first, setup.frames.last, ms.motion, run.rays, setup.threads,
+  out << fmt::format("{} {}: {}, frames {}..{} ({}), {} per frame, {}{}\n", k, p.scene,
+                     counted(run.triangles, "triangle"), setup.frames.first, setup.frames.last, ms.motion,
+                     counted(run.rays, "ray"), counted(setup.threads, "thread"),
                      setup.shard.whole() ? std::string()
                                          : fmt::format(", shard {} ({} of {} items)", setup.shard.str(), run.done.size(),
                                                        items.size()));

@@ -13,6 +13,7 @@
 #include "toolkit/core/memory.h"
 #include "toolkit/io/mesh_io.h"
 #include "toolkit/mesh/mesh_report.h"
+#include "toolkit/core/strings.h"
 
 #include <fmt/format.h>
 
@@ -144,7 +145,8 @@ std::string mesh_info_text(const std::filesystem::path& file, const ReadReport& 
   line("degenerate triangles",
        fmt::format("{} repeated index, {} zero area, {} near-degenerate (sine < 1e-12)", r.repeated_index_triangles,
                    r.zero_area_triangles, r.near_degenerate_triangles));
-  line("duplicates", fmt::format("{} vertices, {} triangles", r.duplicate_vertices, r.duplicate_triangles));
+  line("duplicates", fmt::format("{}, {}", counted(r.duplicate_vertices, "vertex", "vertices"),
+                                 counted(r.duplicate_triangles, "triangle")));
   line("components", fmt::format("{} (by vertex), {} (by edge)", r.components, r.edge_components));
   line("triangle soup", soup ? "yes (no vertex shared by two triangles: clustering joins coincident corners, --adjacency auto)"
                              : "no");

@@ -152,7 +152,7 @@ void cmd_notebook(const NotebookCommandOptions& opt, std::ostream& out) {
     out << dump_json({{"schema", "ptc-notebook-summary/1"}, {"figures", names}, {"drawn", drawn}, {"outputs", written}});
     return;
   }
-  out << fmt::format("{} figure(s) from {}: {}\n", figures.size(), [&] {
+  out << fmt::format("{} from {}: {}\n", counted(figures.size(), "figure"), [&] {
     std::string s;
     for (const auto& [k, d] : in.dirs) s += (s.empty() ? "" : ", ") + k;
     return s;

@@ -17,6 +17,7 @@
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/io/atomic_file.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 namespace fs = std::filesystem;
@@ -286,7 +287,7 @@ void OutputDir::commit() {
     std::string list;
     for (std::size_t i = 0; i < kept_.size() && i < 8; ++i) list += (i ? ", " : "") + kept_[i];
     if (kept_.size() > 8) list += ", ...";
-    std::cerr << "ptc: note: kept " << kept_.size() << " file(s) that ptc did not write in " << target_.string()
+    std::cerr << "ptc: note: kept " << counted(kept_.size(), "file") << " that ptc did not write in " << target_.string()
               << ": " << list << "\n";
   }
 }

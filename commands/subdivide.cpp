@@ -14,6 +14,7 @@
 #include "toolkit/core/stopwatch.h"
 #include "commands/output_dir.h"
 #include "toolkit/io/mesh_io.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 
@@ -64,9 +65,10 @@ void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
                      {"write_ms", write_ms}};
     out << dump_json(j);
   } else {
-    out << fmt::format("{}: {} triangles, {} vertices -> {} x{} -> {}: {} triangles, {} vertices ({:.0f} ms)\n",
-                       opt.input.string(), lm.mesh.triangle_count(), lm.mesh.vertex_count(), to_string(opt.scheme),
-                       opt.levels, opt.output.string(), refined.triangle_count(), refined.vertex_count(), sub_ms);
+    out << fmt::format("{}: {}, {} -> {} x{} -> {}: {}, {} ({:.0f} ms)\n", opt.input.string(),
+                       counted(lm.mesh.triangle_count(), "triangle"), counted(lm.mesh.vertex_count(), "vertex", "vertices"),
+                       to_string(opt.scheme), opt.levels, opt.output.string(), counted(refined.triangle_count(), "triangle"),
+                       counted(refined.vertex_count(), "vertex", "vertices"), sub_ms);
   }
 }
 

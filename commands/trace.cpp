@@ -23,6 +23,7 @@
 #include "toolkit/core/error.h"
 #include "toolkit/core/stopwatch.h"
 #include "viz/png.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 namespace {
@@ -215,13 +216,13 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   std::uint64_t fallback_frames = 0, refit_frames = 0;
 
   std::ostringstream text;  // the table; --json prints the rows as JSON instead
-  text << fmt::format("{}: {} triangles ({} static, {} moving; {} part(s)), {}; {}x{} pixels, {} thread(s); "
-                     "static BVH {:.1f} ms{}\n",
-                     arg, mesh.triangle_count(), static_tris, moving_tris, scene.part_count(),
+  text << fmt::format("{}: {} ({} static, {} moving; {}), {}; {}x{} pixels, {}; static BVH {:.1f} ms{}\n", arg,
+                     counted(mesh.triangle_count(), "triangle"), static_tris, moving_tris,
+                     counted(scene.part_count(), "part"),
                      tracer.all_static() ? fmt::format("one {} BVH built once", use_clusters ? "cluster" : "triangle")
                      : tracer.split() ? fmt::format("static triangle BVH + moving {} BVH", use_clusters ? "cluster" : "triangle")
                                       : fmt::format("one {} BVH updated per frame", use_clusters ? "cluster" : "triangle"),
-                     rc.width, rc.height, threads, tracer.static_build_ms(),
+                     rc.width, rc.height, counted(threads, "thread"), tracer.static_build_ms(),
                      tracer.all_static() ? "" : fmt::format(", moving BVH setup {:.1f} ms", tracer.moving_setup_ms()));
   text << fmt::format("{:>6} {:>10} {:>9} {:<8} {:>10} {:>10} {:>10} {:>9} {:>10} {:>10}\n", "frame", "update_ms",
                      "build_ms", "pass", "rays", "hits", "trace_ms", "Mrays/s", "nodes/ray", "tris/ray");
@@ -291,7 +292,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
                 << " (the camera sees past it or from inside it: give --eye and --look-at)\n";
   });
   if (empty_frames > 1)  // said once, then counted
-    std::cerr << "ptc: note: nor in " << empty_frames - 1 << " later frame(s) (trace.csv: hits 0)\n";
+    std::cerr << "ptc: note: nor in " << counted(empty_frames - 1, "later frame") << " (trace.csv: hits 0)\n";
   manifest.add_timing_ms("positions", positions_ms);
   manifest.add_timing_ms("render", render_ms);
   sw.restart();
@@ -365,8 +366,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   }
   out << text.str();
   if (tracer.moving_is_clusters() && tcfg.cluster_fallback > 0)
-    out << fmt::format("cluster BVH: {} of {} frame(s) traced on the triangle fallback (swelling above {:g}){}{}\n",
-                       fallback_frames, per_frame.size(), tcfg.cluster_fallback,
+    out << fmt::format("cluster BVH: {} of {} traced on the triangle fallback (swelling above {:g}){}{}\n",
+                       fallback_frames, counted(per_frame.size(), "frame"), tcfg.cluster_fallback,
                        tcfg.fallback_refit > 0 ? fmt::format("; its tree refitted on {} of them (cost growth at most {:g})",
                                                              refit_frames, tcfg.fallback_refit)
                                                : std::string("; its tree rebuilt on each"),

@@ -35,6 +35,7 @@
 #include "viz/png.h"
 #include "viz/renderer.h"
 #include "viz/vtp.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 
@@ -407,15 +408,17 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
         const std::vector<viz::TextItem> items{{text, ll.bar_x0, 11, 14, -1, {235, 235, 235}, true}};
         return renderer->text(ll.width, ll.height, items);
       };
-      const RgbImage left = viz::vstack(std::vector<RgbImage>{part, caption(fmt::format("partition: {} clusters, {} colours",
-                                                                                           clusters.cluster_count(), colours_used))},
+      const RgbImage left = viz::vstack(std::vector<RgbImage>{part, caption(fmt::format("partition: {}, {}",
+                                                                                           counted(clusters.cluster_count(), "cluster"),
+                                                                                           counted(colours_used, "colour")))},
                                         0, viz::kBackground);
       const RgbImage middle = viz::vstack(
           std::vector<RgbImage>{shaded, caption(std::string("shaded: ptc's tracer, cluster BVH") + (opt.shadows ? ", shadows" : ""))}, 0,
           viz::kBackground);
       const RgbImage row = viz::hstack(std::vector<RgbImage>{left, middle, heat}, kGap, viz::kBackground);
-      const std::vector<viz::TextItem> title{{fmt::format("{}  |  frame {}  |  {}  |  {} triangles, {} clusters", scene_name, f,
-                                                          ci.title, mesh.triangle_count(), clusters.cluster_count()),
+      const std::vector<viz::TextItem> title{{fmt::format("{}  |  frame {}  |  {}  |  {}, {}", scene_name, f, ci.title,
+                                                          counted(mesh.triangle_count(), "triangle"),
+                                                          counted(clusters.cluster_count(), "cluster")),
                                               8, 14, 15, -1, {245, 245, 245}, true}};
       const RgbImage top = renderer->text(row.width, 28, title);
       put_png(base + suffix + ".png", viz::vstack(std::vector<RgbImage>{top, row}, 0, viz::kBackground),

@@ -166,7 +166,7 @@ double per_ray(std::uint64_t n, std::uint64_t rays) { return rays ? double(n) / 
 
 // ---------------------------------------------------------------- sweep
 
-const Schema kSweepSchema{"ptc-sweep", 1};
+const Schema kSweepSchema{"ptc-sweep", 2};
 struct SweepRow {
   std::string scene;
   std::int64_t max_count = 0;
@@ -174,6 +174,7 @@ struct SweepRow {
   std::uint64_t clusters = 0;
   std::int64_t frame = 0;
   bool warmup = false;
+  std::uint64_t hits = 0;  // the frame's primary rays that hit (the same on its four stage rows)
   std::string stage;
   double ms = 0;
 };
@@ -184,6 +185,7 @@ void visit_sweep(const SweepRow& r, Columns& col) {
   col("primitives", r.clusters);
   col("frame", r.frame);
   col("warmup", r.warmup);
+  col("hits", r.hits);
   col("stage", r.stage);
   col("ms", r.ms);
 }
@@ -392,6 +394,7 @@ void run_sweep(Context& x) {
     r.clusters = pr.has_clusters ? pr.clustering.cluster_count() : pr.mesh.triangle_count();
     r.frame = sf.frame;
     r.warmup = sf.warmup;
+    r.hits = ps.primary.hits;
     const std::pair<const char*, double> stages[] = {{"update", sf.times.update_ms},
                                                      {"build", sf.times.build_ms},
                                                      {"trace", trace},

@@ -5,7 +5,7 @@ REFIT and LOW, per scene and thread count, from `ptc bench` runs made here.
 
     /usr/bin/python3 bench/frames/frames.py [--build build] [--threads 1,2] [--frames 0:5 | --frames all]
         [--min-triangles 500000] [--scenes A,B] [--repeat 1] [--single] [--width 1024 --height 1024]
-        [--max-count N[,M...]] [--leaf-format auto|blocks|tables] --out DIR
+        [--max-count N[,M...]] [--leaf-format auto|blocks|tables] [--shadow-order pixel|morton] --out DIR
 
 Each (repeat, threads, scene, --max-count value) is one `ptc bench SCENE --threads T --frames A:B [--packets]
 (`--frames all`: no --frames, so each scene's whole animation, which is what `ptc bench SCENE`
@@ -16,7 +16,7 @@ swollen or a cloth not yet draped: docs/tracing.md, "Later frames")
 scene's own cluster size, `ptc scenes` lists them, else 32), e.g. 50 for the paper's value; a
 list N,M,... sweeps the cluster size: every value gets its own runs and table rows, with the
 MaxCount each run used in the table and in runs.csv (`max_count`, `max_count_from`); --leaf-format F: the cluster leaves' format, default the bench's own,
-auto). Repeats run one after the other over the
+auto; --shadow-order O: the order the shadow rays are traced in, default the bench's own, pixel). Repeats run one after the other over the
 whole list, so a slow phase of the machine touches every scene a little rather than one scene a
 lot; the table gives, per scene, thread count (and --max-count value), the median over the repeats of each
 configuration's whole frame (each run's own median over frames 1..B) and the ratios of those
@@ -103,6 +103,8 @@ def main():
     ap.add_argument("--height", type=int, default=1024)
     ap.add_argument("--leaf-format", default=None, choices=("auto", "blocks", "tables"),
                     help="ptc bench --leaf-format F for every run (default: the bench's own, auto)")
+    ap.add_argument("--shadow-order", default=None, choices=("pixel", "morton"),
+                    help="ptc bench --shadow-order O for every run (default: the bench's own, pixel)")
     ap.add_argument("--max-count", default=None,
                     help="ptc bench --max-count N for every run, or N,M,...: a sweep, each value its own runs and rows "
                          "(default: the bench's own: the scene's cluster size, else 32)")
@@ -177,6 +179,8 @@ def main():
                     cmd += ["--max-count", mc]
                 if a.leaf_format is not None:
                     cmd += ["--leaf-format", a.leaf_format]
+                if a.shadow_order is not None:
+                    cmd += ["--shadow-order", a.shadow_order]
                 commands.append(cmd)
                 print(f"== {' '.join(cmd)}", file=sys.stderr, flush=True)
                 run = subprocess.run(cmd, capture_output=True, text=True)
@@ -269,7 +273,7 @@ def main():
                "parameters": {"threads": threads, "frames": a.frames, "scenes": scenes, "repeat": a.repeat,
                               "packets": not a.single, "width": a.width, "height": a.height,
                               "max_count": [int(m) for m in max_counts] if a.max_count is not None else None,
-                              "leaf_format": a.leaf_format},
+                              "leaf_format": a.leaf_format, "shadow_order": a.shadow_order},
                "outputs": ["runs.csv", "frames.csv", "scaling.csv"]},
               open(os.path.join(tmp, "manifest.json"), "w"), indent=2)
     os.rename(tmp, a.out)

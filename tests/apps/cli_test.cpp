@@ -900,6 +900,19 @@ TEST_F(Cli, SlipsOfANewUser) {
   r = trace({"--frames", "0:0"}, (dir_ / "frames").string());  // (the same files: nothing to say)
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err.find("replaced"), std::string::npos) << r.err;
+  // One triangle is one triangle (not "1 triangles"), in the lines that count things.
+  const auto one = write("one.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  r = ptc({"cluster", one.string(), "--out", (dir_ / "c1").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(one.string() + ": 1 triangle -> 1 cluster ("), std::string::npos) << r.out;
+  r = ptc({"subdivide", one.string(), "--levels", "1", "--out", (dir_ / "one4.off").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(": 1 triangle, 3 vertices -> "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(": 4 triangles, 6 vertices ("), std::string::npos) << r.out;
+  r = trace({"--threads", "1"}, one.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(": 1 triangle (1 static, 0 moving; 1 part), "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("8x8 pixels, 1 thread; "), std::string::npos) << r.out;
 }
 
 // The output of another command replaced by a run with the same --out is said, naming the

@@ -109,6 +109,55 @@ TEST_F(Experiment, SweepAsThreeShardsMergesToTheSingleRun) {
     const std::string& n = rows[i].at("max_count");
     EXPECT_EQ(rows[i].at("primitives"), n == "0" ? "52000" : clusters.at(n)) << n;
   }
+  // hits: the frame's primary rays that hit, the same on its four stage rows and, as every
+  // structure traces the same rays through the same frame, the same over the MaxCount values
+  // (the triangle BVH at 0 against three cluster BVHs); some rays hit, some pass the mesh.
+  std::map<std::string, std::string> hits_of_frame;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i].at("hits"), rows[i - i % 4].at("hits")) << i;
+    const auto [it, fresh] = hits_of_frame.emplace(rows[i].at("frame"), rows[i].at("hits"));
+    EXPECT_EQ(it->second, rows[i].at("hits")) << "frame " << rows[i].at("frame") << " MaxCount " << rows[i].at("max_count");
+    const long h = std::stol(rows[i].at("hits"));
+    EXPECT_GT(h, 0);
+    EXPECT_LT(h, 48 * 48);
+  }
+  EXPECT_EQ(hits_of_frame.size(), 3u);
+  EXPECT_NE(one.out.find("paper: trace time about unchanged"), std::string::npos) << one.out;
+}
+
+// A camera that sees no part of the mesh: the trace times time rays through empty space, so the
+// paper's verdicts on them are left out, in sweep and in compare, and the run says why.
+TEST_F(Experiment, NoVerdictsOnTraceTimesWhereNoRayHits) {
+  // The armadillo lies within |z| < 58: from z = 1000 looking further out along +z, every ray misses.
+  const std::vector<std::string> away = {"--eye", "0,0,1000", "--look-at", "0,0,2000", "--frames", "0:2", "--width",
+                                         "24", "--height", "24", "--quiet"};
+  auto with = [&](std::vector<std::string> a) {
+    a.insert(a.end(), away.begin(), away.end());
+    return a;
+  };
+  const RunResult s = ptc(with({"experiment", "sweep", "armadillo-twist", "--max-counts", "0,50,100", "--out",
+                                (dir_ / "sweep").string()}));
+  ASSERT_EQ(s.code, 0) << s.err;
+  for (const auto& r : csv_rows(slurp(dir_ / "sweep" / "sweep.csv"))) EXPECT_EQ(r.at("hits"), "0");
+  EXPECT_NE(s.out.find("paper: no verdicts on the trace time: no primary ray hit the mesh in any measured frame"),
+            std::string::npos)
+      << s.out;
+  EXPECT_EQ(s.out.find("paper: trace time"), std::string::npos) << s.out;
+  EXPECT_EQ(s.out.find("paper: trace worse"), std::string::npos) << s.out;
+  EXPECT_NE(s.out.find("paper: update+build"), std::string::npos) << s.out;  // (no rays in it)
+  const RunResult c = ptc(with({"experiment", "compare", "armadillo-twist", "--configs", "acc_growth,naive,gwh01",
+                                "--max-count", "20", "--max-size", "20", "--out", (dir_ / "compare").string()}));
+  ASSERT_EQ(c.code, 0) << c.err;
+  for (const auto& r : csv_rows(slurp(dir_ / "compare" / "compare.csv"))) EXPECT_EQ(r.at("hits"), "0");
+  EXPECT_NE(c.out.find("paper: no verdicts on the clusterings' whole frames"), std::string::npos) << c.out;
+  EXPECT_EQ(c.out.find("clusters close to the method"), std::string::npos) << c.out;
+  // The same compare seeing the mesh gives the verdicts.
+  const RunResult seen = ptc({"experiment", "compare", "armadillo-twist", "--configs", "acc_growth,naive,gwh01",
+                              "--max-count", "20", "--max-size", "20", "--frames", "0:2", "--width", "24", "--height",
+                              "24", "--quiet", "--out", (dir_ / "seen").string()});
+  ASSERT_EQ(seen.code, 0) << seen.err;
+  EXPECT_NE(seen.out.find("paper: naive clusters close to the method"), std::string::npos) << seen.out;
+  EXPECT_EQ(seen.out.find("no verdicts"), std::string::npos) << seen.out;
 }
 
 TEST_F(Experiment, DriftShardsMergeWithTheDerivedTablesOfTheSingleRun) {

@@ -85,5 +85,14 @@ TEST(Strings, SplitListDropsEmptyItems) {
   EXPECT_EQ(split_list("1:2", ':'), (std::vector<std::string>{"1", "2"}));
 }
 
+TEST(Strings, CountedNounsTakeTheirNumber) {
+  EXPECT_EQ(counted(1, "triangle"), "1 triangle");
+  EXPECT_EQ(counted(0, "triangle"), "0 triangles");
+  EXPECT_EQ(counted(2, "cluster"), "2 clusters");
+  EXPECT_EQ(counted(1, "vertex", "vertices"), "1 vertex");
+  EXPECT_EQ(counted(3, "vertex", "vertices"), "3 vertices");
+  EXPECT_EQ(counted(18446744073709551615ull, "later frame"), "18446744073709551615 later frames");
+}
+
 }  // namespace
 }  // namespace ptc

@@ -1,6 +1,7 @@
 // Small string helpers shared by the command line and the benchmark programs.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,6 +34,22 @@ namespace ptc {
     b = e + 1;
   }
   return std::string(last);
+}
+
+/// A count with its noun in the right number: counted(1, "triangle") is "1 triangle",
+/// counted(0, "triangle") "0 triangles", counted(2, "vertex", "vertices") "2 vertices".
+[[nodiscard]] inline std::string counted(std::uint64_t n, std::string_view singular, std::string_view plural = {}) {
+  std::string out = std::to_string(n);
+  out += ' ';
+  if (n == 1) {
+    out += singular;
+  } else if (plural.empty()) {
+    out += singular;
+    out += 's';
+  } else {
+    out += plural;
+  }
+  return out;
 }
 
 }  // namespace ptc
