@@ -97,7 +97,26 @@ nlohmann::json cluster_parameters(const ClusterConfig& c) {
           {"gwh_a2", c.gwh.a2},                  {"gwh_weight", to_string(c.gwh.weight)},
           {"target_clusters", c.target_clusters}, {"max_triangles", c.max_triangles},
           {"method", to_string(c.method)},       {"objective", to_string(c.objective)},
-          {"adjacency", to_string(c.adjacency)}};
+          {"adjacency", to_string(c.adjacency)}, {"regions", c.regions}};
+}
+
+// The clustering parameters of the manifest: those that some clustering of the run read
+// (used_parameters), as `ptc cluster` records only what its method read. Sweep's MaxCount and
+// MaxSize are its --max-counts values (recorded as max_counts); compare's and drift's methods
+// and objectives are named by their items.
+nlohmann::json used_cluster_parameters(const ClusterConfig& base, const std::vector<ClusterConfig>& made,
+                                       ExperimentKind kind) {
+  const nlohmann::json all = cluster_parameters(base);
+  std::set<std::string, std::less<>> used;
+  for (const ClusterConfig& c : made)
+    for (std::string_view u : used_parameters(c)) used.emplace(u);
+  if (kind == ExperimentKind::Sweep && !made.empty()) used.insert("method");  // (every sweep clustering's)
+  if (kind == ExperimentKind::Sweep) used.erase("max_count"), used.erase("max_size");
+  if (kind != ExperimentKind::Sweep) used.erase("method"), used.erase("objective");
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [key, value] : all.items())
+    if (used.count(key)) out[key] = value;
+  return out;
 }
 
 nlohmann::json item_rows_json(const std::vector<FileRows>& files) {
@@ -338,9 +357,7 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
                                     {"up", vec_json(cam.up)}, {"fov_y_deg", cam.fov_y_deg}});
   manifest.set_parameter("light", {{"position", vec_json(setup.light)}, {"from", light.from}});
   manifest.set_parameter("threads", setup.threads);
-  nlohmann::json cp = cluster_parameters(p.cluster);
-  if (*kind != ExperimentKind::Sweep) cp.erase("method"), cp.erase("objective");  // named by the items instead
-  manifest.set_parameter("cluster", cp);
+  manifest.set_parameter("cluster", used_cluster_parameters(p.cluster, made, *kind));
   manifest.set_parameter("clusters_given", given);
   manifest.set_parameter("cluster_leaf", bvh::to_string(setup.cluster_leaf));
   manifest.set_parameter("cluster_group_size", setup.cluster_group_size);  // (at most: see min_cluster_groups)

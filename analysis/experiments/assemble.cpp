@@ -14,6 +14,7 @@
 #include "analysis/experiments/accuracy.h"
 #include "analysis/experiments/experiments.h"
 #include "toolkit/core/stats.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 namespace {
@@ -135,20 +136,20 @@ void assemble_sweep(std::vector<FileRows>& files, std::string& text) {
   const auto at = [&](const char* n) -> std::map<std::string, double>* { return by_count.count(n) ? &by_count[n] : nullptr; };
   if (auto *z = at("0"), *f = at("50"); z && f) {
     const double ub = ((*z)["update"] + (*z)["build"]) / ((*f)["update"] + (*f)["build"]);
-    text += fmt::format("paper: update+build about an order of magnitude faster at MaxCount 50 -> {:.1f}x: {} (criterion "
-                        "3.2x..32x)\n",
-                        ub, ub >= 3.16 && ub <= 31.6 ? "agrees" : "DISAGREES");
+    text += fmt::format("paper: update+build about an order of magnitude faster at MaxCount 50 -> {}x: {} (criterion "
+                        "3.16x..31.6x)\n",
+                        verdict_number(ub, 1, {3.16, 31.6}), ub >= 3.16 && ub <= 31.6 ? "agrees" : "DISAGREES");
     const double tr = (*z)["trace"] / (*f)["trace"];
     if (nothing_hit(s, measured(s))) {
       text += fmt::format("paper: no verdicts on the trace time: {}\n", kNoHitVerdicts);
     } else {
-      text += fmt::format("paper: trace time about unchanged at MaxCount 50 -> {:.2f}x of MaxCount 0: {} (criterion "
+      text += fmt::format("paper: trace time about unchanged at MaxCount 50 -> {}x of MaxCount 0: {} (criterion "
                           "0.8x..1.25x)\n",
-                          tr, tr >= 0.8 && tr <= 1.25 ? "agrees" : "DISAGREES");
+                          verdict_number(tr, 2, {0.8, 1.25}), tr >= 0.8 && tr <= 1.25 ? "agrees" : "DISAGREES");
       if (auto* h = at("100")) {
         const double tr100 = (*z)["trace"] / (*h)["trace"];
-        text += fmt::format("paper: trace worse at MaxCount 100 than at 50 -> {:.2f}x vs {:.2f}x: {}\n", tr100, tr,
-                            tr100 < tr ? "agrees" : "DISAGREES");
+        text += fmt::format("paper: trace worse at MaxCount 100 than at 50 -> {}x vs {}x: {}\n", verdict_number(tr100, 2, {tr}),
+                            verdict_number(tr, 2, {tr100}), tr100 < tr ? "agrees" : "DISAGREES");
       }
     }
   }
@@ -212,10 +213,10 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
       if (it == early_late.end()) continue;
       const auto [e, l] = it->second;
       const bool close = std::abs(e - 1.0) <= 0.1, behind = l > e * 1.05;
-      text += fmt::format("paper: {} clusters close to the method early and behind it later -> perf_factor {:.2f} over "
-                          "the first quarter of the frames, {:.2f} over the last: {} (criterion: early within 10% of 1, "
+      text += fmt::format("paper: {} clusters close to the method early and behind it later -> perf_factor {} over "
+                          "the first quarter of the frames, {} over the last: {} (criterion: early within 10% of 1, "
                           "late 5% above early)\n",
-                          b, e, l, close && behind ? "agrees" : close ? "DISAGREES (not behind later)" : "DISAGREES (not close early)");
+                          b, verdict_number(e, 2, {0.9, 1.1, l / 1.05}), verdict_number(l, 2, {e * 1.05}), close && behind ? "agrees" : close ? "DISAGREES (not behind later)" : "DISAGREES (not close early)");
     }
   files.push_back(std::move(out));
 }
@@ -326,21 +327,29 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
   }
   text += "spearman: rank correlation over clusters of connectivity (N_T/N_V) with box-area drift (mean |ln box area "
           "ratio| over the frames after the first); < 0: denser clusters deform less\n";
-  std::map<std::string, std::size_t> frame_count;  // clustering -> its frames
-  for (std::size_t i = 0; i < fg.keys.size(); ++i) frame_count[fg.keys[i][0]] = fg.rows[i].size();
+  std::map<std::string, std::pair<std::size_t, double>> size_of;  // clustering -> (its frames, its clusters)
+  for (std::size_t i = 0; i < fg.keys.size(); ++i)
+    size_of[fg.keys[i][0]] = {fg.rows[i].size(), frames.number(fg.rows[i].front(), frames.column("clusters"))};
   for (const auto& [name, rn] : rho) {
     const auto [r, n] = rn;
     if (!std::isfinite(r)) {  // say why there is no number
-      text += fmt::format("paper: connectivity predicts drift ({}) -> no Spearman: {}\n", name,
-                          frame_count.count(name) && frame_count.at(name) < 2
-                              ? std::string("one frame only: drift is measured over the frames after the first "
-                                            "(--frames A:B with B > A)")
-                          : n < 3 ? fmt::format("{} cluster(s) with a finite drift (a box of zero area at some frame "
-                                              "makes |ln ratio| infinite or undefined)", n)
-                                : "no variance (every cluster drifts alike, e.g. not at all)");
+      const auto sz = size_of.find(name);
+      const double total = sz != size_of.end() ? sz->second.second : kNaN;
+      std::string why;
+      if (sz != size_of.end() && sz->second.first < 2)
+        why = "one frame only: drift is measured over the frames after the first (--frames A:B with B > A)";
+      else if (total < 3)
+        why = fmt::format("{}: a rank correlation needs 3 or more", counted(std::uint64_t(total), "cluster"));
+      else if (n < 3)
+        why = fmt::format("{} of its {} clusters with a finite drift (a box of zero area at some frame makes |ln ratio| "
+                          "infinite or undefined)", n, total);
+      else
+        why = "no variance (every cluster drifts alike, e.g. not at all)";
+      text += fmt::format("paper: connectivity predicts drift ({}) -> no Spearman: {}\n", name, why);
       continue;
     }
-    text += fmt::format("paper: connectivity predicts drift ({}) -> Spearman {:.3f}: {} (criterion <= -0.3)\n", name, r,
+    text += fmt::format("paper: connectivity predicts drift ({}) -> Spearman {}: {} (criterion <= -0.3)\n", name,
+                        verdict_number(r, 3, {-0.3, 0.0}),
                         r <= -0.3 ? "agrees" : r < 0 ? "DISAGREES (weak)" : "DISAGREES");
   }
   // The per-frame cost of the experiment itself.
@@ -354,6 +363,17 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
 }
 
 }  // namespace
+
+std::string verdict_number(double x, int least, std::initializer_list<double> bounds) {
+  int d = least;
+  for (; d < 6 && std::isfinite(x); ++d) {
+    const double r = std::stod(fmt::format("{:.{}f}", x, d));
+    bool same = true;
+    for (double b : bounds) same = same && (r < b) == (x < b) && (r > b) == (x > b);
+    if (same) break;
+  }
+  return fmt::format("{:.{}f}", x, d);
+}
 
 Assembled assemble(ExperimentKind kind, std::vector<FileRows> primaries, const std::string& reference) {
   Assembled a;

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
 #include <map>
 #include <optional>
 #include <string>
@@ -102,6 +103,11 @@ struct Assembled {
 };
 /// `reference`: compare's perf_factor denominator (ExperimentParams::reference).
 [[nodiscard]] Assembled assemble(ExperimentKind kind, std::vector<FileRows> primaries, const std::string& reference);
+
+/// A verdict's value as the summaries print it: x with `least` decimals, or more (up to 6) where
+/// fewer would put the printed value on the other side of a bound, or on it, while x is not:
+/// 0.7969 against the criterion 0.8 prints as 0.797, not as 0.80.
+[[nodiscard]] std::string verdict_number(double x, int least, std::initializer_list<double> bounds);
 
 /// The primary files of a kind (their names), in the order run_experiment returns them.
 [[nodiscard]] std::vector<std::string> primary_files(ExperimentKind kind);

@@ -125,6 +125,37 @@ TEST_F(Experiment, SweepAsThreeShardsMergesToTheSingleRun) {
   EXPECT_NE(one.out.find("paper: trace time about unchanged"), std::string::npos) << one.out;
 }
 
+// The manifest's clustering parameters are those some clustering of the run read, as `ptc
+// cluster` records them: a meshopt sweep has no objective nor MaxSize, and its MaxCount values
+// are max_counts; an Acc sweep has the sphere but no GWH01 weights.
+TEST_F(Experiment, ManifestRecordsTheClusteringParametersUsed) {
+  const std::vector<std::string> base = {"experiment", "sweep", "armadillo-twist", "--frames", "0:1", "--width", "16",
+                                         "--height", "16", "--quiet"};
+  auto params = [&](std::vector<std::string> extra, const char* out) {
+    auto a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    a.insert(a.end(), {"--out", (dir_ / out).string()});
+    const RunResult r = ptc(a);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return nlohmann::json::parse(slurp(dir_ / out / "manifest.json"))["parameters"];
+  };
+  auto keys = [](const nlohmann::json& j) {
+    std::set<std::string> k;
+    for (const auto& [key, v] : j.items()) k.insert(key);
+    return k;
+  };
+  nlohmann::json p = params({"--method", "meshopt", "--max-counts", "20"}, "meshopt");
+  EXPECT_EQ(keys(p["cluster"]), (std::set<std::string>{"adjacency", "max_triangles", "method"})) << p.dump();
+  EXPECT_EQ(p["cluster"]["method"], "meshopt");
+  EXPECT_EQ(p["max_counts"], nlohmann::json::array({20}));
+  p = params({"--method", "contraction", "--objective", "acc", "--max-counts", "0,20"}, "acc");
+  EXPECT_EQ(keys(p["cluster"]), (std::set<std::string>{"adjacency", "method", "objective", "regions", "size_bound",
+                                                       "sphere", "target_clusters"}))
+      << p.dump();
+  p = params({"--max-counts", "0"}, "none");  // the triangle BVH alone: no clustering
+  EXPECT_TRUE(p["cluster"].empty()) << p.dump();
+}
+
 // A camera that sees no part of the mesh: the trace times time rays through empty space, so the
 // paper's verdicts on them are left out, in sweep and in compare, and the run says why.
 TEST_F(Experiment, NoVerdictsOnTraceTimesWhereNoRayHits) {

@@ -348,9 +348,10 @@ Clustering cluster_mesh(const Mesh& mesh, const ClusterConfig& config, const Pro
   std::optional<ClusterTables> tables;
   auto build_tables = [&](bool with_sums) {
     // Edge lengths only for GWH01 (its boundary term and length scale). The contraction reads
-    // the per-triangle areas and normals rarely and the neighbour lists once: lean tables.
+    // the neighbour lists once and, while its clusters stay small, the per-triangle areas and
+    // normals rarely: lean tables on large meshes (detail::lean_tables_for).
     tables.emplace(ClusterTables::build(mesh, /*with_edges=*/config.objective == ObjectiveKind::Gwh01, with_sums,
-                                        /*lean=*/config.method == ClusterMethod::Contraction));
+                                        detail::lean_tables_for(config.method, mesh.triangle_count())));
   };
   double avg_sa = 0.0;
   switch (config.objective) {

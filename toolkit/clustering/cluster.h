@@ -163,6 +163,17 @@ namespace detail {
 /// then growth or contraction by config.method.
 [[nodiscard]] ClusterRun run_objective(const ClusterTables& tables, const ClusterConfig& config, double avg_sa,
                                        const ProgressFn& progress);
+/// The contraction's tables are lean (ClusterTables::build lean: no stored areas and normals,
+/// 48 bytes a triangle less) from this many triangles of the mesh or region on. Below it they
+/// keep the areas and normals: a contraction whose clusters grow large (high --max-count and
+/// --max-size, --target-clusters) reads them for every member of a pair it evaluates, and
+/// remaking them was 80% of such a run (docs/scale.md, "Lean tables from 2M triangles").
+/// Either way the same clusters bit for bit.
+inline constexpr std::uint32_t kLeanContractionTriangles = 1u << 21;
+/// Whether cluster_mesh builds lean tables for this method on a mesh of `triangles`.
+[[nodiscard]] inline bool lean_tables_for(ClusterMethod method, std::size_t triangles) {
+  return method == ClusterMethod::Contraction && triangles >= kLeanContractionTriangles;
+}
 }  // namespace detail
 
 }  // namespace ptc

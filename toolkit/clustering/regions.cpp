@@ -107,7 +107,7 @@ Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, dou
         if (sc.seen.empty()) sc.seen.assign(mesh.vertex_count(), 0), sc.local.resize(mesh.vertex_count());
         const Mesh sub = region_mesh(mesh, members[r], r + 1, sc.seen, sc.local);
         const ClusterTables tables =
-            ClusterTables::build(sub, /*with_edges=*/false, false, /*lean=*/config.method == ClusterMethod::Contraction);
+            ClusterTables::build(sub, /*with_edges=*/false, false, detail::lean_tables_for(config.method, sub.triangle_count()));
         const ProgressFn region_progress = [&, r](double f) { report(r, f); };
         labels[r] = detail::run_objective(tables, config, avg_sa, region_progress).labels;
       });

@@ -54,6 +54,52 @@ TEST(Assemble, SweepMediansLeaveOutTheWarmupAndCompareWithMaxCountZero) {
   EXPECT_NE(a.text.find("MaxCount"), std::string::npos);
 }
 
+TEST(Assemble, VerdictNumbersFallOnTheirVerdictsSide) {
+  EXPECT_EQ(verdict_number(0.7969, 2, {0.8, 1.25}), "0.797");  // 0.80 would read as inside
+  EXPECT_EQ(verdict_number(0.7999996, 2, {0.8}), "0.800000");  // at most 6 decimals
+  EXPECT_EQ(verdict_number(0.8, 2, {0.8, 1.25}), "0.80");      // on the bound: as it is
+  EXPECT_EQ(verdict_number(0.83, 2, {0.8, 1.25}), "0.83");
+  EXPECT_EQ(verdict_number(1.2504, 2, {0.8, 1.25}), "1.2504");
+  EXPECT_EQ(verdict_number(31.62, 1, {3.16, 31.6}), "31.62");
+  EXPECT_EQ(verdict_number(-0.2996, 3, {-0.3, 0.0}), "-0.2996");
+  EXPECT_EQ(verdict_number(std::nan(""), 2, {0.8}), "nan");
+}
+
+// The sweep's verdicts from rows with known medians: the trace time at MaxCount 0 over that at
+// 50 is 7969 / 10000, just outside 0.8..1.25, and printed so; with every row's hits 0 the trace
+// verdicts are left out and the run says why.
+TEST(Assemble, SweepVerdictsAndTheirValuesAgree) {
+  for (const char* hits : {"5", "0"}) {
+    std::vector<std::vector<std::string>> rows;
+    const std::pair<const char*, std::vector<std::pair<const char*, const char*>>> series[] = {
+        {"0", {{"update", "40"}, {"build", "60"}, {"trace", "7969"}}},
+        {"50", {{"update", "4"}, {"build", "6"}, {"trace", "10000"}}}};
+    for (const auto& [n, stages] : series)
+      for (int f = 0; f < 2; ++f)
+        for (const auto& [stage, ms] : stages)
+          rows.push_back({"s", n, n, "9", std::to_string(f), f == 0 ? "1" : "0", hits, stage, ms});
+    const Assembled a = assemble(ExperimentKind::Sweep,
+                                 {file("sweep.csv",
+                                       {"scene", "max_count", "max_size", "primitives", "frame", "warmup", "hits", "stage",
+                                        "ms"},
+                                       rows)},
+                                 "");
+    EXPECT_NE(a.text.find("paper: update+build about an order of magnitude faster at MaxCount 50 -> 10.0x: agrees"),
+              std::string::npos)
+        << a.text;
+    if (std::string(hits) == "5") {
+      EXPECT_NE(a.text.find("trace time about unchanged at MaxCount 50 -> 0.797x of MaxCount 0: DISAGREES"),
+                std::string::npos)
+          << a.text;
+      EXPECT_EQ(a.text.find("no verdicts"), std::string::npos) << a.text;
+    } else {
+      EXPECT_EQ(a.text.find("trace time about unchanged"), std::string::npos) << a.text;
+      EXPECT_NE(a.text.find("paper: no verdicts on the trace time: no primary ray hit the mesh"), std::string::npos)
+          << a.text;
+    }
+  }
+}
+
 TEST(Assemble, ComparePerfFactorIsFrameByFrameAndNanWithoutTheReference) {
   const std::vector<std::string> h = {"scene", "frame", "warmup", "config", "update_ms", "build_ms", "trace_ms",
                                       "total_ms", "perf_factor"};
@@ -128,6 +174,40 @@ TEST(Assemble, DriftRegressionRecoversExactlyLinearCosts) {
   EXPECT_NEAR(std::stod(counters["r2"]), 1.0, 1e-12);
   EXPECT_NE(a.text.find("-0.500"), std::string::npos) << a.text;  // the Spearman in the summary
   EXPECT_NE(a.text.find("a triangle test = 0.05 node visits"), std::string::npos) << a.text;
+}
+
+// Why drift gives no Spearman, by the rows: one frame; fewer than three clusters; three or more
+// clusters of which fewer than three have a finite drift; no variance.
+TEST(Assemble, DriftSaysWhyThereIsNoSpearman) {
+  const std::vector<std::string> fh = {"scene", "clustering", "frame", "warmup", "clusters", "sah_cost",
+                                       "sah_cost_triangles", "sah_overhead", "epo", "nodes_per_ray", "triangles_per_ray",
+                                       "box_area_ratio_max", "box_area_ratio_p95", "worst_clusters", "metrics_ms"};
+  struct Case {
+    int frames;
+    const char *clusters, *usable, *why;
+  };
+  for (const Case& c : {Case{1, "40", "40", "one frame only"}, Case{3, "1", "1", "1 cluster: a rank correlation needs 3"},
+                        Case{3, "2", "2", "2 clusters: a rank correlation needs 3"},
+                        Case{3, "40", "2", "2 of its 40 clusters with a finite drift"},
+                        Case{3, "40", "40", "no variance"}}) {
+    std::vector<std::vector<std::string>> frames;
+    for (int f = 0; f < c.frames; ++f)
+      frames.push_back({"s", "c", std::to_string(f), f == 0 ? "1" : "0", c.clusters, "20", "20", "1.2", "3", "3", "1",
+                        "1.5", "1.1", "", "2"});
+    const Assembled a = assemble(
+        ExperimentKind::Drift,
+        {file("rays.csv",
+              {"clustering", "frame", "warmup", "ray_type", "rays", "nodes_per_ray", "triangles_per_ray", "cost_per_ray",
+               "sah_cost", "epo", "trace_ms", "ns_per_ray"},
+              {}),
+         file("frames.csv", fh, frames),
+         file("correlation.csv", {"scene", "clustering", "x", "y", "clusters", "frames", "spearman", "pearson"},
+              {{"s", "c", "connectivity", "box_area_drift", c.usable, std::to_string(c.frames), "nan", "nan"}})},
+        "");
+    EXPECT_NE(a.text.find(std::string("paper: connectivity predicts drift (c) -> no Spearman: ") + c.why),
+              std::string::npos)
+        << c.why << "\n" << a.text;
+  }
 }
 
 }  // namespace
