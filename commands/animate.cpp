@@ -56,6 +56,14 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
   manifest.set_parameter("stats", opt.stats);
 
   OutputDir dir(opt.out_dir);
+  // Frames that would not fit are refused before one is written (a stand-in motion has no range
+  // of its own: a typo such as --frames 0:99999999999 would fill the disk). The size is a lower
+  // bound: binary PLY's 24 bytes a vertex and 13 a triangle (OBJ's text takes more).
+  const double frame_bytes = 24.0 * double(rest.vertex_count()) + 13.0 * double(rest.triangle_count()) + 256.0;
+  dir.check_room(frame_bytes * double(range.count()), "--frames",
+                 fmt::format("frames {}:{} ({} of {} or more each)", range.first, range.last,
+                             counted(std::uint64_t(range.count()), "frame"),
+                             fmt::format("{:.0f} bytes", frame_bytes)));
   std::vector<Vec3> pos(rest.vertex_count());
   std::vector<double> first_areas;
   std::vector<FrameStats> stats;

@@ -159,7 +159,12 @@ nlohmann::json cell_json(const std::string& c) {
 nlohmann::json summary_json(const Assembled& a, std::string_view schema) {
   nlohmann::json files = nlohmann::json::object();
   for (const auto& f : a.files) {
-    if (f.file.find("summary") == std::string::npos && f.file != "regression.csv" && f.file != "accuracy.csv") continue;
+    // The summary tables: the sweep's and compare's summaries; drift's per-frame table (its
+    // printed first -> last rows come from it), Spearman and fits; accuracy's table. Not the
+    // per-frame, per-cluster or per-ray rows.
+    static const std::set<std::string, std::less<>> kSummaries = {
+        "sweep_summary.csv", "compare_summary.csv", "frames.csv", "correlation.csv", "regression.csv", "accuracy.csv"};
+    if (!kSummaries.count(f.file)) continue;
     nlohmann::json rows = nlohmann::json::array();
     for (const auto& r : f.rows.rows) {
       nlohmann::json o = nlohmann::json::object();

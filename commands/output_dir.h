@@ -53,6 +53,10 @@ class OutputDir {
   [[nodiscard]] std::filesystem::path path(std::string_view name) const;
   /// Writes `bytes` to target/name (inside the temporary directory).
   void write(std::string_view name, std::string_view bytes) const;
+  /// Refuses (UsageError on `flag`) an output of at least `bytes` that the file system of the
+  /// temporary directory has no room for, before any of it is written: `what` says what would be
+  /// written ("frames 0:99999 (100000 frames of at least 1.2 MB)").
+  void check_room(double bytes, std::string_view flag, std::string_view what) const;
   /// Moves the finished directory into place; throws Interrupted (replacing nothing) once a stop
   /// was requested.
   void commit();

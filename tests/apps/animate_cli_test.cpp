@@ -158,6 +158,19 @@ TEST_F(Animate, DeformGivesAMeshFileTheStandInMotion) {
   }
   // Frames beyond 0..59: the motion is periodic, so no --extend-frames is needed.
   EXPECT_EQ(ptc({"animate", cube, "--deform", "twist", "--frames", "100:100", "--out", (dir_ / "late").string()}).code, 0);
+  // But frames that would not fit on the disk are refused before one is written (a typo's range
+  // of 10^11 frames of this cube is some 10 PB): bad usage, nothing left behind, a previous
+  // output kept.
+  for (const char* frames : {"0:99999999999", "5:9223372036854775806"}) {
+    const RunResult huge = ptc({"animate", cube, "--deform", "twist", "--frames", frames, "--out", (dir_ / "late").string()});
+    EXPECT_EQ(huge.code, 2) << huge.err;
+    EXPECT_NE(huge.err.find(std::string("--frames: frames ") + frames + " ("), std::string::npos) << huge.err;
+    EXPECT_NE(huge.err.find("would take at least"), std::string::npos) << huge.err;
+    EXPECT_NE(huge.err.find("free"), std::string::npos) << huge.err;
+    EXPECT_TRUE(fs::exists(dir_ / "late" / "frame_0100.ply"));
+    for (const auto& e : fs::directory_iterator(dir_))
+      EXPECT_EQ(e.path().filename().string().find(".late.tmp"), std::string::npos) << e.path();
+  }
   // Without --deform the mesh stays still, and the user is told.
   const RunResult still = ptc({"animate", cube, "--frames", "0:1", "--out", (dir_ / "still").string()});
   ASSERT_EQ(still.code, 0) << still.err;

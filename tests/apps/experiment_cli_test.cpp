@@ -271,6 +271,25 @@ TEST_F(Experiment, DriftShardsMergeWithTheDerivedTablesOfTheSingleRun) {
     EXPECT_EQ(std::stoul(c.at("clusters")), v.size());
     EXPECT_NEAR(std::stod(c.at("spearman")), sxy / std::sqrt(sxx * syy), 1e-9) << c.at("clustering");
   }
+  // --json of a merge: drift's summary tables (the per-frame table, Spearman, the fits), row for
+  // row the merged files' rows, numbers as numbers.
+  const RunResult j = ptc({"merge", (dir_ / "a").string(), (dir_ / "b").string(), "--json", "--out", (dir_ / "mj").string()});
+  ASSERT_EQ(j.code, 0) << j.err;
+  const auto js = nlohmann::json::parse(j.out);
+  for (const char* f : {"frames.csv", "correlation.csv", "regression.csv"}) {
+    const auto rows = csv_rows(slurp(dir_ / "mj" / f));
+    ASSERT_TRUE(js.at("tables").contains(f)) << f;
+    const auto& t = js.at("tables").at(f);
+    ASSERT_EQ(t.size(), rows.size()) << f;
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      for (const auto& [col, cell] : rows[i]) {
+        const auto& x = t[i].at(col);
+        if (x.is_number()) EXPECT_EQ(x.get<double>(), std::stod(cell)) << f << " " << col;
+        else if (x.is_null()) EXPECT_TRUE(cell == "nan" || cell == "inf" || cell == "-inf") << f << " " << col;
+        else EXPECT_EQ(x.get<std::string>(), cell) << f << " " << col;
+      }
+  }
+  EXPECT_FALSE(js.at("tables").contains("clusters_frames.csv"));  // (the per-cluster rows stay in the file)
 }
 
 TEST_F(Experiment, CompareDividesByTheReferenceFrameByFrame) {
