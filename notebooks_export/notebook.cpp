@@ -38,8 +38,13 @@ def after_warmup(df):
     """Rows after the first (warm-up) frame, as every summary of ptc leaves it out."""
     return df[df["warmup"] == 0] if "warmup" in df.columns else df
 
-def line_style(i):
-    return dict(color=COLOURS[i % 10], linestyle=STYLES[(i // 10) % 4])
+def line_style(i, points=2):
+    """Colour and dash of series i; a marker where the series has one point (a line of one point
+    draws nothing)."""
+    s = dict(color=COLOURS[i % 10], linestyle=STYLES[(i // 10) % 4])
+    if points < 2:
+        s["marker"] = "o"
+    return s
 
 def save(fig, name, series, note="", kind=None):
     note = "; ".join(n for n in (note, STUDY_NOTES.get(kind, "")) if n)
@@ -89,7 +94,7 @@ for ax, scene in zip(axes[:, 0], scenes):
     d = c[c["scene"] == scene]
     for i, cfg in enumerate(configs):
         e = d[d["config"] == cfg].sort_values("frame")
-        ax.plot(e["frame"], e["perf_factor"], label=cfg, **line_style(i))
+        ax.plot(e["frame"], e["perf_factor"], label=cfg, **line_style(i, len(e)))
         if e["perf_factor"].notna().any():
             finite.add(cfg)
     ax.axhline(1.0, color="black", linestyle=":", linewidth=0.8)
@@ -112,8 +117,8 @@ drawn = 0
 for i, cl in enumerate(clusterings):
     e = fr[fr["clustering"] == cl].sort_values("frame")
     if e["box_area_ratio_p95"].notna().any():
-        a.plot(e["frame"], e["box_area_ratio_p95"], label=cl, **line_style(i))
-    b.plot(e["frame"], e["sah_cost"], label=cl, **line_style(i))
+        a.plot(e["frame"], e["box_area_ratio_p95"], label=cl, **line_style(i, len(e)))
+    b.plot(e["frame"], e["sah_cost"], label=cl, **line_style(i, len(e)))
     drawn += 1
 a.axhline(1.0, color="black", linestyle=":", linewidth=0.8)
 a.set_xlabel("frame"); a.set_ylabel("p95 over clusters of box area / the first frame's"); a.set_title("box-area drift per clustering (every frame)")
@@ -162,22 +167,29 @@ reg = reg[(reg["ray_type"] == "primary") & (reg["target"] == "cost_per_ray")]
 clusterings = list(dict.fromkeys(rays["clustering"]))
 fig, axes = plt.subplots(1, 2, figsize=(13, 4.8))
 fits = 0
+unfitted = []
 for ax, col, model in zip(axes, ["sah_cost", "epo"], ["sah", "epo"]):
     for i, cl in enumerate(clusterings):
         e = rays[rays["clustering"] == cl]
         ax.scatter(e[col], e["cost_per_ray"], s=10, color=COLOURS[i % 10], label=cl)
     f = reg[reg["model"] == model]
-    if len(f) and rays[col].notna().any():
+    coef = np.nan
+    if len(f):
         f = f.iloc[0]
         coef = f["coef_sah"] if model == "sah" else f["coef_epo"]
+    if len(f) and rays[col].notna().any() and np.isfinite([coef, f["intercept"]]).all():
         x = np.linspace(rays[col].min(), rays[col].max(), 50)
         ax.plot(x, coef * x + f["intercept"], "k-", label=f"fit: {coef:.3f} {model.upper()} {f['intercept']:+.2f}, R^2 {f['r2']:.3f}")
         fits = 1
+    else:
+        unfitted.append(model.upper())
     ax.set_xlabel("SAH cost of the frame's BVH" if model == "sah" else "EPO of the frame's BVH")
     ax.set_ylabel("measured cost per primary ray (nodes + weighted triangles)")
     ax.set_title(f"{model.upper()} against the measured cost (primary rays)")
     ax.legend(fontsize=8)
-save(fig, "cost_fit", len(clusterings) + fits, kind="drift")
+save(fig, "cost_fit", len(clusterings) + fits,
+     f"no fit of {' and '.join(unfitted)}: regression.csv has none for these points (a fit needs more frames "
+     "and structures than the model has terms: --frames A:B with B > A)" if unfitted else "", kind="drift")
 plt.show()
 )PY";
 
@@ -193,15 +205,19 @@ for i, g in enumerate(groups):
     ax.scatter(e["speedup"], e["err"], s=36, color=COLOURS[i % 10], label=g)
     for _, r in e.iterrows():
         ax.annotate(r["choice"], (r["speedup"], r["err"]), fontsize=7, xytext=(3, 3), textcoords="offset points")
-    if (e["speedup"] > 0).all():
+    # Log axes only where the values span more than a decade (within one, a log axis shows one
+    # tick or none, and a symlog axis none inside its linear range).
+    sp = e["speedup"].dropna()
+    if len(sp) and (sp > 0).all() and sp.max() > 10 * sp.min():
         ax.set_xscale("log")
-    # Errors span decades: log when all are positive; else symlog, linear below the decade of the
-    # smallest non-zero one, and no negative range when there are no negative errors.
+    # Errors spanning decades: log when all are positive; else symlog, linear below the decade of
+    # the smallest non-zero one, and no negative range when there are no negative errors.
     err = e["err"].dropna()
     small = err.abs()[err != 0]
-    if len(err) and (err > 0).all():
+    wide = len(small) > 0 and small.max() > 10 * small.min()
+    if wide and (err > 0).all():
         ax.set_yscale("log")
-    elif len(small):
+    elif wide:
         ax.set_yscale("symlog", linthresh=float(10.0 ** np.floor(np.log10(small.min()))))
         if (err >= 0).all():
             ax.set_ylim(bottom=0.0)

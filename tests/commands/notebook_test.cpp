@@ -170,6 +170,40 @@ TEST_F(Notebook, FiguresSayWhatTheyCouldNotDraw) {
   EXPECT_NE(err.find("ptc: note: drift_correlation: no frame after the first"), std::string::npos) << err;
 }
 
+// Studies of one frame draw it (found by a new user: a line of one point draws nothing, so
+// Figure 7 of a one-frame compare showed an empty plot), and a fit that regression.csv could not
+// make is said, not drawn as "fit: nan".
+TEST_F(Notebook, OneFrameStudiesDrawTheirPoints) {
+  experiment("compare", [](ExperimentCommandOptions& o) {
+    o.frames = "2:2";
+    o.configs = "standard,acc_growth";
+    o.reference = "standard";
+  });
+  experiment("drift", [](ExperimentCommandOptions& o) {
+    o.frames = "2:2";
+    o.clusterings = "acc_growth";
+  });
+  NotebookCommandOptions n;
+  n.studies = {dir_ / "study" / "compare", dir_ / "study" / "drift"};
+  n.out_dir = dir_ / "nb";
+  std::ostringstream out;
+  testing::internal::CaptureStderr();
+  cmd_notebook(n, out);
+  const std::string err = testing::internal::GetCapturedStderr();
+  const nlohmann::json drawn = nlohmann::json::parse(slurp(n.out_dir / "figures.json"));
+  EXPECT_EQ(drawn["fig7_compare"]["series"], 2);
+  EXPECT_EQ(drawn["fig7_compare"]["note"], "");
+  // Each series a marker in its colour (tab10 0 and 1): a legend entry alone has about 50 pixels
+  // of it, with the marker in the plot and in the legend about 110-130 (measured; in
+  // drift_frames the triangle BVH has a SAH panel only, its clusters' box drift being nan).
+  EXPECT_EQ(tab10_colours_in(viz::read_png(n.out_dir / "fig7_compare.png"), 90), 2u);
+  EXPECT_EQ(tab10_colours_in(viz::read_png(n.out_dir / "drift_frames.png"), 90), 2u);  // triangles, acc_growth
+  const std::string fit = drawn["cost_fit"]["note"];
+  EXPECT_NE(fit.find("no fit of SAH and EPO"), std::string::npos) << fit;
+  EXPECT_EQ(drawn["cost_fit"]["series"], 2);  // the two structures' points, no fit line
+  EXPECT_NE(err.find("ptc: note: cost_fit: no fit of SAH and EPO"), std::string::npos) << err;
+}
+
 TEST_F(Notebook, RefusesWhatIsNotAStudyAndAPythonWithoutPandas) {
   experiment("sweep", [](auto& o) { o.max_counts = "0,10"; });
   NotebookCommandOptions n;
