@@ -190,6 +190,52 @@ TEST_F(Animate, DeformGivesAMeshFileTheStandInMotion) {
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
 
+// Frames that `ptc animate` wrote are traced from the view it recorded: the same pictures as the
+// scene's own (found by a new user: they were framed anew, 892 hits where the scene gives 475),
+// and a directory of later frames says which frames it holds. A malformed recorded camera is an
+// error naming manifest.json and the element; another program's manifest.json is not read.
+TEST_F(Animate, FramesKeepTheViewTheyWereAnimatedWith) {
+  const std::string scene = write("tw.json", R"({"meshes": [{"file": "cube.off", "subdivide": {"levels": 2},
+      "deform": {"kind": "twist", "amplitude": 1.3, "period": 7}}],
+      "camera": {"eye": [2.5, 0.9, 3.1], "look_at": [0.4, 0.5, 0.5], "fov": 30}, "light": {"position": [4, 5, 6]}})")
+                                .string();
+  const fs::path frames = dir_ / "frames";
+  ASSERT_EQ(ptc({"animate", scene, "--frames", "2:3", "--out", frames.string()}).code, 0);
+  auto trace = [&](const std::string& in, const std::string& range, const char* out) {
+    return ptc({"trace", in, "--frames", range, "--width", "24", "--height", "24", "--shadows", "--threads", "1", "--out",
+                (dir_ / out).string()});
+  };
+  const RunResult from_scene = trace(scene, "2:3", "ts");
+  ASSERT_EQ(from_scene.code, 0) << from_scene.err;
+  const RunResult from_frames = trace(frames.string(), "0:1", "tf");
+  ASSERT_EQ(from_frames.code, 0) << from_frames.err;
+  for (const auto& [f, g] : {std::pair{"shaded_0002.png", "shaded_0000.png"}, {"depth_0003.png", "depth_0001.png"}})
+    EXPECT_EQ(slurp(dir_ / "ts" / f), slurp(dir_ / "tf" / g)) << f << " vs " << g;
+  EXPECT_NE(from_frames.err.find("holds frames 2..3 of '" + scene + "' (ptc animate); they are read as frames 0..1"),
+            std::string::npos)
+      << from_frames.err;
+  const auto m = nlohmann::json::parse(slurp(dir_ / "tf" / "manifest.json"));
+  EXPECT_EQ(m["parameters"]["camera"]["from_scene"], true);
+  bool manifest_read = false;
+  for (const auto& in : m["inputs"]) manifest_read = manifest_read || in["path"] == (frames / "manifest.json").string();
+  EXPECT_TRUE(manifest_read) << m["inputs"];
+  // A broken recorded camera: named.
+  auto man = nlohmann::json::parse(slurp(frames / "manifest.json"));
+  man["results"]["camera"]["fov"] = 180;
+  std::ofstream(frames / "manifest.json") << man.dump(2);
+  RunResult bad = trace(frames.string(), "0:1", "tb");
+  EXPECT_EQ(bad.code, 1) << bad.err;
+  EXPECT_NE(bad.err.find((frames / "manifest.json").string()), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("results.camera.fov"), std::string::npos) << bad.err;
+  // Another schema (or none): the frames are framed as any directory's, without a word on it.
+  man["schema"] = "someone-else/1";
+  std::ofstream(frames / "manifest.json") << man.dump(2);
+  const RunResult foreign = trace(frames.string(), "0:1", "tg");
+  ASSERT_EQ(foreign.code, 0) << foreign.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "tg" / "manifest.json"))["parameters"]["camera"]["from_scene"], false);
+  EXPECT_EQ(foreign.err.find("ptc animate"), std::string::npos) << foreign.err;
+}
+
 TEST_F(Animate, BadFramesAndUsage) {
   const fs::path out = dir_ / "out";
   const std::string cube = (dir_ / "cube.off").string();

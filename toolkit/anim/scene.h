@@ -93,6 +93,12 @@ class Scene {
   /// Makes the current camera and light the scene's own (built-in scenes are composed with the
   /// constructor's defaults as their view).
   void adopt_view() { own_camera_ = own_light_ = true; }
+  /// Gives the scene its own camera and light (the view `ptc animate` recorded beside frames).
+  void set_view(const SceneCamera& camera, const SceneLight& light) {
+    camera_ = camera;
+    light_ = light;
+    adopt_view();
+  }
   [[nodiscard]] const FrameRange& frames() const { return frames_; }
   /// The scene's own cluster size: the MaxCount (= MaxSize) `ptc bench` clusters the scene with
   /// when given neither --max-count nor --clusters (`ptc cluster` and `ptc experiment` take their

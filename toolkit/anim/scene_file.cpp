@@ -303,6 +303,43 @@ ScenePart read_mesh_entry(const Reader& r, const json& j, const std::string& pat
 
 }  // namespace
 
+namespace {
+
+// A camera object ({"eye", "look_at", "up", "fov"}) at JSON path `at`: a scene file's "camera",
+// the "results.camera" `ptc animate` records.
+SceneCamera read_camera(const Reader& r, const json& c, const std::string& at) {
+  r.expect_object(c, at);
+  r.only_keys(c, at, {"eye", "look_at", "up", "fov"});
+  SceneCamera sc;
+  if (!c.contains("eye")) r.fail(at + ".eye", "missing");
+  if (!c.contains("look_at")) r.fail(at + ".look_at", "missing");
+  sc.eye = r.vec3(c["eye"], at + ".eye");
+  sc.look_at = r.vec3(c["look_at"], at + ".look_at");
+  if (c.contains("up")) sc.up = r.vec3(c["up"], at + ".up");
+  if (c.contains("fov")) sc.fov_deg = r.number(c["fov"], at + ".fov");
+  if (!(sc.fov_deg > 0 && sc.fov_deg < 180)) r.fail(at + ".fov", "expected a vertical field of view in (0, 180) degrees");
+  if ((sc.eye - sc.look_at).norm() == 0) r.fail(at, "eye and look_at coincide");
+  // (finite coordinates whose difference or its length overflow: no direction to look in)
+  if (!std::isfinite((sc.look_at - sc.eye).norm()) || !std::isfinite(sc.up.norm()))
+    r.fail(at, "eye, look_at and up must be within double's range of each other (a length overflows)");
+  if (sc.up.norm() == 0 || sc.up.cross(sc.look_at - sc.eye).norm() == 0) r.fail(at + ".up", "zero or parallel to the view direction");
+  return sc;
+}
+
+// A light object ({"position", "intensity"}) at JSON path `at`.
+SceneLight read_light(const Reader& r, const json& l, const std::string& at) {
+  r.expect_object(l, at);
+  r.only_keys(l, at, {"position", "intensity"});
+  SceneLight sl;
+  if (!l.contains("position")) r.fail(at + ".position", "missing");
+  sl.position = r.vec3(l["position"], at + ".position");
+  if (l.contains("intensity")) sl.intensity = r.number(l["intensity"], at + ".intensity");
+  if (sl.intensity < 0) r.fail(at + ".intensity", "must be >= 0");
+  return sl;
+}
+
+}  // namespace
+
 Scene parse_scene_json(std::string_view text, const std::string& name, const fs::path& base_dir, const SceneOptions& opt) {
   json root;
   // Each object's keys so far: a key given twice is refused (nlohmann keeps the last one silently,
@@ -368,37 +405,9 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
     if (frames->last < frames->first) r.fail("frames[1]", "the last frame is before the first");
   }
   std::optional<SceneCamera> cam;
-  if (root.contains("camera")) {
-    const json& c = root["camera"];
-    r.expect_object(c, "camera");
-    r.only_keys(c, "camera", {"eye", "look_at", "up", "fov"});
-    SceneCamera sc;
-    if (!c.contains("eye")) r.fail("camera.eye", "missing");
-    if (!c.contains("look_at")) r.fail("camera.look_at", "missing");
-    sc.eye = r.vec3(c["eye"], "camera.eye");
-    sc.look_at = r.vec3(c["look_at"], "camera.look_at");
-    if (c.contains("up")) sc.up = r.vec3(c["up"], "camera.up");
-    if (c.contains("fov")) sc.fov_deg = r.number(c["fov"], "camera.fov");
-    if (!(sc.fov_deg > 0 && sc.fov_deg < 180)) r.fail("camera.fov", "expected a vertical field of view in (0, 180) degrees");
-    if ((sc.eye - sc.look_at).norm() == 0) r.fail("camera", "eye and look_at coincide");
-    // (finite coordinates whose difference or its length overflow: no direction to look in)
-    if (!std::isfinite((sc.look_at - sc.eye).norm()) || !std::isfinite(sc.up.norm()))
-      r.fail("camera", "eye, look_at and up must be within double's range of each other (a length overflows)");
-    if (sc.up.norm() == 0 || sc.up.cross(sc.look_at - sc.eye).norm() == 0) r.fail("camera.up", "zero or parallel to the view direction");
-    cam = sc;
-  }
+  if (root.contains("camera")) cam = read_camera(r, root["camera"], "camera");
   std::optional<SceneLight> light;
-  if (root.contains("light")) {
-    const json& l = root["light"];
-    r.expect_object(l, "light");
-    r.only_keys(l, "light", {"position", "intensity"});
-    SceneLight sl;
-    if (!l.contains("position")) r.fail("light.position", "missing");
-    sl.position = r.vec3(l["position"], "light.position");
-    if (l.contains("intensity")) sl.intensity = r.number(l["intensity"], "light.intensity");
-    if (sl.intensity < 0) r.fail("light.intensity", "must be >= 0");
-    light = sl;
-  }
+  if (root.contains("light")) light = read_light(r, root["light"], "light");
   // The scene's own cluster size (Scene::cluster_max_count): MaxCount = MaxSize for a command that
   // clusters the scene itself and is given none.
   std::optional<std::uint32_t> max_count;
@@ -444,9 +453,51 @@ bool is_scene_file(const std::string& arg) {
 
 bool scene_reads_data_dir(const std::string& arg) { return is_scene_file(arg) || names_builtin_scene(arg); }
 
+std::optional<AnimateView> animate_view(const fs::path& dir) {
+  std::error_code ec;
+  const fs::path m = dir / "manifest.json";
+  if (!fs::is_directory(dir, ec) || !fs::is_regular_file(m, ec)) return std::nullopt;
+  std::ifstream in(m, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  const json root = json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
+  // Another program's manifest, or none of ptc animate's: not ours to read.
+  if (!root.is_object() || root.value("schema", json()) != json("ptc-animate/1")) return std::nullopt;
+  note_input_file(m);
+  Reader r(m.string(), dir, SceneOptions{});
+  if (!root.contains("results") || !root["results"].is_object()) r.fail("results", "missing (an object)");
+  const json& res = root["results"];
+  if (!res.contains("camera")) r.fail("results.camera", "missing");
+  if (!res.contains("light")) r.fail("results.light", "missing");
+  AnimateView v;
+  v.camera = read_camera(r, res["camera"], "results.camera");
+  v.light = read_light(r, res["light"], "results.light");
+  if (root.contains("parameters") && root["parameters"].is_object() && root["parameters"].contains("scene") &&
+      root["parameters"]["scene"].is_string())
+    v.scene = root["parameters"]["scene"].get<std::string>();
+  if (root.contains("parameters") && root["parameters"].is_object() && root["parameters"].contains("frames")) {
+    const json& f = root["parameters"]["frames"];
+    if (f.is_array() && f.size() == 2 && f[0].is_number_integer() && f[1].is_number_integer())
+      v.frames = FrameRange{f[0].get<std::int64_t>(), f[1].get<std::int64_t>()};
+  }
+  return v;
+}
+
 Scene open_scene(const std::string& arg, const SceneOptions& opt) {
   if (is_scene_file(arg)) return load_scene_file(arg, opt);
-  return open_scene_input(arg, opt);
+  Scene s = open_scene_input(arg, opt);
+  // Frames `ptc animate` wrote: traced from the view it recorded (the scene's own camera and
+  // light), as the scene itself would be, not from a framing of the first frame.
+  if (const auto v = animate_view(arg)) {
+    s.set_view(v->camera, v->light);
+    // Frames are the files in name order: frames 5..7 of a scene are this input's 0..2.
+    if (v->frames && v->frames->first > 0 && v->frames->count() == s.frames().count())
+      read_note(arg, fmt::format("holds frames {}..{} of '{}' (ptc animate); they are read as frames 0..{}, in file name "
+                                 "order",
+                                 v->frames->first, v->frames->last, v->scene.empty() ? std::string("its scene") : v->scene,
+                                 v->frames->count() - 1));
+  }
+  return s;
 }
 
 }  // namespace ptc

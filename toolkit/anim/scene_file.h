@@ -8,6 +8,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -25,8 +26,21 @@ namespace ptc {
 [[nodiscard]] Scene parse_scene_json(std::string_view text, const std::string& name,
                                      const std::filesystem::path& base_dir, const SceneOptions& opt = {});
 
+/// The view `ptc animate` recorded beside the frames it wrote (DIR/manifest.json of schema
+/// "ptc-animate/1": results.camera, results.light, and parameters.scene), or nullopt for a path
+/// that is no such directory (another program's manifest.json, or none, is not read). A
+/// malformed camera or light there: InputError naming manifest.json and the element.
+struct AnimateView {
+  SceneCamera camera;
+  SceneLight light;
+  std::string scene;  ///< the scene the frames were made from ("" if not recorded)
+  std::optional<FrameRange> frames;  ///< the scene's frames they are (parameters.frames)
+};
+[[nodiscard]] std::optional<AnimateView> animate_view(const std::filesystem::path& dir);
+
 /// A command's SCENE argument: a path ending in .json (any case) is a scene file; anything else
-/// goes to open_scene_input (built-in name, mesh file, asset file, frame directory).
+/// goes to open_scene_input (built-in name, mesh file, asset file, frame directory). A frame
+/// directory `ptc animate` wrote takes the camera and light it recorded (animate_view).
 [[nodiscard]] Scene open_scene(const std::string& arg, const SceneOptions& opt = {});
 /// Whether open_scene(arg) takes `arg` as a scene file (.json, any case).
 [[nodiscard]] bool is_scene_file(const std::string& arg);
