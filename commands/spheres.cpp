@@ -13,6 +13,7 @@
 #include "commands/output_dir.h"
 #include "toolkit/core/stopwatch.h"
 #include "toolkit/io/mesh_io.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 
@@ -56,9 +57,9 @@ void cmd_spheres(const SpheresOptions& opt, std::ostream& out) {
     out << dump_json(j);
     return;
   }
-  out << fmt::format("bounding spheres of {} point set{} (runs of {}-{} Morton-ordered triangles; the last, or a "
+  out << fmt::format("bounding spheres of {} (runs of {}-{} Morton-ordered triangles; the last, or a "
                      "smaller mesh's only one, may be shorter) of {}\n",
-                     rep.exact_radius.size(), rep.exact_radius.size() == 1 ? "" : "s", opt.config.min_run,
+                     counted(rep.exact_radius.size(), "point set"), opt.config.min_run,
                      opt.config.max_run, opt.input.string());
   out << fmt::format("{:<8} {:>14} {:>14} {:>14} {:>14}\n", "method", "ns/sphere", "rel_err_mean", "rel_err_max",
                      "not_containing");

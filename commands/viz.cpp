@@ -416,11 +416,22 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
           std::vector<RgbImage>{shaded, caption(std::string("shaded: ptc's tracer, cluster BVH") + (opt.shadows ? ", shadows" : ""))}, 0,
           viz::kBackground);
       const RgbImage row = viz::hstack(std::vector<RgbImage>{left, middle, heat}, kGap, viz::kBackground);
-      const std::vector<viz::TextItem> title{{fmt::format("{}  |  frame {}  |  {}  |  {}, {}", scene_name, f, ci.title,
-                                                          counted(mesh.triangle_count(), "triangle"),
-                                                          counted(clusters.cluster_count(), "cluster")),
-                                              8, 14, 15, -1, {245, 245, 245}, true}};
-      const RgbImage top = renderer->text(row.width, 28, title);
+      // The title's parts on as many lines as the row's width needs (a 128-pixel panel cut it
+      // off): a bold character takes about 0.62 of the font size.
+      const std::vector<std::string> parts = {scene_name, fmt::format("frame {}", f), ci.title,
+                                              fmt::format("{}, {}", counted(mesh.triangle_count(), "triangle"),
+                                                          counted(clusters.cluster_count(), "cluster"))};
+      constexpr int kTitleSize = 15, kLine = 20;
+      const auto fits = [&](const std::string& t) { return 0.62 * kTitleSize * double(t.size()) <= double(row.width - 16); };
+      std::vector<std::string> lines;
+      for (const std::string& part : parts) {
+        if (!lines.empty() && fits(lines.back() + "  |  " + part)) lines.back() += "  |  " + part;
+        else lines.push_back(part);
+      }
+      std::vector<viz::TextItem> title;
+      for (std::size_t i = 0; i < lines.size(); ++i)
+        title.push_back({lines[i], 8, 14 + kLine * int(i), kTitleSize, -1, {245, 245, 245}, true});
+      const RgbImage top = renderer->text(row.width, 28 + kLine * int(lines.size() - 1), title);
       put_png(base + suffix + ".png", viz::vstack(std::vector<RgbImage>{top, row}, 0, viz::kBackground),
               {{"frame", f}, {"left", "partition"}, {"middle", "shaded"}, {"right", scale_json(scale, oor)}});
     }
@@ -477,19 +488,22 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     return;
   }
   if (use_clusters)
-  {
-    auto count = [](std::size_t n, const char* one, const char* many) { return fmt::format("{} {}", n, n == 1 ? one : many); };
     out << fmt::format("{}: {}, {} in {} (no two clusters that share an edge alike)\n", arg,
-                       count(mesh.triangle_count(), "triangle", "triangles"),
-                       count(clusters.cluster_count(), "cluster", "clusters"), count(colours_used, "colour", "colours"));
-  }
+                       counted(mesh.triangle_count(), "triangle"), counted(clusters.cluster_count(), "cluster"),
+                       counted(colours_used, "colour"));
   if (!mp4_note.empty()) std::cerr << "ptc: note: " << mp4_note << "\n";  // (as every note: on stderr)
   if (dir) {
     out << "wrote " << opt.out_dir.string() << "/";
     if (written.size() == 1) out << written[0];
-    else if (series && kind != VizKind::Export) out << fmt::format("{}_{:04d}..{:04d}.png", base, range.first, range.last)
-                                                    << (mp4_note.empty() && range.count() > 1 ? ", " + base + ".mp4" : "");
-    else out << fmt::format("{}_{:04d}..{:04d}.vtp, clusters.pvd", base, range.first, range.last);
+    else {
+      // frame_0003.vtp for one frame, frame_0003..0007.vtp for several
+      const std::string frames = range.count() == 1 ? fmt::format("{:04d}", range.first)
+                                                    : fmt::format("{:04d}..{:04d}", range.first, range.last);
+      if (series && kind != VizKind::Export)
+        out << fmt::format("{}_{}.png", base, frames) << (mp4_note.empty() && range.count() > 1 ? ", " + base + ".mp4" : "");
+      else
+        out << fmt::format("{}_{}.vtp, clusters.pvd", base, frames);
+    }
     out << ", manifest.json\n";
   }
 }

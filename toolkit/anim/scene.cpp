@@ -389,8 +389,9 @@ Scene open_scene_input(const std::string& arg, const SceneOptions& opt) {
   if (!fs::exists(arg, ec)) {
     // A glob of frame files ("frames/*.ply") names no existing path; load_animation expands it.
     if (PTC_HAVE_LOAD_ANIMATION && is_glob_pattern(arg)) {
-      parts.push_back({label, load_asset(p)});
-      return Scene(label, std::move(parts));
+      // Named by the whole pattern: "*.off" alone does not say which folder's frames.
+      parts.push_back({arg, load_asset(p)});
+      return Scene(arg, std::move(parts));
     }
     throw InputError(arg, "", "", "neither a file, a directory nor a built-in scene (run 'ptc scenes' for the list)");
   }
