@@ -164,7 +164,8 @@ namespace detail {
 [[nodiscard]] ClusterRun run_objective(const ClusterTables& tables, const ClusterConfig& config, double avg_sa,
                                        const ProgressFn& progress);
 /// The contraction's tables are lean (ClusterTables::build lean: no stored areas and normals,
-/// 48 bytes a triangle less) from this many triangles of the mesh or region on. Below it they
+/// 48 bytes a triangle less) from this many triangles of the mesh on (regions: of the whole
+/// mesh, not of the region). Below it they
 /// keep the areas and normals: a contraction whose clusters grow large (high --max-count and
 /// --max-size, --target-clusters) reads them for every member of a pair it evaluates, and
 /// remaking them was 80% of such a run (docs/scale.md, "Lean tables from 2M triangles").

@@ -97,6 +97,8 @@ Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, dou
     std::vector<std::uint32_t> seen, local;
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
+  // Lean tables by the whole mesh's size, as one run's (several regions' tables are alive at once).
+  const bool lean = detail::lean_tables_for(config.method, mesh.triangle_count());
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, R, 1), [&](const tbb::blocked_range<std::uint32_t>& range) {
     for (std::uint32_t r = range.begin(); r < range.end(); ++r) {
       if (tbb::is_current_task_group_canceling()) return;  // another region threw
@@ -107,7 +109,7 @@ Clustering cluster_in_regions(const Mesh& mesh, const ClusterConfig& config, dou
         if (sc.seen.empty()) sc.seen.assign(mesh.vertex_count(), 0), sc.local.resize(mesh.vertex_count());
         const Mesh sub = region_mesh(mesh, members[r], r + 1, sc.seen, sc.local);
         const ClusterTables tables =
-            ClusterTables::build(sub, /*with_edges=*/false, false, detail::lean_tables_for(config.method, sub.triangle_count()));
+            ClusterTables::build(sub, /*with_edges=*/false, false, lean);
         const ProgressFn region_progress = [&, r](double f) { report(r, f); };
         labels[r] = detail::run_objective(tables, config, avg_sa, region_progress).labels;
       });
