@@ -62,8 +62,7 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
   const double frame_bytes = 24.0 * double(rest.vertex_count()) + 13.0 * double(rest.triangle_count()) + 256.0;
   dir.check_room(frame_bytes * double(range.count()), "--frames",
                  fmt::format("frames {}:{} ({} of {} or more each)", range.first, range.last,
-                             counted(std::uint64_t(range.count()), "frame"),
-                             fmt::format("{:.0f} bytes", frame_bytes)));
+                             counted(std::uint64_t(range.count()), "frame"), readable_bytes(frame_bytes)));
   std::vector<Vec3> pos(rest.vertex_count());
   std::vector<double> first_areas;
   std::vector<FrameStats> stats;
@@ -118,6 +117,10 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
                                  {"up", vec_json(scene.camera().up)},
                                  {"fov", scene.camera().fov_deg}});
   manifest.set_result("light", {{"position", vec_json(scene.light().position)}, {"intensity", scene.light().intensity}});
+  // Whether they are the scene's own (else the defaults a command replaces with its own framing):
+  // a frame directory takes only its scene's own view (toolkit/anim/scene_file.h animate_view).
+  manifest.set_result("camera_own", scene.has_own_camera());
+  manifest.set_result("light_own", scene.has_own_light());
   manifest.set_result("files", files);
   const nlohmann::json doc = commit_with_manifest(dir, manifest);
 

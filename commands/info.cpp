@@ -51,20 +51,23 @@ double regions_bytes_per_triangle(double one_run, double regions, double threads
 nlohmann::json memory_estimate_json(std::size_t triangles) {
   nlohmann::json est, largest;
   const double machine = machine_memory_mb();
-  // A peak at this mesh's size; the largest mesh at the rate of large meshes (`large`).
-  auto add = [&](const std::string& command, double base_mb, double bytes_per_triangle, double large) {
-    est[command] = std::round(base_mb + double(triangles) * bytes_per_triangle / 1048576.0);
-    if (machine > base_mb)
-      largest[command] = static_cast<std::uint64_t>((machine - base_mb) * 1048576.0 / large);
-  };
   // Below 2M triangles the contraction keeps the triangles' areas and normals (48 bytes a
   // triangle more; detail::lean_tables_for): measured 188 MiB at 832k against the lean model's 153.
-  const auto extra = [&](const MemoryModel& m) {
-    return std::string_view(m.command) == "cluster_contraction" && triangles < detail::kLeanContractionTriangles ? 48.0
-                                                                                                              : 0.0;
+  // `lean` and `full`: bytes a triangle from 2M triangles on and below; the peak at this mesh's
+  // size, the largest mesh for the machine at the rate of its own size.
+  auto add = [&](const std::string& command, double base_mb, double lean, double full) {
+    const double lean_from = detail::kLeanContractionTriangles;
+    est[command] = std::round(base_mb + double(triangles) * (double(triangles) < lean_from ? full : lean) / 1048576.0);
+    if (machine > base_mb) {
+      double n = (machine - base_mb) * 1048576.0 / lean;
+      if (n < lean_from) n = (machine - base_mb) * 1048576.0 / full;
+      largest[command] = static_cast<std::uint64_t>(n);
+    }
   };
-  for (const MemoryModel& m : kMemoryModels)
-    add(m.command, m.base_mb, m.bytes_per_triangle + extra(m), m.bytes_per_triangle);
+  const auto full = [](const MemoryModel& m) {
+    return m.bytes_per_triangle + (std::string_view(m.command) == "cluster_contraction" ? 48.0 : 0.0);
+  };
+  for (const MemoryModel& m : kMemoryModels) add(m.command, m.base_mb, m.bytes_per_triangle, full(m));
   // With --regions 8 and 32 at this machine's default thread count (all cores).
   // The threads a run would take: --threads (ptc sets a process-wide limit from it), else all cores.
   const unsigned threads = static_cast<unsigned>(bvh::usable_threads());
@@ -73,8 +76,7 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
       for (const int n : {8, 32}) {
         const double k = static_cast<double>(threads);
         add(std::string(m.command) + "_regions_" + std::to_string(n), m.base_mb,
-            regions_bytes_per_triangle(m.bytes_per_triangle + extra(m), n, k),
-            regions_bytes_per_triangle(m.bytes_per_triangle, n, k));
+            regions_bytes_per_triangle(m.bytes_per_triangle, n, k), regions_bytes_per_triangle(full(m), n, k));
       }
   nlohmann::json j;
   j["peak_mb"] = est;
@@ -83,6 +85,7 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
   j["largest_triangles_for_machine"] = largest;
   j["model"] =
       "peak MiB = base + triangles x bytes per triangle, measured on the armadillo subdivided (docs/scale.md); "
+      "the contraction 48 bytes per triangle more below 2097152 triangles (it keeps the areas and normals there); "
       "with --regions N on k = min(threads, N) threads: bytes per triangle = max(60, 35 + 4 k + k / N x the one "
       "run's)";
   return j;

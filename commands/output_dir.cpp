@@ -26,19 +26,18 @@ namespace {
 constexpr const char* kMarkerHeader =
     "written by ptc: a later run with the same --out replaces the files listed below and keeps any other\n";
 
-// A byte count as a person reads it: 512 B, 1.2 MB, 3.4 GB (powers of 1000).
+std::string unique_suffix() {
+  static std::atomic<unsigned> counter{0};
+  return std::to_string(::getpid()) + "-" + std::to_string(counter++);
+}
+}  // namespace
+
 std::string readable_bytes(double b) {
   const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};
   int u = 0;
   while (b >= 1000.0 && u < 6) b /= 1000.0, ++u;
   return u == 0 ? fmt::format("{:.0f} B", b) : fmt::format("{:.1f} {}", b, units[u]);
 }
-
-std::string unique_suffix() {
-  static std::atomic<unsigned> counter{0};
-  return std::to_string(::getpid()) + "-" + std::to_string(counter++);
-}
-}  // namespace
 
 void OutputDir::check_room(double bytes, std::string_view flag, std::string_view what) const {
   std::error_code ec;

@@ -34,6 +34,9 @@ void refuse_overwriting_input(const std::filesystem::path& out, const std::files
 class RunManifest;
 class OutputDir;
 
+/// A byte count as a person reads it: 512 B, 1.2 MB, 3.4 GB (powers of 1000, one decimal).
+[[nodiscard]] std::string readable_bytes(double bytes);
+
 /// The last step of every command that writes a directory: lists manifest.json among the
 /// outputs, writes it (RunManifest::to_json) and commits the directory. Returns the manifest.
 nlohmann::json commit_with_manifest(OutputDir& dir, RunManifest& manifest);

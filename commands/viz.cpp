@@ -36,6 +36,7 @@
 #include "viz/renderer.h"
 #include "viz/vtp.h"
 #include "toolkit/core/strings.h"
+#include "toolkit/anim/frame_sequence.h"
 
 namespace ptc {
 
@@ -312,7 +313,11 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   nlohmann::json images = nlohmann::json::object();
   std::vector<std::pair<double, std::string>> pvd;
   std::vector<std::string> written;
-  const std::string scene_name = opt.input.filename().string().empty() ? arg : opt.input.filename().string();
+  // The title's name: the file's or folder's name, a glob's whole pattern ("*.off" alone says not
+  // which folder's frames).
+  const std::string scene_name = opt.input.filename().string().empty() || is_glob_pattern(arg)
+                                     ? arg
+                                     : opt.input.filename().string();
   const std::string base = kind == VizKind::Partition ? "partition"
                            : kind == VizKind::Heatmap ? "heatmap_" + metric
                            : kind == VizKind::Panel   ? "panel"
@@ -496,7 +501,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     out << "wrote " << opt.out_dir.string() << "/";
     if (written.size() == 1) out << written[0];
     else {
-      // frame_0003.vtp for one frame, frame_0003..0007.vtp for several
+      // clusters_0003.vtp for one frame, clusters_0003..0007.vtp for several
       const std::string frames = range.count() == 1 ? fmt::format("{:04d}", range.first)
                                                     : fmt::format("{:04d}..{:04d}", range.first, range.last);
       if (series && kind != VizKind::Export)

@@ -204,15 +204,17 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
     text += fmt::format("{:<16} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>11} {:>11} {:>11}\n", g.keys[i][1], u, b, t, to,
                         ratio_text(p), ratio_text(first), ratio_text(last));
   }
+  const bool verdicts = (reference == "given" || reference.rfind("acc_", 0) == 0) &&  // the paper's claim is against the method
+                        (early_late.count("naive") || early_late.count("gwh01"));
   if (ref.empty()) text += fmt::format("(the reference {} is not among these rows: perf_factor is nan)\n", reference);
-  else if (nothing_hit(c, measured(c)))
+  else if (verdicts && nothing_hit(c, measured(c)))
     text += fmt::format("paper: no verdicts on the clusterings' whole frames: {}\n", kNoHitVerdicts);
-  else if (reference == "given" || reference.rfind("acc_", 0) == 0)  // the paper's claim is against the method
+  else if (verdicts)
     for (const char* b : {"naive", "gwh01"}) {
       const auto it = early_late.find(b);
       if (it == early_late.end()) continue;
       const auto [e, l] = it->second;
-      const bool close = std::abs(e - 1.0) <= 0.1, behind = l > e * 1.05;
+      const bool close = e >= 0.9 && e <= 1.1, behind = l > e * 1.05;  // (the bounds verdict_number is given)
       text += fmt::format("paper: {} clusters close to the method early and behind it later -> perf_factor {} over "
                           "the first quarter of the frames, {} over the last: {} (criterion: early within 10% of 1, "
                           "late 5% above early)\n",
@@ -341,8 +343,10 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
       else if (total < 3)
         why = fmt::format("{}: a rank correlation needs 3 or more", counted(std::uint64_t(total), "cluster"));
       else if (n < 3)
-        why = fmt::format("{} of its {} clusters with a finite drift (a box of zero area at some frame makes |ln ratio| "
-                          "infinite or undefined)", n, total);
+        why = fmt::format("{} with a finite drift (a box of zero area at some frame makes |ln ratio| infinite or "
+                          "undefined)",
+                          std::isfinite(total) ? fmt::format("{} of its {} clusters", n, total)
+                                               : counted(std::uint64_t(n), "cluster"));
       else
         why = "no variance (every cluster drifts alike, e.g. not at all)";
       text += fmt::format("paper: connectivity predicts drift ({}) -> no Spearman: {}\n", name, why);

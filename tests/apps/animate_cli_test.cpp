@@ -234,6 +234,23 @@ TEST_F(Animate, FramesKeepTheViewTheyWereAnimatedWith) {
   ASSERT_EQ(foreign.code, 0) << foreign.err;
   EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "tg" / "manifest.json"))["parameters"]["camera"]["from_scene"], false);
   EXPECT_EQ(foreign.err.find("ptc animate"), std::string::npos) << foreign.err;
+  // A mesh file's frames: its view was the defaults, which a command replaces by its own framing
+  // (results.camera_own false), so the frames trace as the mesh with --deform does (review).
+  const fs::path mesh_frames = dir_ / "mesh_frames";
+  ASSERT_EQ(ptc({"animate", (dir_ / "cube.off").string(), "--deform", "twist", "--frames", "0:1", "--out",
+                 mesh_frames.string()})
+                .code,
+            0);
+  const auto mm = nlohmann::json::parse(slurp(mesh_frames / "manifest.json"));
+  EXPECT_EQ(mm["results"]["camera_own"], false);
+  EXPECT_EQ(mm["results"]["light_own"], false);
+  ASSERT_EQ(trace(mesh_frames.string(), "0:1", "tm").code, 0);
+  ASSERT_EQ(ptc({"trace", (dir_ / "cube.off").string(), "--deform", "twist", "--frames", "0:1", "--width", "24",
+                 "--height", "24", "--shadows", "--threads", "1", "--out", (dir_ / "tmd").string()})
+                .code,
+            0);
+  for (const char* f : {"shaded_0000.png", "shaded_0001.png"}) EXPECT_EQ(slurp(dir_ / "tm" / f), slurp(dir_ / "tmd" / f)) << f;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "tm" / "manifest.json"))["parameters"]["camera"]["from_scene"], false);
 }
 
 TEST_F(Animate, BadFramesAndUsage) {

@@ -93,11 +93,14 @@ class Scene {
   /// Makes the current camera and light the scene's own (built-in scenes are composed with the
   /// constructor's defaults as their view).
   void adopt_view() { own_camera_ = own_light_ = true; }
-  /// Gives the scene its own camera and light (the view `ptc animate` recorded beside frames).
-  void set_view(const SceneCamera& camera, const SceneLight& light) {
+  /// Gives the scene its own camera, or light (the view `ptc animate` recorded beside frames).
+  void set_camera(const SceneCamera& camera) {
     camera_ = camera;
+    own_camera_ = true;
+  }
+  void set_light(const SceneLight& light) {
     light_ = light;
-    adopt_view();
+    own_light_ = true;
   }
   [[nodiscard]] const FrameRange& frames() const { return frames_; }
   /// The scene's own cluster size: the MaxCount (= MaxSize) `ptc bench` clusters the scene with

@@ -467,11 +467,18 @@ std::optional<AnimateView> animate_view(const fs::path& dir) {
   Reader r(m.string(), dir, SceneOptions{});
   if (!root.contains("results") || !root["results"].is_object()) r.fail("results", "missing (an object)");
   const json& res = root["results"];
-  if (!res.contains("camera")) r.fail("results.camera", "missing");
-  if (!res.contains("light")) r.fail("results.light", "missing");
+  // Only a view that was the scene's own (a frame directory of a mesh file was framed by the
+  // defaults, which a command replaces with its own framing).
+  const auto own = [&](const char* key) { return res.contains(key) && res[key].is_boolean() && res[key].get<bool>(); };
   AnimateView v;
-  v.camera = read_camera(r, res["camera"], "results.camera");
-  v.light = read_light(r, res["light"], "results.light");
+  if (own("camera_own")) {
+    if (!res.contains("camera")) r.fail("results.camera", "missing");
+    v.camera = read_camera(r, res["camera"], "results.camera");
+  }
+  if (own("light_own")) {
+    if (!res.contains("light")) r.fail("results.light", "missing");
+    v.light = read_light(r, res["light"], "results.light");
+  }
   if (root.contains("parameters") && root["parameters"].is_object() && root["parameters"].contains("scene") &&
       root["parameters"]["scene"].is_string())
     v.scene = root["parameters"]["scene"].get<std::string>();
@@ -489,7 +496,8 @@ Scene open_scene(const std::string& arg, const SceneOptions& opt) {
   // Frames `ptc animate` wrote: traced from the view it recorded (the scene's own camera and
   // light), as the scene itself would be, not from a framing of the first frame.
   if (const auto v = animate_view(arg)) {
-    s.set_view(v->camera, v->light);
+    if (v->camera) s.set_camera(*v->camera);
+    if (v->light) s.set_light(*v->light);
     // Frames are the files in name order: frames 5..7 of a scene are this input's 0..2.
     if (v->frames && v->frames->first > 0 && v->frames->count() == s.frames().count())
       read_note(arg, fmt::format("holds frames {}..{} of '{}' (ptc animate); they are read as frames 0..{}, in file name "

@@ -27,12 +27,14 @@ namespace ptc {
                                      const std::filesystem::path& base_dir, const SceneOptions& opt = {});
 
 /// The view `ptc animate` recorded beside the frames it wrote (DIR/manifest.json of schema
-/// "ptc-animate/1": results.camera, results.light, and parameters.scene), or nullopt for a path
-/// that is no such directory (another program's manifest.json, or none, is not read). A
-/// malformed camera or light there: InputError naming manifest.json and the element.
+/// "ptc-animate/1": results.camera and results.light where results.camera_own and
+/// results.light_own say they were the scene's own, not the defaults a command replaces with its
+/// own framing; a manifest without those flags gives neither), and parameters.scene and .frames;
+/// nullopt for a path that is no such directory (another program's manifest.json, or none, is
+/// not read). A malformed camera or light there: InputError naming manifest.json and the element.
 struct AnimateView {
-  SceneCamera camera;
-  SceneLight light;
+  std::optional<SceneCamera> camera;
+  std::optional<SceneLight> light;
   std::string scene;  ///< the scene the frames were made from ("" if not recorded)
   std::optional<FrameRange> frames;  ///< the scene's frames they are (parameters.frames)
 };
