@@ -202,6 +202,29 @@ TEST_F(Interrupt, BenchStopsWhileItClusters) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// A contraction to few large clusters (limits that never stop it, 100 clusters asked of 52k
+// triangles: minutes and more) stops within a moment too: it polls between its progress steps,
+// which by then take minutes each (found by a session: 12 minutes in, SIGTERM waited for the
+// next step). Signalled twice, later each time, so that the second lands where merges are dear.
+TEST_F(Interrupt, AContractionToFewLargeClustersStopsAtOnce) {
+  for (const int wait_ms : {1500, 6000}) {
+    const fs::path out = dir_ / ("big" + std::to_string(wait_ms));
+    const pid_t pid = start({"cluster", kData + "/meshes/armadillo.off", "--method", "contraction", "--max-count",
+                             "1048576", "--max-size", "1e12", "--target-clusters", "100", "--threads", "1", "--out",
+                             out.string()});
+    ASSERT_GT(pid, 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(wait_ms));
+    ASSERT_EQ(kill(pid, SIGTERM), 0);
+    const auto t0 = Clock::now();
+    const RunResult r = wait_for(pid, std::chrono::seconds(60));
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 1.0) << wait_ms;
+    EXPECT_EQ(r.code, 130) << r.err;
+    EXPECT_NE(r.err.find("ptc: cluster interrupted"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_EQ(temporaries_of(out.parent_path(), out.filename().string()), std::vector<std::string>{});
+  }
+}
+
 TEST_F(Interrupt, SigtermStopsTheSameWay) {
   const fs::path out = dir_ / "out";
   (void)interrupt(out, SIGTERM);

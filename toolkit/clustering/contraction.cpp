@@ -16,6 +16,7 @@
 #include <boost/pending/container_traits.hpp>
 
 #include "toolkit/clustering/small_arcs.h"
+#include "toolkit/core/cancel.h"
 
 namespace ptc {
 namespace {
@@ -563,8 +564,12 @@ template <ClusterObjective O>
   // During a merge, bit 30 of changed[x] marks the neighbours x of lo (push times stay below
   // 2^30, and a neighbour is alive), which spares an array per cluster.
   constexpr std::uint32_t kNeighbourOfLo = 0x40000000u;
+  std::uint64_t pops = 0;
   while (!heap.empty()) {
     if (options.target_clusters > 0 && alive_count <= options.target_clusters) break;
+    // Ctrl-C between the progress steps too: a step of T/256 merges takes minutes where the
+    // clusters grow large (each merge evaluates the merged cluster against all its neighbours).
+    if ((++pops & 63) == 0) throw_if_cancelled();
     const Entry top = heap.top();
     heap.pop();
     if (!current(top)) continue;  // stale: lazy deletion

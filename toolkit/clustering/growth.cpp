@@ -1,4 +1,5 @@
 #include "toolkit/clustering/growth.h"
+#include "toolkit/core/cancel.h"
 
 #include <algorithm>
 #include <functional>
@@ -246,6 +247,9 @@ template <ClusterObjective O>
         frontier.push_back(std::move(c));
       }
     if (++taken % report_every == 0 && progress) progress(static_cast<double>(taken) / T);
+    // Ctrl-C between the progress steps too: with a large MaxCount a step of T/256 triangles
+    // can take minutes (each scores the cluster's whole frontier).
+    if ((taken & 63) == 0) throw_if_cancelled();
   };
 
   for (std::uint32_t s; (s = picker.next(label)) != kNone; ++cluster) {
