@@ -123,6 +123,31 @@ TEST(Assemble, ComparePerfFactorIsFrameByFrameAndNanWithoutTheReference) {
   EXPECT_NE(a.text.find("is not among these rows"), std::string::npos) << a.text;
 }
 
+// Compare's verdicts on naive and gwh01 against the method, by the rows: printed with hits;
+// replaced by the no-hit line without any; neither where no verdict applies (the reference is not
+// the method, or neither baseline was compared).
+TEST(Assemble, CompareVerdictsOnlyWhereTheyApply) {
+  const std::vector<std::string> h = {"scene", "frame", "warmup", "config", "update_ms", "build_ms", "trace_ms",
+                                      "total_ms", "perf_factor", "hits"};
+  auto rows = [](const char* hits, std::vector<const char*> configs) {
+    std::vector<std::vector<std::string>> r;
+    for (int f = 0; f < 5; ++f)
+      for (const char* c : configs) r.push_back({"s", std::to_string(f), f == 0 ? "1" : "0", c, "1", "1", "2", "4", "nan", hits});
+    return r;
+  };
+  const std::string no_hits = "paper: no verdicts on the clusterings' whole frames";
+  Assembled a = assemble(ExperimentKind::Compare, {file("compare.csv", h, rows("7", {"acc_growth", "naive"}))}, "acc_growth");
+  EXPECT_NE(a.text.find("paper: naive clusters close to the method early"), std::string::npos) << a.text;
+  a = assemble(ExperimentKind::Compare, {file("compare.csv", h, rows("0", {"acc_growth", "naive"}))}, "acc_growth");
+  EXPECT_NE(a.text.find(no_hits), std::string::npos) << a.text;
+  EXPECT_EQ(a.text.find("clusters close to the method"), std::string::npos) << a.text;
+  for (const auto& [ref, configs] :
+       {std::pair<const char*, std::vector<const char*>>{"standard", {"standard", "naive"}}, {"acc_growth", {"acc_growth", "standard"}}}) {
+    a = assemble(ExperimentKind::Compare, {file("compare.csv", h, rows("0", configs))}, ref);
+    EXPECT_EQ(a.text.find("paper:"), std::string::npos) << ref << "\n" << a.text;
+  }
+}
+
 TEST(Assemble, DriftRegressionRecoversExactlyLinearCosts) {
   // cost_per_ray = 0.5 SAH + 2 EPO + 1 and ns_per_ray = 10 nodes + 0.5 triangles + 3, exactly,
   // over points where SAH and EPO (and nodes and triangles) are not collinear.
