@@ -41,6 +41,25 @@ class Notebook : public test::TempDirTest {
     std::ostringstream out;
     cmd_experiment(o, out);
   }
+  // A one-frame drift study of acc_growth (frame 2), as two tests need it.
+  void one_frame_drift() {
+    experiment("drift", [](ExperimentCommandOptions& o) {
+      o.frames = "2:2";
+      o.clusterings = "acc_growth";
+    });
+  }
+  // The notebook of the compare and drift studies into dir_/nb: its figures.json, and its stderr
+  // in `err`.
+  nlohmann::json notebook_of_compare_and_drift(std::string& err) {
+    NotebookCommandOptions n;
+    n.studies = {dir_ / "study" / "compare", dir_ / "study" / "drift"};
+    n.out_dir = dir_ / "nb";
+    std::ostringstream out;
+    testing::internal::CaptureStderr();
+    cmd_notebook(n, out);
+    err = testing::internal::GetCapturedStderr();
+    return nlohmann::json::parse(slurp(n.out_dir / "figures.json"));
+  }
   static std::set<std::string> column(const fs::path& csv, const std::string& col, const std::string& skip_col = "",
                                       const std::string& skip_val = "") {
     std::set<std::string> v;
@@ -148,18 +167,9 @@ TEST_F(Notebook, FiguresSayWhatTheyCouldNotDraw) {
     o.reference = "standard";
     o.shard = "2/2";  // acc_growth only
   });
-  experiment("drift", [](ExperimentCommandOptions& o) {
-    o.frames = "2:2";
-    o.clusterings = "acc_growth";
-  });
-  NotebookCommandOptions n;
-  n.studies = {dir_ / "study" / "compare", dir_ / "study" / "drift"};
-  n.out_dir = dir_ / "nb";
-  std::ostringstream out;
-  testing::internal::CaptureStderr();
-  cmd_notebook(n, out);
-  const std::string err = testing::internal::GetCapturedStderr();
-  const nlohmann::json drawn = nlohmann::json::parse(slurp(n.out_dir / "figures.json"));
+  one_frame_drift();
+  std::string err;
+  const nlohmann::json drawn = notebook_of_compare_and_drift(err);
   EXPECT_EQ(drawn["fig7_compare"]["series"], 0);
   const std::string fig7 = drawn["fig7_compare"]["note"];
   EXPECT_NE(fig7.find("1 of 1 configuration(s) without a performance factor"), std::string::npos) << fig7;
@@ -179,25 +189,16 @@ TEST_F(Notebook, OneFrameStudiesDrawTheirPoints) {
     o.configs = "standard,acc_growth";
     o.reference = "standard";
   });
-  experiment("drift", [](ExperimentCommandOptions& o) {
-    o.frames = "2:2";
-    o.clusterings = "acc_growth";
-  });
-  NotebookCommandOptions n;
-  n.studies = {dir_ / "study" / "compare", dir_ / "study" / "drift"};
-  n.out_dir = dir_ / "nb";
-  std::ostringstream out;
-  testing::internal::CaptureStderr();
-  cmd_notebook(n, out);
-  const std::string err = testing::internal::GetCapturedStderr();
-  const nlohmann::json drawn = nlohmann::json::parse(slurp(n.out_dir / "figures.json"));
+  one_frame_drift();
+  std::string err;
+  const nlohmann::json drawn = notebook_of_compare_and_drift(err);
   EXPECT_EQ(drawn["fig7_compare"]["series"], 2);
   EXPECT_EQ(drawn["fig7_compare"]["note"], "");
   // Each series a marker in its colour (tab10 0 and 1): a legend entry alone has about 50 pixels
   // of it, with the marker in the plot and in the legend about 110-130 (measured; in
   // drift_frames the triangle BVH has a SAH panel only, its clusters' box drift being nan).
-  EXPECT_EQ(tab10_colours_in(viz::read_png(n.out_dir / "fig7_compare.png"), 90), 2u);
-  EXPECT_EQ(tab10_colours_in(viz::read_png(n.out_dir / "drift_frames.png"), 90), 2u);  // triangles, acc_growth
+  EXPECT_EQ(tab10_colours_in(viz::read_png(dir_ / "nb" / "fig7_compare.png"), 90), 2u);
+  EXPECT_EQ(tab10_colours_in(viz::read_png(dir_ / "nb" / "drift_frames.png"), 90), 2u);  // triangles, acc_growth
   const std::string fit = drawn["cost_fit"]["note"];
   EXPECT_NE(fit.find("no fit of SAH and EPO"), std::string::npos) << fit;
   EXPECT_EQ(drawn["cost_fit"]["series"], 2);  // the two structures' points, no fit line
