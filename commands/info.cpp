@@ -51,8 +51,8 @@ double regions_bytes_per_triangle(double one_run, double regions, double threads
 nlohmann::json memory_estimate_json(std::size_t triangles) {
   nlohmann::json est, largest;
   const double machine = machine_memory_mb();
-  // Below 2M triangles the contraction keeps the triangles' areas and normals (48 bytes a
-  // triangle more; detail::lean_tables_for): measured 188 MiB at 832k against the lean model's 153.
+  // Below 2M triangles the contraction keeps the triangles' areas and normals
+  // (detail::kLeanSavedBytesPerTriangle more; detail::lean_tables_for): measured 188 MiB at 832k against the lean model's 153.
   // `lean` and `full`: bytes a triangle from 2M triangles on and below; the peak at this mesh's
   // size, the largest mesh for the machine at the rate of its own size.
   auto add = [&](const std::string& command, double base_mb, double lean, double full) {
@@ -65,7 +65,7 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
     }
   };
   const auto full = [](const MemoryModel& m) {
-    return m.bytes_per_triangle + (std::string_view(m.command) == "cluster_contraction" ? 48.0 : 0.0);
+    return m.bytes_per_triangle + (std::string_view(m.command) == "cluster_contraction" ? detail::kLeanSavedBytesPerTriangle : 0.0);
   };
   for (const MemoryModel& m : kMemoryModels) add(m.command, m.base_mb, m.bytes_per_triangle, full(m));
   // With --regions 8 and 32 at this machine's default thread count (all cores).
@@ -83,11 +83,13 @@ nlohmann::json memory_estimate_json(std::size_t triangles) {
   j["machine_memory_mb"] = std::round(machine);
   j["threads"] = threads;
   j["largest_triangles_for_machine"] = largest;
-  j["model"] =
+  j["model"] = fmt::format(
       "peak MiB = base + triangles x bytes per triangle, measured on the armadillo subdivided (docs/scale.md); "
-      "the contraction 48 bytes per triangle more below 2097152 triangles (it keeps the areas and normals there); "
-      "with --regions N on k = min(threads, N) threads: bytes per triangle = max(60, 35 + 4 k + k / N x the one "
-      "run's)";
+      "the contraction {} bytes per triangle more below {} triangles (it keeps the areas and normals there); "
+      "with --regions N on k = min(threads, N) threads: bytes per triangle = max({}, {} + {} k + k / N x the one "
+      "run's)",
+      detail::kLeanSavedBytesPerTriangle, detail::kLeanContractionTriangles, kRegionsFloor, kRegionsWhole,
+      kRegionsPerThread);
   return j;
 }
 

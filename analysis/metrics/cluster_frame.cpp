@@ -14,7 +14,7 @@
 namespace ptc {
 namespace {
 
-constexpr std::array<ClusterMetricInfo, 17> kInfos = {{
+constexpr std::array<ClusterMetricInfo, 18> kInfos = {{
     {"triangles", false, 0, "triangles in the cluster"},
     {"vertices", false, 0, "distinct vertices of the cluster"},
     {"connectivity", false, 0, "triangles / vertices"},
@@ -32,6 +32,7 @@ constexpr std::array<ClusterMetricInfo, 17> kInfos = {{
     {"sah_share", false, 0, "share of the cluster BVH's SAH cost"},
     {"boundary_vertices", false, 0, "vertices on the cluster's border"},
     {"components", false, 0, "vertex-connected components of the cluster"},
+    {"not_full", false, 0, "1: fewer vertices than MaxCount (meshoptimizer's meshlet not full)"},
 }};
 
 }  // namespace
@@ -104,7 +105,8 @@ ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& cl
                         r.m.p_hit,
                         share[k],
                         double(shapes[k].boundary_vertices),
-                        double(shapes[k].components)};
+                        double(shapes[k].components),
+                        shapes[k].not_full ? 1.0 : 0.0};
     static_assert(sizeof(v) / sizeof(v[0]) == kInfos.size());
     for (std::size_t i = 0; i < kInfos.size(); ++i) out.values[i][k] = v[i];
   }

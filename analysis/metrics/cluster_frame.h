@@ -32,7 +32,8 @@ struct ClusterMetricInfo {
 
 /// The metrics, in clusters_frames.csv's column order: triangles, vertices, connectivity, reg,
 /// acc, reg_delta, acc_delta, sphere_radius, sphere_radius_ratio, sphere_radius_ratio_prev,
-/// box_area, box_area_ratio, box_area_ratio_prev, p_hit, sah_share, boundary_vertices, components.
+/// box_area, box_area_ratio, box_area_ratio_prev, p_hit, sah_share, boundary_vertices, components,
+/// not_full (0 or 1).
 [[nodiscard]] std::span<const ClusterMetricInfo> cluster_metric_infos();
 /// The metric called `name`, or nullopt.
 [[nodiscard]] std::optional<ClusterMetricInfo> find_cluster_metric(std::string_view name);

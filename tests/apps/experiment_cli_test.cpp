@@ -531,8 +531,8 @@ TEST_F(Experiment, DriftAndVizExportAgreeValueForValue) {
       for (std::size_t t = 0; t < ids.size(); ++t) {
         const auto& r = row.at({f, ids[t]});
         EXPECT_EQ(cells.at("sah_share")[t], std::stod(r.at("sah_share"))) << "frame " << f << " cluster " << ids[t];
-        for (const char* m : {"vertices", "connectivity", "boundary_vertices", "reg", "acc", "box_area_ratio",
-                              "box_area_ratio_prev", "sphere_radius_ratio", "p_hit"}) {
+        for (const char* m : {"vertices", "connectivity", "boundary_vertices", "components", "not_full", "reg", "acc",
+                              "box_area_ratio", "box_area_ratio_prev", "sphere_radius_ratio", "p_hit"}) {
           const double want = std::stod(r.at(m));
           EXPECT_NEAR(cells.at(m)[t], want, 1e-12 * std::max(1.0, std::abs(want))) << m << " frame " << f;
         }

@@ -171,6 +171,10 @@ namespace detail {
 /// remaking them was 80% of such a run (docs/scale.md, "Lean tables from 2M triangles").
 /// Either way the same clusters bit for bit.
 inline constexpr std::uint32_t kLeanContractionTriangles = 1u << 21;
+/// What the lean tables leave out, bytes a triangle: the area (8) and normal (24) and the
+/// neighbour list (an offset and about three neighbours, 16). ptc info's memory model adds it to
+/// the contraction's rate below kLeanContractionTriangles (measured: docs/scale.md).
+inline constexpr double kLeanSavedBytesPerTriangle = 48;
 /// Whether cluster_mesh builds lean tables for this method on a mesh of `triangles`.
 [[nodiscard]] inline bool lean_tables_for(ClusterMethod method, std::size_t triangles) {
   return method == ClusterMethod::Contraction && triangles >= kLeanContractionTriangles;

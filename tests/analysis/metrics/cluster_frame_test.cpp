@@ -38,7 +38,7 @@ TEST(ClusterFrame, NamesFollowTheDriftTable) {
   const std::vector<std::string> want = {"triangles", "vertices", "connectivity", "reg", "acc", "reg_delta", "acc_delta",
                                          "sphere_radius", "sphere_radius_ratio", "sphere_radius_ratio_prev", "box_area",
                                          "box_area_ratio", "box_area_ratio_prev", "p_hit", "sah_share",
-                                         "boundary_vertices", "components"};
+                                         "boundary_vertices", "components", "not_full"};
   ASSERT_EQ(cluster_metric_infos().size(), want.size());
   for (std::size_t i = 0; i < want.size(); ++i) EXPECT_EQ(cluster_metric_infos()[i].name, want[i]);
   EXPECT_TRUE(find_cluster_metric("box_area_ratio")->diverging);
