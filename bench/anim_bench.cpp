@@ -55,8 +55,32 @@ struct Row {
 
 }  // namespace
 
+int run(const std::filesystem::path& data);
+
 int main(int argc, char** argv) {
-  const std::filesystem::path data = argc > 1 ? argv[1] : PTC_TEST_DATA;
+  std::filesystem::path data = PTC_TEST_DATA;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::printf("usage: anim_bench [DATA_DIR]   (DATA_DIR: holds meshes/armadillo.off; default %s)\n", PTC_TEST_DATA);
+      return 0;
+    }
+    if (a.empty() || a[0] == '-' || i > 1) {
+      std::fprintf(stderr, "anim_bench: %s: %s (usage: anim_bench [DATA_DIR])\n", a.c_str(),
+                   i > 1 ? "one data directory at most" : "unknown option");
+      return 2;
+    }
+    data = a;
+  }
+  try {
+    return run(data);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "anim_bench: %s\n", e.what());
+    return 1;
+  }
+}
+
+int run(const std::filesystem::path& data) {
   const int all = static_cast<int>(tbb::info::default_concurrency());
   std::printf("anim_bench: data %s, %d threads available\n", data.c_str(), all);
 

@@ -114,7 +114,10 @@ int main(int argc, char** argv) {
     if (a == "--reps" && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
     else if (a == "--threads" && i + 1 < argc) threads = static_cast<unsigned>(std::atoi(argv[++i]));
     else if (a == "--quick") quick = true;
-    else {
+    else if (a == "--help" || a == "-h") {
+      std::cout << "usage: anim_sources_bench [--reps N] [--threads N] [--quick]\n";
+      return 0;
+    } else {
       std::cerr << "usage: anim_sources_bench [--reps N] [--threads N] [--quick]\n";
       return 2;
     }

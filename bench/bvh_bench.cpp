@@ -159,6 +159,17 @@ Options parse_options(int argc, char** argv) {
       if (end == t.c_str() || *end != '\0' || !std::isfinite(v)) usage(a + ": not a number: " + t);
       return v;
     };
+    if (a == "--help" || a == "-h") {
+      std::printf(
+          "usage: bvh_bench [MESH] [--levels 2] [--reps 5] [--size 1024] [--threads 1] [--clusters acc,meshopt,morton]\n"
+          "                 [--max-count 50] [--max-size 50] [--leaves linear,block-tree] [--leaf-formats blocks,tables]\n"
+          "                 [--leaf 8] [--ct 1] [--ci 0.3] [--isa auto|sse2|avx2|avx512vl|avx512] [--embree all|none]\n"
+          "                 [--deform twist|bend|wave|rigid] [--amplitude A] [--clock wall|cpu] [--out DIR]\n"
+          "                 [--build-loop N] [--update-loop N] [--median 4] [--vertex-order clusters|input]\n"
+          "                 [--groups 8] [--group-trees rebuild|refit] [--packets] [--no-counters]\n"
+          "(what each measures: the comment at the top of bench/bvh_bench.cpp; CSV columns: docs/tables.md)\n");
+      std::exit(0);
+    }
     if (a == "--levels") o.levels = static_cast<int>(value());
     else if (a == "--reps") o.reps = static_cast<int>(value());
     else if (a == "--build-loop") o.build_loop = static_cast<int>(value());

@@ -399,6 +399,15 @@ int main(int argc, char** argv) {
         usage_error(a + ": not a number: " + s);
       }
     };
+    if (a == "--help" || a == "-h") {
+      std::printf(
+          "usage: clustering_bench [--mesh FILE] [--levels N] [--skip-large] [--quick] [--out DIR]\n"
+          "                        [--methods growth,contraction,sah-split,meshopt] [--objectives acc,naive,gwh01]\n"
+          "                        [--sizes 10,50,100] [--repeats N] [--sections speed,spheres,start,stages]\n"
+          "                        [--sphere-size N] [--no-exact]\n"
+          "(the sections and their CSV files: the comment at the top of bench/clustering_bench.cpp, docs/tables.md)\n");
+      return 0;
+    }
     if (a == "--mesh") {
       mesh_path = value();
     } else if (a == "--levels") {

@@ -36,12 +36,16 @@ int main(int argc, char** argv) {
   int width = 512;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::printf("usage: metrics_bench [MESH] [--levels N] [--width N] [--max-count N]\n");
+      return 0;
+    }
     if (a == "--levels" && i + 1 < argc) levels = std::atoi(argv[++i]);
     else if (a == "--width" && i + 1 < argc) width = std::atoi(argv[++i]);
     else if (a == "--max-count" && i + 1 < argc) max_count = static_cast<std::uint32_t>(std::atoi(argv[++i]));
     else if (a[0] != '-') path = a;
     else {
-      std::fprintf(stderr, "metrics_bench: unknown option %s\n", a.c_str());
+      std::fprintf(stderr, "metrics_bench: unknown option %s (%s)\n", a.c_str(), "usage: metrics_bench [MESH] [--levels N] [--width N] [--max-count N]");
       return 2;
     }
   }

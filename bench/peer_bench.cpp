@@ -41,6 +41,14 @@ int main(int argc, char** argv) {
       return argv[++i];
     };
     const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::printf(
+          "usage: peer_bench [MESH] [--levels 2] [--frames 8] [--size 1024] [--threads 1] [--max-count 32]\n"
+          "                  [--deform twist|bend|wave|rigid|explode] [--cluster-fallback auto|off|X]\n"
+          "                  [--fallback-refit auto|off|X] [--fallback-sah eye|directions|plain] [--csv FILE]\n"
+          "(ptc bench's code with the issue's target set-up; the flags as ptc bench's: docs/tracing.md)\n");
+      return 0;
+    }
     try {
       if (a == "--levels") levels = std::stoi(value("--levels"));
       else if (a == "--frames") frames = std::stoi(value("--frames"));

@@ -64,8 +64,16 @@ void BM_Sphere(benchmark::State& state, ptc::SphereMethod method) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (argc > 1) g_mesh = argv[1];
+  benchmark::Initialize(&argc, argv);  // takes Google Benchmark's own flags (--help lists them)
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.empty() || a[0] == '-' || i > 1) {
+      std::cerr << "spheres_bench: " << a << ": " << (i > 1 ? "one mesh at most" : "unknown option")
+                << " (usage: spheres_bench [MESH] [Google Benchmark flags, e.g. --benchmark_filter=REGEX])\n";
+      return 2;
+    }
+    g_mesh = a;
+  }
   try {
     (void)data();
   } catch (const std::exception& e) {

@@ -139,8 +139,10 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
                                          {"estimated_blocks_bytes", r.cluster_leaf_estimate.blocks},
                                          {"estimated_tables_bytes", r.cluster_leaf_estimate.tables}});
   manifest.set_result("scene_after_renumbering", scene.describe());
-  manifest.set_result("median_frames",
+  manifest.set_result("median_frames",  // places in the run (0: the run's first frame)
                       nlohmann::json::array({r.median_first_frame, static_cast<int>(range.count()) - 1}));
+  manifest.set_result("median_scene_frames",  // the same frames by their scene frame numbers
+                      nlohmann::json::array({range.first + r.median_first_frame, range.last}));
   (void)commit_with_manifest(dir, manifest);
 
   if (opt.json) {

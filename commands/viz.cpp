@@ -127,6 +127,19 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
                                               "no rays)",
                                               kPixelMetrics[0], kPixelMetrics[1], to_string(kind),
                                               kind == VizKind::Heatmap ? " of a per-cluster metric" : ""));
+  // Picture flags that would change nothing in this kind's picture (the export's are refused by the CLI).
+  if (kind != VizKind::Export) {
+    if (!opt.borders && kind != VizKind::Partition && kind != VizKind::Panel)
+      throw UsageError("--no-borders", "only viz partition and panel draw cluster borders (a heatmap draws none)");
+    if (!opt.lighting && kind == VizKind::Heatmap && pixel_metric)
+      throw UsageError("--flat", fmt::format("a heatmap of {} is drawn in flat colours already (only meshes are lit)", metric));
+    if (opt.light && kind == VizKind::Heatmap && pixel_metric && !opt.shadows)
+      throw UsageError("--light", fmt::format("a heatmap of {} traces no shadow rays without --shadows (the light would change nothing)", metric));
+    if (opt.light && (kind == VizKind::Partition || (kind == VizKind::Heatmap && !pixel_metric)))
+      throw UsageError("--light", fmt::format("viz {} draws the mesh with a headlight (--light is for viz panel's shaded "
+                                              "picture and for --shadows)",
+                                              kind == VizKind::Heatmap ? "heatmap of a per-cluster metric" : to_string(kind)));
+  }
   if (opt.clusters.empty() && !(kind == VizKind::Heatmap && pixel_metric))
     throw UsageError("--clusters", fmt::format("viz {}{} needs --clusters DIR (a `ptc cluster` output)", to_string(kind),
                                                kind == VizKind::Heatmap ? " of a per-cluster metric" : ""));
@@ -429,9 +442,9 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
       constexpr int kTitleSize = 15, kLine = 20;
       const auto fits = [&](const std::string& t) { return 0.62 * kTitleSize * double(t.size()) <= double(row.width - 16); };
       std::vector<std::string> lines;
-      for (const std::string& part : parts) {
-        if (!lines.empty() && fits(lines.back() + "  |  " + part)) lines.back() += "  |  " + part;
-        else lines.push_back(part);
+      for (const std::string& piece : parts) {
+        if (!lines.empty() && fits(lines.back() + "  |  " + piece)) lines.back() += "  |  " + piece;
+        else lines.push_back(piece);
       }
       std::vector<viz::TextItem> title;
       for (std::size_t i = 0; i < lines.size(); ++i)

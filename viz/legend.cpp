@@ -20,14 +20,26 @@ LegendLayout legend_layout(int width) {
 RgbImage legend_strip(Renderer& r, const ColourScale& s, int width, const std::string& note) {
   width = std::max(width, kMinLegendWidth);
   const LegendLayout l = legend_layout(width);
-  // As many ticks (5, 3 or 2) as fit without their numbers touching (~7.5 px per character).
+  // As many ticks (5, 3 or 2) as fit without their numbers touching (~7.5 px per character, at
+  // least 8 px apart), placed as they are drawn: the first number starts at its tick, the last
+  // ends at its tick, the others are centred on theirs (so the two last numbers of five evenly
+  // spaced ticks are nearer than the spacing says), at the ticks' own fractions.
   const int bar_w0 = l.bar_x1 - l.bar_x0;
+  const auto tick_at = [&](double fraction) { return l.bar_x0 + static_cast<int>(std::lround(fraction * (bar_w0 - 1))); };
+  const auto fit = [&](const std::vector<Tick>& t) {
+    double right_of_last = -1e300;
+    for (const Tick& k : t) {
+      const double x = tick_at(k.fraction), w = 7.5 * double(k.text.size());
+      const double left = x <= l.bar_x0 + 2 ? x : x >= l.bar_x1 - 3 ? x - w : x - 0.5 * w;
+      if (left - right_of_last < 8) return false;
+      right_of_last = left + w;
+    }
+    return true;
+  };
   std::vector<Tick> tk;
   for (int n : {5, 3, 2}) {
     tk = ticks(s, n);
-    std::size_t widest = 0;
-    for (const Tick& t : tk) widest = std::max(widest, t.text.size());
-    if (tk.size() < 2 || double(bar_w0) / double(tk.size() - 1) >= 7.5 * double(widest) + 10) break;
+    if (tk.size() < 2 || fit(tk)) break;
   }
   std::vector<TextItem> items;
   // The title with where the range came from; on a narrow legend that goes to the note line.
@@ -36,8 +48,8 @@ RgbImage legend_strip(Renderer& r, const ColourScale& s, int width, const std::s
   items.push_back({fits && !range_from.empty() ? s.title + "  (" + range_from + ")" : s.title, l.bar_x0, 11, 14, -1,
                    {235, 235, 235}, true});
   const std::string note_line = fits || range_from.empty() ? note : range_from + (note.empty() ? "" : "; " + note);
-  const int bar_w = l.bar_x1 - l.bar_x0;
-  auto tick_x = [&](double fraction) { return l.bar_x0 + static_cast<int>(std::lround(fraction * (bar_w - 1))); };
+  const int bar_w = bar_w0;
+  const auto& tick_x = tick_at;
   for (std::size_t i = 0; i < tk.size(); ++i) {
     const int x = tick_x(tk[i].fraction);
     const int align = x <= l.bar_x0 + 2 ? -1 : x >= l.bar_x1 - 3 ? 1 : 0;

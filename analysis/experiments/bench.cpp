@@ -466,8 +466,16 @@ std::string shadow_hint_text(const PeerBenchResult& r) {
 
 std::string bench_text(const PeerBenchResult& r) {
   const int frames = r.rows.empty() ? 0 : r.rows.back().frame + 1;
-  std::string s = fmt::format("medians over frames {}..{} ({} frames), {} primary rays{}\n", r.median_first_frame,
-                              frames - 1, frames - r.median_first_frame, r.rays,
+  // Named by their scene frames (the table's "@F"), not by their place in the run.
+  std::int64_t first = r.median_first_frame, last = frames - 1;
+  for (const auto& row : r.rows) {
+    if (row.frame == r.median_first_frame) first = row.scene_frame;
+    if (row.frame == frames - 1) last = row.scene_frame;
+  }
+  const int counted_frames = frames - r.median_first_frame;
+  std::string s = fmt::format("medians over {} ({}), {} primary rays{}\n",
+                              first == last ? fmt::format("frame {}", first) : fmt::format("frames {}..{}", first, last),
+                              counted_frames == 1 ? std::string("1 frame") : fmt::format("{} frames", counted_frames), r.rays,
                               r.shadows ? " and shadow rays to the light" : " (no shadow rays)");
   // The whole frame first: what the method is for.
   s += fmt::format("whole frame = update + build + primary{} (> 1: the row is faster; Embree's frame / the row's){}\n",

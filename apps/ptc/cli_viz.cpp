@@ -65,8 +65,8 @@ void register_viz(CLI::App& app, Context& ctx) {
   c->add_option("--width", a->opt.width, "picture width in pixels")->check(whole_in(1, 8192))->capture_default_str();
   c->add_option("--height", a->opt.height, "picture height in pixels")->check(whole_in(1, 8192))->capture_default_str();
   a->camera.add_to(c, /*with_light=*/true);
-  c->add_flag("--no-borders", a->no_borders, "partition: no lines on the cluster borders");
-  c->add_flag("--flat", a->flat, "no lighting: every pixel is exactly its cluster's or value's colour");
+  c->add_flag("--no-borders", a->no_borders, "partition, panel: no lines on the cluster borders");
+  c->add_flag("--flat", a->flat, "partition, per-cluster heatmap, panel: no lighting: every pixel is exactly its cluster's or value's colour");
   c->add_flag("--shadows", a->opt.shadows, "panel / pixel heatmap: shadow rays to the light in the traced image");
   c->add_flag("--interactive", a->opt.interactive, "also open a window on the display (partition, per-cluster heatmap, one frame)");
   c->add_flag("--xvfb", a->opt.force_xvfb, "render on a private Xvfb even when $DISPLAY answers");

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Soak: FRAMES frames of an animated scene through `ptc bench` and `ptc trace --frames` with
-flat memory (issue 15): the peak resident memory after frame FRAMES is within 5% of the peak
-after frame 10.
+flat memory (issue 15): the peak resident memory after the last frame is within 5% of the peak
+after the tenth (frames are numbered from 0: frames 999 and 9 of 1000).
 
     /usr/bin/python3 bench/soak/soak.py [--build build] [--scene armadillo-832k-twist] [--frames 1000] [--out out-soak]
 
@@ -64,7 +64,7 @@ def main():
             rows.append({"command": name, "frame": f, "rss_mb": frames[f][0], "peak_rss_mb": frames[f][1]})
         f10 = order[min(9, len(order) - 1)]
         ratio = frames[order[-1]][1] / frames[f10][1]
-        results[name] = {"frames": len(order), "peak_mb_frame_10": frames[f10][1],
+        results[name] = {"frames": len(order), "frame_10": f10, "last_frame": order[-1], "peak_mb_frame_10": frames[f10][1],
                          "peak_mb_last_frame": frames[order[-1]][1], "ratio": ratio,
                          "rss_mb_frame_10": frames[f10][0], "rss_mb_last_frame": frames[order[-1]][0]}
         ok = ok and ratio <= 1.05
@@ -78,10 +78,13 @@ def main():
                "outputs": ["soak.csv"]}, open(os.path.join(tmp, "manifest.json"), "w"), indent=2)
     if os.path.exists(a.out):
         shutil.rmtree(a.out)
+        print(f"replaced the earlier {a.out}", file=sys.stderr)
     os.rename(tmp, a.out)
     for name, r in results.items():
-        print(f"{name:<6} {r['frames']} frames: peak {r['peak_mb_frame_10']:.1f} MB after frame 10, "
-              f"{r['peak_mb_last_frame']:.1f} MB after frame {r['frames']} ({r['ratio']:.3f}x; resident "
+        # Frames are numbered from 0: the tenth is frame 9.
+        print(f"{name:<6} {r['frames']} frames: peak {r['peak_mb_frame_10']:.1f} MB after the tenth (frame "
+              f"{r['frame_10']}), {r['peak_mb_last_frame']:.1f} MB after the last (frame {r['last_frame']}) "
+              f"({r['ratio']:.3f}x; resident "
               f"{r['rss_mb_frame_10']:.1f} -> {r['rss_mb_last_frame']:.1f} MB) "
               + ("ok" if r["ratio"] <= 1.05 else "GROWS more than 5%"))
     print(f"wrote {a.out}/soak.csv, {a.out}/manifest.json")

@@ -705,6 +705,30 @@ TEST_F(Cli, FlagsThatWouldDoNothingAreRefused) {
     EXPECT_NE(r.err.find(flag + ": not used by viz export"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "v"));
   }
+  // Pictures that a flag would not change: borders on a heatmap, no lighting on a per-pixel
+  // heatmap (flat already), a light where nothing is lit by it (found by a new user: each gave
+  // the same bytes as without it, and the manifest recorded it as used).
+  struct Case {
+    std::vector<std::string> args;
+    std::string flag, says;
+  };
+  const std::string cl = (dir_ / "none").string();
+  for (const Case& k : {Case{{"heatmap", "--metric", "reg", "--clusters", cl, "--no-borders"}, "--no-borders", "a heatmap draws none"},
+                        Case{{"heatmap", "--metric", "nodes_visited", "--no-borders"}, "--no-borders", "a heatmap draws none"},
+                        Case{{"heatmap", "--metric", "nodes_visited", "--flat"}, "--flat", "flat colours already"},
+                        Case{{"partition", "--clusters", cl, "--light", "1,2,3"}, "--light", "viz partition draws the mesh with a headlight"},
+                        Case{{"heatmap", "--metric", "reg", "--clusters", cl, "--light", "1,2,3"}, "--light", "per-cluster metric draws the mesh with a headlight"},
+                        Case{{"heatmap", "--metric", "triangles_tested", "--light", "1,2,3"}, "--light", "no shadow rays without --shadows"}}) {
+    std::vector<std::string> args = {"viz", k.args[0], mesh};
+    args.insert(args.end(), k.args.begin() + 1, k.args.end());
+    args.insert(args.end(), {"--out", (dir_ / "v").string()});
+    const auto r = ptc(args);
+    EXPECT_EQ(r.code, 2) << k.flag << ": " << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(k.flag + ": "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(k.says), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "v"));
+  }
   // --scheme with --levels 0: nothing is refined.
   {
     const auto s0 = ptc({"subdivide", mesh, "--levels", "0", "--scheme", "loop", "--out", (dir_ / "s.off").string()});

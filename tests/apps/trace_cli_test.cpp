@@ -1023,6 +1023,10 @@ TEST_F(TraceCli, BenchTakesPositionsFromTheScene) {
   const auto m = nlohmann::json::parse(slurp(dir_ / "out" / "manifest.json"));
   EXPECT_EQ(m["parameters"]["motion"], "scene");
   EXPECT_EQ(m["results"]["triangles"], 332);
+  // The medians' frames named as the table names them (scene frames; the run's first is out).
+  EXPECT_NE(r.out.find("medians over frame 4 (1 frame)"), std::string::npos) << r.out;
+  EXPECT_EQ(m["results"]["median_frames"], nlohmann::json::array({1, 1}));
+  EXPECT_EQ(m["results"]["median_scene_frames"], nlohmann::json::array({4, 4}));
   // Vertices renumbered in the clusters' order (the default), within each part of the scene.
   EXPECT_EQ(m["parameters"]["vertex_order"], "clusters");
   EXPECT_EQ(m["results"]["fused_vertex_pass"], true);
