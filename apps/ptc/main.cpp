@@ -4,6 +4,9 @@
 // Each subcommand is registered from its own cli_<name>.cpp (see cli.h).
 #include <iostream>
 #include <optional>
+#include <string_view>
+
+#include <fmt/format.h>
 
 #include <oneapi/tbb/global_control.h>
 
@@ -67,6 +70,18 @@ int main(int argc, char** argv) {
       msg = std::string("'") + argv[1] + "' is not a ptc command (" + names + ")";
     } else if (const auto k = msg.find(": At Most 1 required but received"); k != std::string::npos) {
       msg = msg.substr(0, k) + ": given more than once";
+    } else if (msg.find("not expected") != std::string::npos) {
+      // --frame F where the command takes a range only (bench, animate, experiment): say how.
+      for (int i = 2; i < argc; ++i)
+        if (std::string_view(argv[i]) == "--frame" || std::string_view(argv[i]).starts_with("--frame=")) {
+          const std::string_view a = argv[i];
+          const std::string f = a.size() > 7 ? std::string(a.substr(8)) : i + 1 < argc ? argv[i + 1] : "F";
+          const std::string cmd = std::string(argv[1]) + (std::string_view(argv[1]) == "experiment" && argv[2][0] != '-'
+                                                               ? std::string(" ") + argv[2]
+                                                               : std::string());
+          msg = fmt::format("--frame: ptc {} takes a range of frames: --frames {}:{} for one", cmd, f, f);
+          break;
+        }
     }
     std::cerr << "ptc: " << msg << " (run 'ptc --help')\n";
     return 2;

@@ -769,6 +769,22 @@ TEST_F(Cli, CommonSlipsAreNamed) {
     EXPECT_NE(r.err.find(std::string("--max-count: '") + v + "' is not a whole number in [0, 1048576]"), std::string::npos)
         << r.err;
   }
+  // --frame where a command takes a range only (trace and viz take both).
+  struct Case {
+    std::vector<std::string> args;
+    std::string says;
+  };
+  for (const Case& k : {Case{{"bench", mesh, "--frame", "3"}, "--frame: ptc bench takes a range of frames: --frames 3:3 for one"},
+                        Case{{"animate", mesh, "--frame=4"}, "--frame: ptc animate takes a range of frames: --frames 4:4 for one"},
+                        Case{{"experiment", "sweep", mesh, "--frame", "2"},
+                             "--frame: ptc experiment sweep takes a range of frames: --frames 2:2 for one"}}) {
+    std::vector<std::string> a = k.args;
+    a.insert(a.end(), {"--out", (dir_ / "o").string()});
+    r = ptc(a);
+    EXPECT_EQ(r.code, 2) << k.says;
+    EXPECT_NE(r.err.find(k.says), std::string::npos) << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+  }
   EXPECT_FALSE(fs::exists(dir_ / "o"));
 }
 }  // namespace
