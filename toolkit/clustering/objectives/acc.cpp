@@ -149,8 +149,8 @@ void set_cone(AccObjective::Summary& s, const Vec3& axis, double c) {
 
 }  // namespace
 
-static_assert(sizeof(AccObjective::Summary) == 256, "acc.h: Summary is meant to stay at 256 bytes");
-static_assert(sizeof(AccObjective::Stored) == 176, "acc.h: Stored is the summary without its 80-byte DOP");
+static_assert(sizeof(AccObjective::Summary) == 264, "acc.h: Summary is meant to stay at 264 bytes");
+static_assert(sizeof(AccObjective::Stored) == 184, "acc.h: Stored is the summary without its 80-byte DOP");
 
 AccObjective::AccObjective(const ClusterTables& tables, const ClusterParams& params, const AccTuning& tuning)
     : tables_(&tables), params_(params), tuning_(tuning) {
@@ -174,6 +174,7 @@ AccObjective::Summary AccObjective::single(std::uint32_t t) {
   s.serial = std::uint64_t{t} + 1;  // the same for every summary of {t}: they describe one cluster
   const TriangleGeometry g = tb.geometry_of(t);
   const Vec3& n = g.normal;
+  s.area_sum = g.area;
   if (!n.isZero(0.0)) {
     s.normal_sum = n;
     s.area_normal_sum = g.area * n;
@@ -432,8 +433,12 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
   const bool memo = tuning_.vertex_memo && minimal_ && ctx.added.size() == 1;
   if (memo) enter_lineage(a);
   Evaluation ev;
-  sums_and_area(a, b, ctx, ev);
+  sums_and_area(a, b, ctx, ev, tuning_.area_bound && precision == Precision::UpperBoundAllowed);
   union_sphere_and_score(a, &b, ctx, precision, memo, ev);
+  if (ev.area_bounded) {  // a bound whatever the sphere: AreaP is (reg and the sphere are not kept)
+    ev.exact = false;
+    ev.reg = 0;
+  }
   return ev;
 }
 
@@ -449,7 +454,8 @@ AccObjective::Evaluation AccObjective::evaluate_with(const Summary& a, const Sum
 }
 
 PTC_ISA_CLONES
-void AccObjective::sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev) {
+void AccObjective::sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev,
+                                 bool allow_area_bound) {
   const ClusterTables& tb = *tables_;
   ev.box = a.box;
   ev.box.extend(b.box);
@@ -458,12 +464,27 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
   const std::uint32_t m = a.nonzero + b.nonzero;
   Vec3 ns = a.normal_sum + b.normal_sum;
   double len = ns.norm();  // |ns| <= m: no overflow, so the plain norm (average_normal's hypot agrees to rounding)
+  // AreaP <= sum Area_i (|N_avg . n_i| <= 1; 1 + 1e-6 covers the rounding of both sums, about
+  // k eps relative for k < 2^32 members), for any N_avg: where the cone identity could not
+  // certify it, a key need not make N_avg in order or sum over the members.
+  const auto area_bound = [&] {
+    ev.area_p = (a.area_sum + b.area_sum) * (1.0 + 1e-6);
+    ev.area_bounded = true;
+  };
+  if (allow_area_bound && m > 0 && len < kRecomputeNormalSum * static_cast<double>(m)) return area_bound();
   bool sorted_ready = false;
   auto sort_members = [&] {
     if (sorted_ready) return;
-    scratch_ids_.assign(ctx.a_triangles.begin(), ctx.a_triangles.end());
-    scratch_ids_.insert(scratch_ids_.end(), ctx.b_triangles.begin(), ctx.b_triangles.end());
-    std::sort(scratch_ids_.begin(), scratch_ids_.end());
+    const auto& ma = ctx.a_triangles;
+    const auto& mb = ctx.b_triangles;
+    if (std::is_sorted(ma.begin(), ma.end()) && std::is_sorted(mb.begin(), mb.end())) {  // the contraction's lists
+      scratch_ids_.resize(ma.size() + mb.size());
+      std::merge(ma.begin(), ma.end(), mb.begin(), mb.end(), scratch_ids_.begin());
+    } else {
+      scratch_ids_.assign(ma.begin(), ma.end());
+      scratch_ids_.insert(scratch_ids_.end(), mb.begin(), mb.end());
+      std::sort(scratch_ids_.begin(), scratch_ids_.end());
+    }
     sorted_ready = true;
   };
   bool recomputed = false;
@@ -471,9 +492,15 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
     recomputed = true;
     sort_members();
     ns = Vec3::Zero();
-    for (std::uint32_t t : scratch_ids_) {
-      const Vec3 nt = tb.geometry_of(t).normal;
-      if (!nt.isZero(0.0)) ns += nt;
+    if (!tb.lean) {  // the stored normals (geometry_of's values), read in the loop
+      const Vec3* normal = tb.normal.data();
+      for (std::uint32_t t : scratch_ids_)
+        if (!normal[t].isZero(0.0)) ns += normal[t];
+    } else {
+      for (std::uint32_t t : scratch_ids_) {
+        const Vec3 nt = tb.geometry_of(t).normal;
+        if (!nt.isZero(0.0)) ns += nt;
+      }
     }
     len = safe_norm(ns);  // the same sum and norm as average_normal
   }
@@ -495,9 +522,11 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
     ev.fallback = na.fallback;
   }
 
-  // AreaP: the identity when both cones certify it, the sum otherwise.
+  // AreaP: the identity when both cones certify it, the sum (or for a key its bound) otherwise.
   if (!ev.fallback && certified(a, ev.n_avg) && certified(b, ev.n_avg))
     ev.area_p = std::max(0.0, ev.n_avg.dot(a.area_normal_sum + b.area_normal_sum));
+  else if (allow_area_bound)
+    area_bound();
   else
     ev.area_p = area_p_of(a, ctx.a_triangles, ev.n_avg) + area_p_of(b, ctx.b_triangles, ev.n_avg);
 }
@@ -718,6 +747,7 @@ AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, co
   s.normal_sum = ev.normal_sum;
   s.area_normal_sum = a.area_normal_sum + b.area_normal_sum;
   s.nonzero = a.nonzero + b.nonzero;
+  s.area_sum = a.area_sum + b.area_sum;
   s.sphere = ev.sphere;
   s.box = ev.box;
   for (int k = 0; k < 10; ++k) {

@@ -97,12 +97,20 @@ struct AccTuning {
   /// In growth the diameter bound of Precision::RefinedBound does better and the DOP costs more
   /// than it saves.
   bool dop_bound = true;
+  /// Precision::UpperBoundAllowed bounds AreaP by the members' total area (times 1 + 1e-6, which
+  /// covers the sums' rounding) where the cone identity does not certify it, instead of summing
+  /// it over the members: O(1) instead of O(|A| + |B|). The contraction evaluates every
+  /// neighbour of a merged cluster at that level, and most of those entries go stale before
+  /// they reach the top of its queue; large curved clusters (a high --max-count,
+  /// --target-clusters) then paid for sums no merge read (docs/clustering.md, "Contraction to
+  /// few large clusters"). Growth's bounded keys take another path (growth_prepare).
+  bool area_bound = false;
 
-  [[nodiscard]] static AccTuning for_growth() { return {true, false}; }
+  [[nodiscard]] static AccTuning for_growth() { return {true, false, false}; }
   /// The contraction without the DOP: its SupportBound level leaves the DOP about 6% of the time
-  /// at 832k, and without it a merged cluster's summary is kept in 176 bytes instead of 256
+  /// at 832k, and without it a merged cluster's summary is kept in 184 bytes instead of 264
   /// (AccObjective::Stored; docs/scale.md, "Contraction in one run: the memory").
-  [[nodiscard]] static AccTuning for_contraction() { return {false, false}; }
+  [[nodiscard]] static AccTuning for_contraction() { return {false, false, true}; }
 };
 
 class AccObjective {
@@ -119,7 +127,7 @@ class AccObjective {
 
   /// A cluster's summary without its 26-DOP: what the contraction keeps of a merged cluster
   /// when the tuning has no DOP bound (AccTuning::dop_bound; the DOP is always empty then), in
-  /// 176 bytes (docs/scale.md, "Contraction in one run: what was left").
+  /// 184 bytes (docs/scale.md, "Contraction in one run: what was left"; 176 before area_sum).
   struct Stored {
     Vec3 normal_sum = Vec3::Zero();       ///< sum of the unit normals n_i (zero normals add nothing)
     Vec3 area_normal_sum = Vec3::Zero();  ///< sum Area_i n_i (L^2)
@@ -136,8 +144,9 @@ class AccObjective {
     /// Keys the memo: t + 1 for the singleton {t} (every summary single(t) makes describes the
     /// same cluster), unique for a merged one (T + 1 on).
     std::uint64_t serial = 0;
+    double area_sum = 0;                  ///< sum of Area_i (L^2): AreaP <= it (AccTuning::area_bound)
   };
-  /// 256 bytes: contraction keeps one per merged cluster alive (docs/scale.md, "Contraction in one
+  /// 264 bytes: contraction keeps one per merged cluster alive (docs/scale.md, "Contraction in one
   /// run"), so nothing is stored that a function of the rest gives to the bit (N_avg and its
   /// fallback flag are recomputed from the sums by evaluate(), the cone's sine from its cosine).
   struct Summary : Stored {
@@ -165,7 +174,8 @@ class AccObjective {
     Vec3 n_avg = Vec3::UnitZ();   ///< N_avg(A u B)
     bool fallback = true;
     Vec3 normal_sum = Vec3::Zero();  ///< sum n_i of A u B as used (possibly recomputed)
-    double area_p = 0;            ///< AreaP(A u B)
+    double area_p = 0;            ///< AreaP(A u B), or an upper bound of it (area_bounded)
+    bool area_bounded = false;    ///< area_p is the total area's bound (AccTuning::area_bound; never exact)
     double reg = 0;               ///< reg(A u B) (exact evaluations only)
   };
 
@@ -247,7 +257,10 @@ class AccObjective {
  private:
   [[nodiscard]] double score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg) const;
   /// evaluate() up to the sphere: the box, N_avg with its fallback, the normal sum and AreaP.
-  void sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev);
+  /// allow_area_bound (Precision::UpperBoundAllowed with AccTuning::area_bound): AreaP may be
+  /// the total area's bound (ev.area_bounded; N_avg and the sums are then not made).
+  void sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev,
+                     bool allow_area_bound = false);
   /// evaluate() from the sphere of A u B on (ev holds the box, N_avg, sums and AreaP); b may be
   /// null when ctx adds one vertex and the tuning has no DOP (it is not read then).
   void union_sphere_and_score(const Summary& a, const Summary* b, const MergeContext& ctx, Precision precision,
