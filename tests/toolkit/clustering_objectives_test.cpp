@@ -17,6 +17,7 @@
 
 #include <boost/graph/adjacency_list.hpp>
 
+#include "toolkit/clustering/cluster.h"
 #include "toolkit/clustering/growth.h"
 #include "toolkit/clustering/objectives.h"
 #include "toolkit/clustering/objectives/acc.h"
@@ -211,36 +212,41 @@ Mesh big_book() {
   return Mesh(std::move(t), std::move(p));
 }
 
-/// Triangles that share two distinct vertex ids of a side, by brute force over all pairs.
+/// The dual graph's neighbours of t, by brute force over all pairs: triangles that share two
+/// distinct vertex ids of a side, where that side's edge has at most kMaxCliqueValence triangles;
+/// on an edge with more, the triangles before and after t among the edge's triangles ascending
+/// (a path). Two triangles on two common edges are neighbours when either edge makes them so.
 Ids brute_neighbours(const Mesh& m, std::uint32_t t) {
+  using Side = std::pair<std::uint32_t, std::uint32_t>;
   auto sides = [&](std::uint32_t u) {
-    std::set<std::pair<std::uint32_t, std::uint32_t>> s;
+    std::set<Side> s;
     const Tri& f = m.triangle(u);
     for (int k = 0; k < 3; ++k)
       if (f[k] != f[(k + 1) % 3]) s.insert({std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])});
     return s;
   };
-  const auto mine = sides(t);
-  Ids out;
-  for (std::uint32_t u = 0; u < m.triangle_count(); ++u) {
-    if (u == t) continue;
-    const auto theirs = sides(u);
-    if (std::any_of(mine.begin(), mine.end(), [&](const auto& e) { return theirs.count(e) > 0; })) out.push_back(u);
+  std::set<std::uint32_t> out;
+  for (const Side& e : sides(t)) {
+    Ids on;  // the edge's triangles, ascending
+    for (std::uint32_t u = 0; u < m.triangle_count(); ++u)
+      if (sides(u).count(e) > 0) on.push_back(u);
+    const auto at = std::find(on.begin(), on.end(), t) - on.begin();
+    for (std::size_t i = 0; i < on.size(); ++i)
+      if (on[i] != t && (on.size() <= kMaxCliqueValence || i + 1 == std::size_t(at) || i == std::size_t(at) + 1))
+        out.insert(on[i]);
   }
-  return out;
+  return Ids(out.begin(), out.end());
 }
 
 // The neighbour lists (built from the sides alone, with or without the edge map beside them)
-// against brute force over all pairs and, where no edge has more than kMaxCliqueValence
-// triangles, against Boost's dual graph of the edge map.
+// against brute force over all pairs and against Boost's dual graph of the edge map (a clique
+// of at most kMaxCliqueValence triangles on an edge, a path beyond: big_book's edge has 26).
 TEST(ClusterTables, NeighboursAreTheBoostDualGraphsAdjacency) {
   for (const Mesh& m : {grid(5, 4, 0.1), book(), degenerate_mix(), big_book(), load("elephant.off")}) {
     const ClusterTables with = ClusterTables::build(m), without = ClusterTables::build(m, /*with_edges=*/false);
     EXPECT_EQ(without.edges.edge_count(), 0u);
     EXPECT_EQ(with.neighbour_offsets, without.neighbour_offsets);
     EXPECT_EQ(with.neighbours, without.neighbours);
-    bool path_edges = false;
-    for (std::size_t e = 0; e < with.edges.edge_count(); ++e) path_edges |= with.edges.valence(e) > kMaxCliqueValence;
     const DualGraph g = build_dual_graph(with.edges, m.triangle_count());
     const bool small = m.triangle_count() < 2000;
     for (std::uint32_t t = 0; t < m.triangle_count(); ++t) {
@@ -248,11 +254,43 @@ TEST(ClusterTables, NeighboursAreTheBoostDualGraphsAdjacency) {
       if (small) {
         EXPECT_EQ(Ids(nb.begin(), nb.end()), brute_neighbours(m, t)) << "triangle " << t;
       }
-      if (path_edges) continue;
       std::set<std::uint32_t> expected;
       for (auto [it, end] = boost::adjacent_vertices(t, g); it != end; ++it) expected.insert(static_cast<std::uint32_t>(*it));
       EXPECT_EQ(Ids(nb.begin(), nb.end()), Ids(expected.begin(), expected.end())) << "triangle " << t;
     }
+  }
+}
+
+// One triangle repeated 100,000 times (a pipeline's stuck output): each edge holds every copy,
+// so the neighbours are a path in triangle order, 2 (T - 1) entries, not a clique of 3 10^10
+// (which overflowed the 32-bit offsets and crashed `ptc cluster`, found by a new user's sweep).
+// Clustered by growth and contraction, every copy lands in exactly one cluster, of at most
+// MaxCount vertices.
+TEST(ClusterTables, ManyCopiesOfOneTriangleAreAPath) {
+  constexpr std::uint32_t T = 100000;
+  const Mesh m(std::vector<Tri>(T, Tri{0, 1, 2}), std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  const ClusterTables tb = ClusterTables::build(m, /*with_edges=*/false);
+  ASSERT_EQ(tb.neighbours.size(), 2u * (T - 1));
+  for (std::uint32_t t = 0; t < T; t += 997) {
+    Ids want;
+    if (t > 0) want.push_back(t - 1);
+    if (t + 1 < T) want.push_back(t + 1);
+    EXPECT_EQ(Ids(tb.neighbours_of(t).begin(), tb.neighbours_of(t).end()), want) << t;
+  }
+  EXPECT_EQ(Ids(tb.neighbours_of(T - 1).begin(), tb.neighbours_of(T - 1).end()), Ids{T - 2});
+  const Mesh copies(std::vector<Tri>(20000, Tri{0, 1, 2}), std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  for (const ClusterMethod method : {ClusterMethod::Growth, ClusterMethod::Contraction}) {
+    ClusterConfig cfg;
+    cfg.method = method;
+    cfg.max_count = 50;
+    cfg.max_size = 50;
+    const Clustering c = cluster_mesh(copies, cfg);
+    std::vector<int> seen(copies.triangle_count(), 0);
+    for (std::size_t k = 0; k < c.cluster_count(); ++k) {
+      EXPECT_LE(c.vertices_of(k).size(), 50u) << to_string(method);  // (MaxCount counts vertices: 3 here)
+      for (std::uint32_t t : c.triangles_of(k)) ++seen[t];
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(copies.triangle_count())) << to_string(method);
   }
 }
 

@@ -3,7 +3,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <limits>
 #include <span>
+#include <stdexcept>
 
 #include "toolkit/core/isa.h"
 #include "toolkit/geometry/sphere.h"
@@ -13,8 +15,10 @@ namespace ptc {
 
 /// The distinct edge-neighbours of every triangle, ascending (ClusterTables::neighbours), without
 /// an edge map: a run of equal pairs in topology.h's SortedSides is one mesh edge, and its
-/// distinct triangles are pairwise neighbours (every pair, at any valence: the dual graph without
-/// parallel edges). 8 bytes a side and the lists themselves, against the edge map's ~45 bytes a
+/// distinct triangles are neighbours as in the dual graph (topology.h build_dual_graph): every pair
+/// up to kMaxCliqueValence triangles on the edge, beyond that a path in triangle order (the same
+/// components in linear size; every pair at any valence was quadratic: 100,000 copies of one
+/// triangle made 3 10^10 entries and overflowed the 32-bit offsets). 8 bytes a side and the lists themselves, against the edge map's ~45 bytes a
 /// triangle. When every edge has at most two triangles, one pass over the edges into three slots
 /// a triangle; otherwise two: count each triangle's entries, then write them.
 void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, std::vector<std::uint32_t>& offsets,
@@ -76,22 +80,44 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
       return;
     }
   }
-  offsets.assign(T + 1, 0);
-  for_each_edge([&](const Side* lo, const Side* hi) {
-    std::size_t m = 0;  // distinct triangles on the edge
-    for (const Side* s = lo; s != hi; ++s) m += first_of_its_triangle(lo, s);
+  // Each edge's distinct triangles, ascending (a run's slots ascend): a clique of at most
+  // kMaxCliqueValence, else a path through them in that order.
+  std::vector<std::uint32_t> run;
+  auto distinct_of = [&](const Side* lo, const Side* hi) {
+    run.clear();
     for (const Side* s = lo; s != hi; ++s)
-      if (first_of_its_triangle(lo, s)) offsets[tri(s) + 1] += static_cast<std::uint32_t>(m - 1);
+      if (first_of_its_triangle(lo, s)) run.push_back(tri(s));
+  };
+  std::vector<std::uint64_t> count(T + 1, 0);
+  for_each_edge([&](const Side* lo, const Side* hi) {
+    distinct_of(lo, hi);
+    const std::size_t m = run.size();
+    if (m <= kMaxCliqueValence) {
+      for (std::uint32_t t : run) count[t + 1] += m - 1;
+    } else {
+      for (std::size_t i = 0; i < m; ++i) count[run[i] + 1] += (i > 0) + (i + 1 < m);
+    }
   });
-  for (std::size_t t = 0; t < T; ++t) offsets[t + 1] += offsets[t];
+  for (std::size_t t = 0; t < T; ++t) count[t + 1] += count[t];
+  if (count[T] > std::numeric_limits<std::uint32_t>::max())  // (at most 45 a triangle: beyond 95M triangles)
+    throw std::length_error("build_neighbours: more than 2^32 neighbour entries");
+  offsets.assign(count.begin(), count.end());
+  std::vector<std::uint64_t>().swap(count);
   out.resize(offsets[T]);
   {
     std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
     for_each_edge([&](const Side* lo, const Side* hi) {
-      for (const Side* s = lo; s != hi; ++s) {
-        if (!first_of_its_triangle(lo, s)) continue;
-        for (const Side* u = lo; u != hi; ++u)
-          if (tri(u) != tri(s) && first_of_its_triangle(lo, u)) out[fill[tri(s)]++] = tri(u);
+      distinct_of(lo, hi);
+      const std::size_t m = run.size();
+      if (m <= kMaxCliqueValence) {
+        for (std::uint32_t t : run)
+          for (std::uint32_t u : run)
+            if (u != t) out[fill[t]++] = u;
+      } else {
+        for (std::size_t i = 0; i + 1 < m; ++i) {
+          out[fill[run[i]]++] = run[i + 1];
+          out[fill[run[i + 1]]++] = run[i];
+        }
       }
     });
   }
