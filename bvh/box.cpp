@@ -166,12 +166,12 @@ void throw_not_finite(std::span<const Vec3> positions, const FrameMap& origin) {
   for (std::size_t v = 0; v < positions.size(); ++v) {
     const Vec3f f = to_frame(positions[v], origin);
     if (!(std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2])))
-      throw std::invalid_argument("vertex " + std::to_string(v) + ": position (" + std::to_string(positions[v].x()) +
+      throw FrameRangeError("vertex " + std::to_string(v) + ": position (" + std::to_string(positions[v].x()) +
                                   ", " + std::to_string(positions[v].y()) + ", " + std::to_string(positions[v].z()) +
                                   ") is not finite in single precision (NaN, infinite, or beyond the float range "
                                   "in the trace frame)");
   }
-  throw std::invalid_argument("a position is not finite in single precision");
+  throw FrameRangeError("a position is not finite in single precision");
 }
 
 void triangle_centroids(std::span<const Vec3f> fp, std::span<const Tri> triangles, std::span<Vec3f> c) {

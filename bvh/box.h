@@ -17,10 +17,20 @@
 #include <span>
 #include <vector>
 
+#include <stdexcept>
+
 #include "bvh/aligned.h"
 #include "toolkit/core/types.h"
 
 namespace ptc::bvh {
+
+/// What trace_frame_scale and the conversion into the trace frame throw for positions beyond the
+/// single-precision tracer's range (commands name the input file with it).
+class FrameRangeError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
 
 using Vec3f = std::array<float, 3>;
 

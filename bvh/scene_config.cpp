@@ -95,7 +95,7 @@ Vec3 trace_frame_origin(const Mesh& mesh, const SceneConfig& cfg) {
                                   std::to_string(p[v].y()) + ", " + std::to_string(p[v].z()) + ") is not finite");
   if (cfg.origin && !cfg.origin->allFinite()) throw std::invalid_argument("scene: the trace frame's origin is not finite");
   if (cfg.origin) return *cfg.origin;
-  const Box3 b = mesh.bounds();
+  const Box3 b = mesh.referenced_bounds();  // (an unused vertex far away would move the frame off the mesh)
   return b.empty() ? Vec3::Zero() : b.center();
 }
 
@@ -111,8 +111,11 @@ FrameMap trace_frame(const Mesh& mesh, const SceneConfig& cfg) {
 }
 
 double trace_frame_scale(const Mesh& mesh, const Vec3& origin) {
+  // The largest |p - origin| coordinate over the vertices some triangle uses: the corners of
+  // their box (an unused vertex does not set the frame; its float position is never read).
+  const Box3 b = mesh.referenced_bounds();
   double e = 0;
-  for (const Vec3& p : mesh.positions()) e = std::max(e, (p - origin).cwiseAbs().maxCoeff());
+  if (!b.empty()) e = std::max((b.lo - origin).cwiseAbs().maxCoeff(), (b.hi - origin).cwiseAbs().maxCoeff());
   if (!(e > 0) || !std::isfinite(e)) return 1.0;  // empty, one point, or not finite (reported elsewhere)
   const int k = std::ilogb(e);                       // e in [2^k, 2^(k+1))
   if (k > 100 || k < -100) {

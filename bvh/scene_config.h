@@ -206,14 +206,14 @@ struct SceneConfig {
 /// plain build under 2,048 clusters).
 [[nodiscard]] std::uint32_t cluster_group_size_used(std::size_t clusters, const SceneConfig& cfg);
 
-/// The trace frame of a scene over `mesh`: cfg.origin, or the centre of the mesh's bounds (the
-/// world origin for an empty mesh). A scene's rest positions and origin must be finite (they fix
+/// The trace frame of a scene over `mesh`: cfg.origin, or the centre of the bounds of the vertices
+/// its triangles use (Mesh::referenced_bounds; the world origin for a mesh without triangles). A scene's rest positions and origin must be finite (they fix
 /// the trace frame, the layout and, for clusters, the rest-pose tree): std::invalid_argument
 /// naming the first bad vertex otherwise.
 [[nodiscard]] Vec3 trace_frame_origin(const Mesh& mesh, const SceneConfig& cfg);
 
 /// The trace frame's scale (box.h, FrameMap) for `mesh` around `origin`: 1 when the largest
-/// |p - origin| coordinate E of the mesh's positions lies in [2^-8, 2^16] (or E = 0), else the
+/// |p - origin| coordinate E of the positions its triangles use lies in [2^-8, 2^16] (or E = 0), else the
 /// power of two that brings E into [0.5, 1). In single precision the watertight test's
 /// products grow like E^2 t (t: the ray parameter, about E for unit directions): unscaled, a
 /// mesh of 1e13 units overflowed them and its rays missed, and one of 1e-15 units underflowed.
@@ -224,10 +224,5 @@ struct SceneConfig {
 /// The trace frame of a scene over `mesh`: trace_frame_origin and trace_frame_scale together.
 [[nodiscard]] FrameMap trace_frame(const Mesh& mesh, const SceneConfig& cfg);
 
-/// What trace_frame_scale throws (commands name the input file with it).
-class FrameRangeError : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
-};
 
 }  // namespace ptc::bvh

@@ -103,7 +103,7 @@ SceneTracer::SceneTracer(const Mesh& first, const PartLayout& L, const SceneTrac
   if (cfg.clusters && cfg.clusters->triangle_count() != first.triangle_count())
     throw std::invalid_argument("SceneTracer: the clustering does not cover the mesh's triangles");
   combined_vertices_ = first.vertex_count();
-  origin_ = cfg.origin ? *cfg.origin : first.bounds().center();
+  origin_ = cfg.origin ? *cfg.origin : first.referenced_bounds().center();
   SceneConfig tcfg = triangle_scene_defaults();
   tcfg.origin = origin_;
   const SceneConfig ccfg = cluster_config(cfg, origin_);

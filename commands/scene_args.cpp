@@ -53,7 +53,7 @@ std::string apply_stand_in(Scene& scene, const std::string& deform, const std::s
   const DeformParams params = deform_preset(*k);
   // Twist and bend move a vertex by its place along the axis: a mesh flat across it stays still.
   if ((*k == DeformKind::Twist || *k == DeformKind::Bend) && !scene.rest().empty() &&
-      !(scene.rest().bounds().extent()[params.axis] > 0.0))
+      !(scene.rest().referenced_bounds().extent()[params.axis] > 0.0))
     std::cerr << fmt::format("ptc: note: the {} deformer leaves '{}' still: it has no extent along {} (the deformer's "
                              "axis); wave, rigid or explode move it\n",
                              to_string(*k), arg, "xyz"[params.axis]);
@@ -116,7 +116,7 @@ LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const
   // The light is not a ray origin (shadow rays leave the surface toward it): it only has to be a
   // double's distance away, its difference to the scene finite (the directions are taken without
   // overflowing squares, render/rays.cpp).
-  const Box3 b = scene.rest().bounds();
+  const Box3 b = scene.rest().referenced_bounds();
   if (!b.empty() && b.lo.allFinite() && b.hi.allFinite() &&
       (!(c.position - b.lo).allFinite() || !(c.position - b.hi).allFinite())) {
     const std::string reason = fmt::format("the light ({:.6g}, {:.6g}, {:.6g}) and the scene are too far apart: their "
@@ -140,7 +140,7 @@ void check_reach(const Scene& scene, const Vec3& p, std::string_view what, std::
                  std::string_view element, std::string_view input) {
   const Mesh& rest = scene.rest();
   if (rest.vertex_count() == 0) return;
-  const Vec3 centre = rest.bounds().center();
+  const Vec3 centre = rest.referenced_bounds().center();
   double scale = 1.0;
   try {
     scale = bvh::trace_frame_scale(rest, centre);

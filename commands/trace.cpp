@@ -164,7 +164,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   // the loop: the BVH's fixed parts (cluster order, group trees) and the trace frame do not depend
   // on which frame the run starts at, so a frame traces the same in any range (the camera frames
   // the first frame unless given).
-  tcfg.origin = scene.rest().bounds().center();
+  tcfg.origin = scene.rest().referenced_bounds().center();
   const bool renumbered = use_clusters && opt.vertex_order == bvh::VertexOrder::Clusters;
   manifest.set_parameter("vertex_order", use_clusters ? bvh::to_string(opt.vertex_order) : "input");
   std::optional<loop::SceneAccel> made;

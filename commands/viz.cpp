@@ -225,7 +225,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     tcfg.clusters = use_clusters ? &clusters : nullptr;
     // At the rest pose, as ptc trace, ptc bench and the experiments: a frame's picture does not
     // depend on the range it is drawn in.
-    tcfg.origin = scene.rest().bounds().center();
+    tcfg.origin = scene.rest().referenced_bounds().center();
     try {
       accel = std::make_unique<loop::SceneAccel>(scene.rest(), bvh::PartLayout::of(scene), tcfg);
     } catch (const bvh::FrameRangeError& e) {
@@ -240,7 +240,11 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     Mesh ref = scene.rest();
     scene.positions(double(reference_frame), ref.positions(), true);
     ref_positions.assign(ref.positions().begin(), ref.positions().end());
-    ref_rows = cluster_frame_metrics(ref, clusters, ci.cfg, {}, {}, adjacency).rows;
+    try {  // (its cluster BVH: positions beyond the tracer's range name the input)
+      ref_rows = cluster_frame_metrics(ref, clusters, ci.cfg, {}, {}, adjacency).rows;
+    } catch (const bvh::FrameRangeError& e) {
+      throw InputError(arg, "", "", e.what());
+    }
   }
 
   // The `_prev` metrics of the first frame shown compare with the frame before it (none before
@@ -275,9 +279,13 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
       d.values = *known;
     } else if (needs_metrics) {
       // sah_share on the drift study's cluster BVH: set up at the rest pose, updated to the frame.
-      if (!sah_tree) sah_tree = cluster_bvh_at_rest(scene.rest(), clusters);
-      sah_tree->update(mesh.positions());
-      d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows, adjacency, sah_tree.get());
+      try {
+        if (!sah_tree) sah_tree = cluster_bvh_at_rest(scene.rest(), clusters);
+        sah_tree->update(mesh.positions());
+        d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows, adjacency, sah_tree.get());
+      } catch (const bvh::FrameRangeError& e) {
+        throw InputError(arg, "", "", fmt::format("frame {}: {}", f, e.what()));
+      }
       prev_rows = d.metrics->rows;
       if (cmetric) d.values = d.metrics->of(metric);
     }

@@ -40,7 +40,7 @@ Render render_view(const TraceTarget& scene, const Mesh& mesh, const bvh::Pinhol
   const bvh::TraceTotals tt = scene.trace(r.rays, r.primary, opt);
   r.primary_stats.add(tt, t0.ms());
   r.surface = surface_hits(mesh, r.rays, r.primary);
-  const RayFrame frame{mesh.bounds(), scene.origin};
+  const RayFrame frame{mesh.referenced_bounds(), scene.origin};
   r.light = cfg.light.value_or(default_light(cam, frame.bounds));
   if (cfg.shadows) {
     ShadowResult s = trace_shadows(scene, r.surface, r.light, frame, cfg.threads);

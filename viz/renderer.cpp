@@ -135,7 +135,7 @@ void set_camera(vtkRenderer* r, const Mesh& mesh, const bvh::PinholeCamera& cam)
   vtkCamera* c = r->GetActiveCamera();
   // The focal distance only sets where VTK's trackball turns about: the distance to the mesh's
   // centre along the view direction (at least a small positive value).
-  const Box3 b = mesh.bounds();
+  const Box3 b = mesh.referenced_bounds();
   double d = 1.0;
   if (!b.empty()) d = std::max((b.center() - cam.eye).dot(cam.forward), 1e-6 * std::max(1.0, b.extent().norm()));
   const Vec3 f = cam.eye + d * cam.forward;

@@ -113,7 +113,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
 
   // One trace frame and one camera for every configuration (the rest bounds do not change with
   // the vertex numbering).
-  const Box3 rest_bounds = scene.rest().bounds();
+  const Box3 rest_bounds = scene.rest().referenced_bounds();
   loop::AccelSetup setup;
   setup.origin = rest_bounds.center();
   setup.cluster_leaf = cfg.cluster_leaf;
@@ -219,7 +219,7 @@ PeerBenchResult run_peer_bench(Scene& scene, std::optional<Clustering> clusters,
         if (!frame_mesh) frame_mesh = mesh;
         frame_mesh->set_positions(std::vector<Vec3>(positions.begin(), positions.end()));
         surface = surface_hits(*frame_mesh, rays, ref);
-        frame_bounds = frame_mesh->bounds();
+        frame_bounds = frame_mesh->referenced_bounds();  // (ray offsets: of the surface, not of an unused vertex)
         if (cfg.shadow_morton) {
           Stopwatch order_sw;
           shadow_order = morton_order(surface, frame_bounds);

@@ -77,7 +77,7 @@ loop::AccelSetup accel_setup(const StudySetup& setup, const Vec3& origin) {
 
 StudyRays study_rays(const Mesh& rest, const StudySetup& setup) {
   StudyRays r;
-  const Box3 b = rest.bounds();
+  const Box3 b = rest.referenced_bounds();
   r.origin = b.center();
   r.camera = make_camera(setup.camera, rest.referenced_bounds(), setup.width, setup.height);
   r.primary = camera_rays(r.camera, setup.width, setup.height);
@@ -106,7 +106,7 @@ Passes trace_passes(Prepared& p, const StudyRays& rays, const Vec3& light, const
   }
   if (!opt.shadows && opt.ao_samples <= 0) return out;
   const SurfaceHits s = surface_hits(p.mesh, rays.primary, hits);
-  const RayFrame frame{p.mesh.bounds(), a.origin()};
+  const RayFrame frame{p.mesh.referenced_bounds(), a.origin()};
   const TraceTarget target = target_of(a);
   const TraceTarget counting = with_counters(target);  // the untimed counted passes
   if (opt.shadows) {

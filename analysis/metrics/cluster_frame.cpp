@@ -115,7 +115,7 @@ ClusterFrameMetrics cluster_frame_metrics(const Mesh& mesh, const Clustering& cl
 
 std::unique_ptr<bvh::ClusterScene> cluster_bvh_at_rest(const Mesh& rest, const Clustering& clustering) {
   bvh::SceneConfig cfg = bvh::cluster_scene_defaults();
-  cfg.origin = rest.bounds().center();  // the study's trace frame (study_rays)
+  cfg.origin = rest.referenced_bounds().center();  // the study's trace frame (study_rays)
   cfg.leaf_format = bvh::LeafFormatChoice::Blocks;  // (its tree and boxes are read, and the set-up of blocks is the shorter)
   return std::make_unique<bvh::ClusterScene>(rest, bvh::view_of(clustering), cfg);
 }

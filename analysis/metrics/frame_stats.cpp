@@ -1,5 +1,7 @@
 #include "analysis/metrics/frame_stats.h"
 
+#include "toolkit/mesh/mesh.h"
+
 #include <algorithm>
 #include <limits>
 
@@ -30,7 +32,7 @@ FrameStats frame_stats(std::int64_t frame, std::span<const Tri> triangles, std::
                        std::span<const double> first_areas) {
   FrameStats s;
   s.frame = frame;
-  for (const Vec3& p : positions) s.bounds.extend(p);
+  s.bounds = referenced_bounds(triangles, positions);  // (as ptc info's: the vertices triangles use)
   double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0;
   std::size_t counted = 0;
   for (std::size_t t = 0; t < triangles.size(); ++t) {

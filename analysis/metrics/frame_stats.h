@@ -14,7 +14,7 @@ namespace ptc {
 /// Per-frame shape statistics of `positions` against the first frame's (same topology).
 struct FrameStats {
   std::int64_t frame = 0;
-  Box3 bounds;
+  Box3 bounds;  ///< of the vertices some triangle uses (Mesh::referenced_bounds)
   double total_area = 0;
   double area_ratio_min = 0, area_ratio_mean = 0, area_ratio_max = 0;  ///< NaN when no triangle counts
   std::size_t degenerate_at_first = 0;

@@ -218,6 +218,23 @@ TEST(ClusterFrontDoor, ExtremeScalesClusterAsTheUnitMesh) {
   }
 }
 
+// Corners near +-1e308 (whose differences overflow: the box's extent is inf) are scaled like
+// any extreme mesh: two triangles sharing an edge cluster as the same two at unit size (one
+// cluster), every method and objective. Before, the extent's overflow left the mesh unscaled,
+// its areas inf and NaN, and growth made two clusters (found by a new user's sweep).
+TEST(ClusterFrontDoor, CornersWhoseDifferencesOverflowAreScaled) {
+  const std::vector<Tri> t{{0, 1, 2}, {1, 3, 2}};
+  const std::vector<Vec3> unit{{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, {1, 1, 0}};
+  std::vector<Vec3> huge;
+  for (const Vec3& p : unit) huge.push_back(1e308 * p);
+  const Mesh a(t, unit), b(t, huge);
+  EXPECT_NE(extreme_scale_exponent(b), 0);
+  for (const Case& c : all_cases()) {
+    const ClusterConfig cfg = config_of(c, 24);
+    expect_same(cluster_mesh(a, cfg), cluster_mesh(b, cfg), what(c, 24, "two triangles at +-1e308"));
+  }
+}
+
 // cluster_mesh's avg_sa_used (ptc cluster's AvgSA for the metrics) is the separate pass's value
 // bit for bit on every path that runs Acc: the whole mesh (the tables' pass), regions (the
 // separate pass), a soup clustered over its weld, and a given value; it is left alone by the

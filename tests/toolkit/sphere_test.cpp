@@ -520,7 +520,7 @@ TEST(SphereTriangle, AverageTriangleSphereAreaIsTranslationInvariant) {
   const double base = average_triangle_sphere_area(pos, tris);
   ASSERT_GT(base, 0.0);
   EXPECT_EQ(average_triangle_sphere_area(pos, rotated), base);
-  for (const Vec3 off : {Vec3(0x1p32, -0x1p32, 0x1p32), Vec3(-0x1p20, 0x1p12, 3.0)}) {
+  for (const Vec3& off : {Vec3(0x1p32, -0x1p32, 0x1p32), Vec3(-0x1p20, 0x1p12, 3.0)}) {
     std::vector<Vec3> moved = pos;
     for (Vec3& p : moved) p += off;
     EXPECT_EQ(average_triangle_sphere_area(moved, tris), base) << off.transpose();

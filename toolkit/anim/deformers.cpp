@@ -51,7 +51,7 @@ std::uint32_t hash32(std::uint32_t x) {
 class Deformer final : public Animation {
  public:
   Deformer(Mesh rest, const DeformParams& p) : rest_(std::move(rest)), p_(p) {
-    box_ = rest_.bounds();
+    box_ = rest_.referenced_bounds();  // (the shape: an unused vertex far away would move the axis off it)
     c_ = box_.center();
     e_ = box_.extent();
     diag_ = e_.norm();

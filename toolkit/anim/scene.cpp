@@ -67,12 +67,12 @@ Scene::Scene(std::string name, std::vector<ScenePart> parts, std::optional<Scene
   }
   own_camera_ = camera.has_value();
   own_light_ = light.has_value();
-  camera_ = camera ? *camera : default_camera(rest().bounds());
+  camera_ = camera ? *camera : default_camera(rest().referenced_bounds());
   if (light) {
     light_ = *light;
   } else {
     // Above and behind the camera's right shoulder: the lit side faces the viewer.
-    const Box3 b = rest().bounds();
+    const Box3 b = rest().referenced_bounds();
     const double d = b.extent().norm();
     light_.position = camera_.eye + Vec3(0.5, 1.0, 0.5) * d;
     light_.intensity = 1.0;

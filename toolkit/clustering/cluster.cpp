@@ -284,9 +284,11 @@ int extreme_scale_exponent(const Mesh& mesh) {
   if (mesh.triangle_count() == 0) return 0;
   const Box3 b = mesh.referenced_bounds();
   if (b.empty() || !b.lo.allFinite() || !b.hi.allFinite()) return 0;
-  const double extent = (b.hi - b.lo).maxCoeff();
-  if (!(extent > 0.0) || !std::isfinite(extent)) return 0;
-  const int e = std::ilogb(extent);
+  // Half the extent: finite for any finite box (corners near 1e308 of opposite signs overflow
+  // the extent itself, and such a mesh went unscaled: its areas overflowed, found by a new user).
+  const double half = (0.5 * b.hi - 0.5 * b.lo).maxCoeff();
+  if (!(half > 0.0) || !std::isfinite(half)) return 0;
+  const int e = std::ilogb(half) + 1;  // the extent's exponent (2 x half is exact unless it overflows)
   if (e <= 100 && e >= -100) return 0;
   // Every position (unreferenced ones too) must stay a finite normal number where it is not 0.
   double largest = 0.0;

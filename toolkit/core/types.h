@@ -37,7 +37,9 @@ struct Box3 {
   /// Surface area 2(xy + yz + zx); 0 for an empty box.
   [[nodiscard]] double surface_area() const {
     const Vec3 e = extent();
-    return 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+    // A flat box whose other extents overflow (corners near +-1e308) has area inf, not inf x 0 = NaN.
+    const auto face = [](double a, double b) { return a == 0.0 || b == 0.0 ? 0.0 : a * b; };
+    return 2.0 * (face(e.x(), e.y()) + face(e.y(), e.z()) + face(e.z(), e.x()));
   }
 };
 
