@@ -113,7 +113,7 @@ Box3 Mesh::bounds() const {
   return b;
 }
 
-Box3 Mesh::referenced_bounds() const { return ptc::referenced_bounds(*tris_, pos_); }
+Box3 Mesh::referenced_bounds() const { return ptc::referenced_bounds(triangles(), pos_); }  // (no triangles: empty)
 
 Box3 referenced_bounds(std::span<const Tri> triangles, std::span<const Vec3> positions) {
   std::vector<std::uint8_t> used(positions.size(), 0);
