@@ -144,7 +144,12 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     throw UsageError("--clusters", fmt::format("viz {}{} needs --clusters DIR (a `ptc cluster` output)", to_string(kind),
                                                kind == VizKind::Heatmap ? " of a per-cluster metric" : ""));
   if (opt.range && metric.empty()) throw UsageError("--range", "only heatmaps and panels have a colour range");
-  const std::optional<std::pair<double, double>> fixed = opt.range ? std::optional(parse_value_range(*opt.range, "--range")) : std::nullopt;
+  // not_full is a flag: 0 .. 1 unless --range says otherwise (a frame whose clusters are all full
+  // or all not full would otherwise get a one-value range).
+  const std::optional<std::pair<double, double>> fixed =
+      opt.range ? std::optional(parse_value_range(*opt.range, "--range"))
+      : metric == "not_full" ? std::optional(std::pair<double, double>(0.0, 1.0))
+                             : std::nullopt;
   if (opt.interactive && (kind == VizKind::Panel || kind == VizKind::Export || pixel_metric))
     throw UsageError("--interactive", "a window shows the mesh: viz partition or a heatmap of a per-cluster metric");
   if (opt.interactive && opt.frames) throw UsageError("--interactive", "a window shows one frame (--frame F)");
@@ -396,8 +401,9 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
                            : viz::make_scale(metric, d.values, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0,
                                              fixed, pixel_metric, ratio_floor);
       if (!series_scale && !fixed) scale.from = fmt::format("values of frame {}", f);
+      if (!opt.range && metric == "not_full") scale.from = "a flag: 0 full, 1 not full";
       scale.integer = pixel_metric || metric == "triangles" || metric == "vertices" || metric == "boundary_vertices" ||
-                      metric == "components";
+                      metric == "components" || metric == "not_full";
       oor = viz::out_of_range(scale, d.values);
       if (pixel_metric) {
         heat = RgbImage(opt.width, opt.height);
@@ -483,7 +489,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("frames", {range.first, range.last});
   manifest.set_parameter("reference_frame", reference_frame);
   if (!metric.empty()) manifest.set_parameter("metric", metric);
-  if (fixed) manifest.set_parameter("range", {fixed->first, fixed->second});
+  if (opt.range) manifest.set_parameter("range", {fixed->first, fixed->second});
   if (use_clusters) {
     manifest.set_parameter("clusters", opt.clusters.string());
     manifest.set_parameter("clustering", ci.title);

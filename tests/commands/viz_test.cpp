@@ -275,6 +275,34 @@ TEST_F(Viz, ClusterHeatmapColoursEveryClusterByItsValue) {
   }
 }
 
+// not_full (meshoptimizer's flag: fewer vertices than MaxCount) is drawn on 0 .. 1 without
+// --range (a frame of all-full or all-not-full clusters had a one-value range), said so in the
+// legend, and not recorded as a --range; every cluster pixel is one end of the map.
+TEST_F(Viz, NotFullIsAFlagFromZeroToOne) {
+  VizCommandOptions o = options(VizKind::Heatmap, "nf");
+  o.metric = "not_full";
+  o.lighting = false;
+  std::ostringstream out;
+  cmd_viz(o, out);
+  const RgbImage img = viz::read_png(dir_ / "nf" / "heatmap_not_full.png");
+  const nlohmann::json m = manifest("nf");
+  const auto& sc = m["results"]["images"]["heatmap_not_full.png"]["scale"];
+  EXPECT_EQ(sc["min"].get<double>(), 0.0);
+  EXPECT_EQ(sc["max"].get<double>(), 1.0);
+  EXPECT_EQ(sc["range_from"], "a flag: 0 full, 1 not full");
+  EXPECT_FALSE(m["parameters"].contains("range"));
+  const auto ids = pixel_triangles(m, 160, 120);
+  const auto cls = pixel_clusters(ids);
+  std::size_t checked = 0;
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 160; ++x) {
+      if (!interior(cls, 160, 120, x, y) || ids[static_cast<std::size_t>(y) * 160 + x] == kMiss) continue;
+      EXPECT_TRUE(img.at(x, y) == viridis(0.0) || img.at(x, y) == viridis(1.0)) << "pixel (" << x << ", " << y << ")";
+      ++checked;
+    }
+  EXPECT_GT(checked, 600u);
+}
+
 TEST_F(Viz, DivergingMetricsAreCentred) {
   VizCommandOptions o = options(VizKind::Heatmap, "div");
   o.metric = "box_area_ratio";  // 1 at the reference frame itself: the centre colour everywhere
