@@ -533,11 +533,11 @@ int main(int argc, char** argv) {
   Scene scene("bvh_bench", std::move(parts), std::nullopt, std::nullopt, FrameRange{0, o.reps - 1});
 
   loop::AccelSetup setup;
-  setup.origin = mesh.bounds().center();
+  setup.origin = mesh.referenced_bounds().center();
   setup.cluster_group_size = o.ccfg.cluster_group_size;
   setup.group_trees = o.ccfg.group_trees;
   setup.threads = o.threads;
-  const RayBatch rays = primary_rays(frame_box(mesh.bounds()), o.size, o.size);
+  const RayBatch rays = primary_rays(frame_box(mesh.referenced_bounds()), o.size, o.size);
   std::printf("mesh %s, %d subdivision levels: %zu triangles, %zu vertices; %zu rays; %u thread(s); %d frames "
               "of the %s deformer (amplitude %.3g, period %.3g); SAH traversal %.2f intersection %.2f, triangle "
               "leaves <= %u; tracer isa %s%s; %s clock\n",

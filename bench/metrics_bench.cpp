@@ -98,9 +98,9 @@ int main(int argc, char** argv) {
     const SahOverhead so = sah_overhead(mesh, c);
     row("meshoptimizer SAH overhead", sw.lap_ms(), "overhead " + std::to_string(so.overhead));
     // The counters: every pass traced with them on (as the drift experiment's untimed trace).
-    const bvh::PinholeCamera cam = make_camera({}, mesh.bounds(), width, width);
+    const bvh::PinholeCamera cam = make_camera({}, mesh.referenced_bounds(), width, width);
     const bvh::RayBatch rays = camera_rays(cam, width, width);
-    const Vec3 light = default_light(cam, mesh.bounds());
+    const Vec3 light = default_light(cam, mesh.referenced_bounds());
     bvh::TraceOptions with;
     with.threads = 1;
     with.counters = true;
@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
       bvh::HitBatch hits;
       const bvh::TraceTotals p = bvh::trace(*d, rays, hits, with);
       const SurfaceHits sh = surface_hits(mesh, rays, hits);
-      const RayFrame frame{mesh.bounds(), d->origin};
+      const RayFrame frame{mesh.referenced_bounds(), d->origin};
       const TraceTarget counting = with_counters(target_of(*d));
       const PassStats shadow = trace_shadows(counting, sh, light, frame, 1).stats;
       AoConfig ao;

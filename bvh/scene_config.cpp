@@ -112,7 +112,8 @@ FrameMap trace_frame(const Mesh& mesh, const SceneConfig& cfg) {
 
 double trace_frame_scale(const Mesh& mesh, const Vec3& origin) {
   // The largest |p - origin| coordinate over the vertices some triangle uses: the corners of
-  // their box (an unused vertex does not set the frame; its float position is never read).
+  // their box (an unused vertex does not set the frame; no ray reads its float position, though
+  // the conversion into the frame still refuses one beyond the float range).
   const Box3 b = mesh.referenced_bounds();
   double e = 0;
   if (!b.empty()) e = std::max((b.lo - origin).cwiseAbs().maxCoeff(), (b.hi - origin).cwiseAbs().maxCoeff());

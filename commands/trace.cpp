@@ -234,9 +234,12 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   lo.first_frame_given = true; // computed above for the camera and the trace frame
   lo.rest_positions = still;    // (no buffer then)
   loop::Accel* const accels[] = {&accel};
+  std::int64_t frame_now = range.first;  // (a position beyond the tracer's range names the frame)
+  try {
   loop::run_frame_loop(scene, moving_mesh.positions(), accels, lo, [&](const loop::FrameRecord& fr, loop::Accel& a,
                                                                   std::span<const Vec3>) {
     const std::int64_t f = fr.frame;
+    frame_now = f + 1;  // (the loop moves the next frame's positions after this call)
     const bool first = fr.index == 0;
     positions_ms += fr.source_ms;
     Stopwatch t;
@@ -291,6 +294,9 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
       std::cerr << "ptc: note: no primary ray hit the mesh in frame " << f
                 << " (the camera sees past it or from inside it: give --eye and --look-at)\n";
   });
+  } catch (const bvh::FrameRangeError& e) {
+    throw InputError(arg, "", fmt::format("frame {}", frame_now), e.what());
+  }
   if (empty_frames > 1)  // said once, then counted
     std::cerr << "ptc: note: nor in " << counted(empty_frames - 1, "later frame") << " (trace.csv: hits 0)\n";
   manifest.add_timing_ms("positions", positions_ms);

@@ -43,7 +43,7 @@ struct Render {
 };
 
 /// Traces the view. `scene` must hold `mesh`'s current positions (TriangleScene or ClusterScene
-/// data, or target_of(bvh::SceneTracer) with combined triangle ids). Ray offsets and the AO distance are relative to mesh.bounds() (see render/rays.h).
+/// data, or target_of(bvh::SceneTracer) with combined triangle ids). Ray offsets and the AO distance are relative to mesh.referenced_bounds() (see render/rays.h).
 [[nodiscard]] Render render_view(const TraceTarget& scene, const Mesh& mesh, const bvh::PinholeCamera& cam,
                                  const RenderConfig& cfg);
 [[nodiscard]] Render render_view(const bvh::TraceData& scene, const Mesh& mesh, const bvh::PinholeCamera& cam,

@@ -65,7 +65,7 @@ void register_trace(CLI::App& app, Context& ctx) {
   c->add_option("--clusters", a->opt.clusters, "trace a cluster BVH over the clustering in DIR/triangles.csv (ptc cluster --out DIR)");
   c->add_option("--cluster-groups", a->cluster_groups,
                 "with --clusters: two-level BVH build over fixed groups of at most N clusters; 0 = plain build "
-                "(the default, for moving parts; a still scene, built once, takes the plain build unless given)")
+                "(the default N below is for moving parts; a still scene, built once, takes the plain build unless given)")
       ->check(whole_in(0, 1 << 20))
       ->capture_default_str();
   a->group_trees.add_to(c);

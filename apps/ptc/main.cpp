@@ -72,7 +72,9 @@ int main(int argc, char** argv) {
       msg = msg.substr(0, k) + ": given more than once";
     } else if (msg.find("not expected") != std::string::npos) {
       // --frame F where the command takes a range only (bench, animate, experiment): say how.
-      for (int i = 2; i < argc; ++i)
+      const std::string_view command = argv[1];
+      const bool ranges_only = command == "bench" || command == "animate" || command == "experiment";
+      for (int i = 2; ranges_only && i < argc; ++i)
         if (std::string_view(argv[i]) == "--frame" || std::string_view(argv[i]).starts_with("--frame=")) {
           const std::string_view a = argv[i];
           const std::string f = a.size() > 7 ? std::string(a.substr(8)) : i + 1 < argc ? argv[i + 1] : "F";

@@ -330,7 +330,7 @@ template <ClusterObjective O>
   SlotStore<Summary> merged;                           // unless use_stored
   SlotStore<typename StoredOf<O>::type> merged_stored;  // if use_stored
   Summary expanded[2];
-  constexpr int kSingleCacheBits = 10;  // 1024 summaries (256 KiB for Acc)
+  constexpr int kSingleCacheBits = 10;  // 1024 summaries (264 KiB for Acc)
   std::vector<Summary> single_cache(std::size_t{1} << kSingleCacheBits);
   std::vector<std::uint32_t> single_tag(single_cache.size(), kNoSlot);
   Summary scratch;

@@ -83,7 +83,7 @@ Clustering meshopt_meshlets(const Mesh& mesh, const ClusterConfig& config) {
   if (T > 0xffffffffu / 3) throw std::invalid_argument("meshopt: more than 2^32 / 3 triangles");
 
   // Similarity to the unit box (see header), then float.
-  const Box3 box = mesh.bounds();
+  const Box3 box = mesh.referenced_bounds();  // (an unused vertex far away would collapse the floats)
   const Vec3 center = box.center();
   const double extent = box.extent().maxCoeff();
   const double scale = extent > 0 && std::isfinite(1.0 / extent) ? 1.0 / extent : 1.0;

@@ -49,9 +49,10 @@ struct ClusterTables {
   std::vector<Vec3> normal;    ///< unit normal per triangle; the zero vector for degenerate ones
   EdgeMap edges;               ///< topology.h's edge map (collapsed sides are no edges); empty unless built with edges
   std::vector<double> edge_length;  ///< |p(v1) - p(v0)| per mesh edge (L); empty unless built with edges
-  /// Distinct edge-neighbours of triangle t (triangles sharing a mesh edge with t, t excluded),
-  /// ascending: neighbours[neighbour_offsets[t] .. neighbour_offsets[t + 1]). The dual graph's
-  /// adjacency without parallel edges.
+  /// Distinct edge-neighbours of triangle t (triangles sharing a mesh edge with t, t excluded;
+  /// on an edge of more than kMaxCliqueValence triangles only the previous and next in id
+  /// order), ascending: neighbours[neighbour_offsets[t] .. neighbour_offsets[t + 1]). The dual
+  /// graph's adjacency (topology.h build_dual_graph) without parallel edges.
   std::vector<std::uint32_t> neighbour_offsets;
   std::vector<std::uint32_t> neighbours;
   double mean_edge_length = 0;  ///< mean of edge_length over all mesh edges (L); 0 without edges (or lengths)

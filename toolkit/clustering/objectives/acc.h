@@ -42,7 +42,8 @@
 // - Upper bounds (minimal-sphere methods only; the approximations' radius has no lower bound, so
 //   they always evaluate exactly): Acc decreases as R grows (reg = AreaP / (pi R^2); sizeBound is
 //   non-decreasing in R), so any R_lb <= R gives one. Precision::UpperBoundAllowed: the exact
-//   AreaP (cheap, above) and R >= R_lb, where, with S(A) = (c_A, r_A), S(B) = (c_B, r_B) the
+//   AreaP where the cone identity gives it (cheap, above; elsewhere its bound, the total area,
+//   with AccTuning::area_bound) and R >= R_lb, where, with S(A) = (c_A, r_A), S(B) = (c_B, r_B) the
 //   MINIMAL spheres and d = |c_A - c_B|:
 //       R_lb^2 = min over x in [0, d] of max(r_A^2 + x^2, r_B^2 + (d - x)^2).
 //   Proof: c_A lies in the convex hull of A's support points (on its sphere), so for any
@@ -82,7 +83,8 @@
 
 namespace ptc {
 
-/// Accelerations of AccObjective that never change a score (each is exact, see the file comment).
+/// Accelerations of AccObjective that never change an exact score (each is exact, see the file
+/// comment; area_bound changes only the keys' upper bounds, never which pair merges).
 /// Each pays off in one algorithm only, so cluster_mesh picks them per method.
 struct AccTuning {
   /// Remember S(A u {v}) per added vertex v for the current cluster A and reuse it after A has
