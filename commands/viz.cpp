@@ -144,12 +144,13 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     throw UsageError("--clusters", fmt::format("viz {}{} needs --clusters DIR (a `ptc cluster` output)", to_string(kind),
                                                kind == VizKind::Heatmap ? " of a per-cluster metric" : ""));
   if (opt.range && metric.empty()) throw UsageError("--range", "only heatmaps and panels have a colour range");
-  // not_full is a flag: 0 .. 1 unless --range says otherwise (a frame whose clusters are all full
-  // or all not full would otherwise get a one-value range).
+  // A flag (not_full) is drawn on 0 .. 1 unless --range says otherwise (a frame whose clusters
+  // are all of one kind would otherwise get a one-value range).
+  const bool flag = cmetric && cmetric->flag;
   const std::optional<std::pair<double, double>> fixed =
       opt.range ? std::optional(parse_value_range(*opt.range, "--range"))
-      : metric == "not_full" ? std::optional(std::pair<double, double>(0.0, 1.0))
-                             : std::nullopt;
+      : flag    ? std::optional(std::pair<double, double>(0.0, 1.0))
+                : std::nullopt;
   if (opt.interactive && (kind == VizKind::Panel || kind == VizKind::Export || pixel_metric))
     throw UsageError("--interactive", "a window shows the mesh: viz partition or a heatmap of a per-cluster metric");
   if (opt.interactive && opt.frames) throw UsageError("--interactive", "a window shows one frame (--frame F)");
@@ -168,6 +169,15 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   }
   RunManifest manifest("viz", opt.argv, "ptc-viz/1");
   const std::string arg = opt.input.string();
+  // Positions beyond the single-precision tracer's range (its BVHs, the metrics' cluster BVH):
+  // an input error naming the file and, where there is one, the frame.
+  const auto naming_input = [&](const std::string& element, auto&& make) {
+    try {
+      return make();
+    } catch (const bvh::FrameRangeError& e) {
+      throw InputError(arg, "", element, e.what());
+    }
+  };
   Scene scene = open_scene_recorded(opt.input, opt.scene_options, manifest);
   const bool deformed = opt.deform && *opt.deform != "none";  // (none: as without the flag)
   manifest.set_parameter("motion", apply_stand_in(scene, opt.deform.value_or("none"), arg));
@@ -231,11 +241,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     // At the rest pose, as ptc trace, ptc bench and the experiments: a frame's picture does not
     // depend on the range it is drawn in.
     tcfg.origin = scene.rest().referenced_bounds().center();
-    try {
-      accel = std::make_unique<loop::SceneAccel>(scene.rest(), bvh::PartLayout::of(scene), tcfg);
-    } catch (const bvh::FrameRangeError& e) {
-      throw InputError(arg, "", "", e.what());
-    }
+    accel = naming_input("", [&] { return std::make_unique<loop::SceneAccel>(scene.rest(), bvh::PartLayout::of(scene), tcfg); });
   }
 
   // The reference frame's rows (drift "since frame 0": the scene's first frame) and positions.
@@ -245,11 +251,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     Mesh ref = scene.rest();
     scene.positions(double(reference_frame), ref.positions(), true);
     ref_positions.assign(ref.positions().begin(), ref.positions().end());
-    try {  // (its cluster BVH: positions beyond the tracer's range name the input)
-      ref_rows = cluster_frame_metrics(ref, clusters, ci.cfg, {}, {}, adjacency).rows;
-    } catch (const bvh::FrameRangeError& e) {
-      throw InputError(arg, "", "", e.what());
-    }
+    ref_rows = naming_input("", [&] { return cluster_frame_metrics(ref, clusters, ci.cfg, {}, {}, adjacency).rows; });
   }
 
   // The `_prev` metrics of the first frame shown compare with the frame before it (none before
@@ -284,13 +286,11 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
       d.values = *known;
     } else if (needs_metrics) {
       // sah_share on the drift study's cluster BVH: set up at the rest pose, updated to the frame.
-      try {
+      d.metrics = naming_input(fmt::format("frame {}", f), [&] {
         if (!sah_tree) sah_tree = cluster_bvh_at_rest(scene.rest(), clusters);
         sah_tree->update(mesh.positions());
-        d.metrics = cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows, adjacency, sah_tree.get());
-      } catch (const bvh::FrameRangeError& e) {
-        throw InputError(arg, "", "", fmt::format("frame {}: {}", f, e.what()));
-      }
+        return cluster_frame_metrics(mesh, clusters, ci.cfg, ref_rows, prev_rows, adjacency, sah_tree.get());
+      });
       prev_rows = d.metrics->rows;
       if (cmetric) d.values = d.metrics->of(metric);
     }
@@ -401,9 +401,8 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
                            : viz::make_scale(metric, d.values, cmetric && cmetric->diverging, cmetric ? cmetric->centre : 0,
                                              fixed, pixel_metric, ratio_floor);
       if (!series_scale && !fixed) scale.from = fmt::format("values of frame {}", f);
-      if (!opt.range && metric == "not_full") scale.from = "a flag: 0 full, 1 not full";
-      scale.integer = pixel_metric || metric == "triangles" || metric == "vertices" || metric == "boundary_vertices" ||
-                      metric == "components" || metric == "not_full";
+      if (!opt.range && flag) scale.from = "a flag: 0 full, 1 not full";
+      scale.integer = pixel_metric || (cmetric && cmetric->integer);
       oor = viz::out_of_range(scale, d.values);
       if (pixel_metric) {
         heat = RgbImage(opt.width, opt.height);

@@ -21,6 +21,7 @@
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/stats.h"
 #include "toolkit/core/stopwatch.h"
+#include "toolkit/core/strings.h"
 
 namespace ptc {
 namespace {
@@ -475,7 +476,7 @@ std::string bench_text(const PeerBenchResult& r) {
   const int counted_frames = frames - r.median_first_frame;
   std::string s = fmt::format("medians over {} ({}), {} primary rays{}\n",
                               first == last ? fmt::format("frame {}", first) : fmt::format("frames {}..{}", first, last),
-                              counted_frames == 1 ? std::string("1 frame") : fmt::format("{} frames", counted_frames), r.rays,
+                              counted(counted_frames, "frame"), r.rays,
                               r.shadows ? " and shadow rays to the light" : " (no shadow rays)");
   // The whole frame first: what the method is for.
   s += fmt::format("whole frame = update + build + primary{} (> 1: the row is faster; Embree's frame / the row's){}\n",

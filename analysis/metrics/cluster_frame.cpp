@@ -15,8 +15,8 @@ namespace ptc {
 namespace {
 
 constexpr std::array<ClusterMetricInfo, 18> kInfos = {{
-    {"triangles", false, 0, "triangles in the cluster"},
-    {"vertices", false, 0, "distinct vertices of the cluster"},
+    {"triangles", false, 0, "triangles in the cluster", true},
+    {"vertices", false, 0, "distinct vertices of the cluster", true},
     {"connectivity", false, 0, "triangles / vertices"},
     {"reg", false, 0, "regularity AreaP / AreaC"},
     {"acc", false, 0, "Acc = reg - regBound * sizeBound"},
@@ -30,9 +30,9 @@ constexpr std::array<ClusterMetricInfo, 18> kInfos = {{
     {"box_area_ratio_prev", true, 1, "box area / box area at the previous frame"},
     {"p_hit", false, 0, "SAH hit probability of the surface in its box"},
     {"sah_share", false, 0, "share of the cluster BVH's SAH cost"},
-    {"boundary_vertices", false, 0, "vertices on the cluster's border"},
-    {"components", false, 0, "vertex-connected components of the cluster"},
-    {"not_full", false, 0, "1: fewer vertices than MaxCount (meshoptimizer's meshlet not full)"},
+    {"boundary_vertices", false, 0, "vertices on the cluster's border", true},
+    {"components", false, 0, "vertex-connected components of the cluster", true},
+    {"not_full", false, 0, "1: fewer vertices than MaxCount (meshoptimizer's meshlet not full)", true, true},
 }};
 
 }  // namespace

@@ -28,6 +28,8 @@ struct ClusterMetricInfo {
   bool diverging = false;
   double centre = 0;
   std::string_view meaning;  ///< one line for legends and docs
+  bool integer = false;      ///< whole-number values (a legend without fractions)
+  bool flag = false;         ///< 0 or 1: drawn on 0 .. 1 whatever a frame's values
 };
 
 /// The metrics, in clusters_frames.csv's column order: triangles, vertices, connectivity, reg,

@@ -78,9 +78,8 @@ int main(int argc, char** argv) {
         if (std::string_view(argv[i]) == "--frame" || std::string_view(argv[i]).starts_with("--frame=")) {
           const std::string_view a = argv[i];
           const std::string f = a.size() > 7 ? std::string(a.substr(8)) : i + 1 < argc ? argv[i + 1] : "F";
-          const std::string cmd = std::string(argv[1]) + (std::string_view(argv[1]) == "experiment" && argv[2][0] != '-'
-                                                               ? std::string(" ") + argv[2]
-                                                               : std::string());
+          const std::string cmd =
+              std::string(command) + (command == "experiment" && argv[2][0] != '-' ? std::string(" ") + argv[2] : "");
           msg = fmt::format("--frame: ptc {} takes a range of frames: --frames {}:{} for one", cmd, f, f);
           break;
         }

@@ -114,6 +114,22 @@ class Viz : public test::TempDirTest {
         if (ids[static_cast<std::size_t>(y + dy) * w + x + dx] != ids[static_cast<std::size_t>(y) * w + x]) return false;
     return true;
   }
+  // Calls visit(x, y, t) for each pixel of the command's 160 x 120 picture that sees triangle t
+  // inside one cluster (its 3 x 3 neighbourhood in the same cluster); returns how many.
+  template <class Visit>
+  std::size_t for_each_cluster_pixel(const nlohmann::json& m, Visit visit) const {
+    const auto ids = pixel_triangles(m, 160, 120);
+    const auto cls = pixel_clusters(ids);
+    std::size_t n = 0;
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 160; ++x) {
+        const std::uint32_t t = ids[static_cast<std::size_t>(y) * 160 + x];
+        if (!interior(cls, 160, 120, x, y) || t == kMiss) continue;
+        visit(x, y, t);
+        ++n;
+      }
+    return n;
+  }
   // Cluster pairs sharing a mesh edge: every triangle side keyed by its sorted vertex pair.
   std::set<std::pair<std::uint32_t, std::uint32_t>> adjacent_clusters() const {
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> sides;
@@ -253,20 +269,12 @@ TEST_F(Viz, ClusterHeatmapColoursEveryClusterByItsValue) {
     EXPECT_EQ(sc["min"].get<double>(), mn);
     EXPECT_EQ(sc["max"].get<double>(), mx);
     EXPECT_EQ(sc["range_from"], fixed ? "--range" : "values of frame 0");
-    const auto ids = pixel_triangles(m, 160, 120);
-    const auto cls = pixel_clusters(ids);
-    std::size_t checked = 0;
     std::set<double> values;
-    for (int y = 0; y < 120; ++y)
-      for (int x = 0; x < 160; ++x) {
-        if (!interior(cls, 160, 120, x, y)) continue;
-        const std::uint32_t t = ids[static_cast<std::size_t>(y) * 160 + x];
-        if (t == kMiss) continue;
-        const double v = count[label_[t]];
-        EXPECT_EQ(img.at(x, y), viridis((v - mn) / (mx - mn))) << "pixel (" << x << ", " << y << ")";
-        values.insert(v);
-        ++checked;
-      }
+    const std::size_t checked = for_each_cluster_pixel(m, [&](int x, int y, std::uint32_t t) {
+      const double v = count[label_[t]];
+      EXPECT_EQ(img.at(x, y), viridis((v - mn) / (mx - mn))) << "pixel (" << x << ", " << y << ")";
+      values.insert(v);
+    });
     EXPECT_GT(checked, 600u);
     EXPECT_GE(values.size(), 5u) << "clusters of several sizes are visible";
     // The legend's bar is the map from min (left) to max (right).
@@ -291,15 +299,9 @@ TEST_F(Viz, NotFullIsAFlagFromZeroToOne) {
   EXPECT_EQ(sc["max"].get<double>(), 1.0);
   EXPECT_EQ(sc["range_from"], "a flag: 0 full, 1 not full");
   EXPECT_FALSE(m["parameters"].contains("range"));
-  const auto ids = pixel_triangles(m, 160, 120);
-  const auto cls = pixel_clusters(ids);
-  std::size_t checked = 0;
-  for (int y = 0; y < 120; ++y)
-    for (int x = 0; x < 160; ++x) {
-      if (!interior(cls, 160, 120, x, y) || ids[static_cast<std::size_t>(y) * 160 + x] == kMiss) continue;
-      EXPECT_TRUE(img.at(x, y) == viridis(0.0) || img.at(x, y) == viridis(1.0)) << "pixel (" << x << ", " << y << ")";
-      ++checked;
-    }
+  const std::size_t checked = for_each_cluster_pixel(m, [&](int x, int y, std::uint32_t) {
+    EXPECT_TRUE(img.at(x, y) == viridis(0.0) || img.at(x, y) == viridis(1.0)) << "pixel (" << x << ", " << y << ")";
+  });
   EXPECT_GT(checked, 600u);
 }
 

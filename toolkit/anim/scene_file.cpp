@@ -479,11 +479,10 @@ std::optional<AnimateView> animate_view(const fs::path& dir) {
     if (!res.contains("light")) r.fail("results.light", "missing");
     v.light = read_light(r, res["light"], "results.light");
   }
-  if (root.contains("parameters") && root["parameters"].is_object() && root["parameters"].contains("scene") &&
-      root["parameters"]["scene"].is_string())
-    v.scene = root["parameters"]["scene"].get<std::string>();
-  if (root.contains("parameters") && root["parameters"].is_object() && root["parameters"].contains("frames")) {
-    const json& f = root["parameters"]["frames"];
+  const json params = root.value("parameters", json::object());  // (recorded facts: read where well formed)
+  if (params.is_object() && params.contains("scene") && params["scene"].is_string()) v.scene = params["scene"].get<std::string>();
+  if (params.is_object() && params.contains("frames")) {
+    const json& f = params["frames"];
     if (f.is_array() && f.size() == 2 && f[0].is_number_integer() && f[1].is_number_integer())
       v.frames = FrameRange{f[0].get<std::int64_t>(), f[1].get<std::int64_t>()};
   }
