@@ -14,6 +14,7 @@
 
 #include "analysis/schema/json.h"
 #include "analysis/schema/manifest.h"
+#include "commands/process.h"
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/error.h"
 #include "toolkit/io/atomic_file.h"
@@ -186,7 +187,21 @@ fs::path free_name(const fs::path& dir, const std::string& name) {
   return p;
 }
 
+// The outputs committed in this process (apps/ptc tells an interrupt after a commit from one
+// before it).
+std::vector<std::filesystem::path>& committed_outputs() {
+  static std::vector<std::filesystem::path> paths;
+  return paths;
+}
+
 }  // namespace
+
+bool output_was_committed(const std::filesystem::path& out) {
+  const fs::path want = out.lexically_normal();
+  for (const fs::path& p : committed_outputs())
+    if (p.lexically_normal() == want) return true;
+  return false;
+}
 
 void OutputDir::commit() {
   if (committed_) return;
@@ -212,6 +227,12 @@ void OutputDir::commit() {
   // NAME.kept (NAME.kept.2, ...). Every move is undone if the commit fails, so nothing of the
   // user's is lost whatever happens.
   kept_.clear();
+  // From here until the new directory is in place, a Ctrl-C or SIGTERM is looked for before each
+  // step: one that came undoes the moves and replaces nothing (Interrupted), and a second one
+  // waits for that (StopAtOnceHeld: its handler would remove the temporary directory, by then
+  // holding the user's files).
+  StopAtOnceHeld held;
+  auto give_up_if_stopped = [] { throw_if_cancelled(); };
   std::vector<std::pair<fs::path, fs::path>> moved;  // (from, to)
   auto undo_moves = [&] {
     for (auto it = moved.rbegin(); it != moved.rend(); ++it) {
@@ -260,6 +281,7 @@ void OutputDir::commit() {
       std::sort(keep.begin(), keep.end());
       std::sort(keep_renamed.begin(), keep_renamed.end());
       auto move = [&](const std::string& name, const fs::path& dest) {
+        give_up_if_stopped();
         std::error_code rc;
         fs::rename(target_ / name, dest, rc);
         if (rc) throw InputError((target_ / name).string(), "", "", "cannot keep this file in the new output: " + rc.message());
@@ -270,6 +292,7 @@ void OutputDir::commit() {
       for (const auto& name : keep_renamed) move(name, free_name(tmp_, name));
       std::sort(kept_.begin(), kept_.end());
     }
+    give_up_if_stopped();
     if (fs::exists(target_, ec)) {
       old = tmp_;
       old += ".old";
@@ -285,11 +308,13 @@ void OutputDir::commit() {
   } catch (...) {
     undo_moves();  // the user's files go back where they were (the previous directory is in place)
     kept_.clear();
-    throw;
+    throw;  // (held's end acts on a second signal: the temporary holds only ptc's files again)
   }
   committed_ = true;
+  committed_outputs().push_back(target_);
   unregister_temporary(slot_);
   slot_ = -1;
+  held.release();  // a signal held back now stops the run after its output is complete
   if (!old.empty()) {
     // The previous output, now replaced: a second signal during its removal removes it too.
     slot_ = register_temporary(old, true);

@@ -34,6 +34,10 @@ void refuse_overwriting_input(const std::filesystem::path& out, const std::files
 class RunManifest;
 class OutputDir;
 
+/// Whether an OutputDir for `out` was committed in this process (an interrupt after it leaves a
+/// complete output, not the previous one).
+[[nodiscard]] bool output_was_committed(const std::filesystem::path& out);
+
 /// A byte count as a person reads it: 512 B, 1.2 MB, 3.4 GB (powers of 1000, one decimal).
 [[nodiscard]] std::string readable_bytes(double bytes);
 

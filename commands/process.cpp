@@ -1,6 +1,7 @@
 // The `ptc` process's signal handling and reader notes (commands/process.h).
 #include "commands/process.h"
 
+#include <fcntl.h>
 #include <malloc.h>
 #include <cstdlib>
 #include <filesystem>
@@ -8,6 +9,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <iostream>
 #include <string>
 
@@ -27,14 +29,30 @@ namespace {
 std::atomic<int> g_stop_signals{0};
 static_assert(std::atomic<int>::is_always_lock_free);
 
+// StopAtOnceHeld: the signal that came while held (0: none beyond the first).
+std::atomic<bool> g_at_once_held{false};
+std::atomic<int> g_held_signal{0};
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+void stop_at_once(int sig, bool first);
+
 // The first signal stops at once too while the run waits in a blocking read of a FIFO or pipe
 // (BlockingWaitFor, toolkit/core/cancel.h), which SA_RESTART would resume forever.
 extern "C" void on_stop_signal(int sig) {
   const bool first = g_stop_signals.fetch_add(1) == 0;
+  if (g_at_once_held.load()) {  // an OutputDir commit: it gives up and undoes its moves first
+    request_cancel();
+    if (!first) g_held_signal.store(sig);
+    return;
+  }
   if (first && !in_blocking_wait()) {
     request_cancel();
     return;
   }
+  stop_at_once(sig, first);
+}
+
+void stop_at_once(int sig, bool first) {
   remove_temporaries_now();
   static const char again[] = "ptc: interrupted again: stopped at once (temporary files removed)\n";
   static const char waiting[] = "ptc: interrupted while waiting for input: stopped\n";
@@ -61,6 +79,28 @@ void print_read_note(const std::string& file, const std::string& note) {
 }
 
 }  // namespace
+
+void open_standard_streams() {
+  for (int fd = 0; fd <= 2; ++fd)
+    if (::fcntl(fd, F_GETFD) == -1 && errno == EBADF) {
+      // The lowest free number is fd (those below it are open by now).
+      const int got = ::open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+      if (got != fd && got >= 0) ::close(got);  // (cannot happen; never keep a stray descriptor)
+    }
+}
+
+StopAtOnceHeld::StopAtOnceHeld() {
+  held_ = !g_at_once_held.exchange(true);
+}
+
+void StopAtOnceHeld::release() {
+  if (!held_) return;
+  held_ = false;
+  g_at_once_held.store(false);
+  // A second signal came while held: act on it now (a signal during this check finds the hold
+  // released and acts itself; acting twice is harmless, as the first ends the process).
+  if (const int sig = g_held_signal.exchange(0)) stop_at_once(sig, false);
+}
 
 namespace {
 bool g_stop_blocked_by_exec = false;  // this image was executed with SIGINT and SIGTERM blocked

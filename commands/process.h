@@ -9,6 +9,29 @@ namespace ptc {
 /// a non-interactive shell) stays ignored.
 void install_stop_handlers();
 
+/// While one lives, a Ctrl-C or SIGTERM only requests the stop, the second one too: the handler
+/// does not remove the registered temporaries at once, which an OutputDir's commit fills with the
+/// user's files while it moves them into the new output. The commit looks for the request before
+/// each move, undoes its moves and gives up; release() (or the end) then acts on a second
+/// signal that came meanwhile as the handler would have: removes the temporaries, says so and
+/// ends the process. One at a time, on the thread that runs the command.
+class StopAtOnceHeld {
+ public:
+  StopAtOnceHeld();
+  ~StopAtOnceHeld() { release(); }
+  StopAtOnceHeld(const StopAtOnceHeld&) = delete;
+  StopAtOnceHeld& operator=(const StopAtOnceHeld&) = delete;
+  void release();
+
+ private:
+  bool held_ = false;
+};
+
+/// Opens /dev/null on each of the descriptors 0, 1 and 2 that is closed: otherwise the next file
+/// ptc opens takes its number, and what it prints lands there (viz's X display connection, an
+/// output file; `ptc viz ... >&-` hung in the X protocol). Call first in main.
+void open_standard_streams();
+
 /// Large blocks of glibc's malloc on transparent huge pages: glibc does it when the environment
 /// variable GLIBC_TUNABLES holds glibc.malloc.hugetlb=1 at start-up, so the process sets it and
 /// executes itself again, once (argv unchanged, the same process id); the new image gives the

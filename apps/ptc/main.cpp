@@ -12,6 +12,7 @@
 
 #include "apps/ptc/cli.h"
 #include "commands/errors.h"
+#include "commands/output_dir.h"
 #include "commands/process.h"
 
 namespace {
@@ -26,6 +27,7 @@ std::string out_of(const CLI::App& cmd) {
 
 int main(int argc, char** argv) {
   using namespace ptc;
+  open_standard_streams();     // a closed stdout must not become the next file or socket ptc opens
   use_huge_page_malloc(argv);  // before anything else: it may execute ptc again (process.h)
   install_stop_handlers();  // first: a Ctrl-C during the start-up is a request like any other
   set_memory_policy();
@@ -103,10 +105,13 @@ int main(int argc, char** argv) {
         throw_if_cancelled();  // a signal during the start-up: nothing is run
         c.run();
       }
+    throw_if_cancelled();  // a signal after the last check (the output is then in place): said, 130
   } catch (const Interrupted&) {
     std::cout.flush();  // what a pipe was given so far
     if (out.empty())
       std::cerr << "ptc: " << name << " interrupted (no output was written)\n";
+    else if (output_was_committed(out))
+      std::cerr << "ptc: " << name << " interrupted after its output " << out << " was complete and in place\n";
     else
       std::cerr << "ptc: " << name << " interrupted: nothing was written to " << out << " (an earlier " << out
                 << " is as it was)\n";

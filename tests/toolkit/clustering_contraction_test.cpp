@@ -449,6 +449,43 @@ TEST(Contraction, SupportLevelGivesTheSameMergesBitForBit) {
   EXPECT_LT(exact[1], exact[0] * 3 / 4);  // the level did spare exact evaluations
 }
 
+// A contraction to few large clusters (no size limit, --target-clusters): the bounds of a large
+// cluster's pairs read what it keeps (AccTuning::large_bounds) instead of its members. Bounds
+// only: the same merges with the same score bits as without them, with far fewer exact
+// evaluations. Closed surfaces (the normals cancel: N_avg recomputed), a flat grid (ties: every
+// cone certifies AreaP), a non-manifold fan, copies of one triangle (clusters large by their
+// triangles alone), a jittered bumpy grid and sphere patch, a genus-two surface far from the
+// origin and tiny (1e-100: areas whose products underflow); to three clusters.
+TEST(Contraction, LargeClusterBoundsGiveTheSameMergesBitForBit) {
+  const Mesh eight = load("eight.off");
+  const std::vector<Named> meshes = {
+      {"closed sphere", load("sphere.off")},
+      {"genus two", eight},
+      {"genus two far away", moved(eight, Eigen::Matrix3d::Identity(), Vec3(3e6, -1e6, 2e6))},
+      {"genus two at 1e-100", moved(eight, 1e-100 * Eigen::Matrix3d::Identity(), Vec3(0, 0, 0))},
+      {"flat grid (ties)", grid(36, 30)},
+      {"jittered bumpy grid", jittered(bumpy_grid(30, 28), 0.01, 5)},
+      {"jittered sphere patch", jittered(sphere_patch(34, 24), 0.005, 7)},
+      {"non-manifold fan", edge_fan(300)},
+      {"copies of one triangle", Mesh(std::vector<Tri>(150, Tri{0, 1, 2}), {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)})},
+  };
+  AccTuning without = AccTuning::for_contraction();
+  without.large_bounds = false;
+  std::uint64_t exact[2] = {0, 0};
+  std::size_t merges = 0;
+  for (const auto& [name, m] : meshes) {
+    Scenario s{ObjectiveKind::Acc, 1048576, 1e9};
+    s.target = 3;
+    const ClusterRun with_bounds = run_contraction(m, s, true, {}, AccTuning::for_contraction());
+    const ClusterRun plain = run_contraction(m, s, true, {}, without);
+    exact[0] += plain.exact_evaluations;
+    exact[1] += with_bounds.exact_evaluations;
+    merges += expect_same_merges(plain, with_bounds, name);
+  }
+  EXPECT_GT(merges, 8000u);
+  EXPECT_LT(exact[1], exact[0] * 3 / 4) << exact[1] << " against " << exact[0];  // (the grids: a fifth)
+}
+
 // Acc and GWH01 depend only on distances, normals and areas: a rotated and translated mesh gives
 // the same clusters (up to rounding ties, which a scanned mesh does not have). Naive uses the
 // axis-aligned box: only axis permutations / reflections keep it.

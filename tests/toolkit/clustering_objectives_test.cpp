@@ -788,6 +788,74 @@ TEST(AccObjective, SupportBoundBoundsTheExactScoreWithItsMargin) {
   EXPECT_GE(spanned, 20);  // the margin check met spheres the three points span
 }
 
+// AccTuning::large_bounds: a pair whose A has at least AccObjective::kLargeFrom vertices gets its
+// bounds (UpperBoundAllowed and SupportBound) from what A keeps (ten points, the normals' second
+// moment, their signed sum and horizon around A's own N_avg) instead of A's members. Upper bounds
+// on the exact score, near it: pairs of a large A (grown one triangle at a time, so that it keeps
+// its sums from earlier merges) and a B of one to 200 triangles (large too from 64), on a closed
+// sphere (clusters that nearly close: N_avg recomputed), the hand (curved: cones that do not
+// certify AreaP), far from the origin and tiny.
+TEST(AccObjective, LargeClusterBoundsBoundTheExactScore) {
+  const Mesh sphere = load("larger_sphere.off"), hand = load("hand.off");
+  auto moved = [](const Mesh& m, double s, const Vec3& t) {
+    std::vector<Vec3> p(m.positions().begin(), m.positions().end());
+    for (Vec3& v : p) v = s * v + t;
+    return m.with_positions(std::move(p));
+  };
+  const Mesh far = moved(hand, 1e-3, Vec3(4e6, -2e6, 1e6)), tiny = moved(hand, 1e-30, Vec3(0, 0, 0));
+  AccTuning without = AccTuning::for_contraction();
+  without.large_bounds = false;
+  int pairs = 0, large_b = 0, near_support = 0, tighter_cheap = 0, recomputed = 0;
+  for (const Mesh* m : {&sphere, &hand, &far, &tiny}) {
+    const EdgeMap em = EdgeMap::build(m->triangles(), m->vertex_count());
+    const ClusterTables tb = ClusterTables::build(*m);
+    AccObjective o(tb, acc_params(*m, 1048576, 1e9), AccTuning::for_contraction());
+    AccObjective plain(tb, acc_params(*m, 1048576, 1e9), without);
+    std::mt19937_64 rng(29);
+    for (int i = 0; i < (m == &sphere ? 9 : 8); ++i) {
+      // On the sphere (1,620 triangles) most unions nearly close it.
+      const bool closing = m == &sphere && i % 3 != 2;
+      const std::size_t na = closing ? 1530 + rng() % 60 : 100 + rng() % 700, nb = 1 + rng() % (closing ? 25 : 200);
+      const auto [a, b] = random_pair(tb, rng, na, nb);
+      const auto sa = summary_of(o, *m, em, a), sb = summary_of(o, *m, em, b);
+      Candidate c;
+      make_candidate(*m, em, a, b, c);
+      if (c.ctx.a_vertices.size() < AccObjective::kLargeFrom) continue;
+      const std::string what = "trial " + std::to_string(i) + ", " + std::to_string(a.size()) + " + " +
+                               std::to_string(b.size()) + " triangles, scale " + std::to_string(m->position(0).norm());
+      const auto exact = o.evaluate(sa, sb, c.ctx, Precision::Exact);
+      ASSERT_TRUE(exact.exact) << what;
+      const auto support = o.evaluate(sa, sb, c.ctx, Precision::SupportBound);
+      const auto cheap = o.evaluate(sa, sb, c.ctx, Precision::UpperBoundAllowed);
+      // The objective without the kept sums, on summaries made alike (its own, with no Large).
+      const auto pa = summary_of(plain, *m, em, a), pb = summary_of(plain, *m, em, b);
+      const auto plain_exact = plain.evaluate(pa, pb, c.ctx, Precision::Exact);
+      const auto plain_cheap = plain.evaluate(pa, pb, c.ctx, Precision::UpperBoundAllowed);
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(plain_exact.score), std::bit_cast<std::uint64_t>(exact.score)) << what;
+      ++pairs;
+      large_b += b.size() >= AccObjective::kLargeFrom;
+      const Vec3 ns = sa.normal_sum + sb.normal_sum;
+      recomputed += ns.norm() < AccObjective::kRecomputeNormalSum * (sa.nonzero + sb.nonzero);
+      for (const auto* ev : {&support, &cheap}) {
+        if (ev->exact) {
+          EXPECT_EQ(std::bit_cast<std::uint64_t>(ev->score), std::bit_cast<std::uint64_t>(exact.score)) << what;
+        } else {
+          EXPECT_GE(ev->score, exact.score) << what;
+        }
+      }
+      EXPECT_LE(cheap.score, plain_cheap.score) << what;  // never looser than the total area's bound
+      tighter_cheap += cheap.score < plain_cheap.score;
+      EXPECT_LE(support.score, cheap.score) << what;
+      near_support += support.score <= exact.score + 0.02 * std::abs(exact.score);
+    }
+  }
+  EXPECT_GE(pairs, 30);
+  EXPECT_GE(large_b, 8);
+  EXPECT_GE(recomputed, 3);
+  EXPECT_GE(tighter_cheap, pairs / 2);
+  EXPECT_GE(near_support, pairs / 3);  // (B of up to 200 triangles: the contraction's are mostly one or two)
+}
+
 // ---- Naive ---------------------------------------------------------------------------------
 
 TEST(NaiveObjective, ScoreEqualsClusterMetricsAndLimitIsMaxCount) {

@@ -410,19 +410,15 @@ bool AccObjective::small_support_sphere(const MergeContext& ctx, const Box3& box
   return false;
 }
 
+// R^2 of the minimal sphere of three points of the lists (the point farthest from the center of
+// `box`, the point farthest from it, the point farthest from their sphere) on local coordinates,
+// shrunk by 1e-12 relative: a lower bound on R^2 of any set the lists' points belong to (see
+// support_r2); 0 when not finite.
 PTC_ISA_CLONES
-double AccObjective::support_r2(const MergeContext& ctx, const Box3& box) const {
-  // On cluster-local coordinates, the points sphere_of_union gives the exact computation. The
-  // minimal sphere of a subset is never larger than the union's. Its computed radius is the
-  // largest distance from a computed center (triangle_min_sphere: the circumcenter from the
-  // corner of the largest angle, well conditioned, on edges scaled to unit size, so at any
-  // scale), within a few ulps of the subset's minimal radius; the exact sphere contains every
-  // point up to ~1e-14 relative. The 1e-12 shrink covers both.
-  const auto& pos = tables_->positions;
+static double three_point_r2(std::span<const Vec3> pos, std::initializer_list<std::span<const std::uint32_t>> lists,
+                      const Box3& box) {
   const Vec3 o = local_origin(box);
-  auto farthest = [&](const Vec3& c, double& d2max) {
-    return Vec3(pos[farthest_vertex(pos, {ctx.a_vertices, ctx.added}, o, c, d2max)] - o);
-  };
+  auto farthest = [&](const Vec3& c, double& d2max) { return Vec3(pos[farthest_vertex(pos, lists, o, c, d2max)] - o); };
   double d2;
   const Vec3 p1 = farthest(0.5 * (box.lo + box.hi) - o, d2);
   const Vec3 p2 = farthest(p1, d2);
@@ -436,13 +432,38 @@ double AccObjective::support_r2(const MergeContext& ctx, const Box3& box) const 
 }
 
 PTC_ISA_CLONES
+double AccObjective::support_r2(const MergeContext& ctx, const Box3& box) const {
+  // On cluster-local coordinates, the points sphere_of_union gives the exact computation. The
+  // minimal sphere of a subset is never larger than the union's. Its computed radius is the
+  // largest distance from a computed center (triangle_min_sphere: the circumcenter from the
+  // corner of the largest angle, well conditioned, on edges scaled to unit size, so at any
+  // scale), within a few ulps of the subset's minimal radius; the exact sphere contains every
+  // point up to ~1e-14 relative. The 1e-12 shrink covers both.
+  return three_point_r2(tables_->positions, {ctx.a_vertices, ctx.added}, box);
+}
+
+PTC_ISA_CLONES
 AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary& b, const MergeContext& ctx,
                                                 Precision precision) {
   const bool memo = tuning_.vertex_memo && minimal_ && ctx.added.size() == 1;
   if (memo) enter_lineage(a);
   Evaluation ev;
-  sums_and_area(a, b, ctx, ev, tuning_.area_bound && precision == Precision::UpperBoundAllowed);
-  union_sphere_and_score(a, &b, ctx, precision, memo, ev);
+  // A large A (AccTuning::large_bounds): its pairs' bounds read what it keeps, not its members.
+  const Large* la = nullptr;
+  if ((precision == Precision::UpperBoundAllowed || precision == Precision::SupportBound) && minimal_ &&
+      tuning_.area_bound)
+    la = large_of(a);
+  if (la) {
+    bound_la_ = la;
+    bound_lb_ = large_of(b);
+    union_moment_value_ = la->moment;
+    const Moment mb = moment_of(b, ctx.b_triangles);
+    for (std::size_t k = 0; k < mb.size(); ++k) union_moment_value_[k] += mb[k];
+    union_moment_ = &union_moment_value_;
+  }
+  sums_and_area(a, b, ctx, ev, tuning_.area_bound && (precision == Precision::UpperBoundAllowed || la));
+  union_moment_ = nullptr;
+  union_sphere_and_score(a, &b, ctx, precision, memo, ev, la);
   if (ev.area_bounded) {  // a bound whatever the sphere: AreaP is (reg and the sphere are not kept)
     ev.exact = false;
     ev.reg = 0;
@@ -475,11 +496,47 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
   // AreaP <= sum Area_i (|N_avg . n_i| <= 1; 1 + 1e-6 covers the rounding of both sums, about
   // k eps relative for k < 2^32 members), for any N_avg: where the cone identity could not
   // certify it, a key need not make N_avg in order or sum over the members.
-  const auto area_bound = [&] {
-    ev.area_p = (a.area_sum + b.area_sum) * (1.0 + 1e-6);
+  // With the union's second moment M = sum Area_i n_i n_i^T (a large A), also Cauchy-Schwarz:
+  // sum Area_i |N.n_i| <= sqrt(W N^T M N), W = sum Area_i, for any N; N^T M N <= M's largest
+  // eigenvalue <= its largest Gershgorin row sum when N_avg is not made. Each entry of M is
+  // within k eps W of the true sum (|n_j n_k| <= 1), so N^T M N within 3 k eps W < 2e-6 W for
+  // k < 2^32 members: the 4e-6 W added covers it, and the last factor the square root's and
+  // W's rounding.
+  // And with the horizon sums (horizon_area_bound), at N_avg or near it.
+  const auto area_bound = [&](const Vec3* n, double delta) {
+    const double w = a.area_sum + b.area_sum;
+    ev.area_p = w * (1.0 + 1e-6);
+    if (const Moment* mm = union_moment_) {
+      const Moment& M = *mm;
+      const double q = n && delta == 0.0 ? M[0] * n->x() * n->x() + M[1] * n->y() * n->y() + M[2] * n->z() * n->z() +
+                               2.0 * (M[3] * n->x() * n->y() + M[4] * n->x() * n->z() + M[5] * n->y() * n->z())
+                         : std::max({M[0] + std::abs(M[3]) + std::abs(M[4]), M[1] + std::abs(M[3]) + std::abs(M[5]),
+                                     M[2] + std::abs(M[4]) + std::abs(M[5])});
+      // (Two square roots: W and N^T M N scale as a length^2 each, their product under- or
+      // overflows at lengths beyond 1e+-77.)
+      const double cs = std::sqrt(w) * std::sqrt(std::max(0.0, q + 4e-6 * w)) * (1.0 + 1e-6);
+      if (cs < ev.area_p) ev.area_p = cs;  // (a NaN keeps the total area's bound)
+      if (n) {
+        const double h = horizon_area_bound(b, ctx, *n, delta, w);
+        if (h < ev.area_p) ev.area_p = h;
+      }
+    }
     ev.area_bounded = true;
   };
-  if (allow_area_bound && m > 0 && len < kRecomputeNormalSum * static_cast<double>(m)) return area_bound();
+  if (allow_area_bound && m > 0 && len < kRecomputeNormalSum * static_cast<double>(m)) {
+    // The recomputed sum (members in ascending order) and this one are within m^2 eps of the
+    // exact sum each (|n_i| <= 1 per coordinate), so within e = 4 m^2 eps of each other, and
+    // their directions within 2 e / (len - e). Beyond the fallback's threshold the recomputed
+    // N_avg is that direction; nearer, the fallback rule might choose another: no N then.
+    if (union_moment_) {
+      const double md = m, e = 4.0 * md * md * 0x1p-53;
+      if (len - e > kNormalSumZeroTol * md) {
+        const Vec3 n = ns * (1.0 / len);
+        return area_bound(&n, 2.0 * e / (len - e) + 1e-15);
+      }
+    }
+    return area_bound(nullptr, 0.0);
+  }
   bool sorted_ready = false;
   auto sort_members = [&] {
     if (sorted_ready) return;
@@ -527,14 +584,14 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
   if (!ev.fallback && certified(a, ev.n_avg) && certified(b, ev.n_avg))
     ev.area_p = std::max(0.0, ev.n_avg.dot(a.area_normal_sum + b.area_normal_sum));
   else if (allow_area_bound)
-    area_bound();
+    area_bound(&ev.n_avg, 0.0);
   else
     ev.area_p = area_p_of(a, ctx.a_triangles, ev.n_avg) + area_p_of(b, ctx.b_triangles, ev.n_avg);
 }
 
 PTC_ISA_CLONES
 void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr, const MergeContext& ctx,
-                                          Precision precision, bool memo, Evaluation& ev) {
+                                          Precision precision, bool memo, Evaluation& ev, const Large* la) {
   const ClusterTables& tb = *tables_;
   // The sphere of the union.
   bool have = false;
@@ -637,7 +694,8 @@ void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr
       // bound of its own, made from the points, not from the spheres). r2_lb alone still sets
       // the filter of the exact computation below, as for Precision::Exact.
       double key_r2 = shrink > 0.0 ? r2_lb : 0.0;
-      if (precision == Precision::SupportBound) key_r2 = std::max(key_r2, support_r2(ctx, ev.box));
+      if (precision == Precision::SupportBound)
+        key_r2 = std::max(key_r2, la ? large_support_r2(*la, large_of(*b_ptr), ctx, ev.box) : support_r2(ctx, ev.box));
       if (key_r2 > 0.0 && precision != Precision::Exact) {
         ev.exact = false;
         ev.score = score_of(ev.area_p, key_r2, ctx.vertex_count, nullptr);
@@ -771,7 +829,171 @@ AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, co
       }
     set_cone(s, ev.n_avg, c - 1e-15);
   }
+  if (tuning_.large_bounds && minimal_) keep_large(a, b, ctx, s, ev.n_avg);
   return s;
+}
+
+AccObjective::Moment AccObjective::moment_of(const Summary& part, std::span<const std::uint32_t> members) const {
+  if (const Large* l = large_of(part)) return l->moment;
+  Moment m{};
+  for_each_geometry(*tables_, members, [&](double area, const Vec3& n) {
+    m[0] += area * n.x() * n.x();
+    m[1] += area * n.y() * n.y();
+    m[2] += area * n.z() * n.z();
+    m[3] += area * n.x() * n.y();
+    m[4] += area * n.x() * n.z();
+    m[5] += area * n.y() * n.z();
+  });
+  return m;
+}
+
+void AccObjective::keep_large(const Summary& a, const Summary& b, const MergeContext& ctx, const Summary& s,
+                              const Vec3& n_avg) {
+  const std::size_t members = ctx.a_triangles.size() + ctx.b_triangles.size();
+  const bool large = ctx.vertex_count >= kLargeFrom || members >= kLargeFrom;
+  if (!large || ctx.a_vertices.empty()) {
+    if (!large_.empty()) {
+      large_.erase(a.serial);
+      large_.erase(b.serial);
+    }
+    return;
+  }
+  const auto& pos = tables_->positions;
+  const Large* la = large_of(a);
+  // A large A and a small B whose merge leaves N_avg near A's reference: B's members are added
+  // to A's sums around the same reference. Otherwise one pass over the union's members around
+  // its own N_avg; and again once A has grown by a quarter. The points: one pass over the
+  // union's vertices (cheaper than its members' geometry; points kept from A alone missed the
+  // new support points often enough to double the exact evaluations).
+  const bool incremental = la && !large_of(b) && (n_avg - la->n_ref).norm() <= 0x1p-10 &&
+                           4 * members < 5 * la->full_members;
+  Large l;
+  auto add_members = [&](std::span<const std::uint32_t> ids) {
+    for_each_geometry(*tables_, ids, [&](double area, const Vec3& n) {
+      if (n.isZero(0.0)) return;
+      l.moment[0] += area * n.x() * n.x();
+      l.moment[1] += area * n.y() * n.y();
+      l.moment[2] += area * n.z() * n.z();
+      l.moment[3] += area * n.x() * n.y();
+      l.moment[4] += area * n.x() * n.z();
+      l.moment[5] += area * n.y() * n.z();
+      const double c = l.n_ref.dot(n);
+      l.g += c >= 0.0 ? Vec3(area * n) : Vec3(-area * n);
+      const double ac = std::abs(c);
+      for (std::size_t k = 0; k < kHorizon.size(); ++k)
+        if (ac <= kHorizon[k]) l.horizon[k] += area;
+    });
+  };
+  // The four vertices farthest from S(A u B)'s center (its support points, where at most four
+  // lie on it) and the box's extremes, among the candidates.
+  const Vec3 c = s.sphere.center;
+  std::array<double, 4> far2;
+  far2.fill(-1.0);
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  std::array<std::uint32_t, 10> pts;
+  pts.fill(ctx.a_vertices[0]);
+  auto visit = [&](std::uint32_t v) {
+    const Vec3& p = pos[v];
+    const double d2 = (p - c).squaredNorm();
+    if (d2 > far2[3]) {
+      std::size_t i = 3;
+      for (; i > 0 && d2 > far2[i - 1]; --i) {
+        far2[i] = far2[i - 1];
+        pts[i] = pts[i - 1];
+      }
+      far2[i] = d2;
+      pts[i] = v;
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (p[k] < lo[k]) lo[k] = p[k], pts[4 + k] = v;
+      if (p[k] > hi[k]) hi[k] = p[k], pts[7 + k] = v;
+    }
+  };
+  if (incremental) {
+    l = *la;
+    add_members(ctx.b_triangles);
+  } else {
+    l.n_ref = n_avg;
+    l.full_members = members;
+    add_members(ctx.a_triangles);
+    add_members(ctx.b_triangles);
+  }
+  for (std::uint32_t v : ctx.a_vertices) visit(v);
+  for (std::uint32_t v : ctx.added) visit(v);
+  l.points = pts;
+  large_.erase(a.serial);
+  large_.erase(b.serial);
+  large_.insert_or_assign(s.serial, l);
+}
+
+double AccObjective::horizon_area_bound(const Summary& b, const MergeContext& ctx, const Vec3& n, double delta,
+                                        double w) const {
+  // For a part with Large l, any unit N within delta of n: with s_i the sign of n_ref.n_i,
+  //   sum Area_i |N.n_i| = N.g + 2 sum over the flipped members (s_i N.n_i < 0) of Area_i |N.n_i|,
+  // and a flipped member has |N.n_i| <= |(N - n_ref).n_i| <= d and |n_ref.n_i| <= d, with
+  // d = |n - n_ref| + delta: so the sum is at most n.g + delta |g| + 2 d horizon(d). (The 1e-12
+  // added to d covers the rounding of the signs and of the horizon's classification.) A small B
+  // is summed at n, plus delta times its area. The rounding of g, the horizon and the sums is
+  // below 16 (k + 16) eps of the total area for k members.
+  auto part = [&](const Large& l) {
+    const double d = (n - l.n_ref).norm() + delta + 1e-12;
+    double h = -1.0;
+    for (std::size_t k = 0; k < kHorizon.size(); ++k)
+      if (d <= kHorizon[k]) {
+        h = l.horizon[k];
+        break;
+      }
+    if (h < 0.0) return std::numeric_limits<double>::infinity();  // far from n_ref: no use
+    return n.dot(l.g) + delta * l.g.norm() + 2.0 * d * h;
+  };
+  double sum = part(*bound_la_);
+  if (bound_lb_) {
+    sum += part(*bound_lb_);
+  } else {
+    double sb = 0;
+    for_each_geometry(*tables_, ctx.b_triangles, [&](double area, const Vec3& nt) { sb += area * std::abs(n.dot(nt)); });
+    sum += sb + delta * b.area_sum;
+  }
+  const double k = static_cast<double>(ctx.a_triangles.size() + ctx.b_triangles.size());
+  return sum + 16.0 * (k + 16.0) * 0x1p-53 * w;
+}
+
+double AccObjective::large_support_r2(const Large& la, const Large* lb, const MergeContext& ctx, const Box3& box) {
+  // A subset's minimal sphere is never larger than the union's; min_sphere's radius is minimal to
+  // ~1e-15 of the points' extent on local coordinates, and so is the exact computation's: the
+  // 1e-12 shrink covers both, as in support_r2.
+  const auto& pos = tables_->positions;
+  const Vec3 o = local_origin(box);
+  auto& pts = scratch_bound_points_;
+  pts.clear();
+  for (std::uint32_t v : la.points) pts.push_back(pos[v] - o);
+  if (lb) {
+    for (std::uint32_t v : lb->points) pts.push_back(pos[v] - o);
+  } else {
+    for (std::uint32_t v : ctx.added) pts.push_back(pos[v] - o);
+  }
+  // The minimal sphere of three of the points when it holds them all (it is then theirs), else
+  // CGAL's on all of them.
+  auto farthest = [&](const Vec3& from, double& d2max) {
+    Vec3 best = pts.front();
+    d2max = -1.0;
+    for (const Vec3& p : pts)
+      if (const double d2 = (p - from).squaredNorm(); d2 > d2max) d2max = d2, best = p;
+    return best;
+  };
+  double d2;
+  const Vec3 p1 = farthest(0.5 * (box.lo + box.hi) - o, d2);
+  const Vec3 p2 = farthest(p1, d2);
+  Sphere small{0.5 * (p1 + p2), 0.5 * std::sqrt(d2)};
+  Vec3 p3 = farthest(small.center, d2);
+  if (d2 > small.radius * small.radius) {
+    small = triangle_min_sphere(p1, p2, p3);
+    farthest(small.center, d2);
+  }
+  const double r = d2 <= small.radius * small.radius * (1.0 + 1e-14) ? small.radius : min_sphere(pts).radius;
+  constexpr double kShrink = 1.0 - 1e-12;
+  const double r2 = r * r * (kShrink * kShrink);
+  return std::isfinite(r2) ? r2 : 0.0;
 }
 
 }  // namespace ptc

@@ -75,6 +75,7 @@
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 #include "toolkit/clustering/objectives.h"
@@ -107,12 +108,23 @@ struct AccTuning {
   /// --target-clusters) then paid for sums no merge read (docs/clustering.md, "Contraction to
   /// few large clusters"). Growth's bounded keys take another path (growth_prepare).
   bool area_bound = false;
+  /// Keeps, for each merged cluster of at least kLargeFrom vertices or triangles, ten of its
+  /// vertices (the four farthest from its sphere's center, the six extremes of its box) and its
+  /// normals' second moment sum Area_i n_i n_i^T, so that the bounds of its pairs
+  /// (Precision::UpperBoundAllowed and SupportBound) read those instead of its members: the
+  /// radius from the minimal sphere of those points and B's, AreaP by Cauchy-Schwarz,
+  /// sum Area_i |N.n_i| <= sqrt(sum Area_i * N^T M N). O(|B|) instead of O(|A| + |B|). A
+  /// contraction to few large clusters (--target-clusters with a high --max-count) otherwise
+  /// re-runs SupportBound's passes over the large cluster for each of its neighbours after every
+  /// merge (docs/clustering.md, "Contraction to few large clusters"). Bounds only: which pair
+  /// merges does not change.
+  bool large_bounds = false;
 
-  [[nodiscard]] static AccTuning for_growth() { return {true, false, false}; }
+  [[nodiscard]] static AccTuning for_growth() { return {true, false, false, false}; }
   /// The contraction without the DOP: its SupportBound level leaves the DOP about 6% of the time
   /// at 832k, and without it a merged cluster's summary is kept in 184 bytes instead of 264
   /// (AccObjective::Stored; docs/scale.md, "Contraction in one run: the memory").
-  [[nodiscard]] static AccTuning for_contraction() { return {false, false, true}; }
+  [[nodiscard]] static AccTuning for_contraction() { return {false, false, true, true}; }
 };
 
 class AccObjective {
@@ -126,6 +138,9 @@ class AccObjective {
   /// Relative size of |sum n_i| (per non-zero normal) below which sum n_i is recomputed in
   /// ascending triangle order (see the file comment).
   static constexpr double kRecomputeNormalSum = 0.05;
+  /// A merged cluster of at least this many vertices or triangles keeps what
+  /// AccTuning::large_bounds reads.
+  static constexpr std::size_t kLargeFrom = 64;
 
   /// A cluster's summary without its 26-DOP: what the contraction keeps of a merged cluster
   /// when the tuning has no DOP bound (AccTuning::dop_bound; the DOP is always empty then), in
@@ -257,6 +272,19 @@ class AccObjective {
   [[nodiscard]] std::uint64_t sphere_computations() const { return sphere_computations_; }
 
  private:
+  /// AccTuning::large_bounds: what a large merged cluster keeps (see there), by serial.
+  using Moment = std::array<double, 6>;  ///< sum Area_i n_i n_i^T: xx, yy, zz, xy, xz, yz
+  /// Horizon thresholds of Large::horizon.
+  static constexpr std::array<double, 6> kHorizon = {0x1p-16, 0x1p-12, 0x1p-8, 0x1p-6, 0x1p-4, 0x1p-2};
+  struct Large {
+    std::array<std::uint32_t, 10> points{};  ///< vertices: the 4 farthest from S's center, the box's 6 extremes
+    Moment moment{};
+    /// For AreaP near the cluster's own N_avg n_ref: g = sum s_i Area_i n_i with s_i the sign of
+    /// n_ref.n_i, and horizon[k] = the area of the members with |n_ref.n_i| <= kHorizon[k].
+    Vec3 n_ref = Vec3::Zero(), g = Vec3::Zero();
+    std::array<double, 6> horizon{};
+    std::size_t full_members = 0;  ///< members at the last pass over all of them (AccObjective::keep_large)
+  };
   [[nodiscard]] double score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg) const;
   /// evaluate() up to the sphere: the box, N_avg with its fallback, the normal sum and AreaP.
   /// allow_area_bound (Precision::UpperBoundAllowed with AccTuning::area_bound): AreaP may be
@@ -266,7 +294,7 @@ class AccObjective {
   /// evaluate() from the sphere of A u B on (ev holds the box, N_avg, sums and AreaP); b may be
   /// null when ctx adds one vertex and the tuning has no DOP (it is not read then).
   void union_sphere_and_score(const Summary& a, const Summary* b, const MergeContext& ctx, Precision precision,
-                              bool memo, Evaluation& ev);
+                              bool memo, Evaluation& ev, const Large* la = nullptr);
   /// Which points may support S(A u B) (minimal spheres only; see evaluate()).
   struct PointFilter {
     Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
@@ -287,6 +315,31 @@ class AccObjective {
   [[nodiscard]] const Sphere* memo_find(std::uint32_t v) const;
   void learn_r2(std::uint32_t v, double r2);
   [[nodiscard]] double area_p_of(const Summary& part, std::span<const std::uint32_t> members, const Vec3& n) const;
+
+  std::unordered_map<std::uint64_t, Large> large_;
+  [[nodiscard]] const Large* large_of(const Summary& s) const {
+    if (large_.empty()) return nullptr;
+    const auto it = large_.find(s.serial);
+    return it == large_.end() ? nullptr : &it->second;
+  }
+  /// After merge(a, b) made s: keeps s's Large when it is large, forgets a's and b's.
+  void keep_large(const Summary& a, const Summary& b, const MergeContext& ctx, const Summary& s, const Vec3& n_avg);
+  /// The moment of a part: kept (large) or summed over its members.
+  [[nodiscard]] Moment moment_of(const Summary& part, std::span<const std::uint32_t> members) const;
+  /// Precision::SupportBound's R^2 for a large A: the minimal sphere of A's kept points and B's
+  /// (kept, or V(B) \ V(A) for a small B), shrunk as support_r2's.
+  [[nodiscard]] double large_support_r2(const Large& la, const Large* lb, const MergeContext& ctx,
+                                        const Box3& box);
+  /// AreaP(A u B) at the exact N_avg, which is within delta of n, bounded from the large A's
+  /// (and B's) Large; w = the union's total area.
+  [[nodiscard]] double horizon_area_bound(const Summary& b, const MergeContext& ctx, const Vec3& n, double delta,
+                                          double w) const;
+  /// The union's moment for the bounds of evaluate() (null without a large A), and A's and B's Large.
+  const Moment* union_moment_ = nullptr;
+  const Large* bound_la_ = nullptr;
+  const Large* bound_lb_ = nullptr;
+  std::vector<Vec3> scratch_bound_points_;
+  Moment union_moment_value_{};
 
   const ClusterTables* tables_;
   ClusterParams params_;
