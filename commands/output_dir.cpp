@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <fstream>
+#include <regex>
 #include <iostream>
 #include <stdexcept>
 #include <vector>
@@ -195,6 +196,12 @@ std::vector<std::filesystem::path>& committed_outputs() {
 }
 
 }  // namespace
+
+std::string with_user_paths(const std::string& message) {
+  if (message.find(".tmp-") == std::string::npos) return message;
+  static const std::regex temporary(R"((^|[/\s'"`(])\.([^/\n]+?)\.tmp-[0-9]+-[0-9]+(?:\.old)?(?=$|[/\s:'"`),]))");
+  return std::regex_replace(message, temporary, "$1$2");
+}
 
 bool output_was_committed(const std::filesystem::path& out) {
   const fs::path want = out.lexically_normal();

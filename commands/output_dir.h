@@ -34,6 +34,12 @@ void refuse_overwriting_input(const std::filesystem::path& out, const std::files
 class RunManifest;
 class OutputDir;
 
+/// `message` with ptc's temporary names (an OutputDir's ".NAME.tmp-PID-N" directory and its
+/// ".old", an AtomicFile's ".NAME.tmp-PID-N") replaced by the names the user gave: an error
+/// while writing names the file as it would be ("small/cl/clusters.ply: cannot write: No space
+/// left on device"), not the hidden temporary that was being written.
+[[nodiscard]] std::string with_user_paths(const std::string& message);
+
 /// Whether an OutputDir for `out` was committed in this process (an interrupt after it leaves a
 /// complete output, not the previous one).
 [[nodiscard]] bool output_was_committed(const std::filesystem::path& out);

@@ -120,14 +120,14 @@ int main(int argc, char** argv) {
     std::cerr << "ptc: " << e.what() << " (run 'ptc --help')\n";
     return 2;
   } catch (const InputError& e) {
-    std::cerr << "ptc: error: " << e.what() << "\n";
+    std::cerr << "ptc: error: " << with_user_paths(e.what()) << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << "ptc: error: " << (name.empty() ? std::string() : name + ": ")
               << "out of memory (nothing was written; 'ptc info --json MESH' estimates what a mesh needs)\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "ptc: error: " << e.what() << "\n";
+    std::cerr << "ptc: error: " << with_user_paths(e.what()) << "\n";
     return 1;
   }
   std::cout.flush();

@@ -985,3 +985,22 @@ TEST_F(Cli, ReplacingAnotherCommandsOutputIsSaid) {
 }
 
 }  // namespace
+
+// A command started with its stdout closed (`>&-`) opens /dev/null there first: otherwise the next
+// file ptc opens takes descriptor 1 and what it prints lands in it. viz's X display connection
+// took it, its text went into the X protocol and the run hung in XCloseDisplay; the outputs of the
+// other commands were written through descriptor 1. Now: the same triangles.csv as with stdout
+// open, and viz ends (a timeout of 120 s would say 124).
+TEST_F(Cli, AClosedStdoutIsNotReused) {
+  const auto mesh = std::string(PTC_TEST_DATA) + "/meshes/mushroom.off";
+  const std::string open_out = (dir_ / "open").string(), closed_out = (dir_ / "closed").string();
+  ASSERT_EQ(ptc({"cluster", mesh, "--method", "growth", "--out", open_out}).code, 0);
+  const std::vector<std::string> closed = {"timeout", "120", "sh", "-c", "exec \"$0\" \"$@\" >&-", PTC_BIN};
+  const RunResult c = run(closed, {"cluster", mesh, "--method", "growth", "--out", closed_out});
+  ASSERT_EQ(c.code, 0) << c.err;
+  EXPECT_EQ(slurp(dir_ / "closed" / "triangles.csv"), slurp(dir_ / "open" / "triangles.csv"));
+  const RunResult v = run(closed, {"viz", "partition", mesh, "--clusters", open_out, "--width", "64", "--height", "64",
+                                   "--out", (dir_ / "v").string()});
+  EXPECT_EQ(v.code, 0) << v.err;
+  EXPECT_TRUE(fs::exists(dir_ / "v" / "partition.png")) << v.err;
+}
