@@ -23,6 +23,16 @@ void cmd_subdivide(const SubdivideOptions& opt, std::ostream& out) {
     std::error_code dir_ec;
     if (std::filesystem::is_directory(opt.output, dir_ec))
       throw UsageError("--out", "'" + opt.output.string() + "' is a directory: give the output mesh's file name (.off, .obj or .ply)");
+    // The file is written whole under a temporary name and renamed over the target: a FIFO, a
+    // device or a socket there would be replaced by a regular file, not written to.
+    namespace fs = std::filesystem;
+    const fs::file_status st = fs::symlink_status(opt.output, dir_ec);
+    if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_symlink(st)) {
+      const char* kind = fs::is_fifo(st) ? "a FIFO" : fs::is_socket(st) ? "a socket"
+                         : fs::is_character_file(st) || fs::is_block_file(st) ? "a device" : "not a regular file";
+      throw UsageError("--out", "'" + opt.output.string() + "' is " + kind +
+                                    ": ptc writes a mesh whole and renames it into place, which would replace it; give a file name");
+    }
   }
   if (const auto f = format_from_extension(opt.output); !f || *f == MeshFormat::Stl)
     throw UsageError("--out", "'" + opt.output.string() + "': cannot write this format (use .off, .obj or .ply)");

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <sys/stat.h>
 #include <fstream>
 #include <sstream>
 
@@ -192,6 +193,14 @@ TEST_F(Cli, SubdivideCountsAndAtomicOutput) {
     EXPECT_TRUE(fs::is_regular_file(link));
   }
   EXPECT_EQ(slurp(kept), kept_bytes);
+  // A FIFO as --out is refused before any work (the rename would have replaced it by a file).
+  const fs::path fifo = dir_ / "fifo.off";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  r = ptc({"subdivide", cube, "--out", fifo.string()});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("--out: '" + fifo.string() + "' is a FIFO"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::is_fifo(fifo));
   // Loop refuses a non-manifold mesh with a clear error.
   const auto fan = write("fan.off", "OFF\n5 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n0 -1 0\n3 0 1 2\n3 1 0 3\n3 0 1 4\n").string();
   r = ptc({"subdivide", fan, "--scheme", "loop", "--out", (dir_ / "fan2.off").string()});
