@@ -59,7 +59,10 @@
 //   passes; that sphere often contains every point and is then the exact answer). For any
 //   pair, Precision::SupportBound adds the radius of the minimal sphere of three points of
 //   A u B (support_r2; three passes over V(A u B); never the exact answer: the contraction keeps
-//   the exact computation's sphere, sphere_of_union, as its exact value). Every R_lb is shrunk by 1e-12 relative and (from the
+//   the exact computation's sphere, sphere_of_union, as its exact value). With
+//   AccTuning::large_bounds, a large A's pairs take both levels' bounds from what A keeps (ten
+//   points, the normals' second moment, signed sum and horizon; see there) in O(|B|) instead.
+//   Every R_lb is shrunk by 1e-12 relative and (from the
 //   spheres of A and B) by the absolute rounding of their centers, so that rounding of the
 //   computed spheres (~1e-15) cannot put the bound below the computed exact value.
 // - Point filter for the exact computation: the center c of S(A u B) satisfies
