@@ -100,8 +100,10 @@ int main(int argc, char** argv) {
       if (*c.app) {
         out = out_of(*c.app);
         name = c.app->get_name();
-        if (c.app->get_parent() && c.app->get_parent()->get_parent())  // "viz heatmap", "experiment drift"
+        if (c.app->get_parent() && c.app->get_parent()->get_parent())  // "viz heatmap"
           name = c.app->get_parent()->get_name() + " " + name;
+        if (const CLI::Option* kind = c.app->get_option_no_throw("KIND"); kind && kind->count() > 0)
+          name += " " + kind->as<std::string>();  // "experiment drift"
         throw_if_cancelled();  // a signal during the start-up: nothing is run
         c.run();
       }

@@ -313,10 +313,11 @@ TEST_F(Interrupt, AFifoWithoutAWriterStopsOnTheFirstSignal) {
 // stop at their progress steps).
 TEST_F(Interrupt, AnExperimentStopsTheSameWay) {
   const fs::path out = dir_ / "out";
-  (void)interrupt(out, SIGINT,
-                  {"experiment", "compare", "armadillo-twist", "--data-dir", kData, "--frames", "0:2000",
-                   "--extend-frames", "--configs", "acc_growth,standard", "--width", "128", "--height", "128",
-                   "--quiet", "--out", out.string()});
+  const RunResult r = interrupt(out, SIGINT,
+                                {"experiment", "compare", "armadillo-twist", "--data-dir", kData, "--frames", "0:2000",
+                                 "--extend-frames", "--configs", "acc_growth,standard", "--width", "128", "--height",
+                                 "128", "--quiet", "--out", out.string()});
+  EXPECT_NE(r.err.find("ptc: experiment compare interrupted"), std::string::npos) << r.err;  // the kind named
   EXPECT_FALSE(fs::exists(out));
 }
 
