@@ -109,7 +109,8 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
     fs::create_directories(parent, ec);
     if (ec) throw InputError(parent.string(), "", "", "cannot create directory: " + ec.message());
   }
-  tmp_ = (parent.empty() ? fs::path(".") : parent) / ("." + leaf + ".tmp-" + unique_suffix());
+  // (the first 200 bytes of a long name: ".NAME.tmp-PID-N.old" stays within NAME_MAX, 255)
+  tmp_ = (parent.empty() ? fs::path(".") : parent) / ("." + leaf.substr(0, 200) + ".tmp-" + unique_suffix());
   fs::create_directory(tmp_, ec);
   if (ec) throw InputError(target_.string(), "", "", "cannot create the output directory: " + ec.message());
   slot_ = register_temporary(tmp_, true);

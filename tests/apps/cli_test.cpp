@@ -1013,3 +1013,19 @@ TEST_F(Cli, AClosedStdoutIsNotReused) {
   EXPECT_EQ(v.code, 0) << v.err;
   EXPECT_TRUE(fs::exists(dir_ / "v" / "partition.png")) << v.err;
 }
+
+// Names of up to 255 bytes are legal; ptc's temporaries beside them (".NAME.tmp-PID-N") were not,
+// so a name of 243-255 bytes was refused ("File name too long"), by subdivide after all its work.
+TEST_F(Cli, TheLongestLegalNamesAreWritten) {
+  const auto cube = write("cube.off", ptc::test::kCube).string();
+  const std::string file = std::string(251, 'f') + ".off", dir = std::string(255, 'd');
+  RunResult r = ptc({"subdivide", cube, "--out", (dir_ / file).string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(dir_ / file));
+  r = ptc({"cluster", cube, "--out", (dir_ / dir).string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(dir_ / dir / "triangles.csv"));
+  r = ptc({"cluster", cube, "--out", (dir_ / dir).string()});  // replacing it: its ".old" too
+  EXPECT_EQ(r.code, 0) << r.err;
+  for (const auto& e : fs::directory_iterator(dir_)) EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos);
+}

@@ -29,8 +29,11 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
   if (exists && S_ISDIR(st.st_mode)) throw InputError(target_.string(), "", "", "is a directory");
   // O_EXCL: never reuse a name another writer (thread or process) holds; retry with the next counter.
   for (int attempt = 0;; ++attempt) {
-    const std::string name =
-        "." + base + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1));
+    // A name of up to NAME_MAX (255) bytes is legal: its temporary keeps the first 200 bytes of
+    // it, so that ".NAME.tmp-PID-N" stays legal too.
+    std::string name = ".";
+    name.append(base, 0, 200);
+    name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1));
     temp_ = dir.empty() ? std::filesystem::path(name) : dir / name;
     fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd_ >= 0) break;
