@@ -2,6 +2,8 @@
 // to exit codes: 0 success, 1 bad input or failed run (one line on stderr), 2 bad usage,
 // 130 interrupted (SIGINT or SIGTERM; nothing written, a previous output intact).
 // Each subcommand is registered from its own cli_<name>.cpp (see cli.h).
+#include <cerrno>
+#include <cstring>
 #include <iostream>
 #include <optional>
 #include <string_view>
@@ -132,9 +134,14 @@ int main(int argc, char** argv) {
     std::cerr << "ptc: error: " << with_user_paths(e.what()) << "\n";
     return 1;
   }
+  errno = 0;
   std::cout.flush();
   if (!std::cout) {
-    std::cerr << "ptc: error: cannot write to stdout\n";
+    // Why (when the failed write left it), and that the output itself is whole: a script that
+    // sees exit 1 should not take the output for a failed run's.
+    const int err = errno;
+    std::cerr << "ptc: error: cannot write to stdout" << (err != 0 ? std::string(": ") + std::strerror(err) : "")
+              << (!out.empty() && output_was_committed(out) ? " (" + out + " was written whole)" : "") << "\n";
     return 1;
   }
   return 0;

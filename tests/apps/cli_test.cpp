@@ -1029,3 +1029,20 @@ TEST_F(Cli, TheLongestLegalNamesAreWritten) {
   EXPECT_EQ(r.code, 0) << r.err;
   for (const auto& e : fs::directory_iterator(dir_)) EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos);
 }
+
+// A stdout that cannot take the text (a full device): exit 1 with the reason, and, when the
+// output was committed before, that it is whole (a script sees the failure, not a lost output).
+TEST_F(Cli, AFullStdoutIsSaidWithTheOutputsState) {
+  const auto cube = write("cube.off", ptc::test::kCube).string();
+  const std::vector<std::string> full = {"sh", "-c", "exec \"$0\" \"$@\" >/dev/full", PTC_BIN};
+  RunResult r = run(full, {"info", cube, "--json"});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(r.err, "ptc: error: cannot write to stdout: No space left on device\n");
+  const std::string out = (dir_ / "c").string();
+  r = run(full, {"cluster", cube, "--out", out});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("ptc: error: cannot write to stdout: No space left on device (" + out + " was written whole)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::is_regular_file(dir_ / "c" / "triangles.csv"));
+}
