@@ -1,8 +1,11 @@
 #include "commands/output_dir.h"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdlib>
 #include <atomic>
 #include <fstream>
 #include <regex>
@@ -32,6 +35,36 @@ std::string unique_suffix() {
   static std::atomic<unsigned> counter{0};
   return std::to_string(::getpid()) + "-" + std::to_string(counter++);
 }
+
+// Temporaries of this output left by a run that could not remove them (kill -9, a crash, a power
+// cut: no handler ran) are said once, not removed: a run killed while it moved the user's files
+// into its new output left them there.
+void note_killed_runs(const fs::path& dir, const std::string& prefix, const fs::path& target) {
+  std::error_code ec;
+  std::vector<std::string> stale;
+  std::size_t seen = 0;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end && seen < 100000; it.increment(ec), ++seen) {
+    const std::string name = it->path().filename().string();
+    if (!name.starts_with(prefix)) continue;
+    const std::string rest = name.substr(prefix.size());  // PID-N or PID-N.old
+    const std::size_t dash = rest.find('-');
+    if (dash == 0 || dash == std::string::npos || rest.find_first_not_of("0123456789") != dash) continue;
+    const long pid = std::strtol(rest.c_str(), nullptr, 10);
+    if (pid <= 0 || pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == -1 && errno == ESRCH)
+      stale.push_back(dir == fs::path(".") ? name : (dir / name).string());
+  }
+  if (stale.empty()) return;
+  std::sort(stale.begin(), stale.end());
+  std::string list;
+  for (std::size_t i = 0; i < stale.size() && i < 3; ++i) list += (i ? ", " : "") + stale[i];
+  if (stale.size() > 3) list += fmt::format(", ... ({} of them)", stale.size());
+  std::cerr << "ptc: note: " << list << (stale.size() == 1 ? " is" : " are")
+            << " left from an earlier run into " << target.string()
+            << " that was killed (kill -9, a crash); ptc leaves " << (stale.size() == 1 ? "it" : "them")
+            << " alone: files you had in " << target.string() << " may be inside\n";
+}
+
 }  // namespace
 
 std::string readable_bytes(double b) {
@@ -110,7 +143,9 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
     if (ec) throw InputError(parent.string(), "", "", "cannot create directory: " + ec.message());
   }
   // (the first 200 bytes of a long name: ".NAME.tmp-PID-N.old" stays within NAME_MAX, 255)
-  tmp_ = (parent.empty() ? fs::path(".") : parent) / ("." + leaf.substr(0, 200) + ".tmp-" + unique_suffix());
+  const std::string tmp_prefix = "." + leaf.substr(0, 200) + ".tmp-";
+  tmp_ = (parent.empty() ? fs::path(".") : parent) / (tmp_prefix + unique_suffix());
+  note_killed_runs(tmp_.parent_path(), tmp_prefix, target_);
   fs::create_directory(tmp_, ec);
   if (ec) throw InputError(target_.string(), "", "", "cannot create the output directory: " + ec.message());
   slot_ = register_temporary(tmp_, true);

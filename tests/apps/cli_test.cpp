@@ -1046,3 +1046,27 @@ TEST_F(Cli, AFullStdoutIsSaidWithTheOutputsState) {
       << r.err;
   EXPECT_TRUE(fs::is_regular_file(dir_ / "c" / "triangles.csv"));
 }
+
+// A temporary of the output left by a run that no handler could clean up (kill -9) is said on the
+// next run into that output and left alone (it may hold files the user had there); one of a
+// process that still runs is not a leftover.
+TEST_F(Cli, TemporariesOfAKilledRunAreSaid) {
+  const auto cube = write("cube.off", ptc::test::kCube).string();
+  const std::string out = (dir_ / "c").string();
+  ASSERT_EQ(ptc({"cluster", cube, "--out", out}).code, 0);
+  const RunResult sh = run({"sh", "-c", "echo $$"}, {});  // a process id that has ended
+  const std::string dead = sh.out.substr(0, sh.out.find('\n'));
+  const fs::path stale = dir_ / (".c.tmp-" + dead + "-0"), live = dir_ / (".c.tmp-" + std::to_string(getpid()) + "-0");
+  fs::create_directory(stale);
+  ptc::test::spit(stale / "notes.txt", "the user's notes\n");
+  fs::create_directory(live);
+  const RunResult r = ptc({"cluster", cube, "--out", out});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ptc: note: " + stale.string() + " is left from an earlier run into " + out +
+                       " that was killed (kill -9, a crash); ptc leaves it alone: files you had in " + out +
+                       " may be inside"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find(live.filename().string()), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(stale / "notes.txt"), "the user's notes\n");
+}
