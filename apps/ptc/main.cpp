@@ -53,14 +53,24 @@ int main(int argc, char** argv) {
   cli::register_viz(app, ctx);
   cli::register_notebook(app, ctx);
 
+  // Help and version text go to stdout: a stdout that cannot take them is a failure (exit 1), as
+  // for every other command's text.
+  const auto printed = [](int code) {
+    errno = 0;
+    std::cout.flush();
+    if (std::cout) return code;
+    const int err = errno;
+    std::cerr << "ptc: error: cannot write to stdout" << (err != 0 ? std::string(": ") + std::strerror(err) : "") << "\n";
+    return 1;
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    return printed(app.exit(e));
   } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+    return printed(app.exit(e));
   } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
+    return printed(app.exit(e));
   } catch (const CLI::ParseError& e) {
     std::string msg = e.what();
     // CLI11's words for two common slips, in the user's (the flag or command named).

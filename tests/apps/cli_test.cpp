@@ -1045,6 +1045,11 @@ TEST_F(Cli, AFullStdoutIsSaidWithTheOutputsState) {
             std::string::npos)
       << r.err;
   EXPECT_TRUE(fs::is_regular_file(dir_ / "c" / "triangles.csv"));
+  for (const std::vector<std::string>& help : {std::vector<std::string>{"--help"}, {"cluster", "--help"}, {"--version"}}) {
+    r = run(full, help);
+    EXPECT_EQ(r.code, 1) << help[0];
+    EXPECT_NE(r.err.find("ptc: error: cannot write to stdout"), std::string::npos) << r.err;
+  }
 }
 
 // A temporary of the output left by a run that no handler could clean up (kill -9) is said on the
