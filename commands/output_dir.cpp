@@ -234,8 +234,12 @@ std::vector<std::filesystem::path>& committed_outputs() {
 }  // namespace
 
 std::string with_user_paths(const std::string& message) {
-  if (message.find(".tmp-") == std::string::npos) return message;
-  static const std::regex temporary(R"((^|[/\s'"`(])\.([^/\n]+?)\.tmp-[0-9]+-[0-9]+(?:\.old)?(?=$|[/\s:'"`),]))");
+  // Only this process's temporaries (their names carry its id): a user's ".cache.tmp-2024-01"
+  // stays as it is.
+  const std::string mine = ".tmp-" + std::to_string(::getpid()) + "-";
+  if (message.find(mine) == std::string::npos) return message;
+  static const std::regex temporary(R"((^|[/'"`(])\.([^/\n]+?)\.tmp-)" + std::to_string(::getpid()) +
+                                    R"(-[0-9]+(?:\.old)?(?=$|[/\s:'"`),]))");
   return std::regex_replace(message, temporary, "$1$2");
 }
 
@@ -357,10 +361,11 @@ void OutputDir::commit() {
   committed_outputs().push_back(target_);
   unregister_temporary(slot_);
   slot_ = -1;
-  held.release();  // a signal held back now stops the run after its output is complete
+  // The previous output, now replaced: a second signal during its removal (or held until now)
+  // removes it too.
+  if (!old.empty()) slot_ = register_temporary(old, true);
+  held.release();  // a second signal held back now ends the run (its output is complete)
   if (!old.empty()) {
-    // The previous output, now replaced: a second signal during its removal removes it too.
-    slot_ = register_temporary(old, true);
     fs::remove_all(old, ec);
     unregister_temporary(slot_);
     slot_ = -1;

@@ -119,7 +119,6 @@ int main(int argc, char** argv) {
         throw_if_cancelled();  // a signal during the start-up: nothing is run
         c.run();
       }
-    throw_if_cancelled();  // a signal after the last check (the output is then in place): said, 130
   } catch (const Interrupted&) {
     std::cout.flush();  // what a pipe was given so far
     if (out.empty())

@@ -274,7 +274,9 @@ TEST_F(Interrupt, SignalsWhileTheUsersFilesMoveLoseNothing) {
         if (r.code == 0) continue;  // finished before the signal
         ++stopped;
         EXPECT_TRUE(r.code == 130 || r.code == -sig) << what << ": " << r.err;
-        EXPECT_EQ(lines(r.err), 1u) << what << ": " << r.err;
+        // (twice: the first may stop the run at a clean point and the second still find it on
+        // its way out, which says so in a second line)
+        EXPECT_LE(lines(r.err), twice ? 2u : 1u) << what << ": " << r.err;
       }
   EXPECT_GE(stopped, 8);
 }

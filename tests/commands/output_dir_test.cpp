@@ -248,14 +248,18 @@ namespace {
 // Errors while an output is written name the files as the user will find them, not the hidden
 // temporaries being written (a full disk said ".../small/.cl.tmp-31877-0/clusters.ply").
 TEST(OutputDir, ErrorsNameTheUsersPaths) {
-  EXPECT_EQ(with_user_paths("/tmp/x/small/.cl.tmp-31877-0/clusters.ply: cannot write: No space left on device"),
+  const std::string p = std::to_string(::getpid()), other = std::to_string(::getpid() + 1);
+  EXPECT_EQ(with_user_paths("/tmp/x/small/.cl.tmp-" + p + "-0/clusters.ply: cannot write: No space left on device"),
             "/tmp/x/small/cl/clusters.ply: cannot write: No space left on device");
-  EXPECT_EQ(with_user_paths(".tr.tmp-4143-0/depth_0020.png: cannot write it"), "tr/depth_0020.png: cannot write it");
-  EXPECT_EQ(with_user_paths("out dir/.my out.tmp-1-2/.a.csv.tmp-1-7: x"), "out dir/my out/a.csv: x");
-  EXPECT_EQ(with_user_paths("cannot remove 'runs/.r1.tmp-77-3.old': busy"), "cannot remove 'runs/r1': busy");
-  EXPECT_EQ(with_user_paths("d/.f.off.tmp-12-0: cannot write it"), "d/f.off: cannot write it");
-  // Names that only look alike stay.
-  for (const char* kept : {"a/b.tmp-1-2/c: x", "a/.b.tmp-x-2/c: x", "a/.b.tmp-1-2x/c: x", "nothing to see", ""})
+  EXPECT_EQ(with_user_paths(".tr.tmp-" + p + "-0/depth_0020.png: cannot write it"), "tr/depth_0020.png: cannot write it");
+  EXPECT_EQ(with_user_paths("out dir/.my out.tmp-" + p + "-2/.a.csv.tmp-" + p + "-7: x"), "out dir/my out/a.csv: x");
+  EXPECT_EQ(with_user_paths("cannot remove 'runs/.r1.tmp-" + p + "-3.old': busy"), "cannot remove 'runs/r1': busy");
+  EXPECT_EQ(with_user_paths("d/.f.off.tmp-" + p + "-0: cannot write it"), "d/f.off: cannot write it");
+  // Names that only look alike stay: another process's, a user's dated directory, other shapes,
+  // and a temporary after a word with a dot (the rewrite starts at a path's start or a '/').
+  for (const std::string& kept : {"a/.b.tmp-" + other + "-2/c: x", std::string("/home/u/.cache.tmp-2024-01/x: y"),
+                                 "a/b.tmp-" + p + "-2/c: x", "a/.b.tmp-" + p + "-2x/c: x", std::string("nothing to see"),
+                                 std::string(""), "in .x: .y.tmp-" + p + "-2/z"})
     EXPECT_EQ(with_user_paths(kept), kept);
 }
 

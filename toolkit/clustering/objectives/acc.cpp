@@ -506,7 +506,9 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
   const auto area_bound = [&](const Vec3* n, double delta) {
     const double w = a.area_sum + b.area_sum;
     ev.area_p = w * (1.0 + 1e-6);
-    if (const Moment* mm = union_moment_) {
+    // (W >= 2^-900: the sums' absolute rounding where terms fall below the normal range,
+    // 2^-1075 an operation, stays far below the relative margins; smaller, the total area only.)
+    if (const Moment* mm = union_moment_; mm && w >= 0x1p-900) {
       const Moment& M = *mm;
       const double q = n && delta == 0.0 ? M[0] * n->x() * n->x() + M[1] * n->y() * n->y() + M[2] * n->z() * n->z() +
                                2.0 * (M[3] * n->x() * n->y() + M[4] * n->x() * n->z() + M[5] * n->y() * n->z())
@@ -694,8 +696,14 @@ void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr
       // bound of its own, made from the points, not from the spheres). r2_lb alone still sets
       // the filter of the exact computation below, as for Precision::Exact.
       double key_r2 = shrink > 0.0 ? r2_lb : 0.0;
-      if (precision == Precision::SupportBound)
-        key_r2 = std::max(key_r2, la ? large_support_r2(*la, large_of(*b_ptr), ctx, ev.box) : support_r2(ctx, ev.box));
+      if (precision == Precision::SupportBound) {
+        // Less the centers' absolute rounding, as r2_lb: far from the origin the exact
+        // computation's radius (S(A) reused when the added points are surely inside it, centers
+        // in global coordinates) may lie that much below the points' minimal sphere (a review
+        // found 9.5e-9 relative at an offset of 3e7 with the kept points' tight sphere).
+        const double sr = std::sqrt(la ? large_support_r2(*la, large_of(*b_ptr), ctx, ev.box) : support_r2(ctx, ev.box)) - slack;
+        if (sr > 0.0) key_r2 = std::max(key_r2, sr * sr);
+      }
       if (key_r2 > 0.0 && precision != Precision::Exact) {
         ev.exact = false;
         ev.score = score_of(ev.area_p, key_r2, ctx.vertex_count, nullptr);
