@@ -805,7 +805,7 @@ TEST(AccObjective, LargeClusterBoundsBoundTheExactScore) {
   const Mesh far = moved(hand, 1e-3, Vec3(4e6, -2e6, 1e6)), tiny = moved(hand, 1e-30, Vec3(0, 0, 0));
   AccTuning without = AccTuning::for_contraction();
   without.large_bounds = false;
-  int pairs = 0, large_b = 0, near_support = 0, tighter_cheap = 0, recomputed = 0;
+  int pairs = 0, large_b = 0, near_support = 0, tighter_cheap = 0, recomputed = 0, settled = 0;
   for (const Mesh* m : {&sphere, &hand, &far, &tiny}) {
     const EdgeMap em = EdgeMap::build(m->triangles(), m->vertex_count());
     const ClusterTables tb = ClusterTables::build(*m);
@@ -846,12 +846,21 @@ TEST(AccObjective, LargeClusterBoundsBoundTheExactScore) {
       EXPECT_LE(cheap.score, plain_cheap.score) << what;  // never looser than the total area's bound
       tighter_cheap += cheap.score < plain_cheap.score;
       EXPECT_LE(support.score, cheap.score) << what;
+      if (cheap.settled) {  // keyed as SupportBound's: it must be that key
+        ++settled;
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(support.score), std::bit_cast<std::uint64_t>(cheap.score)) << what;
+      }
+      if (cheap.settled) {  // keyed as SupportBound's: it must be that key
+        ++settled;
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(support.score), std::bit_cast<std::uint64_t>(cheap.score)) << what;
+      }
       near_support += support.score <= exact.score + 0.02 * std::abs(exact.score);
     }
   }
   EXPECT_GE(pairs, 30);
   EXPECT_GE(large_b, 8);
   EXPECT_GE(recomputed, 3);
+  EXPECT_GE(settled, 5);  // (12 of 33 here)
   EXPECT_GE(tighter_cheap, pairs / 2);
   EXPECT_GE(near_support, pairs / 3);  // (B of up to 200 triangles: the contraction's are mostly one or two)
 }

@@ -524,7 +524,10 @@ template <ClusterObjective O>
     const Evaluation ev = objective.evaluate(sa, sb, ctx, Precision::UpperBoundAllowed);
     ++(ev.exact ? run.exact_evaluations : run.bound_evaluations);
     if (O::kMergeOnlyPositive && !(ev.score > 0.0)) return false;
-    out = make_entry(a, b, ev.score, ev.exact ? kExactBit : 0u);
+    std::uint32_t kind = ev.exact ? kExactBit : 0u;
+    if constexpr (requires { ev.settled; })
+      if (ev.settled) kind = kSupportBit;  // SupportBound would give the same key
+    out = make_entry(a, b, ev.score, kind);
     return true;
   };
   for (std::uint32_t t = 0; t < T; ++t)

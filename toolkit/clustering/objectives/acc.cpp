@@ -465,6 +465,9 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
   union_moment_ = nullptr;
   union_sphere_and_score(a, &b, ctx, precision, memo, ev, la);
   if (ev.area_bounded) {  // a bound whatever the sphere: AreaP is (reg and the sphere are not kept)
+    // With a large A and the exact sphere, SupportBound would give this same bound (the same
+    // AreaP bound, the sphere itself): only the exact evaluation can tighten it.
+    ev.settled = la != nullptr && ev.exact;
     ev.exact = false;
     ev.reg = 0;
   }

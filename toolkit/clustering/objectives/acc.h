@@ -196,6 +196,9 @@ class AccObjective {
     Vec3 normal_sum = Vec3::Zero();  ///< sum n_i of A u B as used (possibly recomputed)
     double area_p = 0;            ///< AreaP(A u B), or an upper bound of it (area_bounded)
     bool area_bounded = false;    ///< area_p is the total area's bound (AccTuning::area_bound; never exact)
+    /// A bound no level short of Exact tightens (a large A's pair with its exact sphere: the
+    /// contraction keys it as a SupportBound key).
+    bool settled = false;
     double reg = 0;               ///< reg(A u B) (exact evaluations only)
   };
 
