@@ -112,11 +112,13 @@ struct AccTuning {
   /// few large clusters"). Growth's bounded keys take another path (growth_prepare).
   bool area_bound = false;
   /// Keeps, for each merged cluster of at least kLargeFrom vertices or triangles, ten of its
-  /// vertices (the four farthest from its sphere's center, the six extremes of its box) and its
-  /// normals' second moment sum Area_i n_i n_i^T, so that the bounds of its pairs
-  /// (Precision::UpperBoundAllowed and SupportBound) read those instead of its members: the
-  /// radius from the minimal sphere of those points and B's, AreaP by Cauchy-Schwarz,
-  /// sum Area_i |N.n_i| <= sqrt(sum Area_i * N^T M N). O(|B|) instead of O(|A| + |B|). A
+  /// vertices (the four farthest from its sphere's center, the six extremes of its box), its
+  /// normals' second moment M = sum Area_i n_i n_i^T, and their signed sum and horizon around
+  /// its own N_avg (Large), so that the bounds of its pairs (Precision::UpperBoundAllowed and
+  /// SupportBound) read those instead of its members: the radius from the minimal sphere of
+  /// those points and B's; AreaP by Cauchy-Schwarz, sum Area_i |N.n_i| <= sqrt(sum Area_i *
+  /// N^T M N), and by the signed sum with the members near the horizon bounded apart
+  /// (horizon_area_bound). O(|B|) instead of O(|A| + |B|). A
   /// contraction to few large clusters (--target-clusters with a high --max-count) otherwise
   /// re-runs SupportBound's passes over the large cluster for each of its neighbours after every
   /// merge (docs/clustering.md, "Contraction to few large clusters"). Bounds only: which pair
