@@ -147,7 +147,10 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
   tmp_ = (parent.empty() ? fs::path(".") : parent) / (tmp_prefix + unique_suffix());
   note_killed_runs(tmp_.parent_path(), tmp_prefix, target_);
   fs::create_directory(tmp_, ec);
-  if (ec) throw InputError(target_.string(), "", "", "cannot create the output directory: " + ec.message());
+  if (ec)  // (the directory ptc writes into first is a sibling: its parent is what refuses)
+    throw InputError(target_.string(), "", "",
+                     "cannot write into its directory '" + tmp_.parent_path().string() + "': " +
+                         (ec == std::errc::no_such_file_or_directory ? std::string("it takes no new entries") : ec.message()));
   slot_ = register_temporary(tmp_, true);
   try {
     write(kMarker, kMarkerHeader);

@@ -1075,3 +1075,15 @@ TEST_F(Cli, TemporariesOfAKilledRunAreSaid) {
   EXPECT_EQ(r.err.find(live.filename().string()), std::string::npos) << r.err;
   EXPECT_EQ(slurp(stale / "notes.txt"), "the user's notes\n");
 }
+
+// An output in a directory that exists but takes no new files (/dev/fd, /proc) said the directory
+// "does not exist", or only "cannot create the output directory".
+TEST_F(Cli, ADirectoryThatTakesNoNewFilesIsNamedAsSuch) {
+  const auto cube = write("cube.off", ptc::test::kCube).string();
+  RunResult r = ptc({"subdivide", cube, "--out", "/dev/fd/7.off"});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(r.err, "ptc: error: /dev/fd/7.off: cannot write it: the directory '/dev/fd' takes no new files\n");
+  r = ptc({"cluster", cube, "--out", "/proc/self/clusters"});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(r.err, "ptc: error: /proc/self/clusters: cannot write into its directory '/proc/self': it takes no new entries\n");
+}

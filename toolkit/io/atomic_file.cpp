@@ -40,9 +40,12 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
     const int err = errno;
     if ((err == EEXIST || err == EINTR) && attempt < 100) continue;
     // In the user's words: the file they asked for, and why (the hidden temporary's name is ours).
-    if (err == ENOENT)
-      throw InputError(target_.string(), "", "", "cannot write it: the directory '" + (dir.empty() ? std::string(".") : dir.string()) +
-                                                     "' does not exist");
+    const std::string where = dir.empty() ? std::string(".") : dir.string();
+    std::error_code dir_ec;
+    if (err == ENOENT && !std::filesystem::exists(dir.empty() ? std::filesystem::path(".") : dir, dir_ec))
+      throw InputError(target_.string(), "", "", "cannot write it: the directory '" + where + "' does not exist");
+    if (err == ENOENT)  // a directory that takes no new files (/dev/fd, /proc)
+      throw InputError(target_.string(), "", "", "cannot write it: the directory '" + where + "' takes no new files");
     throw InputError(target_.string(), "", "", "cannot write it: " + errno_text(err));
   }
   slot_ = register_temporary(temp_, false);
