@@ -142,8 +142,7 @@ OutputDir::OutputDir(fs::path target) : target_(std::move(target)) {
     fs::create_directories(parent, ec);
     if (ec) throw InputError(parent.string(), "", "", "cannot create directory: " + ec.message());
   }
-  // (the first 200 bytes of a long name: ".NAME.tmp-PID-N.old" stays within NAME_MAX, 255)
-  const std::string tmp_prefix = "." + leaf.substr(0, 200) + ".tmp-";
+  const std::string tmp_prefix = temporary_prefix(leaf);
   tmp_ = (parent.empty() ? fs::path(".") : parent) / (tmp_prefix + unique_suffix());
   note_killed_runs(tmp_.parent_path(), tmp_prefix, target_);
   fs::create_directory(tmp_, ec);
@@ -227,8 +226,7 @@ fs::path free_name(const fs::path& dir, const std::string& name) {
   return p;
 }
 
-// The outputs committed in this process (apps/ptc tells an interrupt after a commit from one
-// before it).
+// The outputs committed in this process (output_was_committed).
 std::vector<std::filesystem::path>& committed_outputs() {
   static std::vector<std::filesystem::path> paths;
   return paths;
@@ -282,7 +280,6 @@ void OutputDir::commit() {
   // waits for that (StopAtOnceHeld: its handler would remove the temporary directory, by then
   // holding the user's files).
   StopAtOnceHeld held;
-  auto give_up_if_stopped = [] { throw_if_cancelled(); };
   std::vector<std::pair<fs::path, fs::path>> moved;  // (from, to)
   auto undo_moves = [&] {
     for (auto it = moved.rbegin(); it != moved.rend(); ++it) {
@@ -331,7 +328,7 @@ void OutputDir::commit() {
       std::sort(keep.begin(), keep.end());
       std::sort(keep_renamed.begin(), keep_renamed.end());
       auto move = [&](const std::string& name, const fs::path& dest) {
-        give_up_if_stopped();
+        throw_if_cancelled();
         std::error_code rc;
         fs::rename(target_ / name, dest, rc);
         if (rc) throw InputError((target_ / name).string(), "", "", "cannot keep this file in the new output: " + rc.message());
@@ -342,7 +339,7 @@ void OutputDir::commit() {
       for (const auto& name : keep_renamed) move(name, free_name(tmp_, name));
       std::sort(kept_.begin(), kept_.end());
     }
-    give_up_if_stopped();
+    throw_if_cancelled();
     if (fs::exists(target_, ec)) {
       old = tmp_;
       old += ".old";

@@ -40,8 +40,8 @@ class OutputDir;
 /// left on device"), not the hidden temporary that was being written.
 [[nodiscard]] std::string with_user_paths(const std::string& message);
 
-/// Whether an OutputDir for `out` was committed in this process (an interrupt after it leaves a
-/// complete output, not the previous one).
+/// Whether an OutputDir for `out` was committed in this process (apps/ptc: a stdout that fails
+/// after it says the output is whole).
 [[nodiscard]] bool output_was_committed(const std::filesystem::path& out);
 
 /// A byte count as a person reads it: 512 B, 1.2 MB, 3.4 GB (powers of 1000, one decimal).

@@ -19,6 +19,19 @@
 
 namespace {
 
+// Flushes stdout; when it cannot take the text, says so with the reason (when the failed write
+// left one) and, for a run whose output `out` was committed, that the output itself is whole (a
+// script that sees exit 1 should not take it for a failed run's). `code` otherwise.
+int flushed_stdout(int code, const std::string& out = {}) {
+  errno = 0;
+  std::cout.flush();
+  if (std::cout) return code;
+  const int err = errno;
+  std::cerr << "ptc: error: cannot write to stdout" << (err != 0 ? std::string(": ") + std::strerror(err) : "")
+            << (!out.empty() && ptc::output_was_committed(out) ? " (" + out + " was written whole)" : "") << "\n";
+  return 1;
+}
+
 // "--out DIR" of the subcommand that ran, if it has one and it was given ("" otherwise).
 std::string out_of(const CLI::App& cmd) {
   const CLI::Option* o = cmd.get_option_no_throw("--out");
@@ -53,24 +66,16 @@ int main(int argc, char** argv) {
   cli::register_viz(app, ctx);
   cli::register_notebook(app, ctx);
 
-  // Help and version text go to stdout: a stdout that cannot take them is a failure (exit 1), as
-  // for every other command's text.
-  const auto printed = [](int code) {
-    errno = 0;
-    std::cout.flush();
-    if (std::cout) return code;
-    const int err = errno;
-    std::cerr << "ptc: error: cannot write to stdout" << (err != 0 ? std::string(": ") + std::strerror(err) : "") << "\n";
-    return 1;
-  };
+  // (Help and version text go to stdout: a stdout that cannot take them is a failure, as for
+  // every other command's text.)
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return printed(app.exit(e));
+    return flushed_stdout(app.exit(e));
   } catch (const CLI::CallForAllHelp& e) {
-    return printed(app.exit(e));
+    return flushed_stdout(app.exit(e));
   } catch (const CLI::CallForVersion& e) {
-    return printed(app.exit(e));
+    return flushed_stdout(app.exit(e));
   } catch (const CLI::ParseError& e) {
     std::string msg = e.what();
     // CLI11's words for two common slips, in the user's (the flag or command named).
@@ -123,8 +128,6 @@ int main(int argc, char** argv) {
     std::cout.flush();  // what a pipe was given so far
     if (out.empty())
       std::cerr << "ptc: " << name << " interrupted (no output was written)\n";
-    else if (output_was_committed(out))
-      std::cerr << "ptc: " << name << " interrupted after its output " << out << " was complete and in place\n";
     else
       std::cerr << "ptc: " << name << " interrupted: nothing was written to " << out << " (an earlier " << out
                 << " is as it was)\n";
@@ -143,15 +146,5 @@ int main(int argc, char** argv) {
     std::cerr << "ptc: error: " << with_user_paths(e.what()) << "\n";
     return 1;
   }
-  errno = 0;
-  std::cout.flush();
-  if (!std::cout) {
-    // Why (when the failed write left it), and that the output itself is whole: a script that
-    // sees exit 1 should not take the output for a failed run's.
-    const int err = errno;
-    std::cerr << "ptc: error: cannot write to stdout" << (err != 0 ? std::string(": ") + std::strerror(err) : "")
-              << (!out.empty() && output_was_committed(out) ? " (" + out + " was written whole)" : "") << "\n";
-    return 1;
-  }
-  return 0;
+  return flushed_stdout(0, out);
 }

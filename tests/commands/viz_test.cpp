@@ -83,6 +83,16 @@ class Viz : public test::TempDirTest {
     return o;
   }
   nlohmann::json manifest(const std::string& out) const { return nlohmann::json::parse(slurp(dir_ / out / "manifest.json")); }
+  // `ptc viz heatmap --metric METRIC --flat` into `out`: its image, and the image's scale in the manifest.
+  std::pair<RgbImage, nlohmann::json> unlit_heatmap(const std::string& out, const std::string& metric) const {
+    VizCommandOptions o = options(VizKind::Heatmap, out);
+    o.metric = metric;
+    o.lighting = false;
+    std::ostringstream text;
+    cmd_viz(o, text);
+    const std::string png = "heatmap_" + metric + ".png";
+    return {viz::read_png(dir_ / out / png), manifest(out)["results"]["images"][png]["scale"]};
+  }
 
   // The command's camera (from its manifest) and the triangle each pixel sees by brute force.
   std::vector<std::uint32_t> pixel_triangles(const nlohmann::json& m, int w, int h) const {
@@ -287,14 +297,8 @@ TEST_F(Viz, ClusterHeatmapColoursEveryClusterByItsValue) {
 // --range (a frame of all-full or all-not-full clusters had a one-value range), said so in the
 // legend, and not recorded as a --range; every cluster pixel is one end of the map.
 TEST_F(Viz, NotFullIsAFlagFromZeroToOne) {
-  VizCommandOptions o = options(VizKind::Heatmap, "nf");
-  o.metric = "not_full";
-  o.lighting = false;
-  std::ostringstream out;
-  cmd_viz(o, out);
-  const RgbImage img = viz::read_png(dir_ / "nf" / "heatmap_not_full.png");
+  const auto [img, sc] = unlit_heatmap("nf", "not_full");
   const nlohmann::json m = manifest("nf");
-  const auto& sc = m["results"]["images"]["heatmap_not_full.png"]["scale"];
   EXPECT_EQ(sc["min"].get<double>(), 0.0);
   EXPECT_EQ(sc["max"].get<double>(), 1.0);
   EXPECT_EQ(sc["range_from"], "a flag: 0 full, 1 not full");
@@ -306,14 +310,8 @@ TEST_F(Viz, NotFullIsAFlagFromZeroToOne) {
 }
 
 TEST_F(Viz, DivergingMetricsAreCentred) {
-  VizCommandOptions o = options(VizKind::Heatmap, "div");
-  o.metric = "box_area_ratio";  // 1 at the reference frame itself: the centre colour everywhere
-  o.lighting = false;
-  std::ostringstream out;
-  cmd_viz(o, out);
-  const RgbImage img = viz::read_png(dir_ / "div" / "heatmap_box_area_ratio.png");
-  const nlohmann::json m = manifest("div");
-  const auto& sc = m["results"]["images"]["heatmap_box_area_ratio.png"]["scale"];
+  // box_area_ratio: 1 at the reference frame itself, the centre colour everywhere
+  const auto [img, sc] = unlit_heatmap("div", "box_area_ratio");
   EXPECT_EQ(sc["colormap"], "coolwarm");
   EXPECT_DOUBLE_EQ(sc["min"].get<double>() + sc["max"].get<double>(), 2.0) << "symmetric about 1";
   EXPECT_EQ(img.at(48, 40), coolwarm(0.5));

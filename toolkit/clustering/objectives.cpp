@@ -80,8 +80,8 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
       return;
     }
   }
-  // Each edge's distinct triangles, ascending (a run's slots ascend): a clique of at most
-  // kMaxCliqueValence, else a path through them in that order.
+  // Each edge's distinct triangles, ascending (a run's slots ascend), linked by the dual graph's
+  // rule (for_each_dual_pair).
   std::vector<std::uint32_t> run;
   auto distinct_of = [&](const Side* lo, const Side* hi) {
     run.clear();
@@ -91,12 +91,10 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
   std::vector<std::uint64_t> count(T + 1, 0);
   for_each_edge([&](const Side* lo, const Side* hi) {
     distinct_of(lo, hi);
-    const std::size_t m = run.size();
-    if (m <= kMaxCliqueValence) {
-      for (std::uint32_t t : run) count[t + 1] += m - 1;
-    } else {
-      for (std::size_t i = 0; i < m; ++i) count[run[i] + 1] += (i > 0) + (i + 1 < m);
-    }
+    for_each_dual_pair(run, [&](std::uint32_t a, std::uint32_t b) {
+      ++count[a + 1];
+      ++count[b + 1];
+    });
   });
   for (std::size_t t = 0; t < T; ++t) count[t + 1] += count[t];
   if (count[T] > std::numeric_limits<std::uint32_t>::max())  // (at most 45 a triangle: beyond 95M triangles)
@@ -108,17 +106,10 @@ void build_neighbours(std::span<const Tri> triangles, std::size_t vertex_count, 
     std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
     for_each_edge([&](const Side* lo, const Side* hi) {
       distinct_of(lo, hi);
-      const std::size_t m = run.size();
-      if (m <= kMaxCliqueValence) {
-        for (std::uint32_t t : run)
-          for (std::uint32_t u : run)
-            if (u != t) out[fill[t]++] = u;
-      } else {
-        for (std::size_t i = 0; i + 1 < m; ++i) {
-          out[fill[run[i]]++] = run[i + 1];
-          out[fill[run[i + 1]]++] = run[i];
-        }
-      }
+      for_each_dual_pair(run, [&](std::uint32_t a, std::uint32_t b) {
+        out[fill[a]++] = b;
+        out[fill[b]++] = a;
+      });
     });
   }
   // Ascending and distinct per triangle (two triangles sharing two edges meet twice), compacted

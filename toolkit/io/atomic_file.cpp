@@ -20,6 +20,13 @@ std::atomic<unsigned> g_counter{0};
 std::string errno_text(int err) { return std::strerror(err); }
 }  // namespace
 
+std::string temporary_prefix(std::string_view name) {
+  std::string p = ".";
+  p.append(name.substr(0, 200));
+  p += ".tmp-";
+  return p;
+}
+
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
   const std::filesystem::path dir = target_.parent_path();
   const std::string base = target_.filename().string();
@@ -29,23 +36,20 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
   if (exists && S_ISDIR(st.st_mode)) throw InputError(target_.string(), "", "", "is a directory");
   // O_EXCL: never reuse a name another writer (thread or process) holds; retry with the next counter.
   for (int attempt = 0;; ++attempt) {
-    // A name of up to NAME_MAX (255) bytes is legal: its temporary keeps the first 200 bytes of
-    // it, so that ".NAME.tmp-PID-N" stays legal too.
-    std::string name = ".";
-    name.append(base, 0, 200);
-    name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1));
+    const std::string name =
+        temporary_prefix(base) + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1));
     temp_ = dir.empty() ? std::filesystem::path(name) : dir / name;
     fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd_ >= 0) break;
     const int err = errno;
     if ((err == EEXIST || err == EINTR) && attempt < 100) continue;
     // In the user's words: the file they asked for, and why (the hidden temporary's name is ours).
-    const std::string where = dir.empty() ? std::string(".") : dir.string();
+    const std::filesystem::path where = dir.empty() ? std::filesystem::path(".") : dir;
     std::error_code dir_ec;
-    if (err == ENOENT && !std::filesystem::exists(dir.empty() ? std::filesystem::path(".") : dir, dir_ec))
-      throw InputError(target_.string(), "", "", "cannot write it: the directory '" + where + "' does not exist");
-    if (err == ENOENT)  // a directory that takes no new files (/dev/fd, /proc)
-      throw InputError(target_.string(), "", "", "cannot write it: the directory '" + where + "' takes no new files");
+    if (err == ENOENT)  // no such directory, or one that takes no new files (/dev/fd, /proc)
+      throw InputError(target_.string(), "", "",
+                       "cannot write it: the directory '" + where.string() + "' " +
+                           (std::filesystem::exists(where, dir_ec) ? "takes no new files" : "does not exist"));
     throw InputError(target_.string(), "", "", "cannot write it: " + errno_text(err));
   }
   slot_ = register_temporary(temp_, false);

@@ -18,9 +18,16 @@
 
 #include <filesystem>
 #include <cstdint>
+#include <string>
 #include <string_view>
 
 namespace ptc {
+
+/// The start of the hidden name of a temporary beside an output named `name`: "." + its first
+/// 200 bytes + ".tmp-", followed by "PID-N" (and ".old" for a directory moved aside). A name of
+/// up to NAME_MAX (255) bytes is legal; the first 200 keep its temporaries legal too. AtomicFile
+/// and commands/output_dir.h's OutputDir name theirs so, and look for them by it.
+[[nodiscard]] std::string temporary_prefix(std::string_view name);
 
 class AtomicFile {
  public:

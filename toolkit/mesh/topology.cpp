@@ -146,12 +146,7 @@ DualGraph build_dual_graph(const EdgeMap& edges, std::size_t triangle_count) {
   for (std::size_t e = 0; e < edges.edge_count(); ++e) {
     auto ts = edges.triangles_of(e);
     const DualEdgeProperty prop{static_cast<std::uint32_t>(e)};
-    if (ts.size() <= kMaxCliqueValence) {
-      for (std::size_t i = 0; i < ts.size(); ++i)
-        for (std::size_t j = i + 1; j < ts.size(); ++j) boost::add_edge(ts[i], ts[j], prop, g);
-    } else {
-      for (std::size_t i = 1; i < ts.size(); ++i) boost::add_edge(ts[i - 1], ts[i], prop, g);
-    }
+    for_each_dual_pair(ts, [&](std::uint32_t a, std::uint32_t b) { boost::add_edge(a, b, prop, g); });
   }
   return g;
 }

@@ -33,6 +33,19 @@ inline constexpr std::uint32_t kNoEdge = 0xffffffffu;
 /// Non-manifold edges with up to this many triangles make a clique in the dual graph; more, a path.
 inline constexpr std::size_t kMaxCliqueValence = 16;
 
+/// The dual graph's pairs among the distinct triangles `ts` of one mesh edge (in the order
+/// given): f(ts[i], ts[j]) for every i < j when there are at most kMaxCliqueValence of them, else
+/// f(ts[i - 1], ts[i]) (a path). The one rule of build_dual_graph and ClusterTables' neighbours.
+template <class F>
+void for_each_dual_pair(std::span<const std::uint32_t> ts, F&& f) {
+  if (ts.size() <= kMaxCliqueValence) {
+    for (std::size_t i = 0; i < ts.size(); ++i)
+      for (std::size_t j = i + 1; j < ts.size(); ++j) f(ts[i], ts[j]);
+  } else {
+    for (std::size_t i = 1; i < ts.size(); ++i) f(ts[i - 1], ts[i]);
+  }
+}
+
 /// Every non-collapsed triangle side, bucketed by its smaller vertex and sorted within the
 /// bucket by (larger vertex, slot), slot = 3 t + k for side k of triangle t (so by triangle too).
 /// A run of equal `other` in a bucket is one mesh edge; its slots ascend. O(T + V); 8 bytes a

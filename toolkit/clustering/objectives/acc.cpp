@@ -35,7 +35,6 @@ template <class F>
   }
 }
 
-
 constexpr double kEps = 2.220446049250313e-16;
 
 void require_positive(double v, const char* what) {
@@ -413,10 +412,11 @@ bool AccObjective::small_support_sphere(const MergeContext& ctx, const Box3& box
 // R^2 of the minimal sphere of three points of the lists (the point farthest from the center of
 // `box`, the point farthest from it, the point farthest from their sphere) on local coordinates,
 // shrunk by 1e-12 relative: a lower bound on R^2 of any set the lists' points belong to (see
-// support_r2); 0 when not finite.
+// support_r2); 0 when not finite. With `holds_all`: whether that sphere holds every point of the
+// lists (to 1e-14 relative), when it is their minimal sphere (one more pass).
 PTC_ISA_CLONES
 static double three_point_r2(std::span<const Vec3> pos, std::initializer_list<std::span<const std::uint32_t>> lists,
-                      const Box3& box) {
+                             const Box3& box, bool* holds_all = nullptr) {
   const Vec3 o = local_origin(box);
   auto farthest = [&](const Vec3& c, double& d2max) { return Vec3(pos[farthest_vertex(pos, lists, o, c, d2max)] - o); };
   double d2;
@@ -425,7 +425,15 @@ static double three_point_r2(std::span<const Vec3> pos, std::initializer_list<st
   const Sphere diametral{0.5 * (p1 + p2), 0.5 * std::sqrt(d2)};
   const Vec3 p3 = farthest(diametral.center, d2);
   double r = diametral.radius;
-  if (d2 > r * r) r = std::max(r, triangle_min_sphere(p1, p2, p3).radius);
+  if (holds_all) *holds_all = true;  // p3, the farthest, inside the diametral sphere: all are
+  if (d2 > r * r) {
+    const Sphere t = triangle_min_sphere(p1, p2, p3);
+    r = std::max(r, t.radius);
+    if (holds_all) {
+      farthest(t.center, d2);
+      *holds_all = d2 <= t.radius * t.radius * (1.0 + 1e-14);
+    }
+  }
   constexpr double kShrink = 1.0 - 1e-12;
   const double r2 = r * r * (kShrink * kShrink);
   return std::isfinite(r2) ? r2 : 0.0;
@@ -449,25 +457,17 @@ AccObjective::Evaluation AccObjective::evaluate(const Summary& a, const Summary&
   if (memo) enter_lineage(a);
   Evaluation ev;
   // A large A (AccTuning::large_bounds): its pairs' bounds read what it keeps, not its members.
-  const Large* la = nullptr;
+  LargePair pair;
   if ((precision == Precision::UpperBoundAllowed || precision == Precision::SupportBound) && minimal_ &&
       tuning_.area_bound)
-    la = large_of(a);
-  if (la) {
-    bound_la_ = la;
-    bound_lb_ = large_of(b);
-    union_moment_value_ = la->moment;
-    const Moment mb = moment_of(b, ctx.b_triangles);
-    for (std::size_t k = 0; k < mb.size(); ++k) union_moment_value_[k] += mb[k];
-    union_moment_ = &union_moment_value_;
-  }
-  sums_and_area(a, b, ctx, ev, tuning_.area_bound && (precision == Precision::UpperBoundAllowed || la));
-  union_moment_ = nullptr;
-  union_sphere_and_score(a, &b, ctx, precision, memo, ev, la);
+    pair = {large_of(a), large_of(b)};
+  const LargePair* large = pair.a ? &pair : nullptr;
+  sums_and_area(a, b, ctx, ev, tuning_.area_bound && (precision == Precision::UpperBoundAllowed || large), large);
+  union_sphere_and_score(a, &b, ctx, precision, memo, ev, large);
   if (ev.area_bounded) {  // a bound whatever the sphere: AreaP is (reg and the sphere are not kept)
     // With a large A and the exact sphere, SupportBound would give this same bound (the same
     // AreaP bound, the sphere itself): only the exact evaluation can tighten it.
-    ev.settled = la != nullptr && ev.exact;
+    ev.settled = large != nullptr && ev.exact;
     ev.exact = false;
     ev.reg = 0;
   }
@@ -487,7 +487,7 @@ AccObjective::Evaluation AccObjective::evaluate_with(const Summary& a, const Sum
 
 PTC_ISA_CLONES
 void AccObjective::sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev,
-                                 bool allow_area_bound) {
+                                 bool allow_area_bound, const LargePair* large) {
   const ClusterTables& tb = *tables_;
   ev.box = a.box;
   ev.box.extend(b.box);
@@ -511,8 +511,10 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
     ev.area_p = w * (1.0 + 1e-6);
     // (W >= 2^-900: the sums' absolute rounding where terms fall below the normal range,
     // 2^-1075 an operation, stays far below the relative margins; smaller, the total area only.)
-    if (const Moment* mm = union_moment_; mm && w >= 0x1p-900) {
-      const Moment& M = *mm;
+    if (large && w >= 0x1p-900) {
+      Moment M = large->a->moment;  // the union's: A's kept, B's kept or summed (only here)
+      const Moment mb = large->b ? large->b->moment : moment_of(ctx.b_triangles);
+      for (std::size_t k = 0; k < M.size(); ++k) M[k] += mb[k];
       const double q = n && delta == 0.0 ? M[0] * n->x() * n->x() + M[1] * n->y() * n->y() + M[2] * n->z() * n->z() +
                                2.0 * (M[3] * n->x() * n->y() + M[4] * n->x() * n->z() + M[5] * n->y() * n->z())
                          : std::max({M[0] + std::abs(M[3]) + std::abs(M[4]), M[1] + std::abs(M[3]) + std::abs(M[5]),
@@ -522,7 +524,7 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
       const double cs = std::sqrt(w) * std::sqrt(std::max(0.0, q + 4e-6 * w)) * (1.0 + 1e-6);
       if (cs < ev.area_p) ev.area_p = cs;  // (a NaN keeps the total area's bound)
       if (n) {
-        const double h = horizon_area_bound(b, ctx, *n, delta, w);
+        const double h = horizon_area_bound(*large, b, ctx, *n, delta, w);
         if (h < ev.area_p) ev.area_p = h;
       }
     }
@@ -533,7 +535,7 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
     // exact sum each (|n_i| <= 1 per coordinate), so within e = 4 m^2 eps of each other, and
     // their directions within 2 e / (len - e). Beyond the fallback's threshold the recomputed
     // N_avg is that direction; nearer, the fallback rule might choose another: no N then.
-    if (union_moment_) {
+    if (large) {
       const double md = m, e = 4.0 * md * md * 0x1p-53;
       if (len - e > kNormalSumZeroTol * md) {
         const Vec3 n = ns * (1.0 / len);
@@ -596,7 +598,7 @@ void AccObjective::sums_and_area(const Summary& a, const Summary& b, const Merge
 
 PTC_ISA_CLONES
 void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr, const MergeContext& ctx,
-                                          Precision precision, bool memo, Evaluation& ev, const Large* la) {
+                                          Precision precision, bool memo, Evaluation& ev, const LargePair* large) {
   const ClusterTables& tb = *tables_;
   // The sphere of the union.
   bool have = false;
@@ -704,7 +706,7 @@ void AccObjective::union_sphere_and_score(const Summary& a, const Summary* b_ptr
         // computation's radius (S(A) reused when the added points are surely inside it, centers
         // in global coordinates) may lie that much below the points' minimal sphere (a review
         // found 9.5e-9 relative at an offset of 3e7 with the kept points' tight sphere).
-        const double sr = std::sqrt(la ? large_support_r2(*la, large_of(*b_ptr), ctx, ev.box) : support_r2(ctx, ev.box)) - slack;
+        const double sr = std::sqrt(large ? large_support_r2(*large, ctx, ev.box) : support_r2(ctx, ev.box)) - slack;
         if (sr > 0.0) key_r2 = std::max(key_r2, sr * sr);
       }
       if (key_r2 > 0.0 && precision != Precision::Exact) {
@@ -844,17 +846,20 @@ AccObjective::Summary AccObjective::merge(const Summary& a, const Summary& b, co
   return s;
 }
 
-AccObjective::Moment AccObjective::moment_of(const Summary& part, std::span<const std::uint32_t> members) const {
-  if (const Large* l = large_of(part)) return l->moment;
+namespace {
+[[gnu::always_inline]] inline void add_moment(std::array<double, 6>& m, double area, const Vec3& n) {  // (AccObjective::Moment)
+  m[0] += area * n.x() * n.x();
+  m[1] += area * n.y() * n.y();
+  m[2] += area * n.z() * n.z();
+  m[3] += area * n.x() * n.y();
+  m[4] += area * n.x() * n.z();
+  m[5] += area * n.y() * n.z();
+}
+}  // namespace
+
+AccObjective::Moment AccObjective::moment_of(std::span<const std::uint32_t> members) const {
   Moment m{};
-  for_each_geometry(*tables_, members, [&](double area, const Vec3& n) {
-    m[0] += area * n.x() * n.x();
-    m[1] += area * n.y() * n.y();
-    m[2] += area * n.z() * n.z();
-    m[3] += area * n.x() * n.y();
-    m[4] += area * n.x() * n.z();
-    m[5] += area * n.y() * n.z();
-  });
+  for_each_geometry(*tables_, members, [&](double area, const Vec3& n) { add_moment(m, area, n); });
   return m;
 }
 
@@ -882,12 +887,7 @@ void AccObjective::keep_large(const Summary& a, const Summary& b, const MergeCon
   auto add_members = [&](std::span<const std::uint32_t> ids) {
     for_each_geometry(*tables_, ids, [&](double area, const Vec3& n) {
       if (n.isZero(0.0)) return;
-      l.moment[0] += area * n.x() * n.x();
-      l.moment[1] += area * n.y() * n.y();
-      l.moment[2] += area * n.z() * n.z();
-      l.moment[3] += area * n.x() * n.y();
-      l.moment[4] += area * n.x() * n.z();
-      l.moment[5] += area * n.y() * n.z();
+      add_moment(l.moment, area, n);
       const double c = l.n_ref.dot(n);
       l.g += c >= 0.0 ? Vec3(area * n) : Vec3(-area * n);
       const double ac = std::abs(c);
@@ -937,8 +937,8 @@ void AccObjective::keep_large(const Summary& a, const Summary& b, const MergeCon
   large_.insert_or_assign(s.serial, l);
 }
 
-double AccObjective::horizon_area_bound(const Summary& b, const MergeContext& ctx, const Vec3& n, double delta,
-                                        double w) const {
+double AccObjective::horizon_area_bound(const LargePair& large, const Summary& b, const MergeContext& ctx,
+                                        const Vec3& n, double delta, double w) const {
   // For a part with Large l, any unit N within delta of n: with s_i the sign of n_ref.n_i,
   //   sum Area_i |N.n_i| = N.g + 2 sum over the flipped members (s_i N.n_i < 0) of Area_i |N.n_i|,
   // and a flipped member has |N.n_i| <= |(N - n_ref).n_i| <= d and |n_ref.n_i| <= d, with
@@ -957,9 +957,9 @@ double AccObjective::horizon_area_bound(const Summary& b, const MergeContext& ct
     if (h < 0.0) return std::numeric_limits<double>::infinity();  // far from n_ref: no use
     return n.dot(l.g) + delta * l.g.norm() + 2.0 * d * h;
   };
-  double sum = part(*bound_la_);
-  if (bound_lb_) {
-    sum += part(*bound_lb_);
+  double sum = part(*large.a);
+  if (large.b) {
+    sum += part(*large.b);
   } else {
     double sb = 0;
     for_each_geometry(*tables_, ctx.b_triangles, [&](double area, const Vec3& nt) { sb += area * std::abs(n.dot(nt)); });
@@ -969,42 +969,25 @@ double AccObjective::horizon_area_bound(const Summary& b, const MergeContext& ct
   return sum + 16.0 * (k + 16.0) * 0x1p-53 * w;
 }
 
-double AccObjective::large_support_r2(const Large& la, const Large* lb, const MergeContext& ctx, const Box3& box) {
-  // A subset's minimal sphere is never larger than the union's; min_sphere's radius is minimal to
-  // ~1e-15 of the points' extent on local coordinates, and so is the exact computation's: the
-  // 1e-12 shrink covers both, as in support_r2.
+double AccObjective::large_support_r2(const LargePair& large, const MergeContext& ctx, const Box3& box) {
+  // The minimal sphere of A's kept points and B's (a subset's is never larger than the union's):
+  // three of them when that sphere holds them all, else CGAL's on all. min_sphere's radius is
+  // minimal to ~1e-15 of the points' extent on local coordinates, and so is the exact
+  // computation's: the 1e-12 shrink covers both, as in support_r2.
   const auto& pos = tables_->positions;
+  const std::span<const std::uint32_t> bs = large.b ? std::span<const std::uint32_t>(large.b->points) : ctx.added;
+  bool holds_all = false;
+  const double r2 = three_point_r2(pos, {large.a->points, bs}, box, &holds_all);
+  if (holds_all) return r2;
   const Vec3 o = local_origin(box);
   auto& pts = scratch_bound_points_;
   pts.clear();
-  for (std::uint32_t v : la.points) pts.push_back(pos[v] - o);
-  if (lb) {
-    for (std::uint32_t v : lb->points) pts.push_back(pos[v] - o);
-  } else {
-    for (std::uint32_t v : ctx.added) pts.push_back(pos[v] - o);
-  }
-  // The minimal sphere of three of the points when it holds them all (it is then theirs), else
-  // CGAL's on all of them.
-  auto farthest = [&](const Vec3& from, double& d2max) {
-    Vec3 best = pts.front();
-    d2max = -1.0;
-    for (const Vec3& p : pts)
-      if (const double d2 = (p - from).squaredNorm(); d2 > d2max) d2max = d2, best = p;
-    return best;
-  };
-  double d2;
-  const Vec3 p1 = farthest(0.5 * (box.lo + box.hi) - o, d2);
-  const Vec3 p2 = farthest(p1, d2);
-  Sphere small{0.5 * (p1 + p2), 0.5 * std::sqrt(d2)};
-  Vec3 p3 = farthest(small.center, d2);
-  if (d2 > small.radius * small.radius) {
-    small = triangle_min_sphere(p1, p2, p3);
-    farthest(small.center, d2);
-  }
-  const double r = d2 <= small.radius * small.radius * (1.0 + 1e-14) ? small.radius : min_sphere(pts).radius;
+  for (const auto list : {std::span<const std::uint32_t>(large.a->points), bs})
+    for (std::uint32_t v : list) pts.push_back(pos[v] - o);
+  const double r = min_sphere(pts).radius;
   constexpr double kShrink = 1.0 - 1e-12;
-  const double r2 = r * r * (kShrink * kShrink);
-  return std::isfinite(r2) ? r2 : 0.0;
+  const double cgal_r2 = r * r * (kShrink * kShrink);
+  return std::isfinite(cgal_r2) ? cgal_r2 : 0.0;
 }
 
 }  // namespace ptc

@@ -293,16 +293,23 @@ class AccObjective {
     std::array<double, 6> horizon{};
     std::size_t full_members = 0;  ///< members at the last pass over all of them (AccObjective::keep_large)
   };
+  /// A large A's pair, for its bounds: what A keeps, and what B keeps (null for a small B, whose
+  /// members are read instead).
+  struct LargePair {
+    const Large* a = nullptr;
+    const Large* b = nullptr;
+  };
   [[nodiscard]] double score_of(double area_p, double r2, std::uint32_t vertex_count, double* reg) const;
   /// evaluate() up to the sphere: the box, N_avg with its fallback, the normal sum and AreaP.
   /// allow_area_bound (Precision::UpperBoundAllowed with AccTuning::area_bound): AreaP may be
   /// the total area's bound (ev.area_bounded; N_avg and the sums are then not made).
+  /// With `large` (a large A's pair), that bound is also Cauchy-Schwarz's and the horizon's.
   void sums_and_area(const Summary& a, const Summary& b, const MergeContext& ctx, Evaluation& ev,
-                     bool allow_area_bound = false);
+                     bool allow_area_bound = false, const LargePair* large = nullptr);
   /// evaluate() from the sphere of A u B on (ev holds the box, N_avg, sums and AreaP); b may be
   /// null when ctx adds one vertex and the tuning has no DOP (it is not read then).
   void union_sphere_and_score(const Summary& a, const Summary* b, const MergeContext& ctx, Precision precision,
-                              bool memo, Evaluation& ev, const Large* la = nullptr);
+                              bool memo, Evaluation& ev, const LargePair* large = nullptr);
   /// Which points may support S(A u B) (minimal spheres only; see evaluate()).
   struct PointFilter {
     Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
@@ -332,22 +339,16 @@ class AccObjective {
   }
   /// After merge(a, b) made s: keeps s's Large when it is large, forgets a's and b's.
   void keep_large(const Summary& a, const Summary& b, const MergeContext& ctx, const Summary& s, const Vec3& n_avg);
-  /// The moment of a part: kept (large) or summed over its members.
-  [[nodiscard]] Moment moment_of(const Summary& part, std::span<const std::uint32_t> members) const;
+  /// sum Area_i n_i n_i^T over `members`.
+  [[nodiscard]] Moment moment_of(std::span<const std::uint32_t> members) const;
   /// Precision::SupportBound's R^2 for a large A: the minimal sphere of A's kept points and B's
   /// (kept, or V(B) \ V(A) for a small B), shrunk as support_r2's.
-  [[nodiscard]] double large_support_r2(const Large& la, const Large* lb, const MergeContext& ctx,
-                                        const Box3& box);
-  /// AreaP(A u B) at the exact N_avg, which is within delta of n, bounded from the large A's
-  /// (and B's) Large; w = the union's total area.
-  [[nodiscard]] double horizon_area_bound(const Summary& b, const MergeContext& ctx, const Vec3& n, double delta,
-                                          double w) const;
-  /// The union's moment for the bounds of evaluate() (null without a large A), and A's and B's Large.
-  const Moment* union_moment_ = nullptr;
-  const Large* bound_la_ = nullptr;
-  const Large* bound_lb_ = nullptr;
+  [[nodiscard]] double large_support_r2(const LargePair& large, const MergeContext& ctx, const Box3& box);
+  /// AreaP(A u B) at the exact N_avg, which is within delta of n, bounded from what the large A
+  /// (and B) keep; w = the union's total area.
+  [[nodiscard]] double horizon_area_bound(const LargePair& large, const Summary& b, const MergeContext& ctx,
+                                          const Vec3& n, double delta, double w) const;
   std::vector<Vec3> scratch_bound_points_;
-  Moment union_moment_value_{};
 
   const ClusterTables* tables_;
   ClusterParams params_;
