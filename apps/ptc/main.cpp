@@ -21,12 +21,13 @@ namespace {
 
 // Flushes stdout; when it cannot take the text, says so with the reason (when the failed write
 // left one) and, for a run whose output `out` was committed, that the output itself is whole (a
-// script that sees exit 1 should not take it for a failed run's). `code` otherwise.
-int flushed_stdout(int code, const std::string& out = {}) {
+// script that sees exit 1 should not take it for a failed run's). `code` otherwise. `earlier`:
+// the errno of writes made just before (a stream already failed does not write again on flush).
+int flushed_stdout(int code, const std::string& out = {}, int earlier = 0) {
   errno = 0;
   std::cout.flush();
   if (std::cout) return code;
-  const int err = errno;
+  const int err = errno != 0 ? errno : earlier;
   std::cerr << "ptc: error: cannot write to stdout" << (err != 0 ? std::string(": ") + std::strerror(err) : "")
             << (!out.empty() && ptc::output_was_committed(out) ? " (" + out + " was written whole)" : "") << "\n";
   return 1;
@@ -68,14 +69,20 @@ int main(int argc, char** argv) {
 
   // (Help and version text go to stdout: a stdout that cannot take them is a failure, as for
   // every other command's text.)
+  // (errno is cleared first so that the reason of a write failing inside app.exit is kept.)
+  const auto printed = [&app](const CLI::Error& e) {
+    errno = 0;
+    const int code = app.exit(e);
+    return flushed_stdout(code, {}, errno);
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return flushed_stdout(app.exit(e));
+    return printed(e);
   } catch (const CLI::CallForAllHelp& e) {
-    return flushed_stdout(app.exit(e));
+    return printed(e);
   } catch (const CLI::CallForVersion& e) {
-    return flushed_stdout(app.exit(e));
+    return printed(e);
   } catch (const CLI::ParseError& e) {
     std::string msg = e.what();
     // CLI11's words for two common slips, in the user's (the flag or command named).

@@ -1048,7 +1048,8 @@ TEST_F(Cli, AFullStdoutIsSaidWithTheOutputsState) {
   for (const std::vector<std::string>& help : {std::vector<std::string>{"--help"}, {"cluster", "--help"}, {"--version"}}) {
     r = run(full, help);
     EXPECT_EQ(r.code, 1) << help[0];
-    EXPECT_NE(r.err.find("ptc: error: cannot write to stdout"), std::string::npos) << r.err;
+    // (the reason too: the short version text fails inside CLI11's own write, before the flush)
+    EXPECT_NE(r.err.find("ptc: error: cannot write to stdout: No space left on device"), std::string::npos) << r.err;
   }
 }
 
