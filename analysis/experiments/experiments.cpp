@@ -109,7 +109,7 @@ study::ConfigSpec spec_of(const std::string& name, const ExperimentParams& p) {
 
 struct ConfigRow {
   std::string scene, config, structure, method, objective;
-  std::int64_t max_count = 0;
+  std::optional<std::int64_t> max_count = 0;  // none: a given clustering without a manifest (unknown)
   double max_size = 0;
   std::uint64_t clusters = 0, triangles = 0;
   double triangles_per_cluster = 0, cluster_ms = 0, setup_ms = 0;
@@ -121,7 +121,7 @@ void visit_config(const ConfigRow& r, Columns& col) {
   col("structure", r.structure);
   col("method", r.method);
   col("objective", r.objective);
-  col("max_count", r.max_count);
+  col("max_count", r.max_count ? CsvValue(*r.max_count) : CsvValue(std::string()));
   col("max_size", r.max_size);
   col("clusters", r.clusters);
   col("triangles", r.triangles);
@@ -130,7 +130,19 @@ void visit_config(const ConfigRow& r, Columns& col) {
   col("setup_ms", r.setup_ms);
   col("fused_vertex_pass", r.fused_vertex_pass);
 }
-ConfigRow config_row(const std::string& scene, const study::Prepared& p) {
+// The parameters of a clustering as the row gives them (method, objective, MaxCount, MaxSize).
+void cluster_parameters(const ClusterConfig& c, ConfigRow& r) {
+  r.objective =
+      c.method != ClusterMethod::Growth && c.method != ClusterMethod::Contraction ? "" : to_string(c.objective);
+  r.max_count = c.max_count;
+  // MaxSize only where the method reads it (Acc): nan for the others (naive, gwh01, meshopt,
+  // sah-split), whose clusters it did not shape.
+  const auto used = used_parameters(c);
+  r.max_size = std::find(used.begin(), used.end(), "max_size") != used.end() ? c.max_size : kNaN;
+}
+
+// `given_cluster`: the given clustering's parameters, from its manifest (none without one).
+ConfigRow config_row(const std::string& scene, const study::Prepared& p, const std::optional<ClusterConfig>& given_cluster) {
   ConfigRow r;
   r.scene = scene;
   r.config = p.spec.name;
@@ -140,15 +152,18 @@ ConfigRow config_row(const std::string& scene, const study::Prepared& p) {
     const ClusterConfig& c = *p.spec.cluster;
     const bool none = c.max_count == 0 && c.max_size == 0;
     r.method = none ? "none" : to_string(c.method);
-    r.objective = none || (c.method != ClusterMethod::Growth && c.method != ClusterMethod::Contraction)
-                      ? "" : to_string(c.objective);
-    r.max_count = c.max_count;
-    // MaxSize only where the method reads it (Acc): nan for the others (naive, gwh01, meshopt,
-    // sah_split), whose clusters it did not shape.
-    const auto used = used_parameters(c);
-    r.max_size = std::find(used.begin(), used.end(), "max_size") != used.end() ? c.max_size : kNaN;
+    cluster_parameters(c, r);
+    if (none) r.objective.clear();
   } else if (p.spec.given) {
+    // Its own parameters where its manifest gave them (the method stays "given": the clusters
+    // were read, not made), else unknown: MaxCount empty, MaxSize nan.
     r.method = "given";
+    if (given_cluster) {
+      cluster_parameters(*given_cluster, r);
+    } else {
+      r.max_count.reset();
+      r.max_size = kNaN;
+    }
   } else {
     r.method = "none";  // a structure over triangles (standard, Embree's): as sweep's MaxCount 0
   }
@@ -348,12 +363,13 @@ constexpr double kPrepareShare = 0.2;
 
 std::vector<study::Prepared> prepare_all(const Scene& scene, const std::vector<study::ConfigSpec>& specs,
                                          const study::StudySetup& setup, const loop::AccelSetup& as,
-                                         ExperimentRun& run, FileRows& configs, const std::string& scene_label) {
+                                         ExperimentRun& run, FileRows& configs, const std::string& scene_label,
+                                         const std::optional<ClusterConfig>& given_cluster) {
   std::vector<study::Prepared> out;
   for (std::size_t i = 0; i < specs.size(); ++i) {
     throw_if_cancelled();
     out.push_back(study::prepare(scene.rest(), specs[i], setup, as));
-    const ConfigRow row = config_row(scene_label, out.back());
+    const ConfigRow row = config_row(scene_label, out.back(), given_cluster);
     run.timings_ms["prepare_" + specs[i].name] = out.back().cluster_ms + out.back().setup_ms;
     std::vector<ConfigRow> one{row};
     add_item_rows(configs, run.done[i], tabulate(kConfigsSchema, one, visit_config));
@@ -734,7 +750,7 @@ ExperimentRun run_experiment(Scene& scene, const ExperimentParams& p, const stud
     }
   }
   FileRows configs = file_rows("configs.csv", kConfigsSchema, columns_of<ConfigRow>(visit_config));
-  std::vector<study::Prepared> prepared = prepare_all(scene, specs, setup, as, run, configs, p.scene);
+  std::vector<study::Prepared> prepared = prepare_all(scene, specs, setup, as, run, configs, p.scene, p.given_cluster);
   run.files.push_back(std::move(configs));
   Context x{scene, p, setup, rays, as, run, prepared};
   if (p.kind == ExperimentKind::Sweep) run_sweep(x);

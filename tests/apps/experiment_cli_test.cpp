@@ -456,6 +456,25 @@ TEST_F(Experiment, GivenClustersAreTheMethodByDefault) {
   EXPECT_EQ(cfg.at(0).at("config"), "given");
 
   EXPECT_EQ(cfg.at(0).at("clusters"), std::to_string(clusters.size()));  // the given clustering, not a new one
+  // its own parameters, from its manifest (they read 0 and 0 once)
+  EXPECT_EQ(cfg.at(0).at("method"), "given");
+  EXPECT_EQ(cfg.at(0).at("objective"), "acc");
+  EXPECT_EQ(cfg.at(0).at("max_count"), "30");
+  EXPECT_EQ(cfg.at(0).at("max_size"), "30");
+  {  // without a manifest they are unknown: MaxCount empty, MaxSize nan
+    const fs::path bare = dir_ / "bare";
+    fs::create_directories(bare);
+    fs::copy_file(dir_ / "clusters" / "triangles.csv", bare / "triangles.csv");
+    ASSERT_EQ(ptc({"experiment", "compare", mesh, "--clusters", bare.string(), "--frames", "0:1", "--width", "16",
+                   "--height", "16", "--quiet", "--out", (dir_ / "cmp_bare").string()})
+                  .code,
+              0);
+    const auto b = csv_rows(slurp(dir_ / "cmp_bare" / "configs.csv"));
+    EXPECT_EQ(b.at(0).at("config"), "given");
+    EXPECT_EQ(b.at(0).at("objective"), "");
+    EXPECT_EQ(b.at(0).at("max_count"), "");
+    EXPECT_EQ(b.at(0).at("max_size"), "nan");
+  }
 
   const RunResult d = ptc({"experiment", "drift", mesh, "--clusters", c, "--frames", "0:1", "--width", "16", "--height",
                            "16", "--clusterings", "given", "--quiet", "--out", (dir_ / "drift").string()});
