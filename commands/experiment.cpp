@@ -591,6 +591,14 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
       if (f.rows.header.empty()) f.rows.header = t.header;
       if (t.header != f.rows.header)
         throw InputError(path.string(), "line 1", "header", "its columns differ from " + (shards[0].dir / name).string());
+      // The scene as the first shard names it: shards may name one scene file by other paths
+      // (compared by its contents, identity() above), and the derived tables join rows by it.
+      const std::string scene = s.manifest["parameters"].value("scene", ""), scene0 = params.value("scene", "");
+      if (scene != scene0)
+        if (const auto col = std::find(t.header.begin(), t.header.end(), "scene"); col != t.header.end())
+          for (auto& row : t.rows)
+            if (std::size_t(col - t.header.begin()) < row.size() && row[std::size_t(col - t.header.begin())] == scene)
+              row[std::size_t(col - t.header.begin())] = scene0;
       std::size_t at = 0;
       for (const auto& ir : s.manifest["results"]["item_rows"][name]) {
         const std::size_t item = ir[0].get<std::size_t>(), count = ir[1].get<std::size_t>();
@@ -646,7 +654,8 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
                         {"started_utc", m.value("started_utc", nlohmann::json())},
                         {"wall_ms", m.value("wall_ms", nlohmann::json())},
                         {"inputs", m.value("inputs", nlohmann::json::array())},
-                        {"machine", m.value("machine", nlohmann::json())}});
+                        {"machine", m.value("machine", nlohmann::json())},
+                        {"build", m.value("build", nlohmann::json())}});
         for (const auto& i : m.at("results").value("items_done", nlohmann::json::array()))
           if (i.is_number_unsigned()) done.push_back(i.get<std::size_t>());
       }

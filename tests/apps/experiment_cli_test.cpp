@@ -214,6 +214,7 @@ TEST_F(Experiment, DriftShardsMergeWithTheDerivedTablesOfTheSingleRun) {
     ASSERT_EQ(merged["results"]["shard_runs"].size(), 2u);
     EXPECT_EQ(merged["results"]["shard_runs"][0]["shard"], 1);
     EXPECT_EQ(merged["results"]["shard_runs"][1]["machine"], one["machine"]);
+    EXPECT_EQ(merged["results"]["shard_runs"][1]["build"], one["build"]);
   }
   // No timing enters these (counters, SAH, EPO, drift): the merged files equal the single run's.
   for (const char* f : {"clusters_frames.csv", "frames.csv", "rays.csv", "correlation.csv", "regression.csv"})
@@ -431,6 +432,55 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   EXPECT_NE(r.err.find("fewer rows than its manifest"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
   for (const auto& e : {r.err}) EXPECT_EQ(lines(e), 1u) << e;
+}
+
+// Shards that name one scene file by different paths (a scheduler starting them from other
+// directories) merge into the single run's tables: the rows name the scene as the first shard
+// does, so the derived columns join them (perf_factor was nan for the rows named otherwise).
+TEST_F(Experiment, ShardsNamingTheSceneByOtherPathsMergeToTheSingleRun) {
+  fs::copy_file(std::string(PTC_TEST_DATA) + "/meshes/bunny00.off", dir_ / "bunny.off");
+  fs::create_directories(dir_ / "sub");
+  const std::vector<std::string> args = {"--configs", "acc_contraction,standard", "--frames", "0:2", "--width", "16",
+                                         "--height", "16", "--quiet"};
+  auto with = [&](std::vector<std::string> a, const std::vector<std::string>& tail) {
+    a.insert(a.end(), args.begin(), args.end());
+    a.insert(a.end(), tail.begin(), tail.end());
+    return a;
+  };
+  const std::string mesh = (dir_ / "bunny.off").string();
+  ASSERT_EQ(ptc(with({"experiment", "compare", mesh}, {"--out", (dir_ / "one").string()})).code, 0);
+  ASSERT_EQ(ptc(with({"experiment", "compare", mesh}, {"--shard", "1/2", "--out", (dir_ / "a").string()})).code, 0);
+  const std::vector<std::string> in_sub = {"sh", "-c", "cd \"$0\" && exec \"$@\"", (dir_ / "sub").string(), PTC_BIN};
+  const RunResult b = run(in_sub, with({"experiment", "compare", "../bunny.off"}, {"--shard", "2/2", "--out", "../b"}));
+  ASSERT_EQ(b.code, 0) << b.err;
+  {  // shard 2 as if built against another Embree: merge takes it (same ptc and commit) and says so
+    auto mb = nlohmann::json::parse(slurp(dir_ / "b" / "manifest.json"));
+    ASSERT_TRUE(mb["build"]["libraries"].contains("embree"));
+    mb["build"]["libraries"]["embree"] = "4.0.0";
+    spit(dir_ / "b" / "manifest.json", mb.dump(2));
+  }
+  const RunResult m = ptc({"merge", (dir_ / "a").string(), (dir_ / "b").string(), "--out", (dir_ / "m").string()});
+  ASSERT_EQ(m.code, 0) << m.err;
+  {
+    const auto mm = nlohmann::json::parse(slurp(dir_ / "m" / "manifest.json"));
+    ASSERT_EQ(mm["results"]["shard_runs"].size(), 2u);
+    EXPECT_EQ(mm["results"]["shard_runs"][1]["build"]["libraries"]["embree"], "4.0.0");
+    EXPECT_NE(mm["results"]["shard_runs"][0]["build"]["libraries"]["embree"], "4.0.0");
+  }
+  for (const char* f : {"configs.csv", "compare.csv", "compare_summary.csv"}) {
+    const auto rows = csv_rows(slurp(dir_ / "m" / f));
+    ASSERT_FALSE(rows.empty()) << f;
+    for (const auto& r : rows) EXPECT_EQ(r.at("scene"), mesh) << f;
+  }
+  const auto one = csv_rows(slurp(dir_ / "one" / "compare_summary.csv"));
+  const auto merged = csv_rows(slurp(dir_ / "m" / "compare_summary.csv"));
+  ASSERT_EQ(merged.size(), one.size());
+  for (std::size_t i = 0; i < merged.size(); ++i) {
+    EXPECT_EQ(merged[i].at("config"), one[i].at("config"));
+    EXPECT_EQ(merged[i].at("reference"), "acc_contraction");
+    EXPECT_TRUE(std::isfinite(std::stod(merged[i].at("perf_factor")))) << merged[i].at("config");
+  }
+  EXPECT_EQ(m.out.find(" - "), std::string::npos) << m.out;
 }
 
 // A `ptc cluster` output as the method: compare's and drift's default configurations take it as
