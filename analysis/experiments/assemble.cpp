@@ -176,6 +176,7 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
                           "perf_factor_min", "perf_factor_max"});
   const Groups g = group_by(c, {"scene", "config"}, measured(c));
   std::map<std::string, std::pair<double, double>> early_late;
+  std::map<std::string, std::size_t> measured_frames;  // frames with a factor, per configuration
   text += fmt::format("compare (the paper's Figure 7): medians per configuration, ms; perf_factor = total / total of {} "
                       "(> 1: slower than it)\n",
                       reference);
@@ -199,6 +200,7 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
         l(pfs.end() - long(std::min(q, pfs.size())), pfs.end());
     const double early = pfs.empty() ? kNaN : median(e), late = pfs.empty() ? kNaN : median(l);
     early_late[g.keys[i][1]] = {early, late};
+    measured_frames[g.keys[i][1]] = pfs.size();
     out.rows.rows.push_back({g.keys[i][0], g.keys[i][1], reference, std::to_string(rows.size()), num(u), num(b), num(t),
                              num(to), num(p), num(first), num(last), num(early), num(late), num(lo), num(hi)});
     text += fmt::format("{:<16} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>11} {:>11} {:>11}\n", g.keys[i][1], u, b, t, to,
@@ -214,6 +216,12 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
       const auto it = early_late.find(b);
       if (it == early_late.end()) continue;
       const auto [e, l] = it->second;
+      if (measured_frames[b] < 2) {  // early and late would be one frame
+        text += fmt::format("paper: no verdict on {} clusters early and later: {} measured frame{} (early and late "
+                            "need two; the first frame is the warm-up: --frames A:B with B >= A + 2)\n",
+                            b, measured_frames[b], measured_frames[b] == 1 ? "" : "s");
+        continue;
+      }
       const bool close = e >= 0.9 && e <= 1.1, behind = l > e * 1.05;  // (the bounds verdict_number is given)
       text += fmt::format("paper: {} clusters close to the method early and behind it later -> perf_factor {} over "
                           "the first quarter of the frames, {} over the last: {} (criterion: early within 10% of 1, "

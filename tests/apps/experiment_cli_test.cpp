@@ -483,6 +483,26 @@ TEST_F(Experiment, ShardsNamingTheSceneByOtherPathsMergeToTheSingleRun) {
   EXPECT_EQ(m.out.find(" - "), std::string::npos) << m.out;
 }
 
+// Compare's verdict on Naive and GWH01 (close early, behind later) needs two measured frames:
+// with one, early and late are that frame, and the verdict is replaced by a line saying so.
+TEST_F(Experiment, CompareGivesNoEarlyLateVerdictOnOneMeasuredFrame) {
+  const std::string mesh = std::string(PTC_TEST_DATA) + "/meshes/bunny00.off";
+  for (const char* frames : {"0:1", "0:2"}) {
+    const RunResult r = ptc({"experiment", "compare", mesh, "--frames", frames, "--width", "16", "--height", "16",
+                             "--quiet", "--out", (dir_ / (std::string("c") + frames[2])).string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* b : {"naive", "gwh01"}) {
+      const bool one = std::string(frames) == "0:1";
+      EXPECT_EQ(r.out.find(std::string("paper: no verdict on ") + b + " clusters early and later: 1 measured frame") !=
+                    std::string::npos,
+                one)
+          << r.out;
+      EXPECT_EQ(r.out.find(std::string("paper: ") + b + " clusters close to the method early") != std::string::npos, !one)
+          << r.out;
+    }
+  }
+}
+
 // A `ptc cluster` output as the method: compare's and drift's default configurations take it as
 // `given` (and perf_factor divides by it); a clustering of another mesh is refused naming it.
 TEST_F(Experiment, GivenClustersAreTheMethodByDefault) {
