@@ -168,6 +168,7 @@ clusterings = list(dict.fromkeys(rays["clustering"]))
 fig, axes = plt.subplots(1, 2, figsize=(13, 4.8))
 fits = 0
 unfitted = []
+why = []
 for ax, col, model in zip(axes, ["sah_cost", "epo"], ["sah", "epo"]):
     for i, cl in enumerate(clusterings):
         e = rays[rays["clustering"] == cl]
@@ -183,13 +184,19 @@ for ax, col, model in zip(axes, ["sah_cost", "epo"], ["sah", "epo"]):
         fits = 1
     else:
         unfitted.append(model.upper())
+        pts = rays[[col, "cost_per_ray"]].dropna()
+        if len(pts) < 3:
+            why.append(f"{len(pts)} points for {model.upper()} (a fit needs at least 3: --frames A:B with B > A, or more structures)")
+        elif pts[col].nunique() < 2:
+            why.append(f"every point has the same {model.upper()} ({pts[col].iloc[0]:.6g}): nothing varies to fit")
+        else:
+            why.append(f"{len(pts)} points for {model.upper()} but no fit in regression.csv")
     ax.set_xlabel("SAH cost of the frame's BVH" if model == "sah" else "EPO of the frame's BVH")
     ax.set_ylabel("measured cost per primary ray (nodes + weighted triangles)")
     ax.set_title(f"{model.upper()} against the measured cost (primary rays)")
     ax.legend(fontsize=8)
 save(fig, "cost_fit", len(clusterings) + fits,
-     f"no fit of {' and '.join(unfitted)}: regression.csv has none for these points (a fit needs more frames "
-     "and structures than the model has terms: --frames A:B with B > A)" if unfitted else "", kind="drift")
+     f"no fit of {' and '.join(unfitted)}: " + "; ".join(why) if unfitted else "", kind="drift")
 plt.show()
 )PY";
 

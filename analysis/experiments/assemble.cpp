@@ -235,12 +235,16 @@ void assemble_compare(std::vector<FileRows>& files, std::string& text, const std
 
 struct Fit {
   double a = kNaN, b = kNaN, c = kNaN, r2 = kNaN;
+  std::string why;  // why r2 is nan ("" when it is not)
 };
 // Least squares y = X beta (columns of X: the regressors and a 1), R^2 = 1 - SSres / SStot.
 Fit least_squares(const std::vector<std::vector<double>>& x, const std::vector<double>& y) {
   Fit f;
   const std::size_t n = y.size(), k = x.size();
-  if (n < k + 2) return f;
+  if (n < k + 2) {
+    f.why = fmt::format("{} point{}, a fit of {} term{} needs {}", n, n == 1 ? "" : "s", k + 1, k ? "s" : "", k + 2);
+    return f;
+  }
   Eigen::MatrixXd a(n, k + 1);
   Eigen::VectorXd b(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -251,7 +255,10 @@ Fit least_squares(const std::vector<std::vector<double>>& x, const std::vector<d
   const auto qr = a.colPivHouseholderQr();
   // A regressor that does not vary (or two that vary together) leaves the fit undetermined:
   // no coefficients rather than made-up ones.
-  if (qr.rank() < static_cast<Eigen::Index>(k + 1)) return f;
+  if (qr.rank() < static_cast<Eigen::Index>(k + 1)) {
+    f.why = k == 1 ? "the regressor has one value at every point" : "a regressor has one value at every point, or two vary together";
+    return f;
+  }
   const Eigen::VectorXd beta = qr.solve(b);
   const double mean = b.mean();
   const double ss_tot = (b.array() - mean).square().sum(), ss_res = (a * beta - b).squaredNorm();
@@ -259,6 +266,7 @@ Fit least_squares(const std::vector<std::vector<double>>& x, const std::vector<d
   if (k >= 2) f.b = beta(1);
   f.c = beta(k);
   f.r2 = ss_tot > 0 ? 1.0 - ss_res / ss_tot : kNaN;
+  if (!(ss_tot > 0)) f.why = "the measured values are all equal";
   return f;
 }
 
@@ -311,6 +319,11 @@ void assemble_drift(std::vector<FileRows>& files, std::string& text) {
       fits += fmt::format("  {:<12} {:<8} {:>4} points: R^2 sah {:.3f}, epo {:.3f}, sah+epo {:.3f} (EPO weight {:.3g}), "
                           "sah+0.71 epo {:.3f}{}\n",
                           target, type, ys.size(), fs.r2, fe.r2, fse.r2, fse.a != 0 ? fse.b / fse.a : kNaN, ft.r2, counters);
+      for (const auto& [model, f] : {std::pair<const char*, const Fit*>{"sah", &fs}, {"epo", &fe}, {"sah+epo", &fse}})
+        if (!f->why.empty()) {  // (the first model's reason: the others' follow from it)
+          fits += fmt::format("    (R^2 {} nan: {})\n", model, f->why);
+          break;
+        }
     }
   }
   // Per clustering: the first and last frame.

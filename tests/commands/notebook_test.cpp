@@ -200,9 +200,38 @@ TEST_F(Notebook, OneFrameStudiesDrawTheirPoints) {
   EXPECT_EQ(tab10_colours_in(viz::read_png(dir_ / "nb" / "fig7_compare.png"), 90), 2u);
   EXPECT_EQ(tab10_colours_in(viz::read_png(dir_ / "nb" / "drift_frames.png"), 90), 2u);  // triangles, acc_growth
   const std::string fit = drawn["cost_fit"]["note"];
-  EXPECT_NE(fit.find("no fit of SAH and EPO"), std::string::npos) << fit;
+  EXPECT_NE(fit.find("no fit of SAH and EPO: 2 points for SAH (a fit needs at least 3"), std::string::npos) << fit;
   EXPECT_EQ(drawn["cost_fit"]["series"], 2);  // the two structures' points, no fit line
   EXPECT_NE(err.find("ptc: note: cost_fit: no fit of SAH and EPO"), std::string::npos) << err;
+}
+
+// A fit of points that all have the same SAH cost and EPO (one triangle: every frame's BVH is its
+// leaf) is said to have nothing to vary, not to need more frames; the summary says why R^2 is nan.
+TEST_F(Notebook, AFitOfEqualPointsSaysWhy) {
+  const fs::path tri = dir_ / "tri1.off";
+  test::spit(tri, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  ExperimentCommandOptions o;
+  o.kind = "drift";
+  o.input = tri;
+  o.frames = "0:2";
+  o.width = 32, o.height = 32;
+  o.quiet = true;
+  o.out_dir = dir_ / "study" / "drift";
+  std::ostringstream summary;
+  cmd_experiment(o, summary);
+  EXPECT_NE(summary.str().find("(R^2 sah nan: the regressor has one value at every point)"), std::string::npos)
+      << summary.str();
+  NotebookCommandOptions n;
+  n.studies = {dir_ / "study" / "drift"};
+  n.out_dir = dir_ / "nb";
+  std::ostringstream out;
+  testing::internal::CaptureStderr();
+  cmd_notebook(n, out);
+  (void)testing::internal::GetCapturedStderr();
+  const auto drawn = nlohmann::json::parse(test::slurp(dir_ / "nb" / "figures.json"));
+  const std::string fit = drawn["cost_fit"]["note"];
+  EXPECT_NE(fit.find("every point has the same SAH (0.3): nothing varies to fit"), std::string::npos) << fit;
+  EXPECT_EQ(fit.find("needs"), std::string::npos) << fit;
 }
 
 TEST_F(Notebook, RefusesWhatIsNotAStudyAndAPythonWithoutPandas) {
