@@ -481,13 +481,21 @@ void check_shard_manifest(const nlohmann::json& m, const std::filesystem::path& 
   }
 }
 
-// The first difference between two identities, as "parameters.threads: 1 vs 2".
+// The first difference between two identities, as "parameters.threads: 1 vs 2". The parameters
+// the run derives from others (the camera and light, made from --width, --height and the scene)
+// come last, so that the flag the user gave differently is the one named.
 std::string first_difference(const nlohmann::json& a, const nlohmann::json& b, const std::string& path = "") {
   if (a.is_object() && b.is_object()) {
     std::set<std::string> keys;
     for (auto it = a.begin(); it != a.end(); ++it) keys.insert(it.key());
     for (auto it = b.begin(); it != b.end(); ++it) keys.insert(it.key());
-    for (const auto& k : keys) {
+    std::vector<std::string> ordered;
+    const auto derived = [&](const std::string& k) { return path == "parameters" && (k == "camera" || k == "light"); };
+    for (const auto& k : keys)
+      if (!derived(k)) ordered.push_back(k);
+    for (const auto& k : keys)
+      if (derived(k)) ordered.push_back(k);
+    for (const auto& k : ordered) {
       const std::string sub = path.empty() ? k : path + "." + k;
       if (!a.contains(k) || !b.contains(k)) return sub + ": only in one of them";
       if (a[k] != b[k]) return first_difference(a[k], b[k], sub);

@@ -363,6 +363,14 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   r = ptc({"merge", a, (dir_ / "other").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("parameters.frames"), std::string::npos) << r.err;
+  // Another --width: named as the width, not as the camera made from it (which sorts first)
+  ASSERT_EQ(ptc({"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,10,20", "--width", "24", "--height", "16",
+                 "--quiet", "--frames", "0:1", "--shard", "2/2", "--out", (dir_ / "wide").string()})
+                .code,
+            0);
+  r = ptc({"merge", a, (dir_ / "wide").string(), "--out", out});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find(": parameters.width: 16 vs 24"), std::string::npos) << r.err;
   r = ptc({"merge", a, (dir_ / "third").string(), "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("split into 3"), std::string::npos) << r.err;
