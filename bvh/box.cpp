@@ -1,5 +1,7 @@
 #include "bvh/box.h"
 
+#include <fmt/format.h>
+
 #include <immintrin.h>  // SSE2 (the x86-64 baseline)
 
 #include <algorithm>
@@ -166,9 +168,9 @@ void throw_not_finite(std::span<const Vec3> positions, const FrameMap& origin) {
   for (std::size_t v = 0; v < positions.size(); ++v) {
     const Vec3f f = to_frame(positions[v], origin);
     if (!(std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2])))
-      throw FrameRangeError("vertex " + std::to_string(v) + ": position (" + std::to_string(positions[v].x()) +
-                                  ", " + std::to_string(positions[v].y()) + ", " + std::to_string(positions[v].z()) +
-                                  ") is not finite in single precision (NaN, infinite, or beyond the float range "
+      throw FrameRangeError(fmt::format("vertex {}: position ({:g}, {:g}, {:g})", v, positions[v].x(), positions[v].y(),
+                                        positions[v].z()) +
+                            " is not finite in single precision (NaN, infinite, or beyond the float range "
                                   "in the trace frame)");
   }
   throw FrameRangeError("a position is not finite in single precision");

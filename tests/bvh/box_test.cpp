@@ -231,5 +231,19 @@ TEST(Box, GroupBoxesFromDoublesEqualThoseOverTheFramePositions) {
   EXPECT_TRUE(got[0].empty());
 }
 
+// A vertex beyond the float range is named with its coordinates in %g form (they were printed with
+// %f: a 768-byte line of digits for 1e300).
+TEST(Box, NotFiniteVertexIsNamedShortly) {
+  const std::vector<Vec3> pos = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1e300, -1e300, 0.5)};
+  try {
+    throw_not_finite(pos, FrameMap());
+    FAIL() << "no error";
+  } catch (const FrameRangeError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "vertex 2: position (1e+300, -1e+300, 0.5) is not finite in single precision (NaN, infinite, or beyond "
+              "the float range in the trace frame)");
+  }
+}
+
 }  // namespace
 }  // namespace ptc::bvh

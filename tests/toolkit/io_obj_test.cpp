@@ -100,8 +100,14 @@ TEST(IoObj, BadIndices) {
   EXPECT_EQ(e.reason(), "index 57 out of range [1, 3] (the file defines 3 vertices)");
   e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n");
   EXPECT_NE(e.reason().find("refers before the first vertex"), std::string::npos) << e.what();
+  // Beyond what ptc numbers (32 bits) or beyond 64 bits: the same words (a positive index is
+  // checked against the whole file, not the vertices so far, which the message once said)
   e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n");
-  EXPECT_EQ(e.reason(), "index 99999999999999999999 out of range (3 vertices defined so far)");
+  EXPECT_EQ(e.reason(), "index 99999999999999999999 out of range (ptc numbers at most 4294967295 vertices)");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4294967297\n");
+  EXPECT_EQ(e.reason(), "index 4294967297 out of range (ptc numbers at most 4294967295 vertices)");
+  e = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -99999999999999999999\n");
+  EXPECT_EQ(e.reason(), "relative index -99999999999999999999 refers before the first vertex (3 vertices defined so far)");
 }
 
 TEST(IoObj, GarbledAndShortLines) {
@@ -192,7 +198,7 @@ TEST(IoObj, Utf16TextIsNamedAsSuch) {
     for (bool be : {true, false}) {
       const std::string text = f == MeshFormat::Obj ? "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" : "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
       const InputError e = io_test::read_error(utf16(text, be), f);
-      EXPECT_EQ(e.location(), "byte 1");
+      EXPECT_EQ(e.location(), "byte 0");  // (offsets count from 0, as everywhere)
       EXPECT_NE(std::string(e.what()).find("UTF-16 text is not supported"), std::string::npos) << e.what();
     }
 }

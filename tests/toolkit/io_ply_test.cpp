@@ -399,6 +399,10 @@ TEST(IoPly, AsciiSurplusValuesPerLineAreIgnoredAndCounted) {
   EXPECT_EQ(e.reason(),
             "file ends after 2 of 3 vertices (2 lines carried more values than the header declares, first: vertex 0 "
             "(line 10): 6 extra values)");
+  const auto one = ply_error(ascii_tri("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 2 3 0 2 1\n", 3, 2));
+  EXPECT_EQ(one.reason(),
+            "file ends after 1 of 2 faces (1 line carried more values than the header declares, first: face 0 "
+            "(line 13): 4 extra values)");
 }
 
 }  // namespace

@@ -106,7 +106,7 @@ void check_not_utf16(std::string_view first_bytes, const std::string& name) {
   // the readers said only "no triangles". Its byte order mark says what it is.
   const std::string_view b = first_bytes;
   if (b.size() >= 2 && ((b[0] == '\xFE' && b[1] == '\xFF') || (b[0] == '\xFF' && b[1] == '\xFE')))
-    throw InputError(name, "byte 1", "", "UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
+    throw InputError(name, "byte 0", "", "UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
 }
 }  // namespace io
 

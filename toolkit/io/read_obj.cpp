@@ -90,9 +90,13 @@ struct ObjParser {
           std::int64_t idx = 0;
           const NumStatus st = parse_int(vi, idx);
           if (st == NumStatus::Garbled) fail_here("corner " + quote(t) + " is not an integer index");
+          // (beyond 64 bits: a positive index is out of any file's range, a negative one refers
+          // before the first vertex; both as the checks below say them)
           if (st == NumStatus::OutOfRange)
-            fail_here("index " + std::string(vi) + " out of range (" + std::to_string(pos.size()) +
-                      " vertices defined so far)");
+            fail_here(vi.starts_with('-') ? "relative index " + std::string(vi) + " refers before the first vertex (" +
+                                                std::to_string(pos.size()) + " vertices defined so far)"
+                                          : "index " + std::string(vi) + " out of range (ptc numbers at most " +
+                                                std::to_string(kMaxElements) + " vertices)");
           if (idx == 0) fail_here("index 0 is invalid (OBJ indices start at 1)");
           std::uint64_t v = 0;
           if (idx < 0) {
@@ -103,7 +107,9 @@ struct ObjParser {
             v = pos.size() - back;
           } else {
             v = static_cast<std::uint64_t>(idx) - 1;
-            if (v >= kMaxElements) fail_here("index " + std::to_string(idx) + " out of range");
+            if (v >= kMaxElements)
+              fail_here("index " + std::to_string(idx) + " out of range (ptc numbers at most " +
+                        std::to_string(kMaxElements) + " vertices)");
             if (static_cast<std::uint64_t>(idx) > max_index) {
               max_index = static_cast<std::uint64_t>(idx);
               max_index_line = lines.line();

@@ -278,8 +278,8 @@ class PlyParser {
   std::string truncated(const Element& e, std::uint64_t item) const {
     std::string s = "file ends after " + std::to_string(item) + " of " + std::to_string(e.count) + " " + plural(e);
     if (report_.surplus_lines > 0)  // ascii, one element per line: did a writer put several on one?
-      s += " (" + std::to_string(report_.surplus_lines) +
-           " lines carried more values than the header declares, first: " + report_.first_surplus + ")";
+      s += " (" + std::to_string(report_.surplus_lines) + (report_.surplus_lines == 1 ? " line" : " lines") +
+           " carried more values than the header declares, first: " + report_.first_surplus + ")";
     return s;
   }
   // Checks one face index; returns it as a vertex id.
