@@ -35,11 +35,20 @@ std::optional<std::int64_t> frame_number(std::string_view s) {
   return v;
 }
 
+// A frame number beyond kMaxFrame: said naming the flag.
+void check_frame_limit(std::int64_t f, std::string_view flag) {
+  if (f > kMaxFrame)
+    throw UsageError(std::string(flag), fmt::format("frame {} is beyond the largest frame number, 2^53 = {} (a frame "
+                                                    "is the time it stands for, a double)",
+                                                    f, kMaxFrame));
+}
+
 }  // namespace
 
 std::int64_t parse_frame(std::string_view s, std::string_view flag) {
   const auto v = frame_number(s);
   if (!v) throw UsageError(std::string(flag), fmt::format("{} is not a frame number (an integer >= 0)", quoted(s)));
+  check_frame_limit(*v, flag);
   return *v;
 }
 
@@ -52,6 +61,7 @@ FrameRange parse_frame_range(std::string_view s, std::string_view flag) {
                      fmt::format("{} is not A:B with integers 0 <= A <= B (e.g. 0:59), nor one frame F", quoted(s)));
   if (*b < *a)
     throw UsageError(std::string(flag), fmt::format("{}: the last frame {} is before the first {}", quoted(s), *b, *a));
+  check_frame_limit(*b, flag);
   return {*a, *b};
 }
 

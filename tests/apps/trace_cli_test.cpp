@@ -1005,6 +1005,20 @@ TEST_F(TraceCli, BadFramesAreOneLineErrors) {
   expect_error({"bench", scene, "--frames", "2:1", "--out", out}, 2, "--frames");
   expect_error({"bench", scene, "--frames", "5:12", "--out", out}, 2, "outside the range 0:9");
   expect_error({"bench", scene, "--deform", "twist", "--out", out}, 2, "--deform");
+  // The largest int64 as a frame: refused at once (the loops to it never ended: found by a new
+  // user), with --extend-frames and a deformer too; 2^53 is the largest frame number.
+  const std::string cube = cube_.string();
+  const std::string beyond = "--frame: frame 9223372036854775807 is beyond the largest frame number, 2^53";
+  expect_error({"trace", cube, "--deform", "twist", "--frame", "9223372036854775807", "--out", out}, 2, beyond);
+  expect_error({"bench", cube, "--frames", "9223372036854775807:9223372036854775807", "--out", out}, 2,
+               "--frames: frame 9223372036854775807 is beyond");
+  expect_error({"animate", cube, "--deform", "twist", "--frames", "0:9223372036854775807", "--out", out}, 2,
+               "--frames: frame 9223372036854775807 is beyond");
+  expect_error({"trace", cube, "--deform", "twist", "--frame", "9007199254740993", "--out", out}, 2, "--frame: frame 9007199254740993 is beyond");
+  EXPECT_EQ(ptc({"trace", cube, "--deform", "twist", "--frame", "9007199254740992", "--width", "4", "--height", "4",
+                 "--out", out})
+                .code,
+            0);
   // The frame directory traces fine within its range.
   EXPECT_EQ(ptc({"trace", (dir_ / "seq").string(), "--frames", "0:1", "--width", "4", "--height", "4", "--out", out}).code, 0);
 }

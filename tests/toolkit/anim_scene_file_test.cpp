@@ -212,6 +212,11 @@ TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   has(e, "frames[1]: 18446744073709551615 is out of the 64-bit integer range");
   e = scene_error(R"({"meshes": [{"file": "cube.off"}], "frames": [0, 99999999999999999999]})");
   has(e, "is out of the 64-bit integer range");
+  // The largest int64 as the last frame: refused (the frame loops to it never ended), 2^53 taken
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}], "frames": [0, 9223372036854775807]})");
+  has(e, "frames[1]: frame numbers go up to 2^53 = 9007199254740992");
+  e = scene_error(R"({"meshes": [{"file": "cube.off"}], "frames": [0, 9007199254740993]})");
+  has(e, "frames[1]: frame numbers go up to 2^53");
   // A deform key the kind does not read, and a part name given twice.
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "twist", "velocity": [1, 0, 0]}}]})");
   has(e, f);

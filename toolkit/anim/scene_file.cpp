@@ -403,6 +403,9 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
     frames = FrameRange{r.integer(f[0], "frames[0]"), r.integer(f[1], "frames[1]")};
     if (frames->first < 0) r.fail("frames[0]", "must be >= 0");
     if (frames->last < frames->first) r.fail("frames[1]", "the last frame is before the first");
+    if (frames->last > kMaxFrame)
+      r.fail("frames[1]", "frame numbers go up to 2^53 = " + std::to_string(kMaxFrame) +
+                              " (a frame is the time it stands for, a double)");
   }
   std::optional<SceneCamera> cam;
   if (root.contains("camera")) cam = read_camera(r, root["camera"], "camera");
