@@ -110,9 +110,11 @@ CameraSpec camera_for(const CameraSpec& flags, const Scene& scene) {
 
 LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const bvh::PinholeCamera& cam,
                       const Box3& bounds, std::string_view input) {
-  const LightChoice c = flag                    ? LightChoice{*flag, "--light"}
-                        : scene.has_own_light() ? LightChoice{scene.light().position, "scene"}
-                                                : LightChoice{default_light(cam, bounds), "default"};
+  // (--light moves the light; its intensity stays the scene's own, 1 for a scene without one)
+  const double intensity = scene.has_own_light() ? scene.light().intensity : 1.0;
+  const LightChoice c = flag                    ? LightChoice{*flag, "--light", intensity}
+                        : scene.has_own_light() ? LightChoice{scene.light().position, "scene", intensity}
+                                                : LightChoice{default_light(cam, bounds), "default", intensity};
   // The light is not a ray origin (shadow rays leave the surface toward it): it only has to be a
   // double's distance away, its difference to the scene finite (the directions are taken without
   // overflowing squares, render/rays.cpp).

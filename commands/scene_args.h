@@ -64,6 +64,7 @@ void refuse_unused_data_dir(const std::filesystem::path& input);
 struct LightChoice {
   Vec3 position = Vec3::Zero();
   const char* from = "default";  ///< "--light", "scene" or "default" (recorded in manifests)
+  double intensity = 1.0;        ///< the scene's light.intensity (also when --light moves it), else 1
 };
 /// A light whose difference to the scene's rest bounds overflows is refused (a usage error for
 /// --light, else InputError naming `input` and "light"); a far light is not (shadow rays start on

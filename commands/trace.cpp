@@ -137,6 +137,7 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   check_eye_reach(cam, opt.camera, scene, arg);
   const LightChoice light = light_for(rc.light, scene, cam, first_bounds, arg);
   rc.light = light.position;
+  rc.light_intensity = light.intensity;
 
   Clustering clusters;
   const bool use_clusters = !opt.clusters.empty();
@@ -350,7 +351,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
                                     {"fov_y_deg", cam.fov_y_deg}, {"from_scene", scene.has_own_camera()},
                                     {"given", {{"eye", bool(opt.camera.eye)}, {"look_at", bool(opt.camera.look_at)},
                                                {"up", bool(opt.camera.up)}, {"fov", bool(opt.camera.fov_deg)}}}});
-  manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
+  manifest.set_parameter("light",
+                         {{"position", vec_json(light.position)}, {"from", light.from}, {"intensity", light.intensity}});
   manifest.set_parameter("ray_offset", "origin = p + 2^-18 M n, M = max |coordinate| of bounds and p in the trace frame");
   manifest.set_result("images", images);
   manifest.set_result("rays", std::uint64_t(rc.width) * std::uint64_t(rc.height));  // per frame

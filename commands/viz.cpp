@@ -234,6 +234,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
   if (needs_trace) check_eye_reach(cam, opt.camera, scene, arg);
   const LightChoice light = needs_trace ? light_for(opt.light, scene, cam, first_bounds, arg) : LightChoice{};
   rc.light = light.position;
+  rc.light_intensity = light.intensity;
   std::unique_ptr<loop::SceneAccel> accel;
   if (needs_trace) {
     bvh::SceneTracerConfig tcfg;
@@ -502,7 +503,9 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)}, {"right", vec_json(cam.right)},
                                       {"up", vec_json(cam.up)}, {"fov_y_deg", cam.fov_y_deg}});
   }
-  if (needs_trace) manifest.set_parameter("light", {{"position", vec_json(light.position)}, {"from", light.from}});
+  if (needs_trace)
+    manifest.set_parameter("light",
+                           {{"position", vec_json(light.position)}, {"from", light.from}, {"intensity", light.intensity}});
   if (use_clusters) {
     manifest.set_result("clusters", clusters.cluster_count());
     manifest.set_result("colours", colours_used);

@@ -42,6 +42,9 @@ Render render_view(const TraceTarget& scene, const Mesh& mesh, const bvh::Pinhol
   r.surface = surface_hits(mesh, r.rays, r.primary);
   const RayFrame frame{mesh.referenced_bounds(), scene.origin};
   r.light = cfg.light.value_or(default_light(cam, frame.bounds));
+  if (!(cfg.light_intensity >= 0.0 && std::isfinite(cfg.light_intensity)))
+    throw std::invalid_argument("render_view: the light's intensity must be finite and >= 0");
+  r.light_intensity = cfg.light_intensity;
   if (cfg.shadows) {
     ShadowResult s = trace_shadows(scene, r.surface, r.light, frame, cfg.threads);
     r.lit = std::move(s.lit);
@@ -66,7 +69,8 @@ RgbImage shaded_image(const Render& r) {
     const Vec3 to_light = r.light - r.surface.point[i];
     const double n = to_light.norm();
     const Vec3 l = std::isfinite(n) ? to_light.normalized() : unit_vector(to_light);  // (a light at 1e308)
-    const double diffuse = std::max(0.0, r.surface.normal[i].dot(l)) * (r.lit.empty() ? 1.0 : double(r.lit[i]));
+    const double diffuse =
+        r.light_intensity * std::max(0.0, r.surface.normal[i].dot(l)) * (r.lit.empty() ? 1.0 : double(r.lit[i]));
     const double ambient = r.ao.empty() ? 1.0 : double(r.ao[i]);
     const std::uint8_t g = to_u8(kAlbedo * (kAmbient * ambient + kDiffuse * diffuse));
     img.set(i, {g, g, g});

@@ -24,6 +24,7 @@ struct RenderConfig {
   double ao_distance_rel = 0.25;  ///< AO max distance as a fraction of the scene's bounds diagonal
   std::uint64_t seed = 1;         ///< AO sampling seed
   std::optional<Vec3> light;      ///< point light (world); default: default_light()
+  double light_intensity = 1.0;   ///< >= 0: scales the light's diffuse term in shaded_image (a scene's light.intensity)
   unsigned threads = 0;           ///< tracer threads (0 = all cores)
 };
 
@@ -37,6 +38,7 @@ struct Render {
   bvh::HitBatch primary;  ///< closest hits with counters
   SurfaceHits surface;
   Vec3 light = Vec3::Zero();
+  double light_intensity = 1.0;   ///< RenderConfig::light_intensity
   std::vector<std::uint8_t> lit;  ///< per pixel, when shadows were traced
   std::vector<float> ao;          ///< per pixel, when AO was traced
   PassStats primary_stats, shadow_stats, ao_stats;

@@ -982,6 +982,37 @@ TEST_F(TraceCli, BuiltinSceneSequence) {
   EXPECT_NE(r.out.find("static triangle BVH + moving triangle BVH"), std::string::npos) << r.out;
 }
 
+// A scene file's light.intensity reaches the shaded image (it was read, checked and ignored),
+// also when --light moves the light; the manifest records it.
+TEST_F(TraceCli, TheScenesLightIntensityShades) {
+  auto shaded = [&](const std::string& light, const std::vector<std::string>& extra = {}) {
+    const fs::path scene = dir_ / "lit.json";
+    std::ofstream(scene) << R"({"frames": [0, 0], "light": )" << light << R"(, "meshes": [{"file": ")" << cube_.string()
+                         << R"("}]})";
+    std::vector<std::string> args = {"trace", scene.string(), "--width", "24", "--height", "24", "--shadows", "--out",
+                                     (dir_ / "lit").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const CmdResult r = ptc(args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    const auto m = nlohmann::json::parse(slurp(dir_ / "lit" / "manifest.json"));
+    return std::pair{slurp(dir_ / "lit" / "shaded.png"), m["parameters"]["light"]};
+  };
+  const auto [plain, plain_light] = shaded(R"({"position": [3, 4, 5]})");
+  EXPECT_EQ(plain_light["intensity"], 1.0);
+  const auto [one, one_light] = shaded(R"({"position": [3, 4, 5], "intensity": 1})");
+  EXPECT_EQ(one, plain);
+  const auto [dim, dim_light] = shaded(R"({"position": [3, 4, 5], "intensity": 0.25})");
+  EXPECT_NE(dim, plain);
+  EXPECT_EQ(dim_light["intensity"], 0.25);
+  const auto [off, off_light] = shaded(R"({"position": [3, 4, 5], "intensity": 0})");
+  EXPECT_NE(off, dim);
+  const auto [moved, moved_light] = shaded(R"({"position": [3, 4, 5], "intensity": 0.25})", {"--light", "-3,4,5"});
+  EXPECT_EQ(moved_light["from"], "--light");
+  EXPECT_EQ(moved_light["intensity"], 0.25);
+  const auto [moved1, moved1_light] = shaded(R"({"position": [3, 4, 5]})", {"--light", "-3,4,5"});
+  EXPECT_NE(moved, moved1);
+}
+
 TEST_F(TraceCli, BadFramesAreOneLineErrors) {
   std::ofstream(dir_ / "scene.json") << kSceneJson;
   const std::string out = (dir_ / "out").string(), scene = (dir_ / "scene.json").string();

@@ -202,4 +202,22 @@ TEST(TraceRender, MissedPixelsAndShadingTerms) {
   }
   EXPECT_GT(hits, 50u);
   EXPECT_LT(hits, 400u);
+
+  // The light's intensity scales the diffuse term (a scene file's light.intensity; it changed
+  // nothing once): 0 leaves the ambient term, 0.5 half the diffuse, 3 saturates near the centre.
+  for (const double intensity : {0.0, 0.5, 3.0}) {
+    rc.light_intensity = intensity;
+    const ptc::Render ri = ptc::render_view(scene.data(), m, cam, rc);
+    const ptc::RgbImage li = ptc::shaded_image(ri);
+    for (std::size_t i = 0; i < ri.rays.size(); ++i) {
+      if (!ri.surface.hit[i]) continue;
+      const Vec3 l = (rc.light.value() - ri.surface.point[i]).normalized();
+      const double v = 255.0 * 0.9 * (0.2 + 0.8 * intensity * l.dot(Vec3(0, 0, -1)));
+      EXPECT_NEAR(li.at(int(i % 20), int(i / 20))[0], std::min(v, 255.0), 0.51) << intensity;
+    }
+  }
+  for (const double bad : {-1.0, std::nan(""), HUGE_VAL}) {
+    rc.light_intensity = bad;
+    EXPECT_THROW((void)ptc::render_view(scene.data(), m, cam, rc), std::invalid_argument);
+  }
 }
