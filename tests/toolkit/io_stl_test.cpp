@@ -102,6 +102,24 @@ TEST(IoStl, BinaryWhoseHeaderStartsWithSolid) {
   const auto lm = stl(binary_stl(kFacets, "solid exported by a tool that should not have"));
   expect_square_and_facet(lm);
   EXPECT_TRUE(lm.report.binary);
+  // ... and whose size does not match its count: padded, with a newline in the header, or with
+  // fewer facets counted than it holds. Its NUL bytes say binary (it was parsed as ascii and
+  // refused: "file ends before 'endsolid'", or raw binary bytes quoted as a keyword).
+  for (const std::string& header : {std::string("solid exported"), std::string("solid x\n")}) {
+    const auto padded = stl(binary_stl(kFacets, header) + std::string(1, '\0'));
+    expect_square_and_facet(padded);
+    EXPECT_TRUE(padded.report.binary);
+    std::string fewer = binary_stl(kFacets, header);
+    const std::uint32_t two = 2;
+    std::memcpy(fewer.data() + 80, &two, 4);
+    const auto f = stl(fewer);
+    EXPECT_TRUE(f.report.binary);
+    EXPECT_EQ(f.mesh.triangle_count(), 2u);
+    EXPECT_EQ(f.report.trailing_bytes, 50u);
+  }
+  // An ascii file with a garbled line still gets the ascii error (no NUL: not taken for binary).
+  const InputError e = stl_error("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 q\n");
+  EXPECT_NE(std::string(e.what()).find("line 6"), std::string::npos) << e.what();
 }
 
 TEST(IoStl, DegenerateFacetsAreKept) {

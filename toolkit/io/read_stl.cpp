@@ -5,7 +5,9 @@
 // Binary or ascii? A binary file may begin with "solid" too. A file is binary when its size is
 // exactly 84 + 50 * (facet count at byte 80), unless it begins with "solid" and parses as ascii;
 // otherwise it is ascii when it begins with "solid", binary (and then too short or too long for
-// its count) when it does not.
+// its count) when it does not. One more case: a file that begins with "solid", does not parse as
+// ascii and holds a NUL byte (no ascii STL does; a binary one's count and zeros do) is binary
+// (exporters that write "solid" into the header and pad the file, or write a count of 0).
 #include <array>
 #include <bit>
 #include <cstring>
@@ -262,7 +264,14 @@ LoadedMesh read_stl(std::string_view bytes, const std::string& name) {
       return read_binary(bytes, name);  // "solid" in the 80-byte header of a binary file
     }
   }
-  if (solid) return AsciiStl(bytes, name).parse();
+  if (solid) {
+    try {
+      return AsciiStl(bytes, name).parse();
+    } catch (const InputError&) {
+      if (bytes.find('\0') == std::string_view::npos) throw;
+      return read_binary(bytes, name);  // binary bytes after a "solid" header (see the top)
+    }
+  }
   return read_binary(bytes, name);
 }
 
