@@ -230,6 +230,20 @@ TEST(IoOff, NanAndInfiniteCoordinates) {
   e = off_error("OFF\n3 1 0\n0 0 1e999\n1 0 0\n0 1 0\n3 0 1 2\n");
   EXPECT_EQ(e.element(), "vertex 0");
   EXPECT_NE(e.reason().find("out of range"), std::string::npos) << e.what();
+  for (const char* big : {"0.001e312", "1e+400", "-123456e304"}) {
+    e = off_error(std::string("OFF\n3 1 0\n0 0 ") + big + "\n1 0 0\n0 1 0\n3 0 1 2\n");
+    EXPECT_NE(e.reason().find("out of range"), std::string::npos) << big;
+  }
+  // Numbers below the smallest subnormal are the nearest double, 0 with their sign (they were
+  // refused as out of range); subnormals themselves keep their value.
+  const std::pair<const char*, double> tiny[] = {{"1e-400", 0.0},        {"-2e-324", -0.0},
+                                                 {"1000e-327", 0.0},     {"0.0000001e-320", 0.0},
+                                                 {"+1e-99999999999999999999", 0.0}, {"3e-320", 3e-320}};
+  for (const auto& [text, value] : tiny) {
+    const LoadedMesh m = off(std::string("OFF\n3 1 0\n0 0 ") + text + "\n1 0 0\n0 1 0\n3 0 1 2\n");
+    EXPECT_EQ(m.mesh.position(0).z(), value) << text;
+    EXPECT_EQ(std::signbit(m.mesh.position(0).z()), std::signbit(value)) << text;
+  }
 }
 
 TEST(IoOff, GarbledTokens) {

@@ -3,6 +3,7 @@
 // a number is "garbled" (so "1.5x", "1,5" and "--1" are errors, not 1.5, 1 and nothing).
 #pragma once
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -17,13 +18,50 @@ inline bool is_space(char c) { return is_blank(c) || c == '\n'; }
 
 enum class NumStatus { Ok, Garbled, OutOfRange };
 
-/// The whole token must be a decimal number ("1", "-2.5e3", "+.5", "nan", "inf").
+/// Whether a decimal number that from_chars found out of range lies below 1 in magnitude (it
+/// underflowed to zero) rather than beyond double's range: its decimal exponent, the place of its
+/// first non-zero digit plus the exponent after 'e', is negative. `b` .. `e` is the number.
+inline bool decimal_exponent_negative(const char* b, const char* e) {
+  if (b != e && (*b == '-' || *b == '+')) ++b;
+  std::int64_t place = 0;  // the first non-zero digit's place: 10^place
+  bool found = false, point = false;
+  std::int64_t int_digits = 0, frac_zeros = 0;
+  for (; b != e && *b != 'e' && *b != 'E'; ++b) {
+    if (*b == '.') {
+      point = true;
+    } else if (!found && *b == '0') {
+      if (point) ++frac_zeros;
+    } else if (!found) {
+      found = true;
+      place = point ? -(frac_zeros + 1) : 0;
+      int_digits = point ? 0 : 1;
+    } else if (!point) {
+      ++int_digits;
+    }
+  }
+  if (found && int_digits > 0) place = int_digits - 1;
+  std::int64_t exp = 0;
+  bool neg = false;
+  if (b != e) ++b;  // 'e'
+  if (b != e && (*b == '-' || *b == '+')) neg = *b++ == '-';
+  for (; b != e; ++b) exp = std::min<std::int64_t>(exp * 10 + (*b - '0'), std::int64_t(1) << 40);  // (saturates)
+  return place + (neg ? -exp : exp) < 0;
+}
+
+/// The whole token must be a decimal number ("1", "-2.5e3", "+.5", "nan", "inf"). A number too
+/// small for a double (below its smallest subnormal, as "1e-400") is 0 with its sign, the nearest
+/// double; one too large is OutOfRange.
 inline NumStatus parse_double(std::string_view tok, double& out) {
   const char* b = tok.data();
   const char* e = b + tok.size();
   if (b != e && *b == '+' && e - b > 1 && b[1] != '-' && b[1] != '+') ++b;  // from_chars rejects '+'
   const auto [p, ec] = std::from_chars(b, e, out);
-  if (ec == std::errc::result_out_of_range) return NumStatus::OutOfRange;
+  if (ec == std::errc::result_out_of_range) {
+    if (p != e) return NumStatus::Garbled;
+    if (!decimal_exponent_negative(b, e)) return NumStatus::OutOfRange;
+    out = *b == '-' ? -0.0 : 0.0;
+    return NumStatus::Ok;
+  }
   if (ec != std::errc() || p != e) return NumStatus::Garbled;
   return NumStatus::Ok;
 }
