@@ -1013,6 +1013,17 @@ TEST_F(TraceCli, TheScenesLightIntensityShades) {
   EXPECT_NE(moved, moved1);
 }
 
+// A directory of frames named like a scene file (`ptc animate s.json --out frames.json`) is read as
+// the directory it is (it was refused: "is a directory, not a scene file").
+TEST_F(TraceCli, AFrameDirectoryNamedDotJsonIsADirectory) {
+  const std::string frames = (dir_ / "frames.json").string();
+  ASSERT_EQ(ptc({"animate", cube_.string(), "--deform", "twist", "--frames", "0:1", "--out", frames}).code, 0);
+  const CmdResult r = ptc({"trace", frames, "--frames", "0:1", "--width", "8", "--height", "8", "--out",
+                           (dir_ / "t").string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "t" / "shaded_0001.png"));
+}
+
 TEST_F(TraceCli, BadFramesAreOneLineErrors) {
   std::ofstream(dir_ / "scene.json") << kSceneJson;
   const std::string out = (dir_ / "out").string(), scene = (dir_ / "scene.json").string();

@@ -449,6 +449,9 @@ Scene load_scene_file(const fs::path& path, const SceneOptions& opt) {
 }
 
 bool is_scene_file(const std::string& arg) {
+  // (a directory named x.json is a directory of frames, such as `ptc animate s.json --out x.json` writes)
+  std::error_code ec;
+  if (fs::is_directory(arg, ec)) return false;
   std::string ext = fs::path(arg).extension().string();
   std::ranges::transform(ext, ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext == ".json";

@@ -44,7 +44,7 @@ struct AnimateView {
 /// goes to open_scene_input (built-in name, mesh file, asset file, frame directory). A frame
 /// directory `ptc animate` wrote takes the camera and light it recorded (animate_view).
 [[nodiscard]] Scene open_scene(const std::string& arg, const SceneOptions& opt = {});
-/// Whether open_scene(arg) takes `arg` as a scene file (.json, any case).
+/// Whether open_scene(arg) takes `arg` as a scene file (.json, any case, and not a directory).
 [[nodiscard]] bool is_scene_file(const std::string& arg);
 /// Whether open_scene(arg) may read SceneOptions::data_dir: a scene file (its "${data}/" paths)
 /// or a built-in scene (names_builtin_scene); a mesh, an asset, frames or a glob never do.
