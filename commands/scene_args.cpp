@@ -100,7 +100,10 @@ CameraSpec camera_for(const CameraSpec& flags, const Scene& scene) {
   CameraSpec spec = flags;
   if (scene.has_own_camera()) {
     const SceneCamera& sc = scene.camera();
-    if (!spec.eye) spec.eye = sc.eye;
+    if (!spec.eye) {
+      spec.eye = sc.eye;
+      if (flags.look_at) spec.eye_look_flag = "--look-at";  // (the scene's eye: the flag given is --look-at)
+    }
     if (!spec.look_at) spec.look_at = sc.look_at;
     if (!spec.up) spec.up = sc.up;
     if (!spec.fov_deg) spec.fov_deg = sc.fov_deg;

@@ -39,10 +39,10 @@ bvh::PinholeCamera make_camera(const CameraSpec& spec, const Box3& bounds, int w
   if (spec.eye) {
     const Vec3 d = look - *spec.eye;
     if (!finite(d))  // a difference that overflows
-      throw UsageError("--eye", "eye " + fmt_vec(*spec.eye) + " and look-at " + fmt_vec(look) +
-                                    " are too far apart (their difference overflows)");
+      throw UsageError(spec.eye_look_flag, "eye " + fmt_vec(*spec.eye) + " and look-at " + fmt_vec(look) +
+                                               " are too far apart (their difference overflows)");
     if (!(d.cwiseAbs().maxCoeff() > 0.0))
-      throw UsageError("--eye", "eye and look-at are the same point " + fmt_vec(*spec.eye));
+      throw UsageError(spec.eye_look_flag, "eye and look-at are the same point " + fmt_vec(*spec.eye));
     forward = d.stableNormalized();
   } else {
     forward = Vec3(0, 0, -1);

@@ -21,6 +21,9 @@ namespace ptc {
 struct CameraSpec {
   std::optional<Vec3> eye, look_at, up;
   std::optional<double> fov_deg;  ///< vertical, degrees, in (0, 180)
+  /// The flag an error about the eye and look-at point names: the eye's, unless the eye came from
+  /// the scene and --look-at was given (camera_for sets it).
+  const char* eye_look_flag = "--eye";
 };
 
 /// Largest image side (pixels) a camera, a command and the benchmark accept.

@@ -171,6 +171,13 @@ TEST_F(TraceCli, BadCamerasAndClustersAreOneLineErrors) {
   // A camera the flags make inconsistent: usage errors, as a zero --up (exit 2).
   expect_error({"trace", mesh, "--eye", "0.5,0.5,5", "--up", "0,0,1", "--out", out}, 2, "--up: the up vector 0,0,1 is parallel");
   expect_error({"trace", mesh, "--eye", "0.5,0.5,0.5", "--out", out}, 2, "--eye: eye and look-at are the same point");
+  {  // only --look-at given, on the eye of the scene's own camera: that flag is named (it said --eye)
+    const fs::path scene = dir_ / "cam.json";
+    std::ofstream(scene) << R"({"camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]}, "meshes": [{"file": ")" << mesh
+                         << R"("}]})";
+    expect_error({"trace", scene.string(), "--look-at", "0,0,5", "--out", out}, 2,
+                 "--look-at: eye and look-at are the same point");
+  }
   expect_error({"trace", mesh, "--eye", "1e308,0,0", "--look-at", "-1e308,0,0", "--out", out}, 2,
                "--eye: eye 1e+308,0,0 and look-at -1e+308,0,0 are too far apart");
   // A far eye whose difference to look-at does not overflow: the view direction is right (the
