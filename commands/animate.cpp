@@ -60,9 +60,15 @@ void cmd_animate(const AnimateOptions& opt, std::ostream& out) {
   // of its own: a typo such as --frames 0:99999999999 would fill the disk). The size is a lower
   // bound: binary PLY's 24 bytes a vertex and 13 a triangle (OBJ's text takes more).
   const double frame_bytes = 24.0 * double(rest.vertex_count()) + 13.0 * double(rest.triangle_count()) + 256.0;
-  dir.check_room(frame_bytes * double(range.count()), "--frames",
-                 fmt::format("frames {}:{} ({} of {} or more each)", range.first, range.last,
-                             counted(std::uint64_t(range.count()), "frame"), readable_bytes(frame_bytes)));
+  try {
+    dir.check_room(frame_bytes * double(range.count()), "--frames",
+                   fmt::format("frames {}:{} ({} of {} or more each)", range.first, range.last,
+                               counted(std::uint64_t(range.count()), "frame"), readable_bytes(frame_bytes)));
+  } catch (const UsageError& e) {
+    if (asked) throw;
+    // The range is the scene's own (its file's "frames"), not a flag the user gave: said so.
+    throw InputError(opt.scene, "", "frames", e.reason() + " (its own range; --frames A:B takes fewer)");
+  }
   std::vector<Vec3> pos(rest.vertex_count());
   std::vector<double> first_areas;
   std::vector<FrameStats> stats;

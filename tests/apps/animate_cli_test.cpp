@@ -161,7 +161,7 @@ TEST_F(Animate, DeformGivesAMeshFileTheStandInMotion) {
   // But frames that would not fit on the disk are refused before one is written (a typo's range
   // of 10^11 frames of this cube is some 10 PB): bad usage, nothing left behind, a previous
   // output kept.
-  for (const char* frames : {"0:99999999999", "5:9223372036854775806"}) {
+  for (const char* frames : {"0:99999999999", "5:9007199254740992"}) {  // (2^53: the largest frame)
     const RunResult huge = ptc({"animate", cube, "--deform", "twist", "--frames", frames, "--out", (dir_ / "late").string()});
     EXPECT_EQ(huge.code, 2) << huge.err;
     EXPECT_NE(huge.err.find(std::string("--frames: frames ") + frames + " ("), std::string::npos) << huge.err;
@@ -170,6 +170,17 @@ TEST_F(Animate, DeformGivesAMeshFileTheStandInMotion) {
     EXPECT_TRUE(fs::exists(dir_ / "late" / "frame_0100.ply"));
     for (const auto& e : fs::directory_iterator(dir_))
       EXPECT_EQ(e.path().filename().string().find(".late.tmp"), std::string::npos) << e.path();
+  }
+  {  // The same range as a scene file's own "frames": bad input naming the file (it blamed --frames)
+    const fs::path scene = dir_ / "long.json";
+    std::ofstream(scene) << R"({"frames": [0, 99999999999], "meshes": [{"file": ")" << cube
+                         << R"(", "deform": {"kind": "twist"}}]})";
+    const RunResult huge = ptc({"animate", scene.string(), "--out", (dir_ / "late").string()});
+    EXPECT_EQ(huge.code, 1) << huge.err;
+    EXPECT_NE(huge.err.find(scene.string() + ": frames: frames 0:99999999999 ("), std::string::npos) << huge.err;
+    EXPECT_NE(huge.err.find("(its own range; --frames A:B takes fewer)"), std::string::npos) << huge.err;
+    EXPECT_EQ(huge.err.find("--frames:"), std::string::npos) << huge.err;
+    EXPECT_TRUE(fs::exists(dir_ / "late" / "frame_0100.ply"));
   }
   // Without --deform the mesh stays still, and the user is told.
   const RunResult still = ptc({"animate", cube, "--frames", "0:1", "--out", (dir_ / "still").string()});
