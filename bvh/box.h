@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -29,6 +30,8 @@ namespace ptc::bvh {
 class FrameRangeError : public std::invalid_argument {
  public:
   using std::invalid_argument::invalid_argument;
+  /// The scene frame it happened in, when the frame loop knew it (analysis/loop/frame_loop.cpp).
+  std::optional<std::int64_t> frame;
 };
 
 

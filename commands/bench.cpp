@@ -56,7 +56,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   try {
     r = run_peer_bench(scene, std::move(given), c);
   } catch (const bvh::FrameRangeError& e) {
-    throw InputError(arg, "", "", e.what());
+    throw InputError(arg, "", e.frame ? fmt::format("frame {}", *e.frame) : std::string(), e.what());
   }
   manifest.add_timing_ms("bench", sw.ms());
   {  // as `ptc trace` says it: a view where no ray meets the mesh measures the background only

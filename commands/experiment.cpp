@@ -341,6 +341,8 @@ void cmd_experiment(const ExperimentCommandOptions& opt, std::ostream& out) {
     if (!opt.quiet) setup.progress = [&bar](double f) { bar.update(f); };
     try {
       run = run_experiment(ms.scene, p, setup);
+    } catch (const bvh::FrameRangeError& e) {
+      throw InputError(p.scene, "", e.frame ? fmt::format("frame {}", *e.frame) : std::string(), e.what());
     } catch (const std::invalid_argument& e) {
       throw InputError(p.scene, "", "", e.what());
     }

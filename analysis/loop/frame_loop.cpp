@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "bvh/aligned.h"
+#include "bvh/box.h"
 #include "toolkit/core/cancel.h"
 #include "toolkit/core/stopwatch.h"
 
@@ -39,7 +40,12 @@ void run_frame_loop(Scene& scene, std::span<Vec3> positions, std::span<Accel* co
       r.accel = a;
       r.source_ms = source_ms;
       sw.restart();
-      accels[a]->update(p);
+      try {
+        accels[a]->update(p);
+      } catch (bvh::FrameRangeError& e) {  // (which frame: the commands name it)
+        if (!e.frame) e.frame = f;
+        throw;
+      }
       r.update_wall_ms = sw.ms();
       r.times = accels[a]->last_update();
       measure(r, *accels[a], p);

@@ -1031,6 +1031,24 @@ TEST_F(TraceCli, AFrameDirectoryNamedDotJsonIsADirectory) {
   EXPECT_TRUE(fs::exists(dir_ / "t" / "shaded_0001.png"));
 }
 
+// A frame whose positions leave the float range is named, by trace, bench and experiment alike
+// (bench and experiment named the file only).
+TEST_F(TraceCli, AFrameBeyondTheFloatRangeIsNamed) {
+  const fs::path scene = dir_ / "fast.json";
+  std::ofstream(scene) << R"({"meshes": [{"file": ")" << cube_.string()
+                       << R"(", "deform": {"kind": "rigid", "velocity": [1e308, 0, 0]}}]})";
+  const std::string at = scene.string() + ": frame 1: vertex ";
+  for (const std::vector<std::string>& cmd :
+       {std::vector<std::string>{"trace", scene.string(), "--frames", "0:3"},
+        std::vector<std::string>{"bench", scene.string(), "--frames", "0:3"},
+        std::vector<std::string>{"experiment", "compare", scene.string(), "--frames", "0:3", "--quiet"}}) {
+    std::vector<std::string> args = cmd;
+    args.insert(args.end(), {"--width", "8", "--height", "8", "--out", (dir_ / "out").string()});
+    expect_error(args, 1, at);
+    expect_error(args, 1, "is not finite in single precision");
+  }
+}
+
 TEST_F(TraceCli, BadFramesAreOneLineErrors) {
   std::ofstream(dir_ / "scene.json") << kSceneJson;
   const std::string out = (dir_ / "out").string(), scene = (dir_ / "scene.json").string();
