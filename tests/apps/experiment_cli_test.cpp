@@ -1,6 +1,7 @@
 // `ptc experiment` and `ptc merge` end to end: shards merged give the single run's files row by
 // row (timings aside), merge refuses shards that do not belong together, the derived columns
 // recomputed independently from the rows, and the flags' usage errors.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include "common/fnv.h"
 #include "viz/vtp.h"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tuple>
 
@@ -511,6 +513,27 @@ TEST_F(Experiment, CompareGivesNoEarlyLateVerdictOnOneMeasuredFrame) {
   }
 }
 
+// Drift's "metrics per frame" line is the median over the frames after the warm-up, as every
+// other median of the summaries (it took the warm-up frame in too), and is frames.csv's.
+TEST_F(Experiment, DriftMetricsPerFrameLeaveTheWarmUpOut) {
+  const RunResult r = ptc({"experiment", "drift", "cloth-sphere-32", "--frames", "40:44", "--width", "16", "--height",
+                           "16", "--clusterings", "acc_growth,meshopt", "--quiet", "--out", (dir_ / "d").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto at = r.out.find("metrics per frame (median after the warm-up frame): ");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::string line = r.out.substr(at, r.out.find('\n', at) - at);
+  std::map<std::string, std::vector<double>> ms;
+  for (const auto& row : csv_rows(slurp(dir_ / "d" / "frames.csv")))
+    if (row.at("warmup") == "0") ms[row.at("clustering")].push_back(std::stod(row.at("metrics_ms")));
+  ASSERT_EQ(ms.size(), 3u);  // triangles and the two clusterings
+  for (auto& [name, v] : ms) {
+    ASSERT_EQ(v.size(), 4u) << name;
+    std::sort(v.begin(), v.end());
+    const double median = 0.5 * (v[1] + v[2]);
+    EXPECT_NE(line.find(name + " " + fmt::format("{:.0f}", median) + " ms"), std::string::npos) << line << " " << name;
+  }
+}
+
 // A `ptc cluster` output as the method: compare's and drift's default configurations take it as
 // `given` (and perf_factor divides by it); a clustering of another mesh is refused naming it.
 TEST_F(Experiment, GivenClustersAreTheMethodByDefault) {
@@ -783,7 +806,7 @@ TEST_F(Experiment, MergeRefusesAnEditedManifestNamingIt) {
   spit(dir_ / "a" / "manifest.json", m.substr(0, 40));
   const RunResult cut = ptc({"merge", (dir_ / "a").string(), "--out", (dir_ / "m").string()});
   EXPECT_EQ(cut.code, 1);
-  EXPECT_NE(cut.err.find("manifest.json: byte 41: not valid JSON: parse error"), std::string::npos) << cut.err;
+  EXPECT_NE(cut.err.find("manifest.json: byte 40: not valid JSON: parse error"), std::string::npos) << cut.err;
   EXPECT_EQ(cut.err.find("json.exception"), std::string::npos) << cut.err;
   EXPECT_EQ(lines(cut.err), 1u) << cut.err;
 }

@@ -179,7 +179,11 @@ TEST_F(SceneFile, SceneFileErrorsNameFileAndJsonPath) {
   // A number beyond double is invalid JSON with its position, not an escaped library exception
   // (found by the scene_json fuzz target: tests/fuzz_inputs/scene_json/number_overflow_1e999).
   e = scene_error(R"({"frames": [0, 1e999]})");
-  has(e, f + ": byte 16: invalid JSON: number overflow parsing '1e999'");
+  has(e, f + ": byte 15: invalid JSON: number overflow parsing '1e999'");  // (offsets count from 0)
+  e = scene_error("");  // an empty file: byte 0 (it said byte 1)
+  has(e, f + ": byte 0: invalid JSON");
+  e = scene_error("{\"frames\": [0, 1]");  // cut short after 17 bytes: at its end, offset 17
+  has(e, f + ": byte 17: invalid JSON");
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "wobble"}}]})");
   has(e, "meshes[0].deform.kind");
   e = scene_error(R"({"meshes": [{"file": "cube.off", "deform": {"kind": "bend", "axis": "y", "direction": "y"}}]})");

@@ -366,11 +366,11 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
     if (const auto k = why.find("] "); k != std::string::npos) why = why.substr(k + 2);
     std::string where;
     if (const auto* pe = dynamic_cast<const json::parse_error*>(&e)) {
-      where = byte_loc(pe->byte);
+      where = byte_loc(pe->byte > 0 ? pe->byte - 1 : 0);  // (nlohmann counts from 1, ptc's offsets from 0)
     } else if (const auto q = why.find('\''), q2 = why.rfind('\''); q != std::string::npos && q2 > q) {
       // A number beyond double ("1e999": out_of_range.406) has no byte position: the number's
       // own text, quoted in the message, is found in the file instead.
-      if (const auto at = text.find(why.substr(q + 1, q2 - q - 1)); at != std::string_view::npos) where = byte_loc(at + 1);
+      if (const auto at = text.find(why.substr(q + 1, q2 - q - 1)); at != std::string_view::npos) where = byte_loc(at);
     }
     throw InputError(name, where, "", "invalid JSON: " + why);
   }
