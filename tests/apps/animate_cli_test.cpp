@@ -238,6 +238,14 @@ TEST_F(Animate, FramesKeepTheViewTheyWereAnimatedWith) {
   EXPECT_EQ(bad.code, 1) << bad.err;
   EXPECT_NE(bad.err.find((frames / "manifest.json").string()), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find("results.camera.fov"), std::string::npos) << bad.err;
+  // A recorded flag that is not true or false: named too (the recorded camera was dropped silently)
+  man["results"]["camera"]["fov"] = 45;
+  man["results"]["camera_own"] = "yes";
+  std::ofstream(frames / "manifest.json") << man.dump(2);
+  bad = trace(frames.string(), "0:1", "tb");
+  EXPECT_EQ(bad.code, 1) << bad.err;
+  EXPECT_NE(bad.err.find("results.camera_own: expected true or false"), std::string::npos) << bad.err;
+  man["results"]["camera_own"] = true;
   // Another schema (or none): the frames are framed as any directory's, without a word on it.
   man["schema"] = "someone-else/1";
   std::ofstream(frames / "manifest.json") << man.dump(2);

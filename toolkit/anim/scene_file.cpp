@@ -475,7 +475,12 @@ std::optional<AnimateView> animate_view(const fs::path& dir) {
   const json& res = root["results"];
   // Only a view that was the scene's own (a frame directory of a mesh file was framed by the
   // defaults, which a command replaces with its own framing).
-  const auto own = [&](const char* key) { return res.contains(key) && res[key].is_boolean() && res[key].get<bool>(); };
+  // (absent: not the scene's own; present but not true or false: an edited manifest, named)
+  const auto own = [&](const char* key) {
+    if (!res.contains(key)) return false;
+    if (!res[key].is_boolean()) r.fail(std::string("results.") + key, "expected true or false");
+    return res[key].get<bool>();
+  };
   AnimateView v;
   if (own("camera_own")) {
     if (!res.contains("camera")) r.fail("results.camera", "missing");
