@@ -125,6 +125,20 @@ TEST_F(Experiment, SweepAsThreeShardsMergesToTheSingleRun) {
   }
   EXPECT_EQ(hits_of_frame.size(), 3u);
   EXPECT_NE(one.out.find("paper: trace time about unchanged"), std::string::npos) << one.out;
+  // The summary's update + build ratio is in sweep_summary.csv: per MaxCount, a row of stage
+  // update+build whose median is the update's plus the build's and whose speedup is MaxCount 0's
+  // sum over it (printed only, once).
+  std::map<std::string, std::map<std::string, std::pair<double, double>>> sum;  // count -> stage -> (ms, speedup)
+  for (const auto& r : csv_rows(slurp(dir_ / "one" / "sweep_summary.csv")))
+    sum[r.at("max_count")][r.at("stage")] = {std::stod(r.at("median_ms")), std::stod(r.at("speedup_vs_max_count_0"))};
+  ASSERT_EQ(sum.size(), 4u);
+  const double ub0 = sum["0"]["update"].first + sum["0"]["build"].first;
+  for (auto& [n, st] : sum) {
+    ASSERT_TRUE(st.count("update+build")) << n;
+    const double ub = st["update"].first + st["build"].first;
+    EXPECT_NEAR(st["update+build"].first, ub, 1e-12 * ub) << n;
+    EXPECT_NEAR(st["update+build"].second, ub0 / ub, 1e-9 * ub0 / ub) << n;
+  }
 }
 
 // The manifest's clustering parameters are those some clustering of the run read, as `ptc
