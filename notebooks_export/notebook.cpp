@@ -147,6 +147,7 @@ per["drift"] = per["s"] / per["n"]
 corr = study_csv("drift", "correlation.csv")
 corr = corr[(corr["x"] == "connectivity") & (corr["y"] == "box_area_drift")]
 clusterings = [c for c in dict.fromkeys(per.index.get_level_values(0))]
+structures = list(dict.fromkeys(frames["clustering"]))  # (each one's colour as in drift_frames)
 fig, ax = plt.subplots(figsize=(7.5, 5))
 rng = np.random.default_rng(1)
 for i, cl in enumerate(clusterings):
@@ -155,7 +156,7 @@ for i, cl in enumerate(clusterings):
         p = p.iloc[np.sort(rng.choice(len(p), 3000, replace=False))]
     rho = corr[corr["clustering"] == cl]["spearman"]
     label = f"{cl} (Spearman {rho.iloc[0]:+.2f})" if len(rho) and np.isfinite(rho.iloc[0]) else f"{cl} (no Spearman: see summary.txt)"
-    ax.scatter(p["conn"], p["drift"], s=4, color=COLOURS[i % 10], label=label)
+    ax.scatter(p["conn"], p["drift"], s=4, color=COLOURS[structures.index(cl) % 10] if cl in structures else COLOURS[i % 10], label=label)
 ax.set_xlabel("connectivity (triangles / vertices)")
 ax.set_ylabel("mean |ln(box area / the first frame's)| over the frames after it")
 ax.set_title("connectivity against box-area drift (up to 3000 clusters per clustering)")

@@ -152,6 +152,19 @@ TEST_F(Notebook, RedrawsEveryFigureFromTheStudyAndExecutesHeadless) {
       EXPECT_EQ(tab10_colours_in(img), 3u) << name << ": three stages as bars";
     }
   }
+  // A clustering keeps its colour from figure to figure: drift_correlation has no triangle BVH
+  // series, and its clusterings take tab10 1, 2 and 3 as in drift_frames (they took 0, 1 and 2).
+  {
+    const RgbImage img = viz::read_png(n.out_dir / "drift_correlation.png");
+    auto pixels = [&](Rgb8 c) {
+      std::size_t px = 0;
+      for (std::size_t i = 0; i < img.pixel_count(); ++i)
+        px += img.rgb[3 * i] == c[0] && img.rgb[3 * i + 1] == c[1] && img.rgb[3 * i + 2] == c[2];
+      return px;
+    };
+    EXPECT_LT(pixels({31, 119, 180}), 20u) << "tab10 0: the triangle BVH's colour";
+    for (const Rgb8 c : {Rgb8{255, 127, 14}, Rgb8{44, 160, 44}, Rgb8{214, 39, 40}}) EXPECT_GE(pixels(c), 20u);
+  }
   const nlohmann::json m = nlohmann::json::parse(slurp(n.out_dir / "manifest.json"));
   EXPECT_EQ(m["results"]["figures"].size(), 6u);
   EXPECT_EQ(m["parameters"]["studies"]["compare"], "../compare") << "paths relative to the notebook";
