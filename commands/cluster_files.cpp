@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstring>
 #include <span>
 #include <fstream>
@@ -16,8 +17,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "toolkit/anim/scene.h"
 #include "toolkit/clustering/cluster.h"
 #include "toolkit/core/error.h"
+#include "toolkit/io/mesh_io.h"
 
 namespace ptc {
 namespace {
@@ -269,16 +272,52 @@ ClusteringInfo clustering_info(const std::filesystem::path& clusters) {
   ci.title = "clusters of " + clusters.string();
   std::ifstream in(mpath);
   if (!in) return ci;
+  // A manifest.json that is not `ptc cluster`'s (another program's, or not JSON at all) gives no
+  // parameters, and the defaults' record says so; one of ptc cluster's whose parameters are not
+  // what it writes is an edited file: named, with the field.
   const nlohmann::json m = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (m.is_discarded() || !m.contains("parameters") || !m["parameters"].is_object()) return ci;
+  const bool ours = m.is_object() && m.contains("schema") && m["schema"].is_string() &&
+                    m["schema"].get<std::string>().rfind("ptc-cluster/", 0) == 0;
+  if (!ours) {
+    ci.from = fmt::format("defaults ({} is not ptc cluster's manifest{})", mpath.string(),
+                          m.is_discarded() ? ": not valid JSON" : "");
+    read_note(mpath.string(), fmt::format("not ptc cluster's manifest{}: the clustering's parameters are the defaults "
+                                          "(MaxCount {}, MaxSize {:g})",
+                                          m.is_discarded() ? " (not valid JSON)" : "", ci.cfg.max_count, ci.cfg.max_size));
+    return ci;
+  }
+  const auto bad = [&](const std::string& field, const std::string& want) {
+    return InputError(mpath.string(), "", field, want + " (an edited manifest of ptc cluster: its clustering's "
+                                                        "parameters are read from it)");
+  };
+  if (!m.contains("parameters") || !m["parameters"].is_object()) throw bad("parameters", "missing or not an object");
   const nlohmann::json& p = m["parameters"];
-  auto str = [&](const char* k) { return p.contains(k) && p[k].is_string() ? p[k].get<std::string>() : std::string(); };
-  if (p.contains("max_count") && p["max_count"].is_number_unsigned()) ci.cfg.max_count = p["max_count"].get<std::uint32_t>();
-  if (p.contains("max_size") && p["max_size"].is_number()) ci.cfg.max_size = p["max_size"].get<double>();
-  if (const auto s = parse_size_bound_mode(str("size_bound"))) ci.cfg.size_bound_mode = *s;
-  if (const auto s = parse_sphere_method(str("sphere"))) ci.cfg.sphere = *s;
-  if (const auto s = parse_cluster_method(str("method"))) ci.cfg.method = *s;
-  if (const auto s = parse_objective(str("objective"))) ci.cfg.objective = *s;
+  auto str = [&](const char* k) {
+    if (!p.contains(k)) return std::string();
+    if (!p[k].is_string()) throw bad(std::string("parameters.") + k, "not a string");
+    return p[k].get<std::string>();
+  };
+  if (p.contains("max_count")) {
+    if (!p["max_count"].is_number_unsigned() || p["max_count"].get<std::uint64_t>() > kMaxSceneClusterCount)
+      throw bad("parameters.max_count", "not an integer in [0, " + std::to_string(kMaxSceneClusterCount) + "]");
+    ci.cfg.max_count = p["max_count"].get<std::uint32_t>();
+  }
+  if (p.contains("max_size")) {
+    if (!p["max_size"].is_number() || !(p["max_size"].get<double>() >= 0.0) || !std::isfinite(p["max_size"].get<double>()))
+      throw bad("parameters.max_size", "not a finite number >= 0");
+    ci.cfg.max_size = p["max_size"].get<double>();
+  }
+  const auto parsed = [&](const char* k, auto parse, auto& into) {
+    const std::string v = str(k);
+    if (v.empty()) return;
+    const auto x = parse(v);
+    if (!x) throw bad(std::string("parameters.") + k, "'" + v + "' is not a value ptc cluster writes");
+    into = *x;
+  };
+  parsed("size_bound", [](const std::string& v) { return parse_size_bound_mode(v); }, ci.cfg.size_bound_mode);
+  parsed("sphere", [](const std::string& v) { return parse_sphere_method(v); }, ci.cfg.sphere);
+  parsed("method", [](const std::string& v) { return parse_cluster_method(v); }, ci.cfg.method);
+  parsed("objective", [](const std::string& v) { return parse_objective(v); }, ci.cfg.objective);
   // The adjacency the clustering used: as resolved by that run, else as it was asked for.
   if (const auto s = parse_cluster_adjacency(str("adjacency"))) ci.cfg.adjacency = *s;
   if (m.contains("results") && m["results"].is_object() && m["results"].contains("adjacency") &&

@@ -28,8 +28,10 @@ namespace ptc {
 /// The parameters a clustering was made with, from `ptc cluster`'s DIR/manifest.json beside
 /// triangles.csv (MaxCount, MaxSize, size bound, sphere, method, objective, adjacency): the
 /// per-cluster metrics of a given clustering (acc needs MaxCount and MaxSize) use them, in
-/// `ptc viz` and in the experiments. Without a readable manifest: the defaults, and
-/// from_manifest false.
+/// `ptc viz` and in the experiments. Without a manifest, or with one that is not ptc cluster's
+/// (another program's, or not JSON): the defaults, from_manifest false, and `from` says which.
+/// A ptc cluster manifest whose parameters are not what it writes throws InputError naming the
+/// file and the field.
 struct ClusteringInfo {
   ClusterConfig cfg;
   std::string title;  ///< "contraction / acc, MaxCount 50, MaxSize 50"

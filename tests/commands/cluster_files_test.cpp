@@ -341,3 +341,46 @@ TEST_F(TraceClusters, AHugeClusterSortsItsSides) {
             std::string::npos)
       << e;
 }
+
+// The parameters of a given clustering come from ptc cluster's manifest beside triangles.csv: no
+// manifest, or one that is not ptc cluster's (not JSON, another schema), gives the defaults and
+// says which; an edited ptc cluster manifest is an error naming the field (found by a new user:
+// a broken manifest was recorded as "no manifest", and max_count -5 gave the defaults silently,
+// recorded as read from the file).
+TEST_F(TraceClusters, ClusteringParametersComeFromPtcClustersManifestOrAreSaidToBeDefaults) {
+  write("triangle_id,cluster_id\n0,0\n1,0\n");
+  auto info_with = [&](const std::string& manifest) {
+    fs::remove(dir_ / "manifest.json");
+    if (!manifest.empty()) std::ofstream(dir_ / "manifest.json", std::ios::binary) << manifest;
+    return ptc::clustering_info(dir_);
+  };
+  ptc::ClusteringInfo ci = info_with("");
+  EXPECT_FALSE(ci.from_manifest);
+  EXPECT_EQ(ci.from, "defaults (no manifest.json beside triangles.csv)");
+  ci = info_with("{broken");
+  EXPECT_FALSE(ci.from_manifest);
+  EXPECT_EQ(ci.from, "defaults (" + (dir_ / "manifest.json").string() + " is not ptc cluster's manifest: not valid JSON)");
+  ci = info_with(R"({"schema": "someone-else/1", "parameters": {"max_count": 7}})");
+  EXPECT_FALSE(ci.from_manifest);
+  EXPECT_EQ(ci.cfg.max_count, ptc::ClusterConfig{}.max_count);
+  ci = info_with(R"({"schema": "ptc-cluster/1", "parameters": {"max_count": 7, "max_size": 9.5, "method": "contraction", "objective": "gwh01"}})");
+  EXPECT_TRUE(ci.from_manifest);
+  EXPECT_EQ(ci.cfg.max_count, 7u);
+  EXPECT_EQ(ci.cfg.max_size, 9.5);
+  EXPECT_EQ(ci.cfg.method, ptc::ClusterMethod::Contraction);
+  EXPECT_EQ(ci.cfg.objective, ptc::ObjectiveKind::Gwh01);
+  for (const auto& [manifest, field] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"schema": "ptc-cluster/1", "parameters": {"max_count": -5}})", "parameters.max_count"},
+           {R"({"schema": "ptc-cluster/1", "parameters": {"max_size": "x"}})", "parameters.max_size"},
+           {R"({"schema": "ptc-cluster/1", "parameters": {"method": "melt"}})", "parameters.method"},
+           {R"({"schema": "ptc-cluster/1", "parameters": {"objective": 3}})", "parameters.objective"},
+           {R"({"schema": "ptc-cluster/1"})", "parameters"}}) {
+    try {
+      (void)info_with(manifest);
+      ADD_FAILURE() << "no error for " << manifest;
+    } catch (const ptc::InputError& e) {
+      EXPECT_EQ(e.file(), (dir_ / "manifest.json").string());
+      EXPECT_EQ(e.element(), field) << manifest;
+    }
+  }
+}
