@@ -1049,6 +1049,26 @@ TEST_F(TraceCli, AFrameBeyondTheFloatRangeIsNamed) {
   }
 }
 
+// ptc bench records the camera its rays came from as ptc trace does (it was only in argv): the same
+// eye, axes and field of view for the same flags.
+TEST_F(TraceCli, BenchRecordsItsCameraAsTraceDoes) {
+  const std::string cube = cube_.string();
+  const std::vector<std::string> view = {"--eye", "0.5,0.5,3", "--fov", "30", "--width", "8", "--height", "8"};
+  auto with = [&](std::vector<std::string> a) {
+    a.insert(a.end(), view.begin(), view.end());
+    return a;
+  };
+  ASSERT_EQ(ptc(with({"bench", cube, "--deform", "twist", "--frames", "0:1", "--out", (dir_ / "b").string()})).code, 0);
+  ASSERT_EQ(ptc(with({"trace", cube, "--deform", "twist", "--frames", "0:1", "--out", (dir_ / "t").string()})).code, 0);
+  const auto b = nlohmann::json::parse(slurp(dir_ / "b" / "manifest.json"))["parameters"]["camera"];
+  const auto t = nlohmann::json::parse(slurp(dir_ / "t" / "manifest.json"))["parameters"]["camera"];
+  ASSERT_TRUE(b.is_object());
+  EXPECT_EQ(b, t);
+  EXPECT_EQ(b["fov_y_deg"], 30.0);
+  EXPECT_EQ(b["given"]["eye"], true);
+  EXPECT_EQ(b["given"]["look_at"], false);
+}
+
 TEST_F(TraceCli, BadFramesAreOneLineErrors) {
   std::ofstream(dir_ / "scene.json") << kSceneJson;
   const std::string out = (dir_ / "out").string(), scene = (dir_ / "scene.json").string();
