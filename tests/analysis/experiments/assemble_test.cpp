@@ -43,8 +43,15 @@ TEST(Assemble, SweepMediansLeaveOutTheWarmupAndCompareWithMaxCountZero) {
       ExperimentKind::Sweep,
       {file("sweep.csv", {"scene", "max_count", "max_size", "primitives", "frame", "warmup", "stage", "ms"}, rows)}, "");
   const FileRows& s = find(a, "sweep_summary.csv");
-  ASSERT_EQ(s.rows.rows.size(), 2u);
+  ASSERT_EQ(s.rows.rows.size(), 4u);  // the build rows, then update+build's (here the build alone)
   auto r0 = row_map(s, 0), r1 = row_map(s, 1);
+  for (std::size_t k : {2u, 3u}) {
+    auto u = row_map(s, k), b = row_map(s, k - 2);
+    EXPECT_EQ(u["stage"], "update+build");
+    EXPECT_EQ(u["max_count"], b["max_count"]);
+    EXPECT_EQ(u["median_ms"], b["median_ms"]);
+    EXPECT_EQ(u["speedup_vs_max_count_0"], b["speedup_vs_max_count_0"]);
+  }
   EXPECT_EQ(r0["max_count"], "0");
   EXPECT_EQ(r0["frames"], "3");
   EXPECT_EQ(std::stod(r0["median_ms"]), 20.0);
