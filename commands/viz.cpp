@@ -151,6 +151,8 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
       opt.range ? std::optional(parse_value_range(*opt.range, "--range"))
       : flag    ? std::optional(std::pair<double, double>(0.0, 1.0))
                 : std::nullopt;
+  if (opt.range && ratio_floor == 0.0 && fixed->first < 0.0)
+    throw UsageError("--range", fmt::format("{} is a ratio, never below 0: give MIN >= 0", metric));
   if (opt.interactive && (kind == VizKind::Panel || kind == VizKind::Export || pixel_metric))
     throw UsageError("--interactive", "a window shows the mesh: viz partition or a heatmap of a per-cluster metric");
   if (opt.interactive && opt.frames) throw UsageError("--interactive", "a window shows one frame (--frame F)");

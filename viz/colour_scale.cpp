@@ -64,9 +64,20 @@ ColourScale make_scale(std::string title, std::span<const double> values, bool d
   return s;
 }
 
+double ColourScale::map_position(double v) const {
+  if (std::isnan(v) || colormap != "coolwarm" || two_slope) return fraction(v);
+  // A diverging range on one side of the centre: that side's part of the map, so that the centre
+  // keeps the middle colour's meaning (a ratio range 1.2 .. 2 draws growth in reds, not 1.2 in
+  // blue); values outside the range take its end colours.
+  const double c = std::clamp(v, min, max);
+  if (min >= centre && max > centre) return 0.5 + 0.5 * (c - centre) / (max - centre);
+  if (max <= centre && min < centre) return 0.5 * (c - min) / (centre - min);
+  return fraction(v);
+}
+
 Rgb8 colour_of(const ColourScale& s, double v) {
   if (std::isnan(v)) return kNanColour;
-  const double x = s.fraction(v);
+  const double x = s.map_position(v);
   return s.colormap == "coolwarm" ? coolwarm(x) : viridis(x);
 }
 

@@ -35,6 +35,10 @@ struct ColourScale {
   [[nodiscard]] double fraction(double v) const;
   /// The value at fraction f of the map (the inverse of fraction()).
   [[nodiscard]] double value_at(double f) const;
+  /// Where v's colour lies on the colour map, 0 .. 1: fraction(v), except for a diverging range
+  /// that lies on one side of the centre, drawn with that side's half of the map only (the
+  /// centre's colour keeps meaning the centre).
+  [[nodiscard]] double map_position(double v) const;
 };
 
 /// The scale for `values` (NaN ignored): `fixed` when given; else sequential: [min, max] of the
@@ -45,7 +49,8 @@ struct ColourScale {
 /// ~1e-16, not a picture; 1e-12 of the values' size for sequential ones, whatever their units):
 /// diverging centre -+ 0.5, sequential m -+ |m| / 2 for the one value m (its sign kept: no
 /// negative legend for an area), 0 .. 1 for m = 0 or nothing finite. A
-/// fixed diverging range is two-slope when it contains the centre, else linear.
+/// fixed diverging range is two-slope when it contains the centre; else it is laid out linearly
+/// and coloured with the half of the map on its side of the centre (map_position).
 [[nodiscard]] ColourScale make_scale(std::string title, std::span<const double> values, bool diverging, double centre,
                                      const std::optional<std::pair<double, double>>& fixed, bool from_zero = false,
                                      double floor = -std::numeric_limits<double>::infinity());

@@ -557,6 +557,10 @@ TEST_F(Viz, UsageErrorsNameTheFlagAndComeBeforeAnyDisplay) {
   EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--range");
   o.range = "-1:nan";
   EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--range");
+  o.metric = "box_area_ratio";  // a ratio's range below 0 (it was taken)
+  o.range = "-1:0.5";
+  EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--range");
+  o.metric = "reg";
   o.range.reset();
   o.clusters.clear();
   EXPECT_EQ(usage_flag([&] { cmd_viz(o, out); }), "--clusters");  // a per-cluster metric needs clusters

@@ -83,6 +83,22 @@ TEST(ColourScale, RatiosStopAtZeroAndKeepTheCentreColour) {
   // A fixed range without the centre is linear; with it, two-slope.
   EXPECT_FALSE(make_scale("r", std::vector<double>{}, true, 1.0, std::pair{2.0, 3.0}).two_slope);
   EXPECT_TRUE(make_scale("r", std::vector<double>{}, true, 1.0, std::pair{0.0, 3.0}).two_slope);
+  // ... and coloured with the half of the map on its side of the centre: growth stays red (1.2
+  // was drawn blue in a range 1.2 .. 2, found by a new user), shrinkage blue; ends clamp.
+  const ColourScale up = make_scale("r", std::vector<double>{}, true, 1.0, std::pair{1.2, 2.0});
+  EXPECT_EQ(colour_of(up, 2.0), coolwarm(1.0));
+  EXPECT_EQ(colour_of(up, 1.2), coolwarm(0.6));
+  EXPECT_EQ(colour_of(up, 1.6), coolwarm(0.8));
+  EXPECT_EQ(colour_of(up, 1.0), coolwarm(0.6)) << "below the range: its end colour";
+  EXPECT_EQ(colour_of(up, 9.0), coolwarm(1.0));
+  EXPECT_DOUBLE_EQ(up.fraction(1.6), 0.5) << "laid out linearly on the legend";
+  const ColourScale down = make_scale("r", std::vector<double>{}, true, 1.0, std::pair{0.2, 0.6});
+  EXPECT_EQ(colour_of(down, 0.2), coolwarm(0.0));
+  EXPECT_EQ(colour_of(down, 0.6), coolwarm(0.25));
+  EXPECT_EQ(colour_of(down, 0.9), coolwarm(0.25));
+  const ColourScale at = make_scale("r", std::vector<double>{}, true, 1.0, std::pair{1.0, 3.0});  // (from the centre)
+  EXPECT_EQ(colour_of(at, 1.0), coolwarm(0.5));
+  EXPECT_EQ(colour_of(at, 3.0), coolwarm(1.0));
 }
 
 TEST(ColourScale, ColoursEndsNanAndOutOfRange) {
