@@ -55,8 +55,40 @@ RgbImage legend_strip(Renderer& r, const ColourScale& s, int width, const std::s
     const int align = x <= l.bar_x0 + 2 ? -1 : x >= l.bar_x1 - 3 ? 1 : 0;
     items.push_back({tk[i].text, x, 52, 13, align});
   }
-  if (!note_line.empty()) items.push_back({note_line, l.bar_x0, 69, 12, -1, {200, 200, 200}});
-  RgbImage img = r.text(width, l.height, items);
+  // The note on as many lines as the width takes, broken at its "; " parts (then at spaces): a
+  // narrow legend clipped it at the picture's edge. About 6 pixels a character at this size
+  // (measured: 78 characters in 456 pixels), 6.5 taken; each further line adds 14 pixels.
+  std::vector<std::string> lines;
+  if (!note_line.empty()) {
+    const std::size_t per_line = std::max<std::size_t>(12, static_cast<std::size_t>(double(width - l.bar_x0 - 4) / 6.5));
+    std::vector<std::string> words;  // parts, and the words of a part too long for a line
+    for (std::size_t at = 0;;) {
+      const std::size_t semi = note_line.find("; ", at);
+      std::string part = note_line.substr(at, semi == std::string::npos ? std::string::npos : semi + 1 - at);
+      if (part.size() <= per_line) {
+        words.push_back(part);
+      } else {
+        for (std::size_t b = 0; b < part.size();) {
+          std::size_t e = part.find(' ', b);
+          if (e == std::string::npos) e = part.size();
+          words.push_back(part.substr(b, e - b));
+          b = e + 1;
+        }
+      }
+      if (semi == std::string::npos) break;
+      at = semi + 2;
+    }
+    std::string cur;
+    for (const std::string& w : words) {
+      if (!cur.empty() && cur.size() + 1 + w.size() > per_line) lines.push_back(cur), cur.clear();
+      cur += (cur.empty() ? "" : " ") + w;
+    }
+    if (!cur.empty()) lines.push_back(cur);
+  }
+  for (std::size_t i = 0; i < lines.size(); ++i)
+    items.push_back({lines[i], l.bar_x0, 69 + 14 * static_cast<int>(i), 12, -1, {200, 200, 200}});
+  const int height = l.height + 14 * static_cast<int>(lines.size() > 1 ? lines.size() - 1 : 0);
+  RgbImage img = r.text(width, height, items);
   for (int x = l.bar_x0; x < l.bar_x1; ++x) {
     const Rgb8 c = colour_of(s, s.value_at((x - l.bar_x0 + 0.5) / bar_w));
     for (int y = l.bar_y0; y < l.bar_y1; ++y) img.set(x, y, c);

@@ -23,7 +23,9 @@ struct LegendLayout {
 [[nodiscard]] LegendLayout legend_layout(int width);
 
 /// A legend max(`width`, kMinLegendWidth) pixels wide. `note`: e.g.
-/// "312 pixels above 120 drawn at the top colour".
+/// "312 pixels above 120 drawn at the top colour". Its height is legend_layout's, plus 14 pixels
+/// for each further line the note takes where it does not fit on one (broken at "; ", then at
+/// spaces).
 [[nodiscard]] RgbImage legend_strip(Renderer& r, const ColourScale& s, int width, const std::string& note = "");
 
 }  // namespace ptc::viz

@@ -16,7 +16,9 @@
 #include "common/brute_force.h"
 #include "render/camera.h"
 #include "toolkit/core/error.h"
+#include "viz/colour_scale.h"
 #include "viz/display.h"
+#include "viz/legend.h"
 #include "viz/partition_colours.h"
 #include "viz/renderer.h"
 
@@ -293,6 +295,34 @@ TEST_F(RendererTest, TextStripsHaveTextWhereTheItemsAreAndNothingElse) {
   EXPECT_GT(lit_left, 40);
   EXPECT_GT(lit_right, 20);
   EXPECT_EQ(lit_middle, 0) << "no ink outside the two items";
+}
+
+// A legend's note that does not fit its width goes on further lines (the strip 14 pixels taller
+// each) instead of running off the picture's edge (found by a new user: "548 pixels above the"
+// ended at the edge of a 480-pixel heatmap).
+TEST_F(RendererTest, ALegendsLongNoteWrapsInsteadOfBeingClipped) {
+  const ColourScale s = make_scale("nodes_visited", std::vector<double>{}, false, 0, std::pair{2.0, 4.0});
+  const LegendLayout l = legend_layout(240);
+  const RgbImage short_note = legend_strip(renderer_, s, 240, "3 pixels above");
+  EXPECT_EQ(short_note.height, l.height);
+  const std::string long_note =
+      "27310 pixels below the range drawn at the bottom colour; 548 pixels above the range drawn at the top colour";
+  for (const int width : {240, 480}) {
+    const RgbImage img = legend_strip(renderer_, s, width, long_note);
+    const int lines = 1 + (img.height - l.height) / 14;
+    EXPECT_EQ((img.height - l.height) % 14, 0) << width;
+    EXPECT_GE(lines, width == 240 ? 3 : 2) << width;
+    int edge_ink = 0;
+    std::vector<int> ink_per_line(lines, 0);
+    for (int y = 62; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        if (img.at(x, y) == kBackground) continue;
+        if (x >= img.width - 3) ++edge_ink;
+        ++ink_per_line[std::min(lines - 1, (y - 62) / 14)];
+      }
+    EXPECT_EQ(edge_ink, 0) << "no text runs to the right edge at width " << width;
+    for (int i = 0; i < lines; ++i) EXPECT_GT(ink_per_line[i], 20) << "line " << i << " at width " << width;
+  }
 }
 
 TEST_F(RendererTest, SizesAndColourCountsAreChecked) {
