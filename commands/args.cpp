@@ -38,9 +38,8 @@ std::optional<std::int64_t> frame_number(std::string_view s) {
 // A frame number beyond kMaxFrame: said naming the flag.
 void check_frame_limit(std::int64_t f, std::string_view flag) {
   if (f > kMaxFrame)
-    throw UsageError(std::string(flag), fmt::format("frame {} is beyond the largest frame number, 2^53 = {} (a frame "
-                                                    "is the time it stands for, a double)",
-                                                    f, kMaxFrame));
+    throw UsageError(std::string(flag), fmt::format("frame {} is beyond the largest frame number, 2^53 = {} ({})", f,
+                                                    kMaxFrame, kMaxFrameWhy));
 }
 
 }  // namespace

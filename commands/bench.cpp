@@ -81,17 +81,7 @@ void cmd_bench(const BenchCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("motion", motion);
   manifest.set_parameter("camera_from_scene", scene.has_own_camera());
   // The camera the rays came from, as ptc trace records it (the bench's was only in argv).
-  manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)},
-                                    {"forward", vec_json(cam.forward)},
-                                    {"right", vec_json(cam.right)},
-                                    {"up", vec_json(cam.up)},
-                                    {"fov_y_deg", cam.fov_y_deg},
-                                    {"from_scene", scene.has_own_camera()},
-                                    {"given",
-                                     {{"eye", bool(opt.config.camera.eye)},
-                                      {"look_at", bool(opt.config.camera.look_at)},
-                                      {"up", bool(opt.config.camera.up)},
-                                      {"fov", bool(opt.config.camera.fov_deg)}}}});
+  manifest.set_parameter("camera", camera_json(cam, scene, opt.config.camera));
   manifest.set_parameter("width", c.width);
   manifest.set_parameter("height", c.height);
   manifest.set_parameter("threads", c.threads);

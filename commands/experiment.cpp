@@ -604,11 +604,9 @@ void cmd_merge(const MergeOptions& opt, std::ostream& out) {
       // The scene as the first shard names it: shards may name one scene file by other paths
       // (compared by its contents, identity() above), and the derived tables join rows by it.
       const std::string scene = s.manifest["parameters"].value("scene", ""), scene0 = params.value("scene", "");
-      if (scene != scene0)
-        if (const auto col = std::find(t.header.begin(), t.header.end(), "scene"); col != t.header.end())
-          for (auto& row : t.rows)
-            if (std::size_t(col - t.header.begin()) < row.size() && row[std::size_t(col - t.header.begin())] == scene)
-              row[std::size_t(col - t.header.begin())] = scene0;
+      if (scene != scene0 && t.has_column("scene"))
+        for (auto& row : t.rows)
+          if (std::string& v = row[t.column("scene")]; v == scene) v = scene0;
       std::size_t at = 0;
       for (const auto& ir : s.manifest["results"]["item_rows"][name]) {
         const std::size_t item = ir[0].get<std::size_t>(), count = ir[1].get<std::size_t>();

@@ -59,7 +59,7 @@ nlohmann::json read_experiment_manifest(const std::filesystem::path& dir) {
     std::string why = e.what();
     if (const auto k = why.find("] "); k != std::string::npos) why = why.substr(k + 2);
     const auto* pe = dynamic_cast<const nlohmann::json::parse_error*>(&e);
-    throw InputError(f.string(), pe ? byte_loc(pe->byte > 0 ? pe->byte - 1 : 0) : std::string(), "", "not valid JSON: " + why);
+    throw InputError(f.string(), pe ? json_byte_loc(pe->byte) : std::string(), "", "not valid JSON: " + why);
   }
 }
 

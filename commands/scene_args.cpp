@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/schema/json.h"
 #include "commands/args.h"
 #include "commands/cluster_files.h"
 #include "bvh/scene_config.h"
@@ -109,6 +110,21 @@ CameraSpec camera_for(const CameraSpec& flags, const Scene& scene) {
     if (!spec.fov_deg) spec.fov_deg = sc.fov_deg;
   }
   return spec;
+}
+
+nlohmann::json light_json(const LightChoice& light) {
+  return {{"position", vec_json(light.position)}, {"from", light.from}, {"intensity", light.intensity}};
+}
+
+nlohmann::json camera_json(const bvh::PinholeCamera& cam, const Scene& scene, const CameraSpec& flags) {
+  return {{"eye", vec_json(cam.eye)},
+          {"forward", vec_json(cam.forward)},
+          {"right", vec_json(cam.right)},
+          {"up", vec_json(cam.up)},
+          {"fov_y_deg", cam.fov_y_deg},
+          {"from_scene", scene.has_own_camera()},
+          {"given",
+           {{"eye", bool(flags.eye)}, {"look_at", bool(flags.look_at)}, {"up", bool(flags.up)}, {"fov", bool(flags.fov_deg)}}}};
 }
 
 LightChoice light_for(const std::optional<Vec3>& flag, const Scene& scene, const bvh::PinholeCamera& cam,

@@ -66,6 +66,11 @@ struct LightChoice {
   const char* from = "default";  ///< "--light", "scene" or "default" (recorded in manifests)
   double intensity = 1.0;        ///< the scene's light.intensity (also when --light moves it), else 1
 };
+/// The manifests' record of a light ("light": position, where it came from, intensity).
+[[nodiscard]] nlohmann::json light_json(const LightChoice& light);
+/// The manifests' record of a camera as ptc trace and ptc bench give it ("camera": eye, axes,
+/// vertical field of view, whether the scene's own camera was used, and which `flags` were given).
+[[nodiscard]] nlohmann::json camera_json(const bvh::PinholeCamera& cam, const Scene& scene, const CameraSpec& flags);
 /// A light whose difference to the scene's rest bounds overflows is refused (a usage error for
 /// --light, else InputError naming `input` and "light"); a far light is not (shadow rays start on
 /// the surface; a light at 1e308 lights and shadows as one at 1e30).

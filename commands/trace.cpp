@@ -346,13 +346,8 @@ void cmd_trace(const TraceCommandOptions& opt, std::ostream& out) {
   manifest.set_parameter("ao_distance_rel", rc.ao_distance_rel);
   manifest.set_parameter("seed", rc.seed);
   if (cost_range) manifest.set_parameter("cost_range", {cost_range->first, cost_range->second});
-  manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)},
-                                    {"right", vec_json(cam.right)}, {"up", vec_json(cam.up)},
-                                    {"fov_y_deg", cam.fov_y_deg}, {"from_scene", scene.has_own_camera()},
-                                    {"given", {{"eye", bool(opt.camera.eye)}, {"look_at", bool(opt.camera.look_at)},
-                                               {"up", bool(opt.camera.up)}, {"fov", bool(opt.camera.fov_deg)}}}});
-  manifest.set_parameter("light",
-                         {{"position", vec_json(light.position)}, {"from", light.from}, {"intensity", light.intensity}});
+  manifest.set_parameter("camera", camera_json(cam, scene, opt.camera));
+  manifest.set_parameter("light", light_json(light));
   manifest.set_parameter("ray_offset", "origin = p + 2^-18 M n, M = max |coordinate| of bounds and p in the trace frame");
   manifest.set_result("images", images);
   manifest.set_result("rays", std::uint64_t(rc.width) * std::uint64_t(rc.height));  // per frame

@@ -505,9 +505,7 @@ void cmd_viz(const VizCommandOptions& opt, std::ostream& out) {
     manifest.set_parameter("camera", {{"eye", vec_json(cam.eye)}, {"forward", vec_json(cam.forward)}, {"right", vec_json(cam.right)},
                                       {"up", vec_json(cam.up)}, {"fov_y_deg", cam.fov_y_deg}});
   }
-  if (needs_trace)
-    manifest.set_parameter("light",
-                           {{"position", vec_json(light.position)}, {"from", light.from}, {"intensity", light.intensity}});
+  if (needs_trace) manifest.set_parameter("light", light_json(light));
   if (use_clusters) {
     manifest.set_result("clusters", clusters.cluster_count());
     manifest.set_result("colours", colours_used);

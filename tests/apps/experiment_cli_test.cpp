@@ -373,23 +373,21 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
   r = ptc({"merge", (dir_ / "nowhere").string(), b, "--out", out});
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("nowhere: no such directory"), std::string::npos) << r.err;
-  r = ptc({"merge", a, a, "--out", out});
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find("given twice"), std::string::npos) << r.err;
-  r = ptc({"merge", a, (dir_ / "other").string(), "--out", out});
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find("parameters.frames"), std::string::npos) << r.err;
+  // `a` merged with `other`: refused (bad input), the error holding `needle`.
+  auto refused_with = [&](const std::string& other, const std::string& needle) {
+    const RunResult rr = ptc({"merge", a, other, "--out", out});
+    EXPECT_EQ(rr.code, 1) << rr.err;
+    EXPECT_NE(rr.err.find(needle), std::string::npos) << rr.err;
+  };
+  refused_with(a, "given twice");
+  refused_with((dir_ / "other").string(), "parameters.frames");
   // Another --width: named as the width, not as the camera made from it (which sorts first)
   ASSERT_EQ(ptc({"experiment", "sweep", "cloth-sphere-32", "--max-counts", "0,10,20", "--width", "24", "--height", "16",
                  "--quiet", "--frames", "0:1", "--shard", "2/2", "--out", (dir_ / "wide").string()})
                 .code,
             0);
-  r = ptc({"merge", a, (dir_ / "wide").string(), "--out", out});
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find(": parameters.width: 16 vs 24"), std::string::npos) << r.err;
-  r = ptc({"merge", a, (dir_ / "third").string(), "--out", out});
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find("split into 3"), std::string::npos) << r.err;
+  refused_with((dir_ / "wide").string(), ": parameters.width: 16 vs 24");
+  refused_with((dir_ / "third").string(), "split into 3");
   // The output of a run without --shard (it records itself as shard 1/1), alone or beside a
   // shard: said in those words (before: "shard 1/1 of a split into 1").
   ASSERT_EQ(run({"--frames", "0:1"}, "whole").code, 0);
@@ -409,9 +407,7 @@ TEST_F(Experiment, MergeRefusesShardsThatDoNotBelongTogether) {
                  "--height", "16", "--quiet", "--shard", "2/2", "--out", (dir_ / "cmp").string()})
                 .code,
             0);
-  r = ptc({"merge", a, (dir_ / "cmp").string(), "--out", out});
-  EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.err.find("cmp: a shard of `ptc experiment compare`, not of sweep like " + a), std::string::npos) << r.err;
+  refused_with((dir_ / "cmp").string(), "cmp: a shard of `ptc experiment compare`, not of sweep like " + a);
   // Shards of two mesh files: the scenes are named beside their hashes.
   const std::string bunny = std::string(PTC_TEST_DATA) + "/meshes/bunny00.off";
   const std::string elephant = std::string(PTC_TEST_DATA) + "/meshes/elephant.off";

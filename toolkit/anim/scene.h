@@ -43,11 +43,12 @@ struct SceneLight {
   double intensity = 1.0;  ///< >= 0, radiant intensity in arbitrary units
 };
 
-/// Inclusive range of integer frame indices.
 /// The largest frame number: a frame stands for the time double(f), exact up to 2^53 (beyond it
 /// consecutive frames would be one time, and a loop to the largest int64 would never end).
 inline constexpr std::int64_t kMaxFrame = std::int64_t(1) << 53;
+inline constexpr const char* kMaxFrameWhy = "a frame is the time it stands for, a double";
 
+/// Inclusive range of integer frame indices.
 struct FrameRange {
   std::int64_t first = 0, last = 0;
   [[nodiscard]] std::int64_t count() const { return last - first + 1; }

@@ -366,7 +366,7 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
     if (const auto k = why.find("] "); k != std::string::npos) why = why.substr(k + 2);
     std::string where;
     if (const auto* pe = dynamic_cast<const json::parse_error*>(&e)) {
-      where = byte_loc(pe->byte > 0 ? pe->byte - 1 : 0);  // (nlohmann counts from 1, ptc's offsets from 0)
+      where = json_byte_loc(pe->byte);
     } else if (const auto q = why.find('\''), q2 = why.rfind('\''); q != std::string::npos && q2 > q) {
       // A number beyond double ("1e999": out_of_range.406) has no byte position: the number's
       // own text, quoted in the message, is found in the file instead.
@@ -404,8 +404,7 @@ Scene parse_scene_json(std::string_view text, const std::string& name, const fs:
     if (frames->first < 0) r.fail("frames[0]", "must be >= 0");
     if (frames->last < frames->first) r.fail("frames[1]", "the last frame is before the first");
     if (frames->last > kMaxFrame)
-      r.fail("frames[1]", "frame numbers go up to 2^53 = " + std::to_string(kMaxFrame) +
-                              " (a frame is the time it stands for, a double)");
+      r.fail("frames[1]", "frame numbers go up to 2^53 = " + std::to_string(kMaxFrame) + " (" + kMaxFrameWhy + ")");
   }
   std::optional<SceneCamera> cam;
   if (root.contains("camera")) cam = read_camera(r, root["camera"], "camera");

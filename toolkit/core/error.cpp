@@ -31,5 +31,6 @@ InputError::InputError(std::string file, std::string location, std::string eleme
 
 std::string line_loc(std::uint64_t line) { return "line " + std::to_string(line); }
 std::string byte_loc(std::uint64_t offset) { return "byte " + std::to_string(offset); }
+std::string json_byte_loc(std::uint64_t nlohmann_byte) { return byte_loc(nlohmann_byte > 0 ? nlohmann_byte - 1 : 0); }
 
 }  // namespace ptc

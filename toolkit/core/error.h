@@ -39,7 +39,9 @@ class UsageError : public InputError {
 
 /// "line N" helper.
 std::string line_loc(std::uint64_t line);
-/// "byte N" helper.
+/// "byte N" helper (offsets count from 0, as in every reader's messages).
 std::string byte_loc(std::uint64_t offset);
+/// "byte N" of a JSON parse error, from nlohmann's position (the count of bytes read: 1-based).
+std::string json_byte_loc(std::uint64_t nlohmann_byte);
 
 }  // namespace ptc

@@ -77,6 +77,10 @@ struct ObjParser {
         pos.push_back(p);  // w, or the r g b some writers append, is ignored
       } else if (kw == "f") {
         const auto fail_here = [&](const std::string& reason) { fail("face ", sink.faces(), reason); };
+        const auto beyond_numbering = [](std::string_view index) {
+          return "index " + std::string(index) + " out of range (ptc numbers at most " + std::to_string(kMaxElements) +
+                 " vertices)";
+        };
         corners.clear();
         for (std::string_view t = f.next(); !t.empty(); t = f.next()) {
           // The vertex index ends at the first '/'; texture and normal indices are only checked
@@ -95,8 +99,7 @@ struct ObjParser {
           if (st == NumStatus::OutOfRange)
             fail_here(vi.starts_with('-') ? "relative index " + std::string(vi) + " refers before the first vertex (" +
                                                 std::to_string(pos.size()) + " vertices defined so far)"
-                                          : "index " + std::string(vi) + " out of range (ptc numbers at most " +
-                                                std::to_string(kMaxElements) + " vertices)");
+                                          : beyond_numbering(vi));
           if (idx == 0) fail_here("index 0 is invalid (OBJ indices start at 1)");
           std::uint64_t v = 0;
           if (idx < 0) {
@@ -107,9 +110,7 @@ struct ObjParser {
             v = pos.size() - back;
           } else {
             v = static_cast<std::uint64_t>(idx) - 1;
-            if (v >= kMaxElements)
-              fail_here("index " + std::to_string(idx) + " out of range (ptc numbers at most " +
-                        std::to_string(kMaxElements) + " vertices)");
+            if (v >= kMaxElements) fail_here(beyond_numbering(std::to_string(idx)));
             if (static_cast<std::uint64_t>(idx) > max_index) {
               max_index = static_cast<std::uint64_t>(idx);
               max_index_line = lines.line();
